@@ -1,0 +1,73 @@
+#pragma once
+// Headless depth rendering of a MuJoCo scene through EGL (device platform, which works on Mesa
+// llvmpipe without a display and on NVIDIA; falls back to Mesa's surfaceless platform).
+#include <mujoco/mujoco.h>
+
+#include <cstdint>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/camera_model.hpp"
+
+namespace pbnbv::twin {
+
+// An EGL display + OpenGL context made current on the calling thread for its lifetime.
+// Throws std::runtime_error saying which EGL step failed (with the EGL error code).
+class EglContext {
+ public:
+  EglContext();
+  ~EglContext();
+  EglContext(const EglContext&) = delete;
+  EglContext& operator=(const EglContext&) = delete;
+  std::string description() const;  // platform, vendor, renderer strings
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Planar depth image: row-major, row 0 at the top; metres along the optical axis;
+// 0 where nothing was hit within the depth range.
+struct DepthImage {
+  int width = 0;
+  int height = 0;
+  std::vector<float> depth_m;
+  float at(int u, int v) const { return depth_m[static_cast<std::size_t>(v) * width + u]; }
+};
+
+// Renders metric planar depth from a named MuJoCo camera with the given pinhole intrinsics.
+// Requires a current EglContext. Only geoms in groups 0..2 are rendered (groups >= 3 hold
+// collision-only helpers and the camera housing).
+class DepthRenderer {
+ public:
+  // `model` must outlive the renderer and is adjusted for rendering (camera fovy, offscreen
+  // buffer size, near/far planes). Throws std::invalid_argument when the camera does not
+  // exist or the intrinsics cannot be rendered (fx != fy: MuJoCo 2.2.2 has square pixels).
+  // A principal point off the image centre is rendered exactly by rendering a larger centred
+  // image and cropping it.
+  DepthRenderer(mjModel* model, const std::string& camera_name, const CameraIntrinsics& k,
+                const DepthRange& range);
+  ~DepthRenderer();
+  DepthRenderer(const DepthRenderer&) = delete;
+  DepthRenderer& operator=(const DepthRenderer&) = delete;
+
+  // Renders the scene as in `data` (positions must be current: mj_forward or mj_kinematics).
+  DepthImage render(mjData* data);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Optional sensor noise, off by default: Gaussian with standard deviation
+// sigma_per_m * depth (depth-proportional), and each valid pixel dropped (set to 0) with
+// probability `dropout`.
+struct DepthNoise {
+  double sigma_per_m = 0.0;
+  double dropout = 0.0;
+  bool enabled() const { return sigma_per_m > 0.0 || dropout > 0.0; }
+};
+void apply_depth_noise(DepthImage& image, const DepthNoise& noise, std::mt19937_64& rng);
+
+}  // namespace pbnbv::twin
