@@ -1,0 +1,26 @@
+#pragma once
+// The channel names of the contract (README "Channels" lists type, publisher, subscribers, rate).
+namespace pbnbv::channels {
+
+// Rig channels: the only ones the twin (or a real rig driver) speaks.
+inline constexpr const char* kArmCommand = "ARM_COMMAND";              // arm_command_t
+inline constexpr const char* kArmStatus = "ARM_STATUS";                // arm_status_t
+inline constexpr const char* kTurntableCommand = "TURNTABLE_COMMAND";  // turntable_command_t
+inline constexpr const char* kTurntableStatus = "TURNTABLE_STATUS";    // turntable_status_t
+inline constexpr const char* kDepthTrigger = "DEPTH_TRIGGER";          // depth_trigger_t
+inline constexpr const char* kDepthFrame = "DEPTH_FRAME";              // depth_frame_t
+
+// Pipeline channels.
+inline constexpr const char* kMoveRequest = "MOVE_REQUEST";        // move_request_t
+inline constexpr const char* kMoveResult = "MOVE_RESULT";          // move_result_t
+inline constexpr const char* kCaptureRequest = "CAPTURE_REQUEST";  // capture_request_t
+inline constexpr const char* kCloud = "CLOUD";                     // point_cloud_t
+inline constexpr const char* kScanStatus = "SCAN_STATUS";          // scan_status_t
+inline constexpr const char* kHeartbeat = "HEARTBEAT";             // heartbeat_t
+// Reserved for the perception and planning services (later issues).
+inline constexpr const char* kRegisteredCloud = "REGISTERED_CLOUD";  // point_cloud_t
+inline constexpr const char* kVoxelMap = "VOXEL_MAP";                // voxel_set_t
+inline constexpr const char* kEllipsoids = "ELLIPSOIDS";             // ellipsoid_set_t
+inline constexpr const char* kViewPlan = "VIEW_PLAN";                // view_plan_t
+
+}  // namespace pbnbv::channels

@@ -1,0 +1,61 @@
+#pragma once
+// Everything that defines a scan, decided once by the launcher (from the command line and the
+// object) and read by the coordinator. Written into scan.json as "settings", so a scan's
+// output folder says exactly how it was made and can be resumed or repeated from it.
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/camera_model.hpp"
+#include "core/mesh.hpp"
+#include "core/rig.hpp"
+
+namespace pbnbv {
+
+struct ScanSettings {
+  std::string scan_id;
+  RigKind rig = RigKind::kArm;
+  std::string rig_model_path;
+  std::string planner = "ring";
+  int views = 8;
+
+  // Object (twin runs): how the mesh was normalised and where its frame sits.
+  std::string object_name;
+  MeshNormalisation normalisation;
+  double object_z_m = 0;  // object frame origin above the turntable top (arm rig)
+
+  // View geometry.
+  double working_distance_m = 0.6;   // d_c: camera to the object's bounding sphere
+  double ring_elevation_deg = 30.0;  // ring planner: elevation above the object centre
+  double ring_start_azimuth_deg = 0.0;
+
+  // Keep-out box for the arm (object frame) and the working volume for clouds.
+  Eigen::Vector3d keepout_min_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d keepout_max_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d crop_min_m = Eigen::Vector3d::Constant(-0.5);
+  Eigen::Vector3d crop_max_m = Eigen::Vector3d::Constant(0.5);
+  double ground_clearance_m = 0.004;
+  double voxel_m = 0.002;  // per-frame and accumulated cloud downsampling
+
+  CameraIntrinsics camera;
+  DepthRange depth_range;
+
+  double speed_scale = 1.0;
+  double move_timeout_s = 60.0;
+  double capture_timeout_s = 10.0;
+  double sim_speed = 4.0;
+  double startup_timeout_s = 90.0;
+};
+
+nlohmann::json to_json(const ScanSettings& s);
+ScanSettings scan_settings_from_json(const nlohmann::json& j);  // throws naming the field
+
+nlohmann::json to_json(const MeshNormalisation& n);
+nlohmann::json to_json(const Pose& p);  // {"position_m": [...], "quat_wxyz": [...]}
+nlohmann::json to_json(const Eigen::Vector3d& v);
+Eigen::Vector3d vec3_from_json(const nlohmann::json& j, const std::string& what);
+
+// Writes JSON to `path` atomically (temporary file + rename), so a reader never sees half.
+void write_json_atomic(const nlohmann::json& j, const std::string& path);
+nlohmann::json read_json(const std::string& path);  // throws naming the path
+
+}  // namespace pbnbv

@@ -1,0 +1,262 @@
+// pbnbv: the command a user runs.
+//   pbnbv scan [--object PATH|bunny|teapot|sphere|box] [--size M] [--up z|y] [--planner ring]
+//              [--views N] [--rig arm|free] [--out DIR] [...]
+//       normalises the object, starts the twin and every service as separate processes
+//       (plus lcm-logger), supervises them while the coordinator scans, and stops them all at
+//       the end, on Ctrl-C, or when one fails.
+//   pbnbv spy    lcm-spy with the project's message types, so every channel decodes.
+#include <signal.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <ctime>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "core/args.hpp"
+#include "core/mesh.hpp"
+#include "core/scan_settings.hpp"
+#include "launcher/processes.hpp"
+
+using namespace pbnbv;
+namespace fs = std::filesystem;
+
+namespace {
+
+volatile std::sig_atomic_t g_interrupted = 0;
+void on_signal(int) { g_interrupted = 1; }
+
+const char* kUsage =
+R"(usage:
+  pbnbv scan [options]     twin-in-the-loop scan of an object
+  pbnbv spy                lcm-spy with every pbnbv channel decoded
+  pbnbv help
+
+scan options:
+  --object PATH|NAME       mesh file (.obj .stl .off .ply) or a built-in object:
+                           bunny, teapot (fetched by ./scripts/setup), sphere, box  [bunny]
+  --size M                 shortest bounding-box edge after normalisation, m     [0.3]
+  --up z|y                 which axis of the mesh file points up   [y for bunny/teapot, else z]
+  --planner ring           view planner (next-best-view planners: later releases)  [ring]
+  --views N                number of views                                        [8]
+  --rig arm|free           arm + turntable, or a free-flying camera (paper setup) [arm]
+  --out DIR                output folder                      [out/<object>-<date-time>]
+  --working-distance M     camera to the object's bounding sphere, m              [0.6]
+  --ring-elevation DEG     ring planner: camera elevation above the object centre [30]
+  --voxel M                cloud downsampling voxel, m                            [0.002]
+  --speed-scale S          fraction of the joint speed limits, (0, 1]             [1]
+  --sim-speed X            twin simulation speed, multiple of real time           [4]
+  --noise-sigma K          twin depth noise, std = K * depth (0: off)             [0]
+  --dropout P              twin pixel dropout probability (0: off)                [0]
+  --width --height --fx --fy --cx --cy   depth camera intrinsics    [1280 720 696 696 640 360]
+  --depth-min --depth-max M                depth range, m                      [0.1 3.0]
+  --no-log                 do not record scan.lcmlog
+)";
+
+fs::path self_dir() { return fs::read_symlink("/proc/self/exe").parent_path(); }
+
+std::string timestamp() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  localtime_r(&t, &tm);
+  char b[32];
+  std::strftime(b, sizeof(b), "%Y%m%d-%H%M%S", &tm);
+  return b;
+}
+
+// Resolves --object to a mesh (loaded) and a name; built-ins are generated or fetched.
+TriangleMesh resolve_object(const std::string& object, std::string& name, std::string& source, UpAxis& default_up) {
+  default_up = UpAxis::kZ;
+  name = fs::path(object).stem().string();
+  if (object == "sphere") {
+    source = "built-in icosphere";
+    return make_icosphere(0.5, 5);
+  }
+  if (object == "box") {
+    source = "built-in box 1.2 x 1.0 x 0.8";
+    return make_box(Eigen::Vector3d(1.2, 1.0, 0.8));
+  }
+  if (object == "bunny" || object == "teapot") {
+    default_up = UpAxis::kY;
+    source = std::string(PBNBV_DATA_DIR) + "/meshes/" + object + ".obj";
+    if (!fs::exists(source)) {
+      throw std::runtime_error("built-in object '" + object + "' needs " + source +
+                               ", which ./scripts/setup fetches (npm package '" + object + "'): run it first");
+    }
+    return load_mesh(source);
+  }
+  source = fs::absolute(object).string();
+  return load_mesh(source);
+}
+
+int scan(int argc, char** argv) {
+  Args args(argc, argv, 2);
+  ScanSettings s;
+  std::string object_name, source;
+  UpAxis default_up;
+  TriangleMesh mesh = resolve_object(args.str("object", "bunny"), object_name, source, default_up);
+  const double size = args.num("size", 0.3, 0.01, 2.0);
+  const UpAxis up = args.has("up") ? parse_up_axis(args.str("up")) : default_up;
+  s.normalisation = normalise_mesh(mesh, size, up);
+  s.normalisation.source_path = source;
+  s.object_name = object_name;
+  s.rig = parse_rig_kind(args.str("rig", "arm"));
+  s.rig_model_path = default_rig_path(s.rig);
+  s.planner = args.str("planner", "ring");
+  if (s.planner != "ring") {
+    throw std::invalid_argument("--planner " + s.planner + ": only 'ring' is available in this release");
+  }
+  s.views = static_cast<int>(args.integer("views", 8, 1, 1000));
+  s.working_distance_m = args.num("working-distance", 0.6, 0.15, 3.0);
+  s.ring_elevation_deg = args.num("ring-elevation", 30.0, -89.0, 89.0);
+  s.voxel_m = args.num("voxel", 0.002, 0.0, 0.05);
+  s.speed_scale = args.num("speed-scale", 1.0, 0.01, 1.0);
+  s.sim_speed = args.num("sim-speed", 4.0, 0.1, 100.0);
+  s.camera.width = static_cast<int>(args.integer("width", 1280, 1, 16384));
+  s.camera.height = static_cast<int>(args.integer("height", 720, 1, 16384));
+  s.camera.fx = args.num("fx", 696.0, 1.0, 1e5);
+  s.camera.fy = args.num("fy", 696.0, 1.0, 1e5);
+  s.camera.cx = args.num("cx", s.camera.width / 2.0, 0.0, s.camera.width);
+  s.camera.cy = args.num("cy", s.camera.height / 2.0, 0.0, s.camera.height);
+  s.camera.validate();
+  s.depth_range.min_m = args.num("depth-min", 0.1, 0.001, 10.0);
+  s.depth_range.max_m = args.num("depth-max", 3.0, 0.01, 6.5);
+  s.depth_range.validate();
+  const double noise_sigma = args.num("noise-sigma", 0.0, 0.0, 0.1);
+  const double dropout = args.num("dropout", 0.0, 0.0, 1.0);
+  const bool record_log = !args.flag("no-log");
+  const fs::path out = fs::absolute(args.str("out", "out/" + object_name + "-" + timestamp()));
+  args.reject_unknown();
+
+  // The object rests on the turntable (arm rig) or floats at the origin (free rig).
+  const Eigen::Vector3d half = s.normalisation.extent_m / 2.0;
+  s.object_z_m = s.rig == RigKind::kArm ? half.z() : 0.0;
+  s.keepout_min_m = -half - Eigen::Vector3d::Constant(0.02);
+  s.keepout_max_m = half + Eigen::Vector3d::Constant(0.02);
+  if (s.rig == RigKind::kArm) s.keepout_min_m.z() = -half.z();  // down to the turntable top
+  s.crop_min_m = -half - Eigen::Vector3d::Constant(0.05);
+  s.crop_max_m = half + Eigen::Vector3d::Constant(0.05);
+  s.scan_id = object_name + "-" + timestamp();
+
+  fs::create_directories(out / "logs");
+  const std::string stl = (out / "object.stl").string();
+  write_stl_binary(mesh, stl);
+  write_obj(mesh, (out / "object.obj").string());
+  write_json_atomic(to_json(s), (out / "settings.json").string());
+
+  std::cout << "pbnbv scan: " << object_name << " (" << s.normalisation.num_triangles << " triangles, "
+            << s.normalisation.extent_m.x() << " x " << s.normalisation.extent_m.y() << " x "
+            << s.normalisation.extent_m.z() << " m) on the " << to_string(s.rig) << " rig, " << s.views
+            << " " << s.planner << " views -> " << out.string() << std::endl;
+
+  const fs::path bin = self_dir();
+  std::vector<launcher::Child> children;
+  auto add = [&](const std::string& name, std::vector<std::string> argv, bool progress = false) {
+    launcher::Child c;
+    c.name = name;
+    c.argv = std::move(argv);
+    c.log_path = (out / "logs" / (name + ".log")).string();
+    c.stdout_to_terminal = progress;
+    children.push_back(std::move(c));
+  };
+  if (record_log) add("lcm-logger", {"/usr/bin/lcm-logger", "-q", "-f", (out / "scan.lcmlog").string()});
+  auto num = [](double x) { std::ostringstream os; os.precision(17); os << x; return os.str(); };
+  add("twin", {(bin / "pbnbv-twin").string(), "--rig", to_string(s.rig), "--mesh", stl,
+               "--object-z", num(s.object_z_m), "--model-out", (out / "twin_model.xml").string(),
+               "--width", std::to_string(s.camera.width), "--height", std::to_string(s.camera.height),
+               "--fx", num(s.camera.fx), "--fy", num(s.camera.fy), "--cx", num(s.camera.cx), "--cy", num(s.camera.cy),
+               "--depth-min", num(s.depth_range.min_m), "--depth-max", num(s.depth_range.max_m),
+               "--noise-sigma", num(noise_sigma), "--dropout", num(dropout), "--speed", num(s.sim_speed)});
+  add("motion", {(bin / "pbnbv-motion").string(), "--rig", to_string(s.rig)});
+  add("camera", {(bin / "pbnbv-camera").string(), "--rig", to_string(s.rig)});
+  add("coordinator", {(bin / "pbnbv-coordinator").string(), "--out", out.string()}, true);
+
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+
+  try {
+    for (auto& c : children) launcher::start(c);
+  } catch (const std::exception& e) {
+    launcher::stop_all(children, 5.0);
+    throw;
+  }
+  launcher::Child* coordinator = &children.back();
+  int code = 0;
+  bool done = false;
+  while (!done) {
+    if (g_interrupted) {
+      std::cout << "\ninterrupted: stopping every process" << std::endl;
+      // The coordinator writes what it has (scan.json with state "stopped") before exiting.
+      ::kill(coordinator->pid, SIGINT);
+      for (int i = 0; i < 250 && coordinator->running; ++i) {
+        launcher::reap(children);
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+      code = 130;
+      break;
+    }
+    for (launcher::Child* c : launcher::reap(children)) {
+      if (c == coordinator) {
+        code = c->exit_code;
+        done = true;
+      } else if (!done) {
+        std::cerr << "error: " << c->name << " stopped unexpectedly (exit status " << c->exit_code
+                  << "); the end of " << c->log_path << ":\n" << launcher::tail_lines(c->log_path, 8)
+                  << "stopping every process" << std::endl;
+        code = 1;
+        done = true;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  launcher::stop_all(children, 5.0);
+  if (code == 0) {
+    std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
+              << (out / "scan.json").string() << (record_log ? ", " + (out / "scan.lcmlog").string() : "")
+              << std::endl;
+  } else if (code != 130) {
+    std::cerr << "scan failed (exit " << code << "); logs in " << (out / "logs").string() << std::endl;
+  }
+  return code;
+}
+
+int spy(int argc, char** argv) {
+  Args args(argc, argv, 2);
+  args.reject_unknown();
+  const std::string classpath = std::string(PBNBV_LCM_JAR) + ":/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar";
+  if (!fs::exists(PBNBV_LCM_JAR)) {
+    throw std::runtime_error(std::string("message jar ") + PBNBV_LCM_JAR + " is missing: build the project first (./scripts/setup)");
+  }
+  // Debian's lcm-spy script passes -Xincgc, which Java 17 rejects; start the class directly.
+  std::vector<std::string> a = {"java", "-Djava.net.preferIPv4Stack=true", "-Xmx512m", "-cp", classpath, "lcm.spy.Spy"};
+  std::vector<char*> cargv;
+  for (auto& s : a) cargv.push_back(s.data());
+  cargv.push_back(nullptr);
+  ::execvp("java", cargv.data());
+  throw std::runtime_error("cannot run java (install default-jdk-headless: ./scripts/setup)");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string command = argc > 1 ? argv[1] : "help";
+  try {
+    if (command == "scan") return scan(argc, argv);
+    if (command == "spy") return spy(argc, argv);
+    if (command == "help" || command == "--help" || command == "-h") {
+      std::cout << kUsage;
+      return 0;
+    }
+    std::cerr << "pbnbv: unknown command '" << command << "'\n" << kUsage;
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "pbnbv " << command << ": " << e.what() << std::endl;
+    return 2;
+  }
+}

@@ -1,0 +1,200 @@
+#include "rig_sim.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace pbnbv::twin {
+
+namespace {
+constexpr const char* kAssetMarker = "<!-- PBNBV_OBJECT_ASSET -->";
+constexpr const char* kGeomMarker = "<!-- PBNBV_OBJECT_GEOM -->";
+constexpr double kPositionTolerance = 1e-4;  // rad (m), settled
+constexpr double kVelocityTolerance = 2e-3;  // rad/s (m/s), settled
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read rig model " + path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void replace_marker(std::string& xml, const std::string& marker, const std::string& with,
+                    const std::string& path) {
+  const auto pos = xml.find(marker);
+  if (pos == std::string::npos) {
+    throw std::runtime_error("rig model " + path + " has no '" + marker +
+                             "' marker where the object goes");
+  }
+  xml.replace(pos, marker.size(), with);
+}
+}  // namespace
+
+std::string compose_model_xml(const std::string& rig_xml_path, const ObjectPlacement& object) {
+  std::string xml = read_text(rig_xml_path);
+  std::string asset, geom;
+  if (!object.mesh_path.empty()) {
+    asset = "<mesh name=\"pbnbv_object\" file=\"" + object.mesh_path + "\"/>";
+    std::ostringstream g;
+    g.precision(17);
+    // Rendered (group 0) and collides with the arm like the real object would.
+    g << "<geom name=\"object\" type=\"mesh\" mesh=\"pbnbv_object\" pos=\"0 0 "
+      << object.object_z_m << "\" group=\"0\" rgba=\"0.8 0.75 0.6 1\" mass=\"0.5\"/>";
+    geom = g.str();
+  }
+  replace_marker(xml, kAssetMarker, asset, rig_xml_path);
+  replace_marker(xml, kGeomMarker, geom, rig_xml_path);
+  return xml;
+}
+
+RigSim::RigSim(const RigModel& rig, const ObjectPlacement& object,
+               const std::string& model_out_path) {
+  const std::string xml = compose_model_xml(rig.model_path, object);
+  {
+    std::ofstream out(model_out_path);
+    if (!out) throw std::runtime_error("cannot write the composed twin model " + model_out_path);
+    out << xml;
+  }
+  // The rig file uses no relative asset paths and the object mesh path is absolute, so the
+  // composed copy loads from anywhere.
+  char error[1000] = "";
+  m_ = mj_loadXML(model_out_path.c_str(), nullptr, error, sizeof(error));
+  if (!m_) {
+    throw std::runtime_error("MuJoCo could not load the twin model " + model_out_path + ": " + error);
+  }
+  d_ = mj_makeData(m_);
+  std::vector<double> speeds(rig.qd_max.data(), rig.qd_max.data() + 6);
+  arm_ = make_group(rig.joint_names, speeds);
+  if (rig.has_turntable) turntable_ = make_group({"turntable"}, {rig.turntable_qd_max});
+  // Start at home, holding.
+  for (int i = 0; i < 6; ++i) {
+    d_->qpos[arm_.qpos_adr[i]] = rig.q_home[i];
+    arm_.start[i] = arm_.target[i] = arm_.setpoint[i] = rig.q_home[i];
+  }
+  mj_forward(m_, d_);
+}
+
+RigSim::~RigSim() {
+  if (d_) mj_deleteData(d_);
+  if (m_) mj_deleteModel(m_);
+}
+
+JointGroup RigSim::make_group(const std::vector<std::string>& joints,
+                              const std::vector<double>& speeds) {
+  JointGroup g;
+  for (std::size_t i = 0; i < joints.size(); ++i) {
+    const int j = mj_name2id(m_, mjOBJ_JOINT, joints[i].c_str());
+    if (j < 0) throw std::runtime_error("twin model has no joint '" + joints[i] + "'");
+    int act = -1;
+    for (int a = 0; a < m_->nu; ++a) {
+      if (m_->actuator_trntype[a] == mjTRN_JOINT && m_->actuator_trnid[2 * a] == j) act = a;
+    }
+    if (act < 0) throw std::runtime_error("twin model has no actuator driving joint '" + joints[i] + "'");
+    g.names.push_back(joints[i]);
+    g.qpos_adr.push_back(m_->jnt_qposadr[j]);
+    g.dof_adr.push_back(m_->jnt_dofadr[j]);
+    g.actuator.push_back(act);
+    g.speed_limit.push_back(speeds.at(i));
+    const bool limited = m_->jnt_limited[j];
+    g.lower.push_back(limited ? m_->jnt_range[2 * j] : -1e9);
+    g.upper.push_back(limited ? m_->jnt_range[2 * j + 1] : 1e9);
+    const double q = d_->qpos[m_->jnt_qposadr[j]];
+    g.start.push_back(q);
+    g.target.push_back(q);
+    g.setpoint.push_back(q);
+  }
+  return g;
+}
+
+void RigSim::start_ramp(JointGroup& g, const std::vector<double>& target, double speed_scale,
+                        long seq) {
+  if (!(speed_scale > 0 && speed_scale <= 1)) {
+    throw std::invalid_argument("speed_scale " + std::to_string(speed_scale) + " is outside (0, 1]");
+  }
+  for (std::size_t i = 0; i < target.size(); ++i) {
+    if (!std::isfinite(target[i]) || target[i] < g.lower[i] - 1e-9 || target[i] > g.upper[i] + 1e-9) {
+      std::ostringstream os;
+      os << "joint " << g.names[i] << " target " << target[i] << " is outside its limits ["
+         << g.lower[i] << ", " << g.upper[i] << "]";
+      throw std::invalid_argument(os.str());
+    }
+  }
+  // Synchronised linear ramp: the slowest joint sets the duration.
+  double duration = 0;
+  for (std::size_t i = 0; i < target.size(); ++i) {
+    duration = std::max(duration, std::abs(target[i] - g.setpoint[i]) / (g.speed_limit[i] * speed_scale));
+  }
+  g.start = g.setpoint;
+  g.target = target;
+  g.t0 = d_->time;
+  g.t1 = d_->time + duration;
+  g.command_seq = seq;
+  g.ramping = true;
+}
+
+void RigSim::command_arm(const Vector6d& target, double speed_scale, long seq) {
+  start_ramp(arm_, std::vector<double>(target.data(), target.data() + 6), speed_scale, seq);
+}
+
+void RigSim::command_turntable(double target_rad, double speed_scale, long seq) {
+  if (!turntable_) throw std::invalid_argument("this rig has no turntable");
+  start_ramp(*turntable_, {target_rad}, speed_scale, seq);
+}
+
+void RigSim::hold_arm(long seq) {
+  std::vector<double> here;
+  for (int a : arm_.qpos_adr) here.push_back(d_->qpos[a]);
+  arm_.setpoint = here;
+  start_ramp(arm_, here, 1.0, seq);
+}
+
+void RigSim::advance_ramp(JointGroup& g) {
+  if (g.ramping) {
+    const double span = g.t1 - g.t0;
+    const double s = span <= 0 ? 1.0 : std::clamp((d_->time - g.t0) / span, 0.0, 1.0);
+    for (std::size_t i = 0; i < g.target.size(); ++i) {
+      g.setpoint[i] = g.start[i] + s * (g.target[i] - g.start[i]);
+    }
+    if (s >= 1.0) g.ramping = false;
+  }
+  for (std::size_t i = 0; i < g.target.size(); ++i) d_->ctrl[g.actuator[i]] = g.setpoint[i];
+}
+
+void RigSim::step() {
+  advance_ramp(arm_);
+  if (turntable_) advance_ramp(*turntable_);
+  // Gravity and Coriolis compensation, as the rig's own controller does.
+  mju_copy(d_->qfrc_applied, d_->qfrc_bias, m_->nv);
+  mj_step(m_, d_);
+}
+
+double RigSim::time_s() const { return d_->time; }
+
+Vector6d RigSim::arm_position() const {
+  Vector6d q;
+  for (int i = 0; i < 6; ++i) q[i] = d_->qpos[arm_.qpos_adr[i]];
+  return q;
+}
+
+Vector6d RigSim::arm_velocity() const {
+  Vector6d v;
+  for (int i = 0; i < 6; ++i) v[i] = d_->qvel[arm_.dof_adr[i]];
+  return v;
+}
+
+double RigSim::turntable_angle() const { return turntable_ ? d_->qpos[turntable_->qpos_adr[0]] : 0.0; }
+double RigSim::turntable_velocity() const { return turntable_ ? d_->qvel[turntable_->dof_adr[0]] : 0.0; }
+
+bool RigSim::settled(const JointGroup& g) const {
+  if (g.ramping) return false;
+  for (std::size_t i = 0; i < g.target.size(); ++i) {
+    if (std::abs(d_->qpos[g.qpos_adr[i]] - g.target[i]) > kPositionTolerance) return false;
+    if (std::abs(d_->qvel[g.dof_adr[i]]) > kVelocityTolerance) return false;
+  }
+  return true;
+}
+
+}  // namespace pbnbv::twin

@@ -1,0 +1,89 @@
+#pragma once
+// The simulated rig without the bus: the rig's MJCF with the object inserted, stepped by
+// MuJoCo physics. Joints follow speed-limited ramps to their targets (all joints of a command
+// arriving together), position actuators track the ramp, gravity is compensated as an
+// industrial controller would, and a joint group is "settled" when it is at its target and
+// still.
+#include <mujoco/mujoco.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/geometry.hpp"
+#include "core/rig.hpp"
+
+namespace pbnbv::twin {
+
+// The object as the twin places it: a mesh already in the normalised object frame, whose
+// frame sits object_z_m above the turntable top (free rig: at the world origin).
+struct ObjectPlacement {
+  std::string mesh_path;  // binary STL or OBJ in the object frame; "" = empty rig
+  double object_z_m = 0;
+};
+
+// Reads the rig's MJCF text and returns it with the object's asset and geom inserted at the
+// PBNBV_OBJECT_ASSET / PBNBV_OBJECT_GEOM markers. Throws std::runtime_error naming the file
+// when a marker is missing.
+std::string compose_model_xml(const std::string& rig_xml_path, const ObjectPlacement& object);
+
+// A group of joints moving together under one command (the arm's 6, or the turntable).
+struct JointGroup {
+  std::vector<int> qpos_adr;   // addresses in qpos
+  std::vector<int> dof_adr;    // addresses in qvel
+  std::vector<int> actuator;   // position actuator per joint
+  std::vector<double> speed_limit;  // per joint, rad/s (m/s)
+  std::vector<double> lower, upper; // joint limits
+  std::vector<std::string> names;
+  // Ramp state: setpoint moves linearly from start to target over [t0, t1].
+  std::vector<double> start, target, setpoint;
+  double t0 = 0, t1 = 0;
+  long command_seq = -1;
+  bool ramping = false;
+};
+
+class RigSim {
+ public:
+  // Loads the composed model (written to `model_out_path`, kept for users to open in MuJoCo's
+  // viewer). Throws std::runtime_error with MuJoCo's error text.
+  RigSim(const RigModel& rig, const ObjectPlacement& object, const std::string& model_out_path);
+  ~RigSim();
+  RigSim(const RigSim&) = delete;
+  RigSim& operator=(const RigSim&) = delete;
+
+  // Starts a synchronised ramp to `target` at `speed_scale` of the limits. Throws
+  // std::invalid_argument naming the joint when a target is outside its limits or not finite
+  // (the command is then ignored: the rig keeps holding).
+  void command_arm(const Vector6d& target, double speed_scale, long seq);
+  void command_turntable(double target_rad, double speed_scale, long seq);
+  void hold_arm(long seq);  // stop where it is
+
+  // Advances physics by one timestep.
+  void step();
+  double time_s() const;
+
+  Vector6d arm_position() const;
+  Vector6d arm_velocity() const;
+  const JointGroup& arm() const { return arm_; }
+  bool has_turntable() const { return turntable_.has_value(); }
+  const JointGroup& turntable() const { return *turntable_; }
+  double turntable_angle() const;
+  double turntable_velocity() const;
+  bool settled(const JointGroup& g) const;  // ramp done, |q - target| and |qd| small
+  bool moving(const JointGroup& g) const { return g.ramping || !settled(g); }
+
+  mjModel* model() { return m_; }
+  mjData* data() { return d_; }
+
+ private:
+  void start_ramp(JointGroup& g, const std::vector<double>& target, double speed_scale, long seq);
+  void advance_ramp(JointGroup& g);
+  JointGroup make_group(const std::vector<std::string>& joints, const std::vector<double>& speeds);
+
+  mjModel* m_ = nullptr;
+  mjData* d_ = nullptr;
+  JointGroup arm_;
+  std::optional<JointGroup> turntable_;
+};
+
+}  // namespace pbnbv::twin
