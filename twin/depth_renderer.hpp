@@ -44,8 +44,8 @@ class DepthRenderer {
   // `model` must outlive the renderer and is adjusted for rendering (camera fovy, offscreen
   // buffer size, near/far planes). Throws std::invalid_argument when the camera does not
   // exist or the intrinsics cannot be rendered (fx != fy: MuJoCo 2.2.2 has square pixels).
-  // A principal point off the image centre is rendered exactly by rendering a larger centred
-  // image and cropping it.
+  // A principal point off the image centre is rendered exactly by giving the scene camera an
+  // off-centre frustum (MuJoCo 2.2.2 renders the frustum it is given).
   DepthRenderer(mjModel* model, const std::string& camera_name, const CameraIntrinsics& k,
                 const DepthRange& range);
   ~DepthRenderer();

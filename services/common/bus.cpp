@@ -17,7 +17,7 @@ std::string lcm_url() {
   const char* env = std::getenv("LCM_DEFAULT_URL");
   if (env && *env) return env;
   // ttl=0: never leaves the host. A 1280x720 depth frame is 1.8 MB: give the socket room.
-  return "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=33554432";
+  return "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
 }
 }  // namespace
 

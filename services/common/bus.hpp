@@ -36,8 +36,9 @@ class Bus {
   // is logged with the channel and the reason, counted as rejected, and dropped.
   template <class T>
   void subscribe(const std::string& channel, std::function<void(const T&)> handler) {
-    lcm_.subscribe(channel, &Bus::Dispatch<T>::on_message,
-                   new Dispatch<T>{this, channel, std::move(handler)});
+    // Owned by the LCM connection for the process's lifetime (subscriptions are never removed).
+    auto* dispatch = new Dispatch<T>{this, std::move(handler)};
+    lcm_.subscribe(channel, &Dispatch<T>::on_message, dispatch);
   }
 
   template <class T>
@@ -66,9 +67,9 @@ class Bus {
   template <class T>
   struct Dispatch {
     Bus* bus;
-    std::string channel;
     std::function<void(const T&)> handler;
-    static void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& chan, Dispatch* d) {
+    void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& chan) {
+      Dispatch* d = this;
       T msg;
       bool decoded = false;
       try {

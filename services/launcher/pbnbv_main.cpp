@@ -216,6 +216,15 @@ int scan(int argc, char** argv) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   launcher::stop_all(children, 5.0);
+  // How every process ended (0 = clean exit), for the user and for the tests.
+  nlohmann::json procs = nlohmann::json::array();
+  for (const auto& c : children) procs.push_back({{"name", c.name}, {"exit_code", c.exit_code}});
+  write_json_atomic(procs, (out / "processes.json").string());
+  for (const auto& c : children) {
+    if (c.exit_code != 0 && code == 0) {
+      std::cerr << "warning: " << c.name << " exited with status " << c.exit_code << " (log: " << c.log_path << ")" << std::endl;
+    }
+  }
   if (code == 0) {
     std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
               << (out / "scan.json").string() << (record_log ? ", " + (out / "scan.lcmlog").string() : "")
