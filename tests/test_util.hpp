@@ -32,8 +32,9 @@ inline std::string env_or(const char* name, const std::string& fallback) {
   return v && *v ? v : fallback;
 }
 
-inline std::string bin_dir() { return env_or("PBNBV_BIN_DIR", "build/bin"); }
-inline std::string source_dir() { return env_or("PBNBV_SOURCE_DIR", "."); }
+// Compiled in by tests/CMakeLists.txt; the environment may override them.
+inline std::string bin_dir() { return env_or("PBNBV_BIN_DIR", PBNBV_TEST_BIN_DIR); }
+inline std::string source_dir() { return env_or("PBNBV_SOURCE_DIR", PBNBV_TEST_SOURCE_DIR); }
 inline std::string netns_run() { return source_dir() + "/scripts/netns-run"; }
 
 // A fresh empty folder under the system temp dir.

@@ -1,0 +1,216 @@
+#include "core/cloud.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+namespace pbnbv {
+namespace {
+
+namespace fs = std::filesystem;
+
+class CloudFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    static std::atomic<int> counter{0};
+    dir_ = fs::temp_directory_path() /
+           ("pbnbv_cloud_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string write(const std::string& name, const std::string& content) const {
+    const std::string p = path(name);
+    std::ofstream f(p, std::ios::binary);
+    f.write(content.data(), static_cast<std::streamsize>(content.size()));
+    return p;
+  }
+  fs::path dir_;
+};
+
+void put_be(std::string& s, const void* p, size_t n) {
+  const auto* b = static_cast<const unsigned char*>(p);
+  for (size_t k = 0; k < n; ++k) s.push_back(static_cast<char>(b[n - 1 - k]));  // host is LE
+}
+
+void expect_error(const std::function<void()>& fn, const std::vector<std::string>& needles) {
+  try {
+    fn();
+    ADD_FAILURE() << "no exception thrown";
+  } catch (const std::runtime_error& e) {
+    const std::string msg = e.what();
+    for (const auto& n : needles) {
+      EXPECT_NE(msg.find(n), std::string::npos) << "message '" << msg << "' lacks '" << n << "'";
+    }
+  }
+}
+
+TEST_F(CloudFiles, PlyRoundTripIsExact) {
+  std::mt19937 rng(5);
+  std::normal_distribution<float> g(0.0f, 0.3f);
+  PointCloud c;
+  for (int i = 0; i < 1000; ++i) c.emplace_back(g(rng), g(rng), g(rng));
+  c.emplace_back(-0.0f, 1e-30f, 3.4e38f);
+  const std::string p = path("c.ply");
+  write_ply(c, p);
+  EXPECT_EQ(fs::file_size(p) - 12 * c.size(),
+            std::string("ply\nformat binary_little_endian 1.0\ncomment written by pbnbv\n"
+                        "element vertex 1001\nproperty float x\nproperty float y\n"
+                        "property float z\nend_header\n")
+                .size());
+  const PointCloud r = read_ply(p);
+  EXPECT_EQ(r, c);
+
+  write_ply({}, path("empty.ply"));
+  EXPECT_TRUE(read_ply(path("empty.ply")).empty());
+}
+
+TEST_F(CloudFiles, ReadAsciiWithExtrasAndFaces) {
+  const std::string p = write("a.ply",
+                              "ply\r\nformat ascii 1.0\r\ncomment crlf header\r\n"
+                              "element vertex 3\r\nproperty double x\r\nproperty uchar red\r\n"
+                              "property double y\r\nproperty double z\r\nproperty float nx\r\n"
+                              "element face 1\r\nproperty list uchar int vertex_indices\r\n"
+                              "end_header\r\n"
+                              "0.5 255 -1 2e-3 0\r\n1 0 2 3 0.5\r\n-4 7 5 6 1\r\n3 0 1 2\r\n");
+  const PointCloud r = read_ply(p);
+  ASSERT_EQ(r.size(), 3u);
+  EXPECT_EQ(r[0], Eigen::Vector3f(0.5f, -1.0f, 2e-3f));
+  EXPECT_EQ(r[1], Eigen::Vector3f(1, 2, 3));
+  EXPECT_EQ(r[2], Eigen::Vector3f(-4, 5, 6));
+
+  // A cloud may hold invalid points (a mesh may not): they are read as they are.
+  const std::string q = write("nan.ply",
+                              "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
+                              "property float y\nproperty float z\nend_header\n1 2 3\nnan 0 0\n");
+  const PointCloud c = read_ply(q);
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_TRUE(std::isnan(c[1].x()));
+}
+
+TEST_F(CloudFiles, ReadBinaryBigEndianDouble) {
+  std::string s =
+      "ply\nformat binary_big_endian 1.0\nelement camera 1\nproperty float fx\n"
+      "element vertex 2\nproperty double x\nproperty double y\nproperty double z\n"
+      "property list uchar float extra\nend_header\n";
+  const float fx = 600.0f;
+  put_be(s, &fx, 4);
+  const double v[2][3] = {{0.1, 0.2, 0.3}, {-1.5, 2.25, 1e3}};
+  for (const auto& p : v) {
+    for (double c : p) put_be(s, &c, 8);
+    s.push_back(1);
+    const float e = 9.0f;
+    put_be(s, &e, 4);
+  }
+  const PointCloud r = read_ply(write("be.ply", s));
+  ASSERT_EQ(r.size(), 2u);
+  EXPECT_EQ(r[0], Eigen::Vector3f(0.1f, 0.2f, 0.3f));
+  EXPECT_EQ(r[1], Eigen::Vector3f(-1.5f, 2.25f, 1e3f));
+}
+
+TEST_F(CloudFiles, Errors) {
+  const std::string missing = path("missing.ply");
+  expect_error([&] { read_ply(missing); }, {missing, "does not exist"});
+  const std::string notply = write("x.ply", "solid nope\n");
+  expect_error([&] { read_ply(notply); }, {notply, "ply"});
+  const std::string noxyz = write("noxyz.ply",
+                                  "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                                  "property float y\nend_header\n1 2\n");
+  expect_error([&] { read_ply(noxyz); }, {noxyz, "x, y or z"});
+  const std::string bad = write("bad.ply",
+                                "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
+                                "property float y\nproperty float z\nend_header\n1 2 3\n1 2 three\n");
+  expect_error([&] { read_ply(bad); }, {bad, "line 9", "malformed"});
+  PointCloud c(10, Eigen::Vector3f(1, 2, 3));
+  const std::string p = path("cut.ply");
+  write_ply(c, p);
+  fs::resize_file(p, fs::file_size(p) - 5);
+  expect_error([&] { read_ply(p); }, {p, "truncated"});
+  const std::string unwritable = path("no/dir/c.ply");
+  expect_error([&] { write_ply(c, unwritable); }, {unwritable});
+}
+
+TEST(VoxelDownsample, GridCentroids) {
+  // 10 x 10 x 10 points at (i + 0.5) cm: voxel 2 cm holds i = 2j, 2j + 1, centroid (2j + 1) cm.
+  PointCloud c;
+  for (int i = 0; i < 10; ++i) {
+    for (int j = 0; j < 10; ++j) {
+      for (int k = 0; k < 10; ++k) {
+        c.emplace_back((i + 0.5f) * 0.01f, (j + 0.5f) * 0.01f, (k + 0.5f) * 0.01f);
+      }
+    }
+  }
+  std::reverse(c.begin(), c.end());  // output order must not depend on input order
+  const PointCloud d = voxel_downsample(c, 0.02);
+  ASSERT_EQ(d.size(), 125u);
+  for (int a = 0; a < 5; ++a) {
+    for (int b = 0; b < 5; ++b) {
+      for (int e = 0; e < 5; ++e) {
+        const Eigen::Vector3f expected(0.01f + 0.02f * a, 0.01f + 0.02f * b, 0.01f + 0.02f * e);
+        const Eigen::Vector3f got = d[static_cast<size_t>(25 * a + 5 * b + e)];
+        EXPECT_NEAR((got - expected).norm(), 0.0f, 1e-6f) << a << b << e;
+      }
+    }
+  }
+}
+
+TEST(VoxelDownsample, NegativeCoordinatesUseFloor) {
+  const PointCloud c = {{-0.005f, 0.005f, 0}, {-0.015f, 0.015f, 0}, {0.005f, 0.005f, 0}};
+  const PointCloud d = voxel_downsample(c, 0.02);
+  ASSERT_EQ(d.size(), 2u);  // x voxels -1 and 0
+  EXPECT_NEAR((d[0] - Eigen::Vector3f(-0.01f, 0.01f, 0)).norm(), 0.0f, 1e-7f);
+  EXPECT_NEAR((d[1] - Eigen::Vector3f(0.005f, 0.005f, 0)).norm(), 0.0f, 1e-7f);
+}
+
+TEST(VoxelDownsample, NonPositiveVoxelReturnsInput) {
+  const PointCloud c = {{1, 2, 3}, {1, 2, 3}, {4, 5, 6}};
+  EXPECT_EQ(voxel_downsample(c, 0.0), c);
+  EXPECT_EQ(voxel_downsample(c, -1.0), c);
+  EXPECT_TRUE(voxel_downsample({}, 0.01).empty());
+}
+
+TEST(VoxelDownsample, DropsNonFiniteAndIsDeterministic) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  PointCloud c;
+  for (int i = 0; i < 200000; ++i) c.emplace_back(u(rng), u(rng), u(rng));
+  c.emplace_back(std::numeric_limits<float>::quiet_NaN(), 0, 0);
+  c.emplace_back(0, std::numeric_limits<float>::infinity(), 0);
+  const PointCloud a = voxel_downsample(c, 0.1);
+  EXPECT_EQ(a.size(), 8000u);  // 20^3 voxels, all occupied
+  for (const auto& p : a) EXPECT_TRUE(p.allFinite());
+  // Sorted by key: x-voxel non-decreasing.
+  for (size_t i = 1; i < a.size(); ++i) {
+    EXPECT_LE(std::floor(a[i - 1].x() / 0.1f), std::floor(a[i].x() / 0.1f) + 1e-6f);
+  }
+  std::shuffle(c.begin(), c.end(), rng);
+  const PointCloud b = voxel_downsample(c, 0.1);
+  ASSERT_EQ(b.size(), a.size());
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR((a[i] - b[i]).norm(), 0.0f, 1e-6f);
+  // Very wide spread (keys don't fit 64 packed bits): the fallback path gives the same answer
+  // layout, sorted by x then y then z.
+  const PointCloud wide = {{1e15f, 0, 0}, {-1e15f, 1, 0}, {0, -1e15f, 1e15f}, {0, 0, 0}};
+  const PointCloud w = voxel_downsample(wide, 1e-3);
+  ASSERT_EQ(w.size(), 4u);
+  EXPECT_EQ(w[0], wide[1]);
+  EXPECT_EQ(w[1], wide[2]);
+  EXPECT_EQ(w[2], wide[3]);
+  EXPECT_EQ(w[3], wide[0]);
+}
+
+}  // namespace
+}  // namespace pbnbv
