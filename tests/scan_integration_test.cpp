@@ -7,6 +7,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <sys/wait.h>
+#include <thread>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -115,4 +119,80 @@ TEST(ScanIntegration, SphereOnTheFreeRigLiesOnTheTrueSurface) {
   std::cout << "sphere, free rig: " << d.n << " points, median distance " << d.median * 1e3 << " mm\n";
   EXPECT_GT(d.n, 5000u);
   EXPECT_LE(d.median, 1e-3);
+}
+
+namespace {
+
+// Polls scan.json until at least `views` views are recorded or the timeout passes.
+bool wait_for_views(const fs::path& out, std::size_t views, double timeout_s) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (std::chrono::steady_clock::now() < end) {
+    try {
+      if (fs::exists(out / "scan.json") && read_json_file(out / "scan.json")["views"].size() >= views) return true;
+    } catch (const std::exception&) {  // being replaced: read again
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return false;
+}
+
+int wait_exit(pid_t pid, double timeout_s) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (std::chrono::steady_clock::now() < end) {
+    int status = 0;
+    if (::waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ::kill(pid, SIGKILL);
+  return -1;
+}
+
+pid_t start_scan(const fs::path& out, const std::string& options) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string cmd = netns_run() + " " + bin_dir() + "/pbnbv scan " + options + " --out " + out.string() +
+                            " > " + (out.string() + ".stdout") + " 2>&1";
+    ::execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+}  // namespace
+
+TEST(ScanIntegration, CtrlCStopsEveryProcessAndKeepsTheScanSoFar) {
+  const fs::path out = fresh_dir("interrupt") / "scan";
+  const pid_t pid = start_scan(out, "--object sphere --views 40 --sim-speed 2 --no-log");
+  ASSERT_TRUE(wait_for_views(out, 1, 60)) << "no view recorded";
+  ::kill(pid, SIGINT);
+  const int code = wait_exit(pid, 30);
+  EXPECT_EQ(code, 130);
+  const auto scan = read_json_file(out / "scan.json");
+  EXPECT_EQ(scan["status"]["state"], "stopped");
+  EXPECT_GE(scan["status"]["views_done"].get<int>(), 1);
+  EXPECT_LT(scan["status"]["views_done"].get<int>(), 40);
+  EXPECT_TRUE(fs::exists(out / "cloud.ply"));
+  const auto procs = read_json_file(out / "processes.json");
+  for (const auto& p : procs) {
+    if (p["name"] != "coordinator") EXPECT_EQ(p["exit_code"], 0) << p.dump();
+  }
+  const CommandResult left = run_command("pgrep -f 'model-ou[t] " + out.string() + "'");
+  EXPECT_NE(left.exit_code, 0) << "a twin is still running: " << left.output;
+}
+
+TEST(ScanIntegration, AFailedProcessStopsTheScanWithItsName) {
+  const fs::path out = fresh_dir("crash") / "scan";
+  const pid_t pid = start_scan(out, "--object sphere --views 40 --sim-speed 2 --no-log");
+  ASSERT_TRUE(wait_for_views(out, 1, 60)) << "no view recorded";
+  // Kill this scan's twin (its arguments name the output folder).
+  const CommandResult killed = run_command("pkill -KILL -f 'model-ou[t] " + out.string() + "/twin_model.xml'");
+  ASSERT_EQ(killed.exit_code, 0) << killed.output;
+  const int code = wait_exit(pid, 30);
+  EXPECT_EQ(code, 1);
+  std::ifstream in(out.string() + ".stdout");
+  const std::string said((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(said.find("twin stopped unexpectedly"), std::string::npos) << said;
+  const CommandResult left = run_command("pgrep -a -f 'pbnbv-[m]otion|pbnbv-[c]amera|pbnbv-[c]oordinator'");
+  // Other tests may run scans in parallel: look only for processes of this scan.
+  EXPECT_EQ(left.output.find(out.string()), std::string::npos) << left.output;
 }
