@@ -16,6 +16,7 @@
 
 #include "core/mesh.hpp"
 #include "core/geometry.hpp"
+#include "core/scan_settings.hpp"
 #include "launcher/processes.hpp"
 #include "pbnbv/arm_command_t.hpp"
 #include "pbnbv/arm_status_t.hpp"
@@ -303,6 +304,58 @@ TEST_F(BadInput, ValidRequestsStillSucceedAfterTheGarbage) {
     if (r_m < 0.15 - 0.003 || r_m > 0.15 + 0.001) ++off;
   }
   EXPECT_LT(off, cloud.num_points / 100) << off << " of " << cloud.num_points << " points off the sphere";
+  EXPECT_TRUE(all_running());
+}
+
+TEST_F(BadInput, CoordinatorFinishesItsScanDespiteGarbageOnItsChannels) {
+  // A two-view ring scan of the suite's sphere by a coordinator alone, while every channel it
+  // subscribes to also carries malformed messages and answers of another scan.
+  ScanSettings s;
+  s.scan_id = "garbage-scan";
+  s.rig = RigKind::kArm;
+  s.rig_model_path = default_rig_path(RigKind::kArm);
+  s.views = 2;
+  s.object_name = "sphere";
+  s.normalisation.extent_m = Eigen::Vector3d::Constant(0.3);
+  s.object_z_m = kObjectZ;
+  s.keepout_min_m = Eigen::Vector3d(-0.17, -0.17, -0.15);
+  s.keepout_max_m = Eigen::Vector3d::Constant(0.17);
+  s.sim_speed = 20;
+  const fs::path out = dir_ / "coordinator";
+  fs::create_directories(out);
+  write_json_atomic(to_json(s), (out / "settings.json").string());
+  launcher::Child coordinator;
+  coordinator.name = "coordinator";
+  coordinator.argv = {bin_dir() + "/pbnbv-coordinator", "--out", out.string()};
+  coordinator.log_path = (dir_ / "coordinator.log").string();
+  launcher::start(coordinator);
+  std::vector<launcher::Child> one = {coordinator};
+
+  lcm::LCM& lcm = listener_->lcm();
+  const std::vector<uint8_t> garbage = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17};
+  move_result_t foreign;  // a well-formed answer for another scan: ignored
+  foreign.scan_id = "another-scan";
+  foreign.request_id = 0;
+  foreign.status = move_result_t::kUnreachable;
+  foreign.num_joints = 0;
+  int64_t coordinator_rejected = 0;
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (std::chrono::steady_clock::now() < end) {
+    launcher::reap(one);
+    if (!one[0].running) break;
+    for (const char* channel : {"MOVE_RESULT", "CLOUD", "ARM_STATUS", "TURNTABLE_STATUS", "HEARTBEAT"}) {
+      lcm.publish(channel, garbage.data(), static_cast<unsigned>(garbage.size()));
+    }
+    lcm.publish("MOVE_RESULT", &foreign);
+    listener_->spin_until([] { return false; }, 0.05);
+    coordinator_rejected = std::max(coordinator_rejected, rejected("coordinator"));
+  }
+  launcher::stop_all(one, 5.0);
+  EXPECT_EQ(one[0].exit_code, 0) << launcher::tail_lines(one[0].log_path, 20);
+  EXPECT_GT(coordinator_rejected, 0) << "its heartbeat should count the rejected messages";
+  const auto scan = read_json((out / "scan.json").string());
+  EXPECT_EQ(scan["status"]["state"], "done");
+  EXPECT_EQ(scan["status"]["views_done"], 2);
   EXPECT_TRUE(all_running());
 }
 
