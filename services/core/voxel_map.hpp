@@ -1,0 +1,87 @@
+#pragma once
+// The five-state voxel map of PB-NBV (method.md "Voxel map", paper section III-B) with its
+// bounding box B. Dense grid over B; rays traversed with a 3-D DDA (Amanatides & Woo).
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/camera_model.hpp"
+#include "core/geometry.hpp"
+
+namespace pbnbv {
+
+enum class VoxelState : uint8_t { kNone = 0, kEmpty = 1, kOccupied = 2, kUnknown = 3, kFrontier = 4 };
+const char* to_string(VoxelState s);
+
+struct VoxelMapParams {
+  double resolution_m = 0.03;      // voxel edge
+  double gamma_m = 0.1;            // B grows to cover a sphere of this radius around each Frontier voxel
+  bool no_return_is_free = true;   // a pixel without a return (0) means free space up to max range
+  // The ray set: one ray per `ray_stride_px` pixels in u and v; 0 = automatic: about one ray per
+  // voxel footprint at the far side of B (every voxel in the frustum is crossed), never coarser
+  // than needed. Occupied voxels always come from every valid pixel.
+  int ray_stride_px = 0;
+};
+
+// One depth frame as the map needs it: planar depth (0 or non-finite = no return), the camera
+// model and range, and the (registered) camera pose in the object frame.
+struct DepthView {
+  const std::vector<float>* depth_m = nullptr;  // row-major, width * height
+  CameraIntrinsics intrinsics;
+  DepthRange range;
+  Pose object_T_camera = Pose::Identity();
+};
+
+struct VoxelCounts {
+  int64_t none = 0, empty = 0, occupied = 0, unknown = 0, frontier = 0;
+};
+
+struct MapUpdateResult {
+  bool updated = false;          // false: the frame was empty / all invalid; map unchanged
+  std::string message;           // why not, or a summary
+  VoxelCounts counts;
+  double time_s = 0;             // wall time of the update
+  int rays = 0;                  // rays traversed
+};
+
+class VoxelMap {
+ public:
+  explicit VoxelMap(const VoxelMapParams& params);
+
+  // Integrates one frame with the paper's rules:
+  //  - a voxel holding a point of the frame becomes Occupied (Occupied is kept);
+  //  - along each ray from the camera centre, None, Unknown and Frontier voxels before the
+  //    first Occupied voxel become Empty; None voxels behind it become Unknown;
+  //  - then every Unknown voxel with at least one Empty and at least one Occupied voxel among
+  //    its 26 neighbours is Frontier, every other Frontier voxel goes back to Unknown;
+  //  - B: the first frame sets B to the AABB of its Occupied voxels enlarged along the viewing
+  //    direction until its diagonal doubles; later frames grow B to cover the Occupied and
+  //    Unknown voxels and a sphere of radius gamma around every Frontier voxel (B never shrinks).
+  // A frame with no valid pixel, or only NaNs, leaves the map unchanged and says so.
+  MapUpdateResult integrate(const DepthView& view);
+
+  const VoxelMapParams& params() const { return params_; }
+  bool empty() const { return dims_.prod() == 0; }
+  Eigen::AlignedBox3d bounds() const;            // B, object frame
+  Eigen::Vector3i dims() const { return dims_; }  // voxels along x, y, z
+  VoxelState state(const Eigen::Vector3i& index) const;
+  VoxelState state_at(const Eigen::Vector3d& point_m) const;  // kNone outside B
+  Eigen::Vector3d centre(const Eigen::Vector3i& index) const;
+  VoxelCounts counts() const;
+  std::vector<Eigen::Vector3d> centres(VoxelState s) const;  // object frame
+
+  // Writes the map as an OctoMap ColorOcTree (.ot, viewable in octovis): Occupied, Unknown and
+  // Frontier voxels as occupied nodes coloured by state, Empty voxels as free nodes.
+  void write_octomap(const std::string& path) const;
+
+ private:
+  VoxelMapParams params_;
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  // min corner of B, on the voxel lattice
+  Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
+  std::vector<VoxelState> cells_;
+  // (implementation helpers are private to voxel_map.cpp)
+  friend struct VoxelMapAccess;
+};
+
+}  // namespace pbnbv
