@@ -50,6 +50,11 @@ std::string compose_model_xml(const std::string& rig_xml_path, const ObjectPlace
   return xml;
 }
 
+double ramp_duration_s(double distance, double speed_limit, double accel_limit) {
+  if (!(distance > 1e-9)) return 0.0;  // already there (up to numerical noise): no ramp
+  return std::max(1.5 * distance / speed_limit, std::sqrt(6.0 * distance / accel_limit));
+}
+
 RigSim::RigSim(const RigModel& rig, const ObjectPlacement& object,
                const std::string& model_out_path) {
   const std::string xml = compose_model_xml(rig.model_path, object);
@@ -105,6 +110,8 @@ JointGroup RigSim::make_group(const std::vector<std::string>& joints,
     g.start.push_back(q);
     g.target.push_back(q);
     g.setpoint.push_back(q);
+    g.setpoint_velocity.push_back(0.0);
+    g.setpoint_acceleration.push_back(0.0);
   }
   return g;
 }
@@ -122,10 +129,12 @@ void RigSim::start_ramp(JointGroup& g, const std::vector<double>& target, double
       throw std::invalid_argument(os.str());
     }
   }
-  // Synchronised linear ramp: the slowest joint sets the duration.
+  // Synchronised smoothstep ramp: the slowest joint sets the duration.
   double duration = 0;
   for (std::size_t i = 0; i < target.size(); ++i) {
-    duration = std::max(duration, std::abs(target[i] - g.setpoint[i]) / (g.speed_limit[i] * speed_scale));
+    const double v = g.speed_limit[i] * speed_scale;
+    duration = std::max(duration, ramp_duration_s(std::abs(target[i] - g.setpoint[i]), v,
+                                                  kAccelerationPerSpeed * v));
   }
   g.start = g.setpoint;
   g.target = target;
@@ -152,13 +161,22 @@ void RigSim::hold_arm(long seq) {
 }
 
 void RigSim::advance_ramp(JointGroup& g) {
+  std::fill(g.setpoint_velocity.begin(), g.setpoint_velocity.end(), 0.0);
+  std::fill(g.setpoint_acceleration.begin(), g.setpoint_acceleration.end(), 0.0);
   if (g.ramping) {
     const double span = g.t1 - g.t0;
-    const double s = span <= 0 ? 1.0 : std::clamp((d_->time - g.t0) / span, 0.0, 1.0);
+    const double tau = span <= 0 ? 1.0 : std::clamp((d_->time - g.t0) / span, 0.0, 1.0);
+    // s = 3 tau^2 - 2 tau^3, ds/dt = 6 tau (1 - tau) / span, d2s/dt2 = (6 - 12 tau) / span^2
+    const double s = tau * tau * (3.0 - 2.0 * tau);
+    const double ds = span <= 0 ? 0.0 : 6.0 * tau * (1.0 - tau) / span;
+    const double dds = span <= 0 || tau >= 1.0 ? 0.0 : (6.0 - 12.0 * tau) / (span * span);
     for (std::size_t i = 0; i < g.target.size(); ++i) {
-      g.setpoint[i] = g.start[i] + s * (g.target[i] - g.start[i]);
+      const double delta = g.target[i] - g.start[i];
+      g.setpoint[i] = g.start[i] + s * delta;
+      g.setpoint_velocity[i] = ds * delta;
+      g.setpoint_acceleration[i] = dds * delta;
     }
-    if (s >= 1.0) g.ramping = false;
+    if (tau >= 1.0) g.ramping = false;
   }
   for (std::size_t i = 0; i < g.target.size(); ++i) d_->ctrl[g.actuator[i]] = g.setpoint[i];
 }
@@ -166,9 +184,27 @@ void RigSim::advance_ramp(JointGroup& g) {
 void RigSim::step() {
   advance_ramp(arm_);
   if (turntable_) advance_ramp(*turntable_);
-  // Gravity and Coriolis compensation, as the rig's own controller does.
+  // The rig's own controller: gravity and Coriolis compensation, plus feed-forward of the
+  // ramp's acceleration (through the mass matrix) and velocity (through the joint damping).
+  std::vector<mjtNum> qdd(m_->nv, 0.0), inertial(m_->nv, 0.0);
   mju_copy(d_->qfrc_applied, d_->qfrc_bias, m_->nv);
+  auto feed_forward = [&](const JointGroup& g) {
+    for (std::size_t i = 0; i < g.dof_adr.size(); ++i) {
+      qdd[g.dof_adr[i]] = g.setpoint_acceleration[i];
+      d_->qfrc_applied[g.dof_adr[i]] += m_->dof_damping[g.dof_adr[i]] * g.setpoint_velocity[i];
+    }
+  };
+  feed_forward(arm_);
+  if (turntable_) feed_forward(*turntable_);
+  mj_mulM(m_, d_, inertial.data(), qdd.data());
+  for (int i = 0; i < m_->nv; ++i) d_->qfrc_applied[i] += inertial[i];
+  const double t = d_->time;
   mj_step(m_, d_);
+  // MuJoCo resets the state (and the clock) when the physics diverges: never carry on silently.
+  if (d_->warning[mjWARN_BADQACC].number > 0) {
+    throw std::runtime_error("the physics diverged at rig time " + std::to_string(t) +
+                             " s (MuJoCo reset the simulation); the rig model's gains or the command are unsafe");
+  }
 }
 
 double RigSim::time_s() const { return d_->time; }

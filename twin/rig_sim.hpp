@@ -1,9 +1,10 @@
 #pragma once
 // The simulated rig without the bus: the rig's MJCF with the object inserted, stepped by
-// MuJoCo physics. Joints follow speed-limited ramps to their targets (all joints of a command
-// arriving together), position actuators track the ramp, gravity is compensated as an
-// industrial controller would, and a joint group is "settled" when it is at its target and
-// still.
+// MuJoCo physics. Joints follow speed-limited smooth ramps to their targets (all joints of a
+// command arriving together); the model's position actuators track the ramp, helped, as an
+// industrial controller is, by gravity compensation and velocity/acceleration feed-forward
+// (joint damping and inertia times the ramp's velocity and acceleration); a joint group is
+// "settled" when it is at its target and still.
 #include <mujoco/mujoco.h>
 
 #include <optional>
@@ -27,6 +28,14 @@ struct ObjectPlacement {
 // when a marker is missing.
 std::string compose_model_xml(const std::string& rig_xml_path, const ObjectPlacement& object);
 
+// Acceleration limit of every joint, as a multiple of its speed limit per second (the twin's
+// stand-in for the drive's acceleration limit: full speed within about half a second).
+constexpr double kAccelerationPerSpeed = 4.0;
+
+// Duration of a smoothstep ramp over `distance` whose peak speed (1.5 x mean) stays within
+// `speed_limit` and peak acceleration (6 distance / T^2) within `accel_limit`.
+double ramp_duration_s(double distance, double speed_limit, double accel_limit);
+
 // A group of joints moving together under one command (the arm's 6, or the turntable).
 struct JointGroup {
   std::vector<int> qpos_adr;   // addresses in qpos
@@ -35,8 +44,9 @@ struct JointGroup {
   std::vector<double> speed_limit;  // per joint, rad/s (m/s)
   std::vector<double> lower, upper; // joint limits
   std::vector<std::string> names;
-  // Ramp state: setpoint moves linearly from start to target over [t0, t1].
-  std::vector<double> start, target, setpoint;
+  // Ramp state: the setpoint follows a cubic (smoothstep) profile from start to target over
+  // [t0, t1]: zero velocity at both ends, peak velocity 1.5 x the mean, kept within the limits.
+  std::vector<double> start, target, setpoint, setpoint_velocity, setpoint_acceleration;
   double t0 = 0, t1 = 0;
   long command_seq = -1;
   bool ramping = false;

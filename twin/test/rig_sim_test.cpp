@@ -1,0 +1,179 @@
+// The twin's physics: commanded joints move no faster than their speed limits, all joints of a
+// command arrive together, the arm settles on its target under gravity, and a target outside
+// a joint's limits is refused with the joint named.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+#include "core/mesh.hpp"
+#include "core/rig.hpp"
+#include "rig_sim.hpp"
+
+using namespace pbnbv;
+
+namespace {
+
+std::string model_out() {
+  return (std::filesystem::temp_directory_path() / ("rig_sim_test_" + std::to_string(::getpid()) + ".xml")).string();
+}
+
+// Steps until the group settles or `limit_s` of rig time passes; returns rig time taken.
+// (Counts steps: MuJoCo resets the clock if the simulation ever went unstable.)
+double run_until_settled(twin::RigSim& sim, const twin::JointGroup& g, double limit_s,
+                         Vector6d* max_speed = nullptr) {
+  const double t0 = sim.time_s();
+  const int max_steps = static_cast<int>(limit_s / sim.model()->opt.timestep);
+  for (int i = 0; i < max_steps; ++i) {
+    sim.step();
+    if (max_speed) *max_speed = max_speed->cwiseMax(sim.arm_velocity().cwiseAbs());
+    if (sim.settled(g)) break;
+  }
+  return sim.time_s() - t0;
+}
+
+}  // namespace
+
+TEST(RigSim, ArmMovesWithinSpeedLimitsArrivesTogetherAndSettles) {
+  const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
+  twin::RigSim sim(rig, twin::ObjectPlacement{}, model_out());
+  // Move a1 by 0.6 rad and a3 by 0.2 rad: a1 sets the duration, a3 is slowed to arrive with it.
+  Vector6d target = rig.q_home;
+  target[0] += 0.6;
+  target[2] += 0.2;
+  sim.command_arm(target, 1.0, 1);
+  Vector6d max_speed = Vector6d::Zero();
+  const double t = run_until_settled(sim, sim.arm(), 30.0, &max_speed);
+  ASSERT_TRUE(sim.settled(sim.arm())) << "not settled after " << t << " s";
+  // The smooth ramp's duration is set by a1 (the longer move): by its speed limit (peak speed
+  // 1.5 x mean) or its acceleration limit (peak 6 x distance / T^2), whichever is slower.
+  const double ramp = twin::ramp_duration_s(0.6, rig.qd_max[0], twin::kAccelerationPerSpeed * rig.qd_max[0]);
+  EXPECT_GE(t, ramp) << "arrived faster than a1's limits allow";
+  EXPECT_LE(t, ramp + 0.3) << "took far longer than the ramp: the servo lags";
+  EXPECT_LE(max_speed[0], rig.qd_max[0] * 1.05);
+  EXPECT_NEAR(max_speed[0], 1.5 * 0.6 / ramp, 0.1 * 1.5 * 0.6 / ramp);
+  // a3 ramps over the same duration: its peak speed is 1.5 x 0.2 / ramp.
+  EXPECT_NEAR(max_speed[2], 1.5 * 0.2 / ramp, 0.15 * 1.5 * 0.2 / ramp);
+  EXPECT_LT((sim.arm_position() - target).cwiseAbs().maxCoeff(), 1e-4);
+}
+
+TEST(RigSim, HalfSpeedTakesTwiceAsLong) {
+  const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
+  twin::RigSim full(rig, twin::ObjectPlacement{}, model_out());
+  twin::RigSim half(rig, twin::ObjectPlacement{}, model_out());
+  Vector6d target = rig.q_home;
+  target[0] += 1.0;
+  full.command_arm(target, 1.0, 1);
+  half.command_arm(target, 0.5, 1);
+  const double t_full = run_until_settled(full, full.arm(), 30.0);
+  const double t_half = run_until_settled(half, half.arm(), 30.0);
+  const double v = rig.qd_max[0], a = twin::kAccelerationPerSpeed * v;
+  EXPECT_NEAR(t_half - t_full, twin::ramp_duration_s(1.0, v / 2, a / 2) - twin::ramp_duration_s(1.0, v, a), 0.05);
+}
+
+TEST(RigSim, TurntableTurnsAtItsSpeedLimit) {
+  const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
+  twin::RigSim sim(rig, twin::ObjectPlacement{}, model_out());
+  ASSERT_TRUE(sim.has_turntable());
+  // Half a turn is long enough to be limited by speed, not acceleration: the peak speed is the
+  // limit and the ramp takes 1.5 x distance / limit.
+  sim.command_turntable(M_PI, 1.0, 1);
+  const double ramp = twin::ramp_duration_s(M_PI, rig.turntable_qd_max, twin::kAccelerationPerSpeed * rig.turntable_qd_max);
+  EXPECT_DOUBLE_EQ(ramp, 1.5 * M_PI / rig.turntable_qd_max);
+  double max_speed = 0;
+  const double t0 = sim.time_s();
+  while (sim.time_s() - t0 < 30 && !sim.settled(sim.turntable())) {
+    sim.step();
+    max_speed = std::max(max_speed, std::abs(sim.turntable_velocity()));
+  }
+  const double t = sim.time_s() - t0;
+  EXPECT_GE(t, ramp);
+  EXPECT_LE(t, ramp + 0.3);
+  EXPECT_LE(max_speed, rig.turntable_qd_max * 1.05);
+  EXPECT_GE(max_speed, rig.turntable_qd_max * 0.95);
+  EXPECT_NEAR(sim.turntable_angle(), M_PI, 1e-4);
+}
+
+TEST(RigSim, TargetOutsideAJointLimitIsRefusedAndTheArmHolds) {
+  const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
+  twin::RigSim sim(rig, twin::ObjectPlacement{}, model_out());
+  Vector6d target = rig.q_home;
+  target[4] = rig.q_upper[4] + 0.1;
+  try {
+    sim.command_arm(target, 1.0, 7);
+    FAIL() << "a target beyond a5's limit must be refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(rig.joint_names[4]), std::string::npos) << e.what();
+  }
+  target = rig.q_home;
+  target[1] = std::nan("");
+  EXPECT_THROW(sim.command_arm(target, 1.0, 8), std::invalid_argument);
+  EXPECT_THROW(sim.command_arm(rig.q_home, 0.0, 9), std::invalid_argument);  // speed scale 0
+  for (int i = 0; i < 500; ++i) sim.step();
+  EXPECT_LT((sim.arm_position() - rig.q_home).cwiseAbs().maxCoeff(), 1e-4) << "the arm must hold at home";
+}
+
+TEST(RigSim, ObjectIsInsertedAtTheMarkersAndAMissingMarkerIsNamed) {
+  const auto dir = std::filesystem::temp_directory_path() / ("rig_sim_obj_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string stl = (dir / "cube.stl").string();
+  write_stl_binary(make_box(Eigen::Vector3d(0.2, 0.2, 0.2)), stl);
+  const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
+  twin::RigSim sim(rig, twin::ObjectPlacement{stl, 0.1}, (dir / "model.xml").string());
+  const int geom = mj_name2id(sim.model(), mjOBJ_GEOM, "object");
+  ASSERT_GE(geom, 0);
+  // The cube's centre sits 0.1 m above the turntable top.
+  const Pose object = object_in_world(rig, 0.0, 0.1);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(sim.data()->geom_xpos[3 * geom + k], object.translation()[k], 1e-9);
+  // A rig file without the markers.
+  const std::string bad = (dir / "bad.xml").string();
+  {
+    std::ofstream out(bad);
+    out << "<mujoco><worldbody/></mujoco>";
+  }
+  try {
+    twin::compose_model_xml(bad, twin::ObjectPlacement{stl, 0.1});
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.xml"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("PBNBV_OBJECT"), std::string::npos);
+  }
+}
+
+TEST(RigSim, MovesBetweenHemisphereViewsStayWithinLimitsAndSettleQuickly) {
+  const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
+  twin::RigSim sim(rig, twin::ObjectPlacement{}, model_out());
+  ReachabilityChecker checker(rig);
+  KeepoutBox keepout;
+  keepout.min_m = Eigen::Vector3d(-0.17, -0.17, -0.15);
+  keepout.max_m = Eigen::Vector3d::Constant(0.17);
+  const double radius = 0.6 + std::sqrt(3.0) * 0.15;
+  int moves = 0;
+  for (double polar_deg : {20.0, 45.0, 70.0, 85.0}) {
+    for (double azimuth_deg : {0.0, 130.0, 250.0}) {
+      const double p = polar_deg * M_PI / 180, a = azimuth_deg * M_PI / 180;
+      const Eigen::Vector3d eye = radius * Eigen::Vector3d(std::sin(p) * std::cos(a), std::sin(p) * std::sin(a), std::cos(p));
+      const ViewSolution sol = checker.solve(look_at_z_up(eye, Eigen::Vector3d::Zero()), sim.arm_position(),
+                                             sim.turntable_angle(), keepout, 0.15);
+      ASSERT_TRUE(sol.reachable) << sol.reason;
+      double ramp = 0;
+      for (int j = 0; j < 6; ++j) {
+        ramp = std::max(ramp, twin::ramp_duration_s(std::abs(sol.q[j] - sim.arm().setpoint[j]), rig.qd_max[j],
+                                                    twin::kAccelerationPerSpeed * rig.qd_max[j]));
+      }
+      // The same target twice: no motion, no instability.
+      if (moves % 4 == 3) sim.command_arm(sim.arm_position(), 1.0, ++moves);
+      sim.command_arm(sol.q, 1.0, ++moves);
+      Vector6d max_speed = Vector6d::Zero();
+      const double t = run_until_settled(sim, sim.arm(), 30.0, &max_speed);
+      ASSERT_TRUE(sim.settled(sim.arm())) << "move " << moves << " not settled after " << t << " s";
+      EXPECT_LE(t, ramp + 0.3) << "move " << moves;
+      for (int j = 0; j < 6; ++j) EXPECT_LE(max_speed[j], rig.qd_max[j] * 1.05) << rig.joint_names[j];
+      // On target: the camera is where forward kinematics of the target puts it.
+      const Pose reached = camera_in_world(rig, sim.arm_position());
+      EXPECT_LT((reached.translation() - camera_in_world(rig, sol.q).translation()).norm(), 1e-3);
+    }
+  }
+}
