@@ -294,7 +294,8 @@ TEST_F(BadInput, ValidRequestsStillSucceedAfterTheGarbage) {
   lcm.publish("CAPTURE_REQUEST", &c);
   ASSERT_TRUE(listener_->spin_until([] { return listener_->clouds.count(906) > 0; }, 40.0));
   const point_cloud_t& cloud = listener_->clouds[906];
-  ASSERT_EQ(cloud.status, point_cloud_t::kOk) << cloud.message;
+  ASSERT_EQ(cloud.status, point_cloud_t::kOk) << "capture failed: " << cloud.message << "\ncamera log:\n"
+                                               << launcher::tail_lines((dir_ / "camera.log").string(), 20);
   EXPECT_GT(cloud.num_points, 500);
   // Every point lies on the sphere of radius 0.15 m around the object origin (icosphere
   // level 3: the facets sit at most ~1.2 mm inside the sphere).
@@ -351,6 +352,8 @@ TEST_F(BadInput, CoordinatorFinishesItsScanDespiteGarbageOnItsChannels) {
     coordinator_rejected = std::max(coordinator_rejected, rejected("coordinator"));
   }
   launcher::stop_all(one, 5.0);
+  listener_->spin_until([] { return false; }, 0.3);  // its last heartbeat, published on exit
+  coordinator_rejected = std::max(coordinator_rejected, rejected("coordinator"));
   EXPECT_EQ(one[0].exit_code, 0) << launcher::tail_lines(one[0].log_path, 20);
   EXPECT_GT(coordinator_rejected, 0) << "its heartbeat should count the rejected messages";
   const auto scan = read_json((out / "scan.json").string());

@@ -57,7 +57,11 @@ struct Capture {
   int64_t trigger_seq = 0;
   int tries = 0;
   double t_start = 0, t_trigger = 0, deadline = 0;
+  std::optional<depth_frame_t> frame;  // received, waiting for the readings at its exposure
+  double t_frame = 0;
 };
+
+constexpr double kReadingWaitS = 1.0;  // wait this long for readings at/after the exposure
 
 class CameraService {
  public:
@@ -78,6 +82,18 @@ class CameraService {
   }
 
   void tick() {
+    if (job_ && job_->frame) {
+      // The pose at exposure needs readings from both sides of it: then the rig is known to
+      // have been where it was (and still) when the frame was taken.
+      const int64_t t = job_->frame->utime;
+      const bool arm_after = !arm_.empty() && arm_.back().utime >= t;
+      const bool tt_after = !rig_.has_turntable || (!turntable_.empty() && turntable_.back().utime >= t);
+      if ((arm_after && tt_after) || bus::now_s() - job_->t_frame > kReadingWaitS) {
+        const depth_frame_t frame = std::move(*job_->frame);  // process() ends the job
+        process(frame);
+      }
+      return;
+    }
     if (!job_ && !queue_.empty()) {
       start(queue_.front());
       queue_.pop_front();
@@ -147,7 +163,13 @@ class CameraService {
       trigger();
       return;
     }
-    const double capture_s = bus::now_s() - job_->t_trigger;
+    job_->frame = f;
+    job_->t_frame = bus::now_s();
+    tick();
+  }
+
+  void process(const depth_frame_t& f) {
+    const double capture_s = job_->t_frame - job_->t_trigger;
     const double t0 = bus::now_s();
     point_cloud_t out = blank(job_->request);
     try {
@@ -165,7 +187,9 @@ class CameraService {
 
       const auto* arm = nearest(arm_, f.utime);
       if (!arm || std::llabs(arm->utime - f.utime) > kStatusMatchUs) {
-        throw std::runtime_error("no ARM_STATUS within 50 ms of the frame's exposure time");
+        throw std::runtime_error("no ARM_STATUS within 50 ms of the frame's exposure time (newest reading " +
+                                 std::to_string(arm_.empty() ? 0.0 : (f.utime - arm_.back().utime) * 1e-6) +
+                                 " s before it)");
       }
       double turntable = 0;
       double turntable_speed = 0;

@@ -50,6 +50,11 @@ Bus::Bus(const std::string& service_name) : lcm_(lcm_url()), service_(service_na
   }
 }
 
+Bus::~Bus() {
+  state_ = "stopped";
+  heartbeat(true);
+}
+
 void Bus::spin_once(int timeout_ms) {
   lcm_.handleTimeout(timeout_ms);
   heartbeat();
@@ -66,9 +71,9 @@ void Bus::reject(const std::string& channel, const std::string& why) {
   log_warn(last_error_);
 }
 
-void Bus::heartbeat() {
+void Bus::heartbeat(bool force) {
   const double t = now_s();
-  if (t < next_heartbeat_s_) return;
+  if (!force && t < next_heartbeat_s_) return;
   next_heartbeat_s_ = t + 1.0;
   heartbeat_t hb;
   hb.utime = now_utime();

@@ -30,6 +30,8 @@ class Bus {
   // Connects to LCM_DEFAULT_URL if set, else udpm://239.255.76.67:7667?ttl=0 with a large
   // receive buffer. Throws std::runtime_error when LCM cannot start.
   explicit Bus(const std::string& service_name);
+  // Publishes a last heartbeat (state "stopped") so the final counts are seen.
+  ~Bus();
 
   // Subscribes to `channel`; each message is decoded as T and passed to `handler`. A message
   // that does not decode, or whose handler throws std::exception (its validation failing),
@@ -91,7 +93,7 @@ class Bus {
     }
   };
   void reject(const std::string& channel, const std::string& why);
-  void heartbeat();
+  void heartbeat(bool force = false);
 
   lcm::LCM lcm_;
   std::string service_;

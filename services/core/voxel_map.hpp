@@ -71,6 +71,14 @@ class VoxelMap {
   VoxelCounts counts() const;
   std::vector<Eigen::Vector3d> centres(VoxelState s) const;  // object frame
 
+  // Grows B to cover `box_m` (snapped outward to the voxel lattice); new voxels are None and B
+  // never shrinks. Optional: lets a caller that knows its working volume (or a test) start with
+  // a larger B. Called before the first frame, the first frame's rule still applies and B
+  // becomes the union of this box and the first frame's enlarged AABB.
+  void reserve_bounds(const Eigen::AlignedBox3d& box_m);
+  // Pixel stride of the free/occluded ray set used by the last integrated frame (diagnostics).
+  int last_ray_stride_px() const { return last_stride_px_; }
+
   // Writes the map as an OctoMap ColorOcTree (.ot, viewable in octovis): Occupied, Unknown and
   // Frontier voxels as occupied nodes coloured by state, Empty voxels as free nodes.
   void write_octomap(const std::string& path) const;
@@ -81,6 +89,18 @@ class VoxelMap {
   Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
   std::vector<VoxelState> cells_;
   // (implementation helpers are private to voxel_map.cpp)
+  Eigen::Vector3i lo_ = Eigen::Vector3i::Zero();  // lattice index of B's min voxel (origin_ = lo_ * res)
+  bool initialised_ = false;                      // a frame with valid points has been integrated
+  int last_stride_px_ = 0;
+  std::vector<uint8_t> pixel_class_;              // per-frame scratch (one byte per pixel)
+  std::vector<uint8_t> scratch_;                  // frontier pass scratch (one byte per voxel)
+  std::vector<uint8_t> block_kind_;               // per-frame scratch (one byte per ray block)
+  std::vector<float> block_depth_;                // per-frame scratch (nearest depth per block)
+
+  // Grows B to cover the lattice indices [lo, hi] (inclusive); copies states, new cells None.
+  void grow_to_cover(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi);
+  // Re-evaluates Frontier/Unknown over the whole grid; returns the state counts.
+  VoxelCounts update_frontiers();
   friend struct VoxelMapAccess;
 };
 

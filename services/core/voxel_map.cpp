@@ -1,0 +1,728 @@
+// The five-state voxel map of PB-NBV (paper section III-B, method.md "Voxel map").
+//
+// What one integrate() does, in order:
+//  1. Classify every pixel: valid (finite, > 0, inside [range.min_m, range.max_m]), no return
+//     (0 or non-finite) or ignored (finite but outside the range, or negative). Back-project
+//     every valid pixel into the object frame and take its voxel (lattice index
+//     floor(p / resolution)). No valid pixel: the map is left untouched (updated == false).
+//  2. Bounding box B (always on the voxel lattice: B's min corner is lo_ * resolution, so voxels
+//     never shift when B grows):
+//     - first frame with valid pixels: B = AABB of this frame's Occupied voxels, enlarged away
+//       from the camera until its diagonal doubles (see first_frame_box());
+//     - later frames: B first grows to cover this frame's Occupied voxels, so that every point
+//       is recorded and its rays are traversed.
+//  3. Every valid pixel's voxel becomes Occupied (sticky: traversal never writes Occupied).
+//  4. Rays from the camera centre, traversed with a 3-D DDA (Amanatides & Woo 1987) inside B:
+//     - a ray with a return (planar depth z): None/Unknown/Frontier voxels before the first
+//       Occupied voxel become Empty, as long as the voxel is left before depth z (a voxel the
+//       ray leaves beyond z is not known to be free); from the first Occupied voxel, or from the
+//       voxel containing depth z, to where the ray leaves B, None voxels become Unknown.
+//       Interpretation: the paper says "None -> Empty" before the hit. We also clear Unknown and
+//       Frontier voxels that a ray sees through: otherwise a voxel once occluded could never be
+//       observed free and the map could not converge (Frontier would never disappear).
+//     - a ray without a return (no_return_is_free): free space up to range.max_m; None/Unknown/
+//       Frontier -> Empty along it inside B; it stops at the first Occupied voxel it meets (and
+//       marks nothing behind it) and at max range (a voxel straddling max range is not marked).
+//     - ignored pixels cast no ray.
+//  5. Frontier pass over ALL Unknown and Frontier voxels: an Unknown voxel with >= 1 Empty and
+//     >= 1 Occupied voxel among its 26 neighbours is Frontier, a Frontier voxel without that goes
+//     back to Unknown. Neighbours outside B count as None.
+//  6. Later frames only: B grows to cover the Unknown voxels (always inside B already, since
+//     traversal never leaves B) and the axis-aligned cube of half-edge gamma around every
+//     Frontier voxel centre (which contains the gamma sphere). New voxels are None. The first
+//     frame does not apply this rule: its B is the enlarged AABB (paper: "first frame ...; later
+//     frames grow"), so the first B's diagonal is exactly the doubled one.
+//
+// Ray set (the speed part). Occupied voxels come from every valid pixel (one index per pixel).
+// Free/occluded space uses one ray per block of s x s pixels where every voxel in the frustum is
+// still crossed: s = max(1, floor(min(fx, fy) * resolution / (sqrt(2) * d_max))), with d_max the
+// largest distance from the camera centre to a corner of B. Why this is enough: a voxel contains
+// a ball of radius res/2; seen from distance d <= d_max, the rays that hit that ball cover a disk
+// of radius >= f * (res/2) / d pixels in the image (an angle a subtends at least a*f pixels on the
+// image plane at focal distance f). The block centres form a square lattice of spacing s (border
+// blocks are partial, their centre is the centre of their pixels, so the image edge is within
+// s/2 of a ray), so every image point is within s/sqrt(2) of a ray; s/sqrt(2) <= f*res/(2 d_max)
+// puts a ray inside every such disk. Hence every voxel whose inscribed ball projects inside the
+// image is traversed by at least one ray (tested against a wall filling the image).
+// Which ray a block casts:
+//  - all pixels valid and depth spread (max - min) <= resolution: one ray through the block
+//    centre with return depth = the block's MINIMUM depth, so free space is never claimed behind
+//    any surface point of the block;
+//  - all pixels without return (and no_return_is_free): one free ray through the block centre;
+//  - all pixels ignored (or no return with !no_return_is_free): no ray;
+//  - anything else (silhouettes, depth jumps > resolution, ranges edges): one ray per pixel of
+//    the block, exactly as the reference (ray_stride_px = 1) would.
+// Differences to the one-ray-per-pixel reference are therefore confined to (a) voxels only
+// partly in the frustum or only partly visible past an Occupied voxel that a free ray must pass,
+// (b) the <= resolution-deep band in front of a surface inside a smooth block. The test bounds
+// them (voxel_map_test.cpp, SubsampledRaysMatchPerPixelReference).
+//
+// Threads: 2 std::threads over interleaved block rows. The only writes during traversal are the
+// monotone transitions {None, Unknown, Frontier} -> Empty (relaxed atomic store; Empty always
+// wins) and None -> Unknown (relaxed compare-exchange from None, so it can never overwrite an
+// Empty written by the other thread). Occupied is written before traversal and never during it.
+// The result is therefore independent of ray order and thread interleaving: a voxel is Empty if
+// any ray saw it free, else Unknown if any ray saw it occluded while it was None.
+#include "core/voxel_map.hpp"
+
+#include <octomap/ColorOcTree.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+namespace pbnbv {
+
+namespace {
+
+constexpr uint8_t kNoneB = static_cast<uint8_t>(VoxelState::kNone);
+constexpr uint8_t kEmptyB = static_cast<uint8_t>(VoxelState::kEmpty);
+constexpr uint8_t kOccB = static_cast<uint8_t>(VoxelState::kOccupied);
+constexpr uint8_t kUnkB = static_cast<uint8_t>(VoxelState::kUnknown);
+constexpr uint8_t kFrontB = static_cast<uint8_t>(VoxelState::kFrontier);
+
+// Pixel classes.
+constexpr uint8_t kPixIgnored = 0;
+constexpr uint8_t kPixValid = 1;
+constexpr uint8_t kPixNoReturn = 2;
+
+constexpr int64_t kMaxVoxels = int64_t(1) << 31;
+
+int worker_count() {
+  const unsigned hc = std::thread::hardware_concurrency();
+  return hc >= 2 ? 2 : 1;
+}
+
+// Runs f(thread_index, thread_count) on `n` threads (the caller's thread is index 0).
+template <class F>
+void run_parallel(int n, const F& f) {
+  if (n <= 1) {
+    f(0, 1);
+    return;
+  }
+  std::vector<std::thread> threads;
+  threads.reserve(n - 1);
+  for (int t = 1; t < n; ++t) threads.emplace_back([&f, t, n] { f(t, n); });
+  f(0, n);
+  for (auto& th : threads) th.join();
+}
+
+inline uint8_t load_relaxed(const uint8_t* c) { return __atomic_load_n(c, __ATOMIC_RELAXED); }
+inline void store_relaxed(uint8_t* c, uint8_t v) { __atomic_store_n(c, v, __ATOMIC_RELAXED); }
+inline void none_to_unknown(uint8_t* c) {
+  uint8_t expected = kNoneB;
+  __atomic_compare_exchange_n(c, &expected, kUnkB, false, __ATOMIC_RELAXED, __ATOMIC_RELAXED);
+}
+
+inline int floor_index(double x_m, double res) { return static_cast<int>(std::floor(x_m / res)); }
+
+// The dense grid as the ray caster sees it.
+struct Grid {
+  uint8_t* cells;
+  int n[3];
+  double res;
+  double ext[3];  // B's edge lengths, metres
+};
+
+// Traverses one ray o + t d (o relative to B's min corner; d = R (x_n, y_n, 1), so t is the planar
+// depth) through B with the DDA of Amanatides & Woo. has_return: the pixel saw a surface at depth
+// t_free; otherwise the ray is free up to t_free (= max range). Returns whether it entered B.
+bool cast_ray(const Grid& g, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_free,
+              bool has_return) {
+  double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(d[i]) < 1e-15) {
+      if (o[i] < 0.0 || o[i] > g.ext[i]) return false;
+      continue;
+    }
+    const double inv = 1.0 / d[i];
+    double ta = -o[i] * inv, tb = (g.ext[i] - o[i]) * inv;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  if (!has_return) t1 = std::min(t1, t_free);
+  if (!(t0 < t1)) return false;
+
+  const double res = g.res;
+  int idx[3], step[3];
+  double t_max[3], t_delta[3];
+  int64_t stride[3] = {1, g.n[0], int64_t(g.n[0]) * g.n[1]};
+  int64_t lin = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double p = o[i] + d[i] * t0;
+    idx[i] = std::clamp(static_cast<int>(std::floor(p / res)), 0, g.n[i] - 1);
+    lin += idx[i] * stride[i];
+    if (d[i] > 0) {
+      step[i] = 1;
+      t_max[i] = ((idx[i] + 1) * res - o[i]) / d[i];
+      t_delta[i] = res / d[i];
+    } else if (d[i] < 0) {
+      step[i] = -1;
+      t_max[i] = (idx[i] * res - o[i]) / d[i];
+      t_delta[i] = -res / d[i];
+    } else {
+      step[i] = 0;
+      t_max[i] = std::numeric_limits<double>::infinity();
+      t_delta[i] = std::numeric_limits<double>::infinity();
+    }
+    stride[i] *= step[i];
+  }
+
+  bool free_phase = true;
+  for (;;) {
+    const int axis = (t_max[0] <= t_max[1]) ? (t_max[0] <= t_max[2] ? 0 : 2)
+                                            : (t_max[1] <= t_max[2] ? 1 : 2);
+    const double t_next = t_max[axis];  // where the ray leaves this voxel
+    uint8_t* c = g.cells + lin;
+    const uint8_t s = load_relaxed(c);
+    if (free_phase) {
+      if (s == kOccB) {
+        if (!has_return) return true;  // a free ray stops at the first Occupied voxel
+        free_phase = false;            // behind the first Occupied voxel: occluded
+      } else if (t_next <= t_free) {
+        if (s != kEmptyB) store_relaxed(c, kEmptyB);  // left before the return: observed free
+      } else {
+        if (!has_return) return true;  // straddles max range: not known to be free
+        free_phase = false;            // straddles the return depth: not known to be free
+        if (s == kNoneB) none_to_unknown(c);
+      }
+    } else if (s == kNoneB) {
+      none_to_unknown(c);
+    }
+    if (t_next >= t1) break;
+    idx[axis] += step[axis];
+    if (idx[axis] < 0 || idx[axis] >= g.n[axis]) break;
+    lin += stride[axis];
+    t_max[axis] += t_delta[axis];
+  }
+  return true;
+}
+
+// Lattice index box of the first frame's B (see the comment at integrate()).
+void first_frame_box(const Eigen::Vector3i& occ_lo, const Eigen::Vector3i& occ_hi,
+                     const Eigen::Vector3d& camera, const Eigen::Vector3d& optical_axis,
+                     double res, Eigen::Vector3i* lo, Eigen::Vector3i* hi) {
+  const Eigen::Vector3d box_lo = occ_lo.cast<double>() * res;
+  const Eigen::Vector3d box_hi = (occ_hi.cast<double>() + Eigen::Vector3d::Ones()) * res;
+  const Eigen::Vector3d size = box_hi - box_lo;
+  const double diag = size.norm();
+  Eigen::Vector3d dir = 0.5 * (box_lo + box_hi) - camera;
+  if (dir.norm() < 1e-9) dir = optical_axis;
+  dir.normalize();
+  // Extend the far faces by t * d: edge i grows by t |d_i|, so the new diagonal is
+  // |size + t |d||; |size + t a|^2 = 4 diag^2 with a = |d| (|a| = 1) gives
+  // t^2 + 2 t (size . a) - 3 diag^2 = 0, t = -(size . a) + sqrt((size . a)^2 + 3 diag^2).
+  const Eigen::Vector3d a = dir.cwiseAbs();
+  const double b = size.dot(a);
+  const double t = -b + std::sqrt(b * b + 3.0 * diag * diag);
+  *lo = occ_lo;
+  *hi = occ_hi;
+  for (int i = 0; i < 3; ++i) {
+    const double ext = t * dir[i];
+    if (ext > 0) {
+      (*hi)[i] = std::max(occ_hi[i],
+                          static_cast<int>(std::ceil((box_hi[i] + ext) / res - 1e-9)) - 1);
+    } else if (ext < 0) {
+      (*lo)[i] = std::min(occ_lo[i], static_cast<int>(std::floor((box_lo[i] + ext) / res + 1e-9)));
+    }
+  }
+}
+
+}  // namespace
+
+const char* to_string(VoxelState s) {
+  switch (s) {
+    case VoxelState::kNone: return "None";
+    case VoxelState::kEmpty: return "Empty";
+    case VoxelState::kOccupied: return "Occupied";
+    case VoxelState::kUnknown: return "Unknown";
+    case VoxelState::kFrontier: return "Frontier";
+  }
+  return "?";
+}
+
+VoxelMap::VoxelMap(const VoxelMapParams& params) : params_(params) {
+  if (!(std::isfinite(params.resolution_m) && params.resolution_m > 0)) {
+    std::ostringstream os;
+    os << "VoxelMap: resolution_m = " << params.resolution_m << " must be a positive number";
+    throw std::invalid_argument(os.str());
+  }
+  if (!(std::isfinite(params.gamma_m) && params.gamma_m >= 0)) {
+    std::ostringstream os;
+    os << "VoxelMap: gamma_m = " << params.gamma_m << " must be finite and >= 0";
+    throw std::invalid_argument(os.str());
+  }
+  if (params.ray_stride_px < 0) {
+    std::ostringstream os;
+    os << "VoxelMap: ray_stride_px = " << params.ray_stride_px << " must be >= 0 (0 = automatic)";
+    throw std::invalid_argument(os.str());
+  }
+}
+
+Eigen::AlignedBox3d VoxelMap::bounds() const {
+  if (empty()) return Eigen::AlignedBox3d();  // empty box
+  return Eigen::AlignedBox3d(origin_, origin_ + dims_.cast<double>() * params_.resolution_m);
+}
+
+VoxelState VoxelMap::state(const Eigen::Vector3i& i) const {
+  if ((i.array() < 0).any() || (i.array() >= dims_.array()).any()) return VoxelState::kNone;
+  return cells_[i.x() + int64_t(dims_.x()) * (i.y() + int64_t(dims_.y()) * i.z())];
+}
+
+VoxelState VoxelMap::state_at(const Eigen::Vector3d& p) const {
+  if (empty() || !p.allFinite()) return VoxelState::kNone;
+  const double res = params_.resolution_m;
+  const Eigen::Vector3i g(floor_index(p.x(), res), floor_index(p.y(), res),
+                          floor_index(p.z(), res));
+  return state(g - lo_);
+}
+
+Eigen::Vector3d VoxelMap::centre(const Eigen::Vector3i& i) const {
+  return (lo_.cast<double>() + i.cast<double>() + Eigen::Vector3d::Constant(0.5)) *
+         params_.resolution_m;
+}
+
+VoxelCounts VoxelMap::counts() const {
+  int64_t n[5] = {0, 0, 0, 0, 0};
+  for (VoxelState s : cells_) ++n[static_cast<uint8_t>(s)];
+  VoxelCounts c;
+  c.none = n[0];
+  c.empty = n[1];
+  c.occupied = n[2];
+  c.unknown = n[3];
+  c.frontier = n[4];
+  return c;
+}
+
+std::vector<Eigen::Vector3d> VoxelMap::centres(VoxelState s) const {
+  std::vector<Eigen::Vector3d> out;
+  const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
+  int64_t lin = 0;
+  for (int z = 0; z < nz; ++z)
+    for (int y = 0; y < ny; ++y)
+      for (int x = 0; x < nx; ++x, ++lin)
+        if (cells_[lin] == s) out.push_back(centre(Eigen::Vector3i(x, y, z)));
+  return out;
+}
+
+void VoxelMap::grow_to_cover(const Eigen::Vector3i& lo_in, const Eigen::Vector3i& hi_in) {
+  Eigen::Vector3i lo = lo_in, hi = hi_in;
+  if (!empty()) {
+    lo = lo.cwiseMin(lo_);
+    hi = hi.cwiseMax(lo_ + dims_ - Eigen::Vector3i::Ones());
+    if (lo == lo_ && hi == lo_ + dims_ - Eigen::Vector3i::Ones()) return;
+  }
+  const Eigen::Vector3i dims = hi - lo + Eigen::Vector3i::Ones();
+  if ((dims.array() <= 0).any()) throw std::logic_error("VoxelMap::grow_to_cover: empty box");
+  const int64_t total = int64_t(dims.x()) * dims.y() * dims.z();
+  if (total > kMaxVoxels) {
+    std::ostringstream os;
+    os << "VoxelMap: bounding box of " << dims.x() << " x " << dims.y() << " x " << dims.z()
+       << " voxels at " << params_.resolution_m
+       << " m exceeds 2^31 voxels (crop the cloud to the working volume or use coarser voxels)";
+    throw std::length_error(os.str());
+  }
+  std::vector<VoxelState> cells(static_cast<size_t>(total), VoxelState::kNone);
+  if (!empty()) {
+    const Eigen::Vector3i off = lo_ - lo;
+    for (int z = 0; z < dims_.z(); ++z) {
+      for (int y = 0; y < dims_.y(); ++y) {
+        const int64_t src = int64_t(dims_.x()) * (y + int64_t(dims_.y()) * z);
+        const int64_t dst =
+            off.x() + int64_t(dims.x()) * ((y + off.y()) + int64_t(dims.y()) * (z + off.z()));
+        std::memcpy(&cells[dst], &cells_[src], dims_.x() * sizeof(VoxelState));
+      }
+    }
+  }
+  cells_.swap(cells);
+  lo_ = lo;
+  dims_ = dims;
+  origin_ = lo_.cast<double>() * params_.resolution_m;
+}
+
+void VoxelMap::reserve_bounds(const Eigen::AlignedBox3d& box_m) {
+  if (box_m.isEmpty() || !box_m.min().allFinite() || !box_m.max().allFinite()) {
+    throw std::invalid_argument("VoxelMap::reserve_bounds: the box is empty or not finite");
+  }
+  const double res = params_.resolution_m;
+  Eigen::Vector3i lo, hi;
+  for (int i = 0; i < 3; ++i) {
+    lo[i] = static_cast<int>(std::floor(box_m.min()[i] / res + 1e-9));
+    hi[i] = std::max(lo[i], static_cast<int>(std::ceil(box_m.max()[i] / res - 1e-9)) - 1);
+  }
+  grow_to_cover(lo, hi);
+}
+
+VoxelCounts VoxelMap::update_frontiers() {
+  // 26-neighbourhood test with a separable 3x3x3 dilation of two bits per voxel
+  // (bit 0 = Empty, bit 1 = Occupied): plane by plane, mask + dilation along x then y into
+  // scratch_; then along z on the fly while deciding each Unknown/Frontier voxel. The voxel
+  // itself is in its own 3x3x3 block, but it is Unknown/Frontier (neither bit), so the result is
+  // exactly "some 26-neighbour is Empty and some is Occupied". Outside B counts as None.
+  const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
+  const int64_t plane = int64_t(nx) * ny;
+  scratch_.resize(static_cast<size_t>(plane * nz));
+  uint8_t* cells = reinterpret_cast<uint8_t*>(cells_.data());
+  uint8_t* dil = scratch_.data();
+  const int nt = (plane * nz > 200000) ? worker_count() : 1;
+
+  run_parallel(nt, [&](int tid, int n_threads) {
+    std::vector<uint8_t> m(static_cast<size_t>(plane)), mx(static_cast<size_t>(plane));
+    for (int z = tid; z < nz; z += n_threads) {
+      const uint8_t* src = cells + plane * z;
+      for (int64_t i = 0; i < plane; ++i) {
+        const uint8_t s = src[i];
+        m[i] = static_cast<uint8_t>((s == kEmptyB) | ((s == kOccB) << 1));
+      }
+      for (int y = 0; y < ny; ++y) {
+        const uint8_t* r = m.data() + int64_t(y) * nx;
+        uint8_t* o = mx.data() + int64_t(y) * nx;
+        if (nx == 1) {
+          o[0] = r[0];
+          continue;
+        }
+        o[0] = r[0] | r[1];
+        for (int x = 1; x < nx - 1; ++x) o[x] = r[x - 1] | r[x] | r[x + 1];
+        o[nx - 1] = r[nx - 2] | r[nx - 1];
+      }
+      uint8_t* out = dil + plane * z;
+      for (int y = 0; y < ny; ++y) {
+        const uint8_t* c = mx.data() + int64_t(y) * nx;
+        const uint8_t* a = y > 0 ? c - nx : c;
+        const uint8_t* b = y + 1 < ny ? c + nx : c;
+        uint8_t* o = out + int64_t(y) * nx;
+        for (int x = 0; x < nx; ++x) o[x] = a[x] | c[x] | b[x];
+      }
+    }
+  });
+
+  int64_t n[2][5] = {{0, 0, 0, 0, 0}, {0, 0, 0, 0, 0}};
+  run_parallel(nt, [&](int tid, int n_threads) {
+    int64_t* cnt = n[tid];
+    for (int z = tid; z < nz; z += n_threads) {
+      const uint8_t* c = dil + plane * z;
+      const uint8_t* a = z > 0 ? c - plane : c;
+      const uint8_t* b = z + 1 < nz ? c + plane : c;
+      uint8_t* s = cells + plane * z;
+      for (int64_t i = 0; i < plane; ++i) {
+        uint8_t v = s[i];
+        if (v == kUnkB || v == kFrontB) {
+          v = ((a[i] | c[i] | b[i]) == 3) ? kFrontB : kUnkB;
+          s[i] = v;
+        }
+        ++cnt[v];
+      }
+    }
+  });
+  VoxelCounts out;
+  out.none = n[0][0] + n[1][0];
+  out.empty = n[0][1] + n[1][1];
+  out.occupied = n[0][2] + n[1][2];
+  out.unknown = n[0][3] + n[1][3];
+  out.frontier = n[0][4] + n[1][4];
+  return out;
+}
+
+MapUpdateResult VoxelMap::integrate(const DepthView& view) {
+  const auto t_start = std::chrono::steady_clock::now();
+  auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  };
+  if (view.depth_m == nullptr) throw std::invalid_argument("VoxelMap::integrate: depth_m is null");
+  const CameraIntrinsics& k = view.intrinsics;
+  k.validate();
+  view.range.validate();
+  const int W = k.width, H = k.height;
+  if (view.depth_m->size() != static_cast<size_t>(W) * H) {
+    std::ostringstream os;
+    os << "VoxelMap::integrate: depth has " << view.depth_m->size() << " values, expected "
+       << W << " x " << H << " = " << int64_t(W) * H;
+    throw std::invalid_argument(os.str());
+  }
+  if (!view.object_T_camera.matrix().allFinite()) {
+    throw std::invalid_argument("VoxelMap::integrate: object_T_camera is not finite");
+  }
+  const float* depth = view.depth_m->data();
+  const double res = params_.resolution_m;
+  const double zlo = view.range.min_m, zhi = view.range.max_m;
+  const Eigen::Matrix3d R = view.object_T_camera.linear();
+  const Eigen::Vector3d cam = view.object_T_camera.translation();
+  const int nt = worker_count();
+
+  // 1. Classify pixels, back-project the valid ones, collect their lattice indices.
+  pixel_class_.resize(static_cast<size_t>(W) * H);
+  struct PassOne {
+    std::vector<Eigen::Vector3i> idx;
+    Eigen::Vector3i lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max());
+    Eigen::Vector3i hi = Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
+    int64_t valid = 0, no_return = 0, ignored = 0;
+  };
+  PassOne part[2];
+  run_parallel(nt, [&](int tid, int n_threads) {
+    PassOne& pr = part[tid];
+    const int v0 = H * tid / n_threads, v1 = H * (tid + 1) / n_threads;
+    for (int v = v0; v < v1; ++v) {
+      const double yn = (v - k.cy) / k.fy;
+      for (int u = 0; u < W; ++u) {
+        const int64_t i = int64_t(v) * W + u;
+        const float z = depth[i];
+        uint8_t cls;
+        if (!std::isfinite(z) || z == 0.0f) {
+          cls = kPixNoReturn;
+          ++pr.no_return;
+        } else if (z < zlo || z > zhi) {
+          cls = kPixIgnored;
+          ++pr.ignored;
+        } else {
+          cls = kPixValid;
+          ++pr.valid;
+          const Eigen::Vector3d p = cam + R * Eigen::Vector3d((u - k.cx) / k.fx * z, yn * z, z);
+          const Eigen::Vector3i g(floor_index(p.x(), res), floor_index(p.y(), res),
+                                  floor_index(p.z(), res));
+          pr.idx.push_back(g);
+          pr.lo = pr.lo.cwiseMin(g);
+          pr.hi = pr.hi.cwiseMax(g);
+        }
+        pixel_class_[i] = cls;
+      }
+    }
+  });
+  const int64_t n_valid = part[0].valid + part[1].valid;
+  const int64_t n_no_return = part[0].no_return + part[1].no_return;
+  const int64_t n_ignored = part[0].ignored + part[1].ignored;
+  MapUpdateResult result;
+  if (n_valid == 0) {
+    std::ostringstream os;
+    os << "map unchanged: the frame has no valid depth pixel (" << n_no_return
+       << " without return (0 or not finite), " << n_ignored << " outside ["
+       << zlo << ", " << zhi << "] m)";
+    result.updated = false;
+    result.message = os.str();
+    result.counts = counts();
+    result.time_s = elapsed();
+    return result;
+  }
+  Eigen::Vector3i occ_lo = part[0].lo.cwiseMin(part[1].lo);
+  Eigen::Vector3i occ_hi = part[0].hi.cwiseMax(part[1].hi);
+
+  // 2. B before traversal.
+  const bool first = !initialised_;
+  if (first) {
+    Eigen::Vector3i lo, hi;
+    first_frame_box(occ_lo, occ_hi, cam, R.col(2), res, &lo, &hi);
+    grow_to_cover(lo, hi);
+  } else {
+    grow_to_cover(occ_lo, occ_hi);
+  }
+
+  Grid grid;
+  grid.cells = reinterpret_cast<uint8_t*>(cells_.data());
+  grid.res = res;
+  for (int i = 0; i < 3; ++i) {
+    grid.n[i] = dims_[i];
+    grid.ext[i] = dims_[i] * res;
+  }
+
+  // 3. Occupied from every valid pixel (sticky).
+  for (const PassOne& pr : part) {
+    for (const Eigen::Vector3i& g : pr.idx) {
+      const Eigen::Vector3i l = g - lo_;
+      grid.cells[l.x() + int64_t(dims_.x()) * (l.y() + int64_t(dims_.y()) * l.z())] = kOccB;
+    }
+  }
+
+  // 4. Ray stride and traversal.
+  int stride = params_.ray_stride_px;
+  if (stride <= 0) {
+    double d_max = 0;
+    const Eigen::AlignedBox3d b = bounds();
+    for (int c = 0; c < 8; ++c) {
+      d_max = std::max(d_max, (b.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)) - cam).norm());
+    }
+    const double s = std::min(k.fx, k.fy) * res / (std::sqrt(2.0) * d_max);
+    stride = std::max(1, static_cast<int>(std::floor(s)));
+  }
+  last_stride_px_ = stride;
+  const bool free_no_return = params_.no_return_is_free;
+  const Eigen::Vector3d o = cam - origin_;
+  const int n_bu = (W + stride - 1) / stride, n_bv = (H + stride - 1) / stride;
+  const uint8_t* pcls = pixel_class_.data();
+  // Block kinds, then the rays. A block casts one ray per pixel when it is mixed or when any
+  // of its 8 neighbour blocks is of another kind: silhouettes and depth jumps get one ray per
+  // pixel for at least a block's width on both sides, so the thin partly-visible slivers of
+  // voxels along shadow boundaries are sampled like the reference does.
+  enum : uint8_t { kBlockNothing = 0, kBlockSurface = 1, kBlockFree = 2, kBlockMixed = 3 };
+  block_kind_.assign(static_cast<size_t>(n_bu) * n_bv, kBlockNothing);
+  block_depth_.resize(static_cast<size_t>(n_bu) * n_bv);
+  run_parallel(nt, [&](int tid, int n_threads) {
+    for (int bv = tid; bv < n_bv; bv += n_threads) {
+      const int v0 = bv * stride, v1 = std::min(H, v0 + stride);
+      for (int bu = 0; bu < n_bu; ++bu) {
+        const int u0 = bu * stride, u1 = std::min(W, u0 + stride);
+        int n_val = 0, n_nr = 0;
+        float z_min = std::numeric_limits<float>::infinity(), z_max = 0.0f;
+        for (int v = v0; v < v1; ++v) {
+          const int64_t row = int64_t(v) * W;
+          for (int u = u0; u < u1; ++u) {
+            const uint8_t c = pcls[row + u];
+            if (c == kPixValid) {
+              ++n_val;
+              const float z = depth[row + u];
+              z_min = std::min(z_min, z);
+              z_max = std::max(z_max, z);
+            } else if (c == kPixNoReturn) {
+              ++n_nr;
+            }
+          }
+        }
+        const int n_pix = (v1 - v0) * (u1 - u0);
+        const int64_t b = int64_t(bv) * n_bu + bu;
+        uint8_t kind;
+        if (n_val == n_pix && z_max - z_min <= res) {
+          kind = kBlockSurface;
+        } else if (n_nr == n_pix) {
+          kind = free_no_return ? kBlockFree : kBlockNothing;
+        } else if (n_val == 0 && !free_no_return) {
+          kind = kBlockNothing;  // only ignored pixels and returns that do not count as free
+        } else {
+          kind = kBlockMixed;
+        }
+        block_kind_[b] = kind;
+        block_depth_[b] = z_min;
+      }
+    }
+  });
+  int64_t rays[2] = {0, 0};
+  run_parallel(nt, [&](int tid, int n_threads) {
+    int64_t n_rays = 0;
+    auto ray = [&](double u, double v, double t_free, bool has_return) {
+      const Eigen::Vector3d d = R * Eigen::Vector3d((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0);
+      if (cast_ray(grid, o, d, t_free, has_return)) ++n_rays;
+    };
+    for (int bv = tid; bv < n_bv; bv += n_threads) {
+      const int v0 = bv * stride, v1 = std::min(H, v0 + stride);
+      for (int bu = 0; bu < n_bu; ++bu) {
+        const int u0 = bu * stride, u1 = std::min(W, u0 + stride);
+        const int64_t b = int64_t(bv) * n_bu + bu;
+        uint8_t kind = block_kind_[b];
+        // Blocks on the image border also cast one ray per pixel, so the voxels the frustum
+        // boundary cuts are sampled out to the outermost pixel, like the reference.
+        if (bu == 0 || bv == 0 || bu == n_bu - 1 || bv == n_bv - 1) kind = kBlockMixed;
+        if (kind != kBlockMixed && stride > 1) {
+          for (int dv = -1; dv <= 1 && kind != kBlockMixed; ++dv) {
+            const int nv = bv + dv;
+            if (nv < 0 || nv >= n_bv) continue;
+            for (int du = -1; du <= 1; ++du) {
+              const int nu = bu + du;
+              if (nu < 0 || nu >= n_bu) continue;
+              if (block_kind_[int64_t(nv) * n_bu + nu] != kind) {
+                kind = kBlockMixed;
+                break;
+              }
+            }
+          }
+        }
+        const double uc = 0.5 * (u0 + u1 - 1), vc = 0.5 * (v0 + v1 - 1);
+        if (kind == kBlockSurface) {
+          ray(uc, vc, block_depth_[b], true);  // free only up to the block's nearest depth
+        } else if (kind == kBlockFree) {
+          ray(uc, vc, zhi, false);
+        } else if (kind == kBlockMixed) {
+          for (int v = v0; v < v1; ++v) {  // one ray per pixel
+            const int64_t row = int64_t(v) * W;
+            for (int u = u0; u < u1; ++u) {
+              const uint8_t c = pcls[row + u];
+              if (c == kPixValid) {
+                ray(u, v, depth[row + u], true);
+              } else if (c == kPixNoReturn && free_no_return) {
+                ray(u, v, zhi, false);
+              }
+            }
+          }
+        }
+      }
+    }
+    rays[tid] = n_rays;
+  });
+
+  // 5. Frontier pass.
+  VoxelCounts c = update_frontiers();
+
+  // 6. Later frames: B covers the Unknown voxels (inside B by construction) and gamma around
+  // every Frontier voxel.
+  if (!first && c.frontier > 0) {
+    const int kk = static_cast<int>(std::floor(params_.gamma_m / res + 0.5));
+    Eigen::Vector3i f_lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max());
+    Eigen::Vector3i f_hi = Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
+    const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
+    int64_t lin = 0;
+    for (int z = 0; z < nz; ++z)
+      for (int y = 0; y < ny; ++y)
+        for (int x = 0; x < nx; ++x, ++lin)
+          if (grid.cells[lin] == kFrontB) {
+            const Eigen::Vector3i l(x, y, z);
+            f_lo = f_lo.cwiseMin(l);
+            f_hi = f_hi.cwiseMax(l);
+          }
+    // Voxel g's centre is (g + 1/2) res; the voxels g-kk..g+kk reach (kk + 1/2) res > gamma
+    // from it on each side, so they cover the cube [c - gamma, c + gamma] around the centre.
+    const Eigen::Vector3i need_lo = lo_ + f_lo - Eigen::Vector3i::Constant(kk);
+    const Eigen::Vector3i need_hi = lo_ + f_hi + Eigen::Vector3i::Constant(kk);
+    const int64_t before = dims_.prod();
+    grow_to_cover(need_lo, need_hi);
+    c.none += dims_.prod() - before;
+  }
+  initialised_ = true;
+
+  result.updated = true;
+  result.counts = c;
+  result.rays = static_cast<int>(rays[0] + rays[1]);
+  result.time_s = elapsed();
+  std::ostringstream os;
+  const Eigen::Vector3d size = dims_.cast<double>() * res;
+  os << (first ? "first frame: " : "") << n_valid << " valid pixels, " << result.rays
+     << " rays (stride " << stride << " px); B " << size.x() << " x " << size.y() << " x "
+     << size.z() << " m (" << dims_.x() << " x " << dims_.y() << " x " << dims_.z()
+     << " voxels); occupied " << c.occupied << ", empty " << c.empty << ", unknown "
+     << c.unknown << ", frontier " << c.frontier;
+  result.message = os.str();
+  return result;
+}
+
+void VoxelMap::write_octomap(const std::string& path) const {
+  octomap::ColorOcTree tree(params_.resolution_m);
+  const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
+  int64_t lin = 0;
+  for (int z = 0; z < nz; ++z) {
+    for (int y = 0; y < ny; ++y) {
+      for (int x = 0; x < nx; ++x, ++lin) {
+        const VoxelState s = cells_[lin];
+        if (s == VoxelState::kNone) continue;
+        const Eigen::Vector3d c = centre(Eigen::Vector3i(x, y, z));
+        octomap::OcTreeKey key;
+        if (!tree.coordToKeyChecked(octomap::point3d(c.x(), c.y(), c.z()), key)) continue;
+        // lazy_eval: no pruning while inserting, so every voxel is its own leaf.
+        tree.updateNode(key, s != VoxelState::kEmpty, true);
+        switch (s) {
+          case VoxelState::kOccupied: tree.setNodeColor(key, 40, 110, 230); break;   // blue
+          case VoxelState::kUnknown: tree.setNodeColor(key, 150, 150, 150); break;   // grey
+          case VoxelState::kFrontier: tree.setNodeColor(key, 240, 60, 40); break;    // red
+          case VoxelState::kEmpty: tree.setNodeColor(key, 60, 200, 80); break;       // green
+          default: break;
+        }
+      }
+    }
+  }
+  tree.updateInnerOccupancy();
+  if (!tree.write(path)) {
+    throw std::runtime_error("VoxelMap::write_octomap: cannot write " + path);
+  }
+}
+
+}  // namespace pbnbv
