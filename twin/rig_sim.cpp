@@ -55,8 +55,30 @@ double ramp_duration_s(double distance, double speed_limit, double accel_limit) 
   return std::max(1.5 * distance / speed_limit, std::sqrt(6.0 * distance / accel_limit));
 }
 
+bool PoseErrorModel::enabled() const {
+  return !hand_eye_error.isApprox(Pose::Identity()) || turntable_offset_rad != 0 || joint_sigma_rad != 0;
+}
+
+PoseErrorModel make_pose_error(double hand_eye_m, double hand_eye_rad, double turntable_rad,
+                               double joint_sigma_rad, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  auto random_unit = [&] {
+    Eigen::Vector3d v(n(rng), n(rng), n(rng));
+    return v.normalized();
+  };
+  PoseErrorModel e;
+  e.hand_eye_error.translation() = hand_eye_m * random_unit();
+  e.hand_eye_error.linear() = Eigen::AngleAxisd(hand_eye_rad, random_unit()).toRotationMatrix();
+  e.turntable_offset_rad = turntable_rad;
+  e.joint_sigma_rad = joint_sigma_rad;
+  e.seed = seed;
+  return e;
+}
+
 RigSim::RigSim(const RigModel& rig, const ObjectPlacement& object,
-               const std::string& model_out_path) {
+               const std::string& model_out_path, const PoseErrorModel& errors)
+    : errors_(errors), rng_(errors.seed) {
   const std::string xml = compose_model_xml(rig.model_path, object);
   {
     std::ofstream out(model_out_path);
@@ -71,6 +93,20 @@ RigSim::RigSim(const RigModel& rig, const ObjectPlacement& object,
     throw std::runtime_error("MuJoCo could not load the twin model " + model_out_path + ": " + error);
   }
   d_ = mj_makeData(m_);
+  if (!errors_.hand_eye_error.isApprox(Pose::Identity())) {
+    // The real camera sits slightly elsewhere on its bracket than the model says.
+    const int cam = mj_name2id(m_, mjOBJ_BODY, "camera_optical");
+    if (cam < 0) throw std::runtime_error("twin model has no body 'camera_optical'");
+    const Pose truth = rig.flange_T_camera * errors_.hand_eye_error;
+    // body_pos/quat are relative to the parent body, the flange (load_rig checks this), whose
+    // frame the model's flange_T_camera is expressed in.
+    const Eigen::Quaterniond q(truth.linear());
+    for (int k = 0; k < 3; ++k) m_->body_pos[3 * cam + k] = truth.translation()[k];
+    m_->body_quat[4 * cam + 0] = q.w();
+    m_->body_quat[4 * cam + 1] = q.x();
+    m_->body_quat[4 * cam + 2] = q.y();
+    m_->body_quat[4 * cam + 3] = q.z();
+  }
   std::vector<double> speeds(rig.qd_max.data(), rig.qd_max.data() + 6);
   arm_ = make_group(rig.joint_names, speeds);
   if (rig.has_turntable) turntable_ = make_group({"turntable"}, {rig.turntable_qd_max});
@@ -145,12 +181,37 @@ void RigSim::start_ramp(JointGroup& g, const std::vector<double>& target, double
 }
 
 void RigSim::command_arm(const Vector6d& target, double speed_scale, long seq) {
-  start_ramp(arm_, std::vector<double>(target.data(), target.data() + 6), speed_scale, seq);
+  // Commands are in reported (encoder) angles; a new command brings new encoder offsets.
+  Vector6d offset = Vector6d::Zero();
+  if (errors_.joint_sigma_rad > 0) {
+    std::normal_distribution<double> n(0.0, errors_.joint_sigma_rad);
+    for (int i = 0; i < 6; ++i) offset[i] = n(rng_);
+  }
+  const Vector6d truth = target - offset;
+  start_ramp(arm_, std::vector<double>(truth.data(), truth.data() + 6), speed_scale, seq);
+  joint_offset_ = offset;
 }
 
 void RigSim::command_turntable(double target_rad, double speed_scale, long seq) {
   if (!turntable_) throw std::invalid_argument("this rig has no turntable");
-  start_ramp(*turntable_, {target_rad}, speed_scale, seq);
+  start_ramp(*turntable_, {target_rad - errors_.turntable_offset_rad}, speed_scale, seq);
+}
+
+Pose RigSim::true_camera_in_object(double object_z_m) const {
+  auto body_pose = [&](const char* name) {
+    const int b = mj_name2id(m_, mjOBJ_BODY, name);
+    if (b < 0) throw std::runtime_error(std::string("twin model has no body '") + name + "'");
+    Pose p = Pose::Identity();
+    Eigen::Matrix3d r;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) r(i, j) = d_->xmat[9 * b + 3 * i + j];
+    p.linear() = r;
+    p.translation() = Eigen::Vector3d(d_->xpos[3 * b], d_->xpos[3 * b + 1], d_->xpos[3 * b + 2]);
+    return p;
+  };
+  Pose world_T_object = body_pose("object_mount");
+  world_T_object.translate(Eigen::Vector3d(0, 0, object_z_m));
+  return world_T_object.inverse() * body_pose("camera_optical");
 }
 
 void RigSim::hold_arm(long seq) {

@@ -8,6 +8,7 @@
 #include <mujoco/mujoco.h>
 
 #include <optional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,25 @@ constexpr double kAccelerationPerSpeed = 4.0;
 // `speed_limit` and peak acceleration (6 distance / T^2) within `accel_limit`.
 double ramp_duration_s(double distance, double speed_limit, double accel_limit);
 
+// How the twin's kinematics differ from the rig model the services use, so that kinematic
+// camera poses are wrong the way a real rig's are (off by default):
+//  - the true hand-eye transform is the model's times a fixed error (in the camera frame);
+//  - the turntable reports its angle with a fixed offset;
+//  - each joint reports its angle with an offset drawn anew (Gaussian) at every arm command.
+// Reported = true + offset, and the rig servos so that the reported angle reaches the command.
+struct PoseErrorModel {
+  Pose hand_eye_error = Pose::Identity();  // true flange_T_camera = model's * hand_eye_error
+  double turntable_offset_rad = 0;          // reported - true
+  double joint_sigma_rad = 0;               // per-command reported - true, standard deviation
+  uint64_t seed = 1;
+  bool enabled() const;
+};
+
+// A hand-eye error of the given size in a random direction (translation) and about a random
+// axis (rotation), deterministic for the seed, plus the turntable and joint errors.
+PoseErrorModel make_pose_error(double hand_eye_m, double hand_eye_rad, double turntable_rad,
+                               double joint_sigma_rad, uint64_t seed);
+
 // A group of joints moving together under one command (the arm's 6, or the turntable).
 struct JointGroup {
   std::vector<int> qpos_adr;   // addresses in qpos
@@ -56,7 +76,8 @@ class RigSim {
  public:
   // Loads the composed model (written to `model_out_path`, kept for users to open in MuJoCo's
   // viewer). Throws std::runtime_error with MuJoCo's error text.
-  RigSim(const RigModel& rig, const ObjectPlacement& object, const std::string& model_out_path);
+  RigSim(const RigModel& rig, const ObjectPlacement& object, const std::string& model_out_path,
+         const PoseErrorModel& errors = PoseErrorModel{});
   ~RigSim();
   RigSim(const RigSim&) = delete;
   RigSim& operator=(const RigSim&) = delete;
@@ -72,8 +93,14 @@ class RigSim {
   void step();
   double time_s() const;
 
-  Vector6d arm_position() const;
+  Vector6d arm_position() const;  // true joint angles
   Vector6d arm_velocity() const;
+  // What the rig's encoders report (true + the pose-error model's offsets).
+  Vector6d arm_position_reported() const { return arm_position() + joint_offset_; }
+  double turntable_angle_reported() const { return turntable_angle() + errors_.turntable_offset_rad; }
+  // True optical-frame camera pose in the true object frame (for evaluation only: the
+  // pipeline never sees it).
+  Pose true_camera_in_object(double object_z_m) const;
   const JointGroup& arm() const { return arm_; }
   bool has_turntable() const { return turntable_.has_value(); }
   const JointGroup& turntable() const { return *turntable_; }
@@ -92,6 +119,9 @@ class RigSim {
 
   mjModel* m_ = nullptr;
   mjData* d_ = nullptr;
+  PoseErrorModel errors_;
+  Vector6d joint_offset_ = Vector6d::Zero();
+  std::mt19937_64 rng_;
   JointGroup arm_;
   std::optional<JointGroup> turntable_;
 };

@@ -8,6 +8,9 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
 #include <iostream>
 #include <random>
 #include <thread>
@@ -48,6 +51,13 @@ R"(usage: pbnbv-twin [options]
   --dropout P              pixel dropout probability (0: off)           [0]
   --seed N                 noise seed                                   [1]
   --speed X                simulation speed, multiple of real time      [1]
+ pose-error model (off by default): kinematic poses wrong the way a real rig's are
+  --hand-eye-error-mm MM   true camera mount off the model's by MM...   [0]
+  --hand-eye-error-deg DEG ...and turned by DEG (random direction/axis) [0]
+  --turntable-error-deg D  turntable reports its angle D off            [0]
+  --joint-error-deg D      each joint reports its angle off by N(0, D), new per move [0]
+  --error-seed N           seed of the error directions and draws       [7]
+  --truth-out PATH         append each frame's true camera pose (JSON lines; evaluation only)
 )";
 }
 
@@ -100,10 +110,30 @@ int main(int argc, char** argv) {
     noise.dropout = args.num("dropout", 0.0, 0.0, 1.0);
     std::mt19937_64 rng(static_cast<uint64_t>(args.integer("seed", 1, 0, 1L << 40)));
     const double speed = args.num("speed", 1.0, 0.01, 1000.0);
+    const twin::PoseErrorModel errors = twin::make_pose_error(
+        args.num("hand-eye-error-mm", 0.0, 0.0, 100.0) * 1e-3,
+        args.num("hand-eye-error-deg", 0.0, 0.0, 20.0) * M_PI / 180,
+        args.num("turntable-error-deg", 0.0, -20.0, 20.0) * M_PI / 180,
+        args.num("joint-error-deg", 0.0, 0.0, 5.0) * M_PI / 180,
+        static_cast<uint64_t>(args.integer("error-seed", 7, 0, 1L << 40)));
+    const std::string truth_path = args.str("truth-out", "");
     args.reject_unknown();
 
     const RigModel rig = load_rig(model_path);
-    twin::RigSim sim(rig, object, model_out);
+    twin::RigSim sim(rig, object, model_out, errors);
+    std::ofstream truth;
+    if (!truth_path.empty()) {
+      truth.open(truth_path, std::ios::app);
+      if (!truth) throw std::runtime_error("cannot write --truth-out " + truth_path);
+    }
+    if (errors.enabled()) {
+      const Eigen::AngleAxisd r(errors.hand_eye_error.linear());
+      std::ostringstream os;
+      os << "pose-error model on: hand-eye " << errors.hand_eye_error.translation().norm() * 1e3 << " mm / "
+         << r.angle() * 180 / M_PI << " deg, turntable " << errors.turntable_offset_rad * 180 / M_PI
+         << " deg, joints sigma " << errors.joint_sigma_rad * 180 / M_PI << " deg";
+      log_info(os.str());
+    }
     twin::EglContext egl;
     twin::DepthRenderer renderer(sim.model(), "depth", k, range);
     log_info("rig '" + rig.arm_name + "' from " + model_path + ", rendering " +
@@ -173,6 +203,14 @@ int main(int argc, char** argv) {
         f.depth[2 * i + 1] = static_cast<uint8_t>(v >> 8);
       }
       bus.publish(channels::kDepthFrame, f);
+      if (truth.is_open()) {
+        double p[3], q[4];
+        pose_to_arrays(sim.true_camera_in_object(object.object_z_m), p, q);
+        truth << std::setprecision(12) << "{\"frame_seq\": " << f.seq << ", \"trigger_seq\": " << f.trigger_seq
+              << ", \"utime\": " << f.utime << ", \"object_T_camera\": {\"position_m\": [" << p[0] << ", "
+              << p[1] << ", " << p[2] << "], \"quat_wxyz\": [" << q[0] << ", " << q[1] << ", " << q[2] << ", "
+              << q[3] << "]}}" << std::endl;
+      }
       bus.set_state("idle");
       wall0 = bus::now_s();
       sim0 = sim.time_s();
@@ -193,9 +231,10 @@ int main(int argc, char** argv) {
         s.seq = status_seq;
         s.num_joints = 6;
         s.joint_names = rig.joint_names;
-        s.joint_position_rad = bus::to_std(sim.arm_position());
+        s.joint_position_rad = bus::to_std(sim.arm_position_reported());
         s.joint_velocity_rad_s = bus::to_std(sim.arm_velocity());
-        s.joint_position_commanded_rad = sim.arm().target;
+        s.joint_position_commanded_rad = bus::to_std(
+            Eigen::Map<const Vector6d>(sim.arm().target.data()) + (sim.arm_position_reported() - sim.arm_position()));
         s.command_seq = sim.arm().command_seq;
         s.mode = arm_fault.empty() ? mode_of(sim, sim.arm()) : arm_status_t::kModeFault;
         s.fault = arm_fault;
@@ -204,9 +243,9 @@ int main(int argc, char** argv) {
           turntable_status_t t;
           t.utime = utime;
           t.seq = status_seq;
-          t.angle_rad = sim.turntable_angle();
+          t.angle_rad = sim.turntable_angle_reported();
           t.velocity_rad_s = sim.turntable_velocity();
-          t.angle_commanded_rad = sim.turntable().target[0];
+          t.angle_commanded_rad = sim.turntable().target[0] + errors.turntable_offset_rad;
           t.command_seq = sim.turntable().command_seq;
           t.mode = turntable_fault.empty() ? mode_of(sim, sim.turntable()) : arm_status_t::kModeFault;
           t.fault = turntable_fault;

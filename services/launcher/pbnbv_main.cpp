@@ -51,6 +51,10 @@ scan options:
   --sim-speed X            twin simulation speed, multiple of real time           [4]
   --noise-sigma K          twin depth noise, std = K * depth (0: off)             [0]
   --dropout P              twin pixel dropout probability (0: off)                [0]
+  --hand-eye-error-mm MM --hand-eye-error-deg DEG --turntable-error-deg DEG
+  --joint-error-deg DEG --error-seed N
+                           twin pose-error model: kinematic poses wrong the way a
+                           real rig's are (all 0: off)
   --width --height --fx --fy --cx --cy   depth camera intrinsics    [1280 720 696 696 640 360]
   --depth-min --depth-max M                depth range, m                      [0.1 3.0]
   --no-log                 do not record scan.lcmlog
@@ -128,6 +132,13 @@ int scan(int argc, char** argv) {
   const double noise_sigma = args.num("noise-sigma", 0.0, 0.0, 0.1);
   const double dropout = args.num("dropout", 0.0, 0.0, 1.0);
   const bool record_log = !args.flag("no-log");
+  std::vector<std::string> error_args;
+  for (const char* name : {"hand-eye-error-mm", "hand-eye-error-deg", "turntable-error-deg", "joint-error-deg", "error-seed"}) {
+    if (args.has(name)) {
+      error_args.push_back(std::string("--") + name);
+      error_args.push_back(args.str(name));
+    }
+  }
   const fs::path out = fs::absolute(args.str("out", "out/" + object_name + "-" + timestamp()));
   args.reject_unknown();
 
@@ -169,7 +180,9 @@ int scan(int argc, char** argv) {
                "--width", std::to_string(s.camera.width), "--height", std::to_string(s.camera.height),
                "--fx", num(s.camera.fx), "--fy", num(s.camera.fy), "--cx", num(s.camera.cx), "--cy", num(s.camera.cy),
                "--depth-min", num(s.depth_range.min_m), "--depth-max", num(s.depth_range.max_m),
-               "--noise-sigma", num(noise_sigma), "--dropout", num(dropout), "--speed", num(s.sim_speed)});
+               "--noise-sigma", num(noise_sigma), "--dropout", num(dropout), "--speed", num(s.sim_speed),
+               "--truth-out", (out / "twin_truth.jsonl").string()});
+  children.back().argv.insert(children.back().argv.end(), error_args.begin(), error_args.end());
   add("motion", {(bin / "pbnbv-motion").string(), "--rig", to_string(s.rig)});
   add("camera", {(bin / "pbnbv-camera").string(), "--rig", to_string(s.rig)});
   add("coordinator", {(bin / "pbnbv-coordinator").string(), "--out", out.string()}, true);
