@@ -1,8 +1,9 @@
 // pbnbv-coordinator: the scan coordinator.
-//   in:  MOVE_RESULT, CLOUD, ARM_STATUS, TURNTABLE_STATUS, HEARTBEAT
+//   in:  MOVE_RESULT, CLOUD, REGISTERED_CLOUD, VOXEL_MAP, ARM_STATUS, TURNTABLE_STATUS, HEARTBEAT
 //   out: MOVE_REQUEST, CAPTURE_REQUEST, SCAN_STATUS, HEARTBEAT
-// Runs move -> settle -> capture -> accumulate for each view of the plan, writes the scan's
-// output folder after every view (cloud.ply, frames/, scan.json), and prints progress.
+// Runs move -> settle -> capture -> register -> map -> accumulate for each view of the plan,
+// writes the scan's output folder after every view (cloud.ply, frames/, scan.json), and prints
+// progress.
 // Every wait has a deadline; requests are re-sent (idempotent by request_id) when an answer
 // is lost.
 #include <cmath>
@@ -28,6 +29,8 @@
 #include "pbnbv/move_request_t.hpp"
 #include "pbnbv/move_result_t.hpp"
 #include "pbnbv/point_cloud_t.hpp"
+#include "pbnbv/registered_cloud_t.hpp"
+#include "pbnbv/voxel_set_t.hpp"
 #include "pbnbv/scan_status_t.hpp"
 #include "pbnbv/turntable_status_t.hpp"
 
@@ -37,7 +40,8 @@ using nlohmann::json;
 
 namespace {
 
-constexpr double kResendS = 3.0;  // re-send a request whose answer has not come
+constexpr double kResendS = 3.0;          // re-send a request whose answer has not come
+constexpr double kAnswerTimeoutS = 60.0;  // registration / mapping answer to a view
 
 std::string move_status_name(int8_t s) {
   switch (s) {
@@ -69,6 +73,16 @@ class Coordinator {
         throw std::invalid_argument("CLOUD num_points disagrees with its array");
       }
       clouds_[c.request_id] = c;
+    });
+    bus_.subscribe<registered_cloud_t>(channels::kRegisteredCloud, [this](const registered_cloud_t& r) {
+      if (r.scan_id != s_.scan_id) return;
+      if (r.cloud.num_points != static_cast<int32_t>(r.cloud.points_m.size())) {
+        throw std::invalid_argument("REGISTERED_CLOUD cloud.num_points disagrees with its array");
+      }
+      registered_[r.request_id] = r;
+    });
+    bus_.subscribe<voxel_set_t>(channels::kVoxelMap, [this](const voxel_set_t& m) {
+      if (m.scan_id == s_.scan_id) maps_[m.iteration] = m;
     });
     bus_.subscribe<arm_status_t>(channels::kArmStatus, [this](const arm_status_t&) { seen_.insert("ARM_STATUS"); });
     bus_.subscribe<turntable_status_t>(channels::kTurntableStatus, [this](const turntable_status_t&) { seen_.insert("TURNTABLE_STATUS"); });
@@ -112,7 +126,7 @@ class Coordinator {
       view["time_s"] = {{"plan", moved->plan_s}, {"move", moved->move_s}, {"settle", moved->settle_s},
                         {"rig_motion", moved->rig_motion_s}, {"move_round_trip", bus::now_s() - t_move}};
       if (moved->status != move_result_t::kReached) {
-        progress(move_status_name(moved->status) + ": " + moved->reason, true);
+        progress(move_status_name(moved->status) + ": " + moved->reason);
         record(view);
         continue;
       }
@@ -139,22 +153,56 @@ class Coordinator {
                          {"num_cropped", cloud->num_cropped},
                          {"num_points", cloud->num_points}};
       if (cloud->status != point_cloud_t::kOk) {
-        progress("capture failed: " + cloud->message, true);
+        progress("capture failed: " + cloud->message);
         record(view);
         continue;
       }
+      status(scan_status_t::kIntegrating, "registering and mapping view " + std::to_string(i + 1));
+      progress("registering");
+      const double t_reg = bus::now_s();
+      if (!spin_until([&] { return registered_.count(i) > 0; }, kAnswerTimeoutS)) {
+        if (bus::stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
+        record(view);
+        return finish(scan_status_t::kFailed, "the registration service did not answer view " + std::to_string(i + 1));
+      }
+      const registered_cloud_t reg = registered_[i];  // a copy: accumulate() drops the stored one
+      view["registration"] = {{"accepted", reg.accepted}, {"reason", reg.reason},
+                              {"correction", pose_json(reg.correction)},
+                              {"translation_mm", reg.translation_m * 1e3}, {"rotation_deg", reg.rotation_deg},
+                              {"overlap", reg.overlap}, {"rmse_mm", reg.rmse_m * 1e3}, {"iterations", reg.iterations},
+                              {"registered_object_T_camera", pose_json(reg.cloud.object_T_camera)},
+                              {"kinematic_object_T_camera", pose_json(reg.kinematic_object_T_camera)}};
+      view["time_s"]["register"] = reg.register_s;
+      view["time_s"]["register_round_trip"] = bus::now_s() - t_reg;
+      progress("mapping");
+      const double t_map = bus::now_s();
+      if (!spin_until([&] { return maps_.count(i) > 0; }, kAnswerTimeoutS)) {
+        if (bus::stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
+        record(view);
+        return finish(scan_status_t::kFailed, "the mapping service did not answer view " + std::to_string(i + 1));
+      }
+      const voxel_set_t& map = maps_[i];
+      view["map"] = {{"updated", map.updated}, {"message", map.message}, {"resolution_m", map.resolution_m},
+                     {"bbox_min_m", {map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]}},
+                     {"bbox_max_m", {map.bbox_max_m[0], map.bbox_max_m[1], map.bbox_max_m[2]}},
+                     {"voxels", {{"none", map.num_none}, {"empty", map.num_empty}, {"occupied", map.num_occupied},
+                                 {"unknown", map.num_unknown}, {"frontier", map.num_frontier}}}};
+      view["time_s"]["map_update"] = map.update_s;
+      view["time_s"]["map_round_trip"] = bus::now_s() - t_map;
       status(scan_status_t::kIntegrating, "adding view " + std::to_string(i + 1));
       const double t_acc = bus::now_s();
-      accumulate(i, *cloud, view);
+      accumulate(i, reg, view);
       view["time_s"]["accumulate"] = bus::now_s() - t_acc;
       view["time_s"]["view_total"] = bus::now_s() - t_view;
       ++views_done_;
       record(view);
       std::ostringstream os;
-      os << "done: " << cloud->num_points << " points, " << accumulated_.size() << " in the model; move "
-         << fixed(moved->move_s + moved->settle_s) << " s, capture " << fixed(cloud->capture_s) << " s, cloud "
-         << fixed(cloud->process_s) << " s";
-      progress(os.str(), true);
+      os << "done: " << cloud->num_points << " points, " << accumulated_.size() << " in the model; "
+         << (reg.accepted ? "registered (" + fixed(reg.translation_m * 1e3) + " mm, " + fixed(reg.rotation_deg) + " deg)"
+                          : "registration rejected") << ", " << map.num_frontier << " frontier voxels; move "
+         << fixed(moved->move_s + moved->settle_s) << " s, capture " << fixed(cloud->capture_s) << " s, register "
+         << fixed(reg.register_s) << " s, map " << fixed(map.update_s * 1e3) << " ms";
+      progress(os.str());
     }
     if (views_done_ == 0) return finish(scan_status_t::kFailed, "no view produced a cloud");
     return finish(scan_status_t::kDone, "scan complete");
@@ -177,7 +225,8 @@ class Coordinator {
   }
 
   bool wait_ready() {
-    std::set<std::string> need = {"ARM_STATUS", "heartbeat of motion", "heartbeat of camera"};
+    std::set<std::string> need = {"ARM_STATUS", "heartbeat of motion", "heartbeat of camera",
+                                  "heartbeat of registration", "heartbeat of mapping"};
     if (s_.rig == RigKind::kArm) need.insert("TURNTABLE_STATUS");
     const bool ok = spin_until([&] {
       for (const auto& n : need) if (!seen_.count(n)) return false;
@@ -253,18 +302,24 @@ class Coordinator {
     return std::nullopt;
   }
 
-  void accumulate(int i, const point_cloud_t& c, json& view) {
+  // Writes the view's cloud (registered if accepted) to frames/ and merges accepted views into
+  // cloud.ply; a view the registration rejected is kept in frames/ but not merged.
+  void accumulate(int i, const registered_cloud_t& r, json& view) {
     PointCloud frame;
-    frame.reserve(c.points_m.size());
-    for (const auto& p : c.points_m) frame.emplace_back(p[0], p[1], p[2]);
+    frame.reserve(r.cloud.points_m.size());
+    for (const auto& p : r.cloud.points_m) frame.emplace_back(p[0], p[1], p[2]);
     char name[32];
     std::snprintf(name, sizeof(name), "view_%03d.ply", i);
     write_ply(frame, (out_ / "frames" / name).string());
     view["frame_file"] = std::string("frames/") + name;
-    accumulated_.insert(accumulated_.end(), frame.begin(), frame.end());
-    accumulated_ = voxel_downsample(accumulated_, s_.voxel_m);
-    write_ply(accumulated_, (out_ / "cloud.ply").string());
-    clouds_.erase(i);  // the frame is on disk; keep memory flat
+    view["merged"] = r.accepted;
+    if (r.accepted) {
+      accumulated_.insert(accumulated_.end(), frame.begin(), frame.end());
+      accumulated_ = voxel_downsample(accumulated_, s_.voxel_m);
+      write_ply(accumulated_, (out_ / "cloud.ply").string());
+    }
+    clouds_.erase(i);  // on disk now; keep memory flat
+    registered_.erase(i);
   }
 
   void record(const json& view) {
@@ -289,9 +344,8 @@ class Coordinator {
     return state == scan_status_t::kDone ? 0 : state == scan_status_t::kStopped ? 130 : 1;
   }
 
-  void progress(const std::string& what, bool final_line = false) {
+  void progress(const std::string& what) {
     std::cout << "[view " << iteration_ + 1 << "/" << views_.size() << "] " << what << std::endl;
-    (void)final_line;
   }
 
   void status(int8_t state, const std::string& message) {
@@ -326,6 +380,8 @@ class Coordinator {
   std::vector<Pose> views_;
   std::map<int64_t, move_result_t> move_results_;
   std::map<int64_t, point_cloud_t> clouds_;
+  std::map<int64_t, registered_cloud_t> registered_;
+  std::map<int32_t, voxel_set_t> maps_;
   std::set<std::string> seen_;
   PointCloud accumulated_;
   json report_;

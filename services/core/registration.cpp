@@ -10,15 +10,15 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdint>
-#include <cstdlib>
-#include <limits>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <exception>
+#include <limits>
 #include <memory>
 #include <string>
 #include <thread>
+#include <unordered_set>
 #include <vector>
 
 namespace pbnbv {
@@ -34,11 +34,6 @@ class Icp : public pcl::IterativeClosestPointWithNormals<pcl::PointNormal, pcl::
   int iterations() const { return nr_iterations_; }
 };
 using Criteria = pcl::registration::DefaultConvergenceCriteria<double>;
-
-double knob(const char* name, double def) {
-  const char* v = std::getenv(name);
-  return v ? std::atof(v) : def;
-}
 
 // A static 3-d tree over the xyz of a cloud, answering the k-NN and radius queries of
 // pcl::search with far less per-query overhead than the FLANN-backed pcl::search::KdTree (no
@@ -107,7 +102,7 @@ class FastKdTree : public pcl::search::KdTree<PointT> {
     const float r2 = static_cast<float>(radius * radius);
     const Eigen::Vector3f q = point.getVector3fMap();
     std::vector<std::pair<float, pcl::index_t>> found;
-    radius_rec(0, q, r2, found);
+    radius_all(q, r2, found);
     std::sort(found.begin(), found.end());
     if (max_nn > 0 && found.size() > max_nn) found.resize(max_nn);
     for (const auto& f : found) {
@@ -125,32 +120,50 @@ class FastKdTree : public pcl::search::KdTree<PointT> {
   pcl::index_t nearest(const Eigen::Vector3f& q, float max_d2, float& d2) const {
     d2 = max_d2;
     int best = -1;
-    if (!nodes_.empty()) nn_rec(0, q, d2, best);
+    float dists[3];
+    const float rd = root_dist(q, dists);
+    if (!nodes_.empty() && rd <= d2) nn_rec(0, q, rd, dists, d2, best);
     return best < 0 ? -1 : ids_[best];
   }
 
  private:
   static constexpr int kLeaf = 8;
   struct Node {
-    float split;
     int dim;  // -1: leaf over [begin, end)
     int begin, end;
     int left, right;
+    float left_max, right_min;  // extent of the children along dim
   };
+
+  // Squared distance from q to the root's box, per dimension and summed (the incremental
+  // lower bound of the search, as in Arya & Mount / nanoflann).
+  float root_dist(const Eigen::Vector3f& q, float dists[3]) const {
+    float rd = 0;
+    for (int k = 0; k < 3; ++k) {
+      const float o = q[k] < lo_[k] ? lo_[k] - q[k] : q[k] > hi_[k] ? q[k] - hi_[k] : 0.0f;
+      dists[k] = o * o;
+      rd += dists[k];
+    }
+    return rd;
+  }
 
   int build(int begin, int end) {
     const int id = static_cast<int>(nodes_.size());
-    nodes_.push_back({0.f, -1, begin, end, -1, -1});
-    if (end - begin <= kLeaf) return id;
+    nodes_.push_back({-1, begin, end, -1, -1, 0.f, 0.f});
     Eigen::Vector3f lo = pts_[begin], hi = pts_[begin];
     for (int i = begin + 1; i < end; ++i) {
       lo = lo.cwiseMin(pts_[i]);
       hi = hi.cwiseMax(pts_[i]);
     }
+    if (id == 0) {
+      lo_ = lo;
+      hi_ = hi;
+    }
+    if (end - begin <= kLeaf) return id;
     int dim;
     (hi - lo).maxCoeff(&dim);
     const int mid = (begin + end) / 2;
-    // Sort the permutation of [begin, end) by the split coordinate around the median.
+    // Reorder [begin, end) around the median of the split coordinate.
     std::vector<int> order(end - begin);
     for (int i = 0; i < end - begin; ++i) order[i] = begin + i;
     std::nth_element(order.begin(), order.begin() + (mid - begin), order.end(),
@@ -163,45 +176,94 @@ class FastKdTree : public pcl::search::KdTree<PointT> {
     }
     std::copy(p2.begin(), p2.end(), pts_.begin() + begin);
     std::copy(i2.begin(), i2.end(), ids_.begin() + begin);
-    const float split = pts_[mid][dim];
+    float left_max = pts_[begin][dim];
+    for (int i = begin; i < mid; ++i) left_max = std::max(left_max, pts_[i][dim]);
+    float right_min = pts_[mid][dim];
+    for (int i = mid; i < end; ++i) right_min = std::min(right_min, pts_[i][dim]);
     const int left = build(begin, mid);
     const int right = build(mid, end);
-    nodes_[id].split = split;
-    nodes_[id].dim = dim;
-    nodes_[id].left = left;
-    nodes_[id].right = right;
+    Node& nd = nodes_[id];
+    nd.dim = dim;
+    nd.left = left;
+    nd.right = right;
+    nd.left_max = left_max;
+    nd.right_min = right_min;
     return id;
   }
 
-  void nn_rec(int n, const Eigen::Vector3f& q, float& d2, int& best) const {
+  // Calls visit(i) for the points of leaves whose box lies within `bound()` of q, nearest
+  // branch first; `bound` may shrink as points are found.
+  template <typename Visit, typename Bound>
+  void search(int n, const Eigen::Vector3f& q, float rd, float dists[3], Visit& visit,
+              Bound& bound) const {
     const Node& nd = nodes_[n];
     if (nd.dim < 0) {
-      for (int i = nd.begin; i < nd.end; ++i) {
-        const float d = (pts_[i] - q).squaredNorm();
-        if (d < d2 || (d == d2 && best < 0)) {
-          d2 = d;
-          best = i;
-        }
-      }
+      for (int i = nd.begin; i < nd.end; ++i) visit(i);
       return;
     }
-    const float diff = q[nd.dim] - nd.split;
-    const int first = diff < 0 ? nd.left : nd.right;
-    const int second = diff < 0 ? nd.right : nd.left;
-    nn_rec(first, q, d2, best);
-    if (diff * diff <= d2) nn_rec(second, q, d2, best);
+    const float v = q[nd.dim];
+    const float to_left = v > nd.left_max ? v - nd.left_max : 0.0f;
+    const float to_right = v < nd.right_min ? nd.right_min - v : 0.0f;
+    const bool left_first = to_left <= to_right;
+    const int first = left_first ? nd.left : nd.right;
+    const int second = left_first ? nd.right : nd.left;
+    const float cut_first = left_first ? to_left : to_right;
+    const float cut_second = left_first ? to_right : to_left;
+    const float saved = dists[nd.dim];
+    {
+      const float c2 = cut_first * cut_first;
+      const float r = rd - saved + c2;
+      if (r <= bound()) {
+        dists[nd.dim] = c2;
+        search(first, q, r, dists, visit, bound);
+        dists[nd.dim] = saved;
+      }
+    }
+    {
+      const float c2 = cut_second * cut_second;
+      const float r = rd - saved + c2;
+      if (r <= bound()) {
+        dists[nd.dim] = c2;
+        search(second, q, r, dists, visit, bound);
+        dists[nd.dim] = saved;
+      }
+    }
   }
 
-  // Sorted best-k lists in fixed arrays (k is small here); falls back to a heap for large k.
+  void nn_rec(int root, const Eigen::Vector3f& q, float rd, float dists[3], float& d2,
+              int& best) const {
+    auto visit = [&](int i) {
+      const float d = (pts_[i] - q).squaredNorm();
+      if (d < d2 || (d == d2 && best < 0)) {
+        d2 = d;
+        best = i;
+      }
+    };
+    auto bound = [&]() { return d2; };
+    search(root, q, rd, dists, visit, bound);
+  }
+
   int knn(const Eigen::Vector3f& q, int k, float max_d2, pcl::Indices& out_i,
           std::vector<float>& out_d) const {
     out_i.clear();
     out_d.clear();
     if (k <= 0 || nodes_.empty()) return 0;
     k = std::min<int>(k, static_cast<int>(pts_.size()));
+    // Sorted best-k list (k is small: 12 for the normals).
     std::vector<std::pair<float, int>> best;
     best.reserve(k + 1);
-    knn_rec(0, q, k, max_d2, best);
+    auto visit = [&](int i) {
+      const float d = (pts_[i] - q).squaredNorm();
+      if (static_cast<int>(best.size()) == k ? d >= best.back().first : d > max_d2) return;
+      best.insert(std::upper_bound(best.begin(), best.end(), std::make_pair(d, i)), {d, i});
+      if (static_cast<int>(best.size()) > k) best.pop_back();
+    };
+    auto bound = [&]() {
+      return static_cast<int>(best.size()) < k ? max_d2 : best.back().first;
+    };
+    float dists[3];
+    const float rd = root_dist(q, dists);
+    if (rd <= max_d2) search(0, q, rd, dists, visit, bound);
     for (const auto& b : best) {
       out_d.push_back(b.first);
       out_i.push_back(ids_[b.second]);
@@ -209,53 +271,29 @@ class FastKdTree : public pcl::search::KdTree<PointT> {
     return static_cast<int>(best.size());
   }
 
-  void knn_rec(int n, const Eigen::Vector3f& q, int k, float max_d2,
-               std::vector<std::pair<float, int>>& best) const {
-    const Node& nd = nodes_[n];
-    if (nd.dim < 0) {
-      for (int i = nd.begin; i < nd.end; ++i) {
-        const float d = (pts_[i] - q).squaredNorm();
-        if (static_cast<int>(best.size()) == k ? d >= best.back().first : d > max_d2) continue;
-        auto it = std::upper_bound(best.begin(), best.end(), std::make_pair(d, i));
-        best.insert(it, {d, i});
-        if (static_cast<int>(best.size()) > k) best.pop_back();
-      }
-      return;
-    }
-    const float diff = q[nd.dim] - nd.split;
-    const int first = diff < 0 ? nd.left : nd.right;
-    const int second = diff < 0 ? nd.right : nd.left;
-    knn_rec(first, q, k, max_d2, best);
-    const float worst = static_cast<int>(best.size()) < k ? max_d2 : best.back().first;
-    if (diff * diff <= worst) knn_rec(second, q, k, max_d2, best);
-  }
-
-  void radius_rec(int n, const Eigen::Vector3f& q, float r2,
-                  std::vector<std::pair<float, pcl::index_t>>& found) const {
-    const Node& nd = nodes_[n];
-    if (nd.dim < 0) {
-      for (int i = nd.begin; i < nd.end; ++i) {
-        const float d = (pts_[i] - q).squaredNorm();
-        if (d <= r2) found.emplace_back(d, ids_[i]);
-      }
-      return;
-    }
-    const float diff = q[nd.dim] - nd.split;
-    const int first = diff < 0 ? nd.left : nd.right;
-    const int second = diff < 0 ? nd.right : nd.left;
-    radius_rec(first, q, r2, found);
-    if (diff * diff <= r2) radius_rec(second, q, r2, found);
+  int radius_all(const Eigen::Vector3f& q, float r2,
+             std::vector<std::pair<float, pcl::index_t>>& found) const {
+    auto visit = [&](int i) {
+      const float d = (pts_[i] - q).squaredNorm();
+      if (d <= r2) found.emplace_back(d, ids_[i]);
+    };
+    auto bound = [&]() { return r2; };
+    float dists[3];
+    const float rd = root_dist(q, dists);
+    if (rd <= r2) search(0, q, rd, dists, visit, bound);
+    return static_cast<int>(found.size());
   }
 
   std::vector<Eigen::Vector3f> pts_;
   std::vector<pcl::index_t> ids_;
   std::vector<Node> nodes_;
+  Eigen::Vector3f lo_ = Eigen::Vector3f::Zero(), hi_ = Eigen::Vector3f::Zero();
   float k1_bound_d2_ = std::numeric_limits<float>::infinity();
 };
 
 // Drops correspondences whose surface normals disagree by more than an angle (unsigned: the
-// normals are not oriented consistently). Uses the source normals as given at the start of the
-// stage; the rotation within a stage is a few degrees at most, well inside the threshold.
+// normals are not oriented consistently). The source normals are turned by the pose at the start
+// of the stage; the rotation within a stage is a few degrees at most, well inside the threshold.
 class NormalCompatibilityRejector : public pcl::registration::CorrespondenceRejector {
  public:
   NormalCompatibilityRejector(pcl::PointCloud<pcl::PointNormal>::ConstPtr source,
@@ -273,8 +311,6 @@ class NormalCompatibilityRejector : public pcl::registration::CorrespondenceReje
       const Eigen::Vector3f ns = rotation_ * (*source_)[c.index_query].getNormalVector3fMap();
       const float d = ns.dot((*target_)[c.index_match].getNormalVector3fMap());
       if (std::fabs(d) < min_cos_) continue;
-      if ((*source_)[c.index_query].curvature > max_curv_ ||
-          (*target_)[c.index_match].curvature > max_curv_) continue;
       out.push_back(c);
     }
   }
@@ -288,12 +324,11 @@ class NormalCompatibilityRejector : public pcl::registration::CorrespondenceReje
   pcl::PointCloud<pcl::PointNormal>::ConstPtr source_, target_;
   Eigen::Matrix3f rotation_ = Eigen::Matrix3f::Identity();
   float min_cos_;
- public:
-  float max_curv_ = 1.0f;
 };
 
 constexpr double kPi = 3.14159265358979323846;
-const int kNormalNeighbours = static_cast<int>(knob("REG_K", 12));  // k-NN for the normals of the downsampled clouds
+constexpr int kNormalNeighbours = 12;  // k-NN of the plane fits on the downsampled clouds
+constexpr double kMaxNormalAngleDeg = 30.0;  // correspondences with normals further apart drop
 
 std::string fmt(const char* f, double a) {
   char buf[64];
@@ -301,47 +336,40 @@ std::string fmt(const char* f, double a) {
   return buf;
 }
 
-// One point per occupied voxel of edge `voxel`: the input point nearest to the centroid of the
-// voxel's points. Unlike the centroid itself it lies on the measured surface (a centroid at an
-// edge or a corner sits inside the object), which keeps ICP free of the grid's bias.
-PointCloud pick_downsample(const PointCloud& cloud, double voxel) {
-  if (!(voxel > 0) || cloud.empty()) return cloud;
-  struct Item {
-    int64_t x, y, z;
-    uint32_t i;
+// The points of `cloud` within `dist` of some point of `ref` (and some a little further: whole
+// cells of a grid of dist/2, the cells of `ref` dilated by two).
+PointCloud near_points(const PointCloud& cloud, const PointCloud& ref, double dist) {
+  const double cell = dist / 2;
+  auto key = [cell](const Eigen::Vector3f& p, int64_t& k) {
+    const Eigen::Vector3d q = (p.cast<double>() / cell).array().floor();
+    if (!(q.cwiseAbs().maxCoeff() < 1e5)) return false;  // beyond 100,000 cells: not cropped
+    k = ((static_cast<int64_t>(q.x()) + (1 << 20)) << 42) |
+        ((static_cast<int64_t>(q.y()) + (1 << 20)) << 21) |
+        (static_cast<int64_t>(q.z()) + (1 << 20));
+    return true;
   };
-  std::vector<Item> items;
-  items.reserve(cloud.size());
-  for (uint32_t i = 0; i < cloud.size(); ++i) {
-    const Eigen::Vector3d q = (cloud[i].cast<double>() / voxel).array().floor();
-    if (!(q.cwiseAbs().maxCoeff() < 1e15)) continue;
-    items.push_back({static_cast<int64_t>(q.x()), static_cast<int64_t>(q.y()),
-                     static_cast<int64_t>(q.z()), i});
+  std::unordered_set<int64_t> occupied;
+  for (const auto& p : ref) {
+    int64_t k;
+    if (!key(p, k)) return cloud;
+    occupied.insert(k);
   }
-  std::sort(items.begin(), items.end(), [](const Item& a, const Item& b) {
-    return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z != b.z ? a.z < b.z : a.i < b.i;
-  });
-  PointCloud out;
-  for (size_t b = 0; b < items.size();) {
-    size_t e = b + 1;
-    while (e < items.size() && items[e].x == items[b].x && items[e].y == items[b].y &&
-           items[e].z == items[b].z) {
-      ++e;
-    }
-    Eigen::Vector3d c = Eigen::Vector3d::Zero();
-    for (size_t k = b; k < e; ++k) c += cloud[items[k].i].cast<double>();
-    c /= static_cast<double>(e - b);
-    size_t best = b;
-    double best_d = std::numeric_limits<double>::infinity();
-    for (size_t k = b; k < e; ++k) {
-      const double d = (cloud[items[k].i].cast<double>() - c).squaredNorm();
-      if (d < best_d) {
-        best_d = d;
-        best = k;
+  std::unordered_set<int64_t> dilated;
+  dilated.reserve(occupied.size() * 30);
+  for (const int64_t k : occupied) {
+    for (int64_t dx = -2; dx <= 2; ++dx) {
+      for (int64_t dy = -2; dy <= 2; ++dy) {
+        for (int64_t dz = -2; dz <= 2; ++dz) {
+          dilated.insert(k + (dx << 42) + (dy << 21) + dz);
+        }
       }
     }
-    out.push_back(cloud[items[best].i]);
-    b = e;
+  }
+  PointCloud out;
+  out.reserve(cloud.size());
+  for (const auto& p : cloud) {
+    int64_t k;
+    if (!key(p, k) || dilated.count(k)) out.push_back(p);
   }
   return out;
 }
@@ -355,13 +383,10 @@ PointCloud finite_points(const PointCloud& in) {
   return out;
 }
 
-// Surface points with normals: for every point a plane is fitted to its k nearest neighbours
-// (pcl's covariance + eigen plane fit, as in pcl::NormalEstimation, on two threads with the
-// fast tree), and the point is moved onto that plane. The projection removes the sensor noise
-// across the surface and, more importantly, the "double layer" a voxel grid leaves where a
-// noisy surface runs along a grid plane (points on either side of the boundary average into
-// two sheets ~0.5 mm apart), which otherwise pins ICP at a few tenths of a degree off.
-pcl::PointCloud<pcl::PointNormal>::Ptr with_normals(const PointCloud& pts, bool project) {
+// Points with usable normals: for every point a plane is fitted to its k nearest neighbours
+// with pcl's covariance + eigen plane fit (what pcl::NormalEstimation::computePointNormal does),
+// split over the cores by hand and using the fast tree; points without a plane are dropped.
+pcl::PointCloud<pcl::PointNormal>::Ptr with_normals(const PointCloud& pts) {
   pcl::PointCloud<pcl::PointXYZ>::Ptr xyz(new pcl::PointCloud<pcl::PointXYZ>);
   xyz->resize(pts.size());
   for (size_t i = 0; i < pts.size(); ++i) {
@@ -386,10 +411,8 @@ pcl::PointCloud<pcl::PointNormal>::Ptr with_normals(const PointCloud& pts, bool 
         pcl::solvePlaneParameters(cov, nx, ny, nz, curvature);
         const Eigen::Vector3f n(nx, ny, nz);
         if (!n.allFinite() || !(n.norm() > 0.5f)) continue;
-        Eigen::Vector3f p = pts[i];
-        if (project) p -= (p - centroid.head<3>()).dot(n) * n;
         auto& o = all[i];
-        o.getVector3fMap() = p;
+        o.getVector3fMap() = pts[i];
         o.getNormalVector3fMap() = n;
         o.curvature = curvature;
         ok[i] = 1;
@@ -452,18 +475,9 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
       return finish();
     }
 
-    const double voxel = knob("REG_VOXEL", params.voxel_m);
-    const float goff = static_cast<float>(knob("REG_GOFF", 0.0) * voxel);
-    auto ds = [&](const PointCloud& c) {
-      if (goff == 0.0f) return voxel_downsample(c, voxel);
-      PointCloud sh = c;
-      for (auto& p : sh) p.array() += goff;
-      PointCloud out = voxel_downsample(sh, voxel);
-      for (auto& p : out) p.array() -= goff;
-      return out;
-    };
-    const PointCloud model_ds = ds(model_f);
-    const PointCloud frame_ds = ds(frame_f);
+    const double voxel = params.voxel_m;
+    const PointCloud model_ds = voxel_downsample(model_f, voxel);
+    const PointCloud frame_ds = voxel_downsample(frame_f, voxel);
     const size_t min_points = static_cast<size_t>(std::max(params.min_points, 3));
     if (frame_ds.size() < min_points || model_ds.size() < min_points) {
       res.reason = "rejected: too few points: frame " + std::to_string(frame_ds.size()) +
@@ -474,35 +488,16 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
       return finish();
     }
 
-    // Only the part of the model the frame can reach matters: crop it to the frame's box grown
-    // by the largest correspondence distance plus room for the normals.
-    Eigen::Vector3f lo = frame_ds.front(), hi = frame_ds.front();
-    for (const auto& p : frame_ds) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
-    const float margin = static_cast<float>(
-        std::max(params.max_correspondence_m, params.overlap_distance_m) + 4.0 * voxel);
-    lo.array() -= margin;
-    hi.array() += margin;
-    PointCloud model_crop;
-    model_crop.reserve(model_ds.size());
-    for (const auto& p : model_ds) {
-      if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) {
-        model_crop.push_back(p);
-      }
-    }
+    // Only the part of the model the frame can reach matters: keep the model points within
+    // `margin` (the largest correspondence distance plus room for the normals) of the frame,
+    // via a grid of margin/2 cells: the frame's cells dilated by two.
+    const double margin =
+        std::max(params.max_correspondence_m, params.overlap_distance_m) + 4.0 * voxel;
+    const PointCloud model_crop = near_points(model_ds, frame_ds, margin);
 
-    const auto tn = Clock::now();
-    const bool project = knob("REG_PROJ", 1) > 0;
-    const auto target = with_normals(model_crop, project);
-    const auto source = with_normals(frame_ds, project);
+    const auto target = with_normals(model_crop);
+    const auto source = with_normals(frame_ds);
 
-    if (std::getenv("PBNBV_REG_DEBUG")) {
-      std::fprintf(stderr, "prep %.1f ms normals %.1f ms\n",
-                   std::chrono::duration<double>(tn - t0).count() * 1e3,
-                   std::chrono::duration<double>(Clock::now() - tn).count() * 1e3);
-    }
     FastKdTree<pcl::PointNormal>::Ptr tree(new FastKdTree<pcl::PointNormal>);
     Eigen::Matrix4d t_final = Eigen::Matrix4d::Identity();
     std::string icp_note;
@@ -514,20 +509,22 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
       icp.setInputTarget(target);
       icp.setSearchMethodTarget(tree, true);
       icp.setMaximumIterations(std::max(params.max_iterations, 1));
-      const double teps = knob("REG_TEPS", 1e-5), reps = knob("REG_REPS", 1e-3);
-      icp.setTransformationEpsilon(teps * teps);          // squared step
-      icp.setTransformationRotationEpsilon(std::cos(reps * kPi / 180.0));
-      icp.getConvergeCriteria()->setMaximumIterationsSimilarTransforms(static_cast<int>(knob("REG_SIM", 0)));
+      // A stage ends when a step moves less than 10 um and 0.001 deg (pcl compares the squared
+      // translation and the rotation's cosine).
+      icp.setTransformationEpsilon(1e-5 * 1e-5);
+      icp.setTransformationRotationEpsilon(std::cos(1e-3 * kPi / 180.0));
       icp.setEuclideanFitnessEpsilon(1e-9);
-      // Coarse to fine: each stage halves the correspondence distance, ending near the
-      // overlap distance so the frame's unseen-by-the-model part does not pull.
-      auto rejector = std::make_shared<NormalCompatibilityRejector>(
-          source, target, knob("REG_NANGLE", 30.0));
-      rejector->max_curv_ = static_cast<float>(knob("REG_CURV", 1.0));
-      if (knob("REG_NANGLE", 30.0) < 90) icp.addCorrespondenceRejector(rejector);
-      if (knob("REG_SYMM", 0) > 0) icp.setUseSymmetricObjective(true);
+      // Point-to-plane pulls only along the model's normal; a frame point on a surface the model
+      // has not seen, matched to the edge of one it has, would pull sideways. Normal agreement
+      // drops those pairs (it halved the rotation error on partial-overlap frames).
+      auto rejector =
+          std::make_shared<NormalCompatibilityRejector>(source, target, kMaxNormalAngleDeg);
+      icp.addCorrespondenceRejector(rejector);
+      // Coarse to fine: each stage halves the correspondence distance, from
+      // max_correspondence_m down to the overlap distance (at least 1.5 voxels) so the part of
+      // the frame the model has not seen does not pull. max_iterations is per stage.
       std::vector<double> stages;
-      const double finest = knob("REG_FINAL", std::max(params.overlap_distance_m, 1.5 * voxel));
+      const double finest = std::max(params.overlap_distance_m, 1.5 * voxel);
       for (double d = params.max_correspondence_m; d > finest * 1.0001; d *= 0.5) {
         stages.push_back(d);
       }
@@ -538,16 +535,8 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
       for (double d : stages) {
         icp.setMaxCorrespondenceDistance(d);
         tree->set_k1_bound(d * 1.001);
-        const auto ts = Clock::now();
         rejector->set_rotation(t_final.topLeftCorner<3, 3>().cast<float>());
         icp.align(aligned, t_final);
-        if (std::getenv("PBNBV_REG_DEBUG")) {
-          std::fprintf(stderr, "stage %.4f: %d it, %.1f ms, state %d, src %zu tgt %zu\n", d,
-                       icp.iterations(),
-                       std::chrono::duration<double>(Clock::now() - ts).count() * 1e3,
-                       static_cast<int>(icp.getConvergeCriteria()->getConvergenceState()),
-                       source->size(), target->size());
-        }
         res.iterations += icp.iterations();
         state = icp.getConvergeCriteria()->getConvergenceState();
         converged = icp.hasConverged();
@@ -560,8 +549,8 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
       res.converged = converged && state != Criteria::CONVERGENCE_CRITERIA_ITERATIONS &&
                       state != Criteria::CONVERGENCE_CRITERIA_FAILURE_AFTER_MAX_ITERATIONS;
       if (!res.converged && icp_note.empty()) {
-        icp_note = "ICP did not converge in " + std::to_string(params.max_iterations) +
-                   " iterations";
+        icp_note = "ICP did not converge in the final stage's " +
+                   std::to_string(params.max_iterations) + " iterations";
       }
     } else {
       icp_note = "no model points near the frame";

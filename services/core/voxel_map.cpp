@@ -86,10 +86,18 @@ constexpr uint8_t kOccB = static_cast<uint8_t>(VoxelState::kOccupied);
 constexpr uint8_t kUnkB = static_cast<uint8_t>(VoxelState::kUnknown);
 constexpr uint8_t kFrontB = static_cast<uint8_t>(VoxelState::kFrontier);
 
-// Pixel classes.
-constexpr uint8_t kPixIgnored = 0;
-constexpr uint8_t kPixValid = 1;
-constexpr uint8_t kPixNoReturn = 2;
+// Pixel classes: valid = inside [zlo, zhi] (NaN compares false); no return = 0 or not finite;
+// anything else (negative, out of range) is ignored.
+inline bool pixel_valid(float z, float zlo, float zhi) { return z >= zlo && z <= zhi; }
+inline bool pixel_no_return(float z) { return z == 0.0f || !std::isfinite(z); }
+
+// floor() for the lattice index of a coordinate already divided by the resolution. Fast path
+// for |x| < 2^20 voxels (a 1 mm lattice out to 1 km); std::floor beyond.
+inline int lattice_floor(double x) {
+  constexpr double kOff = 1048576.0;
+  if (x > -kOff && x < kOff) return static_cast<int>(x + kOff) - static_cast<int>(kOff);
+  return static_cast<int>(std::floor(x));
+}
 
 constexpr int64_t kMaxVoxels = int64_t(1) << 31;
 
@@ -150,56 +158,80 @@ bool cast_ray(const Grid& g, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
   if (!(t0 < t1)) return false;
 
   const double res = g.res;
-  int idx[3], step[3];
-  double t_max[3], t_delta[3];
-  int64_t stride[3] = {1, g.n[0], int64_t(g.n[0]) * g.n[1]};
-  int64_t lin = 0;
-  for (int i = 0; i < 3; ++i) {
-    const double p = o[i] + d[i] * t0;
-    idx[i] = std::clamp(static_cast<int>(std::floor(p / res)), 0, g.n[i] - 1);
-    lin += idx[i] * stride[i];
-    if (d[i] > 0) {
-      step[i] = 1;
-      t_max[i] = ((idx[i] + 1) * res - o[i]) / d[i];
-      t_delta[i] = res / d[i];
-    } else if (d[i] < 0) {
-      step[i] = -1;
-      t_max[i] = (idx[i] * res - o[i]) / d[i];
-      t_delta[i] = -res / d[i];
+  // Entry voxel (clamped: the entry point lies on B's surface up to rounding).
+  int ix = std::clamp(static_cast<int>(std::floor((o.x() + d.x() * t0) / res)), 0, g.n[0] - 1);
+  int iy = std::clamp(static_cast<int>(std::floor((o.y() + d.y() * t0) / res)), 0, g.n[1] - 1);
+  int iz = std::clamp(static_cast<int>(std::floor((o.z() + d.z() * t0) / res)), 0, g.n[2] - 1);
+  const int64_t nx = g.n[0], nxy = int64_t(g.n[0]) * g.n[1];
+  // A huge finite "never" instead of infinity, so that 0 * kNever = 0 in the branchless step.
+  constexpr double kNever = 1e300;
+  // Per axis: step direction, linear index step, t of the next boundary, t per voxel.
+  auto setup = [&](double oi, double di, int i, int64_t stride, int& s, int64_t& ls, double& tm,
+                   double& td) {
+    if (di > 0) {
+      s = 1;
+      ls = stride;
+      tm = ((i + 1) * res - oi) / di;
+      td = res / di;
+    } else if (di < 0) {
+      s = -1;
+      ls = -stride;
+      tm = (i * res - oi) / di;
+      td = -res / di;
     } else {
-      step[i] = 0;
-      t_max[i] = std::numeric_limits<double>::infinity();
-      t_delta[i] = std::numeric_limits<double>::infinity();
+      s = 0;
+      ls = 0;
+      tm = kNever;
+      td = kNever;
     }
-    stride[i] *= step[i];
-  }
+  };
+  int sx, sy, sz;
+  int64_t lx, ly, lz;
+  double tx, ty, tz, dx, dy, dz;
+  setup(o.x(), d.x(), ix, 1, sx, lx, tx, dx);
+  setup(o.y(), d.y(), iy, nx, sy, ly, ty, dy);
+  setup(o.z(), d.z(), iz, nxy, sz, lz, tz, dz);
+  int64_t lin = ix + nx * iy + nxy * iz;
+  const unsigned ux = g.n[0], uy = g.n[1], uz = g.n[2];
+  // Steps into the next voxel (the axis whose boundary comes first; branchless, since that
+  // choice is unpredictable for oblique rays); false when the ray leaves B.
+  auto step = [&]() -> bool {
+    const int bx = (tx <= ty) & (tx <= tz);
+    const int by = (1 - bx) & (ty <= tz);
+    const int bz = 1 - bx - by;
+    ix += bx * sx;
+    iy += by * sy;
+    iz += bz * sz;
+    lin += bx * lx + by * ly + bz * lz;
+    tx += bx * dx;
+    ty += by * dy;
+    tz += bz * dz;
+    return (static_cast<unsigned>(ix) < ux) & (static_cast<unsigned>(iy) < uy) &
+           (static_cast<unsigned>(iz) < uz);
+  };
 
-  bool free_phase = true;
+  uint8_t* const cells = g.cells;
+  // Free phase: up to the first Occupied voxel or the first voxel not left before t_free.
   for (;;) {
-    const int axis = (t_max[0] <= t_max[1]) ? (t_max[0] <= t_max[2] ? 0 : 2)
-                                            : (t_max[1] <= t_max[2] ? 1 : 2);
-    const double t_next = t_max[axis];  // where the ray leaves this voxel
-    uint8_t* c = g.cells + lin;
+    uint8_t* c = cells + lin;
     const uint8_t s = load_relaxed(c);
-    if (free_phase) {
-      if (s == kOccB) {
-        if (!has_return) return true;  // a free ray stops at the first Occupied voxel
-        free_phase = false;            // behind the first Occupied voxel: occluded
-      } else if (t_next <= t_free) {
-        if (s != kEmptyB) store_relaxed(c, kEmptyB);  // left before the return: observed free
-      } else {
-        if (!has_return) return true;  // straddles max range: not known to be free
-        free_phase = false;            // straddles the return depth: not known to be free
-        if (s == kNoneB) none_to_unknown(c);
-      }
-    } else if (s == kNoneB) {
-      none_to_unknown(c);
+    if (s == kOccB) {
+      if (!has_return) return true;  // a free ray stops at the first Occupied voxel
+      break;                         // behind the first Occupied voxel: occluded
     }
-    if (t_next >= t1) break;
-    idx[axis] += step[axis];
-    if (idx[axis] < 0 || idx[axis] >= g.n[axis]) break;
-    lin += stride[axis];
-    t_max[axis] += t_delta[axis];
+    const double t_next = std::min(tx, std::min(ty, tz));  // where the ray leaves this voxel
+    if (t_next > t_free) {
+      if (!has_return) return true;  // straddles max range: not known to be free
+      if (s == kNoneB) none_to_unknown(c);  // straddles the return depth: not known to be free
+      break;
+    }
+    if (s != kEmptyB) store_relaxed(c, kEmptyB);  // left before the return: observed free
+    if (!step()) return true;
+  }
+  // Occluded phase: None -> Unknown to where the ray leaves B.
+  while (step()) {
+    uint8_t* c = cells + lin;
+    if (load_relaxed(c) == kNoneB) none_to_unknown(c);
   }
   return true;
 }
@@ -455,43 +487,59 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
   const Eigen::Vector3d cam = view.object_T_camera.translation();
   const int nt = worker_count();
 
-  // 1. Classify pixels, back-project the valid ones, collect their lattice indices.
-  pixel_class_.resize(static_cast<size_t>(W) * H);
+  // 1. Classify pixels, back-project the valid ones, collect their lattice indices. The point
+  // of pixel (u, v) at depth z is cam + z (a_u + b_v), a_u = R x_n(u), b_v = R (0, y_n(v), 1).
+  const float zlo_f_ = static_cast<float>(zlo), zhi_f_ = static_cast<float>(zhi);
+  const float zlo_f = zlo_f_, zhi_f = zhi_f_;
+  const double inv_res = 1.0 / res;
+  std::vector<Eigen::Vector3d> col_dir(W);
+  for (int u = 0; u < W; ++u) col_dir[u] = R.col(0) * ((u - k.cx) / k.fx);
   struct PassOne {
-    std::vector<Eigen::Vector3i> idx;
     Eigen::Vector3i lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max());
     Eigen::Vector3i hi = Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
     int64_t valid = 0, no_return = 0, ignored = 0;
   };
   PassOne part[2];
   run_parallel(nt, [&](int tid, int n_threads) {
-    PassOne& pr = part[tid];
     const int v0 = H * tid / n_threads, v1 = H * (tid + 1) / n_threads;
+    std::vector<Eigen::Vector3i>& pts = points_[tid];
+    const size_t cap = static_cast<size_t>(v1 - v0) * W;
+    if (pts.size() < cap) pts.resize(cap);
+    // Locals, so the compiler keeps them in registers (no aliasing with the point stores).
+    Eigen::Vector3i* out = pts.data();
+    int64_t n_out = 0, n_nr = 0, n_ign = 0;
+    Eigen::Vector3i lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max());
+    Eigen::Vector3i hi = Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
+    const float lo_z = zlo_f, hi_z = zhi_f;
+    const double s = inv_res;
+    const Eigen::Vector3d cam_v = cam * inv_res;
+    const Eigen::Vector3d* cd = col_dir.data();
     for (int v = v0; v < v1; ++v) {
-      const double yn = (v - k.cy) / k.fy;
+      const Eigen::Vector3d row_dir = R.col(1) * ((v - k.cy) / k.fy) + R.col(2);
+      const float* drow = depth + int64_t(v) * W;
       for (int u = 0; u < W; ++u) {
-        const int64_t i = int64_t(v) * W + u;
-        const float z = depth[i];
-        uint8_t cls;
-        if (!std::isfinite(z) || z == 0.0f) {
-          cls = kPixNoReturn;
-          ++pr.no_return;
-        } else if (z < zlo || z > zhi) {
-          cls = kPixIgnored;
-          ++pr.ignored;
+        const float z = drow[u];
+        if (pixel_valid(z, lo_z, hi_z)) {
+          const double zs = z * s;
+          const Eigen::Vector3i g(lattice_floor(cam_v.x() + zs * (cd[u].x() + row_dir.x())),
+                                  lattice_floor(cam_v.y() + zs * (cd[u].y() + row_dir.y())),
+                                  lattice_floor(cam_v.z() + zs * (cd[u].z() + row_dir.z())));
+          out[n_out++] = g;
+          lo = lo.cwiseMin(g);
+          hi = hi.cwiseMax(g);
+        } else if (pixel_no_return(z)) {
+          ++n_nr;
         } else {
-          cls = kPixValid;
-          ++pr.valid;
-          const Eigen::Vector3d p = cam + R * Eigen::Vector3d((u - k.cx) / k.fx * z, yn * z, z);
-          const Eigen::Vector3i g(floor_index(p.x(), res), floor_index(p.y(), res),
-                                  floor_index(p.z(), res));
-          pr.idx.push_back(g);
-          pr.lo = pr.lo.cwiseMin(g);
-          pr.hi = pr.hi.cwiseMax(g);
+          ++n_ign;
         }
-        pixel_class_[i] = cls;
       }
     }
+    PassOne& pr = part[tid];
+    pr.valid = n_out;
+    pr.no_return = n_nr;
+    pr.ignored = n_ign;
+    pr.lo = lo;
+    pr.hi = hi;
   });
   const int64_t n_valid = part[0].valid + part[1].valid;
   const int64_t n_no_return = part[0].no_return + part[1].no_return;
@@ -530,8 +578,9 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
   }
 
   // 3. Occupied from every valid pixel (sticky).
-  for (const PassOne& pr : part) {
-    for (const Eigen::Vector3i& g : pr.idx) {
+  for (int t = 0; t < nt; ++t) {
+    for (int64_t i = 0; i < part[t].valid; ++i) {
+      const Eigen::Vector3i& g = points_[t][i];
       const Eigen::Vector3i l = g - lo_;
       grid.cells[l.x() + int64_t(dims_.x()) * (l.y() + int64_t(dims_.y()) * l.z())] = kOccB;
     }
@@ -552,15 +601,15 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
   const bool free_no_return = params_.no_return_is_free;
   const Eigen::Vector3d o = cam - origin_;
   const int n_bu = (W + stride - 1) / stride, n_bv = (H + stride - 1) / stride;
-  const uint8_t* pcls = pixel_class_.data();
-  // Block kinds, then the rays. A block casts one ray per pixel when it is mixed or when any
-  // of its 8 neighbour blocks is of another kind: silhouettes and depth jumps get one ray per
-  // pixel for at least a block's width on both sides, so the thin partly-visible slivers of
-  // voxels along shadow boundaries are sampled like the reference does.
+  // Block kinds, then the rays.
   enum : uint8_t { kBlockNothing = 0, kBlockSurface = 1, kBlockFree = 2, kBlockMixed = 3 };
   block_kind_.assign(static_cast<size_t>(n_bu) * n_bv, kBlockNothing);
   block_depth_.resize(static_cast<size_t>(n_bu) * n_bv);
   run_parallel(nt, [&](int tid, int n_threads) {
+    const float zlo_f = zlo_f_, zhi_f = zhi_f_;  // locals: no reloads in the pixel loop
+    const float res_f = static_cast<float>(res);
+    uint8_t* kinds = block_kind_.data();
+    float* zmins = block_depth_.data();
     for (int bv = tid; bv < n_bv; bv += n_threads) {
       const int v0 = bv * stride, v1 = std::min(H, v0 + stride);
       for (int bu = 0; bu < n_bu; ++bu) {
@@ -570,13 +619,12 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
         for (int v = v0; v < v1; ++v) {
           const int64_t row = int64_t(v) * W;
           for (int u = u0; u < u1; ++u) {
-            const uint8_t c = pcls[row + u];
-            if (c == kPixValid) {
+            const float z = depth[row + u];
+            if (pixel_valid(z, zlo_f, zhi_f)) {
               ++n_val;
-              const float z = depth[row + u];
               z_min = std::min(z_min, z);
               z_max = std::max(z_max, z);
-            } else if (c == kPixNoReturn) {
+            } else if (pixel_no_return(z)) {
               ++n_nr;
             }
           }
@@ -584,7 +632,7 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
         const int n_pix = (v1 - v0) * (u1 - u0);
         const int64_t b = int64_t(bv) * n_bu + bu;
         uint8_t kind;
-        if (n_val == n_pix && z_max - z_min <= res) {
+        if (n_val == n_pix && z_max - z_min <= res_f) {
           kind = kBlockSurface;
         } else if (n_nr == n_pix) {
           kind = free_no_return ? kBlockFree : kBlockNothing;
@@ -593,8 +641,8 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
         } else {
           kind = kBlockMixed;
         }
-        block_kind_[b] = kind;
-        block_depth_[b] = z_min;
+        kinds[b] = kind;
+        zmins[b] = z_min;
       }
     }
   });
@@ -610,21 +658,23 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
       for (int bu = 0; bu < n_bu; ++bu) {
         const int u0 = bu * stride, u1 = std::min(W, u0 + stride);
         const int64_t b = int64_t(bv) * n_bu + bu;
-        uint8_t kind = block_kind_[b];
-        // Blocks on the image border also cast one ray per pixel, so the voxels the frustum
-        // boundary cuts are sampled out to the outermost pixel, like the reference.
-        if (bu == 0 || bv == 0 || bu == n_bu - 1 || bv == n_bv - 1) kind = kBlockMixed;
-        if (kind != kBlockMixed && stride > 1) {
-          for (int dv = -1; dv <= 1 && kind != kBlockMixed; ++dv) {
-            const int nv = bv + dv;
-            if (nv < 0 || nv >= n_bv) continue;
-            for (int du = -1; du <= 1; ++du) {
-              const int nu = bu + du;
-              if (nu < 0 || nu >= n_bu) continue;
-              if (block_kind_[int64_t(nv) * n_bu + nu] != kind) {
-                kind = kBlockMixed;
-                break;
-              }
+        const uint8_t kind = block_kind_[b];
+        if (kind != kBlockMixed && stride > 1 &&
+            (bu == 0 || bv == 0 || bu == n_bu - 1 || bv == n_bv - 1)) {
+          // Image border: also one ray per pixel of the outermost pixel row/column, so the
+          // voxels the frustum boundary cuts are sampled out to the last pixel, like the
+          // reference (the block's own ray follows below).
+          auto edge_ray = [&](int u, int v) {
+            const float z = depth[int64_t(v) * W + u];
+            if (pixel_valid(z, zlo_f, zhi_f)) {
+              ray(u, v, z, true);
+            } else if (free_no_return && pixel_no_return(z)) {
+              ray(u, v, zhi, false);
+            }
+          };
+          for (int v = v0; v < v1; ++v) {
+            for (int u = u0; u < u1; ++u) {
+              if (u == 0 || v == 0 || u == W - 1 || v == H - 1) edge_ray(u, v);
             }
           }
         }
@@ -637,10 +687,10 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
           for (int v = v0; v < v1; ++v) {  // one ray per pixel
             const int64_t row = int64_t(v) * W;
             for (int u = u0; u < u1; ++u) {
-              const uint8_t c = pcls[row + u];
-              if (c == kPixValid) {
-                ray(u, v, depth[row + u], true);
-              } else if (c == kPixNoReturn && free_no_return) {
+              const float z = depth[row + u];
+              if (pixel_valid(z, zlo_f, zhi_f)) {
+                ray(u, v, z, true);
+              } else if (free_no_return && pixel_no_return(z)) {
                 ray(u, v, zhi, false);
               }
             }

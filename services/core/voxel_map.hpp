@@ -92,7 +92,7 @@ class VoxelMap {
   Eigen::Vector3i lo_ = Eigen::Vector3i::Zero();  // lattice index of B's min voxel (origin_ = lo_ * res)
   bool initialised_ = false;                      // a frame with valid points has been integrated
   int last_stride_px_ = 0;
-  std::vector<uint8_t> pixel_class_;              // per-frame scratch (one byte per pixel)
+  std::vector<Eigen::Vector3i> points_[2];        // per-frame scratch: lattice index per valid pixel
   std::vector<uint8_t> scratch_;                  // frontier pass scratch (one byte per voxel)
   std::vector<uint8_t> block_kind_;               // per-frame scratch (one byte per ray block)
   std::vector<float> block_depth_;                // per-frame scratch (nearest depth per block)

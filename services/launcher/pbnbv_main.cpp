@@ -47,6 +47,8 @@ scan options:
   --working-distance M     camera to the object's bounding sphere, m              [0.6]
   --ring-elevation DEG     ring planner: camera elevation above the object centre [30]
   --voxel M                cloud downsampling voxel, m                            [0.002]
+  --resolution M           voxel map resolution, m (0.01 suits a real rig)        [0.03]
+  --registration on|off    refine every view's pose by ICP against the model      [on]
   --speed-scale S          fraction of the joint speed limits, (0, 1]             [1]
   --sim-speed X            twin simulation speed, multiple of real time           [4]
   --noise-sigma K          twin depth noise, std = K * depth (0: off)             [0]
@@ -117,6 +119,11 @@ int scan(int argc, char** argv) {
   s.working_distance_m = args.num("working-distance", 0.6, 0.15, 3.0);
   s.ring_elevation_deg = args.num("ring-elevation", 30.0, -89.0, 89.0);
   s.voxel_m = args.num("voxel", 0.002, 0.0, 0.05);
+  const double resolution = args.num("resolution", 0.03, 0.002, 0.2);
+  const std::string registration = args.str("registration", "on");
+  if (registration != "on" && registration != "off") {
+    throw std::invalid_argument("--registration " + registration + ": expected on or off");
+  }
   s.speed_scale = args.num("speed-scale", 1.0, 0.01, 1.0);
   s.sim_speed = args.num("sim-speed", 4.0, 0.1, 100.0);
   s.camera.width = static_cast<int>(args.integer("width", 1280, 1, 16384));
@@ -185,6 +192,9 @@ int scan(int argc, char** argv) {
   children.back().argv.insert(children.back().argv.end(), error_args.begin(), error_args.end());
   add("motion", {(bin / "pbnbv-motion").string(), "--rig", to_string(s.rig)});
   add("camera", {(bin / "pbnbv-camera").string(), "--rig", to_string(s.rig)});
+  add("registration", {(bin / "pbnbv-registration").string()});
+  if (registration == "off") children.back().argv.push_back("--off");
+  add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", num(resolution), "--out", out.string()});
   add("coordinator", {(bin / "pbnbv-coordinator").string(), "--out", out.string()}, true);
 
   struct sigaction sa {};

@@ -12,6 +12,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <string>
 
 namespace pbnbv {
 namespace {
@@ -530,6 +531,8 @@ TEST(VoxelMap, SubsampledRaysCoverTheFrustum) {
       }
     });
     EXPECT_GT(checked, 1000);
+    std::printf("res %.3f: wall frame stride %d px, %lld voxels inside the frustum checked, ",
+                res, map.last_ray_stride_px(), (long long)checked);
     // Free rays from behind B: every pixel without return except the centre one, which lands
     // on the wall (an Occupied voxel already).
     const Eigen::AlignedBox3d b = map.bounds();
@@ -550,6 +553,8 @@ TEST(VoxelMap, SubsampledRaysCoverTheFrustum) {
       EXPECT_EQ(map.state(l), VoxelState::kEmpty) << res << " " << g.transpose();
     });
     EXPECT_GT(checked, 1000);
+    std::printf("free frame stride %d px, %lld checked\n", map.last_ray_stride_px(),
+                (long long)checked);
   }
 }
 
@@ -568,7 +573,9 @@ TEST(VoxelMap, SubsampledRaysMatchPerPixelReference) {
   for (const CameraIntrinsics& k : {small_camera(), CameraIntrinsics{}}) {
     for (double res : {0.03, 0.02, 0.01}) {
       if (k.width < 1280 && res < 0.03) continue;
+      const int n_eyes = k.width < 1280 ? 3 : 2;  // (the reference at full size is slow)
       for (const Case& c : objects) {
+        if (k.width == 1280 && res < 0.02 && std::string(c.name) == "cube") continue;
         VoxelMapParams p;
         p.resolution_m = res;
         p.gamma_m = 0.0;
@@ -578,7 +585,8 @@ TEST(VoxelMap, SubsampledRaysMatchPerPixelReference) {
         const Eigen::AlignedBox3d box(Vector3d::Constant(-0.5), Vector3d::Constant(0.5));
         fast.reserve_bounds(box);
         ref.reserve_bounds(box);
-        for (const Vector3d& e : eyes) {
+        for (int i_eye = 0; i_eye < n_eyes; ++i_eye) {
+          const Vector3d& e = eyes[i_eye];
           const MapUpdateResult rf = integrate(fast, k, from(e), c.hit);
           const MapUpdateResult rr = integrate(ref, k, from(e), c.hit);
           ASSERT_TRUE(rf.updated && rr.updated);
@@ -591,6 +599,7 @@ TEST(VoxelMap, SubsampledRaysMatchPerPixelReference) {
             if (b != VoxelState::kNone) ++classified;
             if (a == b) return;
             ++differ;
+            if (getenv("DIAG") && differ < 12) std::printf("  diff ref %s fast %s at %s\n", to_string(b), to_string(a), ::testing::PrintToString(fast.centre(l).transpose()).c_str());
             if (a == VoxelState::kNone) {
               ++missed;
             } else if (b == VoxelState::kEmpty && a != VoxelState::kEmpty) {
@@ -614,14 +623,14 @@ TEST(VoxelMap, SubsampledRaysMatchPerPixelReference) {
           std::printf("%4dx%-4d %-6s res %.2f eye (%5.2f %5.2f %5.2f) stride %d: rays %6d vs %6d;"
                       " E/U/F fast %lld/%lld/%lld ref %lld/%lld/%lld; differ %lld of %lld"
                       " (None in fast %lld, ref Empty fast Unknown/Frontier %lld, ref"
-                      " Unknown/Frontier fast Empty %lld, Unknown<->Frontier %lld)\n",
+                      " Unknown/Frontier fast Empty %lld, Unknown<->Frontier %lld); ref %.0f ms\n",
                       k.width, k.height, c.name, res, e.x(), e.y(), e.z(),
                       fast.last_ray_stride_px(), rf.rays, rr.rays, (long long)rf.counts.empty,
                       (long long)rf.counts.unknown, (long long)rf.counts.frontier,
                       (long long)rr.counts.empty, (long long)rr.counts.unknown,
                       (long long)rr.counts.frontier, (long long)differ, (long long)classified,
                       (long long)missed, (long long)empty_vs_unknown,
-                      (long long)unknown_vs_empty, (long long)frontier_flip);
+                      (long long)unknown_vs_empty, (long long)frontier_flip, rr.time_s * 1e3);
           EXPECT_LE(differ, classified / 100) << c.name << " " << res;
           EXPECT_EQ(off_interface, 0) << c.name << " " << res;
         }

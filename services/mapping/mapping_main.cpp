@@ -1,0 +1,182 @@
+// pbnbv-mapping: the mapping service.
+//   in:  REGISTERED_CLOUD (which frame, and its registered camera pose), DEPTH_FRAME (the rays)
+//   out: VOXEL_MAP, HEARTBEAT; DIR/maps/view_NNN.ot (OctoMap, viewable in octovis) per view
+// Keeps the five-state voxel map of each scan (core VoxelMap: None, Empty, Occupied, Unknown,
+// Frontier; 3-D DDA rays inside the bounding box B) and publishes, per view, the Occupied and
+// Frontier voxel centres, the count of every state, B, the resolution and the update time.
+// A view the registration rejected is not integrated (its pose is implausible).
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include "common/bus.hpp"
+#include "common/convert.hpp"
+#include "core/args.hpp"
+#include "core/depth_cloud.hpp"
+#include "core/log.hpp"
+#include "core/voxel_map.hpp"
+#include "pbnbv/depth_frame_t.hpp"
+#include "pbnbv/registered_cloud_t.hpp"
+#include "pbnbv/voxel_set_t.hpp"
+
+using namespace pbnbv;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::size_t kFramesKept = 4;     // depth frames waiting for their registered cloud
+constexpr double kFrameWaitS = 3.0;        // wait this long for a view's depth frame
+
+class MappingService {
+ public:
+  MappingService(bus::Bus& bus, const VoxelMapParams& params, fs::path out)
+      : bus_(bus), params_(params), out_(std::move(out)) {
+    bus_.subscribe<depth_frame_t>(channels::kDepthFrame, [this](const depth_frame_t& f) {
+      frames_.push_back(f);
+      if (frames_.size() > kFramesKept) frames_.pop_front();
+    });
+    bus_.subscribe<registered_cloud_t>(channels::kRegisteredCloud, [this](const registered_cloud_t& r) { on_view(r); });
+  }
+
+  void tick() {
+    if (pending_ && (find_frame(pending_->cloud.depth_frame_seq) || bus::now_s() > pending_deadline_)) {
+      const registered_cloud_t r = std::move(*pending_);
+      pending_.reset();
+      integrate(r);
+    }
+  }
+
+ private:
+  const depth_frame_t* find_frame(int64_t seq) const {
+    for (const auto& f : frames_) if (f.seq == seq) return &f;
+    return nullptr;
+  }
+
+  void on_view(const registered_cloud_t& r) {
+    bus_.set_scan(r.scan_id, r.iteration);
+    if (auto it = answers_.find({r.scan_id, r.iteration}); it != answers_.end()) {
+      bus_.publish(channels::kVoxelMap, it->second);  // a repeat: answer again
+      return;
+    }
+    if (pending_) {  // a newer view arrived: settle the older one now
+      const registered_cloud_t older = std::move(*pending_);
+      pending_.reset();
+      integrate(older);
+    }
+    pending_ = r;
+    pending_deadline_ = bus::now_s() + kFrameWaitS;
+    tick();
+  }
+
+  void integrate(const registered_cloud_t& r) {
+    if (r.scan_id != scan_id_) {  // a new scan: a new map
+      scan_id_ = r.scan_id;
+      map_.emplace(params_);
+      answers_.clear();
+    }
+    voxel_set_t out;
+    out.scan_id = r.scan_id;
+    out.iteration = r.iteration;
+    out.updated = false;
+    out.update_s = 0;
+    const depth_frame_t* frame = find_frame(r.cloud.depth_frame_seq);
+    if (r.cloud.status != point_cloud_t::kOk) {
+      out.message = "no view to integrate: " + r.cloud.message;
+    } else if (!r.accepted) {
+      out.message = "not integrated: registration rejected the view (" + r.reason + ")";
+    } else if (!frame) {
+      out.message = "not integrated: DEPTH_FRAME " + std::to_string(r.cloud.depth_frame_seq) + " never arrived";
+    } else {
+      try {
+        const std::vector<float> depth = decode_depth_u16(frame->depth, frame->width, frame->height, frame->depth_unit_m);
+        DepthView view;
+        view.depth_m = &depth;
+        view.intrinsics = CameraIntrinsics{frame->width, frame->height, frame->fx, frame->fy, frame->cx, frame->cy};
+        view.intrinsics.validate();
+        view.range = DepthRange{frame->depth_min_m, frame->depth_max_m};
+        view.range.validate();
+        view.object_T_camera = bus::from_msg(r.cloud.object_T_camera, "REGISTERED_CLOUD cloud.object_T_camera");
+        const MapUpdateResult u = map_->integrate(view);
+        out.updated = u.updated;
+        out.message = u.message;
+        out.update_s = u.time_s;
+      } catch (const std::exception& e) {
+        out.message = std::string("not integrated: ") + e.what();
+      }
+    }
+    fill(out);
+    if (!out_.empty() && !map_->empty()) {
+      fs::create_directories(out_ / "maps");
+      char name[32];
+      std::snprintf(name, sizeof(name), "view_%03d.ot", r.iteration);
+      map_->write_octomap((out_ / "maps" / name).string());
+    }
+    out.utime = bus::now_utime();
+    bus_.publish(channels::kVoxelMap, out);
+    answers_[{r.scan_id, r.iteration}] = out;
+    std::ostringstream os;
+    os << "view " << r.iteration << ": " << out.message << " (" << out.update_s * 1e3 << " ms; occupied "
+       << out.num_occupied << ", frontier " << out.num_frontier << ", unknown " << out.num_unknown << ")";
+    log_info(os.str());
+  }
+
+  void fill(voxel_set_t& out) const {
+    out.resolution_m = params_.resolution_m;
+    const Eigen::AlignedBox3d b = map_->empty() ? Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()) : map_->bounds();
+    for (int k = 0; k < 3; ++k) {
+      out.bbox_min_m[k] = b.min()[k];
+      out.bbox_max_m[k] = b.max()[k];
+    }
+    const VoxelCounts c = map_->counts();
+    out.num_none = static_cast<int32_t>(c.none);
+    out.num_empty = static_cast<int32_t>(c.empty);
+    out.num_unknown = static_cast<int32_t>(c.unknown);
+    auto centres = [&](VoxelState s, std::vector<std::vector<float>>& dst) {
+      for (const auto& p : map_->centres(s)) dst.push_back({static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())});
+      return static_cast<int32_t>(dst.size());
+    };
+    out.num_occupied = centres(VoxelState::kOccupied, out.occupied_centres_m);
+    out.num_frontier = centres(VoxelState::kFrontier, out.frontier_centres_m);
+  }
+
+  bus::Bus& bus_;
+  VoxelMapParams params_;
+  fs::path out_;
+  std::string scan_id_;
+  std::optional<VoxelMap> map_;
+  std::deque<depth_frame_t> frames_;
+  std::optional<registered_cloud_t> pending_;
+  double pending_deadline_ = 0;
+  std::map<std::pair<std::string, int32_t>, voxel_set_t> answers_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  set_log_name("mapping");
+  bus::install_stop_handlers();
+  try {
+    Args args(argc, argv);
+    VoxelMapParams p;
+    p.resolution_m = args.num("resolution", p.resolution_m, 0.002, 0.2);
+    p.gamma_m = args.num("gamma", p.gamma_m, 0.0, 1.0);
+    const fs::path out = args.str("out", "");
+    args.reject_unknown();
+    bus::Bus bus("mapping");
+    MappingService service(bus, p, out);
+    log_info("ready: resolution " + std::to_string(p.resolution_m) + " m");
+    while (!bus::stop_requested()) {
+      bus.spin_once(10);
+      service.tick();
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    log_error(e.what());
+    std::cerr << "usage: pbnbv-mapping [--resolution M] [--gamma M] [--out DIR]\n";
+    return 2;
+  }
+}

@@ -1,0 +1,143 @@
+// pbnbv-registration: the registration service.
+//   in:  CLOUD (a view placed by the rig's kinematic pose)
+//   out: REGISTERED_CLOUD, HEARTBEAT
+// Refines each view's pose against the accumulated model of its scan with point-to-plane ICP
+// (core register_frame), starting from the kinematic pose; an implausible alignment is
+// rejected with the reason and the kinematic pose kept, and a rejected view is not merged.
+// The model is rebuilt from the messages of the scan (a restarted service starts a new model
+// at the next scan); answers are idempotent by (scan_id, request_id).
+#include <deque>
+#include <iostream>
+#include <sstream>
+
+#include "common/bus.hpp"
+#include "common/convert.hpp"
+#include "core/args.hpp"
+#include "core/cloud.hpp"
+#include "core/log.hpp"
+#include "core/registration.hpp"
+#include "pbnbv/point_cloud_t.hpp"
+#include "pbnbv/registered_cloud_t.hpp"
+
+using namespace pbnbv;
+
+namespace {
+
+constexpr std::size_t kAnswersKept = 4;
+
+class RegistrationService {
+ public:
+  RegistrationService(bus::Bus& bus, const RegistrationParams& params, double model_voxel_m, bool off)
+      : bus_(bus), params_(params), model_voxel_m_(model_voxel_m), off_(off) {
+    bus_.subscribe<point_cloud_t>(channels::kCloud, [this](const point_cloud_t& c) { on_cloud(c); });
+  }
+
+ private:
+  void on_cloud(const point_cloud_t& c) {
+    if (c.num_points != static_cast<int32_t>(c.points_m.size())) {
+      throw std::invalid_argument("CLOUD num_points = " + std::to_string(c.num_points) + " but " +
+                                  std::to_string(c.points_m.size()) + " points");
+    }
+    bus_.set_scan(c.scan_id, c.iteration);
+    for (const auto& a : answers_) {
+      if (a.scan_id == c.scan_id && a.request_id == c.request_id) {
+        bus_.publish(channels::kRegisteredCloud, a);  // a repeat: answer again
+        return;
+      }
+    }
+    if (c.scan_id != scan_id_) {  // a new scan: a new model
+      scan_id_ = c.scan_id;
+      model_.clear();
+    }
+    registered_cloud_t out;
+    out.scan_id = c.scan_id;
+    out.iteration = c.iteration;
+    out.request_id = c.request_id;
+    out.cloud = c;
+    out.kinematic_object_T_camera = c.object_T_camera;
+    out.correction = bus::to_msg(Pose::Identity());
+    out.translation_m = out.rotation_deg = out.overlap = out.rmse_m = out.register_s = 0;
+    out.iterations = 0;
+    if (c.status != point_cloud_t::kOk) {
+      out.accepted = false;
+      out.reason = "no cloud to register: " + c.message;
+    } else {
+      PointCloud frame;
+      frame.reserve(c.points_m.size());
+      for (const auto& p : c.points_m) frame.emplace_back(p[0], p[1], p[2]);
+      const Pose kinematic = bus::from_msg(c.object_T_camera, "CLOUD object_T_camera");
+      RegistrationResult r;
+      if (off_) {  // for comparisons: every view kept where the kinematics put it
+        r.accepted = true;
+        r.reason = "registration off: kinematic pose kept";
+      } else {
+        r = register_frame(model_, frame, params_);
+      }
+      out.accepted = r.accepted;
+      out.reason = r.reason;
+      out.correction = bus::to_msg(r.correction);
+      out.translation_m = r.translation_m;
+      out.rotation_deg = r.rotation_deg;
+      out.overlap = r.overlap;
+      out.rmse_m = r.rmse_m;
+      out.iterations = r.iterations;
+      out.register_s = r.time_s;
+      if (r.accepted) {
+        const PointCloud registered = transform_cloud(frame, r.correction);
+        out.cloud.object_T_camera = bus::to_msg(r.correction * kinematic);
+        for (std::size_t i = 0; i < registered.size(); ++i) {
+          out.cloud.points_m[i] = {registered[i].x(), registered[i].y(), registered[i].z()};
+        }
+        model_.insert(model_.end(), registered.begin(), registered.end());
+        model_ = voxel_downsample(model_, model_voxel_m_);
+      }
+      std::ostringstream os;
+      os << "view " << c.iteration << ": " << r.reason << " (" << r.time_s * 1e3 << " ms)";
+      log_info(os.str());
+    }
+    out.model_points = static_cast<int32_t>(model_.size());
+    out.utime = bus::now_utime();
+    bus_.publish(channels::kRegisteredCloud, out);
+    answers_.push_back(out);
+    if (answers_.size() > kAnswersKept) answers_.pop_front();
+  }
+
+  bus::Bus& bus_;
+  RegistrationParams params_;
+  double model_voxel_m_;
+  bool off_;
+  std::string scan_id_;
+  PointCloud model_;
+  std::deque<registered_cloud_t> answers_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  set_log_name("registration");
+  bus::install_stop_handlers();
+  try {
+    Args args(argc, argv);
+    RegistrationParams p;
+    p.voxel_m = args.num("icp-voxel", p.voxel_m, 0.0005, 0.05);
+    p.max_correspondence_m = args.num("max-correspondence", p.max_correspondence_m, 0.001, 0.5);
+    p.max_iterations = static_cast<int>(args.integer("max-iterations", p.max_iterations, 1, 1000));
+    p.min_overlap = args.num("min-overlap", p.min_overlap, 0.0, 1.0);
+    p.max_rmse_m = args.num("max-rmse", p.max_rmse_m, 1e-5, 0.1);
+    p.max_translation_m = args.num("max-correction", p.max_translation_m, 1e-4, 1.0);
+    p.max_rotation_deg = args.num("max-correction-deg", p.max_rotation_deg, 0.01, 45.0);
+    const double model_voxel_m = args.num("model-voxel", 0.002, 0.0, 0.05);
+    const bool off = args.flag("off");
+    args.reject_unknown();
+    bus::Bus bus("registration");
+    RegistrationService service(bus, p, model_voxel_m, off);
+    log_info("ready");
+    while (!bus::stop_requested()) bus.spin_once(20);
+    return 0;
+  } catch (const std::exception& e) {
+    log_error(e.what());
+    std::cerr << "usage: pbnbv-registration [--icp-voxel M] [--max-correspondence M] [--max-iterations N]\n"
+                 "       [--min-overlap F] [--max-rmse M] [--max-correction M] [--max-correction-deg D] [--model-voxel M] [--off]\n";
+    return 2;
+  }
+}
