@@ -135,11 +135,14 @@ class BadInput : public ::testing::Test {
                  "--width", "320", "--height", "180", "--fx", "174", "--fy", "174", "--speed", "20"});
     add("motion", {bin + "/pbnbv-motion", "--rig", "arm"});
     add("camera", {bin + "/pbnbv-camera", "--rig", "arm"});
+    add("registration", {bin + "/pbnbv-registration"});
+    add("mapping", {bin + "/pbnbv-mapping", "--out", (dir_ / "maps").string()});
     for (auto& c : children_) launcher::start(c);
     listener_ = new Listener();
     ASSERT_TRUE(listener_->spin_until([] {
       return listener_->heartbeats.count("twin") && listener_->heartbeats.count("motion") &&
-             listener_->heartbeats.count("camera") && listener_->have_arm;
+             listener_->heartbeats.count("camera") && listener_->heartbeats.count("registration") &&
+             listener_->heartbeats.count("mapping") && listener_->have_arm;
     }, 60)) << "services did not start; twin log:\n" << launcher::tail_lines((dir_ / "twin.log").string(), 20);
   }
 
@@ -181,6 +184,8 @@ TEST_F(BadInput, MalformedBytesOnEveryChannelAreRejectedAndCounted) {
       {"twin", {"ARM_COMMAND", "TURNTABLE_COMMAND", "DEPTH_TRIGGER"}},
       {"motion", {"MOVE_REQUEST", "ARM_STATUS", "TURNTABLE_STATUS"}},
       {"camera", {"CAPTURE_REQUEST", "DEPTH_FRAME", "ARM_STATUS", "TURNTABLE_STATUS"}},
+      {"registration", {"CLOUD"}},
+      {"mapping", {"REGISTERED_CLOUD", "DEPTH_FRAME"}},
   };
   listener_->spin_until([] { return false; }, 1.2);  // fresh heartbeats
   std::map<std::string, int64_t> before;
@@ -344,7 +349,8 @@ TEST_F(BadInput, CoordinatorFinishesItsScanDespiteGarbageOnItsChannels) {
   while (std::chrono::steady_clock::now() < end) {
     launcher::reap(one);
     if (!one[0].running) break;
-    for (const char* channel : {"MOVE_RESULT", "CLOUD", "ARM_STATUS", "TURNTABLE_STATUS", "HEARTBEAT"}) {
+    for (const char* channel : {"MOVE_RESULT", "CLOUD", "REGISTERED_CLOUD", "VOXEL_MAP", "ARM_STATUS",
+                                "TURNTABLE_STATUS", "HEARTBEAT"}) {
       lcm.publish(channel, garbage.data(), static_cast<unsigned>(garbage.size()));
     }
     lcm.publish("MOVE_RESULT", &foreign);

@@ -89,10 +89,11 @@ class VoxelMap {
   Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
   std::vector<VoxelState> cells_;
   // (implementation helpers are private to voxel_map.cpp)
-  Eigen::Vector3i lo_ = Eigen::Vector3i::Zero();  // lattice index of B's min voxel (origin_ = lo_ * res)
+  Eigen::Vector3i lo_ = Eigen::Vector3i::Zero();  // lattice index of B's min voxel (origin_ =
+                                                  // lo_ * resolution)
   bool initialised_ = false;                      // a frame with valid points has been integrated
   int last_stride_px_ = 0;
-  std::vector<Eigen::Vector3i> points_[2];        // per-frame scratch: lattice index per valid pixel
+  std::vector<Eigen::Vector3i> points_[2];        // scratch: lattice index of each valid pixel
   std::vector<uint8_t> scratch_;                  // frontier pass scratch (one byte per voxel)
   std::vector<uint8_t> block_kind_;               // per-frame scratch (one byte per ray block)
   std::vector<float> block_depth_;                // per-frame scratch (nearest depth per block)

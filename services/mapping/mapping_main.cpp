@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "common/bus.hpp"
+#include "common/service.hpp"
 #include "common/convert.hpp"
 #include "core/args.hpp"
 #include "core/depth_cloud.hpp"
@@ -157,26 +158,13 @@ class MappingService {
 }  // namespace
 
 int main(int argc, char** argv) {
-  set_log_name("mapping");
-  bus::install_stop_handlers();
-  try {
-    Args args(argc, argv);
+  return bus::run_service("mapping", "pbnbv-mapping [--resolution M] [--gamma M] [--out DIR]", argc, argv, 10,
+                          [](const Args& args, bus::Bus& bus) -> std::function<void()> {
     VoxelMapParams p;
     p.resolution_m = args.num("resolution", p.resolution_m, 0.002, 0.2);
     p.gamma_m = args.num("gamma", p.gamma_m, 0.0, 1.0);
-    const fs::path out = args.str("out", "");
-    args.reject_unknown();
-    bus::Bus bus("mapping");
-    MappingService service(bus, p, out);
+    auto service = std::make_shared<MappingService>(bus, p, fs::path(args.str("out", "")));
     log_info("ready: resolution " + std::to_string(p.resolution_m) + " m");
-    while (!bus::stop_requested()) {
-      bus.spin_once(10);
-      service.tick();
-    }
-    return 0;
-  } catch (const std::exception& e) {
-    log_error(e.what());
-    std::cerr << "usage: pbnbv-mapping [--resolution M] [--gamma M] [--out DIR]\n";
-    return 2;
-  }
+    return [service] { service->tick(); };
+  });
 }

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "common/bus.hpp"
+#include "common/service.hpp"
 #include "common/convert.hpp"
 #include "core/args.hpp"
 #include "core/log.hpp"
@@ -294,25 +295,11 @@ class MotionExecutor {
 }  // namespace
 
 int main(int argc, char** argv) {
-  set_log_name("motion");
-  bus::install_stop_handlers();
-  try {
-    Args args(argc, argv);
-    const RigKind kind = parse_rig_kind(args.str("rig", "arm"));
-    const std::string model_path = args.str("model", default_rig_path(kind));
-    args.reject_unknown();
-    const RigModel rig = load_rig(model_path);
-    bus::Bus bus("motion");
-    MotionExecutor executor(bus, rig);
-    log_info("ready: " + rig.arm_name + " from " + model_path);
-    while (!bus::stop_requested()) {
-      bus.spin_once(5);
-      executor.tick();
-    }
-    return 0;
-  } catch (const std::exception& e) {
-    log_error(e.what());
-    std::cerr << "usage: pbnbv-motion [--rig arm|free] [--model PATH]\n";
-    return 2;
-  }
+  return bus::run_service("motion", "pbnbv-motion [--rig arm|free] [--model PATH]", argc, argv, 5,
+                          [](const Args& args, bus::Bus& bus) -> std::function<void()> {
+    auto rig = std::make_shared<RigModel>(bus::rig_from_args(args));
+    auto executor = std::make_shared<MotionExecutor>(bus, *rig);
+    log_info("ready: " + rig->arm_name + " from " + rig->model_path);
+    return [rig, executor] { executor->tick(); };
+  });
 }

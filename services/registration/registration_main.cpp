@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "common/bus.hpp"
+#include "common/service.hpp"
 #include "common/convert.hpp"
 #include "core/args.hpp"
 #include "core/cloud.hpp"
@@ -114,30 +115,22 @@ class RegistrationService {
 }  // namespace
 
 int main(int argc, char** argv) {
-  set_log_name("registration");
-  bus::install_stop_handlers();
-  try {
-    Args args(argc, argv);
-    RegistrationParams p;
-    p.voxel_m = args.num("icp-voxel", p.voxel_m, 0.0005, 0.05);
-    p.max_correspondence_m = args.num("max-correspondence", p.max_correspondence_m, 0.001, 0.5);
-    p.max_iterations = static_cast<int>(args.integer("max-iterations", p.max_iterations, 1, 1000));
-    p.min_overlap = args.num("min-overlap", p.min_overlap, 0.0, 1.0);
-    p.max_rmse_m = args.num("max-rmse", p.max_rmse_m, 1e-5, 0.1);
-    p.max_translation_m = args.num("max-correction", p.max_translation_m, 1e-4, 1.0);
-    p.max_rotation_deg = args.num("max-correction-deg", p.max_rotation_deg, 0.01, 45.0);
-    const double model_voxel_m = args.num("model-voxel", 0.002, 0.0, 0.05);
-    const bool off = args.flag("off");
-    args.reject_unknown();
-    bus::Bus bus("registration");
-    RegistrationService service(bus, p, model_voxel_m, off);
-    log_info("ready");
-    while (!bus::stop_requested()) bus.spin_once(20);
-    return 0;
-  } catch (const std::exception& e) {
-    log_error(e.what());
-    std::cerr << "usage: pbnbv-registration [--icp-voxel M] [--max-correspondence M] [--max-iterations N]\n"
-                 "       [--min-overlap F] [--max-rmse M] [--max-correction M] [--max-correction-deg D] [--model-voxel M] [--off]\n";
-    return 2;
-  }
+  return bus::run_service(
+      "registration",
+      "pbnbv-registration [--icp-voxel M] [--max-correspondence M] [--max-iterations N] [--min-overlap F]\n"
+      "       [--max-rmse M] [--max-correction M] [--max-correction-deg D] [--model-voxel M] [--off]",
+      argc, argv, 20, [](const Args& args, bus::Bus& bus) -> std::function<void()> {
+        RegistrationParams p;
+        p.voxel_m = args.num("icp-voxel", p.voxel_m, 0.0005, 0.05);
+        p.max_correspondence_m = args.num("max-correspondence", p.max_correspondence_m, 0.001, 0.5);
+        p.max_iterations = static_cast<int>(args.integer("max-iterations", p.max_iterations, 1, 1000));
+        p.min_overlap = args.num("min-overlap", p.min_overlap, 0.0, 1.0);
+        p.max_rmse_m = args.num("max-rmse", p.max_rmse_m, 1e-5, 0.1);
+        p.max_translation_m = args.num("max-correction", p.max_translation_m, 1e-4, 1.0);
+        p.max_rotation_deg = args.num("max-correction-deg", p.max_rotation_deg, 0.01, 45.0);
+        const double model_voxel_m = args.num("model-voxel", 0.002, 0.0, 0.05);
+        auto service = std::make_shared<RegistrationService>(bus, p, model_voxel_m, args.flag("off"));
+        log_info("ready");
+        return [service] {};
+      });
 }
