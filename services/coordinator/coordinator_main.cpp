@@ -166,7 +166,7 @@ class Coordinator {
         return finish(scan_status_t::kFailed, "the registration service did not answer view " + std::to_string(i + 1));
       }
       const registered_cloud_t reg = registered_[i];  // a copy: accumulate() drops the stored one
-      view["registration"] = {{"accepted", reg.accepted}, {"reason", reg.reason},
+      view["registration"] = {{"accepted", reg.accepted != 0}, {"reason", reg.reason},
                               {"correction", pose_json(reg.correction)},
                               {"translation_mm", reg.translation_m * 1e3}, {"rotation_deg", reg.rotation_deg},
                               {"overlap", reg.overlap}, {"rmse_mm", reg.rmse_m * 1e3}, {"iterations", reg.iterations},
@@ -182,7 +182,7 @@ class Coordinator {
         return finish(scan_status_t::kFailed, "the mapping service did not answer view " + std::to_string(i + 1));
       }
       const voxel_set_t& map = maps_[i];
-      view["map"] = {{"updated", map.updated}, {"message", map.message}, {"resolution_m", map.resolution_m},
+      view["map"] = {{"updated", map.updated != 0}, {"message", map.message}, {"resolution_m", map.resolution_m},
                      {"bbox_min_m", {map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]}},
                      {"bbox_max_m", {map.bbox_max_m[0], map.bbox_max_m[1], map.bbox_max_m[2]}},
                      {"voxels", {{"none", map.num_none}, {"empty", map.num_empty}, {"occupied", map.num_occupied},
@@ -312,7 +312,7 @@ class Coordinator {
     std::snprintf(name, sizeof(name), "view_%03d.ply", i);
     write_ply(frame, (out_ / "frames" / name).string());
     view["frame_file"] = std::string("frames/") + name;
-    view["merged"] = r.accepted;
+    view["merged"] = r.accepted != 0;
     if (r.accepted) {
       accumulated_.insert(accumulated_.end(), frame.begin(), frame.end());
       accumulated_ = voxel_downsample(accumulated_, s_.voxel_m);

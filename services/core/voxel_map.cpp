@@ -363,6 +363,11 @@ std::vector<Eigen::Vector3d> VoxelMap::centres(VoxelState s) const {
 
 void VoxelMap::grow_to_cover(const Eigen::Vector3i& lo_in, const Eigen::Vector3i& hi_in) {
   Eigen::Vector3i lo = lo_in, hi = hi_in;
+  if (limited_) {  // B stays inside the working volume
+    lo = lo.cwiseMax(limit_lo_);
+    hi = hi.cwiseMin(limit_hi_);
+    if ((hi.array() < lo.array()).any()) return;
+  }
   if (!empty()) {
     lo = lo.cwiseMin(lo_);
     hi = hi.cwiseMax(lo_ + dims_ - Eigen::Vector3i::Ones());
@@ -500,6 +505,18 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
   }
   const float* depth = view.depth_m->data();
   const double res = params_.resolution_m;
+  limited_ = !view.working_volume.isEmpty();
+  if (limited_) {
+    if (!view.working_volume.min().allFinite() || !view.working_volume.max().allFinite()) {
+      throw std::invalid_argument("VoxelMap::integrate: working_volume is not finite");
+    }
+    for (int i = 0; i < 3; ++i) {
+      limit_lo_[i] = static_cast<int>(std::floor(view.working_volume.min()[i] / res));
+      limit_hi_[i] = static_cast<int>(std::floor(view.working_volume.max()[i] / res));
+    }
+  }
+  const Eigen::Vector3i wv_lo = limited_ ? limit_lo_ : Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
+  const Eigen::Vector3i wv_hi = limited_ ? limit_hi_ : Eigen::Vector3i::Constant(std::numeric_limits<int>::max());
   const double zlo = view.range.min_m, zhi = view.range.max_m;
   const Eigen::Matrix3d R = view.object_T_camera.linear();
   const Eigen::Vector3d cam = view.object_T_camera.translation();
@@ -514,7 +531,7 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
   struct PassOne {
     Eigen::Vector3i lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max());
     Eigen::Vector3i hi = Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
-    int64_t valid = 0, no_return = 0, ignored = 0;
+    int64_t valid = 0, no_return = 0, ignored = 0, outside = 0;
   };
   PassOne part[2];
   run_parallel(nt, [&](int tid, int n_threads) {
@@ -523,7 +540,7 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
     if (pts.size() < 4096) pts.resize(4096);
     // Locals, so the compiler keeps them in registers (no aliasing with the point stores).
     Eigen::Vector3i* out = pts.data();
-    int64_t n_out = 0, cap = static_cast<int64_t>(pts.size()), n_nr = 0, n_ign = 0;
+    int64_t n_out = 0, cap = static_cast<int64_t>(pts.size()), n_nr = 0, n_ign = 0, n_outside = 0;
     Eigen::Vector3i lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max());
     Eigen::Vector3i hi = Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
     const float lo_z = zlo_f, hi_z = zhi_f;
@@ -540,6 +557,11 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
           const Eigen::Vector3i g(lattice_floor(cam_v.x() + zs * (cd[u].x() + row_dir.x())),
                                   lattice_floor(cam_v.y() + zs * (cd[u].y() + row_dir.y())),
                                   lattice_floor(cam_v.z() + zs * (cd[u].z() + row_dir.z())));
+          // Outside the working volume: not Occupied (its ray is still cast, free up to it).
+          if ((g.array() < wv_lo.array()).any() || (g.array() > wv_hi.array()).any()) {
+            ++n_outside;
+            continue;
+          }
           if (n_out == cap) {
             pts.resize(static_cast<size_t>(2 * cap));
             cap = static_cast<int64_t>(pts.size());
@@ -559,18 +581,22 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
     pr.valid = n_out;
     pr.no_return = n_nr;
     pr.ignored = n_ign;
+    pr.outside = n_outside;
     pr.lo = lo;
     pr.hi = hi;
   });
   const int64_t n_valid = part[0].valid + part[1].valid;
   const int64_t n_no_return = part[0].no_return + part[1].no_return;
   const int64_t n_ignored = part[0].ignored + part[1].ignored;
+  const int64_t n_outside = part[0].outside + part[1].outside;
   MapUpdateResult result;
   if (n_valid == 0) {
     std::ostringstream os;
-    os << "map unchanged: the frame has no valid depth pixel (" << n_no_return
-       << " without return (0 or not finite), " << n_ignored << " outside ["
-       << zlo << ", " << zhi << "] m)";
+    os << "map unchanged: the frame has no valid depth pixel";
+    if (limited_) os << " inside the working volume (" << n_outside << " outside it";
+    else os << " (";
+    os << (limited_ ? ", " : "") << n_no_return << " without return (0 or not finite), " << n_ignored
+       << " outside [" << zlo << ", " << zhi << "] m)";
     result.updated = false;
     result.message = os.str();
     result.counts = counts();

@@ -31,6 +31,10 @@ struct DepthView {
   CameraIntrinsics intrinsics;
   DepthRange range;
   Pose object_T_camera = Pose::Identity();
+  // The working volume (object frame): only points inside it become Occupied, and B never
+  // extends beyond it. A point outside it (the turntable, the table, the room) still tells
+  // that its ray was free up to it. Empty box (the default): no limit.
+  Eigen::AlignedBox3d working_volume;
 };
 
 struct VoxelCounts {
@@ -100,6 +104,9 @@ class VoxelMap {
 
   // Grows B to cover the lattice indices [lo, hi] (inclusive); copies states, new cells None.
   void grow_to_cover(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi);
+  // The working volume of the frame being integrated, as a lattice index box (B is clamped to it).
+  bool limited_ = false;
+  Eigen::Vector3i limit_lo_ = Eigen::Vector3i::Zero(), limit_hi_ = Eigen::Vector3i::Zero();
   // Re-evaluates Frontier/Unknown over the whole grid; returns the state counts.
   VoxelCounts update_frontiers();
   friend struct VoxelMapAccess;

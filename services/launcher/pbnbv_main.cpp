@@ -194,7 +194,12 @@ int scan(int argc, char** argv) {
   add("camera", {(bin / "pbnbv-camera").string(), "--rig", to_string(s.rig)});
   add("registration", {(bin / "pbnbv-registration").string()});
   if (registration == "off") children.back().argv.push_back("--off");
-  add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", num(resolution), "--out", out.string()});
+  // The map's working volume: the cloud's crop box, above the turntable top.
+  Eigen::Vector3d volume_min = s.crop_min_m;
+  if (s.rig == RigKind::kArm) volume_min.z() = std::max(volume_min.z(), -s.object_z_m + s.ground_clearance_m);
+  auto vec = [&](const Eigen::Vector3d& v) { return num(v.x()) + "," + num(v.y()) + "," + num(v.z()); };
+  add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", num(resolution), "--out", out.string(),
+                  "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m)});
   add("coordinator", {(bin / "pbnbv-coordinator").string(), "--out", out.string()}, true);
 
   struct sigaction sa {};

@@ -34,8 +34,8 @@ constexpr double kFrameWaitS = 3.0;        // wait this long for a view's depth 
 
 class MappingService {
  public:
-  MappingService(bus::Bus& bus, const VoxelMapParams& params, fs::path out)
-      : bus_(bus), params_(params), out_(std::move(out)) {
+  MappingService(bus::Bus& bus, const VoxelMapParams& params, const Eigen::AlignedBox3d& working_volume, fs::path out)
+      : bus_(bus), params_(params), working_volume_(working_volume), out_(std::move(out)) {
     bus_.subscribe<depth_frame_t>(channels::kDepthFrame, [this](const depth_frame_t& f) {
       frames_.push_back(f);
       if (frames_.size() > kFramesKept) frames_.pop_front();
@@ -101,6 +101,7 @@ class MappingService {
         view.range = DepthRange{frame->depth_min_m, frame->depth_max_m};
         view.range.validate();
         view.object_T_camera = bus::from_msg(r.cloud.object_T_camera, "REGISTERED_CLOUD cloud.object_T_camera");
+        view.working_volume = working_volume_;
         const MapUpdateResult u = map_->integrate(view);
         out.updated = u.updated;
         out.message = u.message;
@@ -146,6 +147,7 @@ class MappingService {
 
   bus::Bus& bus_;
   VoxelMapParams params_;
+  Eigen::AlignedBox3d working_volume_;
   fs::path out_;
   std::string scan_id_;
   std::optional<VoxelMap> map_;
@@ -158,12 +160,19 @@ class MappingService {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return bus::run_service("mapping", "pbnbv-mapping [--resolution M] [--gamma M] [--out DIR]", argc, argv, 10,
+  return bus::run_service("mapping", "pbnbv-mapping [--resolution M] [--gamma M] [--out DIR]\n"
+                          "       [--volume-min x,y,z --volume-max x,y,z]   working volume, object frame, m", argc, argv, 10,
                           [](const Args& args, bus::Bus& bus) -> std::function<void()> {
     VoxelMapParams p;
     p.resolution_m = args.num("resolution", p.resolution_m, 0.002, 0.2);
     p.gamma_m = args.num("gamma", p.gamma_m, 0.0, 1.0);
-    auto service = std::make_shared<MappingService>(bus, p, fs::path(args.str("out", "")));
+    Eigen::AlignedBox3d volume;  // empty: unlimited
+    if (args.has("volume-min") || args.has("volume-max")) {
+      volume = Eigen::AlignedBox3d(args.vec3("volume-min", Eigen::Vector3d::Constant(-1e3)),
+                                   args.vec3("volume-max", Eigen::Vector3d::Constant(1e3)));
+      if (volume.isEmpty()) throw std::invalid_argument("--volume-min must be below --volume-max on every axis");
+    }
+    auto service = std::make_shared<MappingService>(bus, p, volume, fs::path(args.str("out", "")));
     log_info("ready: resolution " + std::to_string(p.resolution_m) + " m");
     return [service] { service->tick(); };
   });
