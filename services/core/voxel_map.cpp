@@ -515,8 +515,11 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
       limit_hi_[i] = static_cast<int>(std::floor(view.working_volume.max()[i] / res));
     }
   }
-  const Eigen::Vector3i wv_lo = limited_ ? limit_lo_ : Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
-  const Eigen::Vector3i wv_hi = limited_ ? limit_hi_ : Eigen::Vector3i::Constant(std::numeric_limits<int>::max());
+  // The working volume in voxel units (points are compared exactly, not by voxel).
+  const Eigen::Vector3d wv_min = limited_ ? Eigen::Vector3d(view.working_volume.min() / res)
+                                          : Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
+  const Eigen::Vector3d wv_max = limited_ ? Eigen::Vector3d(view.working_volume.max() / res)
+                                          : Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   const double zlo = view.range.min_m, zhi = view.range.max_m;
   const Eigen::Matrix3d R = view.object_T_camera.linear();
   const Eigen::Vector3d cam = view.object_T_camera.translation();
@@ -554,14 +557,16 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
         const float z = drow[u];
         if (pixel_valid(z, lo_z, hi_z)) {
           const double zs = z * s;
-          const Eigen::Vector3i g(lattice_floor(cam_v.x() + zs * (cd[u].x() + row_dir.x())),
-                                  lattice_floor(cam_v.y() + zs * (cd[u].y() + row_dir.y())),
-                                  lattice_floor(cam_v.z() + zs * (cd[u].z() + row_dir.z())));
-          // Outside the working volume: not Occupied (its ray is still cast, free up to it).
-          if ((g.array() < wv_lo.array()).any() || (g.array() > wv_hi.array()).any()) {
+          // The point in voxel units; outside the working volume it is not Occupied (its ray is
+          // still cast: free up to it).
+          const Eigen::Vector3d q(cam_v.x() + zs * (cd[u].x() + row_dir.x()),
+                                  cam_v.y() + zs * (cd[u].y() + row_dir.y()),
+                                  cam_v.z() + zs * (cd[u].z() + row_dir.z()));
+          if ((q.array() < wv_min.array()).any() || (q.array() > wv_max.array()).any()) {
             ++n_outside;
             continue;
           }
+          const Eigen::Vector3i g(lattice_floor(q.x()), lattice_floor(q.y()), lattice_floor(q.z()));
           if (n_out == cap) {
             pts.resize(static_cast<size_t>(2 * cap));
             cap = static_cast<int64_t>(pts.size());

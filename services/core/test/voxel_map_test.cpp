@@ -716,4 +716,60 @@ TEST(VoxelMap, RejectsBadInput) {
 }
 
 }  // namespace
+// A cube standing on a ground plane (the turntable top at z = -0.15), seen obliquely from above:
+// with the working volume above the ground, the ground's points are not Occupied and B never
+// reaches below the ground; the ground still clears the rays that meet it beside the cube.
+TEST(VoxelMap, WorkingVolumeKeepsTheGroundOutOfTheMap) {
+  const CameraIntrinsics k = small_camera();
+  const HitFn cube_fn = cube(kHalf);
+  const HitFn ground = plane(Vector3d::UnitZ(), -kHalf);
+  const HitFn scene = [&](const Vector3d& o, const Vector3d& d) {
+    const double a = cube_fn(o, d), b = ground(o, d);
+    if (std::isnan(a)) return b;
+    if (std::isnan(b)) return a;
+    return std::min(a, b);
+  };
+  const Pose T = from(Vector3d(0.7, 0.2, 0.5));
+  const std::vector<float> depth = render(k, T, scene);
+  const double res = 0.03;
+  VoxelMapParams p;
+  p.resolution_m = res;
+  DepthView view;
+  view.depth_m = &depth;
+  view.intrinsics = k;
+  view.object_T_camera = T;
+
+  // Without a working volume the ground is Occupied, far beyond the cube.
+  VoxelMap unlimited(p);
+  unlimited.integrate(view);
+  int ground_occupied = 0;
+  for (const auto& c : unlimited.centres(VoxelState::kOccupied)) ground_occupied += c.z() < -kHalf + 0.5 * res;
+  EXPECT_GT(ground_occupied, 100);
+
+  // With it (the ground plus 4 mm clearance is its floor) only the cube is.
+  VoxelMap map(p);
+  view.working_volume = Eigen::AlignedBox3d(Vector3d(-0.5, -0.5, -kHalf + 0.004), Vector3d(0.5, 0.5, 0.5));
+  const MapUpdateResult r = map.integrate(view);
+  ASSERT_TRUE(r.updated) << r.message;
+  const auto occupied = map.centres(VoxelState::kOccupied);
+  ASSERT_FALSE(occupied.empty());
+  for (const auto& c : occupied) {
+    // Every Occupied voxel touches the cube (its centre within half a voxel diagonal of it).
+    const Vector3d outside = (c.cwiseAbs() - Vector3d::Constant(kHalf)).cwiseMax(0.0);
+    EXPECT_LE(outside.norm(), std::sqrt(3.0) / 2 * res + 1e-9) << c.transpose();
+  }
+  // B stays inside the working volume (up to the voxel the floor cuts through).
+  EXPECT_GE(map.bounds().min().z(), -kHalf + 0.004 - res - 1e-9);
+  EXPECT_LE(map.bounds().max().x(), 0.5 + res);
+  // The ground beside the cube cleared free space above it: Empty voxels exist in B.
+  EXPECT_GT(map.counts().empty, 0);
+  // All points outside the volume: the map is unchanged and says so.
+  VoxelMap nothing(p);
+  view.working_volume = Eigen::AlignedBox3d(Vector3d(2, 2, 2), Vector3d(3, 3, 3));
+  const MapUpdateResult none = nothing.integrate(view);
+  EXPECT_FALSE(none.updated);
+  EXPECT_NE(none.message.find("working volume"), std::string::npos) << none.message;
+  EXPECT_TRUE(nothing.empty());
+}
+
 }  // namespace pbnbv
