@@ -166,7 +166,8 @@ class Coordinator {
         return finish(scan_status_t::kFailed, "the registration service did not answer view " + std::to_string(i + 1));
       }
       const registered_cloud_t reg = registered_[i];  // a copy: accumulate() drops the stored one
-      view["registration"] = {{"accepted", reg.accepted != 0}, {"reason", reg.reason},
+      view["registration"] = {{"accepted", reg.accepted != 0}, {"refined", reg.refined != 0},
+                              {"constraint", reg.constraint}, {"reason", reg.reason},
                               {"correction", pose_json(reg.correction)},
                               {"translation_mm", reg.translation_m * 1e3}, {"rotation_deg", reg.rotation_deg},
                               {"overlap", reg.overlap}, {"rmse_mm", reg.rmse_m * 1e3}, {"iterations", reg.iterations},
@@ -198,8 +199,9 @@ class Coordinator {
       record(view);
       std::ostringstream os;
       os << "done: " << cloud->num_points << " points, " << accumulated_.size() << " in the model; "
-         << (reg.accepted ? "registered (" + fixed(reg.translation_m * 1e3) + " mm, " + fixed(reg.rotation_deg) + " deg)"
-                          : "registration rejected") << ", " << map.num_frontier << " frontier voxels; move "
+         << (!reg.accepted ? std::string("registration rejected")
+             : reg.refined ? "registered (" + fixed(reg.translation_m * 1e3) + " mm, " + fixed(reg.rotation_deg) + " deg)"
+                           : std::string("kinematic pose kept")) << ", " << map.num_frontier << " frontier voxels; move "
          << fixed(moved->move_s + moved->settle_s) << " s, capture " << fixed(cloud->capture_s) << " s, register "
          << fixed(reg.register_s) << " s, map " << fixed(map.update_s * 1e3) << " ms";
       progress(os.str());

@@ -1,5 +1,7 @@
 #include "core/registration.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <pcl/common/centroid.h>
 #include <pcl/features/normal_3d.h>
 #include <pcl/point_cloud.h>
@@ -578,6 +580,7 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
     // Gates, on the downsampled frame after alignment against the cropped model.
     size_t n_overlap = 0;
     double sum_sq = 0;
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> pairs;  // aligned point, model normal
     if (target->size() >= 3) {
       const float r2 = static_cast<float>(params.overlap_distance_m * params.overlap_distance_m);
       const Eigen::Matrix3f r = correction.linear().cast<float>();
@@ -595,12 +598,38 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
                              .cast<double>()
                              .dot(m.getNormalVector3fMap().cast<double>());
         sum_sq += e * e;
+        pairs.emplace_back(q.getVector3fMap().cast<double>(), m.getNormalVector3fMap().cast<double>());
       }
+    }
+    // How well the overlap pins the alignment down: eigenvalues of the point-to-plane
+    // information matrix H = mean(J J^T), J = [(x - c) x n / L; n] (c: centroid, L: RMS radius of
+    // the overlap, so rotations and translations are on one scale; each eigenvalue is in [0, 1]).
+    Eigen::Matrix<double, 6, 1> weakest = Eigen::Matrix<double, 6, 1>::Zero();
+    if (pairs.size() >= 6) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (const auto& pr : pairs) c += pr.first;
+      c /= static_cast<double>(pairs.size());
+      double l2 = 0;
+      for (const auto& pr : pairs) l2 += (pr.first - c).squaredNorm();
+      const double L = std::sqrt(l2 / static_cast<double>(pairs.size()));
+      Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+      for (const auto& pr : pairs) {
+        const Eigen::Vector3d n = pr.second.normalized();
+        Eigen::Matrix<double, 6, 1> j;
+        j << (pr.first - c).cross(n) / std::max(L, 1e-9), n;
+        H += j * j.transpose();
+      }
+      H /= static_cast<double>(pairs.size());
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(H);
+      res.constraint = std::max(0.0, eig.eigenvalues()[0]);
+      weakest = eig.eigenvectors().col(0);
     }
     res.overlap = static_cast<double>(n_overlap) / static_cast<double>(frame_ds.size());
     res.rmse_m = n_overlap ? std::sqrt(sum_sq / static_cast<double>(n_overlap)) : 0.0;
 
-    std::vector<std::string> fails;
+    // Gates on the data (does the view fit the model?) and on the motion (is the correction
+    // plausible, did ICP settle?).
+    std::vector<std::string> fails, motion_fails;
     if (res.overlap < params.min_overlap) {
       fails.push_back(fmt("overlap %.2f", res.overlap) + fmt(" below %.2f", params.min_overlap));
     }
@@ -610,20 +639,39 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
                                            fmt(" exceeds %.2f mm", params.max_rmse_m * 1e3));
     }
     if (res.translation_m > params.max_translation_m) {
-      fails.push_back(fmt("correction %.3f m", res.translation_m) +
-                      fmt(" exceeds %.3f m", params.max_translation_m));
+      motion_fails.push_back(fmt("correction %.3f m", res.translation_m) +
+                             fmt(" exceeds %.3f m", params.max_translation_m));
     }
     if (res.rotation_deg > params.max_rotation_deg) {
-      fails.push_back(fmt("correction %.2f deg", res.rotation_deg) +
-                      fmt(" exceeds %.2f deg", params.max_rotation_deg));
+      motion_fails.push_back(fmt("correction %.2f deg", res.rotation_deg) +
+                             fmt(" exceeds %.2f deg", params.max_rotation_deg));
     }
-    if (!res.converged) fails.push_back("not converged: " + icp_note);
+    if (!res.converged) motion_fails.push_back("not converged: " + icp_note);
+    // Where the overlap leaves a direction free, ICP's motion means nothing (it slides, may not
+    // converge): the kinematic pose is kept if the view fits the model. Elsewhere every gate counts.
+    const bool degenerate = res.constraint < params.min_constraint;
+    if (!degenerate) fails.insert(fails.end(), motion_fails.begin(), motion_fails.end());
 
-    if (fails.empty()) {
+    if (fails.empty() && degenerate) {
+      // ICP may have slid along the free direction: trust the kinematics instead.
+      const bool rotation = weakest.head<3>().norm() > weakest.tail<3>().norm();
+      const Eigen::Vector3d axis = (rotation ? weakest.head<3>() : weakest.tail<3>()).normalized();
       res.accepted = true;
+      res.refined = false;
+      res.reason = "kinematic pose kept: the overlap does not constrain the alignment (weakest direction: " +
+                   std::string(rotation ? "rotation about " : "translation along ") +
+                   fmt("(%.2f, ", axis.x()) + fmt("%.2f, ", axis.y()) + fmt("%.2f)", axis.z()) +
+                   fmt(", constraint %.4f", res.constraint) + fmt(" below %.4f", params.min_constraint) +
+                   fmt("; ICP would have moved it %.2f mm)", res.translation_m * 1e3);
+      res.correction = Pose::Identity();
+      res.translation_m = 0;
+      res.rotation_deg = 0;
+    } else if (fails.empty()) {
+      res.accepted = true;
+      res.refined = true;
       res.reason = "accepted: " + fmt("%.2f mm, ", res.translation_m * 1e3) +
                    fmt("%.3f deg, ", res.rotation_deg) + fmt("overlap %.2f, ", res.overlap) +
-                   fmt("rmse %.2f mm", res.rmse_m * 1e3) + dropped_note;
+                   fmt("rmse %.2f mm", res.rmse_m * 1e3) + fmt(", constraint %.4f", res.constraint) + dropped_note;
     } else {
       res.accepted = false;
       res.reason = "rejected: ";

@@ -21,11 +21,18 @@ struct RegistrationParams {
   double max_translation_m = 0.03;       // size of the correction
   double max_rotation_deg = 3.0;
   int min_points = 200;                  // in the frame and in the model
+  // Geometry that does not pin the alignment down in all six directions (a single plane, two
+  // planes, a sphere) lets ICP slide: below this smallest normalised eigenvalue of the
+  // point-to-plane information matrix the view keeps its kinematic pose (still merged).
+  double min_constraint = 0.01;
 };
 
 struct RegistrationResult {
-  bool accepted = false;
+  bool accepted = false;      // the view is usable: merge it (with `correction` applied)
+  bool refined = false;       // the correction comes from ICP (false: kinematic pose kept)
   std::string reason;         // why accepted or rejected, with the figures
+  double constraint = 0;      // smallest normalised eigenvalue of the point-to-plane
+                              // information matrix of the overlap (0: a direction is free)
   Pose correction = Pose::Identity();  // object_T_object: registered = correction * kinematic
   double translation_m = 0;   // |correction| translation
   double rotation_deg = 0;    // |correction| rotation angle

@@ -57,7 +57,8 @@ class RegistrationService {
     out.cloud = c;
     out.kinematic_object_T_camera = c.object_T_camera;
     out.correction = bus::to_msg(Pose::Identity());
-    out.translation_m = out.rotation_deg = out.overlap = out.rmse_m = out.register_s = 0;
+    out.translation_m = out.rotation_deg = out.overlap = out.rmse_m = out.register_s = out.constraint = 0;
+    out.refined = false;
     out.iterations = 0;
     if (c.status != point_cloud_t::kOk) {
       out.accepted = false;
@@ -75,6 +76,8 @@ class RegistrationService {
         r = register_frame(model_, frame, params_);
       }
       out.accepted = r.accepted;
+      out.refined = r.refined;
+      out.constraint = r.constraint;
       out.reason = r.reason;
       out.correction = bus::to_msg(r.correction);
       out.translation_m = r.translation_m;

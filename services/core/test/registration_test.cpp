@@ -404,5 +404,41 @@ TEST(Registration, TransformCloudAppliesThePoseExactly) {
   EXPECT_TRUE(transform_cloud({}, p).empty());
 }
 
+// A plane shifted within itself cannot be registered: the overlap leaves two translations and
+// a rotation free, ICP would slide anywhere. The view keeps its kinematic pose (and is merged).
+// The same shift of three perpendicular faces of a box is seen and undone.
+TEST(Registration, GeometryThatDoesNotPinTheAlignmentKeepsTheKinematicPose) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-0.1, 0.1);
+  PointCloud plane_model, plane_frame;
+  for (int i = 0; i < 20000; ++i) {
+    const Eigen::Vector3d p(u(rng), u(rng), 0.0);
+    plane_model.emplace_back(p.cast<float>());
+    plane_frame.emplace_back((p + Eigen::Vector3d(0.004, -0.003, 0.0)).cast<float>());
+  }
+  RegistrationParams params;
+  const RegistrationResult flat = register_frame(plane_model, plane_frame, params);
+  EXPECT_TRUE(flat.accepted) << flat.reason;
+  EXPECT_FALSE(flat.refined) << flat.reason;
+  EXPECT_LT(flat.constraint, params.min_constraint);
+  EXPECT_TRUE(flat.correction.isApprox(Pose::Identity())) << flat.reason;
+  EXPECT_NE(flat.reason.find("kinematic pose kept"), std::string::npos) << flat.reason;
+
+  // Three faces of a box meeting at a corner, the frame moved by (4, -3, 2) mm.
+  PointCloud corner_model, corner_frame;
+  const Eigen::Vector3d shift(0.004, -0.003, 0.002);
+  for (int i = 0; i < 30000; ++i) {
+    Eigen::Vector3d p(u(rng) + 0.1, u(rng) + 0.1, u(rng) + 0.1);  // in [0, 0.2]^3
+    p[i % 3] = 0.0;                                              // on one of the three faces
+    corner_model.emplace_back(p.cast<float>());
+    corner_frame.emplace_back((p + shift).cast<float>());
+  }
+  const RegistrationResult box = register_frame(corner_model, corner_frame, params);
+  EXPECT_TRUE(box.accepted) << box.reason;
+  EXPECT_TRUE(box.refined) << box.reason;
+  EXPECT_GT(box.constraint, params.min_constraint);
+  EXPECT_LT((box.correction.translation() + shift).norm(), 5e-4) << box.reason;
+}
+
 }  // namespace
 }  // namespace pbnbv
