@@ -1,6 +1,8 @@
 #include "core/cloud.hpp"
 
 #include <gtest/gtest.h>
+
+#include "file_test_util.hpp"
 #include <unistd.h>
 
 #include <algorithm>
@@ -19,45 +21,10 @@ namespace pbnbv {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::expect_error;
+using testing::put_be;
 
-class CloudFiles : public ::testing::Test {
- protected:
-  void SetUp() override {
-    static std::atomic<int> counter{0};
-    dir_ = fs::temp_directory_path() /
-           ("pbnbv_cloud_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string write(const std::string& name, const std::string& content) const {
-    const std::string p = path(name);
-    std::ofstream f(p, std::ios::binary);
-    f.write(content.data(), static_cast<std::streamsize>(content.size()));
-    return p;
-  }
-  fs::path dir_;
-};
-
-void put_be(std::string& s, const void* p, size_t n) {
-  const auto* b = static_cast<const unsigned char*>(p);
-  for (size_t k = 0; k < n; ++k) s.push_back(static_cast<char>(b[n - 1 - k]));  // host is LE
-}
-
-void expect_error(const std::function<void()>& fn, const std::vector<std::string>& needles) {
-  try {
-    fn();
-    ADD_FAILURE() << "no exception thrown";
-  } catch (const std::runtime_error& e) {
-    const std::string msg = e.what();
-    for (const auto& n : needles) {
-      EXPECT_NE(msg.find(n), std::string::npos) << "message '" << msg << "' lacks '" << n << "'";
-    }
-  }
-}
+class CloudFiles : public testing::TempDirTest {};
 
 TEST_F(CloudFiles, PlyRoundTripIsExact) {
   std::mt19937 rng(5);

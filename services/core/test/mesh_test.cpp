@@ -1,6 +1,8 @@
 #include "core/mesh.hpp"
 
 #include <gtest/gtest.h>
+
+#include "file_test_util.hpp"
 #include <unistd.h>
 
 #include <Eigen/Geometry>
@@ -19,29 +21,10 @@ namespace pbnbv {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::expect_error;
+using testing::put_be;
 
-// A fresh temporary directory per test, removed afterwards.
-class MeshFiles : public ::testing::Test {
- protected:
-  void SetUp() override {
-    static std::atomic<int> counter{0};
-    dir_ = fs::temp_directory_path() /
-           ("pbnbv_mesh_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string write(const std::string& name, const std::string& content) const {
-    const std::string p = path(name);
-    std::ofstream f(p, std::ios::binary);
-    f.write(content.data(), static_cast<std::streamsize>(content.size()));
-    return p;
-  }
-  fs::path dir_;
-};
+class MeshFiles : public testing::TempDirTest {};
 
 // Little helpers for building binary files by hand.
 void put_u32_le(std::string& s, uint32_t u) {
@@ -52,24 +35,6 @@ void put_f32_le(std::string& s, float f) {
   std::memcpy(&u, &f, 4);
   put_u32_le(s, u);
 }
-void put_be(std::string& s, const void* p, size_t n) {
-  const auto* b = static_cast<const unsigned char*>(p);
-  for (size_t k = 0; k < n; ++k) s.push_back(static_cast<char>(b[n - 1 - k]));  // host is LE
-}
-
-// Throws, and the message contains every one of `needles`.
-void expect_error(const std::function<void()>& fn, const std::vector<std::string>& needles) {
-  try {
-    fn();
-    ADD_FAILURE() << "no exception thrown";
-  } catch (const std::runtime_error& e) {
-    const std::string msg = e.what();
-    for (const auto& n : needles) {
-      EXPECT_NE(msg.find(n), std::string::npos) << "message '" << msg << "' lacks '" << n << "'";
-    }
-  }
-}
-
 Eigen::Vector3d normal(const TriangleMesh& m, const Eigen::Vector3i& t) {
   return (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]);
 }
