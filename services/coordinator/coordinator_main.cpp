@@ -6,6 +6,8 @@
 // progress.
 // Every wait has a deadline; requests are re-sent (idempotent by request_id) when an answer
 // is lost.
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -126,7 +128,7 @@ class Coordinator {
       view["time_s"] = {{"plan", moved->plan_s}, {"move", moved->move_s}, {"settle", moved->settle_s},
                         {"rig_motion", moved->rig_motion_s}, {"move_round_trip", bus::now_s() - t_move}};
       if (moved->status != move_result_t::kReached) {
-        progress(move_status_name(moved->status) + ": " + moved->reason);
+        progress(move_status_name(moved->status) + ": " + moved->reason, true);
         record(view);
         continue;
       }
@@ -153,7 +155,7 @@ class Coordinator {
                          {"num_cropped", cloud->num_cropped},
                          {"num_points", cloud->num_points}};
       if (cloud->status != point_cloud_t::kOk) {
-        progress("capture failed: " + cloud->message);
+        progress("capture failed: " + cloud->message, true);
         record(view);
         continue;
       }
@@ -204,7 +206,7 @@ class Coordinator {
                            : std::string("kinematic pose kept")) << ", " << map.num_frontier << " frontier voxels; move "
          << fixed(moved->move_s + moved->settle_s) << " s, capture " << fixed(cloud->capture_s) << " s, register "
          << fixed(reg.register_s) << " s, map " << fixed(map.update_s * 1e3) << " ms";
-      progress(os.str());
+      progress(os.str(), true);
     }
     if (views_done_ == 0) return finish(scan_status_t::kFailed, "no view produced a cloud");
     return finish(scan_status_t::kDone, "scan complete");
@@ -340,14 +342,23 @@ class Coordinator {
     status(state, message);
     const char* name = state == scan_status_t::kDone ? "done" : state == scan_status_t::kStopped ? "stopped" : "failed";
     write_report(name, message);
+    if (::isatty(STDOUT_FILENO)) std::cout << "\r\033[K";  // clear an unfinished progress line
     std::cout << (state == scan_status_t::kDone ? "" : "scan ") << message << ": " << views_done_ << " of "
               << views_.size() << " views, " << accumulated_.size() << " points, "
               << fixed(bus::now_s() - t_start_) << " s -> " << (out_ / "scan.json").string() << std::endl;
     return state == scan_status_t::kDone ? 0 : state == scan_status_t::kStopped ? 130 : 1;
   }
 
-  void progress(const std::string& what) {
-    std::cout << "[view " << iteration_ + 1 << "/" << views_.size() << "] " << what << std::endl;
+  // One line per view on a terminal (the stage overwrites itself), every stage on its own line
+  // otherwise (logs, pipes).
+  void progress(const std::string& what, bool last = false) {
+    static const bool tty = ::isatty(STDOUT_FILENO) != 0;
+    const std::string line = "[view " + std::to_string(iteration_ + 1) + "/" + std::to_string(views_.size()) + "] " + what;
+    if (tty) {
+      std::cout << "\r\033[K" << line << (last ? "\n" : "") << std::flush;
+    } else {
+      std::cout << line << std::endl;
+    }
   }
 
   void status(int8_t state, const std::string& message) {

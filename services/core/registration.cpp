@@ -454,6 +454,32 @@ PointCloud transform_cloud(const PointCloud& cloud, const Pose& transform) {
   return out;
 }
 
+// How well an overlap pins the alignment down: the smallest eigenvalue of the point-to-plane
+// information matrix H = mean(J J^T), J = [(x - c) x n / L; n] (c: centroid, L: RMS radius of
+// the overlap, so rotations and translations are on one scale; eigenvalues in [0, 1]), and its
+// eigenvector (the freest direction: rotation part first). Fewer than 6 pairs: 0.
+double overlap_constraint(const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& pairs,
+                          Eigen::Matrix<double, 6, 1>* weakest) {
+  if (pairs.size() < 6) return 0.0;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& pr : pairs) c += pr.first;
+  c /= static_cast<double>(pairs.size());
+  double l2 = 0;
+  for (const auto& pr : pairs) l2 += (pr.first - c).squaredNorm();
+  const double L = std::sqrt(l2 / static_cast<double>(pairs.size()));
+  Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+  for (const auto& pr : pairs) {
+    const Eigen::Vector3d n = pr.second.normalized();
+    Eigen::Matrix<double, 6, 1> j;
+    j << (pr.first - c).cross(n) / std::max(L, 1e-9), n;
+    H += j * j.transpose();
+  }
+  H /= static_cast<double>(pairs.size());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(H);
+  if (weakest) *weakest = eig.eigenvectors().col(0);
+  return std::max(0.0, eig.eigenvalues()[0]);
+}
+
 RegistrationResult register_frame(const PointCloud& model, const PointCloud& frame,
                                   const RegistrationParams& params) {
   const auto t0 = Clock::now();
@@ -505,7 +531,25 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
     std::string icp_note;
     if (target->size() >= 3) tree->setInputCloud(target);
 
+    // Overlap that cannot pin the alignment down (a plane, a sphere) lets ICP slide until it
+    // runs out of iterations: measure it at the kinematic pose first and skip ICP then.
+    bool pinned = true;
     if (target->size() >= 10 && source->size() >= 10) {
+      // Pairs within the coarsest correspondence distance (the kinematic pose may be off by
+      // several mm); a conservative threshold (half the gate's): the final gate decides.
+      std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> near;
+      const float r2 = static_cast<float>(params.max_correspondence_m * params.max_correspondence_m);
+      for (const auto& p : *source) {
+        float d2;
+        const pcl::index_t i = tree->nearest(p.getVector3fMap(), r2, d2);
+        if (i >= 0) near.emplace_back(p.getVector3fMap().cast<double>(), (*target)[i].getNormalVector3fMap().cast<double>());
+      }
+      pinned = near.size() < 6 || overlap_constraint(near, nullptr) >= 0.5 * params.min_constraint;
+    }
+    if (!pinned) {
+      res.converged = true;
+      icp_note = "skipped: the overlap does not constrain the alignment";
+    } else if (target->size() >= 10 && source->size() >= 10) {
       Icp icp;
       icp.setInputSource(source);
       icp.setInputTarget(target);
@@ -601,29 +645,8 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
         pairs.emplace_back(q.getVector3fMap().cast<double>(), m.getNormalVector3fMap().cast<double>());
       }
     }
-    // How well the overlap pins the alignment down: eigenvalues of the point-to-plane
-    // information matrix H = mean(J J^T), J = [(x - c) x n / L; n] (c: centroid, L: RMS radius of
-    // the overlap, so rotations and translations are on one scale; each eigenvalue is in [0, 1]).
     Eigen::Matrix<double, 6, 1> weakest = Eigen::Matrix<double, 6, 1>::Zero();
-    if (pairs.size() >= 6) {
-      Eigen::Vector3d c = Eigen::Vector3d::Zero();
-      for (const auto& pr : pairs) c += pr.first;
-      c /= static_cast<double>(pairs.size());
-      double l2 = 0;
-      for (const auto& pr : pairs) l2 += (pr.first - c).squaredNorm();
-      const double L = std::sqrt(l2 / static_cast<double>(pairs.size()));
-      Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
-      for (const auto& pr : pairs) {
-        const Eigen::Vector3d n = pr.second.normalized();
-        Eigen::Matrix<double, 6, 1> j;
-        j << (pr.first - c).cross(n) / std::max(L, 1e-9), n;
-        H += j * j.transpose();
-      }
-      H /= static_cast<double>(pairs.size());
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(H);
-      res.constraint = std::max(0.0, eig.eigenvalues()[0]);
-      weakest = eig.eigenvectors().col(0);
-    }
+    res.constraint = overlap_constraint(pairs, &weakest);
     res.overlap = static_cast<double>(n_overlap) / static_cast<double>(frame_ds.size());
     res.rmse_m = n_overlap ? std::sqrt(sum_sq / static_cast<double>(n_overlap)) : 0.0;
 
