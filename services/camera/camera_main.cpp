@@ -174,17 +174,7 @@ class CameraService {
     const double t0 = bus::now_s();
     point_cloud_t out = blank(job_->request);
     try {
-      CameraIntrinsics k;
-      k.width = f.width;
-      k.height = f.height;
-      k.fx = f.fx;
-      k.fy = f.fy;
-      k.cx = f.cx;
-      k.cy = f.cy;
-      k.validate();
-      DepthRange range{f.depth_min_m, f.depth_max_m};
-      range.validate();
-      const std::vector<float> depth = decode_depth_u16(f.depth, f.width, f.height, f.depth_unit_m);
+      const bus::DecodedFrame frame = bus::decode_frame(f);
 
       const auto* arm = nearest(arm_, f.utime);
       if (!arm || std::llabs(arm->utime - f.utime) > kStatusMatchUs) {
@@ -216,7 +206,8 @@ class CameraService {
         crop.ground_clearance_m = r.ground_clearance_m;
       }
       CloudStats stats;
-      const PointCloud cloud = depth_to_object_cloud(depth, k, range, object_T_camera, crop, r.voxel_m, &stats);
+      const PointCloud cloud = depth_to_object_cloud(frame.depth_m, frame.intrinsics, frame.range, object_T_camera, crop,
+                                                     r.voxel_m, &stats);
 
       out.object_T_camera = bus::to_msg(object_T_camera);
       out.joint_position_rad = bus::to_std(arm->value);

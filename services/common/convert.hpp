@@ -7,7 +7,10 @@
 #include <string>
 #include <vector>
 
+#include "core/camera_model.hpp"
+#include "core/depth_cloud.hpp"
 #include "core/geometry.hpp"
+#include "pbnbv/depth_frame_t.hpp"
 #include "pbnbv/pose_t.hpp"
 
 namespace pbnbv::bus {
@@ -48,6 +51,25 @@ inline void require_range(double x, double lo, double hi, const std::string& wha
     os << what << " = " << x << " is outside [" << lo << ", " << hi << "]";
     throw std::invalid_argument(os.str());
   }
+}
+
+// A DEPTH_FRAME as the core library takes it: its camera model, its range, planar depth in
+// metres (0 = no return).
+struct DecodedFrame {
+  CameraIntrinsics intrinsics;
+  DepthRange range;
+  std::vector<float> depth_m;
+};
+
+// Throws std::invalid_argument naming the bad field (intrinsics, range, size, depth unit).
+inline DecodedFrame decode_frame(const depth_frame_t& f) {
+  DecodedFrame d;
+  d.intrinsics = CameraIntrinsics{f.width, f.height, f.fx, f.fy, f.cx, f.cy};
+  d.intrinsics.validate();
+  d.range = DepthRange{f.depth_min_m, f.depth_max_m};
+  d.range.validate();
+  d.depth_m = decode_depth_u16(f.depth, f.width, f.height, f.depth_unit_m);
+  return d;
 }
 
 }  // namespace pbnbv::bus

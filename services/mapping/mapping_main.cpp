@@ -17,7 +17,6 @@
 #include "common/service.hpp"
 #include "common/convert.hpp"
 #include "core/args.hpp"
-#include "core/depth_cloud.hpp"
 #include "core/log.hpp"
 #include "core/voxel_map.hpp"
 #include "pbnbv/depth_frame_t.hpp"
@@ -93,13 +92,11 @@ class MappingService {
       out.message = "not integrated: DEPTH_FRAME " + std::to_string(r.cloud.depth_frame_seq) + " never arrived";
     } else {
       try {
-        const std::vector<float> depth = decode_depth_u16(frame->depth, frame->width, frame->height, frame->depth_unit_m);
+        const bus::DecodedFrame decoded = bus::decode_frame(*frame);
         DepthView view;
-        view.depth_m = &depth;
-        view.intrinsics = CameraIntrinsics{frame->width, frame->height, frame->fx, frame->fy, frame->cx, frame->cy};
-        view.intrinsics.validate();
-        view.range = DepthRange{frame->depth_min_m, frame->depth_max_m};
-        view.range.validate();
+        view.depth_m = &decoded.depth_m;
+        view.intrinsics = decoded.intrinsics;
+        view.range = decoded.range;
         view.object_T_camera = bus::from_msg(r.cloud.object_T_camera, "REGISTERED_CLOUD cloud.object_T_camera");
         view.working_volume = working_volume_;
         const MapUpdateResult u = map_->integrate(view);
