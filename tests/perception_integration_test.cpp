@@ -85,7 +85,7 @@ Figures evaluate(const fs::path& out) {
 
 Figures scan(const std::string& name, const std::string& registration) {
   const fs::path out = fresh_dir(name);
-  const std::string cmd = netns_run() + " " + bin_dir() + "/pbnbv scan --object bunny --views 10 --sim-speed 20 --no-log" +
+  const std::string cmd = netns_run() + " " + bin_dir() + "/pbnbv scan --object bunny --planner ring --views 10 --sim-speed 20 --no-log" +
                           " --hand-eye-error-mm 5 --hand-eye-error-deg 1 --turntable-error-deg 0.5 --registration " +
                           registration + " --out " + out.string();
   const CommandResult r = run_command(cmd);

@@ -89,7 +89,7 @@ fs::path scan_and_check(const std::string& name, const std::string& options, int
 }  // namespace
 
 TEST(ScanIntegration, SphereOnTheArmRigLiesOnTheTrueSurface) {
-  const fs::path out = scan_and_check("sphere", "--object sphere --rig arm", 4);
+  const fs::path out = scan_and_check("sphere", "--object sphere --rig arm --planner ring", 4);
   const Distances d = cloud_to_mesh(out / "cloud.ply", out / "object.obj");
   std::cout << "sphere, arm rig: " << d.n << " points, median distance " << d.median * 1e3
             << " mm, 95th percentile " << d.p95 * 1e3 << " mm\n";
@@ -104,7 +104,7 @@ TEST(ScanIntegration, SphereOnTheArmRigLiesOnTheTrueSurface) {
 }
 
 TEST(ScanIntegration, BoxOnTheArmRigLiesOnTheTrueSurface) {
-  const fs::path out = scan_and_check("box", "--object box --rig arm", 4);
+  const fs::path out = scan_and_check("box", "--object box --rig arm --planner ring", 4);
   const Distances d = cloud_to_mesh(out / "cloud.ply", out / "object.obj");
   std::cout << "box, arm rig: " << d.n << " points, median distance " << d.median * 1e3
             << " mm, 95th percentile " << d.p95 * 1e3 << " mm\n";
@@ -114,7 +114,7 @@ TEST(ScanIntegration, BoxOnTheArmRigLiesOnTheTrueSurface) {
 }
 
 TEST(ScanIntegration, SphereOnTheFreeRigLiesOnTheTrueSurface) {
-  const fs::path out = scan_and_check("sphere-free", "--object sphere --rig free", 4);
+  const fs::path out = scan_and_check("sphere-free", "--object sphere --rig free --planner ring", 4);
   const Distances d = cloud_to_mesh(out / "cloud.ply", out / "object.obj");
   std::cout << "sphere, free rig: " << d.n << " points, median distance " << d.median * 1e3 << " mm\n";
   EXPECT_GT(d.n, 5000u);
@@ -162,7 +162,7 @@ pid_t start_scan(const fs::path& out, const std::string& options) {
 
 TEST(ScanIntegration, CtrlCStopsEveryProcessAndKeepsTheScanSoFar) {
   const fs::path out = fresh_dir("interrupt") / "scan";
-  const pid_t pid = start_scan(out, "--object sphere --views 40 --sim-speed 2 --no-log");
+  const pid_t pid = start_scan(out, "--object sphere --planner ring --views 40 --sim-speed 2 --no-log");
   ASSERT_TRUE(wait_for_views(out, 1, 60)) << "no view recorded";
   ::kill(pid, SIGINT);
   const int code = wait_exit(pid, 30);
@@ -182,7 +182,7 @@ TEST(ScanIntegration, CtrlCStopsEveryProcessAndKeepsTheScanSoFar) {
 
 TEST(ScanIntegration, AFailedProcessStopsTheScanWithItsName) {
   const fs::path out = fresh_dir("crash") / "scan";
-  const pid_t pid = start_scan(out, "--object sphere --views 40 --sim-speed 2 --no-log");
+  const pid_t pid = start_scan(out, "--object sphere --planner ring --views 40 --sim-speed 2 --no-log");
   ASSERT_TRUE(wait_for_views(out, 1, 60)) << "no view recorded";
   // Kill this scan's twin (its arguments name the output folder).
   const CommandResult killed = run_command("pkill -KILL -f 'model-ou[t] " + out.string() + "/twin_model.xml'");

@@ -17,10 +17,11 @@ inline constexpr const char* kCaptureRequest = "CAPTURE_REQUEST";  // capture_re
 inline constexpr const char* kCloud = "CLOUD";                     // point_cloud_t
 inline constexpr const char* kScanStatus = "SCAN_STATUS";          // scan_status_t
 inline constexpr const char* kHeartbeat = "HEARTBEAT";             // heartbeat_t
-// Reserved for the perception and planning services (later issues).
+// Perception and planning.
 inline constexpr const char* kRegisteredCloud = "REGISTERED_CLOUD";  // registered_cloud_t
 inline constexpr const char* kVoxelMap = "VOXEL_MAP";                // voxel_set_t
 inline constexpr const char* kEllipsoids = "ELLIPSOIDS";             // ellipsoid_set_t
+inline constexpr const char* kPlanRequest = "PLAN_REQUEST";          // plan_request_t
 inline constexpr const char* kViewPlan = "VIEW_PLAN";                // view_plan_t
 
 }  // namespace pbnbv::channels

@@ -1,9 +1,13 @@
 // pbnbv-coordinator: the scan coordinator.
-//   in:  MOVE_RESULT, CLOUD, REGISTERED_CLOUD, VOXEL_MAP, ARM_STATUS, TURNTABLE_STATUS, HEARTBEAT
-//   out: MOVE_REQUEST, CAPTURE_REQUEST, SCAN_STATUS, HEARTBEAT
-// Runs move -> settle -> capture -> register -> map -> accumulate for each view of the plan,
-// writes the scan's output folder after every view (cloud.ply, frames/, scan.json), and prints
-// progress.
+//   in:  MOVE_RESULT, CLOUD, REGISTERED_CLOUD, VOXEL_MAP, ELLIPSOIDS, VIEW_PLAN, ARM_STATUS,
+//        TURNTABLE_STATUS, HEARTBEAT
+//   out: MOVE_REQUEST, CAPTURE_REQUEST, PLAN_REQUEST, SCAN_STATUS, HEARTBEAT
+// Runs plan -> move -> settle -> capture -> register -> map -> accumulate for each view: the
+// next view comes from the view scorer (planner "pbnbv": PLAN_REQUEST / VIEW_PLAN, with the
+// scan's history in the request) or from a fixed ring (planner "ring"). A view the rig cannot
+// reach is replaced by the plan's next-best alternatives. Writes the scan's output folder after
+// every view (cloud.ply, frames/, plans/, scan.json), says in scan.json why the scan stopped,
+// and prints progress.
 // Every wait has a deadline; requests are re-sent (idempotent by request_id) when an answer
 // is lost.
 #include <unistd.h>
@@ -27,6 +31,9 @@
 #include "core/views.hpp"
 #include "pbnbv/arm_status_t.hpp"
 #include "pbnbv/capture_request_t.hpp"
+#include "pbnbv/ellipsoid_set_t.hpp"
+#include "pbnbv/plan_request_t.hpp"
+#include "pbnbv/view_plan_t.hpp"
 #include "pbnbv/heartbeat_t.hpp"
 #include "pbnbv/move_request_t.hpp"
 #include "pbnbv/move_result_t.hpp"
@@ -44,6 +51,7 @@ namespace {
 
 constexpr double kResendS = 3.0;          // re-send a request whose answer has not come
 constexpr double kAnswerTimeoutS = 60.0;  // registration / mapping answer to a view
+constexpr double kPlanTimeoutS = 90.0;    // view scorer's answer (it waits up to 60 s for inputs)
 
 std::string move_status_name(int8_t s) {
   switch (s) {
@@ -86,6 +94,22 @@ class Coordinator {
     bus_.subscribe<voxel_set_t>(channels::kVoxelMap, [this](const voxel_set_t& m) {
       if (m.scan_id == s_.scan_id) maps_[m.iteration] = m;
     });
+    bus_.subscribe<ellipsoid_set_t>(channels::kEllipsoids, [this](const ellipsoid_set_t& e) {
+      if (e.scan_id != s_.scan_id) return;
+      if (e.num_ellipsoids != static_cast<int32_t>(e.ellipsoids.size())) {
+        throw std::invalid_argument("ELLIPSOIDS num_ellipsoids disagrees with its array");
+      }
+      ellipsoids_[e.iteration] = e;
+    });
+    bus_.subscribe<view_plan_t>(channels::kViewPlan, [this](const view_plan_t& p) {
+      if (p.scan_id != s_.scan_id) return;
+      if (p.num_alternatives != static_cast<int32_t>(p.alternatives.size()) ||
+          p.num_alternatives != static_cast<int32_t>(p.alternative_quality.size())) {
+        throw std::invalid_argument("VIEW_PLAN num_alternatives disagrees with its arrays");
+      }
+      if (p.outcome == view_plan_t::kView) bus::from_msg(p.object_T_camera, "VIEW_PLAN object_T_camera");
+      plans_[p.request_id] = p;
+    });
     bus_.subscribe<arm_status_t>(channels::kArmStatus, [this](const arm_status_t&) { seen_.insert("ARM_STATUS"); });
     bus_.subscribe<turntable_status_t>(channels::kTurntableStatus, [this](const turntable_status_t&) { seen_.insert("TURNTABLE_STATUS"); });
     bus_.subscribe<heartbeat_t>(channels::kHeartbeat, [this](const heartbeat_t& h) { seen_.insert("heartbeat of " + h.service); });
@@ -102,15 +126,63 @@ class Coordinator {
     status(scan_status_t::kStarting, "waiting for the rig and services");
     if (!wait_ready()) return finish(scan_status_t::kFailed, startup_problem_);
 
-    for (int i = 0; i < static_cast<int>(views_.size()); ++i) {
+    for (int i = 0; i < s_.views; ++i) {
       if (bus::stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
       iteration_ = i;
-      json view = {{"view", i}, {"requested_object_T_camera", to_json(views_[i])}};
+      json view = {{"view", i}};
       const double t_view = bus::now_s();
+
+      // Where to go: the ring's view, the first view, or the view scorer's plan and its
+      // alternatives.
+      std::vector<Pose> options;
+      if (s_.planner == "ring") {
+        options = {views_[i]};
+      } else if (i == 0) {
+        options = {first_view_};
+        view["plan"] = {{"planner", "initial view"}};
+      } else {
+        progress("planning");
+        status(scan_status_t::kPlanning, "planning view " + std::to_string(i + 1));
+        std::optional<view_plan_t> plan = request_plan(i);
+        if (!plan) {
+          if (bus::stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
+          return finish(scan_status_t::kFailed, "the view scorer did not answer the plan for view " + std::to_string(i + 1));
+        }
+        view["plan"] = plan_json(*plan);
+        if (plan->outcome != view_plan_t::kView) {
+          stop_ = {{"reason", plan->reason}, {"after_views", views_done_},
+                   {"rule", plan->outcome == view_plan_t::kStop ? "planner" : "planner failed"}};
+          report_["planning_stopped"] = view["plan"];
+          if (plan->outcome == view_plan_t::kStop) return finish(scan_status_t::kDone, "scan complete: " + plan->reason);
+          return finish(scan_status_t::kFailed, "no plan for view " + std::to_string(i + 1) + ": " + plan->reason);
+        }
+        if (!std::isfinite(first_quality_)) first_quality_ = plan->first_quality;
+        options.push_back(bus::from_msg(plan->object_T_camera, "VIEW_PLAN object_T_camera"));
+        for (std::size_t a = 0; a < plan->alternatives.size(); ++a) {
+          options.push_back(bus::from_msg(plan->alternatives[a], "VIEW_PLAN alternatives"));
+        }
+        progress("planned: F " + fixed(plan->view_quality) + " px, " + std::to_string(plan->num_scored) + " candidates scored");
+      }
+
+      // Move, trying the alternatives when the rig cannot reach a view.
       progress("moving");
       status(scan_status_t::kMoving, "moving to view " + std::to_string(i + 1));
       const double t_move = bus::now_s();
-      std::optional<move_result_t> moved = move(i);
+      std::optional<move_result_t> moved;
+      json attempts = json::array();
+      for (std::size_t k = 0; k < options.size(); ++k) {
+        moved = move(i, static_cast<int>(k), options[k]);
+        if (!moved) break;
+        if (moved->status == move_result_t::kReached) {
+          view["requested_object_T_camera"] = to_json(options[k]);
+          view["option"] = k;
+          break;
+        }
+        attempts.push_back({{"option", k}, {"status", move_status_name(moved->status)}, {"reason", moved->reason}});
+        excluded_.push_back(options[k]);
+        if (moved->status != move_result_t::kUnreachable) break;
+      }
+      if (!attempts.empty()) view["failed_moves"] = attempts;
       if (!moved) {
         if (bus::stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
         view["move"] = {{"status", "no_answer"}, {"reason", "no MOVE_RESULT from the motion executor"}};
@@ -132,6 +204,10 @@ class Coordinator {
         record(view);
         continue;
       }
+      if (moved->joint_position_rad.size() == 6) {
+        for (int k = 0; k < 6; ++k) joints_[k] = moved->joint_position_rad[k];
+      }
+      turntable_ = moved->turntable_angle_rad;
       progress("capturing");
       status(scan_status_t::kCapturing, "capturing view " + std::to_string(i + 1));
       const double t_capture = bus::now_s();
@@ -156,6 +232,7 @@ class Coordinator {
                          {"num_points", cloud->num_points}};
       if (cloud->status != point_cloud_t::kOk) {
         progress("capture failed: " + cloud->message, true);
+        excluded_.push_back(bus::from_msg(moved->reached_object_T_camera, "MOVE_RESULT reached_object_T_camera"));
         record(view);
         continue;
       }
@@ -192,6 +269,12 @@ class Coordinator {
                                  {"unknown", map.num_unknown}, {"frontier", map.num_frontier}}}};
       view["time_s"]["map_update"] = map.update_s;
       view["time_s"]["map_round_trip"] = bus::now_s() - t_map;
+      if (map.updated) {
+        last_map_ = i;
+        views_taken_.push_back(bus::from_msg(reg.cloud.object_T_camera, "REGISTERED_CLOUD cloud.object_T_camera"));
+      } else {  // not mapped (e.g. registration rejected it): do not plan it again
+        excluded_.push_back(bus::from_msg(moved->reached_object_T_camera, "MOVE_RESULT reached_object_T_camera"));
+      }
       status(scan_status_t::kIntegrating, "adding view " + std::to_string(i + 1));
       const double t_acc = bus::now_s();
       accumulate(i, reg, view);
@@ -206,10 +289,15 @@ class Coordinator {
                            : std::string("kinematic pose kept")) << ", " << map.num_frontier << " frontier voxels; move "
          << fixed(moved->move_s + moved->settle_s) << " s, capture " << fixed(cloud->capture_s) << " s, register "
          << fixed(reg.register_s) << " s, map " << fixed(map.update_s * 1e3) << " ms";
+      if (view.contains("plan") && view["plan"].contains("planner_step_ms")) {
+        os << ", plan " << fixed(view["plan"]["planner_step_ms"].get<double>()) << " ms";
+      }
       progress(os.str(), true);
     }
     if (views_done_ == 0) return finish(scan_status_t::kFailed, "no view produced a cloud");
-    return finish(scan_status_t::kDone, "scan complete");
+    stop_ = {{"reason", "view budget reached (--views " + std::to_string(s_.views) + ")"}, {"after_views", views_done_},
+             {"rule", "budget"}};
+    return finish(scan_status_t::kDone, "scan complete: " + stop_["reason"].get<std::string>());
   }
 
  private:
@@ -220,18 +308,121 @@ class Coordinator {
   }
 
   void plan_views() {
-    if (s_.planner != "ring") throw std::invalid_argument("planner '" + s_.planner + "' is not available (ring)");
     const Eigen::Vector3d half = s_.normalisation.extent_m / 2.0;
     const double radius = s_.working_distance_m + half.norm();
-    views_ = ring_views(s_.views, radius, s_.ring_elevation_deg * M_PI / 180.0,
-                        s_.ring_start_azimuth_deg * M_PI / 180.0, Eigen::Vector3d::Zero());
-    report_["plan"] = {{"planner", "ring"}, {"radius_m", radius}, {"elevation_deg", s_.ring_elevation_deg}};
+    if (s_.planner == "ring") {
+      views_ = ring_views(s_.views, radius, s_.ring_elevation_deg * M_PI / 180.0,
+                          s_.ring_start_azimuth_deg * M_PI / 180.0, Eigen::Vector3d::Zero());
+      report_["plan"] = {{"planner", "ring"}, {"radius_m", radius}, {"elevation_deg", s_.ring_elevation_deg}};
+    } else if (s_.planner == "pbnbv") {
+      if (s_.initial_view_m.allFinite()) {
+        first_view_ = look_at_z_up(s_.initial_view_m, Eigen::Vector3d::Zero());
+      } else {
+        first_view_ = ring_views(1, radius, s_.ring_elevation_deg * M_PI / 180.0, s_.ring_start_azimuth_deg * M_PI / 180.0,
+                                 Eigen::Vector3d::Zero())[0];
+      }
+      report_["plan"] = {{"planner", "pbnbv"}, {"initial_view", to_json(first_view_)}};
+    } else {
+      throw std::invalid_argument("planner '" + s_.planner + "' is not available (pbnbv, ring)");
+    }
+  }
+
+  json plan_json(const view_plan_t& p) {
+    json j = {{"planner", p.planner}, {"outcome", p.outcome == view_plan_t::kView ? "view" : p.outcome == view_plan_t::kStop ? "stop" : "failed"},
+              {"reason", p.reason}, {"map_of_view", last_map_},
+              {"view_quality_px", p.view_quality}, {"first_quality_px", p.first_quality},
+              {"frontier_area_px", p.frontier_area_px}, {"occupied_area_px", p.occupied_area_px},
+              {"partition", p.partition}, {"allowed_sectors", p.allowed_sectors}, {"partition_fallback", p.partition_fallback != 0},
+              {"sphere", {{"centre_m", {p.sphere_centre_m[0], p.sphere_centre_m[1], p.sphere_centre_m[2]}}, {"radius_m", p.sphere_radius_m}}},
+              {"candidates", {{"generated", p.num_candidates}, {"unreachable", p.num_unreachable}, {"excluded", p.num_excluded},
+                              {"scored", p.num_scored}}},
+              {"alternative_quality_px", p.alternative_quality}};
+    double map_s = 0, fit_s = 0;
+    if (auto m = maps_.find(last_map_); m != maps_.end()) map_s = m->second.update_s;
+    if (auto e = ellipsoids_.find(last_map_); e != ellipsoids_.end()) {
+      const ellipsoid_set_t& es = e->second;
+      fit_s = es.fit_s;
+      json list = json::array();
+      for (const auto& el : es.ellipsoids) {
+        list.push_back({{"class", el.cls == ellipsoid_t::kFrontier ? "frontier" : "occupied"},
+                        {"centre_m", {el.centre_m[0], el.centre_m[1], el.centre_m[2]}},
+                        {"semi_axes_m", {el.semi_axes_m[0], el.semi_axes_m[1], el.semi_axes_m[2]}},
+                        {"quat_wxyz", {el.quat_wxyz[0], el.quat_wxyz[1], el.quat_wxyz[2], el.quat_wxyz[3]}},
+                        {"voxels", el.num_voxels}});
+      }
+      j["ellipsoids"] = {{"occupied_components", es.occupied_components}, {"frontier_components", es.frontier_components},
+                         {"list", list}};
+    }
+    j["time_ms"] = {{"map_update", map_s * 1e3}, {"ellipsoid_fit", fit_s * 1e3}, {"candidates", p.candidates_s * 1e3},
+                    {"reachability", p.reachability_s * 1e3}, {"scoring", p.scoring_s * 1e3},
+                    {"scorer_wait", p.wait_s * 1e3}, {"view_selection", p.plan_s * 1e3}};
+    // The planner step as the paper times it: map update + fitting + view selection.
+    j["planner_step_ms"] = (map_s + fit_s + p.plan_s) * 1e3;
+    char name[40];
+    std::snprintf(name, sizeof(name), "plans/view_%03d.png", p.iteration);
+    if (fs::exists(out_ / name)) j["figure"] = name;
+    return j;
+  }
+
+  std::optional<view_plan_t> request_plan(int i) {
+    plan_request_t r{};
+    r.scan_id = s_.scan_id;
+    r.iteration = i;
+    r.request_id = i;
+    r.planner = s_.planner;
+    r.map_iteration = last_map_;
+    for (const auto& v : views_taken_) r.views_done.push_back(bus::to_msg(v));
+    r.num_views_done = static_cast<int32_t>(r.views_done.size());
+    for (const auto& v : excluded_) r.excluded.push_back(bus::to_msg(v));
+    r.num_excluded = static_cast<int32_t>(r.excluded.size());
+    r.num_candidates = s_.candidates;
+    r.num_parallels = s_.parallels;
+    r.num_sectors = s_.sectors;
+    r.full_sphere = s_.full_sphere;
+    r.working_distance_m = s_.working_distance_m;
+    r.num_alternatives = s_.alternatives;
+    r.stop_fraction = s_.stop_fraction;
+    r.first_quality = first_quality_;
+    r.width_px = s_.camera.width;
+    r.height_px = s_.camera.height;
+    r.fx = s_.camera.fx;
+    r.fy = s_.camera.fy;
+    r.cx = s_.camera.cx;
+    r.cy = s_.camera.cy;
+    r.check_reachability = s_.rig == RigKind::kArm;
+    for (int k = 0; k < 6; ++k) r.joint_position_rad[k] = joints_[k];
+    r.turntable_angle_rad = turntable_;
+    r.object_z_m = s_.object_z_m;
+    for (int k = 0; k < 3; ++k) {
+      r.keepout_min_m[k] = s_.keepout_min_m[k];
+      r.keepout_max_m[k] = s_.keepout_max_m[k];
+    }
+    fs::create_directories(out_ / "plans");
+    char name[40];
+    std::snprintf(name, sizeof(name), "plans/view_%03d.png", i);
+    r.figure_path = (out_ / name).string();
+    if (last_map_ < 0) {
+      view_plan_t none{};
+      none.iteration = i;
+      none.planner = s_.planner;
+      none.outcome = view_plan_t::kFailed;
+      none.reason = "no view has been mapped yet";
+      return none;
+    }
+    const double deadline = bus::now_s() + kPlanTimeoutS;
+    while (bus::now_s() < deadline && !bus::stop_requested()) {
+      r.utime = bus::now_utime();
+      bus_.publish(channels::kPlanRequest, r);
+      if (spin_until([&] { return plans_.count(i) > 0; }, kResendS)) return plans_[i];
+    }
+    return std::nullopt;
   }
 
   bool wait_ready() {
     std::set<std::string> need = {"ARM_STATUS", "heartbeat of motion", "heartbeat of camera",
                                   "heartbeat of registration", "heartbeat of mapping"};
     if (s_.rig == RigKind::kArm) need.insert("TURNTABLE_STATUS");
+    if (s_.planner != "ring") need.insert({"heartbeat of ellipsoids", "heartbeat of scorer"});
     const bool ok = spin_until([&] {
       for (const auto& n : need) if (!seen_.count(n)) return false;
       return true;
@@ -255,12 +446,14 @@ class Coordinator {
     return false;
   }
 
-  std::optional<move_result_t> move(int i) {
+  // Moves to option k of view i (request_id unique per view and option).
+  std::optional<move_result_t> move(int i, int k, const Pose& target) {
+    const int64_t id = static_cast<int64_t>(i) * 100 + k;
     move_request_t r;
     r.scan_id = s_.scan_id;
     r.iteration = i;
-    r.request_id = i;
-    r.object_T_camera = bus::to_msg(views_[i]);
+    r.request_id = id;
+    r.object_T_camera = bus::to_msg(target);
     r.object_z_m = s_.object_z_m;
     for (int k = 0; k < 3; ++k) {
       r.keepout_min_m[k] = s_.keepout_min_m[k];
@@ -271,11 +464,11 @@ class Coordinator {
     r.plan_only = false;
     const double deadline = bus::now_s() + s_.move_timeout_s + 15.0;
     while (bus::now_s() < deadline && !bus::stop_requested()) {
-      move_results_.erase(i);
+      move_results_.erase(id);
       r.utime = bus::now_utime();
       bus_.publish(channels::kMoveRequest, r);
-      if (spin_until([&] { return move_results_.count(i) > 0; }, kResendS)) {
-        if (move_results_[i].status != move_result_t::kBusy) return move_results_[i];
+      if (spin_until([&] { return move_results_.count(id) > 0; }, kResendS)) {
+        if (move_results_[id].status != move_result_t::kBusy) return move_results_[id];
       }
     }
     return std::nullopt;
@@ -333,8 +526,9 @@ class Coordinator {
 
   void write_report(const std::string& state, const std::string& message) {
     report_["status"] = {{"state", state}, {"message", message}, {"views_done", views_done_},
-                         {"views_planned", views_.size()}, {"elapsed_s", bus::now_s() - t_start_},
+                         {"views_planned", s_.views}, {"elapsed_s", bus::now_s() - t_start_},
                          {"num_points", accumulated_.size()}};
+    if (!stop_.is_null()) report_["stop"] = stop_;
     write_json_atomic(report_, (out_ / "scan.json").string());
   }
 
@@ -344,7 +538,7 @@ class Coordinator {
     write_report(name, message);
     if (::isatty(STDOUT_FILENO)) std::cout << "\r\033[K";  // clear an unfinished progress line
     std::cout << (state == scan_status_t::kDone ? "" : "scan ") << message << ": " << views_done_ << " of "
-              << views_.size() << " views, " << accumulated_.size() << " points, "
+              << s_.views << " views, " << accumulated_.size() << " points, "
               << fixed(bus::now_s() - t_start_) << " s -> " << (out_ / "scan.json").string() << std::endl;
     return state == scan_status_t::kDone ? 0 : state == scan_status_t::kStopped ? 130 : 1;
   }
@@ -353,7 +547,7 @@ class Coordinator {
   // otherwise (logs, pipes).
   void progress(const std::string& what, bool last = false) {
     static const bool tty = ::isatty(STDOUT_FILENO) != 0;
-    const std::string line = "[view " + std::to_string(iteration_ + 1) + "/" + std::to_string(views_.size()) + "] " + what;
+    const std::string line = "[view " + std::to_string(iteration_ + 1) + "/" + std::to_string(s_.views) + "] " + what;
     if (tty) {
       std::cout << "\r\033[K" << line << (last ? "\n" : "") << std::flush;
     } else {
@@ -372,7 +566,7 @@ class Coordinator {
     m.utime = bus::now_utime();
     m.scan_id = s_.scan_id;
     m.iteration = iteration_;
-    m.num_views_planned = static_cast<int32_t>(views_.size());
+    m.num_views_planned = s_.views;
     m.num_views_done = views_done_;
     m.state = state_;
     m.message = message_;
@@ -390,7 +584,17 @@ class Coordinator {
   bus::Bus& bus_;
   ScanSettings s_;
   fs::path out_;
-  std::vector<Pose> views_;
+  std::vector<Pose> views_;            // ring planner
+  Pose first_view_ = Pose::Identity(); // pbnbv planner
+  std::vector<Pose> views_taken_;      // registered camera poses of mapped views
+  std::vector<Pose> excluded_;         // views the rig could not reach or capture
+  double first_quality_ = std::numeric_limits<double>::quiet_NaN();
+  int last_map_ = -1;                  // last view integrated into the map
+  double joints_[6] = {0, 0, 0, 0, 0, 0};
+  double turntable_ = 0;
+  json stop_;
+  std::map<int32_t, ellipsoid_set_t> ellipsoids_;
+  std::map<int64_t, view_plan_t> plans_;
   std::map<int64_t, move_result_t> move_results_;
   std::map<int64_t, point_cloud_t> clouds_;
   std::map<int64_t, registered_cloud_t> registered_;

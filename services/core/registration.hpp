@@ -14,7 +14,7 @@ struct RegistrationParams {
   double max_correspondence_m = 0.02;    // ICP correspondence distance (coarse-to-fine from here)
   int max_iterations = 60;
   // Gates: an alignment is accepted only if all hold.
-  double min_overlap = 0.3;              // share of frame points with a model point within
+  double min_overlap = 0.1;              // share of frame points with a model point within
                                          // overlap_distance_m after alignment
   double overlap_distance_m = 0.003;
   double max_rmse_m = 0.002;             // RMS distance of the overlapping points

@@ -45,6 +45,11 @@ nlohmann::json to_json(const ScanSettings& s) {
       {"working_distance_m", s.working_distance_m},
       {"ring_elevation_deg", s.ring_elevation_deg},
       {"ring_start_azimuth_deg", s.ring_start_azimuth_deg},
+      {"initial_view_m", s.initial_view_m.allFinite() ? to_json(s.initial_view_m) : nlohmann::json(nullptr)},
+      {"planning", {{"candidates", s.candidates}, {"parallels", s.parallels}, {"sectors", s.sectors},
+                    {"area", s.full_sphere ? "full" : "hemi"}, {"t_max", s.t_max},
+                    {"map_resolution_m", s.map_resolution_m}, {"stop_fraction", s.stop_fraction},
+                    {"alternatives", s.alternatives}}},
       {"keepout", {{"min_m", to_json(s.keepout_min_m)}, {"max_m", to_json(s.keepout_max_m)}}},
       {"crop", {{"min_m", to_json(s.crop_min_m)}, {"max_m", to_json(s.crop_max_m)},
                 {"ground_clearance_m", s.ground_clearance_m}}},
@@ -83,6 +88,18 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.working_distance_m = j.at("working_distance_m").get<double>();
     s.ring_elevation_deg = j.at("ring_elevation_deg").get<double>();
     s.ring_start_azimuth_deg = j.at("ring_start_azimuth_deg").get<double>();
+    if (!j.at("initial_view_m").is_null()) s.initial_view_m = vec3_from_json(j.at("initial_view_m"), "initial_view_m");
+    const auto& pl = j.at("planning");
+    s.candidates = pl.at("candidates").get<int>();
+    s.parallels = pl.at("parallels").get<int>();
+    s.sectors = pl.at("sectors").get<int>();
+    const std::string area = pl.at("area").get<std::string>();
+    if (area != "full" && area != "hemi") throw std::invalid_argument("scan settings: planning.area '" + area + "' is neither full nor hemi");
+    s.full_sphere = area == "full";
+    s.t_max = pl.at("t_max").get<int>();
+    s.map_resolution_m = pl.at("map_resolution_m").get<double>();
+    s.stop_fraction = pl.at("stop_fraction").get<double>();
+    s.alternatives = pl.at("alternatives").get<int>();
     s.keepout_min_m = vec3_from_json(j.at("keepout").at("min_m"), "keepout.min_m");
     s.keepout_max_m = vec3_from_json(j.at("keepout").at("max_m"), "keepout.max_m");
     s.crop_min_m = vec3_from_json(j.at("crop").at("min_m"), "crop.min_m");

@@ -2,6 +2,7 @@
 // Everything that defines a scan, decided once by the launcher (from the command line and the
 // object) and read by the coordinator. Written into scan.json as "settings", so a scan's
 // output folder says exactly how it was made and can be resumed or repeated from it.
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -15,8 +16,8 @@ struct ScanSettings {
   std::string scan_id;
   RigKind rig = RigKind::kArm;
   std::string rig_model_path;
-  std::string planner = "ring";
-  int views = 8;
+  std::string planner = "pbnbv";  // "pbnbv" (next best view) or "ring" (fixed views)
+  int views = 10;                  // at most this many views
 
   // Object (twin runs): how the mesh was normalised and where its frame sits.
   std::string object_name;
@@ -27,6 +28,20 @@ struct ScanSettings {
   double working_distance_m = 0.6;   // d_c: camera to the object's bounding sphere
   double ring_elevation_deg = 30.0;  // ring planner: elevation above the object centre
   double ring_start_azimuth_deg = 0.0;
+  // The first view of a next-best-view scan: camera position in the object frame, looking at
+  // the origin; unset (NaN): the ring's first view (azimuth ring_start_azimuth_deg, elevation
+  // ring_elevation_deg on the arm rig, 0 on the free rig).
+  Eigen::Vector3d initial_view_m = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+
+  // PB-NBV planning (method.md).
+  int candidates = 800;          // N
+  int parallels = 24;            // alpha
+  int sectors = 4;               // beta
+  bool full_sphere = false;      // candidate area: full sphere, else hemisphere
+  int t_max = 10;                // ellipsoid fitter's T_max
+  double map_resolution_m = 0.03;
+  double stop_fraction = 0.0;    // stop when best F < this * F of the first planned view (0: off)
+  int alternatives = 5;          // next-best views tried when the rig cannot reach the best
 
   // Keep-out box for the arm (object frame) and the working volume for clouds.
   Eigen::Vector3d keepout_min_m = Eigen::Vector3d::Zero();

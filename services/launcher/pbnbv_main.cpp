@@ -1,5 +1,5 @@
 // pbnbv: the command a user runs.
-//   pbnbv scan [--object PATH|bunny|teapot|sphere|box] [--size M] [--up z|y] [--planner ring]
+//   pbnbv scan [--object PATH|bunny|teapot|sphere|box] [--size M] [--up z|y] [--planner pbnbv|ring]
 //              [--views N] [--rig arm|free] [--out DIR] [...]
 //       normalises the object, starts the twin and every service as separate processes
 //       (plus lcm-logger), supervises them while the coordinator scans, and stops them all at
@@ -8,6 +8,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <ctime>
@@ -19,6 +20,7 @@
 #include "core/args.hpp"
 #include "core/mesh.hpp"
 #include "core/scan_settings.hpp"
+#include "launcher/evaluate.hpp"
 #include "launcher/processes.hpp"
 
 using namespace pbnbv;
@@ -40,12 +42,22 @@ scan options:
                            bunny, teapot (fetched by ./scripts/setup), sphere, box  [bunny]
   --size M                 shortest bounding-box edge after normalisation, m     [0.3]
   --up z|y                 which axis of the mesh file points up   [y for bunny/teapot, else z]
-  --planner ring           view planner (next-best-view planners: later releases)  [ring]
-  --views N                number of views                                        [8]
+  --planner pbnbv|ring     next-best-view planning (PB-NBV), or a fixed ring      [pbnbv]
+  --views N                at most this many views                                [10]
   --rig arm|free           arm + turntable, or a free-flying camera (paper setup) [arm]
+  --area hemi|full         pbnbv candidates: hemisphere above the object, or the
+                           full sphere (the paper's comparison: --rig free --area full) [hemi]
+  --candidates N           pbnbv candidate views per plan                         [800]
+  --parallels N            parallels the candidates lie on (alpha)                [24]
+  --beta N                 global partitioning sectors (1: off)                   [4]
+  --tmax N                 most Gaussian components per ellipsoid class (T_max)   [10]
+  --stop-fraction X        stop when the best view quality F falls below X times
+                           the first planned view's F (0: never; README says why) [0]
+  --initial-view x,y,z     first camera position, object frame, m; looks at the origin
+                           [ring view at --ring-elevation (arm) / 0 deg (free), azimuth 0]
   --out DIR                output folder                      [out/<object>-<date-time>]
   --working-distance M     camera to the object's bounding sphere, m              [0.6]
-  --ring-elevation DEG     ring planner: camera elevation above the object centre [30]
+  --ring-elevation DEG     ring views / first view: elevation above the object centre [30 arm, 0 free]
   --voxel M                cloud downsampling voxel, m                            [0.002]
   --resolution M           voxel map resolution, m (0.01 suits a real rig)        [0.03]
   --registration on|off    refine every view's pose by ICP against the model      [on]
@@ -111,15 +123,29 @@ int scan(int argc, char** argv) {
   s.object_name = object_name;
   s.rig = parse_rig_kind(args.str("rig", "arm"));
   s.rig_model_path = default_rig_path(s.rig);
-  s.planner = args.str("planner", "ring");
-  if (s.planner != "ring") {
-    throw std::invalid_argument("--planner " + s.planner + ": only 'ring' is available in this release");
+  s.planner = args.str("planner", "pbnbv");
+  if (s.planner != "ring" && s.planner != "pbnbv") {
+    throw std::invalid_argument("--planner " + s.planner + ": expected pbnbv or ring");
   }
-  s.views = static_cast<int>(args.integer("views", 8, 1, 1000));
+  s.views = static_cast<int>(args.integer("views", 10, 1, 1000));
   s.working_distance_m = args.num("working-distance", 0.6, 0.15, 3.0);
-  s.ring_elevation_deg = args.num("ring-elevation", 30.0, -89.0, 89.0);
+  s.ring_elevation_deg = args.num("ring-elevation", s.rig == RigKind::kArm ? 30.0 : 0.0, -89.0, 89.0);
+  const std::string area = args.str("area", "hemi");
+  if (area != "hemi" && area != "full") throw std::invalid_argument("--area " + area + ": expected hemi or full");
+  s.full_sphere = area == "full";
+  s.candidates = static_cast<int>(args.integer("candidates", 800, 1, 100000));
+  s.parallels = static_cast<int>(args.integer("parallels", 24, 1, 1000));
+  if (s.parallels > s.candidates) throw std::invalid_argument("--parallels must not exceed --candidates");
+  s.sectors = static_cast<int>(args.integer("beta", 4, 1, 360));
+  s.t_max = static_cast<int>(args.integer("tmax", 10, 1, 200));
+  s.stop_fraction = args.num("stop-fraction", 0.0, 0.0, 1.0);
+  if (args.has("initial-view")) {
+    s.initial_view_m = args.vec3("initial-view", Eigen::Vector3d::Zero());
+    if (s.initial_view_m.norm() < 0.05) throw std::invalid_argument("--initial-view must be away from the object centre");
+  }
   s.voxel_m = args.num("voxel", 0.002, 0.0, 0.05);
   const double resolution = args.num("resolution", 0.03, 0.002, 0.2);
+  s.map_resolution_m = resolution;
   const std::string registration = args.str("registration", "on");
   if (registration != "on" && registration != "off") {
     throw std::invalid_argument("--registration " + registration + ": expected on or off");
@@ -200,6 +226,10 @@ int scan(int argc, char** argv) {
   auto vec = [&](const Eigen::Vector3d& v) { return num(v.x()) + "," + num(v.y()) + "," + num(v.z()); };
   add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", num(resolution), "--out", out.string(),
                   "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m)});
+  if (s.planner == "pbnbv") {
+    add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
+    add("scorer", {(bin / "pbnbv-scorer").string(), "--rig", to_string(s.rig)});
+  }
   add("coordinator", {(bin / "pbnbv-coordinator").string(), "--out", out.string()}, true);
 
   struct sigaction sa {};
@@ -254,9 +284,29 @@ int scan(int argc, char** argv) {
     }
   }
   if (code == 0) {
+    // Against the ground truth the twin rendered: coverage after every view.
+    try {
+      const CoverageParams cp;
+      const launcher::ScanEvaluation e = launcher::evaluate_scan(out, cp);
+      write_json_atomic(launcher::to_json(e, cp), (out / "coverage.json").string());
+      std::ostringstream os;
+      os.setf(std::ios::fixed);
+      os.precision(1);
+      for (double c : e.coverage_by_view) os << " " << c;
+      std::cout << "coverage after each view (%, ground truth):" << os.str() << std::endl;
+      if (!e.planner_ms.empty()) {
+        std::vector<double> t = e.planner_ms;
+        std::sort(t.begin(), t.end());
+        std::cout << "planner step (map update + ellipsoids + view selection): median " << t[t.size() / 2] << " ms"
+                  << std::endl;
+      }
+    } catch (const std::exception& x) {
+      std::cerr << "warning: coverage not evaluated: " << x.what() << std::endl;
+    }
     std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
-              << (out / "scan.json").string() << (record_log ? ", " + (out / "scan.lcmlog").string() : "")
-              << std::endl;
+              << (s.planner == "pbnbv" ? (out / "plans").string() + "/, " : std::string())
+              << (out / "scan.json").string() << ", " << (out / "coverage.json").string()
+              << (record_log ? ", " + (out / "scan.lcmlog").string() : "") << std::endl;
   } else if (code != 130) {
     std::cerr << "scan failed (exit " << code << "); logs in " << (out / "logs").string() << std::endl;
   }

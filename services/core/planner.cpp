@@ -1,0 +1,184 @@
+// One PB-NBV planning step (planner.hpp).
+#include "core/planner.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include "core/views.hpp"
+
+namespace pbnbv {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+void candidate_sphere(const Eigen::AlignedBox3d& bbox, double working_distance_m,
+                      Eigen::Vector3d* centre, double* radius) {
+  *centre = bbox.center();
+  *radius = working_distance_m + 0.5 * bbox.diagonal().norm();
+}
+
+std::vector<Pose> candidate_views(const Eigen::AlignedBox3d& bbox, const CandidateSpec& spec) {
+  Eigen::Vector3d centre;
+  double radius = 0;
+  candidate_sphere(bbox, spec.working_distance_m, &centre, &radius);
+  return sphere_band_views(spec.num_views, spec.num_parallels, radius, centre, 0.0,
+                           spec.full_sphere ? M_PI : M_PI / 2);
+}
+
+PlanResult plan_pbnbv(const PlanInput& in) {
+  PlanResult r;
+  for (const auto& e : in.ellipsoids) {
+    (e.cls == EllipsoidClass::kFrontier ? r.num_frontier_ellipsoids : r.num_occupied_ellipsoids)++;
+  }
+  if (in.bbox.isEmpty() || !(in.bbox.diagonal().norm() > 0)) {
+    r.reason = "the bounding box B is empty: no view has been mapped yet";
+    return r;
+  }
+  if (in.beta < 1) throw std::invalid_argument("beta (partition sectors) must be >= 1, got " + std::to_string(in.beta));
+  candidate_sphere(in.bbox, in.candidates.working_distance_m, &r.centre, &r.radius_m);
+  if (r.num_frontier_ellipsoids == 0) {
+    r.outcome = PlanResult::Outcome::kStop;
+    r.reason = "no frontier ellipsoid remains";
+    return r;
+  }
+
+  auto t0 = std::chrono::steady_clock::now();
+  r.candidates = candidate_views(in.bbox, in.candidates);
+  const int n = static_cast<int>(r.candidates.size());
+  r.status.assign(n, CandidateStatus::kScored);
+  r.scores.assign(n, ViewScore{});
+  r.candidates_s = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  if (in.reachable) {
+    const std::vector<bool> ok = in.reachable(r.candidates);
+    if (ok.size() != r.candidates.size()) throw std::logic_error("reachability returned a wrong number of answers");
+    for (int i = 0; i < n; ++i) {
+      if (!ok[i]) {
+        r.status[i] = CandidateStatus::kUnreachable;
+        ++r.num_unreachable;
+      }
+    }
+  }
+  r.reachability_s = seconds_since(t0);
+
+  // Excluded views: compare viewing directions seen from the centre.
+  std::vector<Eigen::Vector3d> excluded_dirs;
+  auto exclude = [&](const std::vector<Pose>& views) {
+    for (const auto& p : views) {
+      const Eigen::Vector3d d = p.translation() - r.centre;
+      if (d.norm() > 0) excluded_dirs.push_back(d.normalized());
+    }
+  };
+  exclude(in.excluded);
+  if (in.skip_revisits) exclude(in.views_done);
+  const double cos_exclude = std::cos(in.exclude_angle_rad);
+  for (int i = 0; i < n && !excluded_dirs.empty(); ++i) {
+    if (r.status[i] != CandidateStatus::kScored) continue;
+    const Eigen::Vector3d d = (r.candidates[i].translation() - r.centre).normalized();
+    for (const auto& x : excluded_dirs) {
+      if (d.dot(x) >= cos_exclude) {
+        r.status[i] = CandidateStatus::kExcluded;
+        ++r.num_excluded;
+        break;
+      }
+    }
+  }
+
+  t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < n; ++i) {
+    if (r.status[i] != CandidateStatus::kScored) continue;
+    r.scores[i] = score_view(in.ellipsoids, in.camera, r.candidates[i]);
+    ++r.num_scored;
+  }
+  r.scoring_s = seconds_since(t0);
+  if (r.num_scored == 0) {
+    std::ostringstream os;
+    os << "no candidate can be scored: " << r.num_unreachable << " of " << n << " unreachable, "
+       << r.num_excluded << " near excluded views";
+    r.reason = os.str();
+    return r;
+  }
+
+  // Global partitioning.
+  std::vector<int> sector(n, 0);
+  if (in.beta > 1) {
+    std::vector<bool> scanned(in.beta, false);
+    for (const auto& v : in.views_done) scanned[sector_of(v.translation(), r.centre, in.beta)] = true;
+    r.allowed_sectors = allowed_sectors(scanned);
+    for (int i = 0; i < n; ++i) sector[i] = sector_of(r.candidates[i].translation(), r.centre, in.beta);
+  } else {
+    r.allowed_sectors = {0};
+  }
+  std::vector<bool> allowed(std::max(in.beta, 1), false);
+  for (int s : r.allowed_sectors) allowed[s] = true;
+  std::vector<int> pool;
+  for (int i = 0; i < n; ++i) {
+    if (r.status[i] == CandidateStatus::kScored && allowed[sector[i]]) pool.push_back(i);
+  }
+  if (pool.empty()) {
+    r.partition_fallback = true;
+    for (int i = 0; i < n; ++i) if (r.status[i] == CandidateStatus::kScored) pool.push_back(i);
+  } else {
+    for (int i = 0; i < n; ++i) {
+      if (r.status[i] == CandidateStatus::kScored && !allowed[sector[i]]) r.status[i] = CandidateStatus::kOutsidePartition;
+    }
+  }
+  // Best F first; ties broken by index so the plan is deterministic.
+  std::stable_sort(pool.begin(), pool.end(), [&](int a, int b) { return r.scores[a].quality > r.scores[b].quality; });
+  r.chosen = pool.front();
+  r.partition = in.beta > 1 ? sector[r.chosen] : -1;
+  for (std::size_t k = 1; k < pool.size() && static_cast<int>(r.alternatives.size()) < in.num_alternatives; ++k) {
+    r.alternatives.push_back(pool[k]);
+  }
+
+  const double best = r.scores[r.chosen].quality;
+  r.first_quality = std::isfinite(in.first_quality) ? in.first_quality : best;
+  if (std::isfinite(in.first_quality) && in.stop_fraction > 0 && best < in.stop_fraction * in.first_quality) {
+    std::ostringstream os;
+    os << "best view quality F = " << best << " px is below " << in.stop_fraction << " of the first planned view's F ("
+       << in.first_quality << " px)";
+    r.outcome = PlanResult::Outcome::kStop;
+    r.reason = os.str();
+    return r;
+  }
+  r.outcome = PlanResult::Outcome::kView;
+  std::ostringstream os;
+  os << "F = " << best << " px (frontier " << r.scores[r.chosen].frontier_sum << ", occupied "
+     << r.scores[r.chosen].occupied_sum << ") of " << r.num_scored << " scored";
+  r.reason = os.str();
+  return r;
+}
+
+PlanFigure plan_figure(const PlanInput& in, const PlanResult& r, const std::string& title) {
+  PlanFigure f;
+  f.title = title;
+  f.ellipsoids = in.ellipsoids;
+  f.candidates = r.candidates;
+  f.status = r.status;
+  f.quality.reserve(r.scores.size());
+  for (const auto& s : r.scores) f.quality.push_back(s.quality);
+  f.chosen = r.outcome == PlanResult::Outcome::kView ? r.chosen : -1;
+  f.past_views = in.views_done;
+  f.bbox = in.bbox;
+  f.centre = r.centre;
+  f.beta = in.beta;
+  f.allowed_sectors = r.allowed_sectors;
+  std::ostringstream a, b;
+  a << r.num_occupied_ellipsoids << " occupied and " << r.num_frontier_ellipsoids << " frontier ellipsoids; "
+    << r.candidates.size() << " candidates, " << r.num_unreachable << " unreachable, " << r.num_excluded
+    << " excluded, " << r.num_scored << " scored";
+  b << (r.outcome == PlanResult::Outcome::kView ? "chosen: " : r.outcome == PlanResult::Outcome::kStop ? "stop: " : "failed: ")
+    << r.reason << (r.partition_fallback ? " (no candidate in the allowed sectors: chosen globally)" : "");
+  f.lines = {a.str(), b.str()};
+  return f;
+}
+
+}  // namespace pbnbv

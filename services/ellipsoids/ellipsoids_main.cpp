@@ -1,0 +1,107 @@
+// pbnbv-ellipsoids: the ellipsoid fitter.
+//   in:  VOXEL_MAP
+//   out: ELLIPSOIDS, HEARTBEAT
+// For every voxel map, clusters the Occupied and the Frontier voxel centres with a Gaussian
+// mixture (T in [1, T_max] by BIC) and publishes the minimum-volume enclosing ellipsoid of each
+// cluster, fitted to voxel corners (method.md "Ellipsoids"; core fit_ellipsoids). Idempotent: a
+// map already answered (same scan and iteration) is answered again with the stored result.
+#include <chrono>
+#include <map>
+#include <sstream>
+
+#include "common/bus.hpp"
+#include "common/convert.hpp"
+#include "common/service.hpp"
+#include "core/ellipsoids.hpp"
+#include "core/log.hpp"
+#include "pbnbv/ellipsoid_set_t.hpp"
+#include "pbnbv/voxel_set_t.hpp"
+
+using namespace pbnbv;
+
+namespace {
+
+constexpr std::size_t kAnswersKept = 64;
+
+std::vector<Eigen::Vector3d> centres(const std::vector<std::vector<float>>& rows, int32_t count, const char* what) {
+  if (count != static_cast<int32_t>(rows.size())) {
+    throw std::invalid_argument(std::string("VOXEL_MAP ") + what + " count " + std::to_string(count) +
+                                " disagrees with its array (" + std::to_string(rows.size()) + ")");
+  }
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const Eigen::Vector3d p(rows[i][0], rows[i][1], rows[i][2]);
+    if (!p.allFinite()) {
+      throw std::invalid_argument(std::string("VOXEL_MAP ") + what + " centre " + std::to_string(i) + " is not finite");
+    }
+    out.push_back(p);
+  }
+  return out;
+}
+
+class EllipsoidService {
+ public:
+  EllipsoidService(bus::Bus& bus, int t_max, uint64_t seed) : bus_(bus), t_max_(t_max), seed_(seed) {
+    bus_.subscribe<voxel_set_t>(channels::kVoxelMap, [this](const voxel_set_t& m) { on_map(m); });
+  }
+
+ private:
+  void on_map(const voxel_set_t& m) {
+    bus_.set_scan(m.scan_id, m.iteration);
+    const auto key = std::make_pair(m.scan_id, m.iteration);
+    if (auto it = answers_.find(key); it != answers_.end()) {
+      bus_.publish(channels::kEllipsoids, it->second);
+      return;
+    }
+    bus::require_range(m.resolution_m, 1e-4, 1.0, "VOXEL_MAP resolution_m");
+    const std::vector<Eigen::Vector3d> occupied = centres(m.occupied_centres_m, m.num_occupied, "occupied");
+    const std::vector<Eigen::Vector3d> frontier = centres(m.frontier_centres_m, m.num_frontier, "frontier");
+
+    EllipsoidParams p;
+    p.t_max = t_max_;
+    p.seed = seed_;
+    p.voxel_m = m.resolution_m;
+    const auto t0 = std::chrono::steady_clock::now();
+    int t_occ = 0, t_front = 0;
+    std::vector<Ellipsoid> all = fit_ellipsoids(occupied, EllipsoidClass::kOccupied, p, &t_occ);
+    const std::vector<Ellipsoid> front = fit_ellipsoids(frontier, EllipsoidClass::kFrontier, p, &t_front);
+    all.insert(all.end(), front.begin(), front.end());
+    const double fit_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+    ellipsoid_set_t out;
+    out.scan_id = m.scan_id;
+    out.iteration = m.iteration;
+    out.occupied_components = t_occ;
+    out.frontier_components = t_front;
+    out.fit_s = fit_s;
+    for (const auto& e : all) out.ellipsoids.push_back(bus::to_msg(e));
+    out.num_ellipsoids = static_cast<int32_t>(out.ellipsoids.size());
+    out.utime = bus::now_utime();
+    bus_.publish(channels::kEllipsoids, out);
+    if (answers_.size() >= kAnswersKept) answers_.erase(answers_.begin());
+    answers_[key] = out;
+    std::ostringstream os;
+    os << "view " << m.iteration << ": " << occupied.size() << " occupied voxels -> T = " << t_occ << ", "
+       << frontier.size() << " frontier voxels -> T = " << t_front << " (" << fit_s * 1e3 << " ms)";
+    log_info(os.str());
+  }
+
+  bus::Bus& bus_;
+  int t_max_;
+  uint64_t seed_;
+  std::map<std::pair<std::string, int32_t>, ellipsoid_set_t> answers_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return bus::run_service("ellipsoids", "pbnbv-ellipsoids [--tmax N (10)] [--seed N (1)]", argc, argv, 50,
+                          [](const Args& args, bus::Bus& bus) -> std::function<void()> {
+    const int t_max = args.integer("tmax", 10, 1, 200);
+    const uint64_t seed = static_cast<uint64_t>(args.integer("seed", 1, 0, 1 << 30));
+    auto service = std::make_shared<EllipsoidService>(bus, t_max, seed);
+    log_info("ready: T_max " + std::to_string(t_max));
+    return [service] {};
+  });
+}

@@ -1,0 +1,335 @@
+// pbnbv-scorer: the view scorer (PB-NBV's next-best-view choice).
+//   in:  PLAN_REQUEST, VOXEL_MAP, ELLIPSOIDS
+//   out: VIEW_PLAN, HEARTBEAT; the request's figure_path (PNG) per plan
+// Answers each PLAN_REQUEST from the VOXEL_MAP (bounding box B) and ELLIPSOIDS of the request's
+// map_iteration: candidates on the sphere around B, the rig's reachability check (arm rig: the
+// same check as the motion executor's, on the same rig model), F of every candidate by ellipsoid
+// projection, global partitioning, termination (core plan_pbnbv). The request carries the scan's
+// history, so the scorer keeps no scan state: restarted, it answers the next request the same.
+// Reachability runs as soon as B is known, while the ellipsoid fitter is still working.
+#include <chrono>
+#include <deque>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <thread>
+
+#include "common/bus.hpp"
+#include "common/convert.hpp"
+#include "common/service.hpp"
+#include "core/log.hpp"
+#include "core/planner.hpp"
+#include "core/rig.hpp"
+#include "pbnbv/ellipsoid_set_t.hpp"
+#include "pbnbv/plan_request_t.hpp"
+#include "pbnbv/view_plan_t.hpp"
+#include "pbnbv/voxel_set_t.hpp"
+
+using namespace pbnbv;
+
+namespace {
+
+constexpr double kInputWaitS = 60.0;   // give up on a map / ellipsoids that never come
+constexpr std::size_t kKept = 8;       // maps and ellipsoid sets kept (a few views back)
+constexpr std::size_t kAnswersKept = 64;
+
+template <class T>
+void keep(std::deque<T>& q, const T& x) {
+  q.push_back(x);
+  if (q.size() > kKept) q.pop_front();
+}
+
+// The request as the core planner takes it, validated; throws naming the bad field.
+PlanInput plan_input(const plan_request_t& r) {
+  PlanInput in;
+  if (r.num_views_done != static_cast<int32_t>(r.views_done.size()) ||
+      r.num_excluded != static_cast<int32_t>(r.excluded.size())) {
+    throw std::invalid_argument("PLAN_REQUEST num_views_done / num_excluded disagree with their arrays");
+  }
+  for (std::size_t i = 0; i < r.views_done.size(); ++i) {
+    in.views_done.push_back(bus::from_msg(r.views_done[i], "PLAN_REQUEST views_done[" + std::to_string(i) + "]"));
+  }
+  for (std::size_t i = 0; i < r.excluded.size(); ++i) {
+    in.excluded.push_back(bus::from_msg(r.excluded[i], "PLAN_REQUEST excluded[" + std::to_string(i) + "]"));
+  }
+  bus::require_range(r.num_candidates, 1, 100000, "PLAN_REQUEST num_candidates");
+  bus::require_range(r.num_parallels, 1, 1000, "PLAN_REQUEST num_parallels");
+  bus::require_range(r.num_sectors, 1, 360, "PLAN_REQUEST num_sectors");
+  bus::require_range(r.working_distance_m, 0.05, 10.0, "PLAN_REQUEST working_distance_m");
+  bus::require_range(r.num_alternatives, 0, 100, "PLAN_REQUEST num_alternatives");
+  bus::require_range(r.stop_fraction, 0.0, 1.0, "PLAN_REQUEST stop_fraction");
+  if (!std::isnan(r.first_quality)) bus::require_range(r.first_quality, -1e12, 1e12, "PLAN_REQUEST first_quality");
+  if (r.num_parallels > r.num_candidates) throw std::invalid_argument("PLAN_REQUEST num_parallels exceeds num_candidates");
+  in.candidates.num_views = r.num_candidates;
+  in.candidates.num_parallels = r.num_parallels;
+  in.candidates.full_sphere = r.full_sphere;
+  in.candidates.working_distance_m = r.working_distance_m;
+  in.beta = r.num_sectors;
+  in.num_alternatives = r.num_alternatives;
+  in.stop_fraction = r.stop_fraction;
+  in.first_quality = r.first_quality;
+  in.camera = CameraIntrinsics{r.width_px, r.height_px, r.fx, r.fy, r.cx, r.cy};
+  in.camera.validate();
+  return in;
+}
+
+class ScorerService {
+ public:
+  ScorerService(bus::Bus& bus, const RigModel& rig) : bus_(bus), rig_(rig) {
+    for (auto& c : checkers_) c = std::make_unique<ReachabilityChecker>(rig_);
+    bus_.subscribe<voxel_set_t>(channels::kVoxelMap, [this](const voxel_set_t& m) { keep(maps_, m); });
+    bus_.subscribe<ellipsoid_set_t>(channels::kEllipsoids, [this](const ellipsoid_set_t& e) {
+      if (e.num_ellipsoids != static_cast<int32_t>(e.ellipsoids.size())) {
+        throw std::invalid_argument("ELLIPSOIDS num_ellipsoids disagrees with its array");
+      }
+      keep(ellipsoids_, e);
+    });
+    bus_.subscribe<plan_request_t>(channels::kPlanRequest, [this](const plan_request_t& r) { on_request(r); });
+  }
+
+  void tick() {
+    if (!pending_) return;
+    const plan_request_t& r = pending_->request;
+    const voxel_set_t* map = find(maps_, r);
+    const ellipsoid_set_t* ell = find(ellipsoids_, r);
+    if (map && !pending_->reachable && r.check_reachability) pending_->reachable = reachability(r, *map);
+    if (map && ell) {
+      answer(*map, *ell);
+    } else if (bus::now_s() > pending_->deadline_s) {
+      fail(std::string("no ") + (map ? "" : "VOXEL_MAP") + (!map && !ell ? " or " : "") + (ell ? "" : "ELLIPSOIDS") +
+           " for view " + std::to_string(r.map_iteration) + " within " + std::to_string(static_cast<int>(kInputWaitS)) + " s");
+    }
+  }
+
+ private:
+  struct Pending {
+    plan_request_t request;
+    PlanInput input;
+    double received_s = 0;
+    double deadline_s = 0;
+    std::optional<std::vector<bool>> reachable;
+    double reachability_s = 0;
+  };
+
+  template <class T>
+  static const T* find(const std::deque<T>& q, const plan_request_t& r) {
+    for (auto it = q.rbegin(); it != q.rend(); ++it) {
+      if (it->scan_id == r.scan_id && it->iteration == r.map_iteration) return &*it;
+    }
+    return nullptr;
+  }
+
+  void on_request(const plan_request_t& r) {
+    bus_.set_scan(r.scan_id, r.iteration);
+    const auto key = std::make_pair(r.scan_id, r.request_id);
+    if (auto it = answers_.find(key); it != answers_.end()) {
+      bus_.publish(channels::kViewPlan, it->second);  // a repeat: answer again
+      return;
+    }
+    if (pending_ && pending_->request.scan_id == r.scan_id && pending_->request.request_id == r.request_id) return;
+    if (r.planner != "pbnbv") {
+      view_plan_t out = empty_answer(r);
+      out.outcome = view_plan_t::kFailed;
+      out.reason = "planner '" + r.planner + "' is not served by pbnbv-scorer (pbnbv)";
+      publish(out);
+      return;
+    }
+    Pending p;
+    p.request = r;
+    try {
+      p.input = plan_input(r);
+      if (r.check_reachability) {
+        bus::to_vector6(std::vector<double>(r.joint_position_rad, r.joint_position_rad + 6), "PLAN_REQUEST joint_position_rad");
+        bus::require_range(r.turntable_angle_rad, -1e3, 1e3, "PLAN_REQUEST turntable_angle_rad");
+        bus::require_range(r.object_z_m, -10, 10, "PLAN_REQUEST object_z_m");
+      }
+    } catch (const std::exception& e) {
+      view_plan_t out = empty_answer(r);
+      out.outcome = view_plan_t::kFailed;
+      out.reason = std::string("bad request: ") + e.what();
+      publish(out);
+      throw;  // counted and logged as a rejected message
+    }
+    if (pending_) fail("superseded by request " + std::to_string(r.request_id));
+    p.received_s = bus::now_s();
+    p.deadline_s = p.received_s + kInputWaitS;
+    pending_ = std::move(p);
+    tick();
+  }
+
+  // The reachability of every candidate for B of this map, on two threads (one MuJoCo checker
+  // each).
+  std::vector<bool> reachability(const plan_request_t& r, const voxel_set_t& map) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const Eigen::AlignedBox3d box(Eigen::Vector3d(map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]),
+                                  Eigen::Vector3d(map.bbox_max_m[0], map.bbox_max_m[1], map.bbox_max_m[2]));
+    const std::vector<Pose> cands = candidate_views(box, pending_->input.candidates);
+    // B often stops growing late in a scan: the same candidate set, the same answer. (The motion
+    // executor checks the chosen view again, with the rig's actual state.)
+    std::ostringstream key;
+    key.precision(17);
+    key << r.scan_id << ' ' << box.min().transpose() << ' ' << box.max().transpose() << ' ' << r.num_candidates << ' '
+        << r.num_parallels << ' ' << r.full_sphere << ' ' << r.working_distance_m << ' ' << r.object_z_m;
+    for (int k = 0; k < 3; ++k) key << ' ' << r.keepout_min_m[k] << ' ' << r.keepout_max_m[k];
+    if (key.str() == reach_key_) {
+      pending_->reachability_s = 0;
+      return reach_cache_;
+    }
+    Vector6d q;
+    for (int k = 0; k < 6; ++k) q[k] = r.joint_position_rad[k];
+    KeepoutBox keepout;
+    for (int k = 0; k < 3; ++k) {
+      keepout.min_m[k] = r.keepout_min_m[k];
+      keepout.max_m[k] = r.keepout_max_m[k];
+    }
+    std::vector<bool> ok(cands.size(), false);
+    const std::size_t half = cands.size() / 2;
+    auto run = [&](int worker, std::size_t lo, std::size_t hi) {
+      const std::vector<Pose> part(cands.begin() + lo, cands.begin() + hi);
+      const std::vector<ViewSolution> s = checkers_[worker]->solve_batch(part, q, r.turntable_angle_rad, keepout, r.object_z_m);
+      for (std::size_t i = 0; i < s.size(); ++i) ok[lo + i] = s[i].reachable;
+    };
+    std::thread other(run, 1, half, cands.size());
+    run(0, 0, half);
+    other.join();
+    pending_->reachability_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    reach_key_ = key.str();
+    reach_cache_ = ok;
+    return ok;
+  }
+
+  void answer(const voxel_set_t& map, const ellipsoid_set_t& ell) {
+    Pending p = std::move(*pending_);
+    pending_.reset();
+    const plan_request_t& r = p.request;
+    const double wait_s = bus::now_s() - p.received_s;
+    view_plan_t out = empty_answer(r);
+    PlanResult result;
+    try {
+      p.input.bbox = Eigen::AlignedBox3d(Eigen::Vector3d(map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]),
+                                         Eigen::Vector3d(map.bbox_max_m[0], map.bbox_max_m[1], map.bbox_max_m[2]));
+      for (std::size_t i = 0; i < ell.ellipsoids.size(); ++i) {
+        p.input.ellipsoids.push_back(bus::from_msg(ell.ellipsoids[i], "ELLIPSOIDS ellipsoids[" + std::to_string(i) + "]"));
+      }
+      if (p.reachable) {
+        const std::vector<bool> cached = *p.reachable;
+        p.input.reachable = [cached](const std::vector<Pose>& c) {
+          if (c.size() != cached.size()) throw std::logic_error("candidate set changed after the reachability check");
+          return cached;
+        };
+      }
+      const double t0 = bus::now_s();
+      result = plan_pbnbv(p.input);
+      fill(out, result);
+      out.reachability_s = p.reachability_s;
+      out.wait_s = wait_s;
+      out.plan_s = bus::now_s() - t0 + p.reachability_s;
+    } catch (const std::exception& e) {
+      out.outcome = view_plan_t::kFailed;
+      out.reason = e.what();
+    }
+    publish(out);
+    if (!r.figure_path.empty() && !result.candidates.empty()) {
+      try {
+        std::ostringstream title;
+        title << "view " << r.iteration + 1 << " - planned from the map of view " << r.map_iteration + 1 << " - T occupied "
+              << ell.occupied_components << ", T frontier " << ell.frontier_components;
+        write_plan_figure(plan_figure(p.input, result, title.str()), r.figure_path);
+      } catch (const std::exception& e) {
+        bus_.note_error(std::string("figure not written: ") + e.what());
+      }
+    }
+  }
+
+  void fill(view_plan_t& out, const PlanResult& res) const {
+    out.outcome = res.outcome == PlanResult::Outcome::kView ? view_plan_t::kView
+                  : res.outcome == PlanResult::Outcome::kStop ? view_plan_t::kStop : view_plan_t::kFailed;
+    out.reason = res.reason;
+    if (const ViewScore* s = res.chosen_score()) {
+      out.object_T_camera = bus::to_msg(res.candidates[res.chosen]);
+      out.view_quality = s->quality;
+      out.frontier_area_px = s->frontier_sum;
+      out.occupied_area_px = s->occupied_sum;
+    }
+    out.first_quality = res.first_quality;
+    out.partition = res.partition;
+    out.allowed_sectors = res.allowed_sectors;
+    out.num_allowed_sectors = static_cast<int32_t>(out.allowed_sectors.size());
+    out.partition_fallback = res.partition_fallback;
+    for (int k = 0; k < 3; ++k) out.sphere_centre_m[k] = res.centre[k];
+    out.sphere_radius_m = res.radius_m;
+    out.num_candidates = static_cast<int32_t>(res.candidates.size());
+    out.num_unreachable = res.num_unreachable;
+    out.num_excluded = res.num_excluded;
+    out.num_scored = res.num_scored;
+    out.num_frontier_ellipsoids = res.num_frontier_ellipsoids;
+    out.num_occupied_ellipsoids = res.num_occupied_ellipsoids;
+    out.candidates_s = res.candidates_s;
+    out.scoring_s = res.scoring_s;
+    for (int a : res.alternatives) {
+      out.alternatives.push_back(bus::to_msg(res.candidates[a]));
+      out.alternative_quality.push_back(res.scores[a].quality);
+    }
+    out.num_alternatives = static_cast<int32_t>(out.alternatives.size());
+  }
+
+  static view_plan_t empty_answer(const plan_request_t& r) {
+    view_plan_t out{};
+    out.scan_id = r.scan_id;
+    out.iteration = r.iteration;
+    out.request_id = r.request_id;
+    out.planner = r.planner;
+    out.object_T_camera = bus::to_msg(Pose::Identity());
+    out.view_quality = 0;
+    out.first_quality = r.first_quality;
+    out.partition = -1;
+    out.num_allowed_sectors = 0;
+    out.num_alternatives = 0;
+    return out;
+  }
+
+  void fail(const std::string& why) {
+    view_plan_t out = empty_answer(pending_->request);
+    pending_.reset();
+    out.outcome = view_plan_t::kFailed;
+    out.reason = why;
+    publish(out);
+  }
+
+  void publish(view_plan_t& out) {
+    out.utime = bus::now_utime();
+    bus_.publish(channels::kViewPlan, out);
+    if (answers_.size() >= kAnswersKept) answers_.erase(answers_.begin());
+    answers_[{out.scan_id, out.request_id}] = out;
+    std::ostringstream os;
+    os << "view " << out.iteration << " (request " << out.request_id << "): "
+       << (out.outcome == view_plan_t::kView ? "" : out.outcome == view_plan_t::kStop ? "stop: " : "failed: ") << out.reason;
+    if (out.outcome == view_plan_t::kView) {
+      os << "; " << out.num_unreachable << " of " << out.num_candidates << " unreachable; reachability "
+         << out.reachability_s * 1e3 << " ms, scoring " << out.scoring_s * 1e3 << " ms";
+    }
+    (out.outcome == view_plan_t::kFailed ? log_warn : log_info)(os.str());
+  }
+
+  bus::Bus& bus_;
+  RigModel rig_;
+  std::unique_ptr<ReachabilityChecker> checkers_[2];
+  std::deque<voxel_set_t> maps_;
+  std::deque<ellipsoid_set_t> ellipsoids_;
+  std::optional<Pending> pending_;
+  std::string reach_key_;                 // the candidate set of the last reachability check
+  std::vector<bool> reach_cache_;
+  std::map<std::pair<std::string, int64_t>, view_plan_t> answers_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return bus::run_service("scorer", "pbnbv-scorer [--rig arm|free | --model PATH]", argc, argv, 5,
+                          [](const Args& args, bus::Bus& bus) -> std::function<void()> {
+    const RigModel rig = bus::rig_from_args(args);
+    auto service = std::make_shared<ScorerService>(bus, rig);
+    log_info("ready");
+    return [service] { service->tick(); };
+  });
+}
