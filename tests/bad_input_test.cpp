@@ -28,6 +28,9 @@
 #include "pbnbv/registered_cloud_t.hpp"
 #include "pbnbv/voxel_set_t.hpp"
 #include "pbnbv/turntable_command_t.hpp"
+#include "pbnbv/ellipsoid_set_t.hpp"
+#include "pbnbv/plan_request_t.hpp"
+#include "pbnbv/view_plan_t.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -47,6 +50,8 @@ class Listener {
     lcm_.subscribe("ARM_STATUS", &Listener::on_arm, this);
     lcm_.subscribe("REGISTERED_CLOUD", &Listener::on_registered, this);
     lcm_.subscribe("VOXEL_MAP", &Listener::on_map, this);
+    lcm_.subscribe("ELLIPSOIDS", &Listener::on_ellipsoids, this);
+    lcm_.subscribe("VIEW_PLAN", &Listener::on_plan, this);
   }
   lcm::LCM& lcm() { return lcm_; }
   // Handles messages until `done` or the timeout; returns done().
@@ -65,6 +70,9 @@ class Listener {
   bool have_arm = false;
   std::map<std::pair<std::string, int64_t>, registered_cloud_t> registered;
   std::map<std::pair<std::string, int32_t>, voxel_set_t> maps;
+  std::map<std::pair<std::string, int32_t>, ellipsoid_set_t> ellipsoids;
+  std::map<std::pair<std::string, int64_t>, view_plan_t> plans;
+  int plan_answers = 0;
 
  private:
   void on_heartbeat(const lcm::ReceiveBuffer*, const std::string&, const heartbeat_t* m) { heartbeats[m->service] = *m; }
@@ -75,6 +83,13 @@ class Listener {
     registered[{m->scan_id, m->request_id}] = *m;
   }
   void on_map(const lcm::ReceiveBuffer*, const std::string&, const voxel_set_t* m) { maps[{m->scan_id, m->iteration}] = *m; }
+  void on_ellipsoids(const lcm::ReceiveBuffer*, const std::string&, const ellipsoid_set_t* m) {
+    ellipsoids[{m->scan_id, m->iteration}] = *m;
+  }
+  void on_plan(const lcm::ReceiveBuffer*, const std::string&, const view_plan_t* m) {
+    plans[{m->scan_id, m->request_id}] = *m;
+    ++plan_answers;
+  }
   lcm::LCM lcm_;
 };
 
@@ -147,12 +162,15 @@ class BadInput : public ::testing::Test {
     add("camera", {bin + "/pbnbv-camera", "--rig", "arm"});
     add("registration", {bin + "/pbnbv-registration"});
     add("mapping", {bin + "/pbnbv-mapping", "--out", (dir_ / "maps").string()});
+    add("ellipsoids", {bin + "/pbnbv-ellipsoids"});
+    add("scorer", {bin + "/pbnbv-scorer", "--rig", "arm"});
     for (auto& c : children_) launcher::start(c);
     listener_ = new Listener();
     ASSERT_TRUE(listener_->spin_until([] {
       return listener_->heartbeats.count("twin") && listener_->heartbeats.count("motion") &&
              listener_->heartbeats.count("camera") && listener_->heartbeats.count("registration") &&
-             listener_->heartbeats.count("mapping") && listener_->have_arm;
+             listener_->heartbeats.count("mapping") && listener_->heartbeats.count("ellipsoids") &&
+             listener_->heartbeats.count("scorer") && listener_->have_arm;
     }, 60)) << "services did not start; twin log:\n" << launcher::tail_lines((dir_ / "twin.log").string(), 20);
   }
 
@@ -196,6 +214,8 @@ TEST_F(BadInput, MalformedBytesOnEveryChannelAreRejectedAndCounted) {
       {"camera", {"CAPTURE_REQUEST", "DEPTH_FRAME", "ARM_STATUS", "TURNTABLE_STATUS"}},
       {"registration", {"CLOUD"}},
       {"mapping", {"REGISTERED_CLOUD", "DEPTH_FRAME"}},
+      {"ellipsoids", {"VOXEL_MAP"}},
+      {"scorer", {"PLAN_REQUEST", "VOXEL_MAP", "ELLIPSOIDS"}},
   };
   listener_->spin_until([] { return false; }, 1.2);  // fresh heartbeats
   std::map<std::string, int64_t> before;
@@ -468,3 +488,142 @@ TEST(LauncherBadInput, MistypedOptionIsNamed) {
 }
 
 }  // namespace
+
+namespace {
+
+// A VOXEL_MAP of a 0.3 m object at 0.03 m: an occupied ball on the turntable and, on its +y
+// side, a slab of frontier voxels (the unexplored side).
+voxel_set_t synthetic_map(const std::string& scan_id, int iteration) {
+  voxel_set_t m{};
+  m.scan_id = scan_id;
+  m.iteration = iteration;
+  m.updated = true;
+  m.message = "synthetic";
+  m.resolution_m = 0.03;
+  for (int k = 0; k < 3; ++k) {
+    m.bbox_min_m[k] = -0.21;
+    m.bbox_max_m[k] = 0.21;
+  }
+  for (int i = -4; i <= 4; ++i)
+    for (int j = -4; j <= 4; ++j)
+      for (int k = -4; k <= 4; ++k) {
+        const Eigen::Vector3f c(0.03f * i, 0.03f * j, 0.03f * k);
+        if (c.norm() <= 0.12f && c.norm() > 0.08f) m.occupied_centres_m.push_back({c.x(), c.y(), c.z()});
+        if (j == 5 - 1 && std::abs(i) <= 3 && std::abs(k) <= 3) m.frontier_centres_m.push_back({c.x(), 0.18f, c.z()});
+      }
+  m.num_occupied = static_cast<int32_t>(m.occupied_centres_m.size());
+  m.num_frontier = static_cast<int32_t>(m.frontier_centres_m.size());
+  return m;
+}
+
+plan_request_t plan_request(const std::string& scan_id, int64_t id, int map_iteration) {
+  plan_request_t r{};
+  r.scan_id = scan_id;
+  r.iteration = 1;
+  r.request_id = id;
+  r.planner = "pbnbv";
+  r.map_iteration = map_iteration;
+  r.num_views_done = 0;
+  r.num_excluded = 0;
+  r.num_candidates = 800;
+  r.num_parallels = 24;
+  r.num_sectors = 1;
+  r.full_sphere = false;
+  r.working_distance_m = 0.6;
+  r.num_alternatives = 3;
+  r.stop_fraction = 0;
+  r.first_quality = std::nan("");
+  r.width_px = 1280;
+  r.height_px = 720;
+  r.fx = r.fy = 696;
+  r.cx = 640;
+  r.cy = 360;
+  r.check_reachability = true;
+  r.object_z_m = kObjectZ;
+  for (int k = 0; k < 3; ++k) {
+    r.keepout_min_m[k] = -0.17;
+    r.keepout_max_m[k] = 0.17;
+  }
+  r.keepout_min_m[2] = -0.15;
+  return r;
+}
+
+}  // namespace
+
+TEST_F(BadInput, EllipsoidFitterAndViewScorerPlanTowardsTheFrontier) {
+  // A map on the bus -> the fitter's ellipsoids -> a plan request -> the scorer's view, which
+  // must look at the frontier side (+y); asked again, the same answer (idempotent).
+  lcm::LCM& lcm = listener_->lcm();
+  const voxel_set_t map = synthetic_map("planning", 0);
+  lcm.publish("VOXEL_MAP", &map);
+  ASSERT_TRUE(listener_->spin_until([] { return listener_->ellipsoids.count({"planning", 0}) > 0; }, 20.0));
+  const ellipsoid_set_t& e = listener_->ellipsoids[{"planning", 0}];
+  EXPECT_GE(e.occupied_components, 1);
+  EXPECT_EQ(e.frontier_components, 1) << "one flat slab of frontier voxels";
+  int frontier = 0;
+  for (const auto& el : e.ellipsoids) {
+    if (el.cls != ellipsoid_t::kFrontier) continue;
+    ++frontier;
+    EXPECT_NEAR(el.centre_m[1], 0.18, 0.01);
+    // One voxel thin: the thinnest semi-axis is about half a voxel (fitted to voxel corners).
+    const double thin = std::min({el.semi_axes_m[0], el.semi_axes_m[1], el.semi_axes_m[2]});
+    EXPECT_GT(thin, 0.01);
+    EXPECT_LT(thin, 0.04);
+  }
+  EXPECT_EQ(frontier, 1);
+
+  const plan_request_t r = plan_request("planning", 1, 0);
+  lcm.publish("PLAN_REQUEST", &r);
+  ASSERT_TRUE(listener_->spin_until([] { return listener_->plans.count({"planning", 1}) > 0; }, 30.0));
+  const view_plan_t p = listener_->plans[{"planning", 1}];
+  ASSERT_EQ(p.outcome, view_plan_t::kView) << p.reason;
+  EXPECT_EQ(p.num_candidates, 800);
+  EXPECT_EQ(p.num_scored + p.num_unreachable, 800);
+  EXPECT_GT(p.view_quality, 0);
+  EXPECT_EQ(p.num_alternatives, 3);
+  EXPECT_GT(p.object_T_camera.position_m[1], 0.3) << "the view should face the frontier side (+y)";
+  const int answers = listener_->plan_answers;
+  lcm.publish("PLAN_REQUEST", &r);
+  ASSERT_TRUE(listener_->spin_until([&] { return listener_->plan_answers > answers; }, 10.0));
+  const view_plan_t again = listener_->plans[{"planning", 1}];
+  EXPECT_EQ(again.utime, p.utime) << "a repeated request gets the stored answer";
+  EXPECT_TRUE(all_running());
+}
+
+TEST_F(BadInput, BadPlanRequestsAreAnsweredWithTheFieldNamed) {
+  lcm::LCM& lcm = listener_->lcm();
+  plan_request_t nan_view = plan_request("bad-plan", 2, 0);
+  nan_view.num_views_done = 1;
+  nan_view.views_done.resize(1);
+  nan_view.views_done[0].position_m[0] = std::nan("");
+  nan_view.views_done[0].quat_wxyz[0] = 1;
+  lcm.publish("PLAN_REQUEST", &nan_view);
+  plan_request_t no_candidates = plan_request("bad-plan", 3, 0);
+  no_candidates.num_candidates = 0;
+  lcm.publish("PLAN_REQUEST", &no_candidates);
+  plan_request_t other = plan_request("bad-plan", 4, 0);
+  other.planner = "magic";
+  lcm.publish("PLAN_REQUEST", &other);
+  ASSERT_TRUE(listener_->spin_until([] {
+    return listener_->plans.count({"bad-plan", 2}) && listener_->plans.count({"bad-plan", 3}) &&
+           listener_->plans.count({"bad-plan", 4});
+  }, 10.0));
+  const view_plan_t& p2 = listener_->plans[std::make_pair(std::string("bad-plan"), int64_t{2})];
+  const view_plan_t& p3 = listener_->plans[std::make_pair(std::string("bad-plan"), int64_t{3})];
+  const view_plan_t& p4 = listener_->plans[std::make_pair(std::string("bad-plan"), int64_t{4})];
+  EXPECT_EQ(p2.outcome, view_plan_t::kFailed);
+  EXPECT_NE(p2.reason.find("views_done[0]"), std::string::npos) << p2.reason;
+  EXPECT_EQ(p3.outcome, view_plan_t::kFailed);
+  EXPECT_NE(p3.reason.find("num_candidates"), std::string::npos) << p3.reason;
+  EXPECT_EQ(p4.outcome, view_plan_t::kFailed);
+  EXPECT_NE(p4.reason.find("magic"), std::string::npos) << p4.reason;
+  // A map with NaN voxel centres: the fitter rejects it, names the array and keeps running.
+  voxel_set_t bad = synthetic_map("bad-plan", 7);
+  bad.frontier_centres_m[0][1] = std::nanf("");
+  const int64_t before = rejected("ellipsoids");
+  lcm.publish("VOXEL_MAP", &bad);
+  EXPECT_TRUE(rejections_reach("ellipsoids", before + 1));
+  EXPECT_NE(listener_->heartbeats["ellipsoids"].last_error.find("frontier centre 0"), std::string::npos)
+      << listener_->heartbeats["ellipsoids"].last_error;
+  EXPECT_TRUE(all_running());
+}
