@@ -7,11 +7,15 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <exception>
 #include <limits>
 #include <numeric>
 #include <random>
+#include <thread>
 #include <unordered_map>
 
 namespace pbnbv {
@@ -26,8 +30,7 @@ using Eigen::Vector3d;
 using Eigen::VectorXd;
 
 constexpr double kLog2Pi = 1.8378770664093454835606594728112;  // ln(2 pi)
-// Components whose log density is this far below the best one get responsibility 0
-// (exp(-50) ~ 2e-22): it saves the exp, the result is unchanged to double precision.
+// Log densities more than 50 below a point's best component are clamped (see exp_clamped).
 constexpr double kLogCut = -50.0;
 
 struct EmOptions {
@@ -41,14 +44,65 @@ Points3 to_matrix(const std::vector<Vector3d>& pts) {
   return X;
 }
 
-// One component's Gaussian in the form the E-step uses: ln N = cst - |Linv (x - mu)|^2 / 2.
+// Runs fn(i) for every i in [0, count) on at most two threads (the caller's and one more),
+// which take the indices in increasing order from a shared counter. Each fn(i) must write
+// only its own results, so they do not depend on the scheduling.
+template <class Fn>
+void parallel_for(int count, const Fn& fn) {
+  static const unsigned cores = std::thread::hardware_concurrency();
+  if (count <= 1 || cores < 2) {
+    for (int i = 0; i < count; ++i) fn(i);
+    return;
+  }
+  std::atomic<int> next{0};
+  std::exception_ptr helper_error;
+  auto work = [&]() {
+    for (int i = next.fetch_add(1); i < count; i = next.fetch_add(1)) fn(i);
+  };
+  std::thread helper([&]() {
+    try {
+      work();
+    } catch (...) {
+      helper_error = std::current_exception();
+      next = count;
+    }
+  });
+  std::exception_ptr own_error;
+  try {
+    work();
+  } catch (...) {
+    own_error = std::current_exception();
+    next = count;
+  }
+  helper.join();
+  if (own_error) std::rethrow_exception(own_error);
+  if (helper_error) std::rethrow_exception(helper_error);
+}
+
+// Per point, the columns [1, x, y, z, xx, xy, xz, yy, yz, zz] of the (centred) data: the
+// M-step statistics of all components are then one product F^T R with the responsibilities.
+using Features = Eigen::Matrix<double, Eigen::Dynamic, 10>;
+using Stats = Eigen::Matrix<double, 10, Eigen::Dynamic>;
+
+Features make_features(const Points3& X) {
+  Features F(X.cols(), 10);
+  F.col(0).setOnes();
+  for (int a = 0; a < 3; ++a) F.col(1 + a) = X.row(a).transpose();
+  int c = 4;
+  for (int a = 0; a < 3; ++a)
+    for (int b = a; b < 3; ++b) F.col(c++) = X.row(a).transpose().cwiseProduct(X.row(b).transpose());
+  return F;
+}
+
+// One component's Gaussian in the form the E-step uses: ln(w N) = cst - |Li x + b|^2 / 2,
+// Li the inverse Cholesky factor of the covariance and b = -Li mu.
 struct CompEval {
-  double mu[3];
   double l00, l10, l11, l20, l21, l22;  // lower-triangular inverse Cholesky factor
-  double cst;                           // ln w - (3 ln 2pi + ln det S) / 2
+  double b0, b1, b2;
+  double cst;  // ln w - (3 ln 2pi + ln det S) / 2
 };
 
-// Prepares the evaluation of component j; a covariance that is not positive definite gets
+// Prepares the evaluation of one component; a covariance that is not positive definite gets
 // extra diagonal regularisation (written back).
 CompEval prepare(double w, const Vector3d& mu, Matrix3d& cov, double min_variance) {
   Eigen::LLT<Matrix3d> llt(cov);
@@ -61,121 +115,308 @@ CompEval prepare(double w, const Vector3d& mu, Matrix3d& cov, double min_varianc
   const Matrix3d L = llt.matrixL();
   const double log_det = 2.0 * L.diagonal().array().log().sum();
   const Matrix3d Li = L.triangularView<Eigen::Lower>().solve(Matrix3d::Identity());
+  const Vector3d b = -(Li.triangularView<Eigen::Lower>() * mu);
   CompEval c;
-  c.mu[0] = mu[0];
-  c.mu[1] = mu[1];
-  c.mu[2] = mu[2];
   c.l00 = Li(0, 0);
   c.l10 = Li(1, 0);
   c.l11 = Li(1, 1);
   c.l20 = Li(2, 0);
   c.l21 = Li(2, 1);
   c.l22 = Li(2, 2);
+  c.b0 = b[0];
+  c.b1 = b[1];
+  c.b2 = b[2];
   c.cst = std::log(std::max(w, 1e-300)) - 0.5 * (3.0 * kLog2Pi + log_det);
   return c;
 }
 
-inline double log_joint(const CompEval& c, const double* x) {
-  const double d0 = x[0] - c.mu[0], d1 = x[1] - c.mu[1], d2 = x[2] - c.mu[2];
-  const double y0 = c.l00 * d0;
-  const double y1 = c.l10 * d0 + c.l11 * d1;
-  const double y2 = c.l20 * d0 + c.l21 * d1 + c.l22 * d2;
-  return c.cst - 0.5 * (y0 * y0 + y1 * y1 + y2 * y2);
+std::vector<CompEval> prepare_all(const std::vector<double>& w, const std::vector<Vector3d>& mu,
+                                  std::vector<Matrix3d>& cov, double min_variance) {
+  std::vector<CompEval> ce(w.size());
+  for (size_t j = 0; j < w.size(); ++j) ce[j] = prepare(w[j], mu[j], cov[j], min_variance);
+  return ce;
 }
 
-// Sufficient statistics of one component from the responsibilities.
-struct CompStats {
-  double n = 0;
-  double s1[3] = {0, 0, 0};
-  double s2[6] = {0, 0, 0, 0, 0, 0};  // xx, xy, xz, yy, yz, zz
+// Column j of L: ln(w_j N(x_i | mu_j, S_j)) for every point i (vectorised over the points).
+void log_joint_all(const Features& F, const std::vector<CompEval>& ce, MatrixXd& L) {
+  L.resize(F.rows(), static_cast<Eigen::Index>(ce.size()));
+  const auto x = F.col(1).array(), y = F.col(2).array(), z = F.col(3).array();
+  for (size_t j = 0; j < ce.size(); ++j) {
+    const CompEval& c = ce[j];
+    L.col(static_cast<Eigen::Index>(j)).array() =
+        c.cst - 0.5 * ((c.l00 * x + c.b0).square() + (c.l10 * x + c.l11 * y + c.b1).square() +
+                       (c.l20 * x + c.l21 * y + c.l22 * z + c.b2).square());
+  }
+}
+
+// The E-step kernel is compiled twice where the compiler supports it: for AVX2 + FMA and for
+// the baseline ISA, chosen once by the CPU (the results then differ only by the rounding of
+// fused multiply-adds, never between runs on one machine).
+#if defined(__GNUC__)
+#define PBNBV_ALWAYS_INLINE __attribute__((always_inline)) inline
+#else
+#define PBNBV_ALWAYS_INLINE inline
+#endif
+#if defined(__GNUC__) && defined(__x86_64__)
+#define PBNBV_ESTEP_DISPATCH 1
+#else
+#define PBNBV_ESTEP_DISPATCH 0
+#endif
+
+// Four doubles added and multiplied lane-wise (one AVX register, or two SSE2 ones, where
+// the compiler has vector extensions), for sums in a fixed order that still vectorise.
+struct Lanes {
+#if defined(__GNUC__)
+  typedef double V __attribute__((vector_size(32)));
+  V v = {0, 0, 0, 0};
+  PBNBV_ALWAYS_INLINE static Lanes load(const double* p) {
+    Lanes r;
+    std::memcpy(&r.v, p, sizeof r.v);
+    return r;
+  }
+  PBNBV_ALWAYS_INLINE static Lanes splat(double a) {
+    Lanes r;
+    r.v = V{a, a, a, a};
+    return r;
+  }
+  PBNBV_ALWAYS_INLINE Lanes& operator+=(const Lanes& o) {
+    v += o.v;
+    return *this;
+  }
+  PBNBV_ALWAYS_INLINE Lanes& operator*=(const Lanes& o) {
+    v *= o.v;
+    return *this;
+  }
+  PBNBV_ALWAYS_INLINE Lanes operator*(const Lanes& o) const {
+    Lanes r;
+    r.v = v * o.v;
+    return r;
+  }
+#else
+  double v[4] = {0, 0, 0, 0};
+  static Lanes load(const double* p) {
+    Lanes r;
+    for (int q = 0; q < 4; ++q) r.v[q] = p[q];
+    return r;
+  }
+  static Lanes splat(double a) {
+    Lanes r;
+    for (int q = 0; q < 4; ++q) r.v[q] = a;
+    return r;
+  }
+  Lanes& operator+=(const Lanes& o) {
+    for (int q = 0; q < 4; ++q) v[q] += o.v[q];
+    return *this;
+  }
+  Lanes& operator*=(const Lanes& o) {
+    for (int q = 0; q < 4; ++q) v[q] *= o.v[q];
+    return *this;
+  }
+  Lanes operator*(const Lanes& o) const {
+    Lanes r;
+    for (int q = 0; q < 4; ++q) r.v[q] = v[q] * o.v[q];
+    return r;
+  }
+#endif
+  PBNBV_ALWAYS_INLINE double operator[](int q) const { return v[q]; }
+  PBNBV_ALWAYS_INLINE double sum() const { return (v[0] + v[1]) + (v[2] + v[3]); }
 };
 
-// One pass over the points: the E-step for the current parameters (log-sum-exp per point),
-// returning the log-likelihood of the data under the mixture; optionally accumulates the
-// M-step statistics and the most probable component per point.
-double em_pass(const Points3& X, const std::vector<CompEval>& ce, std::vector<CompStats>* stats,
-               std::vector<int>* labels) {
-  const Eigen::Index n = X.cols();
-  const int T = static_cast<int>(ce.size());
-  if (stats) stats->assign(static_cast<size_t>(T), CompStats{});
-  if (labels) labels->resize(static_cast<size_t>(n));
-  double lp[64];
-  std::vector<double> lp_heap;
-  double* l = lp;
-  if (T > 64) {
-    lp_heap.resize(static_cast<size_t>(T));
-    l = lp_heap.data();
-  }
-  double ll = 0, prod = 1.0;
-  int in_prod = 0;
-  const int chunk = T <= 1 ? 1024 : std::max(1, std::min(1024, static_cast<int>(690.0 / std::log(static_cast<double>(T)))));
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double* x = X.col(i).data();
-    double mx = -std::numeric_limits<double>::infinity();
-    int arg = 0;
-    for (int j = 0; j < T; ++j) {
-      l[j] = log_joint(ce[static_cast<size_t>(j)], x);
-      if (l[j] > mx) {
-        mx = l[j];
-        arg = j;
-      }
-    }
-    double s = 0;
-    for (int j = 0; j < T; ++j) {
-      const double dlt = l[j] - mx;
-      l[j] = dlt > kLogCut ? std::exp(dlt) : 0.0;
-      s += l[j];
-    }
-    // ln s is accumulated as the log of a running product (s in [1, T]; `chunk` factors
-    // stay below e^690): one log per chunk of points instead of one per point.
-    ll += mx;
-    prod *= s;
-    if (++in_prod == chunk) {
-      ll += std::log(prod);
-      prod = 1.0;
-      in_prod = 0;
-    }
-    if (labels) (*labels)[static_cast<size_t>(i)] = arg;
-    if (stats) {
-      const double inv = 1.0 / s;
-      for (int j = 0; j < T; ++j) {
-        if (l[j] == 0.0) continue;
-        const double r = l[j] * inv;
-        CompStats& st = (*stats)[static_cast<size_t>(j)];
-        const double rx = r * x[0], ry = r * x[1], rz = r * x[2];
-        st.n += r;
-        st.s1[0] += rx;
-        st.s1[1] += ry;
-        st.s1[2] += rz;
-        st.s2[0] += rx * x[0];
-        st.s2[1] += rx * x[1];
-        st.s2[2] += rx * x[2];
-        st.s2[3] += ry * x[1];
-        st.s2[4] += ry * x[2];
-        st.s2[5] += rz * x[2];
-      }
-    }
-  }
-  return ll + std::log(prod);
+// exp(max(x, kLogCut)) for x <= 0 to ~1 ulp, written so that loops over it vectorise:
+// x = k ln2 + r (|r| <= ln2 / 2, Cody-Waite), exp(r) by its degree-13 Taylor polynomial,
+// 2^k assembled in the exponent bits. Components whose log density is more than |kLogCut|
+// below the best one get responsibility e^-50 ~ 2e-22 instead of a tiny or subnormal value
+// (subnormals are very slow to multiply): relative to the best (exactly 1) this is below
+// double precision, so sums and statistics are unchanged.
+PBNBV_ALWAYS_INLINE double exp_clamped(double x) {
+  constexpr double kShift = 6755399441055744.0;  // 1.5 * 2^52: adding it rounds to an integer
+  const double xc = std::max(x, kLogCut);
+  const double t = xc * 1.4426950408889634074 + kShift;  // k + kShift
+  const double k = t - kShift;
+  const double r = (xc - k * 0.693147180369123816490) - k * 1.90821492927058770002e-10;
+  double p = 1.0 / 6227020800.0;
+  p = p * r + 1.0 / 479001600.0;
+  p = p * r + 1.0 / 39916800.0;
+  p = p * r + 1.0 / 3628800.0;
+  p = p * r + 1.0 / 362880.0;
+  p = p * r + 1.0 / 40320.0;
+  p = p * r + 1.0 / 5040.0;
+  p = p * r + 1.0 / 720.0;
+  p = p * r + 1.0 / 120.0;
+  p = p * r + 1.0 / 24.0;
+  p = p * r + 1.0 / 6.0;
+  p = p * r + 0.5;
+  p = p * r + 1.0;
+  p = p * r + 1.0;
+  uint64_t bits;
+  std::memcpy(&bits, &t, sizeof bits);  // the low bits hold k (two's complement)
+  bits = (bits + 1023) << 52;           // 2^k
+  double scale;
+  std::memcpy(&scale, &bits, sizeof scale);
+  return p * scale;
 }
 
-// k-means++ seeding (D^2 sampling from mt19937_64(seed)) and a few Lloyd iterations; initial
-// weights, means and covariances from the resulting hard assignment.
-void kmeanspp_init(const Points3& X, int T, uint64_t seed, double min_variance,
-                   std::vector<double>& w, std::vector<Vector3d>& mu, std::vector<Matrix3d>& cov) {
+// One E-step over n points (coordinate arrays x, y, z and the second moments xx..zz, i.e.
+// the columns 1..9 of the features) for the T components `ce`: L (n x T, column-major) gets
+// the responsibilities, mx and s (n) are scratch. Returns the log-likelihood of the mixture.
+// If `stats` (10 x T, column-major), it gets F^T R: per component sum r, sum r x, ...,
+// sum r zz. Sums run in fixed lanes, so the result does not depend on anything but the input.
+PBNBV_ALWAYS_INLINE double estep_body(int n, int T, const double* const* f, const CompEval* ce,
+                                      double* L, double* mx, double* s, double* stats) {
+  const double* x = f[1];
+  const double* y = f[2];
+  const double* z = f[3];
+  for (int j = 0; j < T; ++j) {
+    const CompEval c = ce[j];
+    double* l = L + static_cast<size_t>(j) * n;
+    for (int i = 0; i < n; ++i) {
+      const double y0 = c.l00 * x[i] + c.b0;
+      const double y1 = c.l10 * x[i] + c.l11 * y[i] + c.b1;
+      const double y2 = c.l20 * x[i] + c.l21 * y[i] + c.l22 * z[i] + c.b2;
+      l[i] = c.cst - 0.5 * (y0 * y0 + y1 * y1 + y2 * y2);
+    }
+  }
+  for (int i = 0; i < n; ++i) mx[i] = L[i];
+  for (int j = 1; j < T; ++j) {
+    const double* l = L + static_cast<size_t>(j) * n;
+    for (int i = 0; i < n; ++i) mx[i] = std::max(mx[i], l[i]);
+  }
+  for (int i = 0; i < n; ++i) s[i] = 0.0;
+  for (int j = 0; j < T; ++j) {
+    double* l = L + static_cast<size_t>(j) * n;
+    for (int i = 0; i < n; ++i) {
+      l[i] = exp_clamped(l[i] - mx[i]);
+      s[i] += l[i];
+    }
+  }
+  // ln L = sum mx + sum ln s; s in [1, T], so the logs are taken of products of `chunk`
+  // factors per lane (each below e^690). Sums run in 4 fixed lanes, so the result depends
+  // only on the input.
+  const int chunk = T <= 1 ? 1 << 20 : std::max(1, static_cast<int>(690.0 / std::log(static_cast<double>(T))));
+  Lanes msum, prod = Lanes::splat(1.0);
+  double ll = 0;
+  int i = 0;
+  for (int in_prod = 0; i + 4 <= n; i += 4) {
+    msum += Lanes::load(mx + i);
+    prod *= Lanes::load(s + i);
+    if (++in_prod == chunk) {
+      for (int q = 0; q < 4; ++q) ll += std::log(prod[q]);
+      prod = Lanes::splat(1.0);
+      in_prod = 0;
+    }
+  }
+  for (; i < n; ++i) ll += mx[i] + std::log(s[i]);
+  for (int q = 0; q < 4; ++q) ll += std::log(prod[q]);
+  ll += msum.sum();
+  if (stats) {
+    for (i = 0; i < n; ++i) s[i] = 1.0 / s[i];
+    const double *xx = f[4], *xy = f[5], *xz = f[6], *yy = f[7], *yz = f[8], *zz = f[9];
+    for (int j = 0; j < T; ++j) {
+      const double* l = L + static_cast<size_t>(j) * n;
+      Lanes a0, a1, a2, a3, a4, a5, a6, a7, a8, a9;
+      for (i = 0; i + 4 <= n; i += 4) {
+        const Lanes r = Lanes::load(l + i) * Lanes::load(s + i);
+        a0 += r;
+        a1 += r * Lanes::load(x + i);
+        a2 += r * Lanes::load(y + i);
+        a3 += r * Lanes::load(z + i);
+        a4 += r * Lanes::load(xx + i);
+        a5 += r * Lanes::load(xy + i);
+        a6 += r * Lanes::load(xz + i);
+        a7 += r * Lanes::load(yy + i);
+        a8 += r * Lanes::load(yz + i);
+        a9 += r * Lanes::load(zz + i);
+      }
+      double* out = stats + static_cast<size_t>(j) * 10;
+      out[0] = a0.sum();
+      out[1] = a1.sum();
+      out[2] = a2.sum();
+      out[3] = a3.sum();
+      out[4] = a4.sum();
+      out[5] = a5.sum();
+      out[6] = a6.sum();
+      out[7] = a7.sum();
+      out[8] = a8.sum();
+      out[9] = a9.sum();
+      for (; i < n; ++i) {
+        const double r = l[i] * s[i];
+        out[0] += r;
+        for (int c = 1; c < 10; ++c) out[c] += r * f[c][i];
+      }
+    }
+  }
+  return ll;
+}
+
+#if PBNBV_ESTEP_DISPATCH
+__attribute__((target("avx2,fma"))) double estep_avx2(int n, int T, const double* const* f,
+                                                      const CompEval* ce, double* L, double* mx,
+                                                      double* s, double* stats) {
+  return estep_body(n, T, f, ce, L, mx, s, stats);
+}
+#endif
+
+double estep_kernel(int n, int T, const double* const* f, const CompEval* ce, double* L, double* mx,
+                    double* s, double* stats) {
+#if PBNBV_ESTEP_DISPATCH
+  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  if (avx2) return estep_avx2(n, T, f, ce, L, mx, s, stats);
+#endif
+  return estep_body(n, T, f, ce, L, mx, s, stats);
+}
+
+struct EmWork {
+  MatrixXd L;  // log joint densities, then responsibilities (n x T)
+  VectorXd mx, s;
+};
+
+// The E-step for the current parameters (log-sum-exp per point): returns the log-likelihood
+// of the data under the mixture and, if `stats`, the M-step statistics F^T R (10 x T).
+double em_pass(const Features& F, const std::vector<CompEval>& ce, EmWork& wk, Stats* stats) {
+  const Eigen::Index n = F.rows(), T = static_cast<Eigen::Index>(ce.size());
+  wk.L.resize(n, T);
+  wk.mx.resize(n);
+  wk.s.resize(n);
+  if (stats) stats->resize(10, T);
+  const double* f[10];
+  for (int c = 0; c < 10; ++c) f[c] = F.col(c).data();
+  return estep_kernel(static_cast<int>(n), static_cast<int>(T), f, ce.data(), wk.L.data(), wk.mx.data(),
+                      wk.s.data(), stats ? stats->data() : nullptr);
+}
+
+// The most probable component of every point (the first on ties).
+std::vector<int> most_probable(const Features& F, const std::vector<CompEval>& ce) {
+  MatrixXd L;
+  log_joint_all(F, ce, L);
+  std::vector<int> labels(static_cast<size_t>(F.rows()));
+  for (Eigen::Index i = 0; i < L.rows(); ++i) {
+    int arg = 0;
+    double mx = L(i, 0);
+    for (Eigen::Index j = 1; j < L.cols(); ++j)
+      if (L(i, j) > mx) {
+        mx = L(i, j);
+        arg = static_cast<int>(j);
+      }
+    labels[static_cast<size_t>(i)] = arg;
+  }
+  return labels;
+}
+
+// k-means++ seeding: D^2 sampling from mt19937_64(seed). The first T centres do not depend
+// on how many are drawn, so one draw of the largest T serves every smaller one.
+std::vector<Vector3d> kmeanspp_seeds(const Points3& X, int count, uint64_t seed) {
   const Eigen::Index n = X.cols();
   std::mt19937_64 rng(seed);
   std::vector<Vector3d> centres;
-  centres.reserve(static_cast<size_t>(T));
+  centres.reserve(static_cast<size_t>(count));
   {
     std::uniform_int_distribution<Eigen::Index> pick(0, n - 1);
     centres.push_back(X.col(pick(rng)));
   }
   std::vector<double> d2(static_cast<size_t>(n));
-  std::vector<int> assign(static_cast<size_t>(n), 0);
   for (Eigen::Index i = 0; i < n; ++i) d2[static_cast<size_t>(i)] = (X.col(i) - centres[0]).squaredNorm();
   std::uniform_real_distribution<double> unif(0.0, 1.0);
-  while (static_cast<int>(centres.size()) < T) {
+  while (static_cast<int>(centres.size()) < count) {
     const double total = std::accumulate(d2.begin(), d2.end(), 0.0);
     Eigen::Index chosen = n - 1;
     if (!(total > 0)) {
@@ -193,17 +434,56 @@ void kmeanspp_init(const Points3& X, int T, uint64_t seed, double min_variance,
       }
     }
     centres.push_back(X.col(chosen));
-    const int j = static_cast<int>(centres.size()) - 1;
+    for (Eigen::Index i = 0; i < n; ++i)
+      d2[static_cast<size_t>(i)] = std::min(d2[static_cast<size_t>(i)], (X.col(i) - centres.back()).squaredNorm());
+  }
+  return centres;
+}
+
+// The nearest of the first T centres for every point (the first on ties), from the
+// coordinate columns of the features; true if any assignment changed.
+bool assign_nearest(const Features& F, const std::vector<Vector3d>& centres, int T, std::vector<int>& assign) {
+  const Eigen::Index n = F.rows();
+  const double* x = F.col(1).data();
+  const double* y = F.col(2).data();
+  const double* z = F.col(3).data();
+  // Written as selects on doubles so that the loop vectorises.
+  std::vector<double> bd(static_cast<size_t>(n), std::numeric_limits<double>::infinity());
+  std::vector<double> best(static_cast<size_t>(n), 0.0);
+  for (int j = 0; j < T; ++j) {
+    const double cx = centres[static_cast<size_t>(j)].x(), cy = centres[static_cast<size_t>(j)].y(),
+                 cz = centres[static_cast<size_t>(j)].z();
+    const double jd = j;
+    double* b = bd.data();
+    double* bj = best.data();
     for (Eigen::Index i = 0; i < n; ++i) {
-      const double d = (X.col(i) - centres.back()).squaredNorm();
-      if (d < d2[static_cast<size_t>(i)]) {
-        d2[static_cast<size_t>(i)] = d;
-        assign[static_cast<size_t>(i)] = j;
-      }
+      const double dx = x[i] - cx, dy = y[i] - cy, dz = z[i] - cz;
+      const double d = dx * dx + dy * dy + dz * dz;
+      const double bi = b[i];
+      bj[i] = d < bi ? jd : bj[i];
+      b[i] = std::min(d, bi);
     }
   }
+  bool changed = false;
+  for (size_t i = 0; i < assign.size(); ++i) {
+    const int a = static_cast<int>(best[i]);
+    changed |= a != assign[i];
+    assign[i] = a;
+  }
+  return changed;
+}
 
-  // Lloyd refinement (assignments start from the seeding's nearest centres).
+// From the first T k-means++ seeds, a few Lloyd iterations; initial weights, means and
+// covariances from the resulting hard assignment.
+void kmeans_init(const Points3& X, const Features& F, const std::vector<Vector3d>& seeds, int T,
+                 double min_variance,
+                 std::vector<double>& w, std::vector<Vector3d>& mu, std::vector<Matrix3d>& cov) {
+  const Eigen::Index n = X.cols();
+  std::vector<Vector3d> centres(seeds.begin(), seeds.begin() + T);
+  std::vector<int> assign(static_cast<size_t>(n), 0);
+  assign_nearest(F, centres, T, assign);
+
+  // Lloyd refinement (assignments start from the seeds' nearest centres).
   std::vector<Vector3d> sum(static_cast<size_t>(T));
   std::vector<int> cnt(static_cast<size_t>(T));
   for (int it = 0; it < 3; ++it) {
@@ -216,23 +496,7 @@ void kmeanspp_init(const Points3& X, int T, uint64_t seed, double min_variance,
     for (int j = 0; j < T; ++j)
       if (cnt[static_cast<size_t>(j)] > 0)
         centres[static_cast<size_t>(j)] = sum[static_cast<size_t>(j)] / cnt[static_cast<size_t>(j)];
-    bool changed = false;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      int best = 0;
-      double bd = std::numeric_limits<double>::infinity();
-      for (int j = 0; j < T; ++j) {
-        const double d = (X.col(i) - centres[static_cast<size_t>(j)]).squaredNorm();
-        if (d < bd) {
-          bd = d;
-          best = j;
-        }
-      }
-      if (best != assign[static_cast<size_t>(i)]) {
-        assign[static_cast<size_t>(i)] = best;
-        changed = true;
-      }
-    }
-    if (!changed) break;
+    if (!assign_nearest(F, centres, T, assign)) break;
   }
 
   // Hard-assignment statistics.
@@ -270,70 +534,61 @@ void kmeanspp_init(const Points3& X, int T, uint64_t seed, double min_variance,
   for (double& v : w) v /= wsum;
 }
 
-GaussianMixture em_run(const Points3& X, std::vector<double> w, std::vector<Vector3d> mu,
-                       std::vector<Matrix3d> cov, double min_variance, const EmOptions& opt);
-
-// EM on data already centred (the caller adds the offset back to the means).
-GaussianMixture fit_gmm_centred(const Points3& X, int components, uint64_t seed, double min_variance,
-                                const EmOptions& opt) {
-  GaussianMixture g;
-  const Eigen::Index n = X.cols();
-  if (n == 0) return g;
-  const int T = std::max(1, std::min<int>(components, static_cast<int>(n)));
-  min_variance = std::max(min_variance, 0.0);
-
-  std::vector<double> w;
-  std::vector<Vector3d> mu;
-  std::vector<Matrix3d> cov;
-  kmeanspp_init(X, T, seed, min_variance, w, mu, cov);
-  return em_run(X, std::move(w), std::move(mu), std::move(cov), min_variance, opt);
-}
-
 // EM from the given parameters until the log-likelihood gain < tol_per_point * n or
-// max_iterations M-steps.
-GaussianMixture em_run(const Points3& X, std::vector<double> w, std::vector<Vector3d> mu,
-                       std::vector<Matrix3d> cov, double min_variance, const EmOptions& opt) {
+// max_iterations M-steps; `labels` (the most probable component per point) only if asked.
+GaussianMixture em_run(const Features& F, std::vector<double> w, std::vector<Vector3d> mu,
+                       std::vector<Matrix3d> cov, double min_variance, const EmOptions& opt,
+                       bool want_labels) {
   GaussianMixture g;
-  const Eigen::Index n = X.cols();
+  const Eigen::Index n = F.rows();
   const int T = static_cast<int>(w.size());
-  std::vector<CompEval> ce(static_cast<size_t>(T));
-  std::vector<CompStats> stats;
-  std::vector<int> labels;
+  EmWork wk;
+  Stats st;
+  std::vector<CompEval> ce;
   const double tol = opt.tol_per_point * static_cast<double>(n);
   double ll = -std::numeric_limits<double>::infinity();
-  // Each pass evaluates the current parameters (log-likelihood, labels) and gathers the
-  // statistics of the next ones; on stopping, the parameters of the last pass are returned,
-  // so `log_likelihood` is exactly theirs.
+  // Each pass evaluates the current parameters (log-likelihood) and gathers the statistics
+  // of the next ones; on stopping, the parameters of the last pass are returned, so
+  // `log_likelihood` is exactly theirs.
   for (int it = 0;; ++it) {
-    for (int j = 0; j < T; ++j)
-      ce[static_cast<size_t>(j)] = prepare(w[static_cast<size_t>(j)], mu[static_cast<size_t>(j)],
-                                           cov[static_cast<size_t>(j)], min_variance);
-    const double ll_new = em_pass(X, ce, &stats, &labels);
+    ce = prepare_all(w, mu, cov, min_variance);
+    const double ll_new = em_pass(F, ce, wk, &st);
     const double gain = ll_new - ll;
     ll = ll_new;
     if (gain < tol || it >= opt.max_iterations) break;
     // M-step.
     for (int j = 0; j < T; ++j) {
       const size_t sj = static_cast<size_t>(j);
-      const CompStats& st = stats[sj];
-      w[sj] = st.n / static_cast<double>(n);
-      if (st.n < 1e-10) continue;  // dead component: keeps its mean and covariance, weight ~0
-      const Vector3d m(st.s1[0] / st.n, st.s1[1] / st.n, st.s1[2] / st.n);
+      const double nj = st(0, j);
+      w[sj] = nj / static_cast<double>(n);
+      if (nj < 1e-10) continue;  // dead component: keeps its mean and covariance, weight ~0
+      const Vector3d m = st.block<3, 1>(1, j) / nj;
       Matrix3d S;
-      S << st.s2[0], st.s2[1], st.s2[2], st.s2[1], st.s2[3], st.s2[4], st.s2[2], st.s2[4], st.s2[5];
+      S << st(4, j), st(5, j), st(6, j), st(5, j), st(7, j), st(8, j), st(6, j), st(8, j), st(9, j);
       mu[sj] = m;
-      cov[sj] = S / st.n - m * m.transpose() + min_variance * Matrix3d::Identity();
+      cov[sj] = S / nj - m * m.transpose() + min_variance * Matrix3d::Identity();
     }
   }
 
+  if (want_labels) g.labels = most_probable(F, ce);
   g.weights = std::move(w);
   g.means = std::move(mu);
   g.covariances = std::move(cov);
   g.log_likelihood = ll;
   const double k = static_cast<double>((T - 1) + 3 * T + 6 * T);
   g.bic = k * std::log(static_cast<double>(n)) - 2.0 * ll;
-  g.labels = std::move(labels);
   return g;
+}
+
+// EM with T components on data already centred (the caller adds the offset back to the
+// means), initialised from the first T of `seeds`.
+GaussianMixture fit_gmm_seeded(const Points3& X, const Features& F, const std::vector<Vector3d>& seeds, int T,
+                               double min_variance, const EmOptions& opt, bool want_labels) {
+  std::vector<double> w;
+  std::vector<Vector3d> mu;
+  std::vector<Matrix3d> cov;
+  kmeans_init(X, F, seeds, T, min_variance, w, mu, cov);
+  return em_run(F, std::move(w), std::move(mu), std::move(cov), min_variance, opt, want_labels);
 }
 
 void uncentre(GaussianMixture& g, const Vector3d& offset) {
@@ -341,22 +596,28 @@ void uncentre(GaussianMixture& g, const Vector3d& offset) {
 }
 
 // BIC search over T in [1, min(t_max, n)] on centred data, each T fitted with `opt`; ties keep
-// the smaller T.
+// the smaller T. The candidate T run on two threads (each T's fit depends only on T, so the
+// result does not depend on the scheduling). `labels` only if asked.
 GaussianMixture bic_search_impl(const Points3& X, int t_max, uint64_t seed, double min_variance,
-                                const EmOptions& opt) {
+                                const EmOptions& opt, bool want_labels) {
   const Eigen::Index n = X.cols();
   if (n == 0) return GaussianMixture{};
+  min_variance = std::max(min_variance, 0.0);
   const int hi = std::max(1, std::min<int>(t_max, static_cast<int>(n)));
-  GaussianMixture best;
-  int best_t = 0;
-  for (int T = 1; T <= hi; ++T) {
-    GaussianMixture g = fit_gmm_centred(X, T, seed, min_variance, opt);
-    if (best_t == 0 || g.bic < best.bic) {
-      best = std::move(g);
-      best_t = T;
-    }
-  }
-  return best;
+  const Features F = make_features(X);
+  const std::vector<Vector3d> seeds = kmeanspp_seeds(X, hi, seed);
+  std::vector<GaussianMixture> fits(static_cast<size_t>(hi));
+  // Largest T (the most work) first, for balance.
+  parallel_for(hi, [&](int k) {
+    const int T = hi - k;
+    fits[static_cast<size_t>(T - 1)] = fit_gmm_seeded(X, F, seeds, T, min_variance, opt, false);
+  });
+  size_t best = 0;
+  for (size_t t = 1; t < fits.size(); ++t)
+    if (fits[t].bic < fits[best].bic) best = t;
+  GaussianMixture g = std::move(fits[best]);
+  if (want_labels) g.labels = most_probable(F, prepare_all(g.weights, g.means, g.covariances, min_variance));
+  return g;
 }
 
 // ---- MVEE ----
@@ -476,9 +737,12 @@ Eigen::Matrix4d Ellipsoid::dual_quadric() const {
 GaussianMixture fit_gaussian_mixture(const std::vector<Eigen::Vector3d>& points, int components,
                                      uint64_t seed, double min_variance) {
   Points3 X = to_matrix(points);
-  const Vector3d offset = X.cols() ? Vector3d(X.rowwise().mean()) : Vector3d::Zero();
+  if (X.cols() == 0) return GaussianMixture{};
+  const Vector3d offset = X.rowwise().mean();
   X.colwise() -= offset;
-  GaussianMixture g = fit_gmm_centred(X, components, seed, min_variance, EmOptions{});
+  const int T = std::max(1, std::min<int>(components, static_cast<int>(X.cols())));
+  GaussianMixture g = fit_gmm_seeded(X, make_features(X), kmeanspp_seeds(X, T, seed), T,
+                                     std::max(min_variance, 0.0), EmOptions{}, true);
   uncentre(g, offset);
   return g;
 }
@@ -488,8 +752,7 @@ GaussianMixture fit_mixture_by_bic(const std::vector<Eigen::Vector3d>& points, i
   Points3 X = to_matrix(points);
   const Vector3d offset = X.cols() ? Vector3d(X.rowwise().mean()) : Vector3d::Zero();
   X.colwise() -= offset;
-  GaussianMixture g =
-      bic_search_impl(X, t_max, seed, min_variance, EmOptions{});
+  GaussianMixture g = bic_search_impl(X, t_max, seed, min_variance, EmOptions{}, true);
   uncentre(g, offset);
   return g;
 }
@@ -587,60 +850,87 @@ Ellipsoid minimum_volume_ellipsoid(const std::vector<Eigen::Vector3d>& points, d
 
 namespace {
 
-// The corners of the voxels that can be vertices of their convex hull (so the MVEE of the
-// returned corners equals that of all corners). A voxel that has other voxels of the set on
-// both sides along some axis line contributes no hull vertex; if the centres are not on a
-// common lattice of pitch `voxel`, all corners are returned.
+// The corners of the voxels that can be vertices of their convex hull, so the MVEE of the
+// returned corners equals that of all corners. A corner on the +x side of its voxel lies
+// strictly inside a segment between two other corners unless the voxel is the last of the
+// set along its x line (likewise -x/first, and y, z): only corners whose voxel is extreme on
+// the corner's side along all three axis lines are kept (shared ones once). If the centres
+// are not on a common lattice of pitch `voxel`, all corners are returned.
 std::vector<Vector3d> hull_candidate_corners(const std::vector<Vector3d>& centres, double voxel) {
   const double h = 0.5 * voxel;
-  std::vector<Eigen::Vector3i> idx(centres.size());
+  const size_t n = centres.size();
+  std::vector<Eigen::Vector3i> idx(n);
   bool lattice = voxel > 0;
   const Vector3d c0 = centres.empty() ? Vector3d::Zero() : centres[0];
-  for (size_t i = 0; i < centres.size() && lattice; ++i) {
+  for (size_t i = 0; i < n && lattice; ++i) {
     const Vector3d q = (centres[i] - c0) / voxel;
     const Vector3d r = q.array().round();
     if ((q - r).cwiseAbs().maxCoeff() > 1e-3 || r.cwiseAbs().maxCoeff() > 1e6) lattice = false;
     idx[i] = r.cast<int>();
   }
-  std::vector<char> keep(centres.size(), 1);
-  if (lattice && centres.size() > 8) {
-    auto key2 = [](int a, int b) {
-      return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b);
-    };
-    for (int axis = 0; axis < 3; ++axis) {
-      const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-      std::unordered_map<uint64_t, std::pair<int, int>> ext;
-      ext.reserve(centres.size() * 2);
-      for (const auto& v : idx) {
-        auto it = ext.emplace(key2(v[a1], v[a2]), std::make_pair(v[axis], v[axis])).first;
-        it->second.first = std::min(it->second.first, v[axis]);
-        it->second.second = std::max(it->second.second, v[axis]);
-      }
-      for (size_t i = 0; i < idx.size(); ++i) {
-        const auto& e = ext[key2(idx[i][a1], idx[i][a2])];
-        if (idx[i][axis] != e.first && idx[i][axis] != e.second) keep[i] = 0;
-      }
-    }
-  }
   std::vector<Vector3d> corners;
-  if (lattice) {
-    // Deduplicate shared corners via their lattice index.
-    std::vector<std::array<int, 3>> ci;
-    for (size_t i = 0; i < idx.size(); ++i) {
-      if (!keep[i]) continue;
-      for (int m = 0; m < 8; ++m)
-        ci.push_back({idx[i][0] + (m & 1), idx[i][1] + ((m >> 1) & 1), idx[i][2] + ((m >> 2) & 1)});
-    }
-    std::sort(ci.begin(), ci.end());
-    ci.erase(std::unique(ci.begin(), ci.end()), ci.end());
-    corners.reserve(ci.size());
-    const Vector3d base = c0 - Vector3d::Constant(h);
-    for (const auto& c : ci) corners.push_back(base + voxel * Vector3d(c[0], c[1], c[2]));
-  } else {
+  if (!lattice) {
+    corners.reserve(8 * n);
     for (const auto& c : centres)
       for (int m = 0; m < 8; ++m)
         corners.push_back(c + Vector3d((m & 1) ? h : -h, (m & 2) ? h : -h, (m & 4) ? h : -h));
+    return corners;
   }
+
+  Eigen::Vector3i lo = idx[0], hi = idx[0];
+  for (const auto& v : idx) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  const Eigen::Matrix<int64_t, 3, 1> dims = (hi - lo).cast<int64_t>().array() + 1;
+  // ext[i] bit 2a: voxel i is the first along its axis-a line; bit 2a+1: the last.
+  std::vector<uint8_t> ext(n, 0);
+  for (int axis = 0; axis < 3; ++axis) {
+    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+    auto mark = [&](auto& range_of) {
+      for (const auto& v : idx) {
+        auto& r = range_of(v);
+        r.first = std::min(r.first, v[axis]);
+        r.second = std::max(r.second, v[axis]);
+      }
+      for (size_t i = 0; i < n; ++i) {
+        const auto& r = range_of(idx[i]);
+        if (idx[i][axis] == r.first) ext[i] |= static_cast<uint8_t>(1u << (2 * axis));
+        if (idx[i][axis] == r.second) ext[i] |= static_cast<uint8_t>(2u << (2 * axis));
+      }
+    };
+    const std::pair<int, int> empty(std::numeric_limits<int>::max(), std::numeric_limits<int>::min());
+    const int64_t cells = dims[a1] * dims[a2];
+    if (cells <= 8 * static_cast<int64_t>(n) + 4096) {
+      std::vector<std::pair<int, int>> grid(static_cast<size_t>(cells), empty);
+      auto range_of = [&](const Eigen::Vector3i& v) -> std::pair<int, int>& {
+        return grid[static_cast<size_t>((v[a1] - lo[a1]) * dims[a2] + (v[a2] - lo[a2]))];
+      };
+      mark(range_of);
+    } else {
+      std::unordered_map<uint64_t, std::pair<int, int>> map;
+      map.reserve(2 * n);
+      auto range_of = [&](const Eigen::Vector3i& v) -> std::pair<int, int>& {
+        const uint64_t key = (static_cast<uint64_t>(static_cast<uint32_t>(v[a1])) << 32) |
+                             static_cast<uint32_t>(v[a2]);
+        return map.emplace(key, empty).first->second;
+      };
+      mark(range_of);
+    }
+  }
+  std::vector<std::array<int, 3>> ci;
+  for (size_t i = 0; i < n; ++i) {
+    for (int m = 0; m < 8; ++m) {
+      bool keep = true;
+      for (int a = 0; a < 3 && keep; ++a) keep = (ext[i] >> (2 * a + ((m >> a) & 1))) & 1u;
+      if (keep) ci.push_back({idx[i][0] + (m & 1), idx[i][1] + ((m >> 1) & 1), idx[i][2] + ((m >> 2) & 1)});
+    }
+  }
+  std::sort(ci.begin(), ci.end());
+  ci.erase(std::unique(ci.begin(), ci.end()), ci.end());
+  corners.reserve(ci.size());
+  const Vector3d base = c0 - Vector3d::Constant(h);
+  for (const auto& c : ci) corners.push_back(base + voxel * Vector3d(c[0], c[1], c[2]));
   return corners;
 }
 
@@ -686,33 +976,30 @@ std::vector<Ellipsoid> fit_ellipsoids(const std::vector<Eigen::Vector3d>& voxel_
   for (size_t i = 0; i < m_em; ++i) Xem.col(static_cast<Eigen::Index>(i)) = Xall.col(static_cast<Eigen::Index>(perm[i]));
   EmOptions search;
   search.max_iterations = kSearchIterations;
-  GaussianMixture g = bic_search_impl(Xem, params.t_max, params.seed, min_variance, search);
+  GaussianMixture g = bic_search_impl(Xem, params.t_max, params.seed, min_variance, search, false);
   {
     EmOptions rest;
     rest.max_iterations = EmOptions{}.max_iterations - kSearchIterations;
-    g = em_run(Xem, g.weights, g.means, g.covariances, min_variance, rest);
+    g = em_run(make_features(Xem), g.weights, g.means, g.covariances, min_variance, rest, false);
   }
   const int T = static_cast<int>(g.weights.size());
   if (components) *components = T;
 
-  std::vector<int> labels;
-  {
-    std::vector<CompEval> ce(static_cast<size_t>(T));
-    for (int j = 0; j < T; ++j)
-      ce[static_cast<size_t>(j)] = prepare(g.weights[static_cast<size_t>(j)], g.means[static_cast<size_t>(j)],
-                                           g.covariances[static_cast<size_t>(j)], min_variance);
-    em_pass(Xall, ce, nullptr, &labels);
-  }
-
+  const std::vector<int> labels =
+      most_probable(make_features(Xall), prepare_all(g.weights, g.means, g.covariances, min_variance));
   std::vector<std::vector<Vector3d>> members(static_cast<size_t>(T));
   for (size_t i = 0; i < n; ++i) members[static_cast<size_t>(labels[i])].push_back(voxel_centres[i]);
-  for (const auto& m : members) {
-    if (m.empty()) continue;  // clusters that end up empty are dropped
+  members.erase(std::remove_if(members.begin(), members.end(),
+                               [](const std::vector<Vector3d>& m) { return m.empty(); }),
+                members.end());  // clusters that end up empty are dropped
+  out.resize(members.size());
+  parallel_for(static_cast<int>(members.size()), [&](int k) {
+    const auto& m = members[static_cast<size_t>(k)];
     Ellipsoid e = minimum_volume_ellipsoid(hull_candidate_corners(m, voxel));
     e.cls = cls;
     e.num_points = static_cast<int>(m.size());
-    out.push_back(e);
-  }
+    out[static_cast<size_t>(k)] = e;
+  });
   return out;
 }
 

@@ -36,7 +36,7 @@ GaussianMixture fit_gaussian_mixture(const std::vector<Eigen::Vector3d>& points,
                                      uint64_t seed, double min_variance);
 
 // Chooses T in [1, t_max] by the lowest BIC (T never above the number of points) and returns
-// that mixture.
+// that mixture. The candidate T are fitted on up to two threads (same result as one).
 GaussianMixture fit_mixture_by_bic(const std::vector<Eigen::Vector3d>& points, int t_max,
                                    uint64_t seed, double min_variance);
 
@@ -52,9 +52,11 @@ struct EllipsoidParams {
 };
 
 // Clusters the voxel centres of one class and fits an ellipsoid to each cluster's voxel
-// corners, so a one-voxel-thin cluster gives a thin, valid ellipsoid. 0 voxels: no ellipsoid;
-// 1, 2, 3 voxels: one ellipsoid around their corners. Returns the ellipsoids and, in
-// `components`, the T chosen.
+// corners, so a one-voxel-thin cluster gives a thin, valid ellipsoid (only the corners that
+// can be vertices of the cluster's convex hull are passed to the MVEE, which depends on
+// nothing else). 0 voxels: no ellipsoid; 1, 2, 3 voxels: one ellipsoid around their corners.
+// Returns the ellipsoids and, in `components`, the T chosen. Uses up to two threads (the
+// candidate T, then the clusters' MVEEs); the result does not depend on their timing.
 std::vector<Ellipsoid> fit_ellipsoids(const std::vector<Eigen::Vector3d>& voxel_centres,
                                       EllipsoidClass cls, const EllipsoidParams& params,
                                       int* components = nullptr);

@@ -349,3 +349,70 @@ TEST(FitEllipsoids, MoreThanAThousandVoxelsAreAllLabelledAndEnclosed) {
     EXPECT_LE(best, 1 + 1e-3);
   }
 }
+
+TEST(FitEllipsoids, HullCornersGiveTheEllipsoidOfAllCorners) {
+  // An irregular blob of voxels (many interior ones): one cluster's ellipsoid is fitted to the
+  // corners that can be hull vertices; it must match the MVEE of all 8 corners of every voxel
+  // and enclose them all.
+  const double voxel = 0.01;
+  std::mt19937_64 rng(17);
+  std::normal_distribution<double> nd;
+  const Matrix3d R = Eigen::AngleAxisd(0.6, Vector3d(1, 1, -1).normalized()).toRotationMatrix();
+  std::set<std::tuple<long, long, long>> cells;
+  for (int i = 0; i < 3000; ++i) {
+    const Vector3d q = R * Vector3d(0.05 * nd(rng), 0.03 * nd(rng), 0.015 * nd(rng));
+    cells.insert({std::lround(q.x() / voxel), std::lround(q.y() / voxel), std::lround(q.z() / voxel)});
+  }
+  std::vector<Vector3d> vox;
+  for (const auto& [i, j, k] : cells) vox.push_back(voxel * Vector3d(i, j, k));
+  EllipsoidParams p;
+  p.voxel_m = voxel;
+  p.t_max = 1;
+  const auto es = fit_ellipsoids(vox, EllipsoidClass::kOccupied, p);
+  ASSERT_EQ(es.size(), 1u);
+  expect_valid(es[0]);
+  const auto all = corners_of(vox, voxel);
+  const Ellipsoid ref = minimum_volume_ellipsoid(all);
+  double worst = 0;
+  for (const auto& q : all) worst = std::max(worst, inside_value(es[0], q));
+  EXPECT_LE(worst, 1 + 1e-9);
+  EXPECT_GT(worst, 0.999);
+  Vector3d a = es[0].semi_axes, b = ref.semi_axes;
+  std::sort(a.data(), a.data() + 3);
+  std::sort(b.data(), b.data() + 3);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(a[i], b[i], 2e-3 * b[i]) << i;
+  EXPECT_LT((es[0].centre - ref.centre).norm(), 1e-3 * b[2]);
+}
+
+TEST(FitEllipsoids, RepeatedCallsGiveBitIdenticalResults) {
+  // The candidate T and the clusters run on two threads; the result must not depend on their
+  // timing.
+  const double voxel = 0.01;
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> nd;
+  const std::vector<Vector3d> c = {{0, 0, 0}, {0.2, 0.05, 0}, {0.05, 0.2, 0.1}, {-0.1, 0.1, 0.2}};
+  std::set<std::tuple<long, long, long>> cells;
+  for (int i = 0; cells.size() < 2000; ++i) {
+    const Vector3d q = c[i % 4] + 0.03 * Vector3d(nd(rng), nd(rng), nd(rng));
+    cells.insert({std::lround(q.x() / voxel), std::lround(q.y() / voxel), std::lround(q.z() / voxel)});
+  }
+  std::vector<Vector3d> vox;
+  for (const auto& [i, j, k] : cells) vox.push_back(voxel * Vector3d(i, j, k));
+  EllipsoidParams p;
+  p.voxel_m = voxel;
+  int T0 = 0;
+  const auto first = fit_ellipsoids(vox, EllipsoidClass::kOccupied, p, &T0);
+  EXPECT_EQ(T0, 4);
+  for (int run = 0; run < 10; ++run) {
+    int T = 0;
+    const auto again = fit_ellipsoids(vox, EllipsoidClass::kOccupied, p, &T);
+    ASSERT_EQ(T, T0);
+    ASSERT_EQ(again.size(), first.size());
+    for (size_t i = 0; i < first.size(); ++i) {
+      EXPECT_EQ(again[i].num_points, first[i].num_points);
+      EXPECT_EQ(again[i].centre, first[i].centre);
+      EXPECT_EQ(again[i].axes, first[i].axes);
+      EXPECT_EQ(again[i].semi_axes, first[i].semi_axes);
+    }
+  }
+}
