@@ -301,7 +301,7 @@ TEST(Registration, DisjointFrameFailsTheOverlapGate) {
       visible(sample_with_normals(other, 40000, 9), view_dir(190, 40), 0.0003, 4);
   const auto r = register_frame(s.model, frame, RegistrationParams{});
   EXPECT_FALSE(r.accepted);
-  EXPECT_TRUE(contains(r.reason, "rejected: overlap 0.00 below 0.30")) << r.reason;
+  EXPECT_TRUE(contains(r.reason, "rejected: overlap 0.00 below 0.10")) << r.reason;
   EXPECT_EQ(r.overlap, 0.0);
 
   // Also a part within the correspondence distance: the model without the upright box, the
