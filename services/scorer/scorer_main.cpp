@@ -39,6 +39,12 @@ void keep(std::deque<T>& q, const T& x) {
   if (q.size() > kKept) q.pop_front();
 }
 
+// The bounding box B of a voxel map message.
+Eigen::AlignedBox3d bbox_of(const voxel_set_t& map) {
+  return Eigen::AlignedBox3d(Eigen::Vector3d(map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]),
+                             Eigen::Vector3d(map.bbox_max_m[0], map.bbox_max_m[1], map.bbox_max_m[2]));
+}
+
 // The request as the core planner takes it, validated; throws naming the bad field.
 PlanInput plan_input(const plan_request_t& r) {
   PlanInput in;
@@ -161,8 +167,7 @@ class ScorerService {
   // each).
   std::vector<bool> reachability(const plan_request_t& r, const voxel_set_t& map) {
     const auto t0 = std::chrono::steady_clock::now();
-    const Eigen::AlignedBox3d box(Eigen::Vector3d(map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]),
-                                  Eigen::Vector3d(map.bbox_max_m[0], map.bbox_max_m[1], map.bbox_max_m[2]));
+    const Eigen::AlignedBox3d box = bbox_of(map);
     const std::vector<Pose> cands = candidate_views(box, pending_->input.candidates);
     // B often stops growing late in a scan: the same candidate set, the same answer. (The motion
     // executor checks the chosen view again, with the rig's actual state.)
@@ -206,8 +211,7 @@ class ScorerService {
     view_plan_t out = empty_answer(r);
     PlanResult result;
     try {
-      p.input.bbox = Eigen::AlignedBox3d(Eigen::Vector3d(map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]),
-                                         Eigen::Vector3d(map.bbox_max_m[0], map.bbox_max_m[1], map.bbox_max_m[2]));
+      p.input.bbox = bbox_of(map);
       for (std::size_t i = 0; i < ell.ellipsoids.size(); ++i) {
         p.input.ellipsoids.push_back(bus::from_msg(ell.ellipsoids[i], "ELLIPSOIDS ellipsoids[" + std::to_string(i) + "]"));
       }
