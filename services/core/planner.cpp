@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <random>
 #include <sstream>
 
 #include "core/views.hpp"
@@ -32,23 +33,9 @@ std::vector<Pose> candidate_views(const Eigen::AlignedBox3d& bbox, const Candida
                            spec.full_sphere ? M_PI : M_PI / 2);
 }
 
-PlanResult plan_pbnbv(const PlanInput& in) {
-  PlanResult r;
-  for (const auto& e : in.ellipsoids) {
-    (e.cls == EllipsoidClass::kFrontier ? r.num_frontier_ellipsoids : r.num_occupied_ellipsoids)++;
-  }
-  if (in.bbox.isEmpty() || !(in.bbox.diagonal().norm() > 0)) {
-    r.reason = "the bounding box B is empty: no view has been mapped yet";
-    return r;
-  }
-  if (in.beta < 1) throw std::invalid_argument("beta (partition sectors) must be >= 1, got " + std::to_string(in.beta));
-  candidate_sphere(in.bbox, in.candidates.working_distance_m, &r.centre, &r.radius_m);
-  if (r.num_frontier_ellipsoids == 0) {
-    r.outcome = PlanResult::Outcome::kStop;
-    r.reason = "no frontier ellipsoid remains";
-    return r;
-  }
-
+// Candidates on the sphere around B, the reachability filter and the exclusions, shared by every
+// planner so that they choose among the same views.
+static void prepare_candidates(const PlanInput& in, PlanResult& r) {
   auto t0 = std::chrono::steady_clock::now();
   r.candidates = candidate_views(in.bbox, in.candidates);
   const int n = static_cast<int>(r.candidates.size());
@@ -91,8 +78,52 @@ PlanResult plan_pbnbv(const PlanInput& in) {
       }
     }
   }
+}
 
-  t0 = std::chrono::steady_clock::now();
+// Checks B and fills the candidate sphere; false (with the reason) when B is empty.
+static bool check_bbox(const PlanInput& in, PlanResult& r) {
+  if (in.bbox.isEmpty() || !(in.bbox.diagonal().norm() > 0)) {
+    r.reason = "the bounding box B is empty: no view has been mapped yet";
+    return false;
+  }
+  candidate_sphere(in.bbox, in.candidates.working_distance_m, &r.centre, &r.radius_m);
+  return true;
+}
+
+static std::string nothing_to_score(const PlanResult& r) {
+  std::ostringstream os;
+  os << "no candidate can be scored: " << r.num_unreachable << " of " << r.candidates.size() << " unreachable, "
+     << r.num_excluded << " near excluded views";
+  return os.str();
+}
+
+// Ranks the pool (candidate indices), best quality first, ties broken by index so the plan is
+// deterministic; fills chosen and the alternatives.
+static void rank_pool(const PlanInput& in, PlanResult& r, std::vector<int> pool) {
+  std::stable_sort(pool.begin(), pool.end(), [&](int a, int b) { return r.scores[a].quality > r.scores[b].quality; });
+  r.chosen = pool.front();
+  for (std::size_t k = 1; k < pool.size() && static_cast<int>(r.alternatives.size()) < in.num_alternatives; ++k) {
+    r.alternatives.push_back(pool[k]);
+  }
+}
+
+PlanResult plan_pbnbv(const PlanInput& in) {
+  PlanResult r;
+  for (const auto& e : in.ellipsoids) {
+    (e.cls == EllipsoidClass::kFrontier ? r.num_frontier_ellipsoids : r.num_occupied_ellipsoids)++;
+  }
+  if (in.beta < 1) throw std::invalid_argument("beta (partition sectors) must be >= 1, got " + std::to_string(in.beta));
+  if (!check_bbox(in, r)) return r;
+  if (r.num_frontier_ellipsoids == 0) {
+    r.outcome = PlanResult::Outcome::kStop;
+    r.reason = "no frontier ellipsoid remains";
+    return r;
+  }
+
+  prepare_candidates(in, r);
+  const int n = static_cast<int>(r.candidates.size());
+
+  auto t0 = std::chrono::steady_clock::now();
   for (int i = 0; i < n; ++i) {
     if (r.status[i] != CandidateStatus::kScored) continue;
     r.scores[i] = score_view(in.ellipsoids, in.camera, r.candidates[i]);
@@ -100,10 +131,7 @@ PlanResult plan_pbnbv(const PlanInput& in) {
   }
   r.scoring_s = seconds_since(t0);
   if (r.num_scored == 0) {
-    std::ostringstream os;
-    os << "no candidate can be scored: " << r.num_unreachable << " of " << n << " unreachable, "
-       << r.num_excluded << " near excluded views";
-    r.reason = os.str();
+    r.reason = nothing_to_score(r);
     return r;
   }
 
@@ -131,13 +159,8 @@ PlanResult plan_pbnbv(const PlanInput& in) {
       if (r.status[i] == CandidateStatus::kScored && !allowed[sector[i]]) r.status[i] = CandidateStatus::kOutsidePartition;
     }
   }
-  // Best F first; ties broken by index so the plan is deterministic.
-  std::stable_sort(pool.begin(), pool.end(), [&](int a, int b) { return r.scores[a].quality > r.scores[b].quality; });
-  r.chosen = pool.front();
+  rank_pool(in, r, std::move(pool));
   r.partition = in.beta > 1 ? sector[r.chosen] : -1;
-  for (std::size_t k = 1; k < pool.size() && static_cast<int>(r.alternatives.size()) < in.num_alternatives; ++k) {
-    r.alternatives.push_back(pool[k]);
-  }
 
   const double best = r.scores[r.chosen].quality;
   r.first_quality = std::isfinite(in.first_quality) ? in.first_quality : best;
@@ -154,6 +177,80 @@ PlanResult plan_pbnbv(const PlanInput& in) {
   os << "F = " << best << " px (frontier " << r.scores[r.chosen].frontier_sum << ", occupied "
      << r.scores[r.chosen].occupied_sum << ") of " << r.num_scored << " scored";
   r.reason = os.str();
+  return r;
+}
+
+PlanResult plan_raycast(const PlanInput& in, const VoxelGrid& grid, const RaycastParams& params) {
+  PlanResult r;
+  if (!check_bbox(in, r)) return r;
+  prepare_candidates(in, r);
+  const int n = static_cast<int>(r.candidates.size());
+  std::vector<uint8_t> active(n, 0);
+  for (int i = 0; i < n; ++i) active[i] = r.status[i] == CandidateStatus::kScored;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<RaycastGain> gains = raycast_gains(grid, r.candidates, active, params);
+  int64_t rays = 0;
+  for (int i = 0; i < n; ++i) {
+    if (!active[i]) continue;
+    r.scores[i].quality = static_cast<double>(gains[i].unknown);
+    r.scores[i].frontier_sum = static_cast<double>(gains[i].unknown);
+    r.scores[i].visible = gains[i].rays;
+    rays += gains[i].rays;
+    ++r.num_scored;
+  }
+  r.scoring_s = seconds_since(t0);
+  if (r.num_scored == 0) {
+    r.reason = nothing_to_score(r);
+    return r;
+  }
+  std::vector<int> pool;
+  for (int i = 0; i < n; ++i) {
+    if (active[i]) pool.push_back(i);
+  }
+  rank_pool(in, r, std::move(pool));
+  const double best = r.scores[r.chosen].quality;
+  r.first_quality = std::isfinite(in.first_quality) ? in.first_quality : best;
+  std::ostringstream os;
+  if (best <= 0) {
+    r.outcome = PlanResult::Outcome::kStop;
+    os << "no candidate sees an unobserved voxel (" << r.num_scored << " scored, " << rays << " rays)";
+  } else if (std::isfinite(in.first_quality) && in.stop_fraction > 0 && best < in.stop_fraction * in.first_quality) {
+    r.outcome = PlanResult::Outcome::kStop;
+    os << "best gain " << best << " voxels is below " << in.stop_fraction << " of the first planned view's ("
+       << in.first_quality << ")";
+  } else {
+    r.outcome = PlanResult::Outcome::kView;
+    os << "gain " << best << " unobserved voxels of " << r.num_scored << " scored (" << rays << " rays)";
+  }
+  r.reason = os.str();
+  return r;
+}
+
+PlanResult plan_random(const PlanInput& in, uint64_t seed) {
+  PlanResult r;
+  if (!check_bbox(in, r)) return r;
+  prepare_candidates(in, r);
+  std::vector<int> pool;
+  for (int i = 0; i < static_cast<int>(r.candidates.size()); ++i) {
+    if (r.status[i] == CandidateStatus::kScored) pool.push_back(i);
+  }
+  r.num_scored = static_cast<int>(pool.size());
+  if (pool.empty()) {
+    r.reason = nothing_to_score(r);
+    return r;
+  }
+  // A partial Fisher-Yates shuffle with our own draws (std::shuffle's sequence is not specified
+  // across standard libraries): the choice, then the alternatives.
+  std::mt19937_64 rng(seed);
+  const int picks = std::min<int>(static_cast<int>(pool.size()), in.num_alternatives + 1);
+  for (int k = 0; k < picks; ++k) {
+    const uint64_t left = pool.size() - k;
+    std::swap(pool[k], pool[k + static_cast<int>(rng() % left)]);
+  }
+  r.chosen = pool[0];
+  r.alternatives.assign(pool.begin() + 1, pool.begin() + picks);
+  r.outcome = PlanResult::Outcome::kView;
+  r.reason = "random choice among " + std::to_string(r.num_scored) + " candidates (seed " + std::to_string(seed) + ")";
   return r;
 }
 

@@ -14,6 +14,7 @@
 #include "core/ellipsoids.hpp"
 #include "core/geometry.hpp"
 #include "core/plan_figure.hpp"
+#include "core/raycast.hpp"
 #include "core/view_scoring.hpp"
 
 namespace pbnbv {
@@ -87,6 +88,14 @@ struct PlanResult {
 // scanned ones (falling back to every sector, and saying so, when none of those holds a
 // scorable candidate); with nothing scanned every sector is allowed.
 PlanResult plan_pbnbv(const PlanInput& in);
+
+// The baselines of the benchmark, on the same candidates (the same sphere around B, the same
+// reachability filter and exclusions) and the same map; no global partitioning (that is PB-NBV's).
+//  - raycast: the candidate whose rays reveal the most unobserved voxels (raycast.hpp); quality =
+//    that count. Stops when no candidate sees an unobserved voxel, or by stop_fraction.
+//  - random: a uniformly random candidate (and random alternatives), reproducible from `seed`.
+PlanResult plan_raycast(const PlanInput& in, const VoxelGrid& grid, const RaycastParams& params);
+PlanResult plan_random(const PlanInput& in, uint64_t seed);
 
 // The figure of a planning step (plan_figure.hpp) with the result's candidates and scores.
 PlanFigure plan_figure(const PlanInput& in, const PlanResult& r, const std::string& title);

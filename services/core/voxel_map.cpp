@@ -350,6 +350,38 @@ VoxelCounts VoxelMap::counts() const {
   return c;
 }
 
+VoxelGrid VoxelMap::grid() const {
+  VoxelGrid g;
+  g.origin_m = origin_;
+  g.dims = dims_;
+  g.resolution_m = params_.resolution_m;
+  g.cells = cells_;
+  return g;
+}
+
+void VoxelGrid::validate(const std::string& what) const {
+  std::ostringstream os;
+  if ((dims.array() < 0).any()) {
+    os << what << ": dims " << dims.transpose() << " must not be negative";
+  } else if (static_cast<int64_t>(cells.size()) != int64_t(dims.x()) * dims.y() * dims.z()) {
+    os << what << ": " << cells.size() << " cells for dims " << dims.transpose() << " ("
+       << int64_t(dims.x()) * dims.y() * dims.z() << " expected)";
+  } else if (!(std::isfinite(resolution_m) && resolution_m > 0)) {
+    os << what << ": resolution_m = " << resolution_m << " must be a positive number";
+  } else if (!origin_m.allFinite()) {
+    os << what << ": origin is not finite";
+  } else {
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      if (static_cast<uint8_t>(cells[i]) > 4) {
+        os << what << ": cell " << i << " has state " << int(static_cast<uint8_t>(cells[i]))
+           << " (0 none, 1 empty, 2 occupied, 3 unknown, 4 frontier expected)";
+        break;
+      }
+    }
+  }
+  if (!os.str().empty()) throw std::invalid_argument(os.str());
+}
+
 std::vector<Eigen::Vector3d> VoxelMap::centres(VoxelState s) const {
   std::vector<Eigen::Vector3d> out;
   const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();

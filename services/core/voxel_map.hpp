@@ -37,6 +37,27 @@ struct DepthView {
   Eigen::AlignedBox3d working_volume;
 };
 
+// The map's cells as plain data (what the VOXEL_MAP message carries for planners that read the
+// whole map, e.g. ray casting): B's min corner, the lattice size, the states with x fastest,
+// then y, then z.
+struct VoxelGrid {
+  Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3i dims = Eigen::Vector3i::Zero();
+  double resolution_m = 0;
+  std::vector<VoxelState> cells;
+
+  bool empty() const { return dims.prod() == 0; }
+  Eigen::AlignedBox3d bounds() const {
+    return Eigen::AlignedBox3d(origin_m, origin_m + dims.cast<double>() * resolution_m);
+  }
+  VoxelState at(int x, int y, int z) const {
+    return cells[x + int64_t(dims.x()) * (y + int64_t(dims.y()) * z)];
+  }
+  // Throws std::invalid_argument naming `what` and the field: negative dims, cells.size() !=
+  // dims product, a resolution that is not positive, a non-finite origin, a state above 4.
+  void validate(const std::string& what) const;
+};
+
 struct VoxelCounts {
   int64_t none = 0, empty = 0, occupied = 0, unknown = 0, frontier = 0;
 };
@@ -74,6 +95,7 @@ class VoxelMap {
   Eigen::Vector3d centre(const Eigen::Vector3i& index) const;
   VoxelCounts counts() const;
   std::vector<Eigen::Vector3d> centres(VoxelState s) const;  // object frame
+  VoxelGrid grid() const;                                     // a copy of the cells
 
   // Grows B to cover `box_m` (snapped outward to the voxel lattice); new voxels are None and B
   // never shrinks. Optional: lets a caller that knows its working volume (or a test) start with
