@@ -161,7 +161,9 @@ class Coordinator {
         for (std::size_t a = 0; a < plan->alternatives.size(); ++a) {
           options.push_back(bus::from_msg(plan->alternatives[a], "VIEW_PLAN alternatives"));
         }
-        progress("planned: F " + fixed(plan->view_quality) + " px, " + std::to_string(plan->num_scored) + " candidates scored");
+        progress("planned: " + std::string(s_.planner == "pbnbv" ? "F " + fixed(plan->view_quality) + " px, "
+                                           : s_.planner == "raycast" ? "gain " + fixed(plan->view_quality) + " voxels, " : "") +
+                 std::to_string(plan->num_scored) + " candidates scored");
       }
 
       // Move, trying the alternatives when the rig cannot reach a view.
@@ -314,16 +316,16 @@ class Coordinator {
       views_ = ring_views(s_.views, radius, s_.ring_elevation_deg * M_PI / 180.0,
                           s_.ring_start_azimuth_deg * M_PI / 180.0, Eigen::Vector3d::Zero());
       report_["plan"] = {{"planner", "ring"}, {"radius_m", radius}, {"elevation_deg", s_.ring_elevation_deg}};
-    } else if (s_.planner == "pbnbv") {
+    } else if (s_.planner == "pbnbv" || s_.planner == "raycast" || s_.planner == "random") {
       if (s_.initial_view_m.allFinite()) {
         first_view_ = look_at_z_up(s_.initial_view_m, Eigen::Vector3d::Zero());
       } else {
         first_view_ = ring_views(1, radius, s_.ring_elevation_deg * M_PI / 180.0, s_.ring_start_azimuth_deg * M_PI / 180.0,
                                  Eigen::Vector3d::Zero())[0];
       }
-      report_["plan"] = {{"planner", "pbnbv"}, {"initial_view", to_json(first_view_)}};
+      report_["plan"] = {{"planner", s_.planner}, {"initial_view", to_json(first_view_)}};
     } else {
-      throw std::invalid_argument("planner '" + s_.planner + "' is not available (pbnbv, ring)");
+      throw std::invalid_argument("planner '" + s_.planner + "' is not available (pbnbv, raycast, random, ring)");
     }
   }
 
@@ -383,6 +385,9 @@ class Coordinator {
     r.num_alternatives = s_.alternatives;
     r.stop_fraction = s_.stop_fraction;
     r.first_quality = first_quality_;
+    r.seed = s_.seed + i;
+    r.depth_min_m = s_.depth_range.min_m;
+    r.depth_max_m = s_.depth_range.max_m;
     r.width_px = s_.camera.width;
     r.height_px = s_.camera.height;
     r.fx = s_.camera.fx;
@@ -422,7 +427,8 @@ class Coordinator {
     std::set<std::string> need = {"ARM_STATUS", "heartbeat of motion", "heartbeat of camera",
                                   "heartbeat of registration", "heartbeat of mapping"};
     if (s_.rig == RigKind::kArm) need.insert("TURNTABLE_STATUS");
-    if (s_.planner != "ring") need.insert({"heartbeat of ellipsoids", "heartbeat of scorer"});
+    if (s_.planner != "ring") need.insert("heartbeat of scorer");
+    if (s_.planner == "pbnbv") need.insert("heartbeat of ellipsoids");
     const bool ok = spin_until([&] {
       for (const auto& n : need) if (!seen_.count(n)) return false;
       return true;

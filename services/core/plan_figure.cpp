@@ -474,7 +474,7 @@ void draw_map_panel(cv::Mat& fig, const PlanFigureLayout& l, const PlanFigure& f
              1);
   }
   all.rect({double(b.x), double(b.y)}, {double(b.br().x), double(b.br().y)}, kFrame);
-  all.text("view quality F of the scored candidates", {b.x + b.width / 2.0, b.y - 7.0}, 0.45,
+  all.text(f.quality_label, {b.x + b.width / 2.0, b.y - 7.0}, 0.45,
            kText, 1, 1);
   if (range.any) {
     all.text(format("%.4g", range.lo), {double(b.x), b.br().y + 16.0}, 0.42, kText, 1, 0);

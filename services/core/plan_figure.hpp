@@ -35,6 +35,7 @@ struct PlanFigure {
   int beta = 4;                              // partition sectors (0 or 1: no partition lines)
   std::vector<int> allowed_sectors;          // sectors the choice was allowed from
   std::vector<std::string> lines;            // text lines printed under the title (F, T, timings)
+  std::string quality_label = "view quality F of the scored candidates";  // the colour bar's
 };
 
 // Draws the figure (BGR 8-bit, 1500 px wide, 520 + 20 per text line high; 560 with two lines):

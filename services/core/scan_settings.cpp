@@ -49,7 +49,7 @@ nlohmann::json to_json(const ScanSettings& s) {
       {"planning", {{"candidates", s.candidates}, {"parallels", s.parallels}, {"sectors", s.sectors},
                     {"area", s.full_sphere ? "full" : "hemi"}, {"t_max", s.t_max},
                     {"map_resolution_m", s.map_resolution_m}, {"stop_fraction", s.stop_fraction},
-                    {"alternatives", s.alternatives}}},
+                    {"alternatives", s.alternatives}, {"seed", s.seed}}},
       {"keepout", {{"min_m", to_json(s.keepout_min_m)}, {"max_m", to_json(s.keepout_max_m)}}},
       {"crop", {{"min_m", to_json(s.crop_min_m)}, {"max_m", to_json(s.crop_max_m)},
                 {"ground_clearance_m", s.ground_clearance_m}}},
@@ -100,6 +100,7 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.map_resolution_m = pl.at("map_resolution_m").get<double>();
     s.stop_fraction = pl.at("stop_fraction").get<double>();
     s.alternatives = pl.at("alternatives").get<int>();
+    s.seed = pl.value("seed", int64_t{1});
     s.keepout_min_m = vec3_from_json(j.at("keepout").at("min_m"), "keepout.min_m");
     s.keepout_max_m = vec3_from_json(j.at("keepout").at("max_m"), "keepout.max_m");
     s.crop_min_m = vec3_from_json(j.at("crop").at("min_m"), "crop.min_m");
@@ -126,16 +127,18 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
   return s;
 }
 
-void write_json_atomic(const nlohmann::json& j, const std::string& path) {
+void write_text_atomic(const std::string& text, const std::string& path) {
   const std::string tmp = path + ".tmp";
   {
     std::ofstream out(tmp);
     if (!out) throw std::runtime_error("cannot write " + tmp);
-    out << j.dump(2) << "\n";
+    out << text;
     if (!out) throw std::runtime_error("error writing " + tmp);
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot rename " + tmp + " to " + path);
 }
+
+void write_json_atomic(const nlohmann::json& j, const std::string& path) { write_text_atomic(j.dump(2) + "\n", path); }
 
 nlohmann::json read_json(const std::string& path) {
   std::ifstream in(path);

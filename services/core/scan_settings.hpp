@@ -16,7 +16,8 @@ struct ScanSettings {
   std::string scan_id;
   RigKind rig = RigKind::kArm;
   std::string rig_model_path;
-  std::string planner = "pbnbv";  // "pbnbv" (next best view) or "ring" (fixed views)
+  std::string planner = "pbnbv";  // "pbnbv" (next best view), "ring" (fixed views), or a
+                                  // benchmark baseline: "raycast", "random"
   int views = 10;                  // at most this many views
 
   // Object (twin runs): how the mesh was normalised and where its frame sits.
@@ -42,6 +43,7 @@ struct ScanSettings {
   double map_resolution_m = 0.03;
   double stop_fraction = 0.0;    // stop when best F < this * F of the first planned view (0: off)
   int alternatives = 5;          // next-best views tried when the rig cannot reach the best
+  int64_t seed = 1;              // the random planner's seed (view i uses seed + i)
 
   // Keep-out box for the arm (object frame) and the working volume for clouds.
   Eigen::Vector3d keepout_min_m = Eigen::Vector3d::Zero();
@@ -71,6 +73,7 @@ Eigen::Vector3d vec3_from_json(const nlohmann::json& j, const std::string& what)
 
 // Writes JSON to `path` atomically (temporary file + rename), so a reader never sees half.
 void write_json_atomic(const nlohmann::json& j, const std::string& path);
+void write_text_atomic(const std::string& text, const std::string& path);  // tmp + rename
 nlohmann::json read_json(const std::string& path);  // throws naming the path
 
 }  // namespace pbnbv

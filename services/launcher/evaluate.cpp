@@ -12,11 +12,15 @@ using nlohmann::json;
 
 namespace pbnbv::launcher {
 
-ScanEvaluation evaluate_scan(const fs::path& out, const CoverageParams& params) {
+ScanEvaluation evaluate_scan(const fs::path& out, const CoverageParams& params, const std::vector<uint8_t>* observable) {
   const json scan = read_json((out / "scan.json").string());
   const fs::path mesh_path = out / "object.stl";
   if (!fs::exists(mesh_path)) throw std::runtime_error(mesh_path.string() + " is missing: not a twin scan's output folder");
   CoverageEvaluator coverage(load_mesh(mesh_path.string()), params);
+  if (observable && observable->size() != coverage.samples().size()) {
+    throw std::invalid_argument("observable mask has " + std::to_string(observable->size()) + " flags for " +
+                                std::to_string(coverage.samples().size()) + " coverage samples of " + mesh_path.string());
+  }
   ScanEvaluation e;
   try {
     e.state = scan.at("status").at("state").get<std::string>();
@@ -35,6 +39,7 @@ ScanEvaluation evaluate_scan(const fs::path& out, const CoverageParams& params) 
       }
       if (!v.contains("frame_file")) continue;  // the rig never captured this view
       e.coverage_by_view.push_back(coverage.coverage_percent());
+      if (observable) e.observable_by_view.push_back(coverage.coverage_percent(*observable));
       e.points_by_view.push_back(points);
     }
   } catch (const json::exception& x) {

@@ -15,6 +15,8 @@ namespace pbnbv::launcher {
 struct ScanEvaluation {
   std::vector<double> coverage_by_view;  // percent after views 1..n (a view that added nothing
                                          // to the model repeats the previous figure)
+  std::vector<double> observable_by_view;  // the same over the observable samples (when a mask
+                                           // is given; empty otherwise)
   std::vector<double> planner_ms;        // per planning iteration: map update + ellipsoid fit +
                                          // view selection (views 2..n; empty for a ring scan)
   std::vector<int> points_by_view;       // points in the model after each view
@@ -23,9 +25,12 @@ struct ScanEvaluation {
   int views_done = 0;
 };
 
-// Evaluates the scan in `out` (scan.json, frames/, object.stl). Throws std::runtime_error
-// naming the file that is missing or malformed.
-ScanEvaluation evaluate_scan(const std::filesystem::path& out, const CoverageParams& params = {});
+// Evaluates the scan in `out` (scan.json, frames/, object.stl). `observable` (optional): one
+// flag per coverage sample (CoverageEvaluator(object.stl, params).samples()), 1 = some reachable
+// candidate view can see it. Throws std::runtime_error naming the file that is missing or
+// malformed, std::invalid_argument when the mask's size is not the number of samples.
+ScanEvaluation evaluate_scan(const std::filesystem::path& out, const CoverageParams& params = {},
+                             const std::vector<uint8_t>* observable = nullptr);
 
 nlohmann::json to_json(const ScanEvaluation& e, const CoverageParams& params);
 

@@ -20,7 +20,9 @@
 #include "core/args.hpp"
 #include "core/mesh.hpp"
 #include "core/scan_settings.hpp"
+#include "launcher/bench.hpp"
 #include "launcher/evaluate.hpp"
+#include "launcher/objects.hpp"
 #include "launcher/processes.hpp"
 
 using namespace pbnbv;
@@ -34,6 +36,10 @@ void on_signal(int) { g_interrupted = 1; }
 const char* kUsage =
 R"(usage:
   pbnbv scan [options]     twin-in-the-loop scan of an object
+  pbnbv bench [options]    every planner on every object in the twin: coverage per
+                           view, planner time, report.md, plots (see below)
+  pbnbv ablate tmax|beta|initial-view [bench options]
+                           the paper's ablations: one benchmark per value, one plot
   pbnbv spy                lcm-spy with every pbnbv channel decoded
   pbnbv help
 
@@ -42,7 +48,11 @@ scan options:
                            bunny, teapot (fetched by ./scripts/setup), sphere, box  [bunny]
   --size M                 shortest bounding-box edge after normalisation, m     [0.3]
   --up z|y                 which axis of the mesh file points up   [y for bunny/teapot, else z]
-  --planner pbnbv|ring     next-best-view planning (PB-NBV), or a fixed ring      [pbnbv]
+  --planner NAME           pbnbv: next-best-view planning (PB-NBV); ring: a fixed
+                           turntable ring; the benchmark's baselines on PB-NBV's
+                           candidates: raycast (ray-casting information gain),
+                           random (a random candidate)                          [pbnbv]
+  --seed N                 the random planner's seed                              [1]
   --views N                at most this many views                                [10]
   --rig arm|free           arm + turntable, or a free-flying camera (paper setup) [arm]
   --area hemi|full         pbnbv candidates: hemisphere above the object, or the
@@ -72,6 +82,20 @@ scan options:
   --width --height --fx --fy --cx --cy   depth camera intrinsics    [1280 720 696 696 640 360]
   --depth-min --depth-max M                depth range, m                      [0.1 3.0]
   --no-log                 do not record scan.lcmlog
+
+bench options:
+  --objects A,B,...        object names or mesh paths        [the default set, README]
+  --object-dir DIR         every .obj/.stl/.off/.ply in DIR instead
+  --planners P,...         pbnbv, raycast, random, ring          [pbnbv,raycast,random]
+  --rig free|arm --area full|hemi                              [free, full: the paper's]
+  --views N --resolution M --candidates N --tmax N --beta N --size M --up z|y
+  --initial-view x,y,z --seed N                   as for scan   [10 0.03 800 10 4 0.3]
+  --jobs N                 scans at once, each in its own network namespace        [1]
+  --no-netns               run the scans on the current LCM bus (one at a time)
+  --out DIR                results; a rerun skips the scans already complete there
+ablate: the same options (planners default pbnbv), --values V,V,... (initial views
+  separated by /)  [tmax 5,10,20,40; beta 1,2,4,8; initial-view
+  0.9,0,0/0,0.9,0/0,0,0.9/0,0.63,0.63]
 )";
 
 fs::path self_dir() { return fs::read_symlink("/proc/self/exe").parent_path(); }
@@ -85,48 +109,24 @@ std::string timestamp() {
   return b;
 }
 
-// Resolves --object to a mesh (loaded) and a name; built-ins are generated or fetched.
-TriangleMesh resolve_object(const std::string& object, std::string& name, std::string& source, UpAxis& default_up) {
-  default_up = UpAxis::kZ;
-  name = fs::path(object).stem().string();
-  if (object == "sphere") {
-    source = "built-in icosphere";
-    return make_icosphere(0.5, 5);
-  }
-  if (object == "box") {
-    source = "built-in box 1.2 x 1.0 x 0.8";
-    return make_box(Eigen::Vector3d(1.2, 1.0, 0.8));
-  }
-  if (object == "bunny" || object == "teapot") {
-    default_up = UpAxis::kY;
-    source = std::string(PBNBV_DATA_DIR) + "/meshes/" + object + ".obj";
-    if (!fs::exists(source)) {
-      throw std::runtime_error("built-in object '" + object + "' needs " + source +
-                               ", which ./scripts/setup fetches (npm package '" + object + "'): run it first");
-    }
-    return load_mesh(source);
-  }
-  source = fs::absolute(object).string();
-  return load_mesh(source);
-}
-
 int scan(int argc, char** argv) {
   Args args(argc, argv, 2);
   ScanSettings s;
-  std::string object_name, source;
-  UpAxis default_up;
-  TriangleMesh mesh = resolve_object(args.str("object", "bunny"), object_name, source, default_up);
+  launcher::ObjectSpec object = launcher::resolve_object(args.str("object", "bunny"));
+  const std::string object_name = object.name;
+  TriangleMesh& mesh = object.mesh;
   const double size = args.num("size", 0.3, 0.01, 2.0);
-  const UpAxis up = args.has("up") ? parse_up_axis(args.str("up")) : default_up;
+  const UpAxis up = args.has("up") ? parse_up_axis(args.str("up")) : object.up;
   s.normalisation = normalise_mesh(mesh, size, up);
-  s.normalisation.source_path = source;
+  s.normalisation.source_path = object.source;
   s.object_name = object_name;
   s.rig = parse_rig_kind(args.str("rig", "arm"));
   s.rig_model_path = default_rig_path(s.rig);
   s.planner = args.str("planner", "pbnbv");
-  if (s.planner != "ring" && s.planner != "pbnbv") {
-    throw std::invalid_argument("--planner " + s.planner + ": expected pbnbv or ring");
+  if (s.planner != "ring" && s.planner != "pbnbv" && s.planner != "raycast" && s.planner != "random") {
+    throw std::invalid_argument("--planner " + s.planner + ": expected pbnbv, raycast, random or ring");
   }
+  s.seed = args.integer("seed", 1, 0, int64_t{1} << 62);
   s.views = static_cast<int>(args.integer("views", 10, 1, 1000));
   s.working_distance_m = args.num("working-distance", 0.6, 0.15, 3.0);
   s.ring_elevation_deg = args.num("ring-elevation", s.rig == RigKind::kArm ? 30.0 : 0.0, -89.0, 89.0);
@@ -178,13 +178,7 @@ int scan(int argc, char** argv) {
   args.reject_unknown();
 
   // The object rests on the turntable (arm rig) or floats at the origin (free rig).
-  const Eigen::Vector3d half = s.normalisation.extent_m / 2.0;
-  s.object_z_m = s.rig == RigKind::kArm ? half.z() : 0.0;
-  s.keepout_min_m = -half - Eigen::Vector3d::Constant(0.02);
-  s.keepout_max_m = half + Eigen::Vector3d::Constant(0.02);
-  if (s.rig == RigKind::kArm) s.keepout_min_m.z() = -half.z();  // down to the turntable top
-  s.crop_min_m = -half - Eigen::Vector3d::Constant(0.05);
-  s.crop_max_m = half + Eigen::Vector3d::Constant(0.05);
+  launcher::place_object(s);
   s.scan_id = object_name + "-" + timestamp();
 
   fs::create_directories(out / "logs");
@@ -228,10 +222,8 @@ int scan(int argc, char** argv) {
   auto vec = [&](const Eigen::Vector3d& v) { return num(v.x()) + "," + num(v.y()) + "," + num(v.z()); };
   add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", num(resolution), "--out", out.string(),
                   "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m)});
-  if (s.planner == "pbnbv") {
-    add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
-    add("scorer", {(bin / "pbnbv-scorer").string(), "--rig", to_string(s.rig)});
-  }
+  if (s.planner == "pbnbv") add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
+  if (s.planner != "ring") add("scorer", {(bin / "pbnbv-scorer").string(), "--rig", to_string(s.rig)});
   add("coordinator", {(bin / "pbnbv-coordinator").string(), "--out", out.string()}, true);
 
   struct sigaction sa {};
@@ -299,14 +291,15 @@ int scan(int argc, char** argv) {
       if (!e.planner_ms.empty()) {
         std::vector<double> t = e.planner_ms;
         std::sort(t.begin(), t.end());
-        std::cout << "planner step (map update + ellipsoids + view selection): median " << t[t.size() / 2] << " ms"
+        std::cout << "planner step (map update + " << (s.planner == "pbnbv" ? "ellipsoids + " : "") << "view selection): median "
+                  << t[t.size() / 2] << " ms"
                   << std::endl;
       }
     } catch (const std::exception& x) {
       std::cerr << "warning: coverage not evaluated: " << x.what() << std::endl;
     }
     std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
-              << (s.planner == "pbnbv" ? (out / "plans").string() + "/, " : std::string())
+              << (s.planner != "ring" ? (out / "plans").string() + "/, " : std::string())
               << (out / "scan.json").string() << ", " << (out / "coverage.json").string()
               << (record_log ? ", " + (out / "scan.lcmlog").string() : "") << std::endl;
   } else if (code != 130) {
@@ -338,6 +331,8 @@ int main(int argc, char** argv) {
   try {
     if (command == "scan") return scan(argc, argv);
     if (command == "spy") return spy(argc, argv);
+    if (command == "bench") return launcher::bench_command(argc, argv, fs::read_symlink("/proc/self/exe"));
+    if (command == "ablate") return launcher::ablate_command(argc, argv, fs::read_symlink("/proc/self/exe"));
     if (command == "help" || command == "--help" || command == "-h") {
       std::cout << kUsage;
       return 0;

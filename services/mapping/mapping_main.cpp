@@ -140,6 +140,11 @@ class MappingService {
     };
     out.num_occupied = centres(VoxelState::kOccupied, out.occupied_centres_m);
     out.num_frontier = centres(VoxelState::kFrontier, out.frontier_centres_m);
+    const VoxelGrid g = map_->grid();
+    for (int k = 0; k < 3; ++k) out.dims[k] = g.dims[k];
+    out.cells.resize(g.cells.size());
+    for (std::size_t i = 0; i < g.cells.size(); ++i) out.cells[i] = static_cast<int8_t>(g.cells[i]);
+    out.num_cells = static_cast<int32_t>(out.cells.size());
   }
 
   bus::Bus& bus_;

@@ -1,10 +1,13 @@
-// pbnbv-scorer: the view scorer (PB-NBV's next-best-view choice).
+// pbnbv-scorer: the view scorer (PB-NBV's next-best-view choice, and the benchmark's baselines).
 //   in:  PLAN_REQUEST, VOXEL_MAP, ELLIPSOIDS
 //   out: VIEW_PLAN, HEARTBEAT; the request's figure_path (PNG) per plan
 // Answers each PLAN_REQUEST from the VOXEL_MAP (bounding box B) and ELLIPSOIDS of the request's
 // map_iteration: candidates on the sphere around B, the rig's reachability check (arm rig: the
 // same check as the motion executor's, on the same rig model), F of every candidate by ellipsoid
-// projection, global partitioning, termination (core plan_pbnbv). The request carries the scan's
+// projection, global partitioning, termination (core plan_pbnbv). The request's planner may also
+// be a baseline on the same candidates and map: "raycast" (ray-casting information gain over the
+// VOXEL_MAP's cells, core plan_raycast) or "random" (core plan_random); those need no ELLIPSOIDS.
+// The request carries the scan's
 // history, so the scorer keeps no scan state: restarted, it answers the next request the same.
 // Reachability runs as soon as B is known, while the ellipsoid fitter is still working.
 #include <chrono>
@@ -97,13 +100,15 @@ class ScorerService {
     if (!pending_) return;
     const plan_request_t& r = pending_->request;
     const voxel_set_t* map = find(maps_, r);
-    const ellipsoid_set_t* ell = find(ellipsoids_, r);
+    const bool needs_ellipsoids = r.planner == "pbnbv";
+    const ellipsoid_set_t* ell = needs_ellipsoids ? find(ellipsoids_, r) : nullptr;
     if (map && !pending_->reachable && r.check_reachability) pending_->reachable = reachability(r, *map);
-    if (map && ell) {
-      answer(*map, *ell);
+    if (map && (ell || !needs_ellipsoids)) {
+      answer(*map, ell);
     } else if (bus::now_s() > pending_->deadline_s) {
-      fail(std::string("no ") + (map ? "" : "VOXEL_MAP") + (!map && !ell ? " or " : "") + (ell ? "" : "ELLIPSOIDS") +
-           " for view " + std::to_string(r.map_iteration) + " within " + std::to_string(static_cast<int>(kInputWaitS)) + " s");
+      std::string missing = map ? "" : "VOXEL_MAP";
+      if (needs_ellipsoids && !ell) missing += std::string(missing.empty() ? "" : " or ") + "ELLIPSOIDS";
+      fail("no " + missing + " for view " + std::to_string(r.map_iteration) + " within " + std::to_string(static_cast<int>(kInputWaitS)) + " s");
     }
   }
 
@@ -115,6 +120,7 @@ class ScorerService {
     double deadline_s = 0;
     std::optional<std::vector<bool>> reachable;
     double reachability_s = 0;
+    RaycastParams raycast;  // planner "raycast"
   };
 
   template <class T>
@@ -133,10 +139,10 @@ class ScorerService {
       return;
     }
     if (pending_ && pending_->request.scan_id == r.scan_id && pending_->request.request_id == r.request_id) return;
-    if (r.planner != "pbnbv") {
+    if (r.planner != "pbnbv" && r.planner != "raycast" && r.planner != "random") {
       view_plan_t out = empty_answer(r);
       out.outcome = view_plan_t::kFailed;
-      out.reason = "planner '" + r.planner + "' is not served by pbnbv-scorer (pbnbv)";
+      out.reason = "planner '" + r.planner + "' is not served by pbnbv-scorer (pbnbv, raycast, random)";
       publish(out);
       return;
     }
@@ -148,6 +154,15 @@ class ScorerService {
         bus::to_vector6(std::vector<double>(r.joint_position_rad, r.joint_position_rad + 6), "PLAN_REQUEST joint_position_rad");
         bus::require_range(r.turntable_angle_rad, -1e3, 1e3, "PLAN_REQUEST turntable_angle_rad");
         bus::require_range(r.object_z_m, -10, 10, "PLAN_REQUEST object_z_m");
+      }
+      if (r.planner == "raycast") {
+        p.raycast.camera = p.input.camera;
+        p.raycast.range = DepthRange{r.depth_min_m, r.depth_max_m};
+        try {
+          p.raycast.range.validate();
+        } catch (const std::exception& e) {
+          throw std::invalid_argument(std::string("PLAN_REQUEST depth_min_m / depth_max_m: ") + e.what());
+        }
       }
     } catch (const std::exception& e) {
       view_plan_t out = empty_answer(r);
@@ -203,7 +218,23 @@ class ScorerService {
     return ok;
   }
 
-  void answer(const voxel_set_t& map, const ellipsoid_set_t& ell) {
+  // The VOXEL_MAP's cells as the ray caster reads them; throws naming the message's bad field.
+  static VoxelGrid grid_of(const voxel_set_t& map) {
+    if (map.num_cells != static_cast<int32_t>(map.cells.size())) {
+      throw std::invalid_argument("VOXEL_MAP num_cells disagrees with its array");
+    }
+    VoxelGrid g;
+    g.origin_m = Eigen::Vector3d(map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]);
+    g.dims = Eigen::Vector3i(map.dims[0], map.dims[1], map.dims[2]);
+    g.resolution_m = map.resolution_m;
+    g.cells.resize(map.cells.size());
+    for (std::size_t i = 0; i < map.cells.size(); ++i) g.cells[i] = static_cast<VoxelState>(static_cast<uint8_t>(map.cells[i]));
+    g.validate("VOXEL_MAP of view " + std::to_string(map.iteration));
+    if (g.empty()) throw std::invalid_argument("VOXEL_MAP of view " + std::to_string(map.iteration) + " carries no cells (dims 0)");
+    return g;
+  }
+
+  void answer(const voxel_set_t& map, const ellipsoid_set_t* ell) {
     Pending p = std::move(*pending_);
     pending_.reset();
     const plan_request_t& r = p.request;
@@ -212,8 +243,8 @@ class ScorerService {
     PlanResult result;
     try {
       p.input.bbox = bbox_of(map);
-      for (std::size_t i = 0; i < ell.ellipsoids.size(); ++i) {
-        p.input.ellipsoids.push_back(bus::from_msg(ell.ellipsoids[i], "ELLIPSOIDS ellipsoids[" + std::to_string(i) + "]"));
+      for (std::size_t i = 0; ell && i < ell->ellipsoids.size(); ++i) {
+        p.input.ellipsoids.push_back(bus::from_msg(ell->ellipsoids[i], "ELLIPSOIDS ellipsoids[" + std::to_string(i) + "]"));
       }
       if (p.reachable) {
         const std::vector<bool> cached = *p.reachable;
@@ -223,7 +254,13 @@ class ScorerService {
         };
       }
       const double t0 = bus::now_s();
-      result = plan_pbnbv(p.input);
+      if (r.planner == "raycast") {
+        result = plan_raycast(p.input, grid_of(map), p.raycast);
+      } else if (r.planner == "random") {
+        result = plan_random(p.input, static_cast<uint64_t>(r.seed));
+      } else {
+        result = plan_pbnbv(p.input);
+      }
       fill(out, result);
       out.reachability_s = p.reachability_s;
       out.wait_s = wait_s;
@@ -236,9 +273,12 @@ class ScorerService {
     if (!r.figure_path.empty() && !result.candidates.empty()) {
       try {
         std::ostringstream title;
-        title << "view " << r.iteration + 1 << " - planned from the map of view " << r.map_iteration + 1 << " - T occupied "
-              << ell.occupied_components << ", T frontier " << ell.frontier_components;
-        write_plan_figure(plan_figure(p.input, result, title.str()), r.figure_path);
+        title << r.planner << ": view " << r.iteration + 1 << " - planned from the map of view " << r.map_iteration + 1;
+        if (ell) title << " - T occupied " << ell->occupied_components << ", T frontier " << ell->frontier_components;
+        PlanFigure figure = plan_figure(p.input, result, title.str());
+        if (r.planner == "raycast") figure.quality_label = "unobserved voxels each scored candidate's rays reach";
+        if (r.planner == "random") figure.quality_label = "random choice (no score)";
+        write_plan_figure(figure, r.figure_path);
       } catch (const std::exception& e) {
         bus_.note_error(std::string("figure not written: ") + e.what());
       }

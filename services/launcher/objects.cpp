@@ -1,0 +1,63 @@
+#include "launcher/objects.hpp"
+
+#include <filesystem>
+#include <stdexcept>
+
+namespace fs = std::filesystem;
+
+namespace pbnbv::launcher {
+
+const std::vector<DefaultObject>& default_objects() {
+  static const std::vector<DefaultObject> objects = {
+      {"bunny", "bunny.obj", UpAxis::kY, "npm package bunny (Stanford bunny)"},
+      {"teapot", "teapot.obj", UpAxis::kY, "npm package teapot (Utah teapot)"},
+  };
+  return objects;
+}
+
+ObjectSpec resolve_object(const std::string& object) {
+  ObjectSpec o;
+  o.name = fs::path(object).stem().string();
+  if (object == "sphere") {
+    o.source = "built-in icosphere";
+    o.mesh = make_icosphere(0.5, 5);
+    return o;
+  }
+  if (object == "box") {
+    o.source = "built-in box 1.2 x 1.0 x 0.8";
+    o.mesh = make_box(Eigen::Vector3d(1.2, 1.0, 0.8));
+    return o;
+  }
+  for (const auto& d : default_objects()) {
+    if (object != d.name) continue;
+    o.up = d.up;
+    o.source = std::string(PBNBV_DATA_DIR) + "/meshes/" + d.file;
+    if (!fs::exists(o.source)) {
+      throw std::runtime_error("object '" + object + "' needs " + o.source + " (" + d.origin +
+                               "), which ./scripts/setup fetches: run it first");
+    }
+    o.mesh = load_mesh(o.source);
+    return o;
+  }
+  if (!fs::exists(object)) {
+    std::string names;
+    for (const auto& d : default_objects()) names += std::string(names.empty() ? "" : ", ") + d.name;
+    throw std::runtime_error("object '" + object + "' is neither a mesh file nor a known object (" + names +
+                             ", sphere, box)");
+  }
+  o.source = fs::absolute(object).string();
+  o.mesh = load_mesh(o.source);
+  return o;
+}
+
+void place_object(ScanSettings& s) {
+  const Eigen::Vector3d half = s.normalisation.extent_m / 2.0;
+  s.object_z_m = s.rig == RigKind::kArm ? half.z() : 0.0;
+  s.keepout_min_m = -half - Eigen::Vector3d::Constant(0.02);
+  s.keepout_max_m = half + Eigen::Vector3d::Constant(0.02);
+  if (s.rig == RigKind::kArm) s.keepout_min_m.z() = -half.z();  // down to the turntable top
+  s.crop_min_m = -half - Eigen::Vector3d::Constant(0.05);
+  s.crop_max_m = half + Eigen::Vector3d::Constant(0.05);
+}
+
+}  // namespace pbnbv::launcher
