@@ -279,6 +279,7 @@ PlannerSummary summarise(const std::string& planner, const std::vector<ObjectRun
     p.planner_ms_mean = std::accumulate(times.begin(), times.end(), 0.0) / n;
   }
   p.reached_95 = static_cast<int>(reached.size());
+  p.views_to_95_of_mean = views_to_reach(p.coverage_by_view, 95.0);
   if (!reached.empty()) p.views_to_95 = std::accumulate(reached.begin(), reached.end(), 0.0) / reached.size();
   return p;
 }
@@ -299,7 +300,8 @@ json to_json(const BenchResult& r) {
     }
     json pj = {{"coverage_by_view", p.coverage_by_view}, {"planner_ms_median", p.planner_ms_median},
                {"planner_ms_mean", p.planner_ms_mean}, {"views_to_95", p.views_to_95 ? json(*p.views_to_95) : json(nullptr)},
-               {"objects_reaching_95", p.reached_95}, {"objects_complete", p.complete}, {"objects_failed", p.failed},
+               {"objects_reaching_95", p.reached_95},
+               {"views_to_95_of_mean_curve", p.views_to_95_of_mean ? json(*p.views_to_95_of_mean) : json(nullptr)}, {"objects_complete", p.complete}, {"objects_failed", p.failed},
                {"objects", objects}};
     if (!p.observable_by_view.empty()) pj["observable_coverage_by_view"] = p.observable_by_view;
     j[p.planner] = pj;

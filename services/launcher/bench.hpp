@@ -63,6 +63,7 @@ struct PlannerSummary {
   std::vector<double> observable_by_view;  // mean over the complete objects
   double planner_ms_median = 0, planner_ms_mean = 0;  // over every iteration of every object
   std::optional<double> views_to_95;       // mean over the objects that reach 95 %
+  std::optional<int> views_to_95_of_mean;  // first view at which the mean coverage reaches 95 %
   int reached_95 = 0, complete = 0, failed = 0;
   std::vector<ObjectRun> objects;
 };

@@ -31,7 +31,7 @@ void start(Child& child) {
       if (!child.stdout_to_terminal) ::dup2(log_fd, STDOUT_FILENO);
       ::dup2(log_fd, STDERR_FILENO);
     }
-    ::execv(argv[0], argv.data());
+    ::execvp(argv[0], argv.data());  // a bare name is looked up on PATH
     std::fprintf(stderr, "cannot run %s: %s\n", argv[0], std::strerror(errno));
     ::_exit(127);
   }

@@ -107,7 +107,7 @@ void coverage_chart(const BenchResult& r, bool observable, const fs::path& path)
   if (!observable && paper_setup(s)) {
     std::vector<double> y = kReleaseCoverage;
     y.resize(std::min<std::size_t>(y.size(), s.views), NAN);
-    c.series.push_back({"authors' release (5 meshes, 2 cores)", view_numbers(static_cast<int>(y.size())), y, true, true});
+    c.series.push_back({"authors' release", view_numbers(static_cast<int>(y.size())), y, true, true});
   }
   if (c.series.empty()) return;
   write_line_chart(c, path.string());

@@ -1,0 +1,151 @@
+// The benchmark command end to end: `pbnbv bench` runs three planners (PB-NBV and the two
+// baselines served by the same view scorer) on two objects for three views, every scan a full
+// pipeline of processes on a real LCM bus in its own private network namespace; summary.json
+// must be well formed and agree with the scans, the report and plots must be written, and a
+// rerun must resume (skip every complete scan). Also the summary's rules on hand-made curves.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "launcher/bench.hpp"
+#include "test_util.hpp"
+
+namespace fs = std::filesystem;
+using namespace pbnbv;
+using namespace pbnbv::testing;
+using nlohmann::json;
+
+namespace {
+
+json read_json_file(const fs::path& p) {
+  std::ifstream in(p);
+  return json::parse(in);
+}
+
+TEST(BenchRules, ViewsToReach) {
+  EXPECT_EQ(launcher::views_to_reach({30, 60, 94.9, 95.0, 99}, 95.0), 4);
+  EXPECT_EQ(launcher::views_to_reach({96}, 95.0), 1);
+  EXPECT_FALSE(launcher::views_to_reach({30, 60, 94.99}, 95.0).has_value());
+  EXPECT_FALSE(launcher::views_to_reach({}, 95.0).has_value());
+}
+
+TEST(BenchRules, PadViewsKeepsTheLastFigureAfterAnEarlyStop) {
+  EXPECT_EQ(launcher::pad_views({40, 80, 97}, 5), (std::vector<double>{40, 80, 97, 97, 97}));
+  EXPECT_EQ(launcher::pad_views({40, 80, 97}, 2), (std::vector<double>{40, 80}));
+  EXPECT_TRUE(launcher::pad_views({}, 3).empty());
+}
+
+TEST(BenchRules, SummaryMeansMediansAndFailures) {
+  launcher::ObjectRun a, b, c;
+  a.object = "a";
+  a.complete = true;
+  a.coverage_by_view = {40, 90, 96};
+  a.planner_ms = {10, 30};
+  a.views_to_95 = 3;
+  b.object = "b";
+  b.complete = true;
+  b.coverage_by_view = {60, 96};  // stopped after view 2: its 96 holds for view 3
+  b.planner_ms = {20};
+  b.views_to_95 = 2;
+  c.object = "c";
+  c.error = "the scan did not complete";
+  const launcher::PlannerSummary s = launcher::summarise("pbnbv", {a, b, c}, 3);
+  EXPECT_EQ(s.complete, 2);
+  EXPECT_EQ(s.failed, 1);
+  ASSERT_EQ(s.coverage_by_view.size(), 3u);
+  EXPECT_DOUBLE_EQ(s.coverage_by_view[0], 50.0);
+  EXPECT_DOUBLE_EQ(s.coverage_by_view[1], 93.0);
+  EXPECT_DOUBLE_EQ(s.coverage_by_view[2], 96.0);
+  EXPECT_DOUBLE_EQ(s.planner_ms_median, 20.0);  // of 10, 20, 30
+  EXPECT_DOUBLE_EQ(s.planner_ms_mean, 20.0);
+  ASSERT_TRUE(s.views_to_95.has_value());
+  EXPECT_DOUBLE_EQ(*s.views_to_95, 2.5);
+  EXPECT_EQ(s.reached_95, 2);
+  EXPECT_EQ(s.views_to_95_of_mean, 3);  // the mean curve reaches 95 % at view 3
+}
+
+TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
+  const fs::path out = fresh_dir("bench");
+  const std::string cmd = netns_run() + " " + bin_dir() +
+                          "/pbnbv bench --objects sphere,box --planners pbnbv,raycast,random --rig free --area full "
+                          "--views 3 --jobs 2 --out " + out.string();
+  const CommandResult r = run_command(cmd);
+  ASSERT_EQ(r.exit_code, 0) << cmd << "\n" << r.output;
+  EXPECT_NE(r.output.find("[1/6] sphere - pbnbv"), std::string::npos) << r.output;  // progress
+
+  const json s = read_json_file(out / "summary.json");
+  EXPECT_EQ(s["planners"], json({"pbnbv", "raycast", "random"}));
+  EXPECT_EQ(s["settings"]["views"], 3);
+  EXPECT_EQ(s["settings"]["rig"], "free");
+  EXPECT_EQ(s["settings"]["candidates"], 800);
+  EXPECT_GE(s["machine"]["cores"].get<int>(), 1);
+  std::map<std::string, double> first_view;  // object -> coverage after view 1
+  for (const std::string planner : {"pbnbv", "raycast", "random"}) {
+    SCOPED_TRACE(planner);
+    const json& p = s.at(planner);
+    ASSERT_EQ(p["coverage_by_view"].size(), 3u);
+    EXPECT_EQ(p["objects_complete"], 2);
+    EXPECT_GT(p["planner_ms_median"].get<double>(), 0.0);
+    EXPECT_GT(p["planner_ms_mean"].get<double>(), 0.0);
+    ASSERT_TRUE(p["views_to_95"].is_null() || p["views_to_95"].is_number());
+    std::vector<double> mean(3, 0.0);
+    for (const std::string object : {"sphere", "box"}) {
+      SCOPED_TRACE(object);
+      const json& o = p["objects"].at(object);
+      ASSERT_EQ(o["coverage_by_view"].size(), 3u);
+      EXPECT_EQ(o["planner_ms"].size(), 2u);  // views 2 and 3 were planned
+      for (int i = 0; i < 3; ++i) {
+        const double c = o["coverage_by_view"][i].get<double>();
+        EXPECT_GT(c, 0.0);
+        EXPECT_LE(c, 100.0);
+        if (i > 0) EXPECT_GE(c, o["coverage_by_view"][i - 1].get<double>());
+        mean[i] += c / 2;
+      }
+      // Every planner starts from the same first view: the same first frame, the same coverage.
+      const double c1 = o["coverage_by_view"][0].get<double>();
+      if (first_view.count(object)) EXPECT_NEAR(c1, first_view[object], 1e-9);
+      first_view[object] = c1;
+      // A sphere seen from one side: about the visible cap, well under half.
+      if (object == "sphere") EXPECT_LT(c1, 50.0);
+      // And the scan's own outputs are there.
+      EXPECT_TRUE(fs::exists(out / planner / object / "cloud.ply"));
+    }
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(p["coverage_by_view"][i].get<double>(), mean[i], 1e-9);
+  }
+  // Two planned views of a sphere add surface for a planner that looks for it.
+  EXPECT_GT(s["pbnbv"]["objects"]["sphere"]["coverage_by_view"][2].get<double>(),
+            s["pbnbv"]["objects"]["sphere"]["coverage_by_view"][0].get<double>() + 20.0);
+
+  // The report in the paper's form, and the plots.
+  std::ifstream md(out / "report.md");
+  const std::string report((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+  EXPECT_NE(report.find("| pbnbv |"), std::string::npos);
+  EXPECT_NE(report.find("| raycast |"), std::string::npos);
+  EXPECT_NE(report.find("resolution 0.03 m"), std::string::npos);
+  for (const char* png : {"coverage.png", "time.png"}) {
+    const cv::Mat img = cv::imread((out / png).string());
+    EXPECT_EQ(img.cols, 960) << png;
+    EXPECT_EQ(img.rows, 600) << png;
+  }
+
+  // A rerun skips every complete scan and gives the same figures.
+  const CommandResult again = run_command(cmd);
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_NE(again.output.find("(6 already complete"), std::string::npos) << again.output;
+  EXPECT_EQ(again.output.find("started"), std::string::npos) << again.output;
+  const json s2 = read_json_file(out / "summary.json");
+  for (const std::string planner : {"pbnbv", "raycast", "random"}) {
+    EXPECT_EQ(s2[planner]["coverage_by_view"], s[planner]["coverage_by_view"]);
+  }
+  // Other settings in the same folder are refused, naming the setting.
+  const CommandResult other = run_command(netns_run() + " " + bin_dir() + "/pbnbv bench --objects sphere --planners pbnbv "
+                                          "--views 4 --out " + out.string());
+  EXPECT_NE(other.exit_code, 0);
+  EXPECT_NE(other.output.find("views"), std::string::npos) << other.output;
+}
+
+}  // namespace
