@@ -384,6 +384,7 @@ class Coordinator {
     r.working_distance_m = s_.working_distance_m;
     r.num_alternatives = s_.alternatives;
     r.stop_fraction = s_.stop_fraction;
+    r.spread_when_done = s_.when_done == "spread";
     r.first_quality = first_quality_;
     r.seed = s_.seed + i;
     r.depth_min_m = s_.depth_range.min_m;

@@ -107,6 +107,41 @@ static void rank_pool(const PlanInput& in, PlanResult& r, std::vector<int> pool)
   }
 }
 
+// The planner has nothing left to aim at but views remain in the budget: the scorable candidate
+// farthest (in angle, seen from the centre of B) from every view taken, filling the largest gap.
+static PlanResult plan_spread(const PlanInput& in, PlanResult r, const std::string& why) {
+  if (!check_bbox(in, r)) return r;
+  r.chosen = -1;
+  r.alternatives.clear();
+  prepare_candidates(in, r);
+  std::vector<Eigen::Vector3d> taken;
+  for (const auto& v : in.views_done) {
+    const Eigen::Vector3d d = v.translation() - r.centre;
+    if (d.norm() > 0) taken.push_back(d.normalized());
+  }
+  std::vector<int> pool;
+  for (int i = 0; i < static_cast<int>(r.candidates.size()); ++i) {
+    if (r.status[i] != CandidateStatus::kScored) continue;
+    const Eigen::Vector3d d = (r.candidates[i].translation() - r.centre).normalized();
+    double nearest = M_PI;
+    for (const auto& t : taken) nearest = std::min(nearest, std::acos(std::clamp(d.dot(t), -1.0, 1.0)));
+    r.scores[i].quality = nearest * 180.0 / M_PI;  // degrees to the nearest view taken
+    pool.push_back(i);
+  }
+  r.num_scored = static_cast<int>(pool.size());
+  if (pool.empty()) {
+    r.outcome = PlanResult::Outcome::kStop;
+    r.reason = why + "; " + nothing_to_score(r);
+    return r;
+  }
+  rank_pool(in, r, std::move(pool));
+  r.outcome = PlanResult::Outcome::kView;
+  std::ostringstream os;
+  os << why << ": the view farthest from every view taken (" << r.scores[r.chosen].quality << " deg from the nearest)";
+  r.reason = os.str();
+  return r;
+}
+
 PlanResult plan_pbnbv(const PlanInput& in) {
   PlanResult r;
   for (const auto& e : in.ellipsoids) {
@@ -115,6 +150,7 @@ PlanResult plan_pbnbv(const PlanInput& in) {
   if (in.beta < 1) throw std::invalid_argument("beta (partition sectors) must be >= 1, got " + std::to_string(in.beta));
   if (!check_bbox(in, r)) return r;
   if (r.num_frontier_ellipsoids == 0) {
+    if (in.spread_when_done) return plan_spread(in, std::move(r), "no frontier ellipsoid remains");
     r.outcome = PlanResult::Outcome::kStop;
     r.reason = "no frontier ellipsoid remains";
     return r;
@@ -139,9 +175,13 @@ PlanResult plan_pbnbv(const PlanInput& in) {
   std::vector<int> sector(n, 0);
   if (in.beta > 1) {
     std::vector<bool> scanned(in.beta, false);
-    for (const auto& v : in.views_done) scanned[sector_of(v.translation(), r.centre, in.beta)] = true;
+    if (in.sectors_centred_on_first_view && !in.views_done.empty()) {
+      const Eigen::Vector3d d = in.views_done.front().translation() - r.centre;
+      if (d.head<2>().norm() > 1e-9) r.sector_start_rad = std::atan2(d.y(), d.x()) - M_PI / in.beta;
+    }
+    for (const auto& v : in.views_done) scanned[sector_of(v.translation(), r.centre, in.beta, r.sector_start_rad)] = true;
     r.allowed_sectors = allowed_sectors(scanned);
-    for (int i = 0; i < n; ++i) sector[i] = sector_of(r.candidates[i].translation(), r.centre, in.beta);
+    for (int i = 0; i < n; ++i) sector[i] = sector_of(r.candidates[i].translation(), r.centre, in.beta, r.sector_start_rad);
   } else {
     r.allowed_sectors = {0};
   }
@@ -211,7 +251,9 @@ PlanResult plan_raycast(const PlanInput& in, const VoxelGrid& grid, const Raycas
   const double best = r.scores[r.chosen].quality;
   r.first_quality = std::isfinite(in.first_quality) ? in.first_quality : best;
   std::ostringstream os;
-  if (best <= 0) {
+  if (best <= 0 && in.spread_when_done) {
+    return plan_spread(in, PlanResult{}, "no candidate sees an unobserved voxel");
+  } else if (best <= 0) {
     r.outcome = PlanResult::Outcome::kStop;
     os << "no candidate sees an unobserved voxel (" << r.num_scored << " scored, " << rays << " rays)";
   } else if (std::isfinite(in.first_quality) && in.stop_fraction > 0 && best < in.stop_fraction * in.first_quality) {

@@ -38,6 +38,11 @@ struct PlanInput {
   Eigen::AlignedBox3d bbox;          // B
   CandidateSpec candidates;
   int beta = 4;                      // partition sectors; 1: no partitioning
+  // Where sector 0 starts: centred on the first view (its azimuth - pi / beta), so that the first
+  // view lies in the middle of the scanned sector and the two adjacent sectors lie symmetrically
+  // on either side of it (the paper does not say where the sectors start; starting them at
+  // azimuth 0 puts a default first view at azimuth 0 on a sector boundary). false: azimuth 0.
+  bool sectors_centred_on_first_view = true;
   std::vector<Pose> views_done;      // camera poses of the views taken (object frame)
   std::vector<Pose> excluded;        // views the rig could not reach or capture
   double exclude_angle_rad = 10.0 * M_PI / 180.0;  // candidates this close (seen from the
@@ -50,6 +55,10 @@ struct PlanInput {
   double stop_fraction = 0.0;        // stop when best F < stop_fraction * first_quality
   double first_quality = std::numeric_limits<double>::quiet_NaN();  // NaN: this is the first
   int num_alternatives = 5;
+  // When the planner has nothing left to aim at (PB-NBV: no frontier ellipsoid; raycast: no
+  // unobserved voxel in view) it stops (false), or (true: a fixed view budget, as in the
+  // paper's evaluation) chooses the candidate farthest in angle from every view taken.
+  bool spread_when_done = false;
   // Reachability of each candidate (the motion executor's check), called once with every
   // candidate (candidate_views(bbox, candidates), so a caller may compute it ahead), or empty:
   // all reachable.
@@ -71,6 +80,7 @@ struct PlanResult {
   double first_quality = std::numeric_limits<double>::quiet_NaN();
 
   int partition = -1;                   // sector of the chosen view (-1: beta 1)
+  double sector_start_rad = 0;          // azimuth where sector 0 starts
   std::vector<int> allowed_sectors;
   bool partition_fallback = false;      // nothing scorable in the allowed sectors
 

@@ -48,7 +48,7 @@ nlohmann::json to_json(const ScanSettings& s) {
       {"initial_view_m", s.initial_view_m.allFinite() ? to_json(s.initial_view_m) : nlohmann::json(nullptr)},
       {"planning", {{"candidates", s.candidates}, {"parallels", s.parallels}, {"sectors", s.sectors},
                     {"area", s.full_sphere ? "full" : "hemi"}, {"t_max", s.t_max},
-                    {"map_resolution_m", s.map_resolution_m}, {"stop_fraction", s.stop_fraction},
+                    {"map_resolution_m", s.map_resolution_m}, {"stop_fraction", s.stop_fraction}, {"when_done", s.when_done},
                     {"alternatives", s.alternatives}, {"seed", s.seed}}},
       {"keepout", {{"min_m", to_json(s.keepout_min_m)}, {"max_m", to_json(s.keepout_max_m)}}},
       {"crop", {{"min_m", to_json(s.crop_min_m)}, {"max_m", to_json(s.crop_max_m)},
@@ -99,6 +99,7 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.t_max = pl.at("t_max").get<int>();
     s.map_resolution_m = pl.at("map_resolution_m").get<double>();
     s.stop_fraction = pl.at("stop_fraction").get<double>();
+    s.when_done = pl.value("when_done", std::string("stop"));
     s.alternatives = pl.at("alternatives").get<int>();
     s.seed = pl.value("seed", int64_t{1});
     s.keepout_min_m = vec3_from_json(j.at("keepout").at("min_m"), "keepout.min_m");

@@ -42,6 +42,7 @@ struct ScanSettings {
   int t_max = 10;                // ellipsoid fitter's T_max
   double map_resolution_m = 0.03;
   double stop_fraction = 0.0;    // stop when best F < this * F of the first planned view (0: off)
+  std::string when_done = "stop";  // nothing left to aim at: "stop", or "spread" (use the budget)
   int alternatives = 5;          // next-best views tried when the rig cannot reach the best
   int64_t seed = 1;              // the random planner's seed (view i uses seed + i)
 

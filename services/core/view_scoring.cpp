@@ -218,9 +218,9 @@ ViewScore score_view(const std::vector<Ellipsoid>& ellipsoids, const CameraIntri
   return score;
 }
 
-int sector_of(const Eigen::Vector3d& eye, const Eigen::Vector3d& centre, int beta) {
+int sector_of(const Eigen::Vector3d& eye, const Eigen::Vector3d& centre, int beta, double start_rad) {
   if (beta <= 1) return 0;
-  double a = std::atan2(eye.y() - centre.y(), eye.x() - centre.x());
+  double a = std::fmod(std::atan2(eye.y() - centre.y(), eye.x() - centre.x()) - start_rad, 2 * kPi);
   if (a < 0) a += 2 * kPi;
   if (a >= 2 * kPi) a = 0;
   const int s = static_cast<int>(std::floor(a / (2 * kPi / beta)));

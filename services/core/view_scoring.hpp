@@ -39,9 +39,9 @@ struct ViewScore {
 ViewScore score_view(const std::vector<Ellipsoid>& ellipsoids, const CameraIntrinsics& k,
                      const Pose& object_T_camera);
 
-// Global partitioning: beta sectors by azimuth about the centre (sector of azimuth a in
-// [0, 2pi): floor(a / (2pi / beta))).
-int sector_of(const Eigen::Vector3d& eye, const Eigen::Vector3d& centre, int beta);
+// Global partitioning: beta sectors by azimuth about the centre, sector 0 starting at azimuth
+// `start_rad` (sector of azimuth a: floor(((a - start) mod 2pi) / (2pi / beta))).
+int sector_of(const Eigen::Vector3d& eye, const Eigen::Vector3d& centre, int beta, double start_rad = 0.0);
 
 // The sectors the next view may come from, given the scanned ones: while some sector is
 // unscanned, the unscanned sectors adjacent (cyclically) to a scanned one; once all are

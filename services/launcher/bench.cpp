@@ -78,7 +78,7 @@ std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, con
   a.insert(a.end(), {self.string(), "scan", "--object", object, "--planner", planner, "--rig", s.rig, "--area", s.area,
                      "--views", std::to_string(s.views), "--resolution", num(s.resolution_m), "--candidates",
                      std::to_string(s.candidates), "--tmax", std::to_string(s.tmax), "--beta", std::to_string(s.beta),
-                     "--size", num(s.size_m), "--seed", std::to_string(s.seed), "--no-log", "--out", out.string()});
+                     "--size", num(s.size_m), "--seed", std::to_string(s.seed), "--when-done", s.when_done, "--no-log", "--out", out.string()});
   if (s.initial_view) {
     const Eigen::Vector3d& v = *s.initial_view;
     a.insert(a.end(), {"--initial-view", num(v.x()) + "," + num(v.y()) + "," + num(v.z())});
@@ -219,7 +219,7 @@ void BenchSpec::validate() const {
 json to_json(const BenchSpec& s) {
   json j = {{"objects", s.objects}, {"planners", s.planners}, {"rig", s.rig}, {"area", s.area}, {"views", s.views},
             {"resolution_m", s.resolution_m}, {"candidates", s.candidates}, {"tmax", s.tmax}, {"beta", s.beta},
-            {"size_m", s.size_m}, {"up", s.up.empty() ? "per object" : s.up}, {"seed", s.seed},
+            {"size_m", s.size_m}, {"up", s.up.empty() ? "per object" : s.up}, {"seed", s.seed}, {"when_done", s.when_done},
             {"coverage", {{"samples", s.coverage.num_samples}, {"seed", s.coverage.seed}, {"radius_m", s.coverage.radius_m}}}};
   j["initial_view"] = s.initial_view ? json{s.initial_view->x(), s.initial_view->y(), s.initial_view->z()} : json(nullptr);
   return j;
@@ -535,6 +535,8 @@ BenchSpec bench_spec(Args& args) {
   s.size_m = args.num("size", 0.3, 0.01, 2.0);
   s.up = args.str("up", "");
   s.seed = args.integer("seed", 1, 0, int64_t{1} << 62);
+  s.when_done = args.str("when-done", "spread");
+  if (s.when_done != "stop" && s.when_done != "spread") throw std::invalid_argument("--when-done " + s.when_done + ": expected stop or spread");
   s.jobs = static_cast<int>(args.integer("jobs", 1, 1, 64));
   s.netns = !args.flag("no-netns");
   return s;

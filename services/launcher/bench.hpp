@@ -31,6 +31,7 @@ struct BenchSpec {
   double size_m = 0.3;
   std::string up;                    // "" : each object's natural up axis
   int64_t seed = 1;                  // the random planner's seed
+  std::string when_done = "spread";  // the paper's evaluation spends the whole view budget
   int jobs = 1;                      // scans run at once (each in its own network namespace)
   bool netns = true;                 // false: every scan on the current LCM bus, one at a time
   std::filesystem::path out;

@@ -11,6 +11,16 @@ const std::vector<DefaultObject>& default_objects() {
   static const std::vector<DefaultObject> objects = {
       {"bunny", "bunny.obj", UpAxis::kY, "npm package bunny (Stanford bunny)"},
       {"teapot", "teapot.obj", UpAxis::kY, "npm package teapot (Utah teapot)"},
+      {"armadillo", "armadillo.off", UpAxis::kY, "libcgal-demo data/meshes/armadillo.off"},
+      {"bear", "bear.off", UpAxis::kY, "libcgal-demo data/meshes/bear.off"},
+      {"bull", "bull.off", UpAxis::kY, "libcgal-demo data/meshes/bull.off"},
+      {"cow", "cow.off", UpAxis::kY, "libcgal-demo data/meshes/cow.off"},
+      {"dino", "dino.off", UpAxis::kZ, "libcgal-demo data/meshes/dino.off"},
+      {"dragon", "ChineseDragon-10kv.off", UpAxis::kY, "libcgal-demo data/meshes/ChineseDragon-10kv.off"},
+      {"elephant", "elephant.off", UpAxis::kY, "libcgal-demo data/meshes/elephant.off"},
+      {"elk", "elk.off", UpAxis::kY, "libcgal-demo data/meshes/elk.off"},
+      {"fandisk", "fandisk.off", UpAxis::kY, "libcgal-demo data/meshes/fandisk.off"},
+      {"homer", "homer.off", UpAxis::kY, "libcgal-demo data/meshes/homer.off"},
   };
   return objects;
 }

@@ -63,6 +63,10 @@ scan options:
   --tmax N                 most Gaussian components per ellipsoid class (T_max)   [10]
   --stop-fraction X        stop when the best view quality F falls below X times
                            the first planned view's F (0: never; README says why) [0]
+  --when-done stop|spread  when the map has nothing left to aim at (no frontier
+                           ellipsoid; raycast: no unobserved voxel in view): stop,
+                           or spend the remaining views filling the largest gaps
+                           between the views taken                             [stop]
   --initial-view x,y,z     first camera position, object frame, m; looks at the origin
                            [ring view at --ring-elevation (arm) / 0 deg (free), azimuth 0]
   --out DIR                output folder                      [out/<object>-<date-time>]
@@ -139,6 +143,10 @@ int scan(int argc, char** argv) {
   s.sectors = static_cast<int>(args.integer("beta", 4, 1, 360));
   s.t_max = static_cast<int>(args.integer("tmax", 10, 1, 200));
   s.stop_fraction = args.num("stop-fraction", 0.0, 0.0, 1.0);
+  s.when_done = args.str("when-done", "stop");
+  if (s.when_done != "stop" && s.when_done != "spread") {
+    throw std::invalid_argument("--when-done " + s.when_done + ": expected stop or spread");
+  }
   if (args.has("initial-view")) {
     s.initial_view_m = args.vec3("initial-view", Eigen::Vector3d::Zero());
     if (s.initial_view_m.norm() < 0.05) throw std::invalid_argument("--initial-view must be away from the object centre");

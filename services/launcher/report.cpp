@@ -65,6 +65,7 @@ std::string command_of(const BenchSpec& s) {
   if (s.initial_view) os << " --initial-view " << s.initial_view->x() << "," << s.initial_view->y() << "," << s.initial_view->z();
   if (s.size_m != 0.3) os << " --size " << s.size_m;
   if (!s.up.empty()) os << " --up " << s.up;
+  if (s.when_done != "spread") os << " --when-done " << s.when_done;
   os << " --jobs " << s.jobs << " --out " << s.out.string();
   return os.str();
 }

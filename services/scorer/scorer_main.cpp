@@ -76,6 +76,7 @@ PlanInput plan_input(const plan_request_t& r) {
   in.beta = r.num_sectors;
   in.num_alternatives = r.num_alternatives;
   in.stop_fraction = r.stop_fraction;
+  in.spread_when_done = r.spread_when_done;
   in.first_quality = r.first_quality;
   in.camera = CameraIntrinsics{r.width_px, r.height_px, r.fx, r.fy, r.cx, r.cy};
   in.camera.validate();
