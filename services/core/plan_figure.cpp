@@ -298,7 +298,7 @@ void draw_sectors_top(Canvas& c, const PlanFigureLayout& l, const OrthoView& v,
       std::vector<cv::Point2d> poly{o};
       const int steps = std::max(2, static_cast<int>(std::ceil(w / (kPi / 36))));
       for (int k = 0; k <= steps; ++k) {
-        const double a = s * w + w * k / steps;
+        const double a = f.sector_start_rad + s * w + w * k / steps;
         poly.emplace_back(o.x + big * std::cos(a), o.y - big * std::sin(a));
       }
       c.polygon(poly, kAllowedShade);
@@ -307,7 +307,7 @@ void draw_sectors_top(Canvas& c, const PlanFigureLayout& l, const OrthoView& v,
   }
   const double r_label = 0.92 * v.rect.width / 2.0;
   for (int s = 0; s < f.beta; ++s) {
-    const double a = s * w;
+    const double a = f.sector_start_rad + s * w;
     c.line(o, {o.x + big * std::cos(a), o.y - big * std::sin(a)}, kSectorLine);
     const double m = a + w / 2;
     // Label on the panel edge along the mid-angle (clamped into the square).
@@ -406,16 +406,27 @@ void draw_ortho_panel(cv::Mat& fig, const PlanFigureLayout& l, const OrthoView& 
 void draw_map_panel(cv::Mat& fig, const PlanFigureLayout& l, const PlanFigure& f,
                     const FRange& range) {
   const cv::Rect& r = l.map;
+  const double start_deg = f.sector_start_rad * 180.0 / kPi;
+  auto wrap_deg = [](double a) { return a - 360.0 * std::floor(a / 360.0); };
   {
     Canvas c(fig, r);
     // Allowed sectors and sector boundaries.
     if (f.beta > 1) {
       for (int s : f.allowed_sectors) {
         if (s < 0 || s >= f.beta) continue;
-        const double a0 = 360.0 * s / f.beta, a1 = 360.0 * (s + 1) / f.beta;
-        c.polygon({sphere_map_pixel(l, a0, 0), sphere_map_pixel(l, a1, 0),
-                   sphere_map_pixel(l, a1, 180), sphere_map_pixel(l, a0, 180)},
-                  kAllowedShade);
+        // The sector's azimuth span on the 0..360 map, split where it wraps.
+        const double a0 = wrap_deg(start_deg + 360.0 * s / f.beta), a1 = a0 + 360.0 / f.beta;
+        auto shade = [&](double lo, double hi) {
+          c.polygon({sphere_map_pixel(l, lo, 0), sphere_map_pixel(l, hi, 0), sphere_map_pixel(l, hi, 180),
+                     sphere_map_pixel(l, lo, 180)},
+                    kAllowedShade);
+        };
+        if (a1 <= 360.0) {
+          shade(a0, a1);
+        } else {
+          shade(a0, 360.0);
+          shade(0.0, a1 - 360.0);
+        }
       }
     }
     for (int az = 45; az < 360; az += 45) {
@@ -427,8 +438,8 @@ void draw_map_panel(cv::Mat& fig, const PlanFigureLayout& l, const PlanFigure& f
     }
     if (f.beta > 1) {
       for (int s = 0; s < f.beta; ++s) {
-        const double a0 = 360.0 * s / f.beta;
-        if (s > 0) c.line(sphere_map_pixel(l, a0, 0), sphere_map_pixel(l, a0, 180), kSectorLine);
+        const double a0 = wrap_deg(start_deg + 360.0 * s / f.beta);
+        if (a0 > 1e-9) c.line(sphere_map_pixel(l, a0, 0), sphere_map_pixel(l, a0, 180), kSectorLine);
       }
     }
     auto map_of = [&](const Eigen::Vector3d& eye) {
@@ -443,7 +454,7 @@ void draw_map_panel(cv::Mat& fig, const PlanFigureLayout& l, const PlanFigure& f
     }
     if (f.chosen >= 0) chosen_marker(c, map_of(f.candidates[f.chosen].translation()));
     for (int s = 0; f.beta > 1 && s < f.beta; ++s) {  // sector names over the markers
-      c.label("s" + std::to_string(s), sphere_map_pixel(l, 360.0 * (s + 0.5) / f.beta, 0) +
+      c.label("s" + std::to_string(s), sphere_map_pixel(l, wrap_deg(start_deg + 360.0 * (s + 0.5) / f.beta), 0) +
                                            cv::Point2d(0, 11),
               0.42, kSectorLine, sector_background(f, s));
     }

@@ -309,6 +309,7 @@ PlanFigure plan_figure(const PlanInput& in, const PlanResult& r, const std::stri
   f.bbox = in.bbox;
   f.centre = r.centre;
   f.beta = in.beta;
+  f.sector_start_rad = r.sector_start_rad;
   f.allowed_sectors = r.allowed_sectors;
   std::ostringstream a, b;
   a << r.num_occupied_ellipsoids << " occupied and " << r.num_frontier_ellipsoids << " frontier ellipsoids; "
