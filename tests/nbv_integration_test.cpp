@@ -96,6 +96,8 @@ TEST(NbvIntegration, ThreeViewScanOnTheFreeRigFullSphere) {
   // nothing measurable on the bunny), so three.
   const NbvScan s = nbv_scan("nbv-free", "--object bunny --size 0.2 --rig free --area full", 3);
   check_views(s, 3);
-  EXPECT_GT(s.eval.coverage_by_view.back(), 90.0);
+  // The authors' release reaches 80.2 % on average after three views, a ring of three views
+  // about 58 % (pbnbv bench); this scan's third view must be in a sector adjacent to the first.
+  EXPECT_GT(s.eval.coverage_by_view.back(), 85.0);
   EXPECT_EQ(s.scan["views"][1]["plan"]["candidates"]["unreachable"], 0);
 }
