@@ -109,11 +109,12 @@ static void rank_pool(const PlanInput& in, PlanResult& r, std::vector<int> pool)
 
 // The planner has nothing left to aim at but views remain in the budget: the scorable candidate
 // farthest (in angle, seen from the centre of B) from every view taken, filling the largest gap.
+// `r` has its candidates prepared (prepare_candidates); any scores it holds are replaced.
 static PlanResult plan_spread(const PlanInput& in, PlanResult r, const std::string& why) {
-  if (!check_bbox(in, r)) return r;
   r.chosen = -1;
   r.alternatives.clear();
-  prepare_candidates(in, r);
+  r.scores.assign(r.candidates.size(), ViewScore{});
+  r.first_quality = in.first_quality;  // a gap-filling view has no quality of the planner's kind
   std::vector<Eigen::Vector3d> taken;
   for (const auto& v : in.views_done) {
     const Eigen::Vector3d d = v.translation() - r.centre;
@@ -150,7 +151,10 @@ PlanResult plan_pbnbv(const PlanInput& in) {
   if (in.beta < 1) throw std::invalid_argument("beta (partition sectors) must be >= 1, got " + std::to_string(in.beta));
   if (!check_bbox(in, r)) return r;
   if (r.num_frontier_ellipsoids == 0) {
-    if (in.spread_when_done) return plan_spread(in, std::move(r), "no frontier ellipsoid remains");
+    if (in.spread_when_done) {
+      prepare_candidates(in, r);
+      return plan_spread(in, std::move(r), "no frontier ellipsoid remains");
+    }
     r.outcome = PlanResult::Outcome::kStop;
     r.reason = "no frontier ellipsoid remains";
     return r;
@@ -252,7 +256,7 @@ PlanResult plan_raycast(const PlanInput& in, const VoxelGrid& grid, const Raycas
   r.first_quality = std::isfinite(in.first_quality) ? in.first_quality : best;
   std::ostringstream os;
   if (best <= 0 && in.spread_when_done) {
-    return plan_spread(in, PlanResult{}, "no candidate sees an unobserved voxel");
+    return plan_spread(in, std::move(r), "no candidate sees an unobserved voxel");
   } else if (best <= 0) {
     r.outcome = PlanResult::Outcome::kStop;
     os << "no candidate sees an unobserved voxel (" << r.num_scored << " scored, " << rays << " rays)";

@@ -156,6 +156,25 @@ TEST(Planner, StopsWhenNoFrontierRemainsOrTheBestViewIsWorthTooLittle) {
   EXPECT_EQ(plan_pbnbv(small).outcome, PlanResult::Outcome::kView);
 }
 
+TEST(Planner, WithABudgetLeftItFillsTheLargestGapInsteadOfStopping) {
+  PlanInput in = scene(0.0, 4);
+  in.ellipsoids.pop_back();  // nothing left to aim at
+  in.spread_when_done = true;
+  Eigen::Vector3d centre;
+  double radius = 0;
+  candidate_sphere(in.bbox, in.candidates.working_distance_m, &centre, &radius);
+  // One view taken at azimuth 0, 45 deg above the centre: the farthest hemisphere candidate is
+  // across the object at the equator, 135 deg away (the lowest parallel is 1.9 deg above it).
+  in.views_done = {look_at_z_up(centre + radius * Eigen::Vector3d(std::sqrt(0.5), 0, std::sqrt(0.5)), centre)};
+  const PlanResult r = plan_pbnbv(in);
+  ASSERT_EQ(r.outcome, PlanResult::Outcome::kView) << r.reason;
+  EXPECT_NE(r.reason.find("no frontier ellipsoid remains"), std::string::npos) << r.reason;
+  EXPECT_NEAR(azimuth_deg(r.candidates[r.chosen], centre), 180.0, 8.0);
+  EXPECT_NEAR(r.scores[r.chosen].quality, 135.0 - 1.9, 2.0);  // degrees to the view taken
+  for (int a : r.alternatives) EXPECT_LE(r.scores[a].quality, r.scores[r.chosen].quality);
+  EXPECT_TRUE(std::isnan(r.first_quality));
+}
+
 TEST(Planner, EmptyBoundingBoxFails) {
   PlanInput in = scene(0.0, 4);
   in.bbox = Eigen::AlignedBox3d();

@@ -174,6 +174,21 @@ TEST(RaycastPlanner, StopsWhenNothingIsUnobserved) {
   EXPECT_NE(r.reason.find("unobserved"), std::string::npos);
 }
 
+TEST(RaycastPlanner, WithABudgetLeftItFillsTheLargestGapInsteadOfStopping) {
+  const VoxelGrid g = cube_grid(10, VoxelState::kEmpty);
+  PlanInput in = plan_input(g);
+  in.spread_when_done = true;
+  in.views_done = {look_at(Eigen::Vector3d(3, 0, 0), Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ())};
+  const PlanResult r = plan_raycast(in, g, RaycastParams{});
+  ASSERT_EQ(r.outcome, PlanResult::Outcome::kView) << r.reason;
+  EXPECT_NE(r.reason.find("no candidate sees an unobserved voxel"), std::string::npos) << r.reason;
+  // Across the object from the one view taken (+x): the full sphere's candidate nearest -x.
+  const Eigen::Vector3d eye = r.candidates[r.chosen].translation().normalized();
+  EXPECT_LT(eye.x(), -0.98);
+  EXPECT_GT(r.scores[r.chosen].quality, 165.0);  // degrees to the view taken
+  EXPECT_GT(r.scoring_s, 0.0);                    // the casting that found nothing is timed
+}
+
 TEST(RandomPlanner, ReproducibleChoiceAmongAllowedCandidatesOnly) {
   const VoxelGrid g = walled_grid();
   PlanInput in = plan_input(g);
