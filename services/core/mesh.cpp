@@ -1051,8 +1051,10 @@ double mesh_area(const TriangleMesh& mesh) {
 }
 
 std::vector<Eigen::Vector3d> sample_surface(const TriangleMesh& mesh, std::size_t n,
-                                            std::uint64_t seed) {
+                                            std::uint64_t seed,
+                                            std::vector<Eigen::Vector3d>* face_normals) {
   std::vector<Eigen::Vector3d> out;
+  if (face_normals) face_normals->clear();
   if (n == 0) return out;
   std::vector<double> cum(mesh.triangles.size());
   double total = 0.0;
@@ -1068,6 +1070,7 @@ std::vector<Eigen::Vector3d> sample_surface(const TriangleMesh& mesh, std::size_
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   out.reserve(n);
+  if (face_normals) face_normals->reserve(n);
   for (size_t i = 0; i < n; ++i) {
     const double u = uni(rng) * total;
     size_t k = static_cast<size_t>(std::upper_bound(cum.begin(), cum.end(), u) - cum.begin());
@@ -1080,6 +1083,11 @@ std::vector<Eigen::Vector3d> sample_surface(const TriangleMesh& mesh, std::size_
     const double s = std::sqrt(uni(rng));
     const double r2 = uni(rng);
     out.push_back((1.0 - s) * a + s * (1.0 - r2) * b + s * r2 * c);
+    if (face_normals) {
+      const Eigen::Vector3d nrm = (b - a).cross(c - a);
+      const double len = nrm.norm();
+      face_normals->push_back(len > 0.0 ? Eigen::Vector3d(nrm / len) : Eigen::Vector3d::Zero());
+    }
   }
   return out;
 }

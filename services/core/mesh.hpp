@@ -53,9 +53,12 @@ TriangleMesh make_box(const Eigen::Vector3d& size_m);             // centred at 
 // Total surface area, m^2.
 double mesh_area(const TriangleMesh& mesh);
 
-// `n` points uniformly distributed by area on the surface, deterministic for a seed.
+// `n` points uniformly distributed by area on the surface, deterministic for a seed. With
+// `face_normals`, it also receives each point's triangle normal ((b - a) x (c - a), unit length;
+// zero on a zero-area triangle); the points do not depend on whether it is asked for.
 std::vector<Eigen::Vector3d> sample_surface(const TriangleMesh& mesh, std::size_t n,
-                                            std::uint64_t seed);
+                                            std::uint64_t seed,
+                                            std::vector<Eigen::Vector3d>* face_normals = nullptr);
 
 // Exact Euclidean distance from each point to the nearest point of the mesh surface
 // (triangles, not vertices), using an AABB tree over the triangles.

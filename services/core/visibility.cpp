@@ -61,43 +61,10 @@ struct ViewFrame {
 
 SurfaceSamples sample_surface_with_normals(const TriangleMesh& mesh, std::size_t n,
                                            std::uint64_t seed) {
-  // Mirrors sample_surface() draw for draw and expression for expression, so the points are
-  // bit-identical to it for the same (n, seed).
   SurfaceSamples out;
   if (n == 0) return out;
   check_indices(mesh, "sample_surface_with_normals: ");
-  std::vector<double> cum(mesh.triangles.size());
-  double total = 0.0;
-  for (size_t i = 0; i < mesh.triangles.size(); ++i) {
-    const auto& t = mesh.triangles[i];
-    const Eigen::Vector3d& a = mesh.vertices[static_cast<size_t>(t[0])];
-    const Eigen::Vector3d& b = mesh.vertices[static_cast<size_t>(t[1])];
-    const Eigen::Vector3d& c = mesh.vertices[static_cast<size_t>(t[2])];
-    total += 0.5 * (b - a).cross(c - a).norm();
-    cum[i] = total;
-  }
-  if (!(total > 0.0)) {
-    throw std::invalid_argument("sample_surface_with_normals: mesh has zero area");
-  }
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> uni(0.0, 1.0);
-  out.points.reserve(n);
-  out.normals.reserve(n);
-  for (size_t i = 0; i < n; ++i) {
-    const double u = uni(rng) * total;
-    size_t k = static_cast<size_t>(std::upper_bound(cum.begin(), cum.end(), u) - cum.begin());
-    if (k >= cum.size()) k = cum.size() - 1;
-    const auto& t = mesh.triangles[k];
-    const Eigen::Vector3d& a = mesh.vertices[static_cast<size_t>(t[0])];
-    const Eigen::Vector3d& b = mesh.vertices[static_cast<size_t>(t[1])];
-    const Eigen::Vector3d& c = mesh.vertices[static_cast<size_t>(t[2])];
-    const double s = std::sqrt(uni(rng));
-    const double r2 = uni(rng);
-    out.points.push_back((1.0 - s) * a + s * (1.0 - r2) * b + s * r2 * c);
-    const Eigen::Vector3d nrm = (b - a).cross(c - a);
-    const double len = nrm.norm();
-    out.normals.push_back(len > 0.0 ? Eigen::Vector3d(nrm / len) : Eigen::Vector3d::Zero());
-  }
+  out.points = sample_surface(mesh, n, seed, &out.normals);
   return out;
 }
 

@@ -17,8 +17,8 @@ struct SurfaceSamples {
   std::vector<Eigen::Vector3d> normals;  // (b - a) x (c - a) normalised; zero on a zero-area one
 };
 
-// The same `n` points as sample_surface(mesh, n, seed) (identical random draws and arithmetic,
-// hence identical to CoverageEvaluator(mesh, {n, seed, ...}).samples()), plus their face normals.
+// sample_surface(mesh, n, seed) with its face normals: the same points as
+// CoverageEvaluator(mesh, {n, seed, ...}).samples().
 // Throws std::invalid_argument for zero area or a triangle index out of range.
 SurfaceSamples sample_surface_with_normals(const TriangleMesh& mesh, std::size_t n,
                                            std::uint64_t seed);
