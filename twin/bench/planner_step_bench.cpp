@@ -68,6 +68,16 @@ std::vector<Ellipsoid> fit_both(const VoxelMap& map) {
   return all;
 }
 
+// Integrates the step's frame into `map`; returns the update's time, ms.
+double integrate_step(const Step& s, VoxelMap& map) {
+  DepthView dv;
+  dv.depth_m = &s.depth;
+  dv.object_T_camera = s.pose;
+  const auto t0 = Clock::now();
+  map.integrate(dv);
+  return ms_since(t0);
+}
+
 // Runs the closed-loop scan once, rendering each view the planner chooses.
 const Sequence& sequence() {
   static Sequence seq = [] {
@@ -103,10 +113,7 @@ const Sequence& sequence() {
         st.pose = view;
         done.push_back(view);
         st.views_done = done;
-        DepthView dv;
-        dv.depth_m = &st.depth;
-        dv.object_T_camera = view;
-        map.integrate(dv);
+        integrate_step(st, map);
         const PlanResult r = plan_pbnbv(plan_input(st, map, fit_both(map)));
         out.steps.push_back(std::move(st));
         if (r.outcome != PlanResult::Outcome::kView) break;
@@ -122,28 +129,35 @@ const Sequence& sequence() {
   return seq;
 }
 
-void BM_PlannerStep(benchmark::State& state) {
+// The step the benchmark's argument names, or null (and the benchmark skipped, saying why).
+const Step* step_of(benchmark::State& state) {
   const Sequence& seq = sequence();
   if (!seq.ok) {
     state.SkipWithError(seq.error.c_str());
-    return;
+    return nullptr;
   }
   const int k = static_cast<int>(state.range(0));
   if (k >= static_cast<int>(seq.steps.size())) {
     state.SkipWithError("the scan stopped before this step");
-    return;
+    return nullptr;
   }
-  const Step& s = seq.steps[k];
+  return &seq.steps[k];
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+void BM_PlannerStep(benchmark::State& state) {
+  const Step* step = step_of(state);
+  if (!step) return;
+  const Step& s = *step;
   std::vector<double> map_ms, fit_ms, select_ms, total_ms;
   std::size_t occupied = 0, frontier = 0, ellipsoids = 0;
   for (auto _ : state) {
     VoxelMap map = s.before;  // copy outside the timing
-    DepthView dv;
-    dv.depth_m = &s.depth;
-    dv.object_T_camera = s.pose;
-    const auto t0 = Clock::now();
-    map.integrate(dv);
-    const double t_map = ms_since(t0);
+    const double t_map = integrate_step(s, map);
     const auto t1 = Clock::now();
     std::vector<Ellipsoid> e = fit_both(map);
     const double t_fit = ms_since(t1);
@@ -160,10 +174,6 @@ void BM_PlannerStep(benchmark::State& state) {
     occupied = map.counts().occupied;
     frontier = map.counts().frontier;
   }
-  auto median = [](std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-  };
   state.counters["map_ms"] = median(map_ms);
   state.counters["fit_ms"] = median(fit_ms);
   state.counters["select_ms"] = median(select_ms);
@@ -176,30 +186,16 @@ BENCHMARK(BM_PlannerStep)->ArgName("view")->DenseRange(0, kSteps - 1)->Iteration
 
 // The ray-casting baseline on the same maps and the same 800 candidates: map update + one ray
 // per voxel footprint through the map from every candidate (all cores), side by side with
-// PB-NBV's step above. ratio_to_pbnbv: this step's median over PB-NBV's median of the same
-// step, measured in this run.
+// PB-NBV's step above (compare the two rows of the same view; same run, same machine load).
 void BM_RaycastStep(benchmark::State& state) {
-  const Sequence& seq = sequence();
-  if (!seq.ok) {
-    state.SkipWithError(seq.error.c_str());
-    return;
-  }
-  const int k = static_cast<int>(state.range(0));
-  if (k >= static_cast<int>(seq.steps.size())) {
-    state.SkipWithError("the scan stopped before this step");
-    return;
-  }
-  const Step& s = seq.steps[k];
+  const Step* step = step_of(state);
+  if (!step) return;
+  const Step& s = *step;
   std::vector<double> map_ms, select_ms, total_ms;
   int64_t rays = 0;
   for (auto _ : state) {
     VoxelMap map = s.before;
-    DepthView dv;
-    dv.depth_m = &s.depth;
-    dv.object_T_camera = s.pose;
-    const auto t0 = Clock::now();
-    map.integrate(dv);
-    const double t_map = ms_since(t0);
+    const double t_map = integrate_step(s, map);
     const auto t1 = Clock::now();
     RaycastParams rp;
     const PlanResult r = plan_raycast(plan_input(s, map, {}), map.grid(), rp);
@@ -212,10 +208,6 @@ void BM_RaycastStep(benchmark::State& state) {
     rays = 0;
     for (const auto& sc : r.scores) rays += sc.visible;
   }
-  auto median = [](std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-  };
   state.counters["map_ms"] = median(map_ms);
   state.counters["select_ms"] = median(select_ms);
   state.counters["total_ms"] = median(total_ms);
