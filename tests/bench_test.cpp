@@ -102,17 +102,23 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
         const double c = o["coverage_by_view"][i].get<double>();
         EXPECT_GT(c, 0.0);
         EXPECT_LE(c, 100.0);
-        if (i > 0) EXPECT_GE(c, o["coverage_by_view"][i - 1].get<double>());
+        if (i > 0) {
+          EXPECT_GE(c, o["coverage_by_view"][i - 1].get<double>());
+        }
         mean[i] += c / 2;
       }
       // Every planner starts from the same first view: the same coverage, to within what the
       // rig's settling tolerance moves the camera (the twin's physics stops within a fraction
       // of a millimetre of the target, never at the same point twice).
       const double c1 = o["coverage_by_view"][0].get<double>();
-      if (first_view.count(object)) EXPECT_NEAR(c1, first_view[object], 0.5);
+      if (first_view.count(object)) {
+        EXPECT_NEAR(c1, first_view[object], 0.5);
+      }
       first_view[object] = c1;
       // A sphere seen from one side: about the visible cap, well under half.
-      if (object == "sphere") EXPECT_LT(c1, 50.0);
+      if (object == "sphere") {
+        EXPECT_LT(c1, 50.0);
+      }
       // And the scan's own outputs are there.
       EXPECT_TRUE(fs::exists(out / planner / object / "cloud.ply"));
     }

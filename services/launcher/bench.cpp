@@ -24,6 +24,7 @@
 #include "launcher/evaluate.hpp"
 #include "launcher/objects.hpp"
 #include "launcher/processes.hpp"
+#include "launcher/text.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -35,21 +36,6 @@ volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) { g_stop = 1; }
 
 const std::vector<std::string> kPlanners = {"pbnbv", "raycast", "random", "ring"};
-
-std::string num(double x) {
-  std::ostringstream os;
-  os.precision(17);
-  os << x;
-  return os.str();
-}
-
-std::string fixed(double x, int digits = 1) {
-  std::ostringstream os;
-  os.setf(std::ios::fixed);
-  os.precision(digits);
-  os << x;
-  return os.str();
-}
 
 std::vector<std::string> split(const std::string& s, char sep) {
   std::vector<std::string> out;
@@ -76,12 +62,12 @@ std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, con
                        "netns"});
   }
   a.insert(a.end(), {self.string(), "scan", "--object", object, "--planner", planner, "--rig", s.rig, "--area", s.area,
-                     "--views", std::to_string(s.views), "--resolution", num(s.resolution_m), "--candidates",
+                     "--views", std::to_string(s.views), "--resolution", exact(s.resolution_m), "--candidates",
                      std::to_string(s.candidates), "--tmax", std::to_string(s.tmax), "--beta", std::to_string(s.beta),
-                     "--size", num(s.size_m), "--seed", std::to_string(s.seed), "--when-done", s.when_done, "--no-log", "--out", out.string()});
+                     "--size", exact(s.size_m), "--seed", std::to_string(s.seed), "--when-done", s.when_done, "--no-log", "--out", out.string()});
   if (s.initial_view) {
     const Eigen::Vector3d& v = *s.initial_view;
-    a.insert(a.end(), {"--initial-view", num(v.x()) + "," + num(v.y()) + "," + num(v.z())});
+    a.insert(a.end(), {"--initial-view", exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z())});
   }
   if (!s.up.empty()) a.insert(a.end(), {"--up", s.up});
   return a;
@@ -193,7 +179,6 @@ struct Job {
   std::string planner;
   fs::path dir;
   fs::path log;
-  Child child;
   std::string last_progress;
   std::chrono::steady_clock::time_point started;
 };
@@ -383,17 +368,17 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
   sigaction(SIGINT, &sa, &old_int);
   sigaction(SIGTERM, &sa, &old_term);
 
+  // The scans running now: their processes and, at the same index, their jobs.
+  std::vector<Child> children;
   std::vector<Job*> running;
   std::size_t next = 0;
   int finished = total - static_cast<int>(todo.size());
-  auto index_of = [&](const Job* j) { return static_cast<int>(j - jobs.data()) + 1; };
-  while ((next < todo.size() || !running.empty())) {
+  auto prefix = [&](const Job* j) {
+    return "[" + std::to_string(j - jobs.data() + 1) + "/" + std::to_string(total) + "] " + j->name + " - " + j->planner + ": ";
+  };
+  while (next < todo.size() || !running.empty()) {
     if (g_stop) {
-      std::vector<Child> children;
-      for (Job* j : running) {
-        ::kill(j->child.pid, SIGINT);  // each scan keeps what it has and stops its processes
-        children.push_back(j->child);
-      }
+      for (const Child& c : children) ::kill(c.pid, SIGINT);  // each scan keeps what it has and stops its processes
       for (int i = 0; i < 500; ++i) {
         reap(children);
         if (std::none_of(children.begin(), children.end(), [](const Child& c) { return c.running; })) break;
@@ -409,41 +394,41 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       Job* j = todo[next++];
       if (fs::exists(j->dir)) fs::remove_all(j->dir);  // an incomplete scan starts again
       fs::create_directories(j->dir.parent_path());
-      j->child = Child{};
-      j->child.name = j->planner + "-" + j->name;
-      j->child.argv = scan_argv(spec, self, j->object, j->planner, j->dir);
-      j->child.log_path = j->log.string();
+      Child c;
+      c.name = j->planner + "-" + j->name;
+      c.argv = scan_argv(spec, self, j->object, j->planner, j->dir);
+      c.log_path = j->log.string();
       j->started = std::chrono::steady_clock::now();
-      start(j->child);
+      start(c);
+      children.push_back(std::move(c));
       running.push_back(j);
-      log << "[" << index_of(j) << "/" << total << "] " << j->name << " - " << j->planner << ": started" << std::endl;
+      log << prefix(j) << "started" << std::endl;
     }
-    std::vector<Child> view;  // reap needs a vector of children
-    for (Job* j : running) view.push_back(j->child);
-    for (Child* c : reap(view)) {
-      for (Job* j : running) {
-        if (j->child.pid != c->pid) continue;
-        j->child = *c;
-        const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - j->started).count();
-        ++finished;
-        if (c->exit_code == 0 && scan_complete(j->dir)) {
-          write_json_atomic({{"wall_s", wall}, {"command", j->child.argv}}, (j->dir / "bench_run.json").string());
-          std::string line;
-          try {
-            const json cov = read_json((j->dir / "coverage.json").string());
-            const auto& c = cov.at("coverage_by_view");
-            if (!c.empty()) line = ", coverage after view " + std::to_string(c.size()) + " " + fixed(c.back().get<double>()) + " %";
-          } catch (const std::exception&) {
-          }
-          log << "[" << index_of(j) << "/" << total << "] " << j->name << " - " << j->planner << ": done in "
-              << fixed(wall, 0) << " s" << line << " (" << finished << " of " << total << " scans complete)" << std::endl;
-        } else {
-          log << "[" << index_of(j) << "/" << total << "] " << j->name << " - " << j->planner << ": FAILED (exit "
-              << c->exit_code << "); the end of " << j->log.string() << ":\n" << tail_lines(j->log.string(), 6) << std::flush;
+    for (const Child* c : reap(children)) {
+      Job* j = running[c - children.data()];
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - j->started).count();
+      ++finished;
+      if (c->exit_code == 0 && scan_complete(j->dir)) {
+        write_json_atomic({{"wall_s", wall}, {"command", c->argv}}, (j->dir / "bench_run.json").string());
+        std::string line;
+        try {
+          const json cov = read_json((j->dir / "coverage.json").string());
+          const auto& cv = cov.at("coverage_by_view");
+          if (!cv.empty()) line = ", coverage after view " + std::to_string(cv.size()) + " " + fixed(cv.back().get<double>()) + " %";
+        } catch (const std::exception&) {
         }
+        log << prefix(j) << "done in " << fixed(wall, 0) << " s" << line << " (" << finished << " of " << total
+            << " scans complete)" << std::endl;
+      } else {
+        log << prefix(j) << "FAILED (exit " << c->exit_code << "); the end of " << j->log.string() << ":\n"
+            << tail_lines(j->log.string(), 6) << std::flush;
       }
     }
-    running.erase(std::remove_if(running.begin(), running.end(), [](Job* j) { return !j->child.running; }), running.end());
+    for (std::size_t i = children.size(); i-- > 0;) {
+      if (children[i].running) continue;
+      children.erase(children.begin() + i);
+      running.erase(running.begin() + i);
+    }
     for (Job* j : running) {
       // Progress: the scan's "[view k/N] ..." line, printed when the view changes.
       const std::string last = tail_lines(j->log.string(), 1);
@@ -452,8 +437,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       const std::string tag = last.substr(a, last.find(']', a) - a + 1);
       if (tag != j->last_progress) {
         j->last_progress = tag;
-        log << "[" << index_of(j) << "/" << total << "] " << j->name << " - " << j->planner << ": " << tag.substr(1, tag.size() - 2)
-            << std::endl;
+        log << prefix(j) << tag.substr(1, tag.size() - 2) << std::endl;
       }
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(100));

@@ -24,8 +24,10 @@
 #include "launcher/evaluate.hpp"
 #include "launcher/objects.hpp"
 #include "launcher/processes.hpp"
+#include "launcher/text.hpp"
 
 using namespace pbnbv;
+using launcher::exact;
 namespace fs = std::filesystem;
 
 namespace {
@@ -211,13 +213,12 @@ int scan(int argc, char** argv) {
     children.push_back(std::move(c));
   };
   if (record_log) add("lcm-logger", {"/usr/bin/lcm-logger", "-q", "-f", (out / "scan.lcmlog").string()});
-  auto num = [](double x) { std::ostringstream os; os.precision(17); os << x; return os.str(); };
   add("twin", {(bin / "pbnbv-twin").string(), "--rig", to_string(s.rig), "--mesh", stl,
-               "--object-z", num(s.object_z_m), "--model-out", (out / "twin_model.xml").string(),
+               "--object-z", exact(s.object_z_m), "--model-out", (out / "twin_model.xml").string(),
                "--width", std::to_string(s.camera.width), "--height", std::to_string(s.camera.height),
-               "--fx", num(s.camera.fx), "--fy", num(s.camera.fy), "--cx", num(s.camera.cx), "--cy", num(s.camera.cy),
-               "--depth-min", num(s.depth_range.min_m), "--depth-max", num(s.depth_range.max_m),
-               "--noise-sigma", num(noise_sigma), "--dropout", num(dropout), "--speed", num(s.sim_speed),
+               "--fx", exact(s.camera.fx), "--fy", exact(s.camera.fy), "--cx", exact(s.camera.cx), "--cy", exact(s.camera.cy),
+               "--depth-min", exact(s.depth_range.min_m), "--depth-max", exact(s.depth_range.max_m),
+               "--noise-sigma", exact(noise_sigma), "--dropout", exact(dropout), "--speed", exact(s.sim_speed),
                "--truth-out", (out / "twin_truth.jsonl").string()});
   children.back().argv.insert(children.back().argv.end(), error_args.begin(), error_args.end());
   add("motion", {(bin / "pbnbv-motion").string(), "--rig", to_string(s.rig)});
@@ -227,8 +228,8 @@ int scan(int argc, char** argv) {
   // The map's working volume: the cloud's crop box, above the turntable top.
   Eigen::Vector3d volume_min = s.crop_min_m;
   if (s.rig == RigKind::kArm) volume_min.z() = std::max(volume_min.z(), -s.object_z_m + s.ground_clearance_m);
-  auto vec = [&](const Eigen::Vector3d& v) { return num(v.x()) + "," + num(v.y()) + "," + num(v.z()); };
-  add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", num(resolution), "--out", out.string(),
+  auto vec = [&](const Eigen::Vector3d& v) { return exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z()); };
+  add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", exact(resolution), "--out", out.string(),
                   "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m)});
   if (s.planner == "pbnbv") add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
   if (s.planner != "ring") add("scorer", {(bin / "pbnbv-scorer").string(), "--rig", to_string(s.rig)});
@@ -291,11 +292,9 @@ int scan(int argc, char** argv) {
       const CoverageParams cp;
       const launcher::ScanEvaluation e = launcher::evaluate_scan(out, cp);
       write_json_atomic(launcher::to_json(e, cp), (out / "coverage.json").string());
-      std::ostringstream os;
-      os.setf(std::ios::fixed);
-      os.precision(1);
-      for (double c : e.coverage_by_view) os << " " << c;
-      std::cout << "coverage after each view (%, ground truth):" << os.str() << std::endl;
+      std::string line;
+      for (double c : e.coverage_by_view) line += " " + launcher::fixed(c, 1);
+      std::cout << "coverage after each view (%, ground truth):" << line << std::endl;
       if (!e.planner_ms.empty()) {
         std::vector<double> t = e.planner_ms;
         std::sort(t.begin(), t.end());

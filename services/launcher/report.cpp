@@ -8,6 +8,7 @@
 #include "core/line_chart.hpp"
 #include "core/scan_settings.hpp"
 #include "launcher/bench.hpp"
+#include "launcher/text.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -21,31 +22,11 @@ namespace {
 const std::vector<double> kReleaseCoverage = {31.3, 61.0, 80.2, 95.3, 98.1, NAN, NAN, NAN, NAN, 99.1};
 constexpr double kReleaseMedianMs = 25800.0;
 
-std::string f1(double x) {
-  if (!std::isfinite(x)) return "-";
-  std::ostringstream os;
-  os.setf(std::ios::fixed);
-  os.precision(1);
-  os << x;
-  return os.str();
-}
+std::string f1(double x) { return std::isfinite(x) ? fixed(x, 1) : "-"; }
 
-std::string ms(double x) {
-  std::ostringstream os;
-  os.setf(std::ios::fixed);
-  os.precision(x < 10 ? 2 : x < 100 ? 1 : 0);
-  os << x;
-  return os.str();
-}
+std::string ms(double x) { return fixed(x, x < 10 ? 2 : x < 100 ? 1 : 0); }
 
-std::string opt(const std::optional<double>& v, int digits = 2) {
-  if (!v) return "never";
-  std::ostringstream os;
-  os.setf(std::ios::fixed);
-  os.precision(digits);
-  os << *v;
-  return os.str();
-}
+std::string opt(const std::optional<double>& v, int digits = 2) { return v ? fixed(*v, digits) : "never"; }
 
 std::vector<double> view_numbers(int n, int first = 1) {
   std::vector<double> x;
