@@ -14,10 +14,12 @@
 #include <map>
 #include <thread>
 
-#include "core/mesh.hpp"
-#include "core/geometry.hpp"
-#include "core/scan_settings.hpp"
-#include "launcher/processes.hpp"
+#include "core/geometry/mesh.hpp"
+#include "core/base/pose.hpp"
+#include "core/io/json.hpp"
+#include "core/io/mesh_file.hpp"
+#include "core/scan/scan_settings.hpp"
+#include "process/processes.hpp"
 #include "pbnbv/arm_command_t.hpp"
 #include "pbnbv/arm_status_t.hpp"
 #include "pbnbv/capture_request_t.hpp"
@@ -148,7 +150,7 @@ class BadInput : public ::testing::Test {
     write_stl_binary(sphere, (dir_ / "sphere.stl").string());
     const std::string bin = bin_dir();
     auto add = [&](const std::string& name, std::vector<std::string> argv) {
-      launcher::Child c;
+      process::Child c;
       c.name = name;
       c.argv = std::move(argv);
       c.log_path = (dir_ / (name + ".log")).string();
@@ -164,26 +166,26 @@ class BadInput : public ::testing::Test {
     add("mapping", {bin + "/pbnbv-mapping", "--out", (dir_ / "maps").string()});
     add("ellipsoids", {bin + "/pbnbv-ellipsoids"});
     add("scorer", {bin + "/pbnbv-scorer", "--rig", "arm"});
-    for (auto& c : children_) launcher::start(c);
+    for (auto& c : children_) process::start(c);
     listener_ = new Listener();
     ASSERT_TRUE(listener_->spin_until([] {
       return listener_->heartbeats.count("twin") && listener_->heartbeats.count("motion") &&
              listener_->heartbeats.count("camera") && listener_->heartbeats.count("registration") &&
              listener_->heartbeats.count("mapping") && listener_->heartbeats.count("ellipsoids") &&
              listener_->heartbeats.count("scorer") && listener_->have_arm;
-    }, 60)) << "services did not start; twin log:\n" << launcher::tail_lines((dir_ / "twin.log").string(), 20);
+    }, 60)) << "services did not start; twin log:\n" << process::tail_lines((dir_ / "twin.log").string(), 20);
   }
 
   static void TearDownTestSuite() {
-    launcher::stop_all(children_, 5.0);
+    process::stop_all(children_, 5.0);
     for (const auto& c : children_) {
-      EXPECT_EQ(c.exit_code, 0) << c.name << " did not exit cleanly:\n" << launcher::tail_lines(c.log_path, 20);
+      EXPECT_EQ(c.exit_code, 0) << c.name << " did not exit cleanly:\n" << process::tail_lines(c.log_path, 20);
     }
     delete listener_;
   }
 
   static bool all_running() {
-    launcher::reap(children_);
+    process::reap(children_);
     for (const auto& c : children_) if (!c.running) return false;
     return true;
   }
@@ -199,11 +201,11 @@ class BadInput : public ::testing::Test {
   }
 
   static fs::path dir_;
-  static std::vector<launcher::Child> children_;
+  static std::vector<process::Child> children_;
   static Listener* listener_;
 };
 fs::path BadInput::dir_;
-std::vector<launcher::Child> BadInput::children_;
+std::vector<process::Child> BadInput::children_;
 Listener* BadInput::listener_ = nullptr;
 
 TEST_F(BadInput, MalformedBytesOnEveryChannelAreRejectedAndCounted) {
@@ -330,7 +332,7 @@ TEST_F(BadInput, ValidRequestsStillSucceedAfterTheGarbage) {
   ASSERT_TRUE(listener_->spin_until([] { return listener_->clouds.count(906) > 0; }, 40.0));
   const point_cloud_t& cloud = listener_->clouds[906];
   ASSERT_EQ(cloud.status, point_cloud_t::kOk) << "capture failed: " << cloud.message << "\ncamera log:\n"
-                                               << launcher::tail_lines((dir_ / "camera.log").string(), 20);
+                                               << process::tail_lines((dir_ / "camera.log").string(), 20);
   EXPECT_GT(cloud.num_points, 500);
   // Every point lies on the sphere of radius 0.15 m around the object origin (icosphere
   // level 3: the facets sit at most ~1.2 mm inside the sphere).
@@ -361,12 +363,12 @@ TEST_F(BadInput, CoordinatorFinishesItsScanDespiteGarbageOnItsChannels) {
   const fs::path out = dir_ / "coordinator";
   fs::create_directories(out);
   write_json_atomic(to_json(s), (out / "settings.json").string());
-  launcher::Child coordinator;
+  process::Child coordinator;
   coordinator.name = "coordinator";
   coordinator.argv = {bin_dir() + "/pbnbv-coordinator", "--out", out.string()};
   coordinator.log_path = (dir_ / "coordinator.log").string();
-  launcher::start(coordinator);
-  std::vector<launcher::Child> one = {coordinator};
+  process::start(coordinator);
+  std::vector<process::Child> one = {coordinator};
 
   lcm::LCM& lcm = listener_->lcm();
   const std::vector<uint8_t> garbage = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17};
@@ -378,7 +380,7 @@ TEST_F(BadInput, CoordinatorFinishesItsScanDespiteGarbageOnItsChannels) {
   int64_t coordinator_rejected = 0;
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (std::chrono::steady_clock::now() < end) {
-    launcher::reap(one);
+    process::reap(one);
     if (!one[0].running) break;
     for (const char* channel : {"MOVE_RESULT", "CLOUD", "REGISTERED_CLOUD", "VOXEL_MAP", "ARM_STATUS",
                                 "TURNTABLE_STATUS", "HEARTBEAT"}) {
@@ -388,10 +390,10 @@ TEST_F(BadInput, CoordinatorFinishesItsScanDespiteGarbageOnItsChannels) {
     listener_->spin_until([] { return false; }, 0.05);
     coordinator_rejected = std::max(coordinator_rejected, rejected("coordinator"));
   }
-  launcher::stop_all(one, 5.0);
+  process::stop_all(one, 5.0);
   listener_->spin_until([] { return false; }, 0.3);  // its last heartbeat, published on exit
   coordinator_rejected = std::max(coordinator_rejected, rejected("coordinator"));
-  EXPECT_EQ(one[0].exit_code, 0) << launcher::tail_lines(one[0].log_path, 20);
+  EXPECT_EQ(one[0].exit_code, 0) << process::tail_lines(one[0].log_path, 20);
   EXPECT_GT(coordinator_rejected, 0) << "its heartbeat should count the rejected messages";
   const auto scan = read_json((out / "scan.json").string());
   EXPECT_EQ(scan["status"]["state"], "done");

@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "launcher/bench.hpp"
+#include "eval/bench.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -27,20 +27,20 @@ json read_json_file(const fs::path& p) {
 }
 
 TEST(BenchRules, ViewsToReach) {
-  EXPECT_EQ(launcher::views_to_reach({30, 60, 94.9, 95.0, 99}, 95.0), 4);
-  EXPECT_EQ(launcher::views_to_reach({96}, 95.0), 1);
-  EXPECT_FALSE(launcher::views_to_reach({30, 60, 94.99}, 95.0).has_value());
-  EXPECT_FALSE(launcher::views_to_reach({}, 95.0).has_value());
+  EXPECT_EQ(eval::views_to_reach({30, 60, 94.9, 95.0, 99}, 95.0), 4);
+  EXPECT_EQ(eval::views_to_reach({96}, 95.0), 1);
+  EXPECT_FALSE(eval::views_to_reach({30, 60, 94.99}, 95.0).has_value());
+  EXPECT_FALSE(eval::views_to_reach({}, 95.0).has_value());
 }
 
 TEST(BenchRules, PadViewsKeepsTheLastFigureAfterAnEarlyStop) {
-  EXPECT_EQ(launcher::pad_views({40, 80, 97}, 5), (std::vector<double>{40, 80, 97, 97, 97}));
-  EXPECT_EQ(launcher::pad_views({40, 80, 97}, 2), (std::vector<double>{40, 80}));
-  EXPECT_TRUE(launcher::pad_views({}, 3).empty());
+  EXPECT_EQ(eval::pad_views({40, 80, 97}, 5), (std::vector<double>{40, 80, 97, 97, 97}));
+  EXPECT_EQ(eval::pad_views({40, 80, 97}, 2), (std::vector<double>{40, 80}));
+  EXPECT_TRUE(eval::pad_views({}, 3).empty());
 }
 
 TEST(BenchRules, SummaryMeansMediansAndFailures) {
-  launcher::ObjectRun a, b, c;
+  eval::ObjectRun a, b, c;
   a.object = "a";
   a.complete = true;
   a.coverage_by_view = {40, 90, 96};
@@ -53,7 +53,7 @@ TEST(BenchRules, SummaryMeansMediansAndFailures) {
   b.views_to_95 = 2;
   c.object = "c";
   c.error = "the scan did not complete";
-  const launcher::PlannerSummary s = launcher::summarise("pbnbv", {a, b, c}, 3);
+  const eval::PlannerSummary s = eval::summarise("pbnbv", {a, b, c}, 3);
   EXPECT_EQ(s.complete, 2);
   EXPECT_EQ(s.failed, 1);
   ASSERT_EQ(s.coverage_by_view.size(), 3u);

@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "launcher/evaluate.hpp"
+#include "eval/evaluate.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -27,7 +27,7 @@ nlohmann::json read_json_file(const fs::path& p) {
 struct NbvScan {
   fs::path out;
   nlohmann::json scan;
-  launcher::ScanEvaluation eval;
+  eval::ScanEvaluation eval;
 };
 
 NbvScan nbv_scan(const std::string& name, const std::string& options, int views) {
@@ -39,7 +39,7 @@ NbvScan nbv_scan(const std::string& name, const std::string& options, int views)
   EXPECT_EQ(r.exit_code, 0) << cmd << "\n" << r.output;
   std::cout << r.output.substr(r.output.find("coverage after") == std::string::npos ? 0 : r.output.find("coverage after"));
   s.scan = read_json_file(s.out / "scan.json");
-  s.eval = launcher::evaluate_scan(s.out);
+  s.eval = eval::evaluate_scan(s.out);
   // Every process exited cleanly.
   for (const auto& p : read_json_file(s.out / "processes.json")) EXPECT_EQ(p["exit_code"], 0) << p.dump();
   EXPECT_EQ(s.scan["status"]["state"], "done");

@@ -13,9 +13,11 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
-#include "core/cloud.hpp"
-#include "core/mesh.hpp"
-#include "core/scan_settings.hpp"
+#include "core/geometry/point_cloud.hpp"
+#include "core/geometry/mesh.hpp"
+#include "core/io/cloud_file.hpp"
+#include "core/io/mesh_file.hpp"
+#include "core/scan/scan_settings.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;

@@ -15,9 +15,11 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "core/cloud.hpp"
-#include "core/mesh.hpp"
+#include "core/geometry/point_cloud.hpp"
+#include "core/geometry/mesh.hpp"
 #include "test_util.hpp"
+#include "core/io/cloud_file.hpp"
+#include "core/io/mesh_file.hpp"
 
 namespace fs = std::filesystem;
 using namespace pbnbv;

@@ -17,7 +17,7 @@
 // available (llvmpipe, NVIDIA) and 24-bit otherwise; either way one step of d is <= 2^-24, so
 // the quantisation step of z is about z^2 / near * 2^-24: 1.2 um at 1 m and 11 um at 3 m with
 // the default range (min 0.1 m).
-#include "depth_renderer.hpp"
+#include "twin/depth_renderer.hpp"
 
 #include <EGL/egl.h>
 #include <EGL/eglext.h>

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "core/camera_model.hpp"
+#include "core/geometry/camera_model.hpp"
 
 namespace pbnbv::twin {
 

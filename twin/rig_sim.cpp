@@ -1,4 +1,4 @@
-#include "rig_sim.hpp"
+#include "twin/rig_sim.hpp"
 
 #include <algorithm>
 #include <cmath>

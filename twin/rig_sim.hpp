@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "core/geometry.hpp"
-#include "core/rig.hpp"
+#include "core/base/pose.hpp"
+#include "core/rig/rig.hpp"
 
 namespace pbnbv::twin {
 

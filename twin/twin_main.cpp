@@ -15,19 +15,19 @@
 #include <random>
 #include <thread>
 
-#include "common/bus.hpp"
-#include "common/convert.hpp"
-#include "core/args.hpp"
-#include "core/log.hpp"
-#include "core/rig.hpp"
-#include "depth_renderer.hpp"
+#include "bus/bus.hpp"
+#include "bus/convert.hpp"
+#include "core/base/args.hpp"
+#include "core/base/log.hpp"
+#include "core/rig/rig.hpp"
+#include "twin/depth_renderer.hpp"
 #include "pbnbv/arm_command_t.hpp"
 #include "pbnbv/arm_status_t.hpp"
 #include "pbnbv/depth_frame_t.hpp"
 #include "pbnbv/depth_trigger_t.hpp"
 #include "pbnbv/turntable_command_t.hpp"
 #include "pbnbv/turntable_status_t.hpp"
-#include "rig_sim.hpp"
+#include "twin/rig_sim.hpp"
 
 using namespace pbnbv;
 

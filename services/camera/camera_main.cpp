@@ -13,13 +13,14 @@
 #include <optional>
 #include <sstream>
 
-#include "common/bus.hpp"
-#include "common/service.hpp"
-#include "common/convert.hpp"
-#include "core/args.hpp"
-#include "core/depth_cloud.hpp"
-#include "core/log.hpp"
-#include "core/rig.hpp"
+#include "bus/bus.hpp"
+#include "bus/rig_options.hpp"
+#include "bus/service.hpp"
+#include "bus/convert.hpp"
+#include "core/base/args.hpp"
+#include "core/perception/depth_cloud.hpp"
+#include "core/base/log.hpp"
+#include "core/rig/rig.hpp"
 #include "pbnbv/arm_status_t.hpp"
 #include "pbnbv/capture_request_t.hpp"
 #include "pbnbv/depth_frame_t.hpp"

@@ -22,13 +22,16 @@
 #include <set>
 #include <sstream>
 
-#include "common/bus.hpp"
-#include "common/convert.hpp"
-#include "core/args.hpp"
-#include "core/cloud.hpp"
-#include "core/log.hpp"
-#include "core/scan_settings.hpp"
-#include "core/views.hpp"
+#include "bus/bus.hpp"
+#include "bus/convert.hpp"
+#include "core/base/args.hpp"
+#include "core/geometry/point_cloud.hpp"
+#include "core/base/log.hpp"
+#include "core/io/cloud_file.hpp"
+#include "core/io/json.hpp"
+#include "core/perception/cloud_filter.hpp"
+#include "core/scan/scan_settings.hpp"
+#include "core/geometry/views.hpp"
 #include "pbnbv/arm_status_t.hpp"
 #include "pbnbv/capture_request_t.hpp"
 #include "pbnbv/ellipsoid_set_t.hpp"

@@ -9,11 +9,12 @@
 #include <map>
 #include <sstream>
 
-#include "common/bus.hpp"
-#include "common/convert.hpp"
-#include "common/service.hpp"
-#include "core/ellipsoids.hpp"
-#include "core/log.hpp"
+#include "bus/bus.hpp"
+#include "bus/convert.hpp"
+#include "bus/convert_planning.hpp"
+#include "bus/service.hpp"
+#include "core/planning/ellipsoids.hpp"
+#include "core/base/log.hpp"
 #include "pbnbv/ellipsoid_set_t.hpp"
 #include "pbnbv/voxel_set_t.hpp"
 

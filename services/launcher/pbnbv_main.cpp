@@ -17,17 +17,18 @@
 #include <sstream>
 #include <thread>
 
-#include "core/args.hpp"
-#include "core/mesh.hpp"
-#include "core/scan_settings.hpp"
-#include "launcher/bench.hpp"
-#include "launcher/evaluate.hpp"
-#include "launcher/objects.hpp"
-#include "launcher/processes.hpp"
-#include "launcher/text.hpp"
+#include "core/base/args.hpp"
+#include "core/geometry/mesh.hpp"
+#include "core/io/json.hpp"
+#include "core/io/mesh_file.hpp"
+#include "core/scan/scan_settings.hpp"
+#include "eval/bench.hpp"
+#include "eval/evaluate.hpp"
+#include "eval/objects.hpp"
+#include "process/processes.hpp"
+#include "core/base/text.hpp"
 
 using namespace pbnbv;
-using launcher::exact;
 namespace fs = std::filesystem;
 
 namespace {
@@ -118,7 +119,7 @@ std::string timestamp() {
 int scan(int argc, char** argv) {
   Args args(argc, argv, 2);
   ScanSettings s;
-  launcher::ObjectSpec object = launcher::resolve_object(args.str("object", "bunny"));
+  eval::ObjectSpec object = eval::resolve_object(args.str("object", "bunny"));
   const std::string object_name = object.name;
   TriangleMesh& mesh = object.mesh;
   const double size = args.num("size", 0.3, 0.01, 2.0);
@@ -188,7 +189,7 @@ int scan(int argc, char** argv) {
   args.reject_unknown();
 
   // The object rests on the turntable (arm rig) or floats at the origin (free rig).
-  launcher::place_object(s);
+  place_object(s);
   s.scan_id = object_name + "-" + timestamp();
 
   fs::create_directories(out / "logs");
@@ -203,9 +204,9 @@ int scan(int argc, char** argv) {
             << " " << s.planner << " views -> " << out.string() << std::endl;
 
   const fs::path bin = self_dir();
-  std::vector<launcher::Child> children;
+  std::vector<process::Child> children;
   auto add = [&](const std::string& name, std::vector<std::string> argv, bool progress = false) {
-    launcher::Child c;
+    process::Child c;
     c.name = name;
     c.argv = std::move(argv);
     c.log_path = (out / "logs" / (name + ".log")).string();
@@ -242,12 +243,12 @@ int scan(int argc, char** argv) {
   sigaction(SIGTERM, &sa, nullptr);
 
   try {
-    for (auto& c : children) launcher::start(c);
+    for (auto& c : children) process::start(c);
   } catch (const std::exception& e) {
-    launcher::stop_all(children, 5.0);
+    process::stop_all(children, 5.0);
     throw;
   }
-  launcher::Child* coordinator = &children.back();
+  process::Child* coordinator = &children.back();
   int code = 0;
   bool done = false;
   while (!done) {
@@ -256,19 +257,19 @@ int scan(int argc, char** argv) {
       // The coordinator writes what it has (scan.json with state "stopped") before exiting.
       ::kill(coordinator->pid, SIGINT);
       for (int i = 0; i < 250 && coordinator->running; ++i) {
-        launcher::reap(children);
+        process::reap(children);
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
       }
       code = 130;
       break;
     }
-    for (launcher::Child* c : launcher::reap(children)) {
+    for (process::Child* c : process::reap(children)) {
       if (c == coordinator) {
         code = c->exit_code;
         done = true;
       } else if (!done) {
         std::cerr << "error: " << c->name << " stopped unexpectedly (exit status " << c->exit_code
-                  << "); the end of " << c->log_path << ":\n" << launcher::tail_lines(c->log_path, 8)
+                  << "); the end of " << c->log_path << ":\n" << process::tail_lines(c->log_path, 8)
                   << "stopping every process" << std::endl;
         code = 1;
         done = true;
@@ -276,7 +277,7 @@ int scan(int argc, char** argv) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  launcher::stop_all(children, 5.0);
+  process::stop_all(children, 5.0);
   // How every process ended (0 = clean exit), for the user and for the tests.
   nlohmann::json procs = nlohmann::json::array();
   for (const auto& c : children) procs.push_back({{"name", c.name}, {"exit_code", c.exit_code}});
@@ -290,10 +291,10 @@ int scan(int argc, char** argv) {
     // Against the ground truth the twin rendered: coverage after every view.
     try {
       const CoverageParams cp;
-      const launcher::ScanEvaluation e = launcher::evaluate_scan(out, cp);
-      write_json_atomic(launcher::to_json(e, cp), (out / "coverage.json").string());
+      const eval::ScanEvaluation e = eval::evaluate_scan(out, cp);
+      write_json_atomic(eval::to_json(e, cp), (out / "coverage.json").string());
       std::string line;
-      for (double c : e.coverage_by_view) line += " " + launcher::fixed(c, 1);
+      for (double c : e.coverage_by_view) line += " " + fixed(c, 1);
       std::cout << "coverage after each view (%, ground truth):" << line << std::endl;
       if (!e.planner_ms.empty()) {
         std::vector<double> t = e.planner_ms;
@@ -338,8 +339,8 @@ int main(int argc, char** argv) {
   try {
     if (command == "scan") return scan(argc, argv);
     if (command == "spy") return spy(argc, argv);
-    if (command == "bench") return launcher::bench_command(argc, argv, fs::read_symlink("/proc/self/exe"));
-    if (command == "ablate") return launcher::ablate_command(argc, argv, fs::read_symlink("/proc/self/exe"));
+    if (command == "bench") return eval::bench_command(argc, argv, fs::read_symlink("/proc/self/exe"));
+    if (command == "ablate") return eval::ablate_command(argc, argv, fs::read_symlink("/proc/self/exe"));
     if (command == "help" || command == "--help" || command == "-h") {
       std::cout << kUsage;
       return 0;

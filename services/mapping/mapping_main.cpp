@@ -13,12 +13,12 @@
 #include <optional>
 #include <sstream>
 
-#include "common/bus.hpp"
-#include "common/service.hpp"
-#include "common/convert.hpp"
-#include "core/args.hpp"
-#include "core/log.hpp"
-#include "core/voxel_map.hpp"
+#include "bus/bus.hpp"
+#include "bus/service.hpp"
+#include "bus/convert.hpp"
+#include "core/base/args.hpp"
+#include "core/base/log.hpp"
+#include "core/mapping/voxel_map.hpp"
 #include "pbnbv/depth_frame_t.hpp"
 #include "pbnbv/registered_cloud_t.hpp"
 #include "pbnbv/voxel_set_t.hpp"

@@ -10,13 +10,14 @@
 #include <iostream>
 #include <sstream>
 
-#include "common/bus.hpp"
-#include "common/service.hpp"
-#include "common/convert.hpp"
-#include "core/args.hpp"
-#include "core/cloud.hpp"
-#include "core/log.hpp"
-#include "core/registration.hpp"
+#include "bus/bus.hpp"
+#include "bus/service.hpp"
+#include "bus/convert.hpp"
+#include "core/base/args.hpp"
+#include "core/geometry/point_cloud.hpp"
+#include "core/base/log.hpp"
+#include "core/perception/cloud_filter.hpp"
+#include "core/perception/registration.hpp"
 #include "pbnbv/point_cloud_t.hpp"
 #include "pbnbv/registered_cloud_t.hpp"
 

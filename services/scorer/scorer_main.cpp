@@ -17,12 +17,15 @@
 #include <sstream>
 #include <thread>
 
-#include "common/bus.hpp"
-#include "common/convert.hpp"
-#include "common/service.hpp"
-#include "core/log.hpp"
-#include "core/planner.hpp"
-#include "core/rig.hpp"
+#include "bus/bus.hpp"
+#include "bus/convert.hpp"
+#include "bus/convert_planning.hpp"
+#include "bus/rig_options.hpp"
+#include "bus/service.hpp"
+#include "core/base/log.hpp"
+#include "core/planning/planner.hpp"
+#include "report/plan_figure.hpp"
+#include "core/rig/rig.hpp"
 #include "pbnbv/ellipsoid_set_t.hpp"
 #include "pbnbv/plan_request_t.hpp"
 #include "pbnbv/view_plan_t.hpp"

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "depth_renderer.hpp"
+#include "twin/depth_renderer.hpp"
 
 namespace {
 

@@ -5,7 +5,7 @@
 // inside it has quat="0 1 0 0" (MuJoCo cameras look along their -z with +y up). The ray through
 // pixel centre (u, v) is then d = ((u - cx) / fx, (v - cy) / fy, 1), and the planar depth of a
 // hit at t * d is t itself.
-#include "depth_renderer.hpp"
+#include "twin/depth_renderer.hpp"
 
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
@@ -21,7 +21,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/camera_model.hpp"
+#include "core/geometry/camera_model.hpp"
 
 namespace pbnbv::twin {
 namespace {

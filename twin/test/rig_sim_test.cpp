@@ -8,9 +8,10 @@
 #include <fstream>
 #include <unistd.h>
 
-#include "core/mesh.hpp"
-#include "core/rig.hpp"
-#include "rig_sim.hpp"
+#include "core/geometry/mesh.hpp"
+#include "core/io/mesh_file.hpp"
+#include "core/rig/rig.hpp"
+#include "twin/rig_sim.hpp"
 
 using namespace pbnbv;
 

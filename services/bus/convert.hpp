@@ -1,0 +1,74 @@
+#pragma once
+// Conversions between the contract's messages and the core library's plain types, with the
+// validation every handler applies to what it receives.
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/geometry/camera_model.hpp"
+#include "core/base/pose.hpp"
+#include "pbnbv/depth_frame_t.hpp"
+#include "pbnbv/pose_t.hpp"
+
+namespace pbnbv::bus {
+
+inline pose_t to_msg(const Pose& pose) {
+  pose_t m;
+  pose_to_arrays(pose, m.position_m, m.quat_wxyz);
+  return m;
+}
+
+// Throws std::invalid_argument naming `what` for a non-finite position or a non-unit quaternion.
+inline Pose from_msg(const pose_t& m, const std::string& what) {
+  return pose_from_arrays(m.position_m, m.quat_wxyz, what);
+}
+
+inline Vector6d to_vector6(const std::vector<double>& v, const std::string& what) {
+  if (v.size() != 6) {
+    throw std::invalid_argument(what + ": expected 6 joints, got " + std::to_string(v.size()));
+  }
+  Vector6d q;
+  for (int i = 0; i < 6; ++i) {
+    if (!std::isfinite(v[i])) {
+      std::ostringstream os;
+      os << what << ": joint " << i << " value " << v[i] << " is not finite";
+      throw std::invalid_argument(os.str());
+    }
+    q[i] = v[i];
+  }
+  return q;
+}
+
+inline std::vector<double> to_std(const Vector6d& q) { return std::vector<double>(q.data(), q.data() + 6); }
+
+// Throws std::invalid_argument when x is not finite or outside [lo, hi].
+inline void require_range(double x, double lo, double hi, const std::string& what) {
+  if (!(std::isfinite(x) && x >= lo && x <= hi)) {
+    std::ostringstream os;
+    os << what << " = " << x << " is outside [" << lo << ", " << hi << "]";
+    throw std::invalid_argument(os.str());
+  }
+}
+
+// A DEPTH_FRAME as the core library takes it: its camera model, its range, planar depth in
+// metres (0 = no return).
+struct DecodedFrame {
+  CameraIntrinsics intrinsics;
+  DepthRange range;
+  std::vector<float> depth_m;
+};
+
+// Throws std::invalid_argument naming the bad field (intrinsics, range, size, depth unit).
+inline DecodedFrame decode_frame(const depth_frame_t& f) {
+  DecodedFrame d;
+  d.intrinsics = CameraIntrinsics{f.width, f.height, f.fx, f.fy, f.cx, f.cy};
+  d.intrinsics.validate();
+  d.range = DepthRange{f.depth_min_m, f.depth_max_m};
+  d.range.validate();
+  d.depth_m = decode_depth_u16(f.depth, f.width, f.height, f.depth_unit_m);
+  return d;
+}
+
+}  // namespace pbnbv::bus

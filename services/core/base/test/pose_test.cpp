@@ -1,0 +1,49 @@
+// Poses, look-at and angle helpers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/base/pose.hpp"
+
+using namespace pbnbv;
+
+TEST(Pose, LookAtPointsTheOpticalAxisAtTheTargetWithImageUpAlongUp) {
+  const Pose p = look_at(Eigen::Vector3d(1, 0, 0), Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ());
+  EXPECT_TRUE(p.linear().col(2).isApprox(Eigen::Vector3d(-1, 0, 0)));   // z: forward
+  EXPECT_TRUE(p.linear().col(1).isApprox(Eigen::Vector3d(0, 0, -1)));   // y: down
+  EXPECT_TRUE(p.linear().col(0).isApprox(Eigen::Vector3d(0, 1, 0)));    // x: right (forward x up)
+  EXPECT_NEAR(p.linear().determinant(), 1.0, 1e-12);
+  EXPECT_THROW(look_at(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()), std::invalid_argument);
+  EXPECT_THROW(look_at(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()), std::invalid_argument);
+  // Straight down works with the z-up helper.
+  const Pose down = look_at_z_up(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d::Zero());
+  EXPECT_TRUE(down.linear().col(2).isApprox(Eigen::Vector3d(0, 0, -1)));
+}
+
+TEST(Pose, PoseArraysRoundTripAndRejectBadQuaternions) {
+  const Pose p = look_at(Eigen::Vector3d(0.3, -0.2, 0.5), Eigen::Vector3d(0, 0.1, 0), Eigen::Vector3d::UnitZ());
+  double pos[3], quat[4];
+  pose_to_arrays(p, pos, quat);
+  EXPECT_GE(quat[0], 0.0);
+  const Pose back = pose_from_arrays(pos, quat, "test");
+  EXPECT_TRUE(back.isApprox(p, 1e-12));
+  double bad[4] = {1, 1, 0, 0};
+  try {
+    pose_from_arrays(pos, bad, "MOVE_REQUEST object_T_camera");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("MOVE_REQUEST object_T_camera"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("norm"), std::string::npos);
+  }
+  double nan_pos[3] = {0, std::nan(""), 0};
+  EXPECT_THROW(pose_from_arrays(nan_pos, quat, "x"), std::invalid_argument);
+}
+
+TEST(Pose, AnglesWrapAndFindTheNearestEquivalent) {
+  EXPECT_NEAR(wrap_angle_rad(3 * M_PI / 2), -M_PI / 2, 1e-12);
+  EXPECT_NEAR(wrap_angle_rad(-M_PI), M_PI, 1e-12);
+  EXPECT_NEAR(nearest_equivalent_angle_rad(0.1, 6.2), 0.1 + 2 * M_PI, 1e-12);
+  EXPECT_NEAR(nearest_equivalent_angle_rad(-M_PI / 2, -3.0), -M_PI / 2, 1e-12);
+  EXPECT_NEAR(rotation_angle_rad(Eigen::Matrix3d::Identity(),
+                                 Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix()), 0.3, 1e-12);
+}

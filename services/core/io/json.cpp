@@ -1,0 +1,45 @@
+#include "core/io/json.hpp"
+
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+
+namespace pbnbv {
+
+nlohmann::json to_json(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+Eigen::Vector3d vec3_from_json(const nlohmann::json& j, const std::string& what) {
+  if (!j.is_array() || j.size() != 3) throw std::invalid_argument(what + " must be an array of 3 numbers");
+  return Eigen::Vector3d(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
+}
+
+nlohmann::json to_json(const Pose& p) {
+  double pos[3], quat[4];
+  pose_to_arrays(p, pos, quat);
+  return {{"position_m", {pos[0], pos[1], pos[2]}}, {"quat_wxyz", {quat[0], quat[1], quat[2], quat[3]}}};
+}
+
+void write_text_atomic(const std::string& text, const std::string& path) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw std::runtime_error("cannot write " + tmp);
+    out << text;
+    if (!out) throw std::runtime_error("error writing " + tmp);
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot rename " + tmp + " to " + path);
+}
+
+void write_json_atomic(const nlohmann::json& j, const std::string& path) { write_text_atomic(j.dump(2) + "\n", path); }
+
+nlohmann::json read_json(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(path + " is not valid JSON: " + e.what());
+  }
+}
+
+}  // namespace pbnbv

@@ -1,0 +1,21 @@
+#pragma once
+// JSON helpers shared by everything that writes or reads the scan's files: poses and vectors as
+// JSON, atomic writes (a reader never sees half a file), reads that name the file on error.
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/base/pose.hpp"
+
+namespace pbnbv {
+
+nlohmann::json to_json(const Pose& p);  // {"position_m": [...], "quat_wxyz": [...]}
+nlohmann::json to_json(const Eigen::Vector3d& v);
+Eigen::Vector3d vec3_from_json(const nlohmann::json& j, const std::string& what);
+
+// Writes JSON to `path` atomically (temporary file + rename), so a reader never sees half.
+void write_json_atomic(const nlohmann::json& j, const std::string& path);
+void write_text_atomic(const std::string& text, const std::string& path);  // tmp + rename
+nlohmann::json read_json(const std::string& path);  // throws naming the path
+
+}  // namespace pbnbv

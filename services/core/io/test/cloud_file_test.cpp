@@ -1,0 +1,115 @@
+#include "core/io/cloud_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include "file_test_util.hpp"
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+namespace pbnbv {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::expect_error;
+using testing::put_be;
+
+class CloudFiles : public testing::TempDirTest {};
+
+TEST_F(CloudFiles, PlyRoundTripIsExact) {
+  std::mt19937 rng(5);
+  std::normal_distribution<float> g(0.0f, 0.3f);
+  PointCloud c;
+  for (int i = 0; i < 1000; ++i) c.emplace_back(g(rng), g(rng), g(rng));
+  c.emplace_back(-0.0f, 1e-30f, 3.4e38f);
+  const std::string p = path("c.ply");
+  write_ply(c, p);
+  EXPECT_EQ(fs::file_size(p) - 12 * c.size(),
+            std::string("ply\nformat binary_little_endian 1.0\ncomment written by pbnbv\n"
+                        "element vertex 1001\nproperty float x\nproperty float y\n"
+                        "property float z\nend_header\n")
+                .size());
+  const PointCloud r = read_ply(p);
+  EXPECT_EQ(r, c);
+
+  write_ply({}, path("empty.ply"));
+  EXPECT_TRUE(read_ply(path("empty.ply")).empty());
+}
+
+TEST_F(CloudFiles, ReadAsciiWithExtrasAndFaces) {
+  const std::string p = write("a.ply",
+                              "ply\r\nformat ascii 1.0\r\ncomment crlf header\r\n"
+                              "element vertex 3\r\nproperty double x\r\nproperty uchar red\r\n"
+                              "property double y\r\nproperty double z\r\nproperty float nx\r\n"
+                              "element face 1\r\nproperty list uchar int vertex_indices\r\n"
+                              "end_header\r\n"
+                              "0.5 255 -1 2e-3 0\r\n1 0 2 3 0.5\r\n-4 7 5 6 1\r\n3 0 1 2\r\n");
+  const PointCloud r = read_ply(p);
+  ASSERT_EQ(r.size(), 3u);
+  EXPECT_EQ(r[0], Eigen::Vector3f(0.5f, -1.0f, 2e-3f));
+  EXPECT_EQ(r[1], Eigen::Vector3f(1, 2, 3));
+  EXPECT_EQ(r[2], Eigen::Vector3f(-4, 5, 6));
+
+  // A cloud may hold invalid points (a mesh may not): they are read as they are.
+  const std::string q = write("nan.ply",
+                              "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
+                              "property float y\nproperty float z\nend_header\n1 2 3\nnan 0 0\n");
+  const PointCloud c = read_ply(q);
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_TRUE(std::isnan(c[1].x()));
+}
+
+TEST_F(CloudFiles, ReadBinaryBigEndianDouble) {
+  std::string s =
+      "ply\nformat binary_big_endian 1.0\nelement camera 1\nproperty float fx\n"
+      "element vertex 2\nproperty double x\nproperty double y\nproperty double z\n"
+      "property list uchar float extra\nend_header\n";
+  const float fx = 600.0f;
+  put_be(s, &fx, 4);
+  const double v[2][3] = {{0.1, 0.2, 0.3}, {-1.5, 2.25, 1e3}};
+  for (const auto& p : v) {
+    for (double c : p) put_be(s, &c, 8);
+    s.push_back(1);
+    const float e = 9.0f;
+    put_be(s, &e, 4);
+  }
+  const PointCloud r = read_ply(write("be.ply", s));
+  ASSERT_EQ(r.size(), 2u);
+  EXPECT_EQ(r[0], Eigen::Vector3f(0.1f, 0.2f, 0.3f));
+  EXPECT_EQ(r[1], Eigen::Vector3f(-1.5f, 2.25f, 1e3f));
+}
+
+TEST_F(CloudFiles, Errors) {
+  const std::string missing = path("missing.ply");
+  expect_error([&] { read_ply(missing); }, {missing, "does not exist"});
+  const std::string notply = write("x.ply", "solid nope\n");
+  expect_error([&] { read_ply(notply); }, {notply, "ply"});
+  const std::string noxyz = write("noxyz.ply",
+                                  "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                                  "property float y\nend_header\n1 2\n");
+  expect_error([&] { read_ply(noxyz); }, {noxyz, "x, y or z"});
+  const std::string bad = write("bad.ply",
+                                "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
+                                "property float y\nproperty float z\nend_header\n1 2 3\n1 2 three\n");
+  expect_error([&] { read_ply(bad); }, {bad, "line 9", "malformed"});
+  PointCloud c(10, Eigen::Vector3f(1, 2, 3));
+  const std::string p = path("cut.ply");
+  write_ply(c, p);
+  fs::resize_file(p, fs::file_size(p) - 5);
+  expect_error([&] { read_ply(p); }, {p, "truncated"});
+  const std::string unwritable = path("no/dir/c.ply");
+  expect_error([&] { write_ply(c, unwritable); }, {unwritable});
+}
+
+}  // namespace
+}  // namespace pbnbv

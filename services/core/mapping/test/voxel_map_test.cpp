@@ -1,0 +1,775 @@
+// The five-state voxel map (voxel_map.hpp) against geometry checkable by hand: synthetic depth
+// images ray-cast analytically (cube, sphere, plane), no renderer.
+#include "core/mapping/voxel_map.hpp"
+
+#include <gtest/gtest.h>
+#include <octomap/AbstractOcTree.h>
+#include <octomap/ColorOcTree.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <string>
+
+namespace pbnbv {
+namespace {
+
+using Eigen::Vector3d;
+using Eigen::Vector3i;
+
+// Returns the ray parameter t > 0 of the first hit of o + t d, or NaN.
+using HitFn = std::function<double(const Vector3d& o, const Vector3d& d)>;
+
+HitFn cube(double half) {
+  return [half](const Vector3d& o, const Vector3d& d) {
+    double t0 = -std::numeric_limits<double>::infinity();
+    double t1 = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < 3; ++i) {
+      if (std::abs(d[i]) < 1e-15) {
+        if (std::abs(o[i]) > half) return std::nan("");
+        continue;
+      }
+      double a = (-half - o[i]) / d[i], b = (half - o[i]) / d[i];
+      if (a > b) std::swap(a, b);
+      t0 = std::max(t0, a);
+      t1 = std::min(t1, b);
+    }
+    return (t0 <= t1 && t0 > 0) ? t0 : std::nan("");
+  };
+}
+
+HitFn sphere(double r) {
+  return [r](const Vector3d& o, const Vector3d& d) {
+    const double a = d.squaredNorm(), b = o.dot(d), c = o.squaredNorm() - r * r;
+    const double disc = b * b - a * c;
+    if (disc < 0) return std::nan("");
+    const double t = (-b - std::sqrt(disc)) / a;
+    return t > 0 ? t : std::nan("");
+  };
+}
+
+// The plane n . p = offset.
+HitFn plane(const Vector3d& n, double offset) {
+  return [n, offset](const Vector3d& o, const Vector3d& d) {
+    const double nd = n.dot(d);
+    if (std::abs(nd) < 1e-12) return std::nan("");
+    const double t = (offset - n.dot(o)) / nd;
+    return t > 0 ? t : std::nan("");
+  };
+}
+
+// Planar depth image: t is the depth because d = R (x_n, y_n, 1). Misses get `miss`.
+std::vector<float> render(const CameraIntrinsics& k, const Pose& T, const HitFn& hit,
+                          float miss = 0.0f) {
+  std::vector<float> depth(static_cast<size_t>(k.width) * k.height, miss);
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      const Vector3d d = T.linear() * Vector3d((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0);
+      const double t = hit(T.translation(), d);
+      if (std::isfinite(t)) depth[static_cast<size_t>(v) * k.width + u] = static_cast<float>(t);
+    }
+  }
+  return depth;
+}
+
+CameraIntrinsics small_camera() {  // the D435 field of view at a quarter of the size
+  CameraIntrinsics k;
+  k.width = 320;
+  k.height = 180;
+  k.fx = k.fy = 174.0;
+  k.cx = 160.0;
+  k.cy = 90.0;
+  return k;
+}
+
+CameraIntrinsics wide_camera() {  // 106 degrees both ways: sees all of B from 0.9 m
+  CameraIntrinsics k;
+  k.width = 320;
+  k.height = 320;
+  k.fx = k.fy = 120.0;
+  k.cx = 160.0;
+  k.cy = 160.0;
+  return k;
+}
+
+MapUpdateResult integrate(VoxelMap& map, const CameraIntrinsics& k, const Pose& T,
+                          const HitFn& hit) {
+  const std::vector<float> depth = render(k, T, hit);
+  DepthView view;
+  view.depth_m = &depth;
+  view.intrinsics = k;
+  view.object_T_camera = T;
+  return map.integrate(view);
+}
+
+Pose from(const Vector3d& eye) { return look_at_z_up(eye, Vector3d::Zero()); }
+
+std::vector<VoxelState> all_states(const VoxelMap& m) {
+  std::vector<VoxelState> s;
+  const Vector3i n = m.dims();
+  for (int z = 0; z < n.z(); ++z)
+    for (int y = 0; y < n.y(); ++y)
+      for (int x = 0; x < n.x(); ++x) s.push_back(m.state(Vector3i(x, y, z)));
+  return s;
+}
+
+// Lattice index of a voxel (the map's local index + the index of B's min voxel).
+Vector3i global_index(const VoxelMap& m, const Vector3i& local) {
+  const Vector3d c = m.centre(local) / m.params().resolution_m;
+  return Vector3i(static_cast<int>(std::floor(c.x())), static_cast<int>(std::floor(c.y())),
+                  static_cast<int>(std::floor(c.z())));
+}
+
+template <class F>
+void for_each_voxel(const VoxelMap& m, F f) {
+  const Vector3i n = m.dims();
+  for (int z = 0; z < n.z(); ++z)
+    for (int y = 0; y < n.y(); ++y)
+      for (int x = 0; x < n.x(); ++x) f(Vector3i(x, y, z));
+}
+
+// All 8 corners of the voxel project inside the image (pixel centres 0..W-1, 0..H-1) in front
+// of the camera, within max range.
+bool inside_frustum(const VoxelMap& m, const Vector3i& local, const CameraIntrinsics& k,
+                    const Pose& T, double max_m = 3.0) {
+  const double h = 0.5 * m.params().resolution_m;
+  const Vector3d c = m.centre(local);
+  const Eigen::Matrix3d Rt = T.linear().transpose();
+  const Vector3d qc = Rt * (c - T.translation());
+  for (int i = 0; i < 8; ++i) {
+    const Vector3d q = qc + Rt * Vector3d((i & 1) ? h : -h, (i & 2) ? h : -h, (i & 4) ? h : -h);
+    if (q.z() <= 1e-6 || q.z() > max_m) return false;
+    const double u = k.fx * q.x() / q.z() + k.cx, v = k.fy * q.y() / q.z() + k.cy;
+    if (u < 0 || u > k.width - 1 || v < 0 || v > k.height - 1) return false;
+  }
+  return true;
+}
+
+constexpr double kHalf = 0.15;  // the 0.3 m cube / sphere radius
+
+// ---------------------------------------------------------------------------------------------
+// Cube seen from +x, first frame with no other information: B and every state by hand.
+TEST(VoxelMap, CubeFirstFrameHandCountedBoundsAndStates) {
+  // res 0.02: the face x = 0.15 lies mid-voxel (voxel 7 = [0.14, 0.16]); the face's pixels give
+  // y, z in [-0.1498, 0.1498] (|u - 640| <= 139 px at 0.75 m), voxels -8..7 = [-0.16, 0.16].
+  // Occupied AABB: [0.14, 0.16] x [-0.16, 0.16]^2, size (0.02, 0.32, 0.32), diagonal 0.45299.
+  // View direction camera -> box centre = -x: extend the min x face by t with
+  // (0.02 + t)^2 + 2 * 0.32^2 = 4 * 0.45299^2 -> t = 0.76486, min x = -0.62486 -> lattice -0.64.
+  // B = [-0.64, 0.16] x [-0.16, 0.16]^2 = 40 x 16 x 16 = 10240 voxels.
+  VoxelMapParams p;
+  p.resolution_m = 0.02;
+  VoxelMap map(p);
+  const CameraIntrinsics k;  // 1280 x 720, f = 696
+  const MapUpdateResult r = integrate(map, k, from(Vector3d(0.9, 0, 0)), cube(kHalf));
+  ASSERT_TRUE(r.updated) << r.message;
+  EXPECT_EQ(map.dims(), Vector3i(40, 16, 16));
+  EXPECT_TRUE(map.bounds().min().isApprox(Vector3d(-0.64, -0.16, -0.16), 1e-9));
+  EXPECT_TRUE(map.bounds().max().isApprox(Vector3d(0.16, 0.16, 0.16), 1e-9));
+  // The front layer of B is exactly the face (16 x 16 Occupied). Rays from a camera on the
+  // axis diverge, so they enter B only through its front layer, which is all Occupied: free
+  // rays stop there and rays with a return turn occluded, so everything behind is Unknown
+  // and there is no Empty voxel, hence no Frontier either.
+  EXPECT_EQ(r.counts.occupied, 256);
+  EXPECT_EQ(r.counts.unknown, 10240 - 256);
+  EXPECT_EQ(r.counts.empty, 0);
+  EXPECT_EQ(r.counts.frontier, 0);
+  EXPECT_EQ(r.counts.none, 0);
+  for (const Vector3d& c : map.centres(VoxelState::kOccupied)) EXPECT_NEAR(c.x(), 0.15, 1e-9);
+  const VoxelCounts c = map.counts();
+  EXPECT_EQ(c.occupied, r.counts.occupied);
+  EXPECT_EQ(c.unknown, r.counts.unknown);
+}
+
+// Cube seen from +x inside a larger B given up front: Occupied face layer, Empty in front,
+// Unknown behind, Frontier on the rim only.
+TEST(VoxelMap, CubeOneFaceStatesInLargerBox) {
+  VoxelMapParams p;
+  p.resolution_m = 0.02;
+  VoxelMap map(p);
+  // x in [-0.7, 0.5] (indices -35..24), y, z in [-0.5, 0.5] (-25..24): 60 x 50 x 50. It
+  // contains the first frame's enlarged AABB (x >= -0.64), so the first frame leaves it as is.
+  map.reserve_bounds(Eigen::AlignedBox3d(Vector3d(-0.7, -0.5, -0.5), Vector3d(0.5, 0.5, 0.5)));
+  ASSERT_EQ(map.dims(), Vector3i(60, 50, 50));
+  const CameraIntrinsics k;
+  const Pose T = from(Vector3d(0.9, 0, 0));
+  const MapUpdateResult r = integrate(map, k, T, cube(kHalf));
+  ASSERT_TRUE(r.updated) << r.message;
+  EXPECT_EQ(map.dims(), Vector3i(60, 50, 50));
+  EXPECT_EQ(r.counts.occupied, 256);  // voxel x = 7, y, z = -8..7 (see the test above)
+
+  // The occupied layer [0.14, 0.16] x [-0.16, 0.16]^2 casts the shadow
+  // S = {x < 0.16, |y|, |z| <= 0.16 (0.9 - x) / 0.74} (its silhouette is its front face at
+  // depth 0.74) for the free rays, which stop at it. The rays with a return only fill the
+  // narrower shadow of the face's pixels, C = {|y|, |z| <= 0.1498 (0.9 - x) / 0.75}. Per
+  // voxel, by its corners (S and C are convex):
+  //  - Occupied iff x index 7 and y, z index in -8..7;
+  //  - in front (x index >= 8) or in the face layer outside the face, inside the frustum: free
+  //    along every ray -> Empty;
+  //  - behind (x index <= 6), all corners inside C (so entirely behind the face): Unknown;
+  //  - behind, all corners beyond the same side plane of S, inside the frustum: no ray to it
+  //    passes an Occupied voxel -> Empty;
+  //  - the rest straddles the boundary of S or lies between C and S: Empty, Unknown,
+  //    Frontier or (between C and S, where a free ray stops at the Occupied rim and no ray
+  //    with a return passes) None.
+  const double s = 0.16 / 0.74;
+  int64_t certain_empty = 0, certain_unknown = 0, straddling = 0;
+  int ring_frontier = 0;
+  for_each_voxel(map, [&](const Vector3i& l) {
+    const Vector3i g = global_index(map, l);
+    const VoxelState st = map.state(l);
+    const bool face = g.x() == 7 && g.y() >= -8 && g.y() <= 7 && g.z() >= -8 && g.z() <= 7;
+    if (face) {
+      EXPECT_EQ(st, VoxelState::kOccupied);
+      return;
+    }
+    EXPECT_NE(st, VoxelState::kOccupied);
+    const bool in_view = inside_frustum(map, l, k, T);
+    if (g.x() >= 7) {
+      if (in_view) {
+        EXPECT_EQ(st, VoxelState::kEmpty) << g.transpose();
+        ++certain_empty;
+      }
+      return;
+    }
+    int inside = 0, beyond[4] = {0, 0, 0, 0};
+    const Vector3d c = map.centre(l);
+    for (int i = 0; i < 8; ++i) {
+      const Vector3d q = c + 0.01 * Vector3d((i & 1) ? 1 : -1, (i & 2) ? 1 : -1, (i & 4) ? 1 : -1);
+      const double w = s * (0.9 - q.x()), w_cube = 0.1498 / 0.75 * (0.9 - q.x());
+      inside += (std::abs(q.y()) <= w_cube && std::abs(q.z()) <= w_cube);
+      beyond[0] += q.y() > w;
+      beyond[1] += q.y() < -w;
+      beyond[2] += q.z() > w;
+      beyond[3] += q.z() < -w;
+    }
+    if (inside == 8) {
+      EXPECT_EQ(st == VoxelState::kUnknown || st == VoxelState::kFrontier, true) << g.transpose();
+      ++certain_unknown;
+    } else if (std::max({beyond[0], beyond[1], beyond[2], beyond[3]}) == 8) {
+      if (in_view) {
+        EXPECT_EQ(st, VoxelState::kEmpty) << g.transpose();
+        ++certain_empty;
+      }
+    } else {
+      ++straddling;
+    }
+    // Frontier: only in the layer right behind the face (x index 6: the only Unknown voxels
+    // next to an Occupied one) and only on its rim: the ring y or z index in {-8, 7} is
+    // next to the Empty voxels beside the face (x 7, y or z index -9 / 8), the middle
+    // (y, z in -7..6) only sees Occupied and Unknown voxels.
+    if (st == VoxelState::kFrontier) {
+      EXPECT_EQ(g.x(), 6) << g.transpose();
+      EXPECT_FALSE(g.y() >= -7 && g.y() <= 6 && g.z() >= -7 && g.z() <= 6) << g.transpose();
+    }
+    const bool ring = g.x() == 6 && g.y() >= -8 && g.y() <= 7 && g.z() >= -8 && g.z() <= 7 &&
+                      (g.y() == -8 || g.y() == 7 || g.z() == -8 || g.z() == 7);
+    if (ring) {
+      EXPECT_EQ(st, VoxelState::kFrontier) << g.transpose();
+      ++ring_frontier;
+    }
+  });
+  // The ring: 4 * 16 - 4 = 60 voxels. The only other candidates are the 68 voxels of the ring
+  // just outside it (x index 6, y or z index -9 / 8, e.g. x in [0.12, 0.14], y in
+  // [0.16, 0.18]): they straddle the shadow boundary S (y = 0.1643 .. 0.1686 m across the
+  // voxel), and are Frontier only if no free ray crosses their outer part. Free rays leaving
+  // the Occupied front face at y > 0.16 (more than 0.16 / 0.74 * 696 = 150.5 px from the image
+  // centre) reach x = 0.12 at y < 0.18 for up to 0.18 / 0.78 * 696 = 160.6 px: a 10 px wide
+  // band, wider than the ray stride (5 px here: d_max = 1.749 m, 696 * 0.02 / (sqrt 2 * 1.749)
+  // = 5.6), so a free ray crosses every outer ring voxel: they are Empty and Frontier is
+  // exactly the 60 voxel ring.
+  EXPECT_EQ(map.last_ray_stride_px(), 5);
+  EXPECT_EQ(ring_frontier, 60);
+  EXPECT_EQ(r.counts.frontier, 60);
+  // The other totals against the per-voxel geometry above: every certain voxel is checked
+  // individually, and the straddling ones can only add to either side.
+  EXPECT_GE(r.counts.empty, certain_empty);
+  EXPECT_LE(r.counts.empty, certain_empty + straddling);
+  EXPECT_GE(r.counts.unknown + r.counts.frontier, certain_unknown);
+  EXPECT_LE(r.counts.unknown + r.counts.frontier, certain_unknown + straddling);
+  EXPECT_EQ(r.counts.none + r.counts.empty + r.counts.occupied + r.counts.unknown +
+                r.counts.frontier,
+            60 * 50 * 50);
+  // Right behind the face centre, x index 6 down to -35 (B's back face): Unknown.
+  for (int x = -35; x <= 6; ++x) {
+    const VoxelState st = map.state_at(Vector3d((x + 0.5) * 0.02, 0.0, 0.0));
+    EXPECT_TRUE(st == VoxelState::kUnknown) << x;
+  }
+  // The column in front of the face centre, x index 8..24, is Empty.
+  for (int x = 8; x <= 24; ++x) {
+    EXPECT_EQ(map.state_at(Vector3d((x + 0.5) * 0.02, 0.01, 0.01)), VoxelState::kEmpty) << x;
+  }
+  std::printf("cube from +x in 60x50x50 B: empty %lld (certain %lld), unknown %lld, frontier %lld"
+              " (certain unknown %lld, straddling %lld)\n",
+              (long long)r.counts.empty, (long long)certain_empty, (long long)r.counts.unknown,
+              (long long)r.counts.frontier, (long long)certain_unknown, (long long)straddling);
+}
+
+// Six axis views of the cube with a wide camera: the shell is Occupied, the inside Unknown,
+// everything else seen Empty, no Frontier left.
+TEST(VoxelMap, SixAxisViewsLeaveNoFrontier) {
+  VoxelMapParams p;
+  p.resolution_m = 0.02;
+  VoxelMap map(p);
+  map.reserve_bounds(Eigen::AlignedBox3d(Vector3d(-0.4, -0.4, -0.4), Vector3d(0.4, 0.4, 0.4)));
+  const CameraIntrinsics k = wide_camera();
+  const Vector3d eyes[6] = {{0.9, 0, 0}, {-0.9, 0, 0}, {0, 0.9, 0},
+                            {0, -0.9, 0}, {0, 0, 0.9}, {0, 0, -0.9}};
+  MapUpdateResult r;
+  for (const Vector3d& e : eyes) {
+    r = integrate(map, k, from(e), cube(kHalf));
+    ASSERT_TRUE(r.updated) << r.message;
+  }
+  // The shell: voxels of [-8, 7]^3 with an index at -8 or 7 = 16^3 - 14^3 = 1352; the inside
+  // 14^3 = 2744 voxels are never seen.
+  EXPECT_EQ(r.counts.frontier, 0);
+  EXPECT_EQ(r.counts.occupied, 16 * 16 * 16 - 14 * 14 * 14);
+  EXPECT_EQ(r.counts.unknown, 14 * 14 * 14);
+  for_each_voxel(map, [&](const Vector3i& l) {
+    const Vector3i g = global_index(map, l);
+    const bool in_cube = (g.array() >= -8).all() && (g.array() <= 7).all();
+    const bool inside = (g.array() >= -7).all() && (g.array() <= 6).all();
+    const VoxelState st = map.state(l);
+    if (inside) {
+      EXPECT_EQ(st, VoxelState::kUnknown);
+    } else if (in_cube) {
+      EXPECT_EQ(st, VoxelState::kOccupied);
+    } else {
+      EXPECT_TRUE(st == VoxelState::kEmpty || st == VoxelState::kNone) << g.transpose();
+    }
+  });
+}
+
+// A sphere seen from one side: Occupied only near the visible hemisphere, Unknown behind.
+TEST(VoxelMap, SphereOneSide) {
+  const double res = 0.02, r_s = kHalf, d = 0.9;
+  VoxelMapParams p;
+  p.resolution_m = res;
+  VoxelMap map(p);
+  const CameraIntrinsics k;
+  const MapUpdateResult r = integrate(map, k, from(Vector3d(d, 0, 0)), sphere(r_s));
+  ASSERT_TRUE(r.updated) << r.message;
+  // A voxel holding a surface point has its centre within sqrt(3)/2 res of that point. The
+  // visible points p satisfy p . eye >= r^2 (the tangent circle at x = r^2 / d = 0.025).
+  const double tol = std::sqrt(3.0) / 2.0 * res + 1e-9;
+  const auto occ = map.centres(VoxelState::kOccupied);
+  ASSERT_GT(occ.size(), 0u);
+  for (const Vector3d& c : occ) {
+    EXPECT_NEAR(c.norm(), r_s, tol) << c.transpose();
+    EXPECT_GE(c.x(), r_s * r_s / d - tol) << c.transpose();
+  }
+  // The visible cap has area 2 pi r h with h = r - r^2/d = 0.125: 0.1178 m^2; seen along x
+  // its voxels number at least its projected area / res^2 (pi 0.148^2 / 0.0004 = 172) and at
+  // most about area * (1 + slope) / res^2; just a sanity window here.
+  EXPECT_GT(occ.size(), 172u);
+  EXPECT_LT(occ.size(), 1200u);
+  // Behind the sphere along the axis: inside and in the shadow -> Unknown.
+  for (double x : {0.0, -0.1, -0.2, -0.4, -0.6}) {
+    EXPECT_EQ(map.state_at(Vector3d(x + 0.001, 0.001, 0.001)), VoxelState::kUnknown) << x;
+  }
+  // In front of the sphere's rim, inside B (the occupied AABB reaches y, z = +-0.16):
+  // the corner (0.15, 0.15, 0.15) is 0.26 m from the centre and its sight line misses the
+  // sphere -> Empty.
+  EXPECT_EQ(map.state_at(Vector3d(0.15, 0.15, 0.15)), VoxelState::kEmpty);
+  EXPECT_GT(r.counts.empty, 0);
+  EXPECT_GT(r.counts.frontier, 0);
+  EXPECT_GT(r.counts.unknown, r.counts.occupied);
+  // Frontier voxels border both Occupied and Empty voxels, so they lie near the sphere: their
+  // centres are within 2 voxels of the surface (they are next to an Occupied voxel).
+  for (const Vector3d& c : map.centres(VoxelState::kFrontier)) {
+    EXPECT_NEAR(c.norm(), r_s, std::sqrt(3.0) * res + tol) << c.transpose();
+  }
+}
+
+// Frames without a valid pixel change nothing (whatever no_return_is_free says: a frame
+// with no return at all carries no pose-checked evidence, see voxel_map.hpp).
+TEST(VoxelMap, EmptyAndNanFramesLeaveTheMapUnchanged) {
+  const CameraIntrinsics k = small_camera();
+  const Pose T = from(Vector3d(0.9, 0.2, 0.1));
+  const std::vector<float> zeros(k.width * k.height, 0.0f);
+  const std::vector<float> nans(k.width * k.height, std::numeric_limits<float>::quiet_NaN());
+  const std::vector<float> far(k.width * k.height, 7.0f);  // beyond max range: ignored
+  for (bool free : {false, true}) {
+    VoxelMapParams p;
+    p.resolution_m = 0.03;
+    p.no_return_is_free = free;
+    VoxelMap map(p);
+    {  // before any frame: no B either
+      DepthView v{&zeros, k, DepthRange{}, T};
+      const MapUpdateResult r = map.integrate(v);
+      EXPECT_FALSE(r.updated);
+      EXPECT_NE(r.message.find("no valid depth pixel"), std::string::npos) << r.message;
+      EXPECT_TRUE(map.empty());
+    }
+    ASSERT_TRUE(integrate(map, k, T, sphere(kHalf)).updated);
+    const auto before = all_states(map);
+    const Eigen::AlignedBox3d b = map.bounds();
+    for (const auto* depth : {&zeros, &nans, &far}) {
+      DepthView v{depth, k, DepthRange{}, from(Vector3d(-0.9, 0, 0))};
+      const MapUpdateResult r = map.integrate(v);
+      EXPECT_FALSE(r.updated);
+      EXPECT_NE(r.message.find("map unchanged"), std::string::npos) << r.message;
+      EXPECT_NE(r.message.find("no valid depth pixel"), std::string::npos) << r.message;
+      EXPECT_EQ(all_states(map), before);
+      EXPECT_TRUE(map.bounds().isApprox(b));
+    }
+  }
+}
+
+// B: first frame = occupied AABB with doubled diagonal; never shrinks; covers gamma around
+// Frontier voxels after later frames.
+TEST(VoxelMap, BoundingBoxRules) {
+  for (double res : {0.01, 0.02, 0.03}) {
+    VoxelMapParams p;
+    p.resolution_m = res;
+    p.gamma_m = 0.1;
+    VoxelMap map(p);
+    const CameraIntrinsics k = small_camera();
+    // An oblique first view so the extension runs along all three axes.
+    const MapUpdateResult r0 = integrate(map, k, from(Vector3d(0.6, 0.5, 0.4)), cube(kHalf));
+    ASSERT_TRUE(r0.updated);
+    Eigen::AlignedBox3d occ;
+    for (const Vector3d& c : map.centres(VoxelState::kOccupied)) {
+      occ.extend(c - Vector3d::Constant(res / 2));
+      occ.extend(c + Vector3d::Constant(res / 2));
+    }
+    Eigen::AlignedBox3d b = map.bounds();
+    Eigen::AlignedBox3d b_tol = b;
+    b_tol.extend(b.min() - Vector3d::Constant(1e-9)).extend(b.max() + Vector3d::Constant(1e-9));
+    EXPECT_TRUE(b_tol.contains(occ));
+    // Snapping the extended faces outward to the lattice adds < 1 voxel per extended axis.
+    EXPECT_GE(b.diagonal().norm(), 2 * occ.diagonal().norm() - 1e-9) << res;
+    EXPECT_LE(b.diagonal().norm(), 2 * occ.diagonal().norm() + std::sqrt(3.0) * res) << res;
+    // Extended away from the camera only: the faces toward the camera stay at the AABB.
+    EXPECT_NEAR(b.max().x(), occ.max().x(), 1e-9);
+    EXPECT_NEAR(b.max().y(), occ.max().y(), 1e-9);
+    EXPECT_NEAR(b.max().z(), occ.max().z(), 1e-9);
+    EXPECT_LT(b.min().x(), occ.min().x());
+
+    const Vector3d eyes[] = {{-0.5, 0.7, 0.2}, {0.1, -0.9, -0.3}, {0.0, 0.2, 0.95},
+                             {-0.8, -0.3, -0.5}};
+    bool saw_frontier = false;
+    for (const Vector3d& e : eyes) {
+      const MapUpdateResult r = integrate(map, k, from(e), cube(kHalf));
+      ASSERT_TRUE(r.updated);
+      const Eigen::AlignedBox3d nb = map.bounds();
+      EXPECT_TRUE(nb.contains(b)) << "B shrank";
+      for (const Vector3d& c : map.centres(VoxelState::kOccupied)) EXPECT_TRUE(nb.contains(c));
+      const auto fr = map.centres(VoxelState::kFrontier);
+      saw_frontier = saw_frontier || !fr.empty();
+      for (const Vector3d& c : fr) {
+        const Eigen::AlignedBox3d g(c - Vector3d::Constant(p.gamma_m),
+                                    c + Vector3d::Constant(p.gamma_m));
+        EXPECT_TRUE(nb.contains(g)) << c.transpose();
+      }
+      b = nb;
+    }
+    EXPECT_TRUE(saw_frontier);
+  }
+}
+
+// A frame whose frontier voxels sit on B's boundary makes B grow by gamma around them.
+TEST(VoxelMap, FrontierNearBoundaryGrowsBoxByGamma) {
+  VoxelMapParams p;
+  p.resolution_m = 0.02;
+  p.gamma_m = 0.1;
+  VoxelMap map(p);
+  const CameraIntrinsics k;
+  ASSERT_TRUE(integrate(map, k, from(Vector3d(0.9, 0, 0)), cube(kHalf)).updated);
+  const Eigen::AlignedBox3d b1 = map.bounds();  // [-0.64, 0.16] x [-0.16, 0.16]^2
+  const MapUpdateResult r = integrate(map, k, from(Vector3d(0, 0.9, 0)), cube(kHalf));
+  ASSERT_TRUE(r.updated);
+  ASSERT_GT(r.counts.frontier, 0);
+  const Eigen::AlignedBox3d b2 = map.bounds();
+  EXPECT_TRUE(b2.contains(b1));
+  EXPECT_GT(b2.volume(), b1.volume());
+  for (const Vector3d& c : map.centres(VoxelState::kFrontier)) {
+    EXPECT_TRUE(b2.contains(Eigen::AlignedBox3d(c - Vector3d::Constant(0.1),
+                                                c + Vector3d::Constant(0.1))))
+        << c.transpose();
+  }
+  // The new voxels are None (only the old B has states).
+  for_each_voxel(map, [&](const Vector3i& l) {
+    if (!b1.contains(map.centre(l))) {
+      EXPECT_EQ(map.state(l), VoxelState::kNone);
+    }
+  });
+}
+
+// The subsampled ray set crosses every voxel in the frustum: a wall filling the image (rays
+// with a return) then free rays from behind it, with a rolled camera so the voxel lattice is
+// at an angle to the pixel lattice.
+TEST(VoxelMap, SubsampledRaysCoverTheFrustum) {
+  for (double res : {0.005, 0.01, 0.02, 0.03}) {
+    VoxelMapParams p;
+    p.resolution_m = res;
+    VoxelMap map(p);
+    // The full-size camera: at 0.005 m the quarter-size one has voxels smaller than a pixel
+    // at the far side of B (f res / (sqrt(2) d_max) < 1), where no ray set short of
+    // supersampling the pixels crosses every voxel.
+    const CameraIntrinsics k;
+    const Vector3d up(0.0, std::sin(0.6), std::cos(0.6));  // 34 degree roll
+    const Pose T1 = look_at(Vector3d(0.2, 0.02, -0.03), Vector3d(0.0, 0.05, 0.0), up);
+    // The wall x = 0.001 (inside voxel layer 0 for every res here).
+    const MapUpdateResult r1 = integrate(map, k, T1, plane(Vector3d::UnitX(), 0.001));
+    ASSERT_TRUE(r1.updated);
+    if (res >= 0.01) {
+      EXPECT_GT(map.last_ray_stride_px(), 1) << res;
+    }
+    {  // the guarantee holds when one ray per pixel is fine enough: f res / (sqrt 2 d_max) >= 1
+      double d_max = 0;
+      for (int c = 0; c < 8; ++c) {
+        const auto corner = map.bounds().corner(static_cast<Eigen::AlignedBox3d::CornerType>(c));
+        d_max = std::max(d_max, (corner - T1.translation()).norm());
+      }
+      ASSERT_GE(k.fx * res / (std::sqrt(2.0) * d_max), 1.0) << res;
+    }
+    int64_t checked = 0;
+    for_each_voxel(map, [&](const Vector3i& l) {
+      if (!inside_frustum(map, l, k, T1)) return;
+      ++checked;
+      const Vector3i g = global_index(map, l);
+      const VoxelState st = map.state(l);
+      if (g.x() == 0) {
+        EXPECT_EQ(st, VoxelState::kOccupied) << res << " " << g.transpose();
+      } else {
+        EXPECT_EQ(st, VoxelState::kUnknown) << res << " " << g.transpose();
+      }
+    });
+    EXPECT_GT(checked, 1000);
+    std::printf("res %.3f: wall frame stride %d px, %lld voxels inside the frustum checked, ",
+                res, map.last_ray_stride_px(), (long long)checked);
+    // Free rays from behind B: every pixel without return except the centre one, which lands
+    // on the wall (an Occupied voxel already).
+    const Eigen::AlignedBox3d b = map.bounds();
+    const Vector3d eye(b.min().x() - 0.3, 0.03, 0.01);
+    const Vector3d up2(0.0, std::sin(-0.4), std::cos(-0.4));
+    const Pose T2 = look_at(eye, Vector3d(0.001, 0.03, 0.01), up2);
+    std::vector<float> depth(k.width * k.height, 0.0f);
+    depth[static_cast<size_t>(k.cy) * k.width + static_cast<size_t>(k.cx)] =
+        static_cast<float>(0.001 - eye.x());
+    DepthView v{&depth, k, DepthRange{}, T2};
+    ASSERT_TRUE(map.integrate(v).updated);
+    checked = 0;
+    for_each_voxel(map, [&](const Vector3i& l) {
+      if (!b.contains(map.centre(l)) || !inside_frustum(map, l, k, T2)) return;
+      const Vector3i g = global_index(map, l);
+      if (g.x() >= 0) return;  // the wall and (outside B) beyond
+      ++checked;
+      EXPECT_EQ(map.state(l), VoxelState::kEmpty) << res << " " << g.transpose();
+    });
+    EXPECT_GT(checked, 1000);
+    std::printf("free frame stride %d px, %lld checked\n", map.last_ray_stride_px(),
+                (long long)checked);
+  }
+}
+
+// The automatic ray subsampling against one ray per pixel (ray_stride_px = 1). gamma = 0 and a
+// reserved B keep both maps on the same B (B then only grows by Occupied voxels, which both
+// record from every pixel), so the states can be compared voxel by voxel after every frame.
+TEST(VoxelMap, SubsampledRaysMatchPerPixelReference) {
+  struct Case {
+    const char* name;
+    HitFn hit;
+  };
+  const Case objects[] = {{"cube", cube(kHalf)}, {"sphere", sphere(kHalf)}};
+  const Vector3d eyes[] = {{0.9, 0, 0}, {0.3, 0.75, 0.4}, {-0.6, -0.2, 0.65}};
+  // The quarter-size camera has a stride > 1 only at 0.03 m (f = 174); the full-size one at all
+  // three resolutions.
+  for (const CameraIntrinsics& k : {small_camera(), CameraIntrinsics{}}) {
+    for (double res : {0.03, 0.02, 0.01}) {
+      if (k.width < 1280 && res < 0.03) continue;
+      const int n_eyes = k.width < 1280 ? 3 : 2;  // (the reference at full size is slow)
+      for (const Case& c : objects) {
+        if (k.width == 1280 && res < 0.02 && std::string(c.name) == "cube") continue;
+        VoxelMapParams p;
+        p.resolution_m = res;
+        p.gamma_m = 0.0;
+        VoxelMap fast(p);
+        p.ray_stride_px = 1;
+        VoxelMap ref(p);
+        const Eigen::AlignedBox3d box(Vector3d::Constant(-0.5), Vector3d::Constant(0.5));
+        fast.reserve_bounds(box);
+        ref.reserve_bounds(box);
+        for (int i_eye = 0; i_eye < n_eyes; ++i_eye) {
+          const Vector3d& e = eyes[i_eye];
+          const MapUpdateResult rf = integrate(fast, k, from(e), c.hit);
+          const MapUpdateResult rr = integrate(ref, k, from(e), c.hit);
+          ASSERT_TRUE(rf.updated && rr.updated);
+          ASSERT_EQ(fast.dims(), ref.dims());
+          ASSERT_TRUE(fast.bounds().isApprox(ref.bounds()));
+          int64_t differ = 0, classified = 0, missed = 0, off_interface = 0;
+          int64_t empty_vs_unknown = 0, unknown_vs_empty = 0, frontier_flip = 0;
+          for_each_voxel(ref, [&](const Vector3i& l) {
+            const VoxelState a = fast.state(l), b = ref.state(l);
+            if (b != VoxelState::kNone) ++classified;
+            if (a == b) return;
+            ++differ;
+            if (a == VoxelState::kNone) {
+              ++missed;
+            } else if (b == VoxelState::kEmpty && a != VoxelState::kEmpty) {
+              ++empty_vs_unknown;
+            } else if (a == VoxelState::kEmpty) {
+              ++unknown_vs_empty;
+            } else {
+              ++frontier_flip;
+            }
+            // Every difference lies on an interface of the reference map: a voxel with a
+            // 26-neighbour in another state (the edge of a shadow, of the frustum, or a
+            // Frontier/Unknown decided by such a neighbour), never inside a uniform region.
+            bool interface = false;
+            for (int dz = -1; dz <= 1 && !interface; ++dz)
+              for (int dy = -1; dy <= 1 && !interface; ++dy)
+                for (int dx = -1; dx <= 1 && !interface; ++dx)
+                  interface = ref.state(l + Vector3i(dx, dy, dz)) != b;
+            if (!interface) ++off_interface;
+          });
+          EXPECT_EQ(rf.counts.occupied, rr.counts.occupied);
+          std::printf("%4dx%-4d %-6s res %.2f eye (%5.2f %5.2f %5.2f) stride %d: rays %6d vs %6d;"
+                      " E/U/F fast %lld/%lld/%lld ref %lld/%lld/%lld; differ %lld of %lld"
+                      " (None in fast %lld, ref Empty fast Unknown/Frontier %lld, ref"
+                      " Unknown/Frontier fast Empty %lld, Unknown<->Frontier %lld); ref %.0f ms\n",
+                      k.width, k.height, c.name, res, e.x(), e.y(), e.z(),
+                      fast.last_ray_stride_px(), rf.rays, rr.rays, (long long)rf.counts.empty,
+                      (long long)rf.counts.unknown, (long long)rf.counts.frontier,
+                      (long long)rr.counts.empty, (long long)rr.counts.unknown,
+                      (long long)rr.counts.frontier, (long long)differ, (long long)classified,
+                      (long long)missed, (long long)empty_vs_unknown,
+                      (long long)unknown_vs_empty, (long long)frontier_flip, rr.time_s * 1e3);
+          EXPECT_LE(differ, classified / 100) << c.name << " " << res;
+          EXPECT_EQ(off_interface, 0) << c.name << " " << res;
+        }
+      }
+    }
+  }
+}
+
+// Two threads give the same map as any other run (the write policy is order independent).
+TEST(VoxelMap, Deterministic) {
+  VoxelMapParams p;
+  p.resolution_m = 0.01;
+  VoxelMap a(p), b(p);
+  const CameraIntrinsics k;
+  for (const Vector3d& e : {Vector3d(0.9, 0, 0), Vector3d(0.2, 0.6, 0.6)}) {
+    integrate(a, k, from(e), sphere(kHalf));
+    integrate(b, k, from(e), sphere(kHalf));
+  }
+  EXPECT_EQ(all_states(a), all_states(b));
+}
+
+TEST(VoxelMap, WriteOctomapRoundTrip) {
+  VoxelMapParams p;
+  p.resolution_m = 0.03;
+  VoxelMap map(p);
+  const CameraIntrinsics k = small_camera();
+  integrate(map, k, from(Vector3d(0.9, 0, 0)), sphere(kHalf));
+  const MapUpdateResult r = integrate(map, k, from(Vector3d(0.3, 0.8, 0.3)), sphere(kHalf));
+  ASSERT_TRUE(r.updated);
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("pbnbv_voxel_map_test_" + std::to_string(::getpid()) + ".ot"))
+                               .string();
+  map.write_octomap(path);
+  std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read(path));
+  std::filesystem::remove(path);
+  ASSERT_TRUE(tree);
+  auto* color = dynamic_cast<octomap::ColorOcTree*>(tree.get());
+  ASSERT_NE(color, nullptr) << tree->getTreeType();
+  EXPECT_NEAR(color->getResolution(), 0.03, 1e-12);
+  int64_t occupied = 0, free = 0;
+  for (auto it = color->begin_leafs(); it != color->end_leafs(); ++it) {
+    // Count in voxels of the map's size in case a reader prunes equal siblings.
+    const double n = std::pow(it.getSize() / 0.03, 3);
+    if (color->isNodeOccupied(*it)) {
+      occupied += std::llround(n);
+    } else {
+      free += std::llround(n);
+    }
+  }
+  EXPECT_EQ(occupied, r.counts.occupied + r.counts.unknown + r.counts.frontier);
+  EXPECT_EQ(free, r.counts.empty);
+  // A Frontier voxel is red.
+  const auto fr = map.centres(VoxelState::kFrontier);
+  ASSERT_FALSE(fr.empty());
+  const auto* node = color->search(fr[0].x(), fr[0].y(), fr[0].z());
+  ASSERT_NE(node, nullptr);
+  EXPECT_EQ(node->getColor(), octomap::ColorOcTreeNode::Color(240, 60, 40));
+}
+
+TEST(VoxelMap, RejectsBadInput) {
+  VoxelMapParams p;
+  p.resolution_m = 0;
+  EXPECT_THROW(VoxelMap{p}, std::invalid_argument);
+  p.resolution_m = 0.02;
+  p.gamma_m = -1;
+  EXPECT_THROW(VoxelMap{p}, std::invalid_argument);
+  p.gamma_m = 0.1;
+  VoxelMap map(p);
+  const CameraIntrinsics k = small_camera();
+  const std::vector<float> wrong(10, 1.0f);
+  DepthView v{&wrong, k, DepthRange{}, Pose::Identity()};
+  EXPECT_THROW(map.integrate(v), std::invalid_argument);
+  v.depth_m = nullptr;
+  EXPECT_THROW(map.integrate(v), std::invalid_argument);
+  EXPECT_STREQ(to_string(VoxelState::kFrontier), "Frontier");
+}
+
+}  // namespace
+// A cube standing on a ground plane (the turntable top at z = -0.15), seen obliquely from above:
+// with the working volume above the ground, the ground's points are not Occupied and B never
+// reaches below the ground; the ground still clears the rays that meet it beside the cube.
+TEST(VoxelMap, WorkingVolumeKeepsTheGroundOutOfTheMap) {
+  const CameraIntrinsics k = small_camera();
+  const HitFn cube_fn = cube(kHalf);
+  const HitFn ground = plane(Vector3d::UnitZ(), -kHalf);
+  const HitFn scene = [&](const Vector3d& o, const Vector3d& d) {
+    const double a = cube_fn(o, d), b = ground(o, d);
+    if (std::isnan(a)) return b;
+    if (std::isnan(b)) return a;
+    return std::min(a, b);
+  };
+  const Pose T = from(Vector3d(0.7, 0.2, 0.5));
+  const std::vector<float> depth = render(k, T, scene);
+  const double res = 0.03;
+  VoxelMapParams p;
+  p.resolution_m = res;
+  DepthView view;
+  view.depth_m = &depth;
+  view.intrinsics = k;
+  view.object_T_camera = T;
+
+  // Without a working volume the ground is Occupied, far beyond the cube.
+  VoxelMap unlimited(p);
+  unlimited.integrate(view);
+  int ground_occupied = 0;
+  for (const auto& c : unlimited.centres(VoxelState::kOccupied)) ground_occupied += c.z() < -kHalf + 0.5 * res;
+  EXPECT_GT(ground_occupied, 100);
+
+  // With it (the ground plus 4 mm clearance is its floor) only the cube is.
+  VoxelMap map(p);
+  view.working_volume = Eigen::AlignedBox3d(Vector3d(-0.5, -0.5, -kHalf + 0.004), Vector3d(0.5, 0.5, 0.5));
+  const MapUpdateResult r = map.integrate(view);
+  ASSERT_TRUE(r.updated) << r.message;
+  const auto occupied = map.centres(VoxelState::kOccupied);
+  ASSERT_FALSE(occupied.empty());
+  for (const auto& c : occupied) {
+    // Every Occupied voxel touches the cube (its centre within half a voxel diagonal of it).
+    const Vector3d outside = (c.cwiseAbs() - Vector3d::Constant(kHalf)).cwiseMax(0.0);
+    EXPECT_LE(outside.norm(), std::sqrt(3.0) / 2 * res + 1e-9) << c.transpose();
+  }
+  // B stays inside the working volume (up to the voxel the floor cuts through).
+  EXPECT_GE(map.bounds().min().z(), -kHalf + 0.004 - res - 1e-9);
+  EXPECT_LE(map.bounds().max().x(), 0.5 + res);
+  // The ground beside the cube cleared free space above it: Empty voxels exist in B.
+  EXPECT_GT(map.counts().empty, 0);
+  // All points outside the volume: the map is unchanged and says so.
+  VoxelMap nothing(p);
+  view.working_volume = Eigen::AlignedBox3d(Vector3d(2, 2, 2), Vector3d(3, 3, 3));
+  const MapUpdateResult none = nothing.integrate(view);
+  EXPECT_FALSE(none.updated);
+  EXPECT_NE(none.message.find("working volume"), std::string::npos) << none.message;
+  EXPECT_TRUE(nothing.empty());
+}
+
+}  // namespace pbnbv

@@ -1,0 +1,137 @@
+#pragma once
+// The five-state voxel map of PB-NBV (method.md "Voxel map", paper section III-B) with its
+// bounding box B. Dense grid over B; rays traversed with a 3-D DDA (Amanatides & Woo).
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/geometry/camera_model.hpp"
+#include "core/base/pose.hpp"
+
+namespace pbnbv {
+
+enum class VoxelState : uint8_t { kNone = 0, kEmpty = 1, kOccupied = 2, kUnknown = 3, kFrontier = 4 };
+const char* to_string(VoxelState s);
+
+struct VoxelMapParams {
+  double resolution_m = 0.03;      // voxel edge
+  double gamma_m = 0.1;            // B grows to cover a sphere of this radius around each Frontier voxel
+  bool no_return_is_free = true;   // a pixel without a return (0) means free space up to max range
+  // The ray set: one ray per `ray_stride_px` pixels in u and v; 0 = automatic: about one ray per
+  // voxel footprint at the far side of B (every voxel in the frustum is crossed), never coarser
+  // than needed. Occupied voxels always come from every valid pixel.
+  int ray_stride_px = 0;
+};
+
+// One depth frame as the map needs it: planar depth (0 or non-finite = no return), the camera
+// model and range, and the (registered) camera pose in the object frame.
+struct DepthView {
+  const std::vector<float>* depth_m = nullptr;  // row-major, width * height
+  CameraIntrinsics intrinsics;
+  DepthRange range;
+  Pose object_T_camera = Pose::Identity();
+  // The working volume (object frame): only points inside it become Occupied, and B never
+  // extends beyond it. A point outside it (the turntable, the table, the room) still tells
+  // that its ray was free up to it. Empty box (the default): no limit.
+  Eigen::AlignedBox3d working_volume;
+};
+
+// The map's cells as plain data (what the VOXEL_MAP message carries for planners that read the
+// whole map, e.g. ray casting): B's min corner, the lattice size, the states with x fastest,
+// then y, then z.
+struct VoxelGrid {
+  Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3i dims = Eigen::Vector3i::Zero();
+  double resolution_m = 0;
+  std::vector<VoxelState> cells;
+
+  bool empty() const { return dims.prod() == 0; }
+  Eigen::AlignedBox3d bounds() const {
+    return Eigen::AlignedBox3d(origin_m, origin_m + dims.cast<double>() * resolution_m);
+  }
+  VoxelState at(int x, int y, int z) const {
+    return cells[x + int64_t(dims.x()) * (y + int64_t(dims.y()) * z)];
+  }
+  // Throws std::invalid_argument naming `what` and the field: negative dims, cells.size() !=
+  // dims product, a resolution that is not positive, a non-finite origin, a state above 4.
+  void validate(const std::string& what) const;
+};
+
+struct VoxelCounts {
+  int64_t none = 0, empty = 0, occupied = 0, unknown = 0, frontier = 0;
+};
+
+struct MapUpdateResult {
+  bool updated = false;          // false: the frame was empty / all invalid; map unchanged
+  std::string message;           // why not, or a summary
+  VoxelCounts counts;
+  double time_s = 0;             // wall time of the update
+  int rays = 0;                  // rays traversed
+};
+
+class VoxelMap {
+ public:
+  explicit VoxelMap(const VoxelMapParams& params);
+
+  // Integrates one frame with the paper's rules:
+  //  - a voxel holding a point of the frame becomes Occupied (Occupied is kept);
+  //  - along each ray from the camera centre, None, Unknown and Frontier voxels before the
+  //    first Occupied voxel become Empty; None voxels behind it become Unknown;
+  //  - then every Unknown voxel with at least one Empty and at least one Occupied voxel among
+  //    its 26 neighbours is Frontier, every other Frontier voxel goes back to Unknown;
+  //  - B: the first frame sets B to the AABB of its Occupied voxels enlarged along the viewing
+  //    direction until its diagonal doubles; later frames grow B to cover the Occupied and
+  //    Unknown voxels and a sphere of radius gamma around every Frontier voxel (B never shrinks).
+  // A frame with no valid pixel, or only NaNs, leaves the map unchanged and says so.
+  MapUpdateResult integrate(const DepthView& view);
+
+  const VoxelMapParams& params() const { return params_; }
+  bool empty() const { return dims_.prod() == 0; }
+  Eigen::AlignedBox3d bounds() const;            // B, object frame
+  Eigen::Vector3i dims() const { return dims_; }  // voxels along x, y, z
+  VoxelState state(const Eigen::Vector3i& index) const;
+  VoxelState state_at(const Eigen::Vector3d& point_m) const;  // kNone outside B
+  Eigen::Vector3d centre(const Eigen::Vector3i& index) const;
+  VoxelCounts counts() const;
+  std::vector<Eigen::Vector3d> centres(VoxelState s) const;  // object frame
+  VoxelGrid grid() const;                                     // a copy of the cells
+
+  // Grows B to cover `box_m` (snapped outward to the voxel lattice); new voxels are None and B
+  // never shrinks. Optional: lets a caller that knows its working volume (or a test) start with
+  // a larger B. Called before the first frame, the first frame's rule still applies and B
+  // becomes the union of this box and the first frame's enlarged AABB.
+  void reserve_bounds(const Eigen::AlignedBox3d& box_m);
+  // Pixel stride of the free/occluded ray set used by the last integrated frame (diagnostics).
+  int last_ray_stride_px() const { return last_stride_px_; }
+
+  // Writes the map as an OctoMap ColorOcTree (.ot, viewable in octovis): Occupied, Unknown and
+  // Frontier voxels as occupied nodes coloured by state, Empty voxels as free nodes.
+  void write_octomap(const std::string& path) const;
+
+ private:
+  VoxelMapParams params_;
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  // min corner of B, on the voxel lattice
+  Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
+  std::vector<VoxelState> cells_;
+  // (implementation helpers are private to voxel_map.cpp)
+  Eigen::Vector3i lo_ = Eigen::Vector3i::Zero();  // lattice index of B's min voxel (origin_ =
+                                                  // lo_ * resolution)
+  bool initialised_ = false;                      // a frame with valid points has been integrated
+  int last_stride_px_ = 0;
+  std::vector<Eigen::Vector3i> points_[2];        // scratch: lattice index of each valid pixel
+  std::vector<uint8_t> scratch_;                  // frontier pass scratch (one byte per voxel)
+  std::vector<uint8_t> block_kind_;               // per-frame scratch (one byte per ray block)
+  std::vector<float> block_depth_;                // per-frame scratch (nearest depth per block)
+
+  // Grows B to cover the lattice indices [lo, hi] (inclusive); copies states, new cells None.
+  void grow_to_cover(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi);
+  // The working volume of the frame being integrated, as a lattice index box (B is clamped to it).
+  bool limited_ = false;
+  Eigen::Vector3i limit_lo_ = Eigen::Vector3i::Zero(), limit_hi_ = Eigen::Vector3i::Zero();
+  // Re-evaluates Frontier/Unknown over the whole grid; returns the state counts.
+  VoxelCounts update_frontiers();
+  friend struct VoxelMapAccess;
+};
+
+}  // namespace pbnbv

@@ -1,0 +1,163 @@
+#include "core/perception/cloud_filter.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace pbnbv {
+
+namespace {
+
+int bit_width(uint64_t v) {
+  int b = 0;
+  while (v) {
+    ++b;
+    v >>= 1;
+  }
+  return b;
+}
+
+struct KeyIndex {
+  uint64_t key;
+  uint32_t index;
+};
+
+// Stable LSD radix sort on the low `bits` bits of the key, digits of at most 12 bits.
+void radix_sort(std::vector<KeyIndex>& a, int bits) {
+  if (bits <= 0 || a.size() < 2) return;
+  const int passes = (bits + 11) / 12;
+  const int digit = (bits + passes - 1) / passes;
+  const size_t buckets = size_t{1} << digit;
+  const uint64_t mask = buckets - 1;
+  std::vector<KeyIndex> tmp(a.size());
+  std::vector<size_t> count(buckets);
+  for (int pass = 0, shift = 0; pass < passes; ++pass, shift += digit) {
+    std::fill(count.begin(), count.end(), 0);
+    for (const auto& e : a) ++count[(e.key >> shift) & mask];
+    size_t sum = 0;
+    for (auto& c : count) {
+      const size_t m = c;
+      c = sum;
+      sum += m;
+    }
+    for (const auto& e : a) tmp[count[(e.key >> shift) & mask]++] = e;
+    a.swap(tmp);
+  }
+}
+
+}  // namespace
+
+PointCloud voxel_downsample(const PointCloud& cloud, double voxel_m) {
+  if (!(voxel_m > 0.0) || !std::isfinite(voxel_m)) return cloud;
+  if (cloud.size() > std::numeric_limits<uint32_t>::max()) {
+    throw std::invalid_argument("voxel_downsample: too many points");
+  }
+  // Voxel index of a point; false for non-finite points and absurdly far ones (dropped).
+  constexpr double kMaxIndex = 4.0e18;
+  auto voxel_of = [voxel_m](const Eigen::Vector3f& p, int64_t q[3]) {
+    for (int k = 0; k < 3; ++k) {
+      const double f = std::floor(static_cast<double>(p[k]) / voxel_m);
+      if (!(std::fabs(f) < kMaxIndex)) return false;  // also catches NaN
+      q[k] = static_cast<int64_t>(f);
+    }
+    return true;
+  };
+
+  // Pass 1: range of the voxel indices.
+  int64_t lo[3], hi[3];
+  for (int k = 0; k < 3; ++k) {
+    lo[k] = std::numeric_limits<int64_t>::max();
+    hi[k] = std::numeric_limits<int64_t>::min();
+  }
+  size_t n = 0;
+  for (const auto& p : cloud) {
+    int64_t q[3];
+    if (!voxel_of(p, q)) continue;
+    ++n;
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], q[k]);
+      hi[k] = std::max(hi[k], q[k]);
+    }
+  }
+  PointCloud out;
+  if (n == 0) return out;
+  int bits[3];
+  for (int k = 0; k < 3; ++k) {
+    bits[k] = bit_width(static_cast<uint64_t>(hi[k]) - static_cast<uint64_t>(lo[k]));
+  }
+  const int total_bits = bits[0] + bits[1] + bits[2];
+
+  // Emits the centroid of a run of points [b, e) of `ki`, all in one voxel.
+  auto emit = [&](const KeyIndex* b, const KeyIndex* e) {
+    double sx = 0, sy = 0, sz = 0;
+    for (const KeyIndex* it = b; it != e; ++it) {
+      const Eigen::Vector3f& p = cloud[it->index];
+      sx += p.x();
+      sy += p.y();
+      sz += p.z();
+    }
+    const double inv = 1.0 / static_cast<double>(e - b);
+    out.emplace_back(static_cast<float>(sx * inv), static_cast<float>(sy * inv),
+                     static_cast<float>(sz * inv));
+  };
+
+  if (total_bits <= 64) {
+    // Pass 2: packed key (x, then y, then z: lexicographic order), radix sort, runs.
+    std::vector<KeyIndex> ki;
+    ki.reserve(n);
+    for (size_t i = 0; i < cloud.size(); ++i) {
+      int64_t q[3];
+      if (!voxel_of(cloud[i], q)) continue;
+      uint64_t key = static_cast<uint64_t>(q[0]) - static_cast<uint64_t>(lo[0]);
+      for (int k = 1; k < 3; ++k) {
+        key = bits[k] ? (key << bits[k]) : key;
+        key |= static_cast<uint64_t>(q[k]) - static_cast<uint64_t>(lo[k]);
+      }
+      ki.push_back({key, static_cast<uint32_t>(i)});
+    }
+    radix_sort(ki, total_bits);
+    size_t j = 0;
+    while (j < n) {
+      size_t e = j + 1;
+      while (e < n && ki[e].key == ki[j].key) ++e;
+      emit(&ki[j], &ki[e]);
+      j = e;
+    }
+    return out;
+  }
+
+  // Keys too wide to pack: sort index triples (stable, so the summation order is fixed).
+  struct Wide {
+    int64_t q[3];
+    uint32_t index;
+  };
+  std::vector<Wide> w;
+  w.reserve(n);
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    Wide x;
+    if (!voxel_of(cloud[i], x.q)) continue;
+    x.index = static_cast<uint32_t>(i);
+    w.push_back(x);
+  }
+  std::stable_sort(w.begin(), w.end(), [](const Wide& a, const Wide& b) {
+    return std::lexicographical_compare(a.q, a.q + 3, b.q, b.q + 3);
+  });
+  std::vector<KeyIndex> run;
+  size_t j = 0;
+  while (j < n) {
+    size_t e = j;
+    run.clear();
+    while (e < n && std::equal(w[e].q, w[e].q + 3, w[j].q)) run.push_back({0, w[e++].index});
+    emit(run.data(), run.data() + run.size());
+    j = e;
+  }
+  return out;
+}
+
+}  // namespace pbnbv

@@ -1,0 +1,33 @@
+#pragma once
+// Turning one depth frame into an object-frame cloud: decode, back-project, transform, crop,
+// downsample. Plain functions; the camera service calls them.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/geometry/camera_model.hpp"
+#include "core/geometry/point_cloud.hpp"
+#include "core/base/pose.hpp"
+
+namespace pbnbv {
+
+struct CloudCrop {
+  Eigen::Vector3d min_m = Eigen::Vector3d::Constant(-1e9);  // working volume, object frame
+  Eigen::Vector3d max_m = Eigen::Vector3d::Constant(1e9);
+  double ground_z_m = -1e9;  // object-frame z of the turntable top; points at or below
+  double ground_clearance_m = 0;  // ground_z + clearance are dropped
+};
+
+struct CloudStats {
+  int num_valid_pixels = 0;
+  int num_cropped = 0;
+};
+
+
+// Back-projects every pixel whose depth is finite and inside `range`, maps it with
+// object_T_camera, keeps the points inside the crop, then voxel-downsamples.
+PointCloud depth_to_object_cloud(const std::vector<float>& depth_m, const CameraIntrinsics& k,
+                                 const DepthRange& range, const Pose& object_T_camera,
+                                 const CloudCrop& crop, double voxel_m, CloudStats* stats);
+
+}  // namespace pbnbv

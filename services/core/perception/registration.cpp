@@ -1,0 +1,717 @@
+#include "core/perception/cloud_filter.hpp"
+#include "core/perception/registration.hpp"
+
+#include <Eigen/Eigenvalues>
+
+#include <pcl/common/centroid.h>
+#include <pcl/features/normal_3d.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/registration/correspondence_rejection.h>
+#include <pcl/registration/icp.h>
+#include <pcl/search/kdtree.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <exception>
+#include <limits>
+#include <memory>
+#include <string>
+#include <thread>
+#include <unordered_set>
+#include <vector>
+
+namespace pbnbv {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+// Point-to-plane ICP (linear least squares, double precision estimation); exposes the
+// iteration count pcl keeps protected.
+class Icp : public pcl::IterativeClosestPointWithNormals<pcl::PointNormal, pcl::PointNormal,
+                                                          double> {
+ public:
+  int iterations() const { return nr_iterations_; }
+};
+using Criteria = pcl::registration::DefaultConvergenceCriteria<double>;
+
+// A static 3-d tree over the xyz of a cloud, answering the k-NN and radius queries of
+// pcl::search with far less per-query overhead than the FLANN-backed pcl::search::KdTree (no
+// allocation, no OpenMP region per query). Thread-safe for queries; used by the normal
+// estimation, ICP's correspondence search and the overlap gate.
+template <typename PointT>
+class FastKdTree : public pcl::search::KdTree<PointT> {
+ public:
+  using Base = pcl::search::KdTree<PointT>;
+  using typename Base::PointCloudConstPtr;
+  using typename Base::IndicesConstPtr;
+  using pcl::search::Search<PointT>::nearestKSearch;
+  using pcl::search::Search<PointT>::radiusSearch;
+  using Ptr = pcl::shared_ptr<FastKdTree<PointT>>;
+
+  FastKdTree() : Base(true) {}
+
+  void setInputCloud(const PointCloudConstPtr& cloud,
+                     const IndicesConstPtr& indices = IndicesConstPtr()) override {
+    this->input_ = cloud;
+    this->indices_ = indices;
+    pts_.clear();
+    ids_.clear();
+    nodes_.clear();
+    if (!cloud) return;
+    auto add = [&](pcl::index_t i) {
+      const auto& p = (*cloud)[i];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return;
+      pts_.push_back(p.getVector3fMap());
+      ids_.push_back(i);
+    };
+    if (indices) {
+      for (pcl::index_t i : *indices) add(i);
+    } else {
+      for (pcl::index_t i = 0; i < static_cast<pcl::index_t>(cloud->size()); ++i) add(i);
+    }
+    nodes_.reserve(2 * pts_.size() / kLeaf + 2);
+    if (!pts_.empty()) build(0, static_cast<int>(pts_.size()));
+  }
+
+  int nearestKSearch(const PointT& point, int k, pcl::Indices& k_indices,
+                     std::vector<float>& k_sqr_distances) const override {
+    if (k == 1) {  // ICP's correspondence search
+      k_indices.resize(1);
+      k_sqr_distances.resize(1);
+      float d2;
+      const pcl::index_t i = nearest(point.getVector3fMap(), k1_bound_d2_, d2);
+      if (i < 0) {  // nothing within the bound: report a miss pcl's distance test drops
+        k_indices[0] = ids_.empty() ? 0 : ids_[0];
+        k_sqr_distances[0] = std::numeric_limits<float>::max();
+        return ids_.empty() ? 0 : 1;
+      }
+      k_indices[0] = i;
+      k_sqr_distances[0] = d2;
+      return 1;
+    }
+    return knn(point.getVector3fMap(), k, std::numeric_limits<float>::infinity(), k_indices,
+               k_sqr_distances);
+  }
+
+  int radiusSearch(const PointT& point, double radius, pcl::Indices& k_indices,
+                   std::vector<float>& k_sqr_distances, unsigned int max_nn = 0) const override {
+    k_indices.clear();
+    k_sqr_distances.clear();
+    if (nodes_.empty()) return 0;
+    const float r2 = static_cast<float>(radius * radius);
+    const Eigen::Vector3f q = point.getVector3fMap();
+    std::vector<std::pair<float, pcl::index_t>> found;
+    radius_all(q, r2, found);
+    std::sort(found.begin(), found.end());
+    if (max_nn > 0 && found.size() > max_nn) found.resize(max_nn);
+    for (const auto& f : found) {
+      k_sqr_distances.push_back(f.first);
+      k_indices.push_back(f.second);
+    }
+    return static_cast<int>(found.size());
+  }
+
+  // Single-neighbour queries (ICP's correspondences) only look this far (squared, m^2); a query
+  // with nothing nearer gets a miss at distance FLT_MAX. Keeps far-off frames cheap.
+  void set_k1_bound(double d) { k1_bound_d2_ = static_cast<float>(d * d); }
+
+  // Nearest point within sqrt(max_d2): its original index, or -1.
+  pcl::index_t nearest(const Eigen::Vector3f& q, float max_d2, float& d2) const {
+    d2 = max_d2;
+    int best = -1;
+    float dists[3];
+    const float rd = root_dist(q, dists);
+    if (!nodes_.empty() && rd <= d2) nn_rec(0, q, rd, dists, d2, best);
+    return best < 0 ? -1 : ids_[best];
+  }
+
+ private:
+  static constexpr int kLeaf = 8;
+  struct Node {
+    int dim;  // -1: leaf over [begin, end)
+    int begin, end;
+    int left, right;
+    float left_max, right_min;  // extent of the children along dim
+  };
+
+  // Squared distance from q to the root's box, per dimension and summed (the incremental
+  // lower bound of the search, as in Arya & Mount / nanoflann).
+  float root_dist(const Eigen::Vector3f& q, float dists[3]) const {
+    float rd = 0;
+    for (int k = 0; k < 3; ++k) {
+      const float o = q[k] < lo_[k] ? lo_[k] - q[k] : q[k] > hi_[k] ? q[k] - hi_[k] : 0.0f;
+      dists[k] = o * o;
+      rd += dists[k];
+    }
+    return rd;
+  }
+
+  int build(int begin, int end) {
+    const int id = static_cast<int>(nodes_.size());
+    nodes_.push_back({-1, begin, end, -1, -1, 0.f, 0.f});
+    Eigen::Vector3f lo = pts_[begin], hi = pts_[begin];
+    for (int i = begin + 1; i < end; ++i) {
+      lo = lo.cwiseMin(pts_[i]);
+      hi = hi.cwiseMax(pts_[i]);
+    }
+    if (id == 0) {
+      lo_ = lo;
+      hi_ = hi;
+    }
+    if (end - begin <= kLeaf) return id;
+    int dim;
+    (hi - lo).maxCoeff(&dim);
+    const int mid = (begin + end) / 2;
+    // Reorder [begin, end) around the median of the split coordinate.
+    std::vector<int> order(end - begin);
+    for (int i = 0; i < end - begin; ++i) order[i] = begin + i;
+    std::nth_element(order.begin(), order.begin() + (mid - begin), order.end(),
+                     [&](int a, int b) { return pts_[a][dim] < pts_[b][dim]; });
+    std::vector<Eigen::Vector3f> p2(end - begin);
+    std::vector<pcl::index_t> i2(end - begin);
+    for (int i = 0; i < end - begin; ++i) {
+      p2[i] = pts_[order[i]];
+      i2[i] = ids_[order[i]];
+    }
+    std::copy(p2.begin(), p2.end(), pts_.begin() + begin);
+    std::copy(i2.begin(), i2.end(), ids_.begin() + begin);
+    float left_max = pts_[begin][dim];
+    for (int i = begin; i < mid; ++i) left_max = std::max(left_max, pts_[i][dim]);
+    float right_min = pts_[mid][dim];
+    for (int i = mid; i < end; ++i) right_min = std::min(right_min, pts_[i][dim]);
+    const int left = build(begin, mid);
+    const int right = build(mid, end);
+    Node& nd = nodes_[id];
+    nd.dim = dim;
+    nd.left = left;
+    nd.right = right;
+    nd.left_max = left_max;
+    nd.right_min = right_min;
+    return id;
+  }
+
+  // Calls visit(i) for the points of leaves whose box lies within `bound()` of q, nearest
+  // branch first; `bound` may shrink as points are found.
+  template <typename Visit, typename Bound>
+  void search(int n, const Eigen::Vector3f& q, float rd, float dists[3], Visit& visit,
+              Bound& bound) const {
+    const Node& nd = nodes_[n];
+    if (nd.dim < 0) {
+      for (int i = nd.begin; i < nd.end; ++i) visit(i);
+      return;
+    }
+    const float v = q[nd.dim];
+    const float to_left = v > nd.left_max ? v - nd.left_max : 0.0f;
+    const float to_right = v < nd.right_min ? nd.right_min - v : 0.0f;
+    const bool left_first = to_left <= to_right;
+    const int first = left_first ? nd.left : nd.right;
+    const int second = left_first ? nd.right : nd.left;
+    const float cut_first = left_first ? to_left : to_right;
+    const float cut_second = left_first ? to_right : to_left;
+    const float saved = dists[nd.dim];
+    {
+      const float c2 = cut_first * cut_first;
+      const float r = rd - saved + c2;
+      if (r <= bound()) {
+        dists[nd.dim] = c2;
+        search(first, q, r, dists, visit, bound);
+        dists[nd.dim] = saved;
+      }
+    }
+    {
+      const float c2 = cut_second * cut_second;
+      const float r = rd - saved + c2;
+      if (r <= bound()) {
+        dists[nd.dim] = c2;
+        search(second, q, r, dists, visit, bound);
+        dists[nd.dim] = saved;
+      }
+    }
+  }
+
+  void nn_rec(int root, const Eigen::Vector3f& q, float rd, float dists[3], float& d2,
+              int& best) const {
+    auto visit = [&](int i) {
+      const float d = (pts_[i] - q).squaredNorm();
+      if (d < d2 || (d == d2 && best < 0)) {
+        d2 = d;
+        best = i;
+      }
+    };
+    auto bound = [&]() { return d2; };
+    search(root, q, rd, dists, visit, bound);
+  }
+
+  int knn(const Eigen::Vector3f& q, int k, float max_d2, pcl::Indices& out_i,
+          std::vector<float>& out_d) const {
+    out_i.clear();
+    out_d.clear();
+    if (k <= 0 || nodes_.empty()) return 0;
+    k = std::min<int>(k, static_cast<int>(pts_.size()));
+    // Sorted best-k list (k is small: 12 for the normals).
+    std::vector<std::pair<float, int>> best;
+    best.reserve(k + 1);
+    auto visit = [&](int i) {
+      const float d = (pts_[i] - q).squaredNorm();
+      if (static_cast<int>(best.size()) == k ? d >= best.back().first : d > max_d2) return;
+      best.insert(std::upper_bound(best.begin(), best.end(), std::make_pair(d, i)), {d, i});
+      if (static_cast<int>(best.size()) > k) best.pop_back();
+    };
+    auto bound = [&]() {
+      return static_cast<int>(best.size()) < k ? max_d2 : best.back().first;
+    };
+    float dists[3];
+    const float rd = root_dist(q, dists);
+    if (rd <= max_d2) search(0, q, rd, dists, visit, bound);
+    for (const auto& b : best) {
+      out_d.push_back(b.first);
+      out_i.push_back(ids_[b.second]);
+    }
+    return static_cast<int>(best.size());
+  }
+
+  int radius_all(const Eigen::Vector3f& q, float r2,
+             std::vector<std::pair<float, pcl::index_t>>& found) const {
+    auto visit = [&](int i) {
+      const float d = (pts_[i] - q).squaredNorm();
+      if (d <= r2) found.emplace_back(d, ids_[i]);
+    };
+    auto bound = [&]() { return r2; };
+    float dists[3];
+    const float rd = root_dist(q, dists);
+    if (rd <= r2) search(0, q, rd, dists, visit, bound);
+    return static_cast<int>(found.size());
+  }
+
+  std::vector<Eigen::Vector3f> pts_;
+  std::vector<pcl::index_t> ids_;
+  std::vector<Node> nodes_;
+  Eigen::Vector3f lo_ = Eigen::Vector3f::Zero(), hi_ = Eigen::Vector3f::Zero();
+  float k1_bound_d2_ = std::numeric_limits<float>::infinity();
+};
+
+// Drops correspondences whose surface normals disagree by more than an angle (unsigned: the
+// normals are not oriented consistently). The source normals are turned by the pose at the start
+// of the stage; the rotation within a stage is a few degrees at most, well inside the threshold.
+class NormalCompatibilityRejector : public pcl::registration::CorrespondenceRejector {
+ public:
+  NormalCompatibilityRejector(pcl::PointCloud<pcl::PointNormal>::ConstPtr source,
+                              pcl::PointCloud<pcl::PointNormal>::ConstPtr target, double max_deg)
+      : source_(std::move(source)), target_(std::move(target)),
+        min_cos_(static_cast<float>(std::cos(max_deg * 3.14159265358979323846 / 180.0))) {
+    rejection_name_ = "NormalCompatibilityRejector";
+  }
+  void set_rotation(const Eigen::Matrix3f& r) { rotation_ = r; }
+  void getRemainingCorrespondences(const pcl::Correspondences& in,
+                                   pcl::Correspondences& out) override {
+    out.clear();
+    out.reserve(in.size());
+    for (const auto& c : in) {
+      const Eigen::Vector3f ns = rotation_ * (*source_)[c.index_query].getNormalVector3fMap();
+      const float d = ns.dot((*target_)[c.index_match].getNormalVector3fMap());
+      if (std::fabs(d) < min_cos_) continue;
+      out.push_back(c);
+    }
+  }
+
+ protected:
+  void applyRejection(pcl::Correspondences& out) override {
+    getRemainingCorrespondences(*input_correspondences_, out);
+  }
+
+ private:
+  pcl::PointCloud<pcl::PointNormal>::ConstPtr source_, target_;
+  Eigen::Matrix3f rotation_ = Eigen::Matrix3f::Identity();
+  float min_cos_;
+};
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kNormalNeighbours = 12;  // k-NN of the plane fits on the downsampled clouds
+constexpr double kMaxNormalAngleDeg = 30.0;  // correspondences with normals further apart drop
+
+std::string fmt(const char* f, double a) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, a);
+  return buf;
+}
+
+// The points of `cloud` within `dist` of some point of `ref` (and some a little further: whole
+// cells of a grid of dist/2, the cells of `ref` dilated by two).
+PointCloud near_points(const PointCloud& cloud, const PointCloud& ref, double dist) {
+  const double cell = dist / 2;
+  auto key = [cell](const Eigen::Vector3f& p, int64_t& k) {
+    const Eigen::Vector3d q = (p.cast<double>() / cell).array().floor();
+    if (!(q.cwiseAbs().maxCoeff() < 1e5)) return false;  // beyond 100,000 cells: not cropped
+    k = ((static_cast<int64_t>(q.x()) + (1 << 20)) << 42) |
+        ((static_cast<int64_t>(q.y()) + (1 << 20)) << 21) |
+        (static_cast<int64_t>(q.z()) + (1 << 20));
+    return true;
+  };
+  std::unordered_set<int64_t> occupied;
+  for (const auto& p : ref) {
+    int64_t k;
+    if (!key(p, k)) return cloud;
+    occupied.insert(k);
+  }
+  std::unordered_set<int64_t> dilated;
+  dilated.reserve(occupied.size() * 30);
+  for (const int64_t k : occupied) {
+    for (int64_t dx = -2; dx <= 2; ++dx) {
+      for (int64_t dy = -2; dy <= 2; ++dy) {
+        for (int64_t dz = -2; dz <= 2; ++dz) {
+          dilated.insert(k + (dx << 42) + (dy << 21) + dz);
+        }
+      }
+    }
+  }
+  PointCloud out;
+  out.reserve(cloud.size());
+  for (const auto& p : cloud) {
+    int64_t k;
+    if (!key(p, k) || dilated.count(k)) out.push_back(p);
+  }
+  return out;
+}
+
+PointCloud finite_points(const PointCloud& in) {
+  PointCloud out;
+  out.reserve(in.size());
+  for (const auto& p : in) {
+    if (p.allFinite()) out.push_back(p);
+  }
+  return out;
+}
+
+// Points with usable normals: for every point a plane is fitted to its k nearest neighbours
+// with pcl's covariance + eigen plane fit (what pcl::NormalEstimation::computePointNormal does),
+// split over the cores by hand and using the fast tree; points without a plane are dropped.
+pcl::PointCloud<pcl::PointNormal>::Ptr with_normals(const PointCloud& pts) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr xyz(new pcl::PointCloud<pcl::PointXYZ>);
+  xyz->resize(pts.size());
+  for (size_t i = 0; i < pts.size(); ++i) {
+    (*xyz)[i].getVector3fMap() = pts[i];
+  }
+  pcl::PointCloud<pcl::PointNormal> all;
+  all.resize(pts.size());
+  std::vector<char> ok(pts.size(), 0);
+  if (pts.size() >= 3) {
+    FastKdTree<pcl::PointXYZ> tree;
+    tree.setInputCloud(xyz);
+    const int k = std::min<int>(kNormalNeighbours, static_cast<int>(pts.size()));
+    auto work = [&](size_t begin, size_t end) {
+      pcl::Indices nn;
+      std::vector<float> d2;
+      Eigen::Matrix3f cov;
+      Eigen::Vector4f centroid;
+      for (size_t i = begin; i < end; ++i) {
+        if (tree.nearestKSearch((*xyz)[i], k, nn, d2) < 3) continue;
+        if (pcl::computeMeanAndCovarianceMatrix(*xyz, nn, cov, centroid) < 3) continue;
+        float nx, ny, nz, curvature;
+        pcl::solvePlaneParameters(cov, nx, ny, nz, curvature);
+        const Eigen::Vector3f n(nx, ny, nz);
+        if (!n.allFinite() || !(n.norm() > 0.5f)) continue;
+        auto& o = all[i];
+        o.getVector3fMap() = pts[i];
+        o.getNormalVector3fMap() = n;
+        o.curvature = curvature;
+        ok[i] = 1;
+      }
+    };
+    const size_t threads = std::max<size_t>(
+        1, std::min<size_t>({std::thread::hardware_concurrency(), 4, pts.size() / 2000 + 1}));
+    std::vector<std::thread> pool;
+    const size_t chunk = (pts.size() + threads - 1) / threads;
+    for (size_t t = 1; t < threads; ++t) {
+      pool.emplace_back(work, std::min(pts.size(), t * chunk), std::min(pts.size(), (t + 1) * chunk));
+    }
+    work(0, std::min(pts.size(), chunk));
+    for (auto& th : pool) th.join();
+  }
+  pcl::PointCloud<pcl::PointNormal>::Ptr out(new pcl::PointCloud<pcl::PointNormal>);
+  out->reserve(pts.size());
+  for (size_t i = 0; i < pts.size(); ++i) {
+    if (ok[i]) out->push_back(all[i]);
+  }
+  out->width = static_cast<uint32_t>(out->size());
+  out->height = 1;
+  out->is_dense = true;
+  return out;
+}
+
+}  // namespace
+
+PointCloud transform_cloud(const PointCloud& cloud, const Pose& transform) {
+  PointCloud out;
+  out.reserve(cloud.size());
+  const Eigen::Matrix3d r = transform.linear();
+  const Eigen::Vector3d t = transform.translation();
+  for (const auto& p : cloud) {
+    out.push_back((r * p.cast<double>() + t).cast<float>());
+  }
+  return out;
+}
+
+// How well an overlap pins the alignment down: the smallest eigenvalue of the point-to-plane
+// information matrix H = mean(J J^T), J = [(x - c) x n / L; n] (c: centroid, L: RMS radius of
+// the overlap, so rotations and translations are on one scale; eigenvalues in [0, 1]), and its
+// eigenvector (the freest direction: rotation part first). Fewer than 6 pairs: 0.
+double overlap_constraint(const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& pairs,
+                          Eigen::Matrix<double, 6, 1>* weakest) {
+  if (pairs.size() < 6) return 0.0;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& pr : pairs) c += pr.first;
+  c /= static_cast<double>(pairs.size());
+  double l2 = 0;
+  for (const auto& pr : pairs) l2 += (pr.first - c).squaredNorm();
+  const double L = std::sqrt(l2 / static_cast<double>(pairs.size()));
+  Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+  for (const auto& pr : pairs) {
+    const Eigen::Vector3d n = pr.second.normalized();
+    Eigen::Matrix<double, 6, 1> j;
+    j << (pr.first - c).cross(n) / std::max(L, 1e-9), n;
+    H += j * j.transpose();
+  }
+  H /= static_cast<double>(pairs.size());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(H);
+  if (weakest) *weakest = eig.eigenvectors().col(0);
+  return std::max(0.0, eig.eigenvalues()[0]);
+}
+
+RegistrationResult register_frame(const PointCloud& model, const PointCloud& frame,
+                                  const RegistrationParams& params) {
+  const auto t0 = Clock::now();
+  RegistrationResult res;
+  auto finish = [&]() -> RegistrationResult {
+    res.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
+    return res;
+  };
+
+  try {
+    const PointCloud model_f = finite_points(model);
+    const PointCloud frame_f = finite_points(frame);
+    const size_t dropped = (model.size() - model_f.size()) + (frame.size() - frame_f.size());
+    const std::string dropped_note =
+        dropped ? " (" + std::to_string(dropped) + " non-finite points dropped)" : "";
+
+    if (model_f.empty()) {
+      res.accepted = true;
+      res.converged = true;
+      res.reason = "first frame: defines the model" + dropped_note;
+      return finish();
+    }
+
+    const double voxel = params.voxel_m;
+    const PointCloud model_ds = voxel_downsample(model_f, voxel);
+    const PointCloud frame_ds = voxel_downsample(frame_f, voxel);
+    const size_t min_points = static_cast<size_t>(std::max(params.min_points, 3));
+    if (frame_ds.size() < min_points || model_ds.size() < min_points) {
+      res.reason = "rejected: too few points: frame " + std::to_string(frame_ds.size()) +
+                   ", model " + std::to_string(model_ds.size()) + " after " +
+                   fmt("%.1f", voxel * 1e3) + " mm downsampling (of " +
+                   std::to_string(frame_f.size()) + " and " + std::to_string(model_f.size()) +
+                   " finite points), need " + std::to_string(min_points) + dropped_note;
+      return finish();
+    }
+
+    // Only the part of the model the frame can reach matters: keep the model points within
+    // `margin` (the largest correspondence distance plus room for the normals) of the frame,
+    // via a grid of margin/2 cells: the frame's cells dilated by two.
+    const double margin =
+        std::max(params.max_correspondence_m, params.overlap_distance_m) + 4.0 * voxel;
+    const PointCloud model_crop = near_points(model_ds, frame_ds, margin);
+
+    const auto target = with_normals(model_crop);
+    const auto source = with_normals(frame_ds);
+
+    FastKdTree<pcl::PointNormal>::Ptr tree(new FastKdTree<pcl::PointNormal>);
+    Eigen::Matrix4d t_final = Eigen::Matrix4d::Identity();
+    std::string icp_note;
+    if (target->size() >= 3) tree->setInputCloud(target);
+
+    // Overlap that cannot pin the alignment down (a plane, a sphere) lets ICP slide until it
+    // runs out of iterations: measure it at the kinematic pose first and skip ICP then.
+    bool pinned = true;
+    if (target->size() >= 10 && source->size() >= 10) {
+      // Pairs within the coarsest correspondence distance (the kinematic pose may be off by
+      // several mm); a conservative threshold (half the gate's): the final gate decides.
+      std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> near;
+      const float r2 = static_cast<float>(params.max_correspondence_m * params.max_correspondence_m);
+      for (const auto& p : *source) {
+        float d2;
+        const pcl::index_t i = tree->nearest(p.getVector3fMap(), r2, d2);
+        if (i >= 0) near.emplace_back(p.getVector3fMap().cast<double>(), (*target)[i].getNormalVector3fMap().cast<double>());
+      }
+      pinned = near.size() < 6 || overlap_constraint(near, nullptr) >= 0.5 * params.min_constraint;
+    }
+    if (!pinned) {
+      res.converged = true;
+      icp_note = "skipped: the overlap does not constrain the alignment";
+    } else if (target->size() >= 10 && source->size() >= 10) {
+      Icp icp;
+      icp.setInputSource(source);
+      icp.setInputTarget(target);
+      icp.setSearchMethodTarget(tree, true);
+      icp.setMaximumIterations(std::max(params.max_iterations, 1));
+      // A stage ends when a step moves less than 10 um and 0.001 deg (pcl compares the squared
+      // translation and the rotation's cosine).
+      icp.setTransformationEpsilon(1e-5 * 1e-5);
+      icp.setTransformationRotationEpsilon(std::cos(1e-3 * kPi / 180.0));
+      icp.setEuclideanFitnessEpsilon(1e-9);
+      // Point-to-plane pulls only along the model's normal; a frame point on a surface the model
+      // has not seen, matched to the edge of one it has, would pull sideways. Normal agreement
+      // drops those pairs (it halved the rotation error on partial-overlap frames).
+      auto rejector =
+          std::make_shared<NormalCompatibilityRejector>(source, target, kMaxNormalAngleDeg);
+      icp.addCorrespondenceRejector(rejector);
+      // Coarse to fine: each stage halves the correspondence distance, from
+      // max_correspondence_m down to the overlap distance (at least 1.5 voxels) so the part of
+      // the frame the model has not seen does not pull. max_iterations is per stage.
+      std::vector<double> stages;
+      const double finest = std::max(params.overlap_distance_m, 1.5 * voxel);
+      for (double d = params.max_correspondence_m; d > finest * 1.0001; d *= 0.5) {
+        stages.push_back(d);
+      }
+      stages.push_back(std::min(finest, params.max_correspondence_m));
+      pcl::PointCloud<pcl::PointNormal> aligned;
+      bool converged = false;
+      int state = Criteria::CONVERGENCE_CRITERIA_NOT_CONVERGED;
+      for (double d : stages) {
+        icp.setMaxCorrespondenceDistance(d);
+        tree->set_k1_bound(d * 1.001);
+        rejector->set_rotation(t_final.topLeftCorner<3, 3>().cast<float>());
+        icp.align(aligned, t_final);
+        res.iterations += icp.iterations();
+        state = icp.getConvergeCriteria()->getConvergenceState();
+        converged = icp.hasConverged();
+        if (state == Criteria::CONVERGENCE_CRITERIA_NO_CORRESPONDENCES) {
+          icp_note = fmt("no correspondences within %.1f mm", d * 1e3);
+          break;
+        }
+        t_final = icp.getFinalTransformation();
+      }
+      res.converged = converged && state != Criteria::CONVERGENCE_CRITERIA_ITERATIONS &&
+                      state != Criteria::CONVERGENCE_CRITERIA_FAILURE_AFTER_MAX_ITERATIONS;
+      if (!res.converged && icp_note.empty()) {
+        icp_note = "ICP did not converge in the final stage's " +
+                   std::to_string(params.max_iterations) + " iterations";
+      }
+    } else {
+      icp_note = "no model points near the frame";
+    }
+
+    // Orthonormalise the correction (the estimate is a product of small rigid steps).
+    Pose correction = Pose::Identity();
+    {
+      const Eigen::Matrix3d r = t_final.topLeftCorner<3, 3>();
+      Eigen::Quaterniond q(r);
+      q.normalize();
+      correction.linear() = q.toRotationMatrix();
+      correction.translation() = t_final.topRightCorner<3, 1>();
+    }
+    if (!correction.matrix().allFinite()) {
+      correction = Pose::Identity();
+      res.converged = false;
+      icp_note = "ICP produced a non-finite transform";
+    }
+    res.correction = correction;
+    res.translation_m = correction.translation().norm();
+    res.rotation_deg =
+        Eigen::AngleAxisd(correction.linear()).angle() * 180.0 / kPi;
+
+    // Gates, on the downsampled frame after alignment against the cropped model.
+    size_t n_overlap = 0;
+    double sum_sq = 0;
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> pairs;  // aligned point, model normal
+    if (target->size() >= 3) {
+      const float r2 = static_cast<float>(params.overlap_distance_m * params.overlap_distance_m);
+      const Eigen::Matrix3f r = correction.linear().cast<float>();
+      const Eigen::Vector3f t = correction.translation().cast<float>();
+      pcl::PointNormal q;
+      for (const auto& p : frame_ds) {
+        q.getVector3fMap() = r * p + t;
+        float d2;
+        const pcl::index_t i = tree->nearest(q.getVector3fMap(), r2, d2);
+        if (i < 0) continue;
+        ++n_overlap;
+        // Point-to-plane distance to the model's local surface.
+        const auto& m = (*target)[i];
+        const double e = (q.getVector3fMap() - m.getVector3fMap())
+                             .cast<double>()
+                             .dot(m.getNormalVector3fMap().cast<double>());
+        sum_sq += e * e;
+        pairs.emplace_back(q.getVector3fMap().cast<double>(), m.getNormalVector3fMap().cast<double>());
+      }
+    }
+    Eigen::Matrix<double, 6, 1> weakest = Eigen::Matrix<double, 6, 1>::Zero();
+    res.constraint = overlap_constraint(pairs, &weakest);
+    res.overlap = static_cast<double>(n_overlap) / static_cast<double>(frame_ds.size());
+    res.rmse_m = n_overlap ? std::sqrt(sum_sq / static_cast<double>(n_overlap)) : 0.0;
+
+    // Gates on the data (does the view fit the model?) and on the motion (is the correction
+    // plausible, did ICP settle?).
+    std::vector<std::string> fails, motion_fails;
+    if (res.overlap < params.min_overlap) {
+      fails.push_back(fmt("overlap %.2f", res.overlap) + fmt(" below %.2f", params.min_overlap));
+    }
+    if (n_overlap == 0 || res.rmse_m > params.max_rmse_m) {
+      fails.push_back(n_overlap == 0 ? std::string("rmse undefined (no overlapping points)")
+                                     : fmt("rmse %.2f mm", res.rmse_m * 1e3) +
+                                           fmt(" exceeds %.2f mm", params.max_rmse_m * 1e3));
+    }
+    if (res.translation_m > params.max_translation_m) {
+      motion_fails.push_back(fmt("correction %.3f m", res.translation_m) +
+                             fmt(" exceeds %.3f m", params.max_translation_m));
+    }
+    if (res.rotation_deg > params.max_rotation_deg) {
+      motion_fails.push_back(fmt("correction %.2f deg", res.rotation_deg) +
+                             fmt(" exceeds %.2f deg", params.max_rotation_deg));
+    }
+    if (!res.converged) motion_fails.push_back("not converged: " + icp_note);
+    // Where the overlap leaves a direction free, ICP's motion means nothing (it slides, may not
+    // converge): the kinematic pose is kept if the view fits the model. Elsewhere every gate counts.
+    const bool degenerate = res.constraint < params.min_constraint;
+    if (!degenerate) fails.insert(fails.end(), motion_fails.begin(), motion_fails.end());
+
+    if (fails.empty() && degenerate) {
+      // ICP may have slid along the free direction: trust the kinematics instead.
+      const bool rotation = weakest.head<3>().norm() > weakest.tail<3>().norm();
+      const Eigen::Vector3d axis = (rotation ? weakest.head<3>() : weakest.tail<3>()).normalized();
+      res.accepted = true;
+      res.refined = false;
+      res.reason = "kinematic pose kept: the overlap does not constrain the alignment (weakest direction: " +
+                   std::string(rotation ? "rotation about " : "translation along ") +
+                   fmt("(%.2f, ", axis.x()) + fmt("%.2f, ", axis.y()) + fmt("%.2f)", axis.z()) +
+                   fmt(", constraint %.4f", res.constraint) + fmt(" below %.4f", params.min_constraint) +
+                   fmt("; ICP would have moved it %.2f mm)", res.translation_m * 1e3);
+      res.correction = Pose::Identity();
+      res.translation_m = 0;
+      res.rotation_deg = 0;
+    } else if (fails.empty()) {
+      res.accepted = true;
+      res.refined = true;
+      res.reason = "accepted: " + fmt("%.2f mm, ", res.translation_m * 1e3) +
+                   fmt("%.3f deg, ", res.rotation_deg) + fmt("overlap %.2f, ", res.overlap) +
+                   fmt("rmse %.2f mm", res.rmse_m * 1e3) + fmt(", constraint %.4f", res.constraint) + dropped_note;
+    } else {
+      res.accepted = false;
+      res.reason = "rejected: ";
+      for (size_t i = 0; i < fails.size(); ++i) res.reason += (i ? "; " : "") + fails[i];
+      res.reason += dropped_note;
+    }
+    return finish();
+  } catch (const std::exception& e) {
+    res = RegistrationResult{};
+    res.reason = std::string("rejected: registration failed: ") + e.what();
+    return finish();
+  } catch (...) {
+    res = RegistrationResult{};
+    res.reason = "rejected: registration failed";
+    return finish();
+  }
+}
+
+}  // namespace pbnbv

@@ -1,0 +1,91 @@
+// Depth frame -> object-frame cloud, against geometry checkable by hand.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/perception/depth_cloud.hpp"
+
+using namespace pbnbv;
+
+namespace {
+
+CameraIntrinsics small_camera() {
+  CameraIntrinsics k;
+  k.width = 64;
+  k.height = 48;
+  k.fx = k.fy = 50.0;
+  k.cx = 32.0;
+  k.cy = 24.0;
+  return k;
+}
+
+}  // namespace
+
+TEST(DepthCloud, FlatDepthBackProjectsOntoThePlaneInTheObjectFrame) {
+  const CameraIntrinsics k = small_camera();
+  // Camera 1 m above the object origin looking straight down: depth 1 m everywhere is the
+  // plane z = 0 of the object frame.
+  const Pose object_T_camera = look_at(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  const std::vector<float> depth(k.width * k.height, 1.0f);
+  CloudStats stats;
+  const PointCloud cloud = depth_to_object_cloud(depth, k, DepthRange{0.1, 3.0}, object_T_camera, CloudCrop{}, 0.0, &stats);
+  ASSERT_EQ(cloud.size(), static_cast<std::size_t>(k.width * k.height));
+  EXPECT_EQ(stats.num_valid_pixels, k.width * k.height);
+  EXPECT_EQ(stats.num_cropped, 0);
+  for (const auto& p : cloud) EXPECT_NEAR(p.z(), 0.0, 1e-6);
+  // The footprint: pixel u spans x = (u - cx) / fx * 1 m, so the cloud's extent is
+  // (width - 1) / fx by (height - 1) / fy.
+  Eigen::Vector3f lo = cloud[0], hi = cloud[0];
+  for (const auto& p : cloud) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  EXPECT_NEAR(hi.x() - lo.x() + hi.y() - lo.y(), (63 + 47) / 50.0, 1e-5);
+}
+
+TEST(DepthCloud, InvalidOutOfRangeAndNonFinitePixelsAreSkipped) {
+  const CameraIntrinsics k = small_camera();
+  std::vector<float> depth(k.width * k.height, 1.0f);
+  depth[0] = 0.0f;                 // no return
+  depth[1] = std::nanf("");        // NaN
+  depth[2] = 0.05f;                // nearer than the range
+  depth[3] = 5.0f;                 // farther than the range
+  depth[4] = INFINITY;
+  CloudStats stats;
+  const PointCloud cloud = depth_to_object_cloud(depth, k, DepthRange{0.1, 3.0}, Pose::Identity(), CloudCrop{}, 0.0, &stats);
+  EXPECT_EQ(stats.num_valid_pixels, k.width * k.height - 5);
+  EXPECT_EQ(cloud.size(), static_cast<std::size_t>(k.width * k.height - 5));
+}
+
+TEST(DepthCloud, AllNanFrameGivesAnEmptyCloud) {
+  const CameraIntrinsics k = small_camera();
+  const std::vector<float> depth(k.width * k.height, std::nanf(""));
+  CloudStats stats;
+  const PointCloud cloud = depth_to_object_cloud(depth, k, DepthRange{}, Pose::Identity(), CloudCrop{}, 0.002, &stats);
+  EXPECT_TRUE(cloud.empty());
+  EXPECT_EQ(stats.num_valid_pixels, 0);
+}
+
+TEST(DepthCloud, CropRemovesTheGroundAndPointsOutsideTheWorkingVolume) {
+  const CameraIntrinsics k = small_camera();
+  // Looking down from 1 m at the plane z = 0; the ground is declared at z = 0 with 4 mm
+  // clearance: everything is cropped. Lower the ground to -0.1: nothing is.
+  const Pose object_T_camera = look_at(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  const std::vector<float> depth(k.width * k.height, 1.0f);
+  CloudCrop crop;
+  crop.ground_z_m = 0.0;
+  crop.ground_clearance_m = 0.004;
+  CloudStats stats;
+  EXPECT_TRUE(depth_to_object_cloud(depth, k, DepthRange{}, object_T_camera, crop, 0.0, &stats).empty());
+  EXPECT_EQ(stats.num_cropped, k.width * k.height);
+  crop.ground_z_m = -0.1;
+  EXPECT_EQ(depth_to_object_cloud(depth, k, DepthRange{}, object_T_camera, crop, 0.0, &stats).size(),
+            static_cast<std::size_t>(k.width * k.height));
+  // A working volume |x| <= 0.1 keeps the pixel columns with |u - cx| / fx <= 0.1.
+  crop.min_m = Eigen::Vector3d(-0.1, -1, -1);
+  crop.max_m = Eigen::Vector3d(0.1, 1, 1);
+  const PointCloud kept = depth_to_object_cloud(depth, k, DepthRange{}, object_T_camera, crop, 0.0, &stats);
+  for (const auto& p : kept) EXPECT_LE(std::abs(p.x()), 0.1 + 1e-6);
+  EXPECT_EQ(static_cast<int>(kept.size()) + stats.num_cropped, k.width * k.height);
+  EXPECT_GT(kept.size(), 0u);
+}

@@ -1,0 +1,303 @@
+// One PB-NBV planning step (planner.hpp).
+#include "core/planning/planner.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <sstream>
+
+#include "core/geometry/views.hpp"
+
+namespace pbnbv {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+void candidate_sphere(const Eigen::AlignedBox3d& bbox, double working_distance_m,
+                      Eigen::Vector3d* centre, double* radius) {
+  *centre = bbox.center();
+  *radius = working_distance_m + 0.5 * bbox.diagonal().norm();
+}
+
+std::vector<Pose> candidate_views(const Eigen::AlignedBox3d& bbox, const CandidateSpec& spec) {
+  Eigen::Vector3d centre;
+  double radius = 0;
+  candidate_sphere(bbox, spec.working_distance_m, &centre, &radius);
+  return sphere_band_views(spec.num_views, spec.num_parallels, radius, centre, 0.0,
+                           spec.full_sphere ? M_PI : M_PI / 2);
+}
+
+// Candidates on the sphere around B, the reachability filter and the exclusions, shared by every
+// planner so that they choose among the same views.
+static void prepare_candidates(const PlanInput& in, PlanResult& r) {
+  auto t0 = std::chrono::steady_clock::now();
+  r.candidates = candidate_views(in.bbox, in.candidates);
+  const int n = static_cast<int>(r.candidates.size());
+  r.status.assign(n, CandidateStatus::kScored);
+  r.scores.assign(n, ViewScore{});
+  r.candidates_s = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  if (in.reachable) {
+    const std::vector<bool> ok = in.reachable(r.candidates);
+    if (ok.size() != r.candidates.size()) throw std::logic_error("reachability returned a wrong number of answers");
+    for (int i = 0; i < n; ++i) {
+      if (!ok[i]) {
+        r.status[i] = CandidateStatus::kUnreachable;
+        ++r.num_unreachable;
+      }
+    }
+  }
+  r.reachability_s = seconds_since(t0);
+
+  // Excluded views: compare viewing directions seen from the centre.
+  std::vector<Eigen::Vector3d> excluded_dirs;
+  auto exclude = [&](const std::vector<Pose>& views) {
+    for (const auto& p : views) {
+      const Eigen::Vector3d d = p.translation() - r.centre;
+      if (d.norm() > 0) excluded_dirs.push_back(d.normalized());
+    }
+  };
+  exclude(in.excluded);
+  if (in.skip_revisits) exclude(in.views_done);
+  const double cos_exclude = std::cos(in.exclude_angle_rad);
+  for (int i = 0; i < n && !excluded_dirs.empty(); ++i) {
+    if (r.status[i] != CandidateStatus::kScored) continue;
+    const Eigen::Vector3d d = (r.candidates[i].translation() - r.centre).normalized();
+    for (const auto& x : excluded_dirs) {
+      if (d.dot(x) >= cos_exclude) {
+        r.status[i] = CandidateStatus::kExcluded;
+        ++r.num_excluded;
+        break;
+      }
+    }
+  }
+}
+
+// Checks B and fills the candidate sphere; false (with the reason) when B is empty.
+static bool check_bbox(const PlanInput& in, PlanResult& r) {
+  if (in.bbox.isEmpty() || !(in.bbox.diagonal().norm() > 0)) {
+    r.reason = "the bounding box B is empty: no view has been mapped yet";
+    return false;
+  }
+  candidate_sphere(in.bbox, in.candidates.working_distance_m, &r.centre, &r.radius_m);
+  return true;
+}
+
+static std::string nothing_to_score(const PlanResult& r) {
+  std::ostringstream os;
+  os << "no candidate can be scored: " << r.num_unreachable << " of " << r.candidates.size() << " unreachable, "
+     << r.num_excluded << " near excluded views";
+  return os.str();
+}
+
+// Ranks the pool (candidate indices), best quality first, ties broken by index so the plan is
+// deterministic; fills chosen and the alternatives.
+static void rank_pool(const PlanInput& in, PlanResult& r, std::vector<int> pool) {
+  std::stable_sort(pool.begin(), pool.end(), [&](int a, int b) { return r.scores[a].quality > r.scores[b].quality; });
+  r.chosen = pool.front();
+  for (std::size_t k = 1; k < pool.size() && static_cast<int>(r.alternatives.size()) < in.num_alternatives; ++k) {
+    r.alternatives.push_back(pool[k]);
+  }
+}
+
+// The planner has nothing left to aim at but views remain in the budget: the scorable candidate
+// farthest (in angle, seen from the centre of B) from every view taken, filling the largest gap.
+// `r` has its candidates prepared (prepare_candidates); any scores it holds are replaced.
+static PlanResult plan_spread(const PlanInput& in, PlanResult r, const std::string& why) {
+  r.chosen = -1;
+  r.alternatives.clear();
+  r.scores.assign(r.candidates.size(), ViewScore{});
+  r.first_quality = in.first_quality;  // a gap-filling view has no quality of the planner's kind
+  std::vector<Eigen::Vector3d> taken;
+  for (const auto& v : in.views_done) {
+    const Eigen::Vector3d d = v.translation() - r.centre;
+    if (d.norm() > 0) taken.push_back(d.normalized());
+  }
+  std::vector<int> pool;
+  for (int i = 0; i < static_cast<int>(r.candidates.size()); ++i) {
+    if (r.status[i] != CandidateStatus::kScored) continue;
+    const Eigen::Vector3d d = (r.candidates[i].translation() - r.centre).normalized();
+    double nearest = M_PI;
+    for (const auto& t : taken) nearest = std::min(nearest, std::acos(std::clamp(d.dot(t), -1.0, 1.0)));
+    r.scores[i].quality = nearest * 180.0 / M_PI;  // degrees to the nearest view taken
+    pool.push_back(i);
+  }
+  r.num_scored = static_cast<int>(pool.size());
+  if (pool.empty()) {
+    r.outcome = PlanResult::Outcome::kStop;
+    r.reason = why + "; " + nothing_to_score(r);
+    return r;
+  }
+  rank_pool(in, r, std::move(pool));
+  r.outcome = PlanResult::Outcome::kView;
+  std::ostringstream os;
+  os << why << ": the view farthest from every view taken (" << r.scores[r.chosen].quality << " deg from the nearest)";
+  r.reason = os.str();
+  return r;
+}
+
+PlanResult plan_pbnbv(const PlanInput& in) {
+  PlanResult r;
+  for (const auto& e : in.ellipsoids) {
+    (e.cls == EllipsoidClass::kFrontier ? r.num_frontier_ellipsoids : r.num_occupied_ellipsoids)++;
+  }
+  if (in.beta < 1) throw std::invalid_argument("beta (partition sectors) must be >= 1, got " + std::to_string(in.beta));
+  if (!check_bbox(in, r)) return r;
+  if (r.num_frontier_ellipsoids == 0) {
+    if (in.spread_when_done) {
+      prepare_candidates(in, r);
+      return plan_spread(in, std::move(r), "no frontier ellipsoid remains");
+    }
+    r.outcome = PlanResult::Outcome::kStop;
+    r.reason = "no frontier ellipsoid remains";
+    return r;
+  }
+
+  prepare_candidates(in, r);
+  const int n = static_cast<int>(r.candidates.size());
+
+  auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < n; ++i) {
+    if (r.status[i] != CandidateStatus::kScored) continue;
+    r.scores[i] = score_view(in.ellipsoids, in.camera, r.candidates[i]);
+    ++r.num_scored;
+  }
+  r.scoring_s = seconds_since(t0);
+  if (r.num_scored == 0) {
+    r.reason = nothing_to_score(r);
+    return r;
+  }
+
+  // Global partitioning.
+  std::vector<int> sector(n, 0);
+  if (in.beta > 1) {
+    std::vector<bool> scanned(in.beta, false);
+    if (in.sectors_centred_on_first_view && !in.views_done.empty()) {
+      const Eigen::Vector3d d = in.views_done.front().translation() - r.centre;
+      if (d.head<2>().norm() > 1e-9) r.sector_start_rad = std::atan2(d.y(), d.x()) - M_PI / in.beta;
+    }
+    for (const auto& v : in.views_done) scanned[sector_of(v.translation(), r.centre, in.beta, r.sector_start_rad)] = true;
+    r.allowed_sectors = allowed_sectors(scanned);
+    for (int i = 0; i < n; ++i) sector[i] = sector_of(r.candidates[i].translation(), r.centre, in.beta, r.sector_start_rad);
+  } else {
+    r.allowed_sectors = {0};
+  }
+  std::vector<bool> allowed(std::max(in.beta, 1), false);
+  for (int s : r.allowed_sectors) allowed[s] = true;
+  std::vector<int> pool;
+  for (int i = 0; i < n; ++i) {
+    if (r.status[i] == CandidateStatus::kScored && allowed[sector[i]]) pool.push_back(i);
+  }
+  if (pool.empty()) {
+    r.partition_fallback = true;
+    for (int i = 0; i < n; ++i) if (r.status[i] == CandidateStatus::kScored) pool.push_back(i);
+  } else {
+    for (int i = 0; i < n; ++i) {
+      if (r.status[i] == CandidateStatus::kScored && !allowed[sector[i]]) r.status[i] = CandidateStatus::kOutsidePartition;
+    }
+  }
+  rank_pool(in, r, std::move(pool));
+  r.partition = in.beta > 1 ? sector[r.chosen] : -1;
+
+  const double best = r.scores[r.chosen].quality;
+  r.first_quality = std::isfinite(in.first_quality) ? in.first_quality : best;
+  if (std::isfinite(in.first_quality) && in.stop_fraction > 0 && best < in.stop_fraction * in.first_quality) {
+    std::ostringstream os;
+    os << "best view quality F = " << best << " px is below " << in.stop_fraction << " of the first planned view's F ("
+       << in.first_quality << " px)";
+    r.outcome = PlanResult::Outcome::kStop;
+    r.reason = os.str();
+    return r;
+  }
+  r.outcome = PlanResult::Outcome::kView;
+  std::ostringstream os;
+  os << "F = " << best << " px (frontier " << r.scores[r.chosen].frontier_sum << ", occupied "
+     << r.scores[r.chosen].occupied_sum << ") of " << r.num_scored << " scored";
+  r.reason = os.str();
+  return r;
+}
+
+PlanResult plan_raycast(const PlanInput& in, const VoxelGrid& grid, const RaycastParams& params) {
+  PlanResult r;
+  if (!check_bbox(in, r)) return r;
+  prepare_candidates(in, r);
+  const int n = static_cast<int>(r.candidates.size());
+  std::vector<uint8_t> active(n, 0);
+  for (int i = 0; i < n; ++i) active[i] = r.status[i] == CandidateStatus::kScored;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<RaycastGain> gains = raycast_gains(grid, r.candidates, active, params);
+  int64_t rays = 0;
+  for (int i = 0; i < n; ++i) {
+    if (!active[i]) continue;
+    r.scores[i].quality = static_cast<double>(gains[i].unknown);
+    r.scores[i].frontier_sum = static_cast<double>(gains[i].unknown);
+    r.scores[i].visible = gains[i].rays;
+    rays += gains[i].rays;
+    ++r.num_scored;
+  }
+  r.scoring_s = seconds_since(t0);
+  if (r.num_scored == 0) {
+    r.reason = nothing_to_score(r);
+    return r;
+  }
+  std::vector<int> pool;
+  for (int i = 0; i < n; ++i) {
+    if (active[i]) pool.push_back(i);
+  }
+  rank_pool(in, r, std::move(pool));
+  const double best = r.scores[r.chosen].quality;
+  r.first_quality = std::isfinite(in.first_quality) ? in.first_quality : best;
+  std::ostringstream os;
+  if (best <= 0 && in.spread_when_done) {
+    return plan_spread(in, std::move(r), "no candidate sees an unobserved voxel");
+  } else if (best <= 0) {
+    r.outcome = PlanResult::Outcome::kStop;
+    os << "no candidate sees an unobserved voxel (" << r.num_scored << " scored, " << rays << " rays)";
+  } else if (std::isfinite(in.first_quality) && in.stop_fraction > 0 && best < in.stop_fraction * in.first_quality) {
+    r.outcome = PlanResult::Outcome::kStop;
+    os << "best gain " << best << " voxels is below " << in.stop_fraction << " of the first planned view's ("
+       << in.first_quality << ")";
+  } else {
+    r.outcome = PlanResult::Outcome::kView;
+    os << "gain " << best << " unobserved voxels of " << r.num_scored << " scored (" << rays << " rays)";
+  }
+  r.reason = os.str();
+  return r;
+}
+
+PlanResult plan_random(const PlanInput& in, uint64_t seed) {
+  PlanResult r;
+  if (!check_bbox(in, r)) return r;
+  prepare_candidates(in, r);
+  std::vector<int> pool;
+  for (int i = 0; i < static_cast<int>(r.candidates.size()); ++i) {
+    if (r.status[i] == CandidateStatus::kScored) pool.push_back(i);
+  }
+  r.num_scored = static_cast<int>(pool.size());
+  if (pool.empty()) {
+    r.reason = nothing_to_score(r);
+    return r;
+  }
+  // A partial Fisher-Yates shuffle with our own draws (std::shuffle's sequence is not specified
+  // across standard libraries): the choice, then the alternatives.
+  std::mt19937_64 rng(seed);
+  const int picks = std::min<int>(static_cast<int>(pool.size()), in.num_alternatives + 1);
+  for (int k = 0; k < picks; ++k) {
+    const uint64_t left = pool.size() - k;
+    std::swap(pool[k], pool[k + static_cast<int>(rng() % left)]);
+  }
+  r.chosen = pool[0];
+  r.alternatives.assign(pool.begin() + 1, pool.begin() + picks);
+  r.outcome = PlanResult::Outcome::kView;
+  r.reason = "random choice among " + std::to_string(r.num_scored) + " candidates (seed " + std::to_string(seed) + ")";
+  return r;
+}
+
+}  // namespace pbnbv

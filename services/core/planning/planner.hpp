@@ -1,0 +1,119 @@
+#pragma once
+// One PB-NBV planning step as a plain function (method.md "Candidate views", "Scoring a
+// candidate view", "Global partitioning", plus our termination rule): candidates on the sphere
+// around B, reachability filter, F for every candidate, the partition rule, the choice and the
+// next best alternatives. The view scorer service wraps this; benchmarks and tests call it
+// directly.
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "core/geometry/camera_model.hpp"
+#include "core/planning/ellipsoids.hpp"
+#include "core/base/pose.hpp"
+#include "core/planning/raycast.hpp"
+#include "core/planning/view_scoring.hpp"
+
+namespace pbnbv {
+
+// What became of a candidate in a planning step. kExcluded: skipped as too close to a view the
+// rig could not reach or capture (or, with skip_revisits, to a view already taken).
+enum class CandidateStatus : uint8_t {
+  kScored = 0,
+  kUnreachable = 1,
+  kOutsidePartition = 2,
+  kExcluded = 3
+};
+
+struct CandidateSpec {
+  int num_views = 800;               // N
+  int num_parallels = 24;            // alpha
+  bool full_sphere = false;          // false: hemisphere above the centre of B
+  double working_distance_m = 0.6;   // d_c; R = d_c + d_b, d_b = half the diagonal of B
+};
+
+// The candidate sphere for a bounding box: centre of B and R = d_c + d_b.
+void candidate_sphere(const Eigen::AlignedBox3d& bbox, double working_distance_m,
+                      Eigen::Vector3d* centre, double* radius);
+
+// The candidate views for B (sphere_band_views over [0, pi/2] or [0, pi]).
+std::vector<Pose> candidate_views(const Eigen::AlignedBox3d& bbox, const CandidateSpec& spec);
+
+struct PlanInput {
+  std::vector<Ellipsoid> ellipsoids;
+  Eigen::AlignedBox3d bbox;          // B
+  CandidateSpec candidates;
+  int beta = 4;                      // partition sectors; 1: no partitioning
+  // Where sector 0 starts: centred on the first view (its azimuth - pi / beta), so that the first
+  // view lies in the middle of the scanned sector and the two adjacent sectors lie symmetrically
+  // on either side of it (the paper does not say where the sectors start; starting them at
+  // azimuth 0 puts a default first view at azimuth 0 on a sector boundary). false: azimuth 0.
+  bool sectors_centred_on_first_view = true;
+  std::vector<Pose> views_done;      // camera poses of the views taken (object frame)
+  std::vector<Pose> excluded;        // views the rig could not reach or capture
+  double exclude_angle_rad = 10.0 * M_PI / 180.0;  // candidates this close (seen from the
+                                                   // centre) to an excluded view are skipped
+  // Also skip candidates this close to a view already taken: in a static scene the same view
+  // sees nothing new, yet F (which has no memory) can keep choosing it once the map stops
+  // changing.
+  bool skip_revisits = true;
+  CameraIntrinsics camera;
+  double stop_fraction = 0.0;        // stop when best F < stop_fraction * first_quality
+  double first_quality = std::numeric_limits<double>::quiet_NaN();  // NaN: this is the first
+  int num_alternatives = 5;
+  // When the planner has nothing left to aim at (PB-NBV: no frontier ellipsoid; raycast: no
+  // unobserved voxel in view) it stops (false), or (true: a fixed view budget, as in the
+  // paper's evaluation) chooses the candidate farthest in angle from every view taken.
+  bool spread_when_done = false;
+  // Reachability of each candidate (the motion executor's check), called once with every
+  // candidate (candidate_views(bbox, candidates), so a caller may compute it ahead), or empty:
+  // all reachable.
+  std::function<std::vector<bool>(const std::vector<Pose>&)> reachable;
+};
+
+struct PlanResult {
+  enum class Outcome { kView, kStop, kFailed };
+  Outcome outcome = Outcome::kFailed;
+  std::string reason;
+
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // candidate sphere
+  double radius_m = 0;
+  std::vector<Pose> candidates;
+  std::vector<CandidateStatus> status;  // per candidate
+  std::vector<ViewScore> scores;        // per candidate (zero unless kScored)
+  int chosen = -1;                      // index into candidates
+  std::vector<int> alternatives;        // next best scored candidates, best first
+  double first_quality = std::numeric_limits<double>::quiet_NaN();
+
+  int partition = -1;                   // sector of the chosen view (-1: beta 1)
+  double sector_start_rad = 0;          // azimuth where sector 0 starts
+  std::vector<int> allowed_sectors;
+  bool partition_fallback = false;      // nothing scorable in the allowed sectors
+
+  int num_unreachable = 0, num_excluded = 0, num_scored = 0;
+  int num_frontier_ellipsoids = 0, num_occupied_ellipsoids = 0;
+  double candidates_s = 0, reachability_s = 0, scoring_s = 0;  // wall time per stage
+
+  const ViewScore* chosen_score() const { return chosen >= 0 ? &scores[chosen] : nullptr; }
+};
+
+// One planning step. Stops (kStop) when no Frontier ellipsoid remains, or when the best F is
+// below stop_fraction * first_quality. Fails (kFailed) when B is empty or no candidate is
+// reachable. The sectors already scanned are those of views_done about the current centre of
+// B; while some sector is unscanned the choice is limited to unscanned sectors adjacent to
+// scanned ones (falling back to every sector, and saying so, when none of those holds a
+// scorable candidate); with nothing scanned every sector is allowed.
+PlanResult plan_pbnbv(const PlanInput& in);
+
+// The baselines of the benchmark, on the same candidates (the same sphere around B, the same
+// reachability filter and exclusions) and the same map; no global partitioning (that is PB-NBV's).
+//  - raycast: the candidate whose rays reveal the most unobserved voxels (raycast.hpp); quality =
+//    that count. Stops when no candidate sees an unobserved voxel, or by stop_fraction.
+//  - random: a uniformly random candidate (and random alternatives), reproducible from `seed`.
+PlanResult plan_raycast(const PlanInput& in, const VoxelGrid& grid, const RaycastParams& params);
+PlanResult plan_random(const PlanInput& in, uint64_t seed);
+
+}  // namespace pbnbv

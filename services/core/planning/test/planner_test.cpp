@@ -1,0 +1,187 @@
+// One PB-NBV planning step (planner.hpp): the candidate sphere, the choice, partitions,
+// reachability, exclusion and termination, on scenes whose answer is plain geometry.
+#include "core/planning/planner.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace pbnbv {
+namespace {
+
+Ellipsoid sphere(EllipsoidClass cls, const Eigen::Vector3d& c, double r) {
+  Ellipsoid e;
+  e.cls = cls;
+  e.centre = c;
+  e.semi_axes = Eigen::Vector3d::Constant(r);
+  return e;
+}
+
+// A 0.3 m object (occupied ball at the origin) with unexplored structure (a frontier ball) on
+// the side at azimuth `azimuth_deg`.
+PlanInput scene(double azimuth_deg, int beta) {
+  PlanInput in;
+  in.bbox = Eigen::AlignedBox3d(Eigen::Vector3d(-0.15, -0.15, 0.0), Eigen::Vector3d(0.15, 0.15, 0.3));
+  const double a = azimuth_deg * M_PI / 180.0;
+  in.ellipsoids = {sphere(EllipsoidClass::kOccupied, Eigen::Vector3d(0, 0, 0.15), 0.1),
+                   sphere(EllipsoidClass::kFrontier, Eigen::Vector3d(0.18 * std::cos(a), 0.18 * std::sin(a), 0.15), 0.08)};
+  in.beta = beta;
+  in.candidates.full_sphere = false;
+  return in;
+}
+
+double azimuth_deg(const Pose& p, const Eigen::Vector3d& centre) {
+  const Eigen::Vector3d d = p.translation() - centre;
+  double a = std::atan2(d.y(), d.x()) * 180.0 / M_PI;
+  return a < 0 ? a + 360.0 : a;
+}
+
+TEST(Planner, CandidateSphereFollowsTheBoundingBox) {
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-0.1, -0.2, 0.0), Eigen::Vector3d(0.3, 0.2, 0.4));
+  Eigen::Vector3d c;
+  double r = 0;
+  candidate_sphere(box, 0.6, &c, &r);
+  EXPECT_NEAR((c - Eigen::Vector3d(0.1, 0.0, 0.2)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(r, 0.6 + 0.5 * std::sqrt(0.4 * 0.4 * 3), 1e-12);  // d_c + half the diagonal
+  CandidateSpec spec;
+  const std::vector<Pose> v = candidate_views(box, spec);
+  ASSERT_EQ(v.size(), 800u);
+  for (const auto& p : v) {
+    EXPECT_NEAR((p.translation() - c).norm(), r, 1e-9);
+    EXPECT_GE(p.translation().z(), c.z() - 1e-9) << "hemisphere above the centre of B";
+    // Looks at the centre: the optical axis (+z of the camera) points from the eye to it.
+    EXPECT_NEAR(p.linear().col(2).dot((c - p.translation()).normalized()), 1.0, 1e-9);
+  }
+}
+
+TEST(Planner, ChoosesTheSideWithTheFrontierAndRanksAlternatives) {
+  PlanInput in = scene(90.0, 1);
+  const PlanResult r = plan_pbnbv(in);
+  ASSERT_EQ(r.outcome, PlanResult::Outcome::kView) << r.reason;
+  EXPECT_EQ(r.num_scored, 800);
+  EXPECT_EQ(r.num_frontier_ellipsoids, 1);
+  EXPECT_EQ(r.num_occupied_ellipsoids, 1);
+  // The frontier ball sits at azimuth 90 deg, in front of the occupied ball seen from +y.
+  EXPECT_NEAR(azimuth_deg(r.candidates[r.chosen], r.centre), 90.0, 30.0);
+  EXPECT_GT(r.scores[r.chosen].quality, 0.0);
+  ASSERT_EQ(r.alternatives.size(), 5u);
+  double last = r.scores[r.chosen].quality;
+  for (int a : r.alternatives) {
+    EXPECT_LE(r.scores[a].quality, last);
+    last = r.scores[a].quality;
+  }
+  // The first planned view defines F_1.
+  EXPECT_DOUBLE_EQ(r.first_quality, r.scores[r.chosen].quality);
+}
+
+TEST(Planner, PartitionsOnlyAllowSectorsAdjacentToTheScannedOne) {
+  // One view taken at azimuth 45 deg (sector 0 of 4); the frontier is on the far side
+  // (azimuth 225 deg, sector 2). With beta = 4 the choice must come from sector 1 or 3;
+  // without partitions it goes straight to the far side.
+  PlanInput in = scene(225.0, 4);
+  in.views_done = {look_at_z_up(Eigen::Vector3d(0.6, 0.6, 0.5), Eigen::Vector3d(0, 0, 0.15))};
+  const PlanResult r = plan_pbnbv(in);
+  ASSERT_EQ(r.outcome, PlanResult::Outcome::kView) << r.reason;
+  EXPECT_EQ(r.allowed_sectors, (std::vector<int>{1, 3}));
+  EXPECT_TRUE(r.partition == 1 || r.partition == 3) << r.partition;
+  EXPECT_FALSE(r.partition_fallback);
+  int outside = 0;
+  for (const auto s : r.status) outside += s == CandidateStatus::kOutsidePartition;
+  EXPECT_NEAR(outside, 400, 20) << "about half of a hemisphere's candidates lie in sectors 0 and 2";
+
+  in.beta = 1;
+  const PlanResult free = plan_pbnbv(in);
+  ASSERT_EQ(free.outcome, PlanResult::Outcome::kView);
+  EXPECT_EQ(free.partition, -1);
+  EXPECT_NEAR(azimuth_deg(free.candidates[free.chosen], free.centre), 225.0, 30.0);
+}
+
+TEST(Planner, UnreachableCandidatesAreDroppedAndCounted) {
+  PlanInput in = scene(0.0, 1);
+  const Eigen::Vector3d centre = in.bbox.center();
+  // A rig that cannot reach anything on the +x side.
+  in.reachable = [&](const std::vector<Pose>& c) {
+    std::vector<bool> ok;
+    for (const auto& p : c) ok.push_back(p.translation().x() < centre.x());
+    return ok;
+  };
+  const PlanResult r = plan_pbnbv(in);
+  ASSERT_EQ(r.outcome, PlanResult::Outcome::kView) << r.reason;
+  EXPECT_EQ(r.num_unreachable + r.num_scored, 800);
+  EXPECT_NEAR(r.num_unreachable, 400, 30);
+  EXPECT_LT(r.candidates[r.chosen].translation().x(), centre.x());
+  for (int i = 0; i < 800; ++i) {
+    EXPECT_EQ(r.status[i] == CandidateStatus::kUnreachable, r.candidates[i].translation().x() >= centre.x());
+  }
+
+  in.reachable = [](const std::vector<Pose>& c) { return std::vector<bool>(c.size(), false); };
+  const PlanResult none = plan_pbnbv(in);
+  EXPECT_EQ(none.outcome, PlanResult::Outcome::kFailed);
+  EXPECT_NE(none.reason.find("800 of 800 unreachable"), std::string::npos) << none.reason;
+}
+
+TEST(Planner, ExcludedViewsAreSkipped) {
+  PlanInput in = scene(90.0, 1);
+  const PlanResult first = plan_pbnbv(in);
+  ASSERT_EQ(first.outcome, PlanResult::Outcome::kView);
+  in.excluded = {first.candidates[first.chosen]};
+  const PlanResult r = plan_pbnbv(in);
+  ASSERT_EQ(r.outcome, PlanResult::Outcome::kView);
+  EXPECT_GT(r.num_excluded, 0);
+  const Eigen::Vector3d a = (first.candidates[first.chosen].translation() - r.centre).normalized();
+  const Eigen::Vector3d b = (r.candidates[r.chosen].translation() - r.centre).normalized();
+  EXPECT_GT(std::acos(std::clamp(a.dot(b), -1.0, 1.0)), 10.0 * M_PI / 180.0);
+}
+
+TEST(Planner, StopsWhenNoFrontierRemainsOrTheBestViewIsWorthTooLittle) {
+  PlanInput in = scene(0.0, 4);
+  in.ellipsoids.pop_back();  // only the occupied ball
+  const PlanResult done = plan_pbnbv(in);
+  EXPECT_EQ(done.outcome, PlanResult::Outcome::kStop);
+  EXPECT_EQ(done.reason, "no frontier ellipsoid remains");
+
+  PlanInput small = scene(0.0, 1);
+  const PlanResult first = plan_pbnbv(small);
+  ASSERT_EQ(first.outcome, PlanResult::Outcome::kView);
+  const double best = first.scores[first.chosen].quality;
+  small.first_quality = best / 0.04;  // best F = 4 % of the first view's
+  small.stop_fraction = 0.05;
+  const PlanResult stop = plan_pbnbv(small);
+  EXPECT_EQ(stop.outcome, PlanResult::Outcome::kStop);
+  EXPECT_NE(stop.reason.find("below 0.05"), std::string::npos) << stop.reason;
+  small.stop_fraction = 0.03;  // 4 % is above 3 %: go on
+  EXPECT_EQ(plan_pbnbv(small).outcome, PlanResult::Outcome::kView);
+  small.stop_fraction = 0.0;   // never
+  small.first_quality = 1e12;
+  EXPECT_EQ(plan_pbnbv(small).outcome, PlanResult::Outcome::kView);
+}
+
+TEST(Planner, WithABudgetLeftItFillsTheLargestGapInsteadOfStopping) {
+  PlanInput in = scene(0.0, 4);
+  in.ellipsoids.pop_back();  // nothing left to aim at
+  in.spread_when_done = true;
+  Eigen::Vector3d centre;
+  double radius = 0;
+  candidate_sphere(in.bbox, in.candidates.working_distance_m, &centre, &radius);
+  // One view taken at azimuth 0, 45 deg above the centre: the farthest hemisphere candidate is
+  // across the object at the equator, 135 deg away (the lowest parallel is 1.9 deg above it).
+  in.views_done = {look_at_z_up(centre + radius * Eigen::Vector3d(std::sqrt(0.5), 0, std::sqrt(0.5)), centre)};
+  const PlanResult r = plan_pbnbv(in);
+  ASSERT_EQ(r.outcome, PlanResult::Outcome::kView) << r.reason;
+  EXPECT_NE(r.reason.find("no frontier ellipsoid remains"), std::string::npos) << r.reason;
+  EXPECT_NEAR(azimuth_deg(r.candidates[r.chosen], centre), 180.0, 8.0);
+  EXPECT_NEAR(r.scores[r.chosen].quality, 135.0 - 1.9, 2.0);  // degrees to the view taken
+  for (int a : r.alternatives) EXPECT_LE(r.scores[a].quality, r.scores[r.chosen].quality);
+  EXPECT_TRUE(std::isnan(r.first_quality));
+}
+
+TEST(Planner, EmptyBoundingBoxFails) {
+  PlanInput in = scene(0.0, 4);
+  in.bbox = Eigen::AlignedBox3d();
+  const PlanResult r = plan_pbnbv(in);
+  EXPECT_EQ(r.outcome, PlanResult::Outcome::kFailed);
+  EXPECT_NE(r.reason.find("bounding box B is empty"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace pbnbv

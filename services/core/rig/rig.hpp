@@ -1,0 +1,117 @@
+#pragma once
+// The rig as plain data read from its MJCF file (models/rig_arm.xml, models/rig_free.xml), and
+// its kinematics: forward kinematics, analytic inverse kinematics, the split of a requested
+// camera pose into a turntable angle and an arm configuration, and the reachability check
+// (IK + joint limits + MuJoCo collision check against table, turntable, pedestal and the object
+// keep-out box). The same file describes the twin and a calibrated real rig; services read the
+// kinematics from here, never from the twin's state.
+#include <Eigen/Geometry>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/base/pose.hpp"
+
+namespace pbnbv {
+
+enum class RigKind {
+  kArm,   // 6-axis arm + turntable; object on the turntable
+  kFree,  // no arm: a 6-DOF virtual gantry puts the camera anywhere; object floats at origin
+};
+std::string to_string(RigKind kind);  // "arm" | "free"
+RigKind parse_rig_kind(const std::string& s);  // throws naming the value
+
+// Lengths of a spherical-wrist 6R arm with the KUKA joint layout (axes z, y, y, x, y, x at
+// zero), metres: base->A2 (a1 forward, d1 up), A2->A3 (a2), A3->wrist (a3 up, d4 forward),
+// wrist centre -> flange (d6).
+struct ArmGeometry {
+  double a1 = 0, d1 = 0, a2 = 0, a3 = 0, d4 = 0, d6 = 0;
+};
+
+struct RigModel {
+  RigKind kind = RigKind::kArm;
+  std::string model_path;
+  std::string arm_name;                   // e.g. "KUKA KR 10 R1100 sixx"
+  std::vector<std::string> joint_names;   // 6 arm (or gantry) joints, base to flange
+  Vector6d q_lower, q_upper;              // joint limits, rad (m for gantry slides)
+  Vector6d qd_max;                        // joint speed limits, rad/s (m/s)
+  Vector6d q_home;                        // a safe start configuration
+  ArmGeometry arm;                        // kArm only
+  Pose world_T_base = Pose::Identity();   // arm base (A1 axis at the floor of link 1)
+  Pose flange_T_camera = Pose::Identity(); // hand-eye: optical frame in the flange frame
+  bool has_turntable = false;
+  double turntable_qd_max = 0;            // rad/s
+  Pose world_T_turntable = Pose::Identity();  // turntable top centre at angle 0, z = axis
+  double preferred_azimuth_rad = 0;       // world azimuth about the turntable axis where the
+                                          // arm sees best (towards the arm base)
+};
+
+// Reads the rig from its MJCF file. Throws std::runtime_error naming the file and what is wrong
+// (missing file, MuJoCo parse error, missing body/joint, wrong joint axis for the arm layout).
+RigModel load_rig(const std::string& mjcf_path);
+
+// models/rig_<kind>.xml under the installed models directory.
+std::string default_rig_path(RigKind kind);
+
+// Forward kinematics.
+Pose flange_in_world(const RigModel& rig, const Vector6d& q);
+Pose camera_in_world(const RigModel& rig, const Vector6d& q);
+// Object frame in the world: turntable top frame turned by `turntable_rad` about its axis and
+// lifted by `object_z_m` along it. Free rig: identity (the object floats at the world origin).
+Pose object_in_world(const RigModel& rig, double turntable_rad, double object_z_m);
+// Camera (optical frame) in the object frame, from joint and turntable readings.
+Pose camera_in_object(const RigModel& rig, const Vector6d& q, double turntable_rad,
+                      double object_z_m);
+
+// All inverse kinematics solutions of the flange pose within joint limits (including the
+// +-2*pi variants of joints whose range allows them), each verified by forward kinematics to
+// 1e-6 m / 1e-6 rad. Empty when none exists. `why_none` (optional) receives the reason.
+std::vector<Vector6d> inverse_kinematics(const RigModel& rig, const Pose& world_T_flange,
+                                         std::string* why_none = nullptr);
+
+// A requested view split into a turntable angle and an arm configuration.
+struct ViewSolution {
+  bool reachable = false;
+  std::string reason;                      // why not, when !reachable (e.g. which joint limit,
+                                           // which bodies collide, how far out of reach)
+  Vector6d q = Vector6d::Zero();
+  double turntable_rad = 0;
+  Pose world_T_camera = Pose::Identity();  // by forward kinematics of the solution
+};
+
+// Object keep-out volume for the collision check, an axis-aligned box in the object frame.
+struct KeepoutBox {
+  Eigen::Vector3d min_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d max_m = Eigen::Vector3d::Zero();  // min == max: no box
+};
+
+// Owns a MuJoCo model/data of the rig for collision checks; not thread-safe (one per thread).
+class ReachabilityChecker {
+ public:
+  explicit ReachabilityChecker(const RigModel& rig);
+  ~ReachabilityChecker();
+  ReachabilityChecker(const ReachabilityChecker&) = delete;
+  ReachabilityChecker& operator=(const ReachabilityChecker&) = delete;
+
+  // Splits object_T_camera into a turntable angle (the turntable brings the view's azimuth to
+  // the arm's preferred azimuth, trying nearby azimuths when that fails; the angle nearest
+  // `turntable_current`) and the IK solution nearest `q_current` within joint limits that
+  // collides with nothing. Free rig: the gantry configuration, turntable 0.
+  ViewSolution solve(const Pose& object_T_camera, const Vector6d& q_current,
+                     double turntable_current, const KeepoutBox& keepout, double object_z_m);
+
+  // solve() for each pose (a planner's candidate views), same current state.
+  std::vector<ViewSolution> solve_batch(const std::vector<Pose>& object_T_cameras,
+                                        const Vector6d& q_current, double turntable_current,
+                                        const KeepoutBox& keepout, double object_z_m);
+
+  // Names of colliding geom pairs ("link_4 / table") at this configuration; empty = free.
+  std::vector<std::string> collisions(const Vector6d& q, double turntable_rad,
+                                      const KeepoutBox& keepout, double object_z_m);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace pbnbv

@@ -1,0 +1,598 @@
+// The benchmark and the ablations (bench.hpp).
+#include "eval/bench.hpp"
+
+#include <sys/utsname.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <numeric>
+#include <sstream>
+#include <thread>
+
+#include "core/base/args.hpp"
+#include "core/io/json.hpp"
+#include "core/io/mesh_file.hpp"
+#include "core/planning/planner.hpp"
+#include "core/rig/rig.hpp"
+#include "core/scan/scan_settings.hpp"
+#include "eval/visibility.hpp"
+#include "eval/evaluate.hpp"
+#include "eval/objects.hpp"
+#include "process/processes.hpp"
+#include "core/base/text.hpp"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace pbnbv::eval {
+
+using process::Child;
+using process::reap;
+using process::start;
+using process::stop_all;
+using process::tail_lines;
+
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+const std::vector<std::string> kPlanners = {"pbnbv", "raycast", "random", "ring"};
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::string cur;
+  std::istringstream is(s);
+  while (std::getline(is, cur, sep)) {
+    if (!cur.empty()) out.push_back(cur);
+  }
+  return out;
+}
+
+// The command that runs one scan of the benchmark, in a private network namespace (as
+// scripts/netns-run does) when `netns`.
+std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, const std::string& object,
+                                   const std::string& planner, const fs::path& out) {
+  std::vector<std::string> a;
+  if (s.netns) {
+    if (::geteuid() == 0) a = {"unshare", "-n"};
+    else a = {"unshare", "-r", "-n"};
+    a.insert(a.end(), {"sh", "-c",
+                       "ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo || "
+                       "{ echo 'pbnbv bench: cannot set up loopback multicast in a network namespace' >&2; exit 97; }; "
+                       "sysctl -q -w net.core.rmem_max=67108864 net.core.rmem_default=33554432 2>/dev/null; exec \"$@\"",
+                       "netns"});
+  }
+  a.insert(a.end(), {self.string(), "scan", "--object", object, "--planner", planner, "--rig", s.rig, "--area", s.area,
+                     "--views", std::to_string(s.views), "--resolution", exact(s.resolution_m), "--candidates",
+                     std::to_string(s.candidates), "--tmax", std::to_string(s.tmax), "--beta", std::to_string(s.beta),
+                     "--size", exact(s.size_m), "--seed", std::to_string(s.seed), "--when-done", s.when_done, "--no-log", "--out", out.string()});
+  if (s.initial_view) {
+    const Eigen::Vector3d& v = *s.initial_view;
+    a.insert(a.end(), {"--initial-view", exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z())});
+  }
+  if (!s.up.empty()) a.insert(a.end(), {"--up", s.up});
+  return a;
+}
+
+// True when a network namespace can be made here (root, or unprivileged user namespaces).
+bool netns_available() {
+  const std::string cmd = std::string(::geteuid() == 0 ? "unshare -n" : "unshare -r -n") +
+                          " sh -c 'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo'"
+                          " >/dev/null 2>&1";
+  return std::system(cmd.c_str()) == 0;
+}
+
+bool scan_complete(const fs::path& dir) {
+  try {
+    if (!fs::exists(dir / "scan.json") || !fs::exists(dir / "processes.json")) return false;
+    return read_json((dir / "scan.json").string()).at("status").at("state").get<std::string>() == "done";
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+std::string file_text(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+json machine_info() {
+  json m;
+  char host[256] = {0};
+  ::gethostname(host, sizeof(host) - 1);
+  m["host"] = host;
+  m["cores"] = std::thread::hardware_concurrency();
+  std::istringstream cpu(file_text("/proc/cpuinfo"));
+  for (std::string line; std::getline(cpu, line);) {
+    if (line.rfind("model name", 0) == 0) {
+      m["cpu"] = line.substr(line.find(':') + 2);
+      break;
+    }
+  }
+  std::istringstream mem(file_text("/proc/meminfo"));
+  for (std::string line; std::getline(mem, line);) {
+    if (line.rfind("MemTotal", 0) == 0) {
+      std::istringstream ls(line.substr(9));
+      double kb = 0;
+      ls >> kb;
+      m["memory_gib"] = std::round(kb / 1048576.0 * 10) / 10;
+      break;
+    }
+  }
+  utsname u{};
+  if (::uname(&u) == 0) m["kernel"] = std::string(u.sysname) + " " + u.release;
+  double load[3] = {0, 0, 0};
+  if (::getloadavg(load, 3) == 3) m["load_average_at_end"] = {load[0], load[1], load[2]};
+  const std::time_t t = std::time(nullptr);
+  char b[64];
+  std::strftime(b, sizeof(b), "%Y-%m-%dT%H:%M:%S%z", std::localtime(&t));
+  m["date"] = b;
+#ifdef NDEBUG
+  m["build"] = "optimised (NDEBUG)";
+#else
+  m["build"] = "debug (asserts on)";
+#endif
+  return m;
+}
+
+// The samples of the object's coverage evaluation that at least one reachable candidate view can
+// see: candidates as the planner generates them around the object's bounding box (B at the end
+// of a scan), filtered by the rig's reachability check, visibility by ray casting the true mesh.
+std::vector<uint8_t> observable_mask(const BenchSpec& spec, const fs::path& scan_dir, std::string* summary) {
+  const ScanSettings s = scan_settings_from_json(read_json((scan_dir / "settings.json").string()));
+  const TriangleMesh mesh = load_mesh((scan_dir / "object.stl").string());
+  const SurfaceSamples samples = sample_surface_with_normals(mesh, spec.coverage.num_samples, spec.coverage.seed);
+  const Eigen::Vector3d half = s.normalisation.extent_m / 2.0;
+  CandidateSpec cs;
+  cs.num_views = s.candidates;
+  cs.num_parallels = s.parallels;
+  cs.full_sphere = s.full_sphere;
+  cs.working_distance_m = s.working_distance_m;
+  const std::vector<Pose> candidates = candidate_views(Eigen::AlignedBox3d(-half, half), cs);
+  const RigModel rig = load_rig(s.rig_model_path);
+  ReachabilityChecker checker(rig);
+  KeepoutBox keepout;
+  keepout.min_m = s.keepout_min_m;
+  keepout.max_m = s.keepout_max_m;
+  const std::vector<ViewSolution> reach = checker.solve_batch(candidates, rig.q_home, 0.0, keepout, s.object_z_m);
+  std::vector<Pose> reachable;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    if (reach[i].reachable) reachable.push_back(candidates[i]);
+  }
+  VisibilityParams vp;
+  vp.camera = s.camera;
+  vp.range = s.depth_range;
+  const std::vector<uint8_t> mask = visible_from_any(mesh, samples.points, samples.normals, reachable, vp);
+  const double seen = std::accumulate(mask.begin(), mask.end(), 0.0);
+  if (summary) {
+    *summary = std::to_string(reachable.size()) + " of " + std::to_string(candidates.size()) +
+               " candidates reachable; they see " + fixed(100.0 * seen / std::max<std::size_t>(mask.size(), 1)) +
+               " % of the surface";
+  }
+  return mask;
+}
+
+struct Job {
+  std::string object;   // as given
+  std::string name;     // folder name
+  std::string planner;
+  fs::path dir;
+  fs::path log;
+  std::string last_progress;
+  std::chrono::steady_clock::time_point started;
+};
+
+}  // namespace
+
+void BenchSpec::validate() const {
+  if (objects.empty()) throw std::invalid_argument("--objects: no object to benchmark");
+  if (planners.empty()) throw std::invalid_argument("--planners: no planner to benchmark");
+  for (const auto& p : planners) {
+    if (std::find(kPlanners.begin(), kPlanners.end(), p) == kPlanners.end()) {
+      throw std::invalid_argument("--planners: unknown planner '" + p + "' (pbnbv, raycast, random, ring)");
+    }
+  }
+  if (rig != "free" && rig != "arm") throw std::invalid_argument("--rig " + rig + ": expected free or arm");
+  if (area != "full" && area != "hemi") throw std::invalid_argument("--area " + area + ": expected full or hemi");
+  if (views < 1) throw std::invalid_argument("--views must be >= 1");
+  if (jobs < 1) throw std::invalid_argument("--jobs must be >= 1");
+  if (out.empty()) throw std::invalid_argument("--out: an output folder is needed");
+  if (!up.empty() && up != "z" && up != "y") throw std::invalid_argument("--up " + up + ": expected z or y");
+}
+
+json to_json(const BenchSpec& s) {
+  json j = {{"objects", s.objects}, {"planners", s.planners}, {"rig", s.rig}, {"area", s.area}, {"views", s.views},
+            {"resolution_m", s.resolution_m}, {"candidates", s.candidates}, {"tmax", s.tmax}, {"beta", s.beta},
+            {"size_m", s.size_m}, {"up", s.up.empty() ? "per object" : s.up}, {"seed", s.seed}, {"when_done", s.when_done},
+            {"coverage", {{"samples", s.coverage.num_samples}, {"seed", s.coverage.seed}, {"radius_m", s.coverage.radius_m}}}};
+  j["initial_view"] = s.initial_view ? json{s.initial_view->x(), s.initial_view->y(), s.initial_view->z()} : json(nullptr);
+  return j;
+}
+
+std::optional<int> views_to_reach(const std::vector<double>& c, double percent) {
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    if (c[i] >= percent) return static_cast<int>(i) + 1;
+  }
+  return std::nullopt;
+}
+
+std::vector<double> pad_views(std::vector<double> v, int n) {
+  if (v.empty()) return v;
+  if (static_cast<int>(v.size()) > n) v.resize(n);
+  while (static_cast<int>(v.size()) < n) v.push_back(v.back());
+  return v;
+}
+
+PlannerSummary summarise(const std::string& planner, const std::vector<ObjectRun>& runs, int views) {
+  PlannerSummary p;
+  p.planner = planner;
+  p.objects = runs;
+  p.coverage_by_view.assign(views, 0.0);
+  std::vector<double> observable(views, 0.0);
+  int with_observable = 0;
+  std::vector<double> times, reached;
+  for (const auto& r : runs) {
+    if (!r.complete || r.coverage_by_view.empty()) {
+      ++p.failed;
+      continue;
+    }
+    ++p.complete;
+    const std::vector<double> c = pad_views(r.coverage_by_view, views);
+    for (int i = 0; i < views; ++i) p.coverage_by_view[i] += c[i];
+    if (!r.observable_by_view.empty()) {
+      const std::vector<double> o = pad_views(r.observable_by_view, views);
+      for (int i = 0; i < views; ++i) observable[i] += o[i];
+      ++with_observable;
+    }
+    times.insert(times.end(), r.planner_ms.begin(), r.planner_ms.end());
+    if (r.views_to_95) reached.push_back(*r.views_to_95);
+  }
+  if (p.complete == 0) {
+    p.coverage_by_view.clear();
+  } else {
+    for (double& c : p.coverage_by_view) c /= p.complete;
+  }
+  if (with_observable > 0) {
+    for (double& c : observable) c /= with_observable;
+    p.observable_by_view = observable;
+  }
+  if (!times.empty()) {
+    std::sort(times.begin(), times.end());
+    const std::size_t n = times.size();
+    p.planner_ms_median = n % 2 ? times[n / 2] : 0.5 * (times[n / 2 - 1] + times[n / 2]);
+    p.planner_ms_mean = std::accumulate(times.begin(), times.end(), 0.0) / n;
+  }
+  p.reached_95 = static_cast<int>(reached.size());
+  p.views_to_95_of_mean = views_to_reach(p.coverage_by_view, 95.0);
+  if (!reached.empty()) p.views_to_95 = std::accumulate(reached.begin(), reached.end(), 0.0) / reached.size();
+  return p;
+}
+
+json to_json(const BenchResult& r) {
+  json j;
+  std::vector<std::string> order;
+  for (const auto& p : r.planners) {
+    order.push_back(p.planner);
+    json objects = json::object();
+    for (const auto& o : p.objects) {
+      json oj = {{"coverage_by_view", o.coverage_by_view}, {"planner_ms", o.planner_ms},
+                 {"views_to_95", o.views_to_95 ? json(*o.views_to_95) : json(nullptr)}, {"views_done", o.views_done},
+                 {"complete", o.complete}, {"stop_reason", o.stop_reason}, {"wall_s", o.wall_s}};
+      if (!o.observable_by_view.empty()) oj["observable_coverage_by_view"] = o.observable_by_view;
+      if (!o.error.empty()) oj["error"] = o.error;
+      objects[o.object] = oj;
+    }
+    json pj = {{"coverage_by_view", p.coverage_by_view}, {"planner_ms_median", p.planner_ms_median},
+               {"planner_ms_mean", p.planner_ms_mean}, {"views_to_95", p.views_to_95 ? json(*p.views_to_95) : json(nullptr)},
+               {"objects_reaching_95", p.reached_95},
+               {"views_to_95_of_mean_curve", p.views_to_95_of_mean ? json(*p.views_to_95_of_mean) : json(nullptr)}, {"objects_complete", p.complete}, {"objects_failed", p.failed},
+               {"objects", objects}};
+    if (!p.observable_by_view.empty()) pj["observable_coverage_by_view"] = p.observable_by_view;
+    j[p.planner] = pj;
+  }
+  j["planners"] = order;
+  j["settings"] = to_json(r.spec);
+  j["machine"] = r.machine;
+  j["coverage_rule"] = "mean over the complete objects of the percent of " + std::to_string(r.spec.coverage.num_samples) +
+                       " surface samples (seed " + std::to_string(r.spec.coverage.seed) + ") with a captured point within " +
+                       fixed(r.spec.coverage.radius_m * 1000, 0) +
+                       " mm; a scan that stopped early keeps its last figure; views_to_95: mean over the objects that reach 95 %";
+  j["planner_ms_rule"] = "per planning iteration: map update + view selection (+ ellipsoid fitting for pbnbv; "
+                         "view selection includes the reachability check and waiting for it)";
+  return j;
+}
+
+BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostream& log) {
+  BenchSpec spec = spec_in;
+  spec.validate();
+  fs::create_directories(spec.out / "logs");
+  // A folder holds one benchmark: a rerun with other settings must not mix results.
+  const fs::path spec_path = spec.out / "bench.json";
+  json settings = to_json(spec);
+  settings.erase("objects");  // objects may be added to a folder's benchmark
+  settings.erase("planners");
+  if (fs::exists(spec_path)) {
+    const json before = read_json(spec_path.string());
+    for (auto it = settings.begin(); it != settings.end(); ++it) {
+      if (before.contains(it.key()) && before[it.key()] != it.value()) {
+        throw std::invalid_argument(spec.out.string() + " holds a benchmark with other settings (" + it.key() + ": " +
+                                    before[it.key()].dump() + " there, " + it.value().dump() +
+                                    " now): use another --out, or remove the folder");
+      }
+    }
+  }
+  write_json_atomic(settings, spec_path.string());
+
+  if (spec.netns && !netns_available()) {
+    log << "pbnbv bench: cannot create a private network namespace here (needs root or unprivileged user "
+           "namespaces): every scan runs on the current LCM bus, one at a time"
+        << std::endl;
+    spec.netns = false;
+  }
+  if (!spec.netns) spec.jobs = 1;
+
+  // The jobs, object by object so that a partial run has every planner on the first objects.
+  std::vector<Job> jobs;
+  std::map<std::string, std::string> names;  // object as given -> folder name
+  for (const auto& object : spec.objects) {
+    const std::string name = fs::path(object).stem().string();
+    for (const auto& [given, n] : names) {
+      if (n == name && given != object) throw std::invalid_argument("--objects: '" + given + "' and '" + object + "' have the same name " + name);
+    }
+    names[object] = name;
+    for (const auto& planner : spec.planners) {
+      Job j;
+      j.object = object;
+      j.name = name;
+      j.planner = planner;
+      j.dir = spec.out / planner / name;
+      j.log = spec.out / "logs" / (planner + "-" + name + ".log");
+      jobs.push_back(std::move(j));
+    }
+  }
+  const int total = static_cast<int>(jobs.size());
+  std::vector<Job*> todo;
+  for (auto& j : jobs) {
+    if (scan_complete(j.dir)) continue;
+    todo.push_back(&j);
+  }
+  log << "pbnbv bench: " << spec.objects.size() << " objects x " << spec.planners.size() << " planners = " << total
+      << " scans (" << total - static_cast<int>(todo.size()) << " already complete in " << spec.out.string() << "), "
+      << spec.jobs << " at a time" << std::endl;
+
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  struct sigaction old_int {}, old_term {};
+  sigaction(SIGINT, &sa, &old_int);
+  sigaction(SIGTERM, &sa, &old_term);
+
+  // The scans running now: their processes and, at the same index, their jobs.
+  std::vector<Child> children;
+  std::vector<Job*> running;
+  std::size_t next = 0;
+  int finished = total - static_cast<int>(todo.size());
+  auto prefix = [&](const Job* j) {
+    return "[" + std::to_string(j - jobs.data() + 1) + "/" + std::to_string(total) + "] " + j->name + " - " + j->planner + ": ";
+  };
+  while (next < todo.size() || !running.empty()) {
+    if (g_stop) {
+      for (const Child& c : children) ::kill(c.pid, SIGINT);  // each scan keeps what it has and stops its processes
+      for (int i = 0; i < 500; ++i) {
+        reap(children);
+        if (std::none_of(children.begin(), children.end(), [](const Child& c) { return c.running; })) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+      stop_all(children, 5.0);
+      sigaction(SIGINT, &old_int, nullptr);
+      sigaction(SIGTERM, &old_term, nullptr);
+      throw std::runtime_error("interrupted: the scans completed so far are kept in " + spec.out.string() +
+                               "; run the same command again to resume");
+    }
+    while (static_cast<int>(running.size()) < spec.jobs && next < todo.size()) {
+      Job* j = todo[next++];
+      if (fs::exists(j->dir)) fs::remove_all(j->dir);  // an incomplete scan starts again
+      fs::create_directories(j->dir.parent_path());
+      Child c;
+      c.name = j->planner + "-" + j->name;
+      c.argv = scan_argv(spec, self, j->object, j->planner, j->dir);
+      c.log_path = j->log.string();
+      j->started = std::chrono::steady_clock::now();
+      start(c);
+      children.push_back(std::move(c));
+      running.push_back(j);
+      log << prefix(j) << "started" << std::endl;
+    }
+    for (const Child* c : reap(children)) {
+      Job* j = running[c - children.data()];
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - j->started).count();
+      ++finished;
+      if (c->exit_code == 0 && scan_complete(j->dir)) {
+        write_json_atomic({{"wall_s", wall}, {"command", c->argv}}, (j->dir / "bench_run.json").string());
+        std::string line;
+        try {
+          const json cov = read_json((j->dir / "coverage.json").string());
+          const auto& cv = cov.at("coverage_by_view");
+          if (!cv.empty()) line = ", coverage after view " + std::to_string(cv.size()) + " " + fixed(cv.back().get<double>()) + " %";
+        } catch (const std::exception&) {
+        }
+        log << prefix(j) << "done in " << fixed(wall, 0) << " s" << line << " (" << finished << " of " << total
+            << " scans complete)" << std::endl;
+      } else {
+        log << prefix(j) << "FAILED (exit " << c->exit_code << "); the end of " << j->log.string() << ":\n"
+            << tail_lines(j->log.string(), 6) << std::flush;
+      }
+    }
+    for (std::size_t i = children.size(); i-- > 0;) {
+      if (children[i].running) continue;
+      children.erase(children.begin() + i);
+      running.erase(running.begin() + i);
+    }
+    for (Job* j : running) {
+      // Progress: the scan's "[view k/N] ..." line, printed when the view changes.
+      const std::string last = tail_lines(j->log.string(), 1);
+      const auto a = last.rfind("[view ");
+      if (a == std::string::npos) continue;
+      const std::string tag = last.substr(a, last.find(']', a) - a + 1);
+      if (tag != j->last_progress) {
+        j->last_progress = tag;
+        log << prefix(j) << tag.substr(1, tag.size() - 2) << std::endl;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  sigaction(SIGINT, &old_int, nullptr);
+  sigaction(SIGTERM, &old_term, nullptr);
+
+  // Evaluation of every scan in the folder against the ground truth.
+  BenchResult result;
+  result.spec = spec;
+  result.spec.jobs = spec_in.jobs;
+  std::map<std::string, std::vector<uint8_t>> masks;
+  std::map<std::string, std::vector<ObjectRun>> runs;
+  for (auto& j : jobs) {
+    ObjectRun r;
+    r.object = j.name;
+    r.planner = j.planner;
+    try {
+      if (!scan_complete(j.dir)) {
+        throw std::runtime_error("the scan did not complete (log: " + j.log.string() + ")");
+      }
+      if (!masks.count(j.name)) {
+        std::string what;
+        masks[j.name] = observable_mask(spec, j.dir, &what);
+        log << j.name << ": observable surface: " << what << std::endl;
+      }
+      const ScanEvaluation e = evaluate_scan(j.dir, spec.coverage, &masks[j.name]);
+      r.coverage_by_view = pad_views(e.coverage_by_view, spec.views);
+      r.observable_by_view = pad_views(e.observable_by_view, spec.views);
+      r.planner_ms = e.planner_ms;
+      r.views_to_95 = views_to_reach(r.coverage_by_view, 95.0);
+      r.views_done = e.views_done;
+      r.stop_reason = e.stop_reason;
+      r.complete = true;
+      if (fs::exists(j.dir / "bench_run.json")) r.wall_s = read_json((j.dir / "bench_run.json").string()).value("wall_s", 0.0);
+    } catch (const std::exception& x) {
+      r.error = x.what();
+    }
+    runs[j.planner].push_back(r);
+  }
+  for (const auto& p : spec.planners) result.planners.push_back(summarise(p, runs[p], spec.views));
+  result.machine = machine_info();
+  result.machine["scans_at_once"] = spec.jobs;
+  write_json_atomic(to_json(result), (spec.out / "summary.json").string());
+  write_report(result);
+  return result;
+}
+
+namespace {
+
+// The benchmark options shared by `bench` and `ablate`.
+BenchSpec bench_spec(Args& args) {
+  BenchSpec s;
+  if (args.has("objects") && args.has("object-dir")) throw std::invalid_argument("give --objects or --object-dir, not both");
+  if (args.has("object-dir")) {
+    const fs::path dir = args.str("object-dir");
+    if (!fs::is_directory(dir)) throw std::invalid_argument("--object-dir " + dir.string() + ": not a folder");
+    for (const auto& e : fs::directory_iterator(dir)) {
+      std::string ext = e.path().extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+      if (ext == ".obj" || ext == ".stl" || ext == ".off" || ext == ".ply") s.objects.push_back(e.path().string());
+    }
+    std::sort(s.objects.begin(), s.objects.end());
+    if (s.objects.empty()) throw std::invalid_argument("--object-dir " + dir.string() + ": no .obj, .stl, .off or .ply file");
+  } else if (args.has("objects")) {
+    s.objects = split(args.str("objects"), ',');
+  } else {
+    for (const auto& d : default_objects()) s.objects.push_back(d.name);
+  }
+  if (args.has("planners")) s.planners = split(args.str("planners"), ',');
+  s.rig = args.str("rig", "free");
+  s.area = args.str("area", "full");
+  s.views = static_cast<int>(args.integer("views", 10, 1, 1000));
+  s.resolution_m = args.num("resolution", 0.03, 0.002, 0.2);
+  s.candidates = static_cast<int>(args.integer("candidates", 800, 24, 100000));
+  s.tmax = static_cast<int>(args.integer("tmax", 10, 1, 200));
+  s.beta = static_cast<int>(args.integer("beta", 4, 1, 360));
+  if (args.has("initial-view")) s.initial_view = args.vec3("initial-view", Eigen::Vector3d::Zero());
+  s.size_m = args.num("size", 0.3, 0.01, 2.0);
+  s.up = args.str("up", "");
+  s.seed = args.integer("seed", 1, 0, int64_t{1} << 62);
+  s.when_done = args.str("when-done", "spread");
+  if (s.when_done != "stop" && s.when_done != "spread") throw std::invalid_argument("--when-done " + s.when_done + ": expected stop or spread");
+  s.jobs = static_cast<int>(args.integer("jobs", 1, 1, 64));
+  s.netns = !args.flag("no-netns");
+  return s;
+}
+
+}  // namespace
+
+int bench_command(int argc, char** argv, const fs::path& self) {
+  Args args(argc, argv, 2);
+  BenchSpec spec = bench_spec(args);
+  spec.out = fs::absolute(args.str("out", ""));
+  if (args.str("out", "").empty()) throw std::invalid_argument("--out DIR is required");
+  args.reject_unknown();
+  const BenchResult r = run_bench(spec, self, std::cout);
+  std::cout << "\n" << file_text((spec.out / "report.md").string()) << std::endl;
+  int failed = 0;
+  for (const auto& p : r.planners) failed += p.failed;
+  std::cout << "outputs: " << (spec.out / "summary.json").string() << ", " << (spec.out / "report.md").string()
+            << ", coverage.png, time.png; scans in " << spec.out.string() << "/<planner>/<object>/" << std::endl;
+  if (failed > 0) {
+    std::cerr << "pbnbv bench: " << failed << " scans did not complete (see summary.json and logs/); run the command "
+              << "again to retry them" << std::endl;
+    return 1;
+  }
+  return 0;
+}
+
+int ablate_command(int argc, char** argv, const fs::path& self) {
+  // pbnbv ablate tmax|beta|initial-view [--values ...] [bench options] --out DIR
+  if (argc < 3 || argv[2][0] == '-') throw std::invalid_argument("ablate: name the parameter: tmax, beta or initial-view");
+  const std::string param = argv[2];
+  Args args(argc, argv, 3);
+  BenchSpec base = bench_spec(args);
+  if (!args.has("planners")) base.planners = {"pbnbv"};
+  const fs::path out = fs::absolute(args.str("out", ""));
+  if (args.str("out", "").empty()) throw std::invalid_argument("--out DIR is required");
+  std::vector<std::string> values;
+  if (param == "tmax") values = {"5", "10", "20", "40"};
+  else if (param == "beta") values = {"1", "2", "4", "8"};
+  else if (param == "initial-view") values = {"0.9,0,0", "0,0.9,0", "0,0,0.9", "0,0.63,0.63"};
+  else throw std::invalid_argument("ablate: unknown parameter '" + param + "' (tmax, beta, initial-view)");
+  if (args.has("values")) values = split(args.str("values"), param == "initial-view" ? '/' : ',');
+  args.reject_unknown();
+
+  std::vector<std::pair<std::string, BenchResult>> results;
+  for (const auto& v : values) {
+    BenchSpec s = base;
+    if (param == "tmax") s.tmax = std::stoi(v);
+    if (param == "beta") s.beta = std::stoi(v);
+    if (param == "initial-view") {
+      const auto xyz = split(v, ',');
+      if (xyz.size() != 3) throw std::invalid_argument("--values: initial view '" + v + "' is not x,y,z");
+      s.initial_view = Eigen::Vector3d(std::stod(xyz[0]), std::stod(xyz[1]), std::stod(xyz[2]));
+    }
+    std::string folder = param + "=" + v;
+    std::replace(folder.begin(), folder.end(), ',', '_');
+    s.out = out / folder;
+    std::cout << "=== " << param << " = " << v << " -> " << s.out.string() << std::endl;
+    results.emplace_back(v, run_bench(s, self, std::cout));
+  }
+  write_ablation(param, results, out);
+  std::cout << "\n" << file_text((out / "ablation.md").string()) << std::endl;
+  return 0;
+}
+
+}  // namespace pbnbv::eval

@@ -1,0 +1,251 @@
+// The benchmark's report (report.md and PNG plots) and the ablations' (bench.hpp).
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "report/line_chart.hpp"
+#include "core/io/json.hpp"
+#include "core/scan/scan_settings.hpp"
+#include "eval/bench.hpp"
+#include "core/base/text.hpp"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace pbnbv::eval {
+namespace {
+
+// The authors' release, run closed-loop on this machine kind (2 cores), optimised build, five
+// real meshes, free rig / full sphere, 0.03 m, 800 candidates (issue 5): coverage after views
+// 1-5 and 10; views 6-9 were not reported.
+const std::vector<double> kReleaseCoverage = {31.3, 61.0, 80.2, 95.3, 98.1, NAN, NAN, NAN, NAN, 99.1};
+constexpr double kReleaseMedianMs = 25800.0;
+
+std::string f1(double x) { return std::isfinite(x) ? fixed(x, 1) : "-"; }
+
+std::string ms(double x) { return fixed(x, x < 10 ? 2 : x < 100 ? 1 : 0); }
+
+std::string opt(const std::optional<double>& v, int digits = 2) { return v ? fixed(*v, digits) : "never"; }
+
+std::vector<double> view_numbers(int n, int first = 1) {
+  std::vector<double> x;
+  for (int i = first; i <= n; ++i) x.push_back(i);
+  return x;
+}
+
+// The command that reproduces the benchmark.
+std::string command_of(const BenchSpec& s) {
+  std::ostringstream os;
+  os << "build/bin/pbnbv bench --objects ";
+  for (std::size_t i = 0; i < s.objects.size(); ++i) os << (i ? "," : "") << s.objects[i];
+  os << " --planners ";
+  for (std::size_t i = 0; i < s.planners.size(); ++i) os << (i ? "," : "") << s.planners[i];
+  os << " --rig " << s.rig << " --area " << s.area << " --views " << s.views << " --resolution " << s.resolution_m
+     << " --candidates " << s.candidates << " --tmax " << s.tmax << " --beta " << s.beta;
+  if (s.initial_view) os << " --initial-view " << s.initial_view->x() << "," << s.initial_view->y() << "," << s.initial_view->z();
+  if (s.size_m != 0.3) os << " --size " << s.size_m;
+  if (!s.up.empty()) os << " --up " << s.up;
+  if (s.when_done != "spread") os << " --when-done " << s.when_done;
+  os << " --jobs " << s.jobs << " --out " << s.out.string();
+  return os.str();
+}
+
+bool paper_setup(const BenchSpec& s) { return s.rig == "free" && s.area == "full"; }
+
+// Median over the objects of the planner time at each planning iteration (views 2..n).
+std::vector<double> median_time_by_iteration(const PlannerSummary& p, int views) {
+  std::vector<double> out;
+  for (int k = 0; k + 1 < views; ++k) {
+    std::vector<double> t;
+    for (const auto& o : p.objects) {
+      if (o.complete && k < static_cast<int>(o.planner_ms.size())) t.push_back(o.planner_ms[k]);
+    }
+    if (t.empty()) {
+      out.push_back(NAN);
+      continue;
+    }
+    std::sort(t.begin(), t.end());
+    out.push_back(t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]));
+  }
+  return out;
+}
+
+void coverage_chart(const BenchResult& r, bool observable, const fs::path& path) {
+  const BenchSpec& s = r.spec;
+  LineChart c;
+  c.title = std::string(observable ? "Observable coverage" : "Coverage") + " after each view - " + s.rig + " rig, " +
+            (s.area == "full" ? "full sphere" : "hemisphere") + ", " + std::to_string(s.objects.size()) + " objects";
+  c.x_label = "views";
+  c.y_label = observable ? "observable surface covered (%, mean)" : "surface covered (%, mean)";
+  c.integer_x = true;
+  c.y_max = 100;
+  c.y_lines = {{95.0, "95 %"}};
+  for (const auto& p : r.planners) {
+    const std::vector<double>& y = observable ? p.observable_by_view : p.coverage_by_view;
+    if (y.empty()) continue;
+    c.series.push_back({p.planner, view_numbers(static_cast<int>(y.size())), y});
+  }
+  if (!observable && paper_setup(s)) {
+    std::vector<double> y = kReleaseCoverage;
+    y.resize(std::min<std::size_t>(y.size(), s.views), NAN);
+    c.series.push_back({"authors' release", view_numbers(static_cast<int>(y.size())), y, true, true});
+  }
+  if (c.series.empty()) return;
+  write_line_chart(c, path.string());
+}
+
+void time_chart(const BenchResult& r, const fs::path& path) {
+  LineChart c;
+  c.title = "Planner time per iteration (median over objects) - map update + view selection";
+  c.x_label = "planning for view";
+  c.y_label = "ms (log scale)";
+  c.integer_x = true;
+  c.log_y = true;
+  for (const auto& p : r.planners) {
+    if (p.planner == "ring") continue;
+    const std::vector<double> t = median_time_by_iteration(p, r.spec.views);
+    if (std::none_of(t.begin(), t.end(), [](double x) { return std::isfinite(x) && x > 0; })) continue;
+    c.series.push_back({p.planner, view_numbers(r.spec.views, 2), t});
+  }
+  if (paper_setup(r.spec)) c.y_lines = {{kReleaseMedianMs, "authors' release, median (25.8 s)"}};
+  if (c.series.empty()) return;
+  write_line_chart(c, path.string());
+}
+
+}  // namespace
+
+void write_report(const BenchResult& r) {
+  const BenchSpec& s = r.spec;
+  const int n = s.views;
+  std::ostringstream md;
+  md << "# Benchmark: " << s.rig << " rig, " << (s.area == "full" ? "full sphere" : "hemisphere") << ", "
+     << s.objects.size() << " objects, " << n << " views\n\n";
+  md << "```\n" << command_of(s) << "\n```\n\n";
+  md << "Candidates " << s.candidates << " on the " << (s.area == "full" ? "full sphere" : "upper hemisphere")
+     << ", voxel map resolution " << s.resolution_m << " m, T_max " << s.tmax << ", beta " << s.beta << ", object size "
+     << s.size_m << " m (shortest bounding-box edge). Coverage: " << s.coverage.num_samples
+     << " surface samples, a sample is covered by a captured point within " << s.coverage.radius_m * 1000 << " mm. "
+     << "Machine: " << r.machine.value("cpu", std::string("?")) << ", " << r.machine.value("cores", 0) << " cores, "
+     << r.machine.value("scans_at_once", 1) << " scan(s) at a time, " << r.machine.value("date", std::string("")) << ".\n\n";
+
+  md << "## Coverage after each view (%, mean over objects)\n\n| planner |";
+  for (int i = 1; i <= n; ++i) md << " " << i << " |";
+  md << " views to 95 % | planner time per iteration, median (mean) | objects |\n|---|";
+  for (int i = 0; i < n + 3; ++i) md << "---|";
+  md << "\n";
+  const PlannerSummary* pbnbv = nullptr;
+  for (const auto& p : r.planners) {
+    if (p.planner == "pbnbv") pbnbv = &p;
+    md << "| " << p.planner << " |";
+    for (int i = 0; i < n; ++i) md << " " << (i < static_cast<int>(p.coverage_by_view.size()) ? f1(p.coverage_by_view[i]) : "-") << " |";
+    md << " " << opt(p.views_to_95) << " (" << p.reached_95 << " of " << p.complete << " reach it) | ";
+    if (p.planner == "ring") md << "- (fixed views) |";
+    else md << ms(p.planner_ms_median) << " ms (" << ms(p.planner_ms_mean) << ") |";
+    md << " " << p.complete << (p.failed ? " (" + std::to_string(p.failed) + " failed)" : "") << " |\n";
+  }
+  if (paper_setup(s)) {
+    md << "| authors' release, 5 meshes, this machine kind |";
+    for (int i = 0; i < n; ++i) md << " " << (i < static_cast<int>(kReleaseCoverage.size()) ? f1(kReleaseCoverage[i]) : "-") << " |";
+    md << " - | 25,800 ms | 5 |\n";
+  }
+  md << "\n";
+  if (pbnbv && pbnbv->planner_ms_median > 0) {
+    for (const auto& p : r.planners) {
+      if (&p == pbnbv || p.planner == "ring" || p.planner_ms_median <= 0) continue;
+      md << "- " << p.planner << " / pbnbv planner time, medians: " << f1(p.planner_ms_median / pbnbv->planner_ms_median)
+         << "x\n";
+    }
+    md << "\n";
+  }
+  bool any_observable = false;
+  for (const auto& p : r.planners) any_observable = any_observable || !p.observable_by_view.empty();
+  if (any_observable) {
+    md << "## Observable coverage (%, mean): over the surface samples that some reachable candidate view can see\n\n| planner |";
+    for (int i = 1; i <= n; ++i) md << " " << i << " |";
+    md << "\n|---|";
+    for (int i = 0; i < n; ++i) md << "---|";
+    md << "\n";
+    for (const auto& p : r.planners) {
+      if (p.observable_by_view.empty()) continue;
+      md << "| " << p.planner << " |";
+      for (int i = 0; i < n; ++i) md << " " << f1(p.observable_by_view[i]) << " |";
+      md << "\n";
+    }
+    md << "\n";
+  }
+
+  md << "## Per object: coverage after view " << n << " (%), views to 95 % in brackets\n\n| object |";
+  for (const auto& p : r.planners) md << " " << p.planner << " |";
+  md << "\n|---|";
+  for (std::size_t i = 0; i < r.planners.size(); ++i) md << "---|";
+  md << "\n";
+  std::vector<std::string> names;
+  for (const auto& p : r.planners) {
+    for (const auto& o : p.objects) {
+      if (std::find(names.begin(), names.end(), o.object) == names.end()) names.push_back(o.object);
+    }
+  }
+  for (const auto& name : names) {
+    md << "| " << name << " |";
+    for (const auto& p : r.planners) {
+      const auto it = std::find_if(p.objects.begin(), p.objects.end(), [&](const ObjectRun& o) { return o.object == name; });
+      if (it == p.objects.end()) md << " |";
+      else if (!it->complete) md << " failed |";
+      else md << " " << f1(it->coverage_by_view.back()) << " (" << (it->views_to_95 ? std::to_string(*it->views_to_95) : "-") << ") |";
+    }
+    md << "\n";
+  }
+  md << "\n![coverage](coverage.png)\n\n![time](time.png)\n";
+  if (any_observable) md << "\n![observable coverage](observable.png)\n";
+  md << "\nsummary.json holds every figure; each scan's outputs are in <planner>/<object>/.\n";
+  write_text_atomic(md.str(), (s.out / "report.md").string());
+
+  coverage_chart(r, false, s.out / "coverage.png");
+  if (any_observable) coverage_chart(r, true, s.out / "observable.png");
+  time_chart(r, s.out / "time.png");
+}
+
+void write_ablation(const std::string& param, const std::vector<std::pair<std::string, BenchResult>>& runs,
+                    const fs::path& out) {
+  fs::create_directories(out);
+  json j = {{"parameter", param}, {"values", json::array()}};
+  LineChart c;
+  c.title = "Ablation: " + param + " (PB-NBV, mean coverage over objects)";
+  c.x_label = "views";
+  c.y_label = "surface covered (%, mean)";
+  c.integer_x = true;
+  c.y_max = 100;
+  c.y_lines = {{95.0, "95 %"}};
+  std::ostringstream md;
+  md << "# Ablation: " << param << "\n\n";
+  int n = 0;
+  for (const auto& [value, r] : runs) n = std::max(n, r.spec.views);
+  md << "| " << param << " |";
+  for (int i = 1; i <= n; ++i) md << " " << i << " |";
+  md << " views to 95 % | planner time, median (mean) |\n|---|";
+  for (int i = 0; i < n + 2; ++i) md << "---|";
+  md << "\n";
+  for (const auto& [value, r] : runs) {
+    for (const auto& p : r.planners) {
+      const std::string label = param + " " + value + (r.planners.size() > 1 ? " " + p.planner : "");
+      j["values"].push_back({{"value", value}, {"planner", p.planner}, {"coverage_by_view", p.coverage_by_view},
+                             {"views_to_95", p.views_to_95 ? json(*p.views_to_95) : json(nullptr)},
+                             {"planner_ms_median", p.planner_ms_median}, {"planner_ms_mean", p.planner_ms_mean},
+                             {"objects_complete", p.complete}, {"folder", r.spec.out.filename().string()}});
+      md << "| " << label << " |";
+      for (int i = 0; i < n; ++i) md << " " << (i < static_cast<int>(p.coverage_by_view.size()) ? f1(p.coverage_by_view[i]) : "-") << " |";
+      md << " " << opt(p.views_to_95) << " | " << ms(p.planner_ms_median) << " ms (" << ms(p.planner_ms_mean) << ") |\n";
+      if (!p.coverage_by_view.empty()) c.series.push_back({label, view_numbers(static_cast<int>(p.coverage_by_view.size())), p.coverage_by_view});
+    }
+  }
+  if (!runs.empty()) md << "\nEach value's benchmark (report.md, summary.json, scans) is in its folder; the command:\n\n```\n"
+                        << command_of(runs.front().second.spec) << "\n```\n(with the value changed).\n";
+  md << "\n![ablation](ablation.png)\n";
+  write_json_atomic(j, (out / "ablation.json").string());
+  write_text_atomic(md.str(), (out / "ablation.md").string());
+  if (!c.series.empty()) write_line_chart(c, (out / "ablation.png").string());
+}
+
+}  // namespace pbnbv::eval

@@ -1,0 +1,207 @@
+#include "eval/visibility.hpp"
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Simple_cartesian.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <exception>
+#include <numeric>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+namespace pbnbv {
+
+namespace {
+
+using K = CGAL::Simple_cartesian<double>;
+using Triangle = K::Triangle_3;
+using TriangleIterator = std::vector<Triangle>::const_iterator;
+using Primitive = CGAL::AABB_triangle_primitive<K, TriangleIterator>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr const char* kCtx = "visible_from_any: ";
+
+[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument(kCtx + what); }
+
+std::string index_name(const char* array, std::size_t i) {
+  return std::string(array) + "[" + std::to_string(i) + "]";
+}
+
+// Throws naming `what` when a triangle refers to a vertex that does not exist.
+void check_indices(const TriangleMesh& mesh, const char* ctx) {
+  const long long nv = static_cast<long long>(mesh.vertices.size());
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const int v = mesh.triangles[i][k];
+      if (v < 0 || v >= nv) {
+        std::ostringstream os;
+        os << ctx << "mesh triangle " << i << " has vertex index " << v << " outside [0, " << nv
+           << ")";
+        throw std::invalid_argument(os.str());
+      }
+    }
+  }
+}
+
+// A view prepared for the per-sample tests.
+struct ViewFrame {
+  Eigen::Matrix3d camera_R_object;  // rotation part of camera_T_object
+  Eigen::Vector3d centre;           // camera centre in the object frame
+};
+
+}  // namespace
+
+SurfaceSamples sample_surface_with_normals(const TriangleMesh& mesh, std::size_t n,
+                                           std::uint64_t seed) {
+  SurfaceSamples out;
+  if (n == 0) return out;
+  check_indices(mesh, "sample_surface_with_normals: ");
+  out.points = sample_surface(mesh, n, seed, &out.normals);
+  return out;
+}
+
+std::vector<uint8_t> visible_from_any(const TriangleMesh& mesh,
+                                      const std::vector<Eigen::Vector3d>& samples,
+                                      const std::vector<Eigen::Vector3d>& normals,
+                                      const std::vector<Pose>& views, const VisibilityParams& p) {
+  // --- Arguments -------------------------------------------------------------------------------
+  if (!normals.empty() && normals.size() != samples.size()) {
+    fail("normals has " + std::to_string(normals.size()) + " entries, samples has " +
+         std::to_string(samples.size()) + " (need 0 or the same number)");
+  }
+  if (mesh.triangles.empty() || mesh.vertices.empty()) fail("mesh has no triangles");
+  check_indices(mesh, kCtx);
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    if (!samples[i].allFinite()) fail(index_name("samples", i) + " is not finite");
+  }
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    if (!normals[i].allFinite()) fail(index_name("normals", i) + " is not finite");
+  }
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    if (!views[i].matrix().allFinite()) fail(index_name("views", i) + " is not finite");
+  }
+  try {
+    p.camera.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(std::string("p.camera: ") + e.what());
+  }
+  try {
+    p.range.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(std::string("p.range: ") + e.what());
+  }
+  if (!(std::isfinite(p.surface_offset_m) && p.surface_offset_m >= 0.0)) {
+    fail("p.surface_offset_m = " + std::to_string(p.surface_offset_m) +
+         " must be a finite number >= 0");
+  }
+  if (!(p.max_incidence_deg >= 0.0 && p.max_incidence_deg <= 90.0)) {
+    fail("p.max_incidence_deg = " + std::to_string(p.max_incidence_deg) + " must be in [0, 90]");
+  }
+  if (p.threads < 0) fail("p.threads = " + std::to_string(p.threads) + " must be >= 0");
+
+  std::vector<uint8_t> mask(samples.size(), 0);
+  if (samples.empty() || views.empty()) return mask;
+
+  // --- Occlusion structure: AABB tree over the non-degenerate triangles -------------------------
+  std::vector<Triangle> tris;
+  tris.reserve(mesh.triangles.size());
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d& a = mesh.vertices[static_cast<size_t>(t[0])];
+    const Eigen::Vector3d& b = mesh.vertices[static_cast<size_t>(t[1])];
+    const Eigen::Vector3d& c = mesh.vertices[static_cast<size_t>(t[2])];
+    if (!(a.allFinite() && b.allFinite() && c.allFinite())) fail("mesh has a non-finite vertex");
+    if ((b - a).cross(c - a).squaredNorm() == 0.0) continue;  // CGAL dislikes degenerate ones
+    tris.emplace_back(K::Point_3(a.x(), a.y(), a.z()), K::Point_3(b.x(), b.y(), b.z()),
+                      K::Point_3(c.x(), c.y(), c.z()));
+  }
+  if (tris.empty()) fail("mesh has only zero-area triangles");
+  Tree tree(tris.cbegin(), tris.cend());
+  tree.build();  // before the threads: queries on a built tree are const
+
+  // Views are tried in a golden-ratio stride order rather than as given: view sets come ordered
+  // by position (ring after ring), so consecutive views tend to see the same side and a sample on
+  // the other side would wade through many of them; spread out, one of the first few tries
+  // usually sees it. The order does not change the result.
+  const std::size_t nv = views.size();
+  std::size_t stride = std::max<std::size_t>(1, static_cast<std::size_t>(0.618034 * nv));
+  while (std::gcd(stride, nv) != 1) ++stride;
+  std::vector<ViewFrame> frames(nv);
+  for (std::size_t j = 0; j < nv; ++j) {
+    const Pose& view = views[(j * stride) % nv];
+    frames[j].camera_R_object = view.linear().transpose();
+    frames[j].centre = view.translation();
+  }
+
+  const CameraIntrinsics& k = p.camera;
+  const double u_lo = -0.5, u_hi = k.width - 0.5;
+  const double v_lo = -0.5, v_hi = k.height - 0.5;
+  const bool use_normals = !normals.empty();
+  const double cos_max = std::cos(p.max_incidence_deg * kPi / 180.0);
+
+  // Whether view j sees sample i.
+  auto sees = [&](std::size_t i, const ViewFrame& f) {
+    const Eigen::Vector3d& x = samples[i];
+    const Eigen::Vector3d to_cam = f.centre - x;
+    // Cheapest rejections first: facing away (max incidence <= 90 deg), then depth, then image.
+    const double facing = use_normals ? normals[i].dot(to_cam) : 0.0;
+    if (facing < 0.0) return false;
+    const Eigen::Vector3d xc = f.camera_R_object * (-to_cam);  // sample in the optical frame
+    const double z = xc.z();
+    if (!(z >= p.range.min_m && z <= p.range.max_m)) return false;
+    const double u = k.fx * xc.x() / z + k.cx;
+    const double v = k.fy * xc.y() / z + k.cy;
+    if (!(u >= u_lo && u < u_hi && v >= v_lo && v < v_hi)) return false;
+    const double dist = to_cam.norm();
+    if (use_normals && facing < cos_max * normals[i].norm() * dist) return false;
+    if (p.surface_offset_m >= dist) return true;  // nothing left to test
+    const Eigen::Vector3d s = x + (p.surface_offset_m / dist) * to_cam;
+    const K::Segment_3 seg(K::Point_3(s.x(), s.y(), s.z()),
+                           K::Point_3(f.centre.x(), f.centre.y(), f.centre.z()));
+    return !tree.do_intersect(seg);
+  };
+
+  // --- Samples in blocks, handed out to the workers ---------------------------------------------
+  constexpr std::size_t kBlock = 128;
+  const std::size_t num_blocks = (samples.size() + kBlock - 1) / kBlock;
+  std::size_t workers =
+      p.threads > 0 ? static_cast<std::size_t>(p.threads)
+                    : static_cast<std::size_t>(std::max(1u, std::thread::hardware_concurrency()));
+  workers = std::min(workers, num_blocks);
+  std::atomic<std::size_t> next_block{0};
+  std::vector<std::exception_ptr> errors(workers);
+  auto run = [&](std::size_t slot) {
+    try {
+      for (std::size_t b = next_block++; b < num_blocks; b = next_block++) {
+        const std::size_t end = std::min(samples.size(), (b + 1) * kBlock);
+        for (std::size_t i = b * kBlock; i < end; ++i) {
+          for (const ViewFrame& f : frames) {
+            if (sees(i, f)) {
+              mask[i] = 1;
+              break;
+            }
+          }
+        }
+      }
+    } catch (...) {
+      errors[slot] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> threads;
+  for (std::size_t w = 1; w < workers; ++w) threads.emplace_back(run, w);
+  run(0);
+  for (auto& t : threads) t.join();
+  for (const auto& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+  return mask;
+}
+
+}  // namespace pbnbv

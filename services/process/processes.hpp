@@ -1,0 +1,32 @@
+#pragma once
+// Starting and supervising the scan's processes (POSIX fork/exec), for the launcher.
+#include <sys/types.h>
+
+#include <string>
+#include <vector>
+
+namespace pbnbv::process {
+
+struct Child {
+  std::string name;       // "twin", "motion", ...
+  std::vector<std::string> argv;
+  std::string log_path;   // stdout+stderr go here ("" = inherit)
+  bool stdout_to_terminal = false;  // keep stdout on the terminal (progress), stderr to the log
+  pid_t pid = -1;
+  bool running = false;
+  int exit_code = 0;      // valid when !running: exit status, or 128 + signal
+};
+
+// Starts the child; throws std::runtime_error naming it when fork/exec fails.
+void start(Child& child);
+
+// Reaps children that exited (non-blocking); returns the ones that just stopped.
+std::vector<Child*> reap(std::vector<Child>& children);
+
+// Sends SIGTERM to every running child, waits up to grace_s, then SIGKILLs what remains.
+void stop_all(std::vector<Child>& children, double grace_s);
+
+// Last `n` lines of a text file ("" when unreadable).
+std::string tail_lines(const std::string& path, int n);
+
+}  // namespace pbnbv::process

@@ -1,0 +1,675 @@
+#include "report/plan_figure.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <sstream>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+namespace pbnbv {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Layout (pixels).
+constexpr int kWidth = 1500;
+constexpr int kTitleBlock = 40;   // header height without text lines
+constexpr int kLineStep = 20;     // per text line under the title
+constexpr int kLabelBlock = 26;   // panel labels above the panels
+constexpr int kPanel = 440;       // panels 1 and 2 are kPanel x kPanel
+constexpr int kBottom = 14;
+constexpr int kMapW = 480;        // panel 3: kMapW x kMapW / 2
+constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
+
+// Drawing with sub-pixel precision: figure coordinates (pixel i covers [i, i+1)) to OpenCV's
+// fixed-point coordinates (pixel centres at integers) with kShift fractional bits.
+constexpr int kShift = 4;
+constexpr double kOne = 1 << kShift;
+
+const cv::Scalar kBlack(0, 0, 0);
+const cv::Scalar kText(40, 40, 40);
+const cv::Scalar kSubText(90, 90, 90);
+const cv::Scalar kFrame(150, 150, 150);
+const cv::Scalar kGrid(236, 236, 236);
+const cv::Scalar kSectorLine(120, 120, 120);
+const cv::Scalar kAllowedShade(228, 246, 230);  // light green
+const cv::Scalar kBoxColour(70, 70, 70);
+const cv::Scalar kOutsideColour(175, 175, 175);
+const cv::Scalar kUnscoredColour(120, 120, 120);
+const cv::Scalar kExcludedColour(30, 30, 210);
+
+cv::Scalar scalar(const cv::Vec3b& c) { return cv::Scalar(c[0], c[1], c[2]); }
+
+cv::Scalar mix(const cv::Scalar& a, const cv::Scalar& b, double t) {  // (1-t) a + t b
+  return cv::Scalar(a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t,
+                    a[2] + (b[2] - a[2]) * t);
+}
+
+cv::Scalar darker(const cv::Scalar& c, double f) { return mix(c, kBlack, f); }
+
+// A region of the figure that clips everything drawn into it; takes figure coordinates.
+class Canvas {
+ public:
+  Canvas(cv::Mat& figure, const cv::Rect& rect) : img_(figure(rect)), tl_(rect.tl()) {}
+
+  cv::Point fixed(const cv::Point2d& p) const {
+    return cv::Point(cvRound((p.x - tl_.x - 0.5) * kOne), cvRound((p.y - tl_.y - 0.5) * kOne));
+  }
+  void disc(const cv::Point2d& c, double r, const cv::Scalar& colour) {
+    cv::circle(img_, fixed(c), cvRound(r * kOne), colour, cv::FILLED, cv::LINE_AA, kShift);
+  }
+  void ring(const cv::Point2d& c, double r, const cv::Scalar& colour, int thickness = 1) {
+    cv::circle(img_, fixed(c), cvRound(r * kOne), colour, thickness, cv::LINE_AA, kShift);
+  }
+  void line(const cv::Point2d& a, const cv::Point2d& b, const cv::Scalar& colour,
+            int thickness = 1) {
+    cv::line(img_, fixed(a), fixed(b), colour, thickness, cv::LINE_AA, kShift);
+  }
+  void cross(const cv::Point2d& c, double r, const cv::Scalar& colour) {
+    line(c + cv::Point2d(-r, -r), c + cv::Point2d(r, r), colour);
+    line(c + cv::Point2d(-r, r), c + cv::Point2d(r, -r), colour);
+  }
+  void rect(const cv::Point2d& a, const cv::Point2d& b, const cv::Scalar& colour,
+            int thickness = 1) {
+    cv::rectangle(img_, fixed(a), fixed(b), colour, thickness, cv::LINE_AA, kShift);
+  }
+  // Ellipse with semi-axes (a, b) px, the a-axis at angle_deg (image frame, clockwise).
+  void ellipse(const cv::Point2d& c, double a, double b, double angle_deg,
+               const cv::Scalar& colour, int thickness) {
+    const cv::Size axes(std::max(1, cvRound(a * kOne)), std::max(1, cvRound(b * kOne)));
+    cv::ellipse(img_, fixed(c), axes, angle_deg, 0, 360, colour, thickness, cv::LINE_AA, kShift);
+  }
+  void polygon(const std::vector<cv::Point2d>& pts, const cv::Scalar& colour) {
+    std::vector<cv::Point> q;
+    q.reserve(pts.size());
+    for (const auto& p : pts) q.push_back(fixed(p));
+    cv::fillPoly(img_, std::vector<std::vector<cv::Point>>{q}, colour, cv::LINE_AA, kShift);
+  }
+  // Text with its baseline starting at p; align: 0 left, 1 centre, 2 right.
+  void text(const std::string& s, const cv::Point2d& p, double scale, const cv::Scalar& colour,
+            int thickness = 1, int align = 0) {
+    int base = 0;
+    const cv::Size sz = cv::getTextSize(s, kFont, scale, thickness, &base);
+    const double x = p.x - (align == 1 ? sz.width / 2.0 : align == 2 ? sz.width : 0.0);
+    cv::putText(img_, s, cv::Point(cvRound(x - tl_.x), cvRound(p.y - tl_.y)), kFont, scale,
+                colour, thickness, cv::LINE_AA);
+  }
+  // Text centred on p both ways.
+  void text_centred(const std::string& s, const cv::Point2d& p, double scale,
+                    const cv::Scalar& colour, int thickness = 1) {
+    int base = 0;
+    const cv::Size sz = cv::getTextSize(s, kFont, scale, thickness, &base);
+    cv::putText(img_, s,
+                cv::Point(cvRound(p.x - tl_.x - sz.width / 2.0),
+                          cvRound(p.y - tl_.y + sz.height / 2.0)),
+                kFont, scale, colour, thickness, cv::LINE_AA);
+  }
+  // Text centred on p on a filled box.
+  void label(const std::string& s, const cv::Point2d& p, double scale, const cv::Scalar& colour,
+             const cv::Scalar& box) {
+    int base = 0;
+    const cv::Size sz = cv::getTextSize(s, kFont, scale, 1, &base);
+    const cv::Point2d h(sz.width / 2.0 + 3, sz.height / 2.0 + 3);
+    cv::rectangle(img_, fixed(p - h), fixed(p + h), box, cv::FILLED, cv::LINE_8, kShift);
+    text_centred(s, p, scale, colour, 1);
+  }
+  cv::Mat& mat() { return img_; }
+
+ private:
+  cv::Mat img_;
+  cv::Point tl_;
+};
+
+// Viridis-like colour for t in [0, 1] (OpenCV's VIRIDIS map).
+cv::Scalar colour_map(double t) {
+  static const cv::Mat lut = [] {
+    cv::Mat ramp(256, 1, CV_8UC1);
+    for (int i = 0; i < 256; ++i) ramp.at<uint8_t>(i) = static_cast<uint8_t>(i);
+    cv::Mat out;
+    cv::applyColorMap(ramp, out, cv::COLORMAP_VIRIDIS);
+    return out;
+  }();
+  const int i = std::clamp(static_cast<int>(std::lround(t * 255.0)), 0, 255);
+  return scalar(lut.at<cv::Vec3b>(i));
+}
+
+std::string format(const char* fmt, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), fmt, v);
+  return buf;
+}
+
+void validate(const PlanFigure& f) {
+  const size_t n = f.candidates.size();
+  if (f.quality.size() != n) {
+    throw std::invalid_argument("plan figure: quality has " + std::to_string(f.quality.size()) +
+                                " entries, candidates " + std::to_string(n));
+  }
+  if (f.status.size() != n) {
+    throw std::invalid_argument("plan figure: status has " + std::to_string(f.status.size()) +
+                                " entries, candidates " + std::to_string(n));
+  }
+  if (f.chosen < -1 || f.chosen >= static_cast<int>(n)) {
+    throw std::invalid_argument("plan figure: chosen " + std::to_string(f.chosen) +
+                                " is out of range for " + std::to_string(n) + " candidates");
+  }
+}
+
+// A "nice" grid step (1, 2 or 5 x 10^k) giving a few lines over `span`.
+double nice_step(double span) {
+  const double raw = span / 8.0;
+  const double p = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0}) {
+    if (m * p >= raw) return m * p;
+  }
+  return 10.0 * p;
+}
+
+std::string metres(double v) {
+  if (v >= 1.0) return format("%g m", v);
+  return format("%g cm", v * 100.0);
+}
+
+struct FRange {
+  bool any = false;
+  double lo = 0, hi = 0;
+  double t(double f) const { return hi > lo ? (f - lo) / (hi - lo) : 0.5; }
+};
+
+FRange f_range(const PlanFigure& f) {
+  FRange r;
+  r.lo = std::numeric_limits<double>::infinity();
+  r.hi = -r.lo;
+  for (size_t i = 0; i < f.candidates.size(); ++i) {
+    if (f.status[i] != CandidateStatus::kScored || !std::isfinite(f.quality[i])) continue;
+    r.any = true;
+    r.lo = std::min(r.lo, f.quality[i]);
+    r.hi = std::max(r.hi, f.quality[i]);
+  }
+  if (!r.any) r.lo = r.hi = 0;
+  return r;
+}
+
+bool is_allowed(const PlanFigure& f, int sector) {
+  return std::find(f.allowed_sectors.begin(), f.allowed_sectors.end(), sector) !=
+         f.allowed_sectors.end();
+}
+
+cv::Scalar sector_background(const PlanFigure& f, int sector) {
+  return is_allowed(f, sector) ? kAllowedShade : scalar(PlanFigureColours::background());
+}
+
+bool is_scored(const PlanFigure& f, size_t i) {
+  return f.status[i] == CandidateStatus::kScored && std::isfinite(f.quality[i]);
+}
+
+// --- Markers, shared by the three panels ---
+
+void candidate_marker(Canvas& c, const cv::Point2d& p, const PlanFigure& f, size_t i,
+                      const FRange& range, bool pale) {
+  const cv::Scalar bg = scalar(PlanFigureColours::background());
+  switch (f.status[i]) {
+    case CandidateStatus::kUnreachable:
+      c.cross(p, 2.5, pale ? mix(kBlack, bg, 0.55) : kBlack);
+      return;
+    case CandidateStatus::kOutsidePartition:
+      c.disc(p, 2.0, pale ? mix(kOutsideColour, bg, 0.5) : kOutsideColour);
+      return;
+    case CandidateStatus::kExcluded:
+      c.cross(p, 2.5, pale ? mix(kExcludedColour, bg, 0.55) : kExcludedColour);
+      return;
+    case CandidateStatus::kScored:
+      break;
+  }
+  if (!is_scored(f, i)) {  // scored but F not finite
+    c.ring(p, 2.5, kUnscoredColour);
+    return;
+  }
+  const cv::Scalar col = colour_map(range.t(f.quality[i]));
+  if (pale) {
+    c.disc(p, 3.0, mix(col, bg, 0.6));
+  } else {
+    c.disc(p, 3.6, col);
+  }
+}
+
+void past_marker(Canvas& c, const cv::Point2d& p, int number, double r = 9.0) {
+  c.disc(p, r, scalar(PlanFigureColours::past_view()));
+  c.ring(p, r, kBlack, 1);
+  c.text_centred(std::to_string(number), p, number >= 10 ? 0.33 : 0.4, kBlack, 1);
+}
+
+void chosen_marker(Canvas& c, const cv::Point2d& p) {
+  const cv::Scalar col = scalar(PlanFigureColours::chosen());
+  c.ring(p, 15.0, col, 2);
+  c.disc(p, 9.5, kBlack);
+  c.disc(p, 8.0, col);
+}
+
+// --- Panels 1 and 2 ---
+
+struct OrthoView {
+  cv::Rect rect;
+  int u_axis, v_axis, depth_axis;  // world axes along image x, image up, towards the viewer
+  double depth_sign;               // +1: larger depth coordinate is nearer the viewer
+};
+
+cv::Point2d ortho_pixel(const PlanFigureLayout& l, const OrthoView& v, const Eigen::Vector3d& p) {
+  const double s = (v.rect.width / 2.0) / l.half_width_m;
+  const double cx = v.rect.x + v.rect.width / 2.0;
+  const double cy = v.rect.y + v.rect.height / 2.0;
+  return cv::Point2d(cx + (p[v.u_axis] - l.centre[v.u_axis]) * s,
+                     cy - (p[v.v_axis] - l.centre[v.v_axis]) * s);
+}
+
+void draw_grid(Canvas& c, const PlanFigureLayout& l, const OrthoView& v, double step) {
+  for (int axis : {v.u_axis, v.v_axis}) {
+    const double lo = l.centre[axis] - l.half_width_m, hi = l.centre[axis] + l.half_width_m;
+    for (double g = std::ceil(lo / step) * step; g <= hi; g += step) {
+      const bool zero = std::abs(g) < 1e-9 * step;
+      Eigen::Vector3d p = l.centre;
+      p[axis] = g;
+      const cv::Point2d q = ortho_pixel(l, v, p);
+      const cv::Scalar col = zero ? cv::Scalar(210, 210, 210) : kGrid;
+      if (axis == v.u_axis) {
+        c.line({q.x, double(v.rect.y)}, {q.x, double(v.rect.br().y)}, col);
+      } else {
+        c.line({double(v.rect.x), q.y}, {double(v.rect.br().x), q.y}, col);
+      }
+    }
+  }
+}
+
+void draw_sectors_top(Canvas& c, const PlanFigureLayout& l, const OrthoView& v,
+                      const PlanFigure& f, bool lines) {
+  if (f.beta <= 1) return;
+  const cv::Point2d o = ortho_pixel(l, v, l.centre);
+  const double big = 2.0 * v.rect.width;
+  const double w = 2 * kPi / f.beta;
+  if (!lines) {
+    for (int s : f.allowed_sectors) {
+      if (s < 0 || s >= f.beta) continue;
+      std::vector<cv::Point2d> poly{o};
+      const int steps = std::max(2, static_cast<int>(std::ceil(w / (kPi / 36))));
+      for (int k = 0; k <= steps; ++k) {
+        const double a = f.sector_start_rad + s * w + w * k / steps;
+        poly.emplace_back(o.x + big * std::cos(a), o.y - big * std::sin(a));
+      }
+      c.polygon(poly, kAllowedShade);
+    }
+    return;
+  }
+  const double r_label = 0.92 * v.rect.width / 2.0;
+  for (int s = 0; s < f.beta; ++s) {
+    const double a = f.sector_start_rad + s * w;
+    c.line(o, {o.x + big * std::cos(a), o.y - big * std::sin(a)}, kSectorLine);
+    const double m = a + w / 2;
+    // Label on the panel edge along the mid-angle (clamped into the square).
+    const double dx = std::cos(m), dy = -std::sin(m);
+    const double k = r_label / std::max(std::abs(dx), std::abs(dy));
+    c.label("s" + std::to_string(s), {o.x + k * dx, o.y + k * dy}, 0.45, kSectorLine,
+            sector_background(f, s));
+  }
+}
+
+void draw_ellipsoids(Canvas& c, const PlanFigureLayout& l, const OrthoView& v,
+                     const PlanFigure& f) {
+  const double s = (v.rect.width / 2.0) / l.half_width_m;
+  struct Shadow {
+    cv::Point2d centre;
+    double a, b, angle;
+    EllipsoidClass cls;
+  };
+  std::vector<Shadow> shadows;
+  for (const auto& e : f.ellipsoids) {
+    const Eigen::Vector3d s2 = e.semi_axes.cwiseAbs2();
+    const Eigen::Matrix3d m = e.axes * s2.asDiagonal() * e.axes.transpose();
+    Eigen::Matrix2d b;
+    b << m(v.u_axis, v.u_axis), m(v.u_axis, v.v_axis), m(v.v_axis, v.u_axis),
+        m(v.v_axis, v.v_axis);
+    if (!b.allFinite() || !e.centre.allFinite()) continue;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(b);
+    const Eigen::Vector2d lam = es.eigenvalues().cwiseMax(0.0);
+    const Eigen::Vector2d dir = es.eigenvectors().col(1);  // larger eigenvalue
+    // Image y points down, so the world direction (du, dv) is (du, -dv) in the image.
+    const double angle = std::atan2(-dir.y(), dir.x()) * 180.0 / kPi;
+    shadows.push_back({ortho_pixel(l, v, e.centre), std::sqrt(lam(1)) * s,
+                       std::sqrt(lam(0)) * s, angle, e.cls});
+  }
+  // Occupied first, frontier over them; each fill blended on its own.
+  const double alpha = PlanFigureColours::fill_alpha();
+  for (EllipsoidClass cls : {EllipsoidClass::kOccupied, EllipsoidClass::kFrontier}) {
+    const cv::Scalar col = scalar(cls == EllipsoidClass::kFrontier ? PlanFigureColours::frontier()
+                                                                   : PlanFigureColours::occupied());
+    for (const auto& sh : shadows) {
+      if (sh.cls != cls) continue;
+      cv::Mat before = c.mat().clone();
+      c.ellipse(sh.centre, sh.a, sh.b, sh.angle, col, cv::FILLED);
+      cv::addWeighted(c.mat(), alpha, before, 1.0 - alpha, 0.0, c.mat());
+    }
+    for (const auto& sh : shadows) {
+      if (sh.cls != cls) continue;
+      c.ellipse(sh.centre, sh.a, sh.b, sh.angle, darker(col, 0.25), 1);
+    }
+  }
+}
+
+void draw_ortho_panel(cv::Mat& fig, const PlanFigureLayout& l, const OrthoView& v,
+                      const PlanFigure& f, const FRange& range, bool top) {
+  Canvas c(fig, v.rect);
+  const double step = nice_step(2.0 * l.half_width_m);
+  if (top) draw_sectors_top(c, l, v, f, false);
+  draw_grid(c, l, v, step);
+  if (top) draw_sectors_top(c, l, v, f, true);
+
+  if (!f.bbox.isEmpty()) {
+    const Eigen::Vector3d lo = f.bbox.min(), hi = f.bbox.max();
+    const cv::Point2d a = ortho_pixel(l, v, lo), b = ortho_pixel(l, v, hi);
+    c.rect(a, b, kBoxColour, 1);
+    c.text("B", {std::max(a.x, b.x) + 3, std::min(a.y, b.y) + 10}, 0.4, kBoxColour);
+  }
+  draw_ellipsoids(c, l, v, f);
+
+  // Candidates, far ones first and paler.
+  std::vector<size_t> order(f.candidates.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  auto depth = [&](size_t i) {
+    return v.depth_sign * (f.candidates[i].translation()[v.depth_axis] - l.centre[v.depth_axis]);
+  };
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return depth(a) < depth(b); });
+  for (size_t i : order) {
+    candidate_marker(c, ortho_pixel(l, v, f.candidates[i].translation()), f, i, range,
+                     depth(i) < -1e-9);
+  }
+
+  if (f.chosen >= 0) {
+    const cv::Point2d p = ortho_pixel(l, v, f.candidates[f.chosen].translation());
+    const cv::Point2d o = ortho_pixel(l, v, l.centre);
+    c.line(p, o, scalar(PlanFigureColours::chosen()), 2);
+    c.disc(o, 3.0, scalar(PlanFigureColours::chosen()));
+  }
+  for (size_t k = 0; k < f.past_views.size(); ++k) {
+    past_marker(c, ortho_pixel(l, v, f.past_views[k].translation()), static_cast<int>(k) + 1);
+  }
+  if (f.chosen >= 0) chosen_marker(c, ortho_pixel(l, v, f.candidates[f.chosen].translation()));
+}
+
+// --- Panel 3 ---
+
+void draw_map_panel(cv::Mat& fig, const PlanFigureLayout& l, const PlanFigure& f,
+                    const FRange& range) {
+  const cv::Rect& r = l.map;
+  const double start_deg = f.sector_start_rad * 180.0 / kPi;
+  auto wrap_deg = [](double a) { return a - 360.0 * std::floor(a / 360.0); };
+  {
+    Canvas c(fig, r);
+    // Allowed sectors and sector boundaries.
+    if (f.beta > 1) {
+      for (int s : f.allowed_sectors) {
+        if (s < 0 || s >= f.beta) continue;
+        // The sector's azimuth span on the 0..360 map, split where it wraps.
+        const double a0 = wrap_deg(start_deg + 360.0 * s / f.beta), a1 = a0 + 360.0 / f.beta;
+        auto shade = [&](double lo, double hi) {
+          c.polygon({sphere_map_pixel(l, lo, 0), sphere_map_pixel(l, hi, 0), sphere_map_pixel(l, hi, 180),
+                     sphere_map_pixel(l, lo, 180)},
+                    kAllowedShade);
+        };
+        if (a1 <= 360.0) {
+          shade(a0, a1);
+        } else {
+          shade(a0, 360.0);
+          shade(0.0, a1 - 360.0);
+        }
+      }
+    }
+    for (int az = 45; az < 360; az += 45) {
+      c.line(sphere_map_pixel(l, az, 0), sphere_map_pixel(l, az, 180), kGrid);
+    }
+    for (int po = 30; po < 180; po += 30) {
+      c.line(sphere_map_pixel(l, 0, po), sphere_map_pixel(l, 360, po),
+             po == 90 ? cv::Scalar(205, 205, 205) : kGrid);
+    }
+    if (f.beta > 1) {
+      for (int s = 0; s < f.beta; ++s) {
+        const double a0 = wrap_deg(start_deg + 360.0 * s / f.beta);
+        if (a0 > 1e-9) c.line(sphere_map_pixel(l, a0, 0), sphere_map_pixel(l, a0, 180), kSectorLine);
+      }
+    }
+    auto map_of = [&](const Eigen::Vector3d& eye) {
+      const Eigen::Vector2d ap = azimuth_polar_deg(eye, l.centre);
+      return sphere_map_pixel(l, ap(0), ap(1));
+    };
+    for (size_t i = 0; i < f.candidates.size(); ++i) {
+      candidate_marker(c, map_of(f.candidates[i].translation()), f, i, range, false);
+    }
+    for (size_t k = 0; k < f.past_views.size(); ++k) {
+      past_marker(c, map_of(f.past_views[k].translation()), static_cast<int>(k) + 1);
+    }
+    if (f.chosen >= 0) chosen_marker(c, map_of(f.candidates[f.chosen].translation()));
+    for (int s = 0; f.beta > 1 && s < f.beta; ++s) {  // sector names over the markers
+      c.label("s" + std::to_string(s), sphere_map_pixel(l, wrap_deg(start_deg + 360.0 * (s + 0.5) / f.beta), 0) +
+                                           cv::Point2d(0, 11),
+              0.42, kSectorLine, sector_background(f, s));
+    }
+  }
+  Canvas all(fig, cv::Rect(0, 0, fig.cols, fig.rows));
+  all.rect({double(r.x), double(r.y)}, {double(r.br().x), double(r.br().y)}, kFrame);
+  for (int az = 0; az <= 360; az += 90) {
+    all.text(std::to_string(az), sphere_map_pixel(l, az, 180) + cv::Point2d(0, 16), 0.4, kSubText,
+             1, 1);
+  }
+  for (int po = 0; po <= 180; po += 30) {
+    all.text(std::to_string(po), sphere_map_pixel(l, 0, po) + cv::Point2d(-6, 5), 0.4, kSubText, 1,
+             2);
+  }
+  all.text("azimuth about the centre (deg)", {r.x + r.width / 2.0, r.br().y + 34.0}, 0.45, kText,
+           1, 1);
+
+  // Colour bar.
+  const cv::Rect& b = l.colour_bar;
+  if (range.any) {
+    for (int x = 0; x < b.width; ++x) {
+      cv::line(fig, {b.x + x, b.y}, {b.x + x, b.y + b.height - 1},
+               colour_map(b.width > 1 ? x / double(b.width - 1) : 0.5));
+    }
+  } else {
+    cv::rectangle(fig, b, cv::Scalar(240, 240, 240), cv::FILLED);
+    all.text("no scored candidates", {b.x + b.width / 2.0, b.y + b.height - 3.0}, 0.4, kSubText, 1,
+             1);
+  }
+  all.rect({double(b.x), double(b.y)}, {double(b.br().x), double(b.br().y)}, kFrame);
+  all.text(f.quality_label, {b.x + b.width / 2.0, b.y - 7.0}, 0.45,
+           kText, 1, 1);
+  if (range.any) {
+    all.text(format("%.4g", range.lo), {double(b.x), b.br().y + 16.0}, 0.42, kText, 1, 0);
+    all.text(format("%.4g", range.hi), {double(b.br().x), b.br().y + 16.0}, 0.42, kText, 1, 2);
+  }
+  if (range.any && range.lo < 0 && range.hi > 0) {
+    const double x0 = b.x + range.t(0.0) * b.width;
+    all.line({x0, b.y - 3.0}, {x0, b.br().y + 3.0}, kBlack, 1);
+    all.text("0", {x0, b.br().y + 16.0}, 0.42, kText, 1, 1);
+  }
+  if (f.chosen >= 0 && range.any && is_scored(f, f.chosen)) {
+    const double x = b.x + std::clamp(range.t(f.quality[f.chosen]), 0.0, 1.0) * b.width;
+    const cv::Scalar col = scalar(PlanFigureColours::chosen());
+    all.line({x, b.y - 3.0}, {x, b.br().y + 3.0}, col, 3);
+    all.text("chosen " + format("%.4g", f.quality[f.chosen]), {x, b.br().y + 16.0}, 0.42, col, 1,
+             x > b.x + b.width * 0.75 ? 2 : x < b.x + b.width * 0.25 ? 0 : 1);
+  }
+
+  // Legend.
+  const double y1 = b.br().y + 44.0, y2 = y1 + 26.0;
+  double x = r.x;
+  auto item = [&](double y, double& xx, const std::string& label, auto&& marker,
+                  double half = 10.0) {
+    marker(cv::Point2d(xx + half, y - 4));
+    all.text(label, {xx + 2 * half + 5, y}, 0.42, kText);
+    int base = 0;
+    xx += 2 * half + 5 + cv::getTextSize(label, kFont, 0.42, 1, &base).width + 18;
+  };
+  item(y1, x, "chosen", [&](cv::Point2d p) { chosen_marker(all, p); }, 15.0);
+  item(y1, x, "past view", [&](cv::Point2d p) { past_marker(all, p, 1); });
+  item(y1, x, "unreachable", [&](cv::Point2d p) { all.cross(p, 2.5, kBlack); });
+  item(y1, x, "outside partition",
+       [&](cv::Point2d p) { all.disc(p, 2.0, kOutsideColour); });
+  x = r.x;
+  auto swatch = [&](const cv::Vec3b& col) {
+    return [&all, col](cv::Point2d p) {
+      const cv::Scalar c = mix(scalar(PlanFigureColours::background()), scalar(col),
+                               PlanFigureColours::fill_alpha());
+      all.ellipse(p, 10, 6, 0, c, cv::FILLED);
+      all.ellipse(p, 10, 6, 0, darker(scalar(col), 0.25), 1);
+    };
+  };
+  item(y2, x, "occupied ellipsoid", swatch(PlanFigureColours::occupied()));
+  item(y2, x, "frontier ellipsoid", swatch(PlanFigureColours::frontier()));
+  if (f.beta > 1) {
+    item(y2, x, "allowed sectors", [&](cv::Point2d p) {
+      all.polygon({p + cv::Point2d(-10, -7), p + cv::Point2d(10, -7), p + cv::Point2d(10, 7),
+                   p + cv::Point2d(-10, 7)},
+                  kAllowedShade);
+      all.rect(p + cv::Point2d(-10, -7), p + cv::Point2d(10, 7), kFrame);
+    });
+  }
+  if (std::find(f.status.begin(), f.status.end(), CandidateStatus::kExcluded) != f.status.end()) {
+    item(y2, x, "excluded", [&](cv::Point2d p) { all.cross(p, 2.5, kExcludedColour); });
+  }
+  all.text("paler markers: far side (below / behind the centre)", {double(r.x), y2 + 24.0}, 0.4,
+           kSubText);
+}
+
+}  // namespace
+
+Eigen::Vector2d azimuth_polar_deg(const Eigen::Vector3d& eye, const Eigen::Vector3d& centre) {
+  const Eigen::Vector3d d = eye - centre;
+  double az = std::atan2(d.y(), d.x());
+  if (az < 0) az += 2 * kPi;
+  if (az >= 2 * kPi) az = 0;
+  const double n = d.norm();
+  const double polar = n > 0 ? std::acos(std::clamp(d.z() / n, -1.0, 1.0)) : 0.0;
+  return Eigen::Vector2d(az * 180.0 / kPi, polar * 180.0 / kPi);
+}
+
+PlanFigureLayout plan_figure_layout(const PlanFigure& f) {
+  PlanFigureLayout l;
+  const int header = kTitleBlock + kLineStep * static_cast<int>(f.lines.size());
+  const int py = header + kLabelBlock;
+  l.size = cv::Size(kWidth, py + kPanel + kBottom);
+  l.top = cv::Rect(20, py, kPanel, kPanel);
+  l.side = cv::Rect(l.top.br().x + 30, py, kPanel, kPanel);
+  l.map = cv::Rect(l.side.br().x + 60, py, kMapW, kMapW / 2);
+  l.colour_bar = cv::Rect(l.map.x, l.map.br().y + 72, kMapW, 14);
+  l.centre = f.centre;
+
+  double r = 0;
+  for (const auto& c : f.candidates) r = std::max(r, (c.translation() - f.centre).norm());
+  for (const auto& c : f.past_views) r = std::max(r, (c.translation() - f.centre).norm());
+  if (!(r > 0) || !std::isfinite(r)) {
+    r = 0;
+    if (!f.bbox.isEmpty()) {
+      for (int k = 0; k < 8; ++k) {
+        r = std::max(r, (f.bbox.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)) -
+                         f.centre).norm());
+      }
+    }
+    if (!(r > 0) || !std::isfinite(r)) r = 1.0 / 1.1;
+  }
+  l.half_width_m = 1.1 * r;
+  return l;
+}
+
+cv::Point2d top_view_pixel(const PlanFigureLayout& l, const Eigen::Vector3d& p) {
+  return ortho_pixel(l, OrthoView{l.top, 0, 1, 2, 1.0}, p);
+}
+
+cv::Point2d side_view_pixel(const PlanFigureLayout& l, const Eigen::Vector3d& p) {
+  return ortho_pixel(l, OrthoView{l.side, 0, 2, 1, -1.0}, p);
+}
+
+cv::Point2d sphere_map_pixel(const PlanFigureLayout& l, double azimuth_deg, double polar_deg) {
+  return cv::Point2d(l.map.x + azimuth_deg / 360.0 * l.map.width,
+                     l.map.y + polar_deg / 180.0 * l.map.height);
+}
+
+cv::Mat draw_plan_figure(const PlanFigure& f) {
+  validate(f);
+  const PlanFigureLayout l = plan_figure_layout(f);
+  cv::Mat fig(l.size, CV_8UC3, scalar(PlanFigureColours::background()));
+  const FRange range = f_range(f);
+
+  Canvas all(fig, cv::Rect(0, 0, fig.cols, fig.rows));
+  all.text(f.title, {20.0, 30.0}, 0.75, kBlack, 2);
+  for (size_t i = 0; i < f.lines.size(); ++i) {
+    all.text(f.lines[i], {22.0, 30.0 + kLineStep * (i + 1.0)}, 0.5, kText);
+  }
+
+  const OrthoView top{l.top, 0, 1, 2, 1.0};     // seen from above: larger z is nearer
+  const OrthoView side{l.side, 0, 2, 1, -1.0};  // seen from -y: smaller y is nearer
+  draw_ortho_panel(fig, l, top, f, range, true);
+  draw_ortho_panel(fig, l, side, f, range, false);
+  draw_map_panel(fig, l, f, range);
+
+  const double step = nice_step(2.0 * l.half_width_m);
+  for (const auto* v : {&top, &side}) {
+    all.rect({double(v->rect.x), double(v->rect.y)},
+             {double(v->rect.br().x), double(v->rect.br().y)}, kFrame);
+  }
+  const std::string grid = ", grid " + metres(step);
+  all.text("top view (x right, y up)" + grid, {double(l.top.x), l.top.y - 8.0}, 0.5, kText);
+  all.text("side view (x right, z up)" + grid, {double(l.side.x), l.side.y - 8.0}, 0.5, kText);
+  all.text("candidate sphere: azimuth vs polar angle from +z (deg)",
+           {double(l.map.x) - 40.0, l.map.y - 8.0}, 0.5, kText);
+  if (f.chosen < 0) {
+    all.text("no view chosen (stop)", {kWidth - 20.0, 30.0}, 0.75, cv::Scalar(0, 0, 200), 2, 2);
+  }
+  return fig;
+}
+
+void write_plan_figure(const PlanFigure& f, const std::string& path) {
+  const cv::Mat fig = draw_plan_figure(f);
+  std::vector<uchar> png;
+  if (!cv::imencode(".png", fig, png, {cv::IMWRITE_PNG_COMPRESSION, 6})) {
+    throw std::runtime_error("cannot encode plan figure for '" + path + "'");
+  }
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (out) {
+    out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+  }
+  out.close();
+  if (!out) throw std::runtime_error("cannot write plan figure to '" + path + "'");
+}
+
+PlanFigure plan_figure(const PlanInput& in, const PlanResult& r, const std::string& title) {
+  PlanFigure f;
+  f.title = title;
+  f.ellipsoids = in.ellipsoids;
+  f.candidates = r.candidates;
+  f.status = r.status;
+  f.quality.reserve(r.scores.size());
+  for (const auto& s : r.scores) f.quality.push_back(s.quality);
+  f.chosen = r.outcome == PlanResult::Outcome::kView ? r.chosen : -1;
+  f.past_views = in.views_done;
+  f.bbox = in.bbox;
+  f.centre = r.centre;
+  f.beta = in.beta;
+  f.sector_start_rad = r.sector_start_rad;
+  f.allowed_sectors = r.allowed_sectors;
+  std::ostringstream a, b;
+  a << r.num_occupied_ellipsoids << " occupied and " << r.num_frontier_ellipsoids << " frontier ellipsoids; "
+    << r.candidates.size() << " candidates, " << r.num_unreachable << " unreachable, " << r.num_excluded
+    << " excluded, " << r.num_scored << " scored";
+  b << (r.outcome == PlanResult::Outcome::kView ? "chosen: " : r.outcome == PlanResult::Outcome::kStop ? "stop: " : "failed: ")
+    << r.reason << (r.partition_fallback ? " (no candidate in the allowed sectors: chosen globally)" : "");
+  f.lines = {a.str(), b.str()};
+  return f;
+}
+
+}  // namespace pbnbv
