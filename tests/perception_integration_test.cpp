@@ -19,6 +19,7 @@
 #include "core/io/mesh_file.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "test_util.hpp"
+#include "core/base/units.hpp"
 
 namespace fs = std::filesystem;
 using namespace pbnbv;
@@ -70,7 +71,7 @@ Figures evaluate(const fs::path& out) {
   for (std::size_t i = 1; i < est.size(); ++i) {
     const Pose anchored = first_error * est[i];
     mm.push_back((anchored.translation() - tru[i].translation()).norm() * 1e3);
-    deg.push_back(rotation_angle_rad(anchored.linear(), tru[i].linear()) * 180 / M_PI);
+    deg.push_back(rotation_angle_rad(anchored.linear(), tru[i].linear()) * 180 / kPi);
   }
   f.pose_mm = median(mm);
   f.pose_deg = median(deg);

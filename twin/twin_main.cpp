@@ -28,6 +28,7 @@
 #include "pbnbv/turntable_command_t.hpp"
 #include "pbnbv/turntable_status_t.hpp"
 #include "twin/rig_sim.hpp"
+#include "core/base/units.hpp"
 
 using namespace pbnbv;
 
@@ -74,7 +75,7 @@ int8_t mode_of(const twin::RigSim& sim, const twin::JointGroup& g) {
 
 int main(int argc, char** argv) {
   set_log_name("twin");
-  bus::install_stop_handlers();
+  install_stop_handlers();
   try {
     Args args(argc, argv);
     if (args.flag("help")) {
@@ -112,9 +113,9 @@ int main(int argc, char** argv) {
     const double speed = args.num("speed", 1.0, 0.01, 1000.0);
     const twin::PoseErrorModel errors = twin::make_pose_error(
         args.num("hand-eye-error-mm", 0.0, 0.0, 100.0) * 1e-3,
-        args.num("hand-eye-error-deg", 0.0, 0.0, 20.0) * M_PI / 180,
-        args.num("turntable-error-deg", 0.0, -20.0, 20.0) * M_PI / 180,
-        args.num("joint-error-deg", 0.0, 0.0, 5.0) * M_PI / 180,
+        args.num("hand-eye-error-deg", 0.0, 0.0, 20.0) * kPi / 180,
+        args.num("turntable-error-deg", 0.0, -20.0, 20.0) * kPi / 180,
+        args.num("joint-error-deg", 0.0, 0.0, 5.0) * kPi / 180,
         static_cast<uint64_t>(args.integer("error-seed", 7, 0, 1L << 40)));
     const std::string truth_path = args.str("truth-out", "");
     args.reject_unknown();
@@ -130,8 +131,8 @@ int main(int argc, char** argv) {
       const Eigen::AngleAxisd r(errors.hand_eye_error.linear());
       std::ostringstream os;
       os << "pose-error model on: hand-eye " << errors.hand_eye_error.translation().norm() * 1e3 << " mm / "
-         << r.angle() * 180 / M_PI << " deg, turntable " << errors.turntable_offset_rad * 180 / M_PI
-         << " deg, joints sigma " << errors.joint_sigma_rad * 180 / M_PI << " deg";
+         << r.angle() * 180 / kPi << " deg, turntable " << errors.turntable_offset_rad * 180 / kPi
+         << " deg, joints sigma " << errors.joint_sigma_rad * 180 / kPi << " deg";
       log_info(os.str());
     }
     twin::EglContext egl;
@@ -220,7 +221,7 @@ int main(int argc, char** argv) {
     wall0 = bus::now_s();
     sim0 = sim.time_s();
     double next_status = sim.time_s();
-    while (!bus::stop_requested()) {
+    while (!stop_requested()) {
       bus.spin_once(0);
       sim.step();
       if (sim.time_s() + 1e-12 >= next_status) {

@@ -10,9 +10,6 @@
 namespace pbnbv::bus {
 
 namespace {
-volatile std::sig_atomic_t g_stop = 0;
-void on_signal(int) { g_stop = 1; }
-
 std::string lcm_url() {
   const char* env = std::getenv("LCM_DEFAULT_URL");
   if (env && *env) return env;
@@ -30,17 +27,6 @@ int64_t now_utime() {
 double now_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
       .count();
-}
-
-bool stop_requested() { return g_stop != 0; }
-
-void install_stop_handlers() {
-  struct sigaction sa {};
-  sa.sa_handler = on_signal;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
-  signal(SIGPIPE, SIG_IGN);
 }
 
 Bus::Bus(const std::string& service_name) : lcm_(lcm_url()), service_(service_name) {

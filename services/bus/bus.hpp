@@ -13,6 +13,7 @@
 
 #include "bus/channels.hpp"
 #include "core/base/log.hpp"
+#include "core/base/signals.hpp"
 
 namespace pbnbv::bus {
 
@@ -21,9 +22,7 @@ int64_t now_utime();
 // Seconds on a monotonic clock, for durations.
 double now_s();
 
-// Set by SIGINT/SIGTERM once install_stop_handlers() ran.
-bool stop_requested();
-void install_stop_handlers();
+// Stop signals: pbnbv::install_stop_handlers() / stop_requested() (core/base/signals.hpp).
 
 class Bus {
  public:

@@ -45,6 +45,8 @@
 #include "pbnbv/voxel_set_t.hpp"
 #include "pbnbv/scan_status_t.hpp"
 #include "pbnbv/turntable_status_t.hpp"
+#include "core/base/format.hpp"
+#include "core/base/units.hpp"
 
 using namespace pbnbv;
 namespace fs = std::filesystem;
@@ -130,7 +132,7 @@ class Coordinator {
     if (!wait_ready()) return finish(scan_status_t::kFailed, startup_problem_);
 
     for (int i = 0; i < s_.views; ++i) {
-      if (bus::stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
+      if (stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
       iteration_ = i;
       json view = {{"view", i}};
       const double t_view = bus::now_s();
@@ -148,7 +150,7 @@ class Coordinator {
         status(scan_status_t::kPlanning, "planning view " + std::to_string(i + 1));
         std::optional<view_plan_t> plan = request_plan(i);
         if (!plan) {
-          if (bus::stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
+          if (stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
           return finish(scan_status_t::kFailed, "the view scorer did not answer the plan for view " + std::to_string(i + 1));
         }
         view["plan"] = plan_json(*plan);
@@ -164,8 +166,8 @@ class Coordinator {
         for (std::size_t a = 0; a < plan->alternatives.size(); ++a) {
           options.push_back(bus::from_msg(plan->alternatives[a], "VIEW_PLAN alternatives"));
         }
-        progress("planned: " + std::string(s_.planner == "pbnbv" ? "F " + fixed(plan->view_quality) + " px, "
-                                           : s_.planner == "raycast" ? "gain " + fixed(plan->view_quality) + " voxels, " : "") +
+        progress("planned: " + std::string(s_.planner == "pbnbv" ? "F " + fixed(plan->view_quality, 2) + " px, "
+                                           : s_.planner == "raycast" ? "gain " + fixed(plan->view_quality, 2) + " voxels, " : "") +
                  std::to_string(plan->num_scored) + " candidates scored");
       }
 
@@ -189,7 +191,7 @@ class Coordinator {
       }
       if (!attempts.empty()) view["failed_moves"] = attempts;
       if (!moved) {
-        if (bus::stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
+        if (stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
         view["move"] = {{"status", "no_answer"}, {"reason", "no MOVE_RESULT from the motion executor"}};
         record(view);
         return finish(scan_status_t::kFailed, "the motion executor did not answer the move to view " + std::to_string(i + 1));
@@ -197,7 +199,7 @@ class Coordinator {
       view["move"] = {{"status", move_status_name(moved->status)}, {"reason", moved->reason},
                       {"reached_object_T_camera", pose_json(moved->reached_object_T_camera)},
                       {"position_error_m", moved->position_error_m},
-                      {"angle_error_deg", moved->angle_error_rad * 180 / M_PI},
+                      {"angle_error_deg", moved->angle_error_rad * 180 / kPi},
                       {"joint_target_rad", moved->joint_target_rad},
                       {"joint_position_rad", moved->joint_position_rad},
                       {"turntable_target_rad", moved->turntable_target_rad},
@@ -218,7 +220,7 @@ class Coordinator {
       const double t_capture = bus::now_s();
       std::optional<point_cloud_t> cloud = capture(i, moved->settled_utime);
       if (!cloud) {
-        if (bus::stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
+        if (stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
         view["capture"] = {{"status", "no_answer"}};
         record(view);
         return finish(scan_status_t::kFailed, "the camera service did not answer the capture of view " + std::to_string(i + 1));
@@ -245,7 +247,7 @@ class Coordinator {
       progress("registering");
       const double t_reg = bus::now_s();
       if (!spin_until([&] { return registered_.count(i) > 0; }, kAnswerTimeoutS)) {
-        if (bus::stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
+        if (stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
         record(view);
         return finish(scan_status_t::kFailed, "the registration service did not answer view " + std::to_string(i + 1));
       }
@@ -262,11 +264,12 @@ class Coordinator {
       progress("mapping");
       const double t_map = bus::now_s();
       if (!spin_until([&] { return maps_.count(i) > 0; }, kAnswerTimeoutS)) {
-        if (bus::stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
+        if (stop_requested()) return finish(scan_status_t::kStopped, "interrupted");
         record(view);
         return finish(scan_status_t::kFailed, "the mapping service did not answer view " + std::to_string(i + 1));
       }
       const voxel_set_t& map = maps_[i];
+      latest_map_ = i;
       view["map"] = {{"updated", map.updated != 0}, {"message", map.message}, {"resolution_m", map.resolution_m},
                      {"bbox_min_m", {map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]}},
                      {"bbox_max_m", {map.bbox_max_m[0], map.bbox_max_m[1], map.bbox_max_m[2]}},
@@ -290,12 +293,12 @@ class Coordinator {
       std::ostringstream os;
       os << "done: " << cloud->num_points << " points, " << accumulated_.size() << " in the model; "
          << (!reg.accepted ? std::string("registration rejected")
-             : reg.refined ? "registered (" + fixed(reg.translation_m * 1e3) + " mm, " + fixed(reg.rotation_deg) + " deg)"
+             : reg.refined ? "registered (" + fixed(reg.translation_m * 1e3, 2) + " mm, " + fixed(reg.rotation_deg, 2) + " deg)"
                            : std::string("kinematic pose kept")) << ", " << map.num_frontier << " frontier voxels; move "
-         << fixed(moved->move_s + moved->settle_s) << " s, capture " << fixed(cloud->capture_s) << " s, register "
-         << fixed(reg.register_s) << " s, map " << fixed(map.update_s * 1e3) << " ms";
+         << fixed(moved->move_s + moved->settle_s, 2) << " s, capture " << fixed(cloud->capture_s, 2) << " s, register "
+         << fixed(reg.register_s, 2) << " s, map " << fixed(map.update_s * 1e3, 2) << " ms";
       if (view.contains("plan") && view["plan"].contains("planner_step_ms")) {
-        os << ", plan " << fixed(view["plan"]["planner_step_ms"].get<double>()) << " ms";
+        os << ", plan " << fixed(view["plan"]["planner_step_ms"].get<double>(), 2) << " ms";
       }
       progress(os.str(), true);
     }
@@ -306,24 +309,18 @@ class Coordinator {
   }
 
  private:
-  static std::string fixed(double x) {
-    char b[32];
-    std::snprintf(b, sizeof(b), "%.2f", x);
-    return b;
-  }
-
   void plan_views() {
     const Eigen::Vector3d half = s_.normalisation.extent_m / 2.0;
     const double radius = s_.working_distance_m + half.norm();
     if (s_.planner == "ring") {
-      views_ = ring_views(s_.views, radius, s_.ring_elevation_deg * M_PI / 180.0,
-                          s_.ring_start_azimuth_deg * M_PI / 180.0, Eigen::Vector3d::Zero());
+      views_ = ring_views(s_.views, radius, s_.ring_elevation_deg * kPi / 180.0,
+                          s_.ring_start_azimuth_deg * kPi / 180.0, Eigen::Vector3d::Zero());
       report_["plan"] = {{"planner", "ring"}, {"radius_m", radius}, {"elevation_deg", s_.ring_elevation_deg}};
     } else if (s_.planner == "pbnbv" || s_.planner == "raycast" || s_.planner == "random") {
       if (s_.initial_view_m.allFinite()) {
         first_view_ = look_at_z_up(s_.initial_view_m, Eigen::Vector3d::Zero());
       } else {
-        first_view_ = ring_views(1, radius, s_.ring_elevation_deg * M_PI / 180.0, s_.ring_start_azimuth_deg * M_PI / 180.0,
+        first_view_ = ring_views(1, radius, s_.ring_elevation_deg * kPi / 180.0, s_.ring_start_azimuth_deg * kPi / 180.0,
                                  Eigen::Vector3d::Zero())[0];
       }
       report_["plan"] = {{"planner", s_.planner}, {"initial_view", to_json(first_view_)}};
@@ -334,7 +331,7 @@ class Coordinator {
 
   json plan_json(const view_plan_t& p) {
     json j = {{"planner", p.planner}, {"outcome", p.outcome == view_plan_t::kView ? "view" : p.outcome == view_plan_t::kStop ? "stop" : "failed"},
-              {"reason", p.reason}, {"map_of_view", last_map_},
+              {"reason", p.reason}, {"map_of_view", latest_map_},
               {"view_quality_px", p.view_quality}, {"first_quality_px", p.first_quality},
               {"frontier_area_px", p.frontier_area_px}, {"occupied_area_px", p.occupied_area_px},
               {"partition", p.partition}, {"allowed_sectors", p.allowed_sectors}, {"partition_fallback", p.partition_fallback != 0},
@@ -343,8 +340,8 @@ class Coordinator {
                               {"scored", p.num_scored}}},
               {"alternative_quality_px", p.alternative_quality}};
     double map_s = 0, fit_s = 0;
-    if (auto m = maps_.find(last_map_); m != maps_.end()) map_s = m->second.update_s;
-    if (auto e = ellipsoids_.find(last_map_); e != ellipsoids_.end()) {
+    if (auto m = maps_.find(latest_map_); m != maps_.end()) map_s = m->second.update_s;
+    if (auto e = ellipsoids_.find(latest_map_); e != ellipsoids_.end()) {
       const ellipsoid_set_t& es = e->second;
       fit_s = es.fit_s;
       json list = json::array();
@@ -363,9 +360,7 @@ class Coordinator {
                     {"scorer_wait", p.wait_s * 1e3}, {"view_selection", p.plan_s * 1e3}};
     // The planner step as the paper times it: map update + fitting + view selection.
     j["planner_step_ms"] = (map_s + fit_s + p.plan_s) * 1e3;
-    char name[40];
-    std::snprintf(name, sizeof(name), "plans/view_%03d.png", p.iteration);
-    j["figure"] = name;  // written by the view scorer just after it answers
+    j["figure"] = "plans/" + view_file(p.iteration, "png");  // written by the view scorer just after it answers
     return j;
   }
 
@@ -375,7 +370,7 @@ class Coordinator {
     r.iteration = i;
     r.request_id = i;
     r.planner = s_.planner;
-    r.map_iteration = last_map_;
+    r.map_iteration = latest_map_;  // the newest map: the view scorer keeps only that one
     for (const auto& v : views_taken_) r.views_done.push_back(bus::to_msg(v));
     r.num_views_done = static_cast<int32_t>(r.views_done.size());
     for (const auto& v : excluded_) r.excluded.push_back(bus::to_msg(v));
@@ -407,9 +402,7 @@ class Coordinator {
       r.keepout_max_m[k] = s_.keepout_max_m[k];
     }
     fs::create_directories(out_ / "plans");
-    char name[40];
-    std::snprintf(name, sizeof(name), "plans/view_%03d.png", i);
-    r.figure_path = (out_ / name).string();
+    r.figure_path = (out_ / "plans" / view_file(i, "png")).string();
     if (last_map_ < 0) {
       view_plan_t none{};
       none.iteration = i;
@@ -419,7 +412,7 @@ class Coordinator {
       return none;
     }
     const double deadline = bus::now_s() + kPlanTimeoutS;
-    while (bus::now_s() < deadline && !bus::stop_requested()) {
+    while (bus::now_s() < deadline && !stop_requested()) {
       r.utime = bus::now_utime();
       bus_.publish(channels::kPlanRequest, r);
       if (spin_until([&] { return plans_.count(i) > 0; }, kResendS)) return plans_[i];
@@ -440,14 +433,14 @@ class Coordinator {
     if (!ok) {
       std::string missing;
       for (const auto& n : need) if (!seen_.count(n)) missing += (missing.empty() ? "" : ", ") + n;
-      startup_problem_ = "not ready after " + fixed(s_.startup_timeout_s) + " s: no " + missing;
+      startup_problem_ = "not ready after " + fixed(s_.startup_timeout_s, 2) + " s: no " + missing;
     }
     return ok;
   }
 
   bool spin_until(const std::function<bool()>& done, double timeout_s) {
     const double deadline = bus::now_s() + timeout_s;
-    while (!bus::stop_requested()) {
+    while (!stop_requested()) {
       if (done()) return true;
       if (bus::now_s() > deadline) return false;
       bus_.spin_once(20);
@@ -473,7 +466,7 @@ class Coordinator {
     r.timeout_s = s_.move_timeout_s;
     r.plan_only = false;
     const double deadline = bus::now_s() + s_.move_timeout_s + 15.0;
-    while (bus::now_s() < deadline && !bus::stop_requested()) {
+    while (bus::now_s() < deadline && !stop_requested()) {
       move_results_.erase(id);
       r.utime = bus::now_utime();
       bus_.publish(channels::kMoveRequest, r);
@@ -501,7 +494,7 @@ class Coordinator {
     // The camera service retries the trigger itself (3 tries); re-send only if the whole
     // answer is lost.
     const double per_try = 3 * s_.capture_timeout_s + 5.0;
-    for (int attempt = 0; attempt < 3 && !bus::stop_requested(); ++attempt) {
+    for (int attempt = 0; attempt < 3 && !stop_requested(); ++attempt) {
       r.utime = bus::now_utime();
       bus_.publish(channels::kCaptureRequest, r);
       if (spin_until([&] { return clouds_.count(i) > 0; }, per_try)) return clouds_[i];
@@ -515,10 +508,9 @@ class Coordinator {
     PointCloud frame;
     frame.reserve(r.cloud.points_m.size());
     for (const auto& p : r.cloud.points_m) frame.emplace_back(p[0], p[1], p[2]);
-    char name[32];
-    std::snprintf(name, sizeof(name), "view_%03d.ply", i);
+    const std::string name = view_file(i, "ply");
     write_ply(frame, (out_ / "frames" / name).string());
-    view["frame_file"] = std::string("frames/") + name;
+    view["frame_file"] = "frames/" + name;
     view["merged"] = r.accepted != 0;
     if (r.accepted) {
       accumulated_.insert(accumulated_.end(), frame.begin(), frame.end());
@@ -549,7 +541,7 @@ class Coordinator {
     if (::isatty(STDOUT_FILENO)) std::cout << "\r\033[K";  // clear an unfinished progress line
     std::cout << (state == scan_status_t::kDone ? "" : "scan ") << message << ": " << views_done_ << " of "
               << s_.views << " views, " << accumulated_.size() << " points, "
-              << fixed(bus::now_s() - t_start_) << " s -> " << (out_ / "scan.json").string() << std::endl;
+              << fixed(bus::now_s() - t_start_, 2) << " s -> " << (out_ / "scan.json").string() << std::endl;
     return state == scan_status_t::kDone ? 0 : state == scan_status_t::kStopped ? 130 : 1;
   }
 
@@ -600,6 +592,8 @@ class Coordinator {
   std::vector<Pose> excluded_;         // views the rig could not reach or capture
   double first_quality_ = std::numeric_limits<double>::quiet_NaN();
   int last_map_ = -1;                  // last view integrated into the map
+  int latest_map_ = -1;                // last view the mapping service answered (the current map,
+                                       // changed or not by that view)
   double joints_[6] = {0, 0, 0, 0, 0, 0};
   double turntable_ = 0;
   json stop_;
@@ -625,7 +619,7 @@ class Coordinator {
 
 int main(int argc, char** argv) {
   set_log_name("coordinator");
-  bus::install_stop_handlers();
+  install_stop_handlers();
   try {
     Args args(argc, argv);
     const fs::path out = args.str("out");

@@ -12,6 +12,7 @@
 #include "bus/bus.hpp"
 #include "bus/convert.hpp"
 #include "bus/convert_planning.hpp"
+#include "bus/reply_cache.hpp"
 #include "bus/service.hpp"
 #include "core/planning/ellipsoids.hpp"
 #include "core/base/log.hpp"
@@ -51,8 +52,8 @@ class EllipsoidService {
   void on_map(const voxel_set_t& m) {
     bus_.set_scan(m.scan_id, m.iteration);
     const auto key = std::make_pair(m.scan_id, m.iteration);
-    if (auto it = answers_.find(key); it != answers_.end()) {
-      bus_.publish(channels::kEllipsoids, it->second);
+    if (const ellipsoid_set_t* answer = answers_.find(key)) {
+      bus_.publish(channels::kEllipsoids, *answer);
       return;
     }
     bus::require_range(m.resolution_m, 1e-4, 1.0, "VOXEL_MAP resolution_m");
@@ -80,8 +81,7 @@ class EllipsoidService {
     out.num_ellipsoids = static_cast<int32_t>(out.ellipsoids.size());
     out.utime = bus::now_utime();
     bus_.publish(channels::kEllipsoids, out);
-    if (answers_.size() >= kAnswersKept) answers_.erase(answers_.begin());
-    answers_[key] = out;
+    answers_.put(key, out);
     std::ostringstream os;
     os << "view " << m.iteration << ": " << occupied.size() << " occupied voxels -> T = " << t_occ << ", "
        << frontier.size() << " frontier voxels -> T = " << t_front << " (" << fit_s * 1e3 << " ms)";
@@ -91,7 +91,7 @@ class EllipsoidService {
   bus::Bus& bus_;
   int t_max_;
   uint64_t seed_;
-  std::map<std::pair<std::string, int32_t>, ellipsoid_set_t> answers_;
+  bus::ReplyCache<std::pair<std::string, int32_t>, ellipsoid_set_t> answers_{kAnswersKept};
 };
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "core/base/args.hpp"
+#include "core/base/signals.hpp"
 #include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
 #include "core/planning/planner.hpp"
@@ -26,7 +27,7 @@
 #include "eval/evaluate.hpp"
 #include "eval/objects.hpp"
 #include "process/processes.hpp"
-#include "core/base/text.hpp"
+#include "core/base/format.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -40,9 +41,6 @@ using process::stop_all;
 using process::tail_lines;
 
 namespace {
-
-volatile std::sig_atomic_t g_stop = 0;
-void on_signal(int) { g_stop = 1; }
 
 const std::vector<std::string> kPlanners = {"pbnbv", "raycast", "random", "ring"};
 
@@ -370,12 +368,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       << " scans (" << total - static_cast<int>(todo.size()) << " already complete in " << spec.out.string() << "), "
       << spec.jobs << " at a time" << std::endl;
 
-  struct sigaction sa {};
-  sa.sa_handler = on_signal;
-  sigemptyset(&sa.sa_mask);
-  struct sigaction old_int {}, old_term {};
-  sigaction(SIGINT, &sa, &old_int);
-  sigaction(SIGTERM, &sa, &old_term);
+  install_stop_handlers();
 
   // The scans running now: their processes and, at the same index, their jobs.
   std::vector<Child> children;
@@ -386,7 +379,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
     return "[" + std::to_string(j - jobs.data() + 1) + "/" + std::to_string(total) + "] " + j->name + " - " + j->planner + ": ";
   };
   while (next < todo.size() || !running.empty()) {
-    if (g_stop) {
+    if (stop_requested()) {
       for (const Child& c : children) ::kill(c.pid, SIGINT);  // each scan keeps what it has and stops its processes
       for (int i = 0; i < 500; ++i) {
         reap(children);
@@ -394,8 +387,6 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
       }
       stop_all(children, 5.0);
-      sigaction(SIGINT, &old_int, nullptr);
-      sigaction(SIGTERM, &old_term, nullptr);
       throw std::runtime_error("interrupted: the scans completed so far are kept in " + spec.out.string() +
                                "; run the same command again to resume");
     }
@@ -451,8 +442,6 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
-  sigaction(SIGINT, &old_int, nullptr);
-  sigaction(SIGTERM, &old_term, nullptr);
 
   // Evaluation of every scan in the folder against the ground truth.
   BenchResult result;

@@ -9,7 +9,7 @@
 #include "core/io/json.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "eval/bench.hpp"
-#include "core/base/text.hpp"
+#include "core/base/format.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;

@@ -1,4 +1,5 @@
 #include "eval/visibility.hpp"
+#include "core/base/units.hpp"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -26,7 +27,6 @@ using TriangleIterator = std::vector<Triangle>::const_iterator;
 using Primitive = CGAL::AABB_triangle_primitive<K, TriangleIterator>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr const char* kCtx = "visible_from_any: ";
 
 [[noreturn]] void fail(const std::string& what) { throw std::invalid_argument(kCtx + what); }

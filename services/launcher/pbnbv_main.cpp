@@ -18,6 +18,7 @@
 #include <thread>
 
 #include "core/base/args.hpp"
+#include "core/base/signals.hpp"
 #include "core/geometry/mesh.hpp"
 #include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
@@ -26,15 +27,12 @@
 #include "eval/evaluate.hpp"
 #include "eval/objects.hpp"
 #include "process/processes.hpp"
-#include "core/base/text.hpp"
+#include "core/base/format.hpp"
 
 using namespace pbnbv;
 namespace fs = std::filesystem;
 
 namespace {
-
-volatile std::sig_atomic_t g_interrupted = 0;
-void on_signal(int) { g_interrupted = 1; }
 
 const char* kUsage =
 R"(usage:
@@ -236,11 +234,7 @@ int scan(int argc, char** argv) {
   if (s.planner != "ring") add("scorer", {(bin / "pbnbv-scorer").string(), "--rig", to_string(s.rig)});
   add("coordinator", {(bin / "pbnbv-coordinator").string(), "--out", out.string()}, true);
 
-  struct sigaction sa {};
-  sa.sa_handler = on_signal;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
+  install_stop_handlers();
 
   try {
     for (auto& c : children) process::start(c);
@@ -252,7 +246,7 @@ int scan(int argc, char** argv) {
   int code = 0;
   bool done = false;
   while (!done) {
-    if (g_interrupted) {
+    if (stop_requested()) {
       std::cout << "\ninterrupted: stopping every process" << std::endl;
       // The coordinator writes what it has (scan.json with state "stopped") before exiting.
       ::kill(coordinator->pid, SIGINT);

@@ -14,9 +14,11 @@
 #include <sstream>
 
 #include "bus/bus.hpp"
+#include "bus/reply_cache.hpp"
 #include "bus/service.hpp"
 #include "bus/convert.hpp"
 #include "core/base/args.hpp"
+#include "core/base/format.hpp"
 #include "core/base/log.hpp"
 #include "core/mapping/voxel_map.hpp"
 #include "pbnbv/depth_frame_t.hpp"
@@ -30,6 +32,7 @@ namespace {
 
 constexpr std::size_t kFramesKept = 4;     // depth frames waiting for their registered cloud
 constexpr double kFrameWaitS = 3.0;        // wait this long for a view's depth frame
+constexpr std::size_t kAnswersKept = 16;   // maps kept to answer a repeated view again
 
 class MappingService {
  public:
@@ -58,8 +61,8 @@ class MappingService {
 
   void on_view(const registered_cloud_t& r) {
     bus_.set_scan(r.scan_id, r.iteration);
-    if (auto it = answers_.find({r.scan_id, r.iteration}); it != answers_.end()) {
-      bus_.publish(channels::kVoxelMap, it->second);  // a repeat: answer again
+    if (const voxel_set_t* answer = answers_.find({r.scan_id, r.iteration})) {
+      bus_.publish(channels::kVoxelMap, *answer);  // a repeat: answer again
       return;
     }
     if (pending_) {  // a newer view arrived: settle the older one now
@@ -110,13 +113,11 @@ class MappingService {
     fill(out);
     if (!out_.empty() && !map_->empty()) {
       fs::create_directories(out_ / "maps");
-      char name[32];
-      std::snprintf(name, sizeof(name), "view_%03d.ot", r.iteration);
-      map_->write_octomap((out_ / "maps" / name).string());
+      map_->write_octomap((out_ / "maps" / view_file(r.iteration, "ot")).string());
     }
     out.utime = bus::now_utime();
     bus_.publish(channels::kVoxelMap, out);
-    answers_[{r.scan_id, r.iteration}] = out;
+    answers_.put({r.scan_id, r.iteration}, out);
     std::ostringstream os;
     os << "view " << r.iteration << ": " << out.message << " (" << out.update_s * 1e3 << " ms; occupied "
        << out.num_occupied << ", frontier " << out.num_frontier << ", unknown " << out.num_unknown << ")";
@@ -156,7 +157,7 @@ class MappingService {
   std::deque<depth_frame_t> frames_;
   std::optional<registered_cloud_t> pending_;
   double pending_deadline_ = 0;
-  std::map<std::pair<std::string, int32_t>, voxel_set_t> answers_;
+  bus::ReplyCache<std::pair<std::string, int32_t>, voxel_set_t> answers_{kAnswersKept};
 };
 
 }  // namespace

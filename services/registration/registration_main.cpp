@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "bus/bus.hpp"
+#include "bus/reply_cache.hpp"
 #include "bus/service.hpp"
 #include "bus/convert.hpp"
 #include "core/base/args.hpp"
@@ -41,11 +42,9 @@ class RegistrationService {
                                   std::to_string(c.points_m.size()) + " points");
     }
     bus_.set_scan(c.scan_id, c.iteration);
-    for (const auto& a : answers_) {
-      if (a.scan_id == c.scan_id && a.request_id == c.request_id) {
-        bus_.publish(channels::kRegisteredCloud, a);  // a repeat: answer again
-        return;
-      }
+    if (const registered_cloud_t* answer = answers_.find({c.scan_id, c.request_id})) {
+      bus_.publish(channels::kRegisteredCloud, *answer);  // a repeat: answer again
+      return;
     }
     if (c.scan_id != scan_id_) {  // a new scan: a new model
       scan_id_ = c.scan_id;
@@ -103,8 +102,7 @@ class RegistrationService {
     out.model_points = static_cast<int32_t>(model_.size());
     out.utime = bus::now_utime();
     bus_.publish(channels::kRegisteredCloud, out);
-    answers_.push_back(out);
-    if (answers_.size() > kAnswersKept) answers_.pop_front();
+    answers_.put({out.scan_id, out.request_id}, out);
   }
 
   bus::Bus& bus_;
@@ -113,7 +111,7 @@ class RegistrationService {
   bool off_;
   std::string scan_id_;
   PointCloud model_;
-  std::deque<registered_cloud_t> answers_;
+  bus::ReplyCache<std::pair<std::string, int64_t>, registered_cloud_t> answers_{kAnswersKept};
 };
 
 }  // namespace

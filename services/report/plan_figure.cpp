@@ -1,5 +1,8 @@
 #include "report/plan_figure.hpp"
 
+#include <fmt/format.h>
+#include "core/base/units.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -16,7 +19,6 @@
 namespace pbnbv {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Layout (pixels).
 constexpr int kWidth = 1500;
@@ -140,12 +142,6 @@ cv::Scalar colour_map(double t) {
   return scalar(lut.at<cv::Vec3b>(i));
 }
 
-std::string format(const char* fmt, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), fmt, v);
-  return buf;
-}
-
 void validate(const PlanFigure& f) {
   const size_t n = f.candidates.size();
   if (f.quality.size() != n) {
@@ -173,8 +169,8 @@ double nice_step(double span) {
 }
 
 std::string metres(double v) {
-  if (v >= 1.0) return format("%g m", v);
-  return format("%g cm", v * 100.0);
+  if (v >= 1.0) return fmt::format("{:g} m", v);
+  return fmt::format("{:g} cm", v * 100.0);
 }
 
 struct FRange {
@@ -489,8 +485,8 @@ void draw_map_panel(cv::Mat& fig, const PlanFigureLayout& l, const PlanFigure& f
   all.text(f.quality_label, {b.x + b.width / 2.0, b.y - 7.0}, 0.45,
            kText, 1, 1);
   if (range.any) {
-    all.text(format("%.4g", range.lo), {double(b.x), b.br().y + 16.0}, 0.42, kText, 1, 0);
-    all.text(format("%.4g", range.hi), {double(b.br().x), b.br().y + 16.0}, 0.42, kText, 1, 2);
+    all.text(fmt::format("{:.4g}", range.lo), {double(b.x), b.br().y + 16.0}, 0.42, kText, 1, 0);
+    all.text(fmt::format("{:.4g}", range.hi), {double(b.br().x), b.br().y + 16.0}, 0.42, kText, 1, 2);
   }
   if (range.any && range.lo < 0 && range.hi > 0) {
     const double x0 = b.x + range.t(0.0) * b.width;
@@ -501,7 +497,7 @@ void draw_map_panel(cv::Mat& fig, const PlanFigureLayout& l, const PlanFigure& f
     const double x = b.x + std::clamp(range.t(f.quality[f.chosen]), 0.0, 1.0) * b.width;
     const cv::Scalar col = scalar(PlanFigureColours::chosen());
     all.line({x, b.y - 3.0}, {x, b.br().y + 3.0}, col, 3);
-    all.text("chosen " + format("%.4g", f.quality[f.chosen]), {x, b.br().y + 16.0}, 0.42, col, 1,
+    all.text("chosen " + fmt::format("{:.4g}", f.quality[f.chosen]), {x, b.br().y + 16.0}, 0.42, col, 1,
              x > b.x + b.width * 0.75 ? 2 : x < b.x + b.width * 0.25 ? 0 : 1);
   }
 

@@ -20,6 +20,7 @@
 #include "bus/bus.hpp"
 #include "bus/convert.hpp"
 #include "bus/convert_planning.hpp"
+#include "bus/reply_cache.hpp"
 #include "bus/rig_options.hpp"
 #include "bus/service.hpp"
 #include "core/base/log.hpp"
@@ -36,14 +37,7 @@ using namespace pbnbv;
 namespace {
 
 constexpr double kInputWaitS = 60.0;   // give up on a map / ellipsoids that never come
-constexpr std::size_t kKept = 8;       // maps and ellipsoid sets kept (a few views back)
 constexpr std::size_t kAnswersKept = 64;
-
-template <class T>
-void keep(std::deque<T>& q, const T& x) {
-  q.push_back(x);
-  if (q.size() > kKept) q.pop_front();
-}
 
 // The bounding box B of a voxel map message.
 Eigen::AlignedBox3d bbox_of(const voxel_set_t& map) {
@@ -90,12 +84,12 @@ class ScorerService {
  public:
   ScorerService(bus::Bus& bus, const RigModel& rig) : bus_(bus), rig_(rig) {
     for (auto& c : checkers_) c = std::make_unique<ReachabilityChecker>(rig_);
-    bus_.subscribe<voxel_set_t>(channels::kVoxelMap, [this](const voxel_set_t& m) { keep(maps_, m); });
+    bus_.subscribe<voxel_set_t>(channels::kVoxelMap, [this](const voxel_set_t& m) { maps_.offer(m); });
     bus_.subscribe<ellipsoid_set_t>(channels::kEllipsoids, [this](const ellipsoid_set_t& e) {
       if (e.num_ellipsoids != static_cast<int32_t>(e.ellipsoids.size())) {
         throw std::invalid_argument("ELLIPSOIDS num_ellipsoids disagrees with its array");
       }
-      keep(ellipsoids_, e);
+      ellipsoids_.offer(e);
     });
     bus_.subscribe<plan_request_t>(channels::kPlanRequest, [this](const plan_request_t& r) { on_request(r); });
   }
@@ -103,9 +97,23 @@ class ScorerService {
   void tick() {
     if (!pending_) return;
     const plan_request_t& r = pending_->request;
-    const voxel_set_t* map = find(maps_, r);
+    const voxel_set_t* map = maps_.find(r.scan_id, r.map_iteration);
     const bool needs_ellipsoids = r.planner == "pbnbv";
-    const ellipsoid_set_t* ell = needs_ellipsoids ? find(ellipsoids_, r) : nullptr;
+    const ellipsoid_set_t* ell = needs_ellipsoids ? ellipsoids_.find(r.scan_id, r.map_iteration) : nullptr;
+    // Only the latest map (and its ellipsoids) of each scan is kept: a request for an older one
+    // can never be met, so it fails now, naming both.
+    const int map_kept = maps_.latest(r.scan_id);
+    const int ell_kept = ellipsoids_.latest(r.scan_id);
+    if (!map && map_kept > r.map_iteration) {
+      fail("the VOXEL_MAP of view " + std::to_string(r.map_iteration) + " is gone: the scorer keeps the latest map of each scan (view " +
+           std::to_string(map_kept) + "); ask for that one");
+      return;
+    }
+    if (needs_ellipsoids && !ell && ell_kept > r.map_iteration) {
+      fail("the ELLIPSOIDS of view " + std::to_string(r.map_iteration) + " are gone: the scorer keeps the latest set of each scan (view " +
+           std::to_string(ell_kept) + "); ask for that one");
+      return;
+    }
     if (map && !pending_->reachable && r.check_reachability) pending_->reachable = reachability(r, *map);
     if (map && (ell || !needs_ellipsoids)) {
       answer(*map, ell);
@@ -127,19 +135,11 @@ class ScorerService {
     RaycastParams raycast;  // planner "raycast"
   };
 
-  template <class T>
-  static const T* find(const std::deque<T>& q, const plan_request_t& r) {
-    for (auto it = q.rbegin(); it != q.rend(); ++it) {
-      if (it->scan_id == r.scan_id && it->iteration == r.map_iteration) return &*it;
-    }
-    return nullptr;
-  }
-
   void on_request(const plan_request_t& r) {
     bus_.set_scan(r.scan_id, r.iteration);
     const auto key = std::make_pair(r.scan_id, r.request_id);
-    if (auto it = answers_.find(key); it != answers_.end()) {
-      bus_.publish(channels::kViewPlan, it->second);  // a repeat: answer again
+    if (const view_plan_t* answer = answers_.find(key)) {
+      bus_.publish(channels::kViewPlan, *answer);  // a repeat: answer again
       return;
     }
     if (pending_ && pending_->request.scan_id == r.scan_id && pending_->request.request_id == r.request_id) return;
@@ -347,8 +347,7 @@ class ScorerService {
   void publish(view_plan_t& out) {
     out.utime = bus::now_utime();
     bus_.publish(channels::kViewPlan, out);
-    if (answers_.size() >= kAnswersKept) answers_.erase(answers_.begin());
-    answers_[{out.scan_id, out.request_id}] = out;
+    answers_.put({out.scan_id, out.request_id}, out);
     std::ostringstream os;
     os << "view " << out.iteration << " (request " << out.request_id << "): "
        << (out.outcome == view_plan_t::kView ? "" : out.outcome == view_plan_t::kStop ? "stop: " : "failed: ") << out.reason;
@@ -362,12 +361,12 @@ class ScorerService {
   bus::Bus& bus_;
   RigModel rig_;
   std::unique_ptr<ReachabilityChecker> checkers_[2];
-  std::deque<voxel_set_t> maps_;
-  std::deque<ellipsoid_set_t> ellipsoids_;
+  bus::LatestPerScan<voxel_set_t> maps_;
+  bus::LatestPerScan<ellipsoid_set_t> ellipsoids_;
   std::optional<Pending> pending_;
   std::string reach_key_;                 // the candidate set of the last reachability check
   std::vector<bool> reach_cache_;
-  std::map<std::pair<std::string, int64_t>, view_plan_t> answers_;
+  bus::ReplyCache<std::pair<std::string, int64_t>, view_plan_t> answers_{kAnswersKept};
 };
 
 }  // namespace

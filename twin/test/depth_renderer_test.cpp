@@ -22,6 +22,7 @@
 #include <string>
 
 #include "core/geometry/camera_model.hpp"
+#include "core/base/units.hpp"
 
 namespace pbnbv::twin {
 namespace {
@@ -182,7 +183,7 @@ INSTANTIATE_TEST_SUITE_P(Distances, FrontoParallelPlane, ::testing::Values(0.8, 
 // in both image directions, so a half-pixel error of the projection would show.
 struct Tilted {
   Eigen::Vector3d p0{0.05, -0.03, 1.0};
-  Eigen::Quaterniond q{Eigen::AngleAxisd(40.0 * M_PI / 180.0, Eigen::Vector3d(1, 0.5, 0).normalized())};
+  Eigen::Quaterniond q{Eigen::AngleAxisd(40.0 * kPi / 180.0, Eigen::Vector3d(1, 0.5, 0).normalized())};
   Eigen::Vector3d n() const { return q * Eigen::Vector3d::UnitZ(); }
 };
 
@@ -253,7 +254,7 @@ struct SphereStats {
 
 SphereStats check_sphere(const DepthImage& img, const CameraIntrinsics& k, const Eigen::Vector3d& c,
                          double r, int slices, int stacks) {
-  const double theta = std::max(std::hypot(M_PI / slices, M_PI / (2.0 * stacks)), M_PI / stacks);
+  const double theta = std::max(std::hypot(kPi / slices, kPi / (2.0 * stacks)), kPi / stacks);
   const double r_in = r * std::cos(theta);
   const double tol = 1e-4;  // 0.1 mm: depth quantisation and float vertex rounding
   SphereStats s;

@@ -12,6 +12,7 @@
 #include "core/io/mesh_file.hpp"
 #include "core/rig/rig.hpp"
 #include "twin/rig_sim.hpp"
+#include "core/base/units.hpp"
 
 using namespace pbnbv;
 
@@ -80,9 +81,9 @@ TEST(RigSim, TurntableTurnsAtItsSpeedLimit) {
   ASSERT_TRUE(sim.has_turntable());
   // Half a turn is long enough to be limited by speed, not acceleration: the peak speed is the
   // limit and the ramp takes 1.5 x distance / limit.
-  sim.command_turntable(M_PI, 1.0, 1);
-  const double ramp = twin::ramp_duration_s(M_PI, rig.turntable_qd_max, twin::kAccelerationPerSpeed * rig.turntable_qd_max);
-  EXPECT_DOUBLE_EQ(ramp, 1.5 * M_PI / rig.turntable_qd_max);
+  sim.command_turntable(kPi, 1.0, 1);
+  const double ramp = twin::ramp_duration_s(kPi, rig.turntable_qd_max, twin::kAccelerationPerSpeed * rig.turntable_qd_max);
+  EXPECT_DOUBLE_EQ(ramp, 1.5 * kPi / rig.turntable_qd_max);
   double max_speed = 0;
   const double t0 = sim.time_s();
   while (sim.time_s() - t0 < 30 && !sim.settled(sim.turntable())) {
@@ -94,7 +95,7 @@ TEST(RigSim, TurntableTurnsAtItsSpeedLimit) {
   EXPECT_LE(t, ramp + 0.3);
   EXPECT_LE(max_speed, rig.turntable_qd_max * 1.05);
   EXPECT_GE(max_speed, rig.turntable_qd_max * 0.95);
-  EXPECT_NEAR(sim.turntable_angle(), M_PI, 1e-4);
+  EXPECT_NEAR(sim.turntable_angle(), kPi, 1e-4);
 }
 
 TEST(RigSim, TargetOutsideAJointLimitIsRefusedAndTheArmHolds) {
@@ -154,7 +155,7 @@ TEST(RigSim, MovesBetweenHemisphereViewsStayWithinLimitsAndSettleQuickly) {
   int moves = 0;
   for (double polar_deg : {20.0, 45.0, 70.0, 85.0}) {
     for (double azimuth_deg : {0.0, 130.0, 250.0}) {
-      const double p = polar_deg * M_PI / 180, a = azimuth_deg * M_PI / 180;
+      const double p = polar_deg * kPi / 180, a = azimuth_deg * kPi / 180;
       const Eigen::Vector3d eye = radius * Eigen::Vector3d(std::sin(p) * std::cos(a), std::sin(p) * std::sin(a), std::cos(p));
       const ViewSolution sol = checker.solve(look_at_z_up(eye, Eigen::Vector3d::Zero()), sim.arm_position(),
                                              sim.turntable_angle(), keepout, 0.15);

@@ -4,6 +4,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/base/units.hpp"
+
 namespace pbnbv {
 
 Pose look_at(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
@@ -34,9 +36,12 @@ Pose look_at_z_up(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
 }
 
 double rotation_angle_rad(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  // For R = a^T b: sin(angle) = |vee(R - R^T)| / 2 and cos(angle) = (trace R - 1) / 2. atan2 of the
+  // two is accurate at every angle, where acos of the cosine alone loses all digits near 0 (a
+  // rotation of 1e-8 rad reads as 0 or 1.5e-8).
   const Eigen::Matrix3d r = a.transpose() * b;
-  const double c = std::clamp((r.trace() - 1.0) * 0.5, -1.0, 1.0);
-  return std::acos(c);
+  const Eigen::Vector3d v(r(2, 1) - r(1, 2), r(0, 2) - r(2, 0), r(1, 0) - r(0, 1));
+  return std::atan2(0.5 * v.norm(), 0.5 * (r.trace() - 1.0));
 }
 
 Pose pose_from_arrays(const double position_m[3], const double quat_wxyz[4],
@@ -75,9 +80,9 @@ void pose_to_arrays(const Pose& pose, double position_m[3], double quat_wxyz[4])
 }
 
 double wrap_angle_rad(double a) {
-  a = std::fmod(a + M_PI, 2.0 * M_PI);
-  if (a <= 0) a += 2.0 * M_PI;
-  return a - M_PI;
+  a = std::fmod(a + kPi, 2.0 * kPi);
+  if (a <= 0) a += 2.0 * kPi;
+  return a - kPi;
 }
 
 double nearest_equivalent_angle_rad(double a, double reference) {

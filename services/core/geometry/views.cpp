@@ -1,5 +1,6 @@
 // Candidate and fixed view sets. See views.hpp.
 #include "core/geometry/views.hpp"
+#include "core/base/units.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +11,6 @@
 namespace pbnbv {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 Eigen::Vector3d on_sphere(const Eigen::Vector3d& centre, double radius, double polar,
                           double azimuth) {

@@ -1,5 +1,7 @@
 #include "core/perception/cloud_filter.hpp"
 #include "core/perception/registration.hpp"
+#include "core/base/format.hpp"
+#include "core/base/units.hpp"
 
 #include <Eigen/Eigenvalues>
 
@@ -329,15 +331,8 @@ class NormalCompatibilityRejector : public pcl::registration::CorrespondenceReje
   float min_cos_;
 };
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kNormalNeighbours = 12;  // k-NN of the plane fits on the downsampled clouds
 constexpr double kMaxNormalAngleDeg = 30.0;  // correspondences with normals further apart drop
-
-std::string fmt(const char* f, double a) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, a);
-  return buf;
-}
 
 // The points of `cloud` within `dist` of some point of `ref` (and some a little further: whole
 // cells of a grid of dist/2, the cells of `ref` dilated by two).
@@ -511,7 +506,7 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
     if (frame_ds.size() < min_points || model_ds.size() < min_points) {
       res.reason = "rejected: too few points: frame " + std::to_string(frame_ds.size()) +
                    ", model " + std::to_string(model_ds.size()) + " after " +
-                   fmt("%.1f", voxel * 1e3) + " mm downsampling (of " +
+                   fmt::format("{:.1f}", voxel * 1e3) + " mm downsampling (of " +
                    std::to_string(frame_f.size()) + " and " + std::to_string(model_f.size()) +
                    " finite points), need " + std::to_string(min_points) + dropped_note;
       return finish();
@@ -588,7 +583,7 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
         state = icp.getConvergeCriteria()->getConvergenceState();
         converged = icp.hasConverged();
         if (state == Criteria::CONVERGENCE_CRITERIA_NO_CORRESPONDENCES) {
-          icp_note = fmt("no correspondences within %.1f mm", d * 1e3);
+          icp_note = fmt::format("no correspondences within {:.1f} mm", d * 1e3);
           break;
         }
         t_final = icp.getFinalTransformation();
@@ -620,7 +615,7 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
     res.correction = correction;
     res.translation_m = correction.translation().norm();
     res.rotation_deg =
-        Eigen::AngleAxisd(correction.linear()).angle() * 180.0 / kPi;
+        rad_to_deg(rotation_angle_rad(Eigen::Matrix3d::Identity(), correction.linear()));
 
     // Gates, on the downsampled frame after alignment against the cropped model.
     size_t n_overlap = 0;
@@ -655,20 +650,20 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
     // plausible, did ICP settle?).
     std::vector<std::string> fails, motion_fails;
     if (res.overlap < params.min_overlap) {
-      fails.push_back(fmt("overlap %.2f", res.overlap) + fmt(" below %.2f", params.min_overlap));
+      fails.push_back(fmt::format("overlap {:.2f}", res.overlap) + fmt::format(" below {:.2f}", params.min_overlap));
     }
     if (n_overlap == 0 || res.rmse_m > params.max_rmse_m) {
       fails.push_back(n_overlap == 0 ? std::string("rmse undefined (no overlapping points)")
-                                     : fmt("rmse %.2f mm", res.rmse_m * 1e3) +
-                                           fmt(" exceeds %.2f mm", params.max_rmse_m * 1e3));
+                                     : fmt::format("rmse {:.2f} mm", res.rmse_m * 1e3) +
+                                           fmt::format(" exceeds {:.2f} mm", params.max_rmse_m * 1e3));
     }
     if (res.translation_m > params.max_translation_m) {
-      motion_fails.push_back(fmt("correction %.3f m", res.translation_m) +
-                             fmt(" exceeds %.3f m", params.max_translation_m));
+      motion_fails.push_back(fmt::format("correction {:.3f} m", res.translation_m) +
+                             fmt::format(" exceeds {:.3f} m", params.max_translation_m));
     }
     if (res.rotation_deg > params.max_rotation_deg) {
-      motion_fails.push_back(fmt("correction %.2f deg", res.rotation_deg) +
-                             fmt(" exceeds %.2f deg", params.max_rotation_deg));
+      motion_fails.push_back(fmt::format("correction {:.2f} deg", res.rotation_deg) +
+                             fmt::format(" exceeds {:.2f} deg", params.max_rotation_deg));
     }
     if (!res.converged) motion_fails.push_back("not converged: " + icp_note);
     // Where the overlap leaves a direction free, ICP's motion means nothing (it slides, may not
@@ -684,18 +679,18 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
       res.refined = false;
       res.reason = "kinematic pose kept: the overlap does not constrain the alignment (weakest direction: " +
                    std::string(rotation ? "rotation about " : "translation along ") +
-                   fmt("(%.2f, ", axis.x()) + fmt("%.2f, ", axis.y()) + fmt("%.2f)", axis.z()) +
-                   fmt(", constraint %.4f", res.constraint) + fmt(" below %.4f", params.min_constraint) +
-                   fmt("; ICP would have moved it %.2f mm)", res.translation_m * 1e3);
+                   fmt::format("({:.2f}, ", axis.x()) + fmt::format("{:.2f}, ", axis.y()) + fmt::format("{:.2f})", axis.z()) +
+                   fmt::format(", constraint {:.4f}", res.constraint) + fmt::format(" below {:.4f}", params.min_constraint) +
+                   fmt::format("; ICP would have moved it {:.2f} mm)", res.translation_m * 1e3);
       res.correction = Pose::Identity();
       res.translation_m = 0;
       res.rotation_deg = 0;
     } else if (fails.empty()) {
       res.accepted = true;
       res.refined = true;
-      res.reason = "accepted: " + fmt("%.2f mm, ", res.translation_m * 1e3) +
-                   fmt("%.3f deg, ", res.rotation_deg) + fmt("overlap %.2f, ", res.overlap) +
-                   fmt("rmse %.2f mm", res.rmse_m * 1e3) + fmt(", constraint %.4f", res.constraint) + dropped_note;
+      res.reason = "accepted: " + fmt::format("{:.2f} mm, ", res.translation_m * 1e3) +
+                   fmt::format("{:.3f} deg, ", res.rotation_deg) + fmt::format("overlap {:.2f}, ", res.overlap) +
+                   fmt::format("rmse {:.2f} mm", res.rmse_m * 1e3) + fmt::format(", constraint {:.4f}", res.constraint) + dropped_note;
     } else {
       res.accepted = false;
       res.reason = "rejected: ";

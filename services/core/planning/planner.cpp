@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/geometry/views.hpp"
+#include "core/base/units.hpp"
 
 namespace pbnbv {
 namespace {
@@ -30,7 +31,7 @@ std::vector<Pose> candidate_views(const Eigen::AlignedBox3d& bbox, const Candida
   double radius = 0;
   candidate_sphere(bbox, spec.working_distance_m, &centre, &radius);
   return sphere_band_views(spec.num_views, spec.num_parallels, radius, centre, 0.0,
-                           spec.full_sphere ? M_PI : M_PI / 2);
+                           spec.full_sphere ? kPi : kPi / 2);
 }
 
 // Candidates on the sphere around B, the reachability filter and the exclusions, shared by every
@@ -124,9 +125,9 @@ static PlanResult plan_spread(const PlanInput& in, PlanResult r, const std::stri
   for (int i = 0; i < static_cast<int>(r.candidates.size()); ++i) {
     if (r.status[i] != CandidateStatus::kScored) continue;
     const Eigen::Vector3d d = (r.candidates[i].translation() - r.centre).normalized();
-    double nearest = M_PI;
+    double nearest = kPi;
     for (const auto& t : taken) nearest = std::min(nearest, std::acos(std::clamp(d.dot(t), -1.0, 1.0)));
-    r.scores[i].quality = nearest * 180.0 / M_PI;  // degrees to the nearest view taken
+    r.scores[i].quality = nearest * 180.0 / kPi;  // degrees to the nearest view taken
     pool.push_back(i);
   }
   r.num_scored = static_cast<int>(pool.size());
@@ -181,7 +182,7 @@ PlanResult plan_pbnbv(const PlanInput& in) {
     std::vector<bool> scanned(in.beta, false);
     if (in.sectors_centred_on_first_view && !in.views_done.empty()) {
       const Eigen::Vector3d d = in.views_done.front().translation() - r.centre;
-      if (d.head<2>().norm() > 1e-9) r.sector_start_rad = std::atan2(d.y(), d.x()) - M_PI / in.beta;
+      if (d.head<2>().norm() > 1e-9) r.sector_start_rad = std::atan2(d.y(), d.x()) - kPi / in.beta;
     }
     for (const auto& v : in.views_done) scanned[sector_of(v.translation(), r.centre, in.beta, r.sector_start_rad)] = true;
     r.allowed_sectors = allowed_sectors(scanned);

@@ -16,6 +16,7 @@
 #include "core/base/pose.hpp"
 #include "core/planning/raycast.hpp"
 #include "core/planning/view_scoring.hpp"
+#include "core/base/units.hpp"
 
 namespace pbnbv {
 
@@ -54,7 +55,7 @@ struct PlanInput {
   bool sectors_centred_on_first_view = true;
   std::vector<Pose> views_done;      // camera poses of the views taken (object frame)
   std::vector<Pose> excluded;        // views the rig could not reach or capture
-  double exclude_angle_rad = 10.0 * M_PI / 180.0;  // candidates this close (seen from the
+  double exclude_angle_rad = 10.0 * kPi / 180.0;  // candidates this close (seen from the
                                                    // centre) to an excluded view are skipped
   // Also skip candidates this close to a view already taken: in a static scene the same view
   // sees nothing new, yet F (which has no memory) can keep choosing it once the map stops

@@ -15,6 +15,7 @@
 // disc ∩ triangle(origin, edge), each of which is closed form (triangle pieces inside the disc,
 // circular sectors outside). The clipped area is that times det L. Exact up to rounding.
 #include "core/planning/view_scoring.hpp"
+#include "core/base/units.hpp"
 
 #include <algorithm>
 #include <array>
@@ -23,7 +24,6 @@
 namespace pbnbv {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Signed area of (unit disc) ∩ (triangle origin, a, b); positive when a -> b turns
 // counter-clockwise about the origin.

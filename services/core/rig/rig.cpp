@@ -17,6 +17,8 @@
 // centre to the object (rays to the keep-out box centre and its corners pulled 20% inwards
 // must not hit a rendered rig geom, e.g. the arm's own links or the pedestal) wins.
 #include "core/rig/rig.hpp"
+#include "core/base/format.hpp"
+#include "core/base/units.hpp"
 
 #include <mujoco/mujoco.h>
 
@@ -33,21 +35,11 @@ namespace pbnbv {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kLimitTol = 1e-9;      // joint-limit tolerance, rad (m)
 constexpr double kVerifyPosTol = 1e-6;  // IK verification, m
 constexpr double kVerifyRotTol = 1e-6;  // IK verification, rad
 constexpr double kContactMargin = 0.005;  // clearance required by the collision check, m
 
-double deg(double rad) { return rad * 180.0 / kPi; }
-
-std::string fmt(double v, int prec = 4) {
-  std::ostringstream os;
-  os.setf(std::ios::fixed);
-  os.precision(prec);
-  os << v;
-  return os.str();
-}
 
 Eigen::Matrix3d rot_x(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()).toRotationMatrix(); }
 Eigen::Matrix3d rot_y(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitY()).toRotationMatrix(); }
@@ -214,9 +206,9 @@ void expand_variants(const RigModel& rig, const Vector6d& q, const std::array<bo
     if (within_limits(rig, c, &bad)) {
       out->push_back(c);
     } else if (first_violation && first_violation->empty()) {
-      *first_violation = rig.joint_names[bad] + " = " + fmt(c[bad]) + " rad (" +
-                         fmt(deg(c[bad]), 1) + " deg) outside [" + fmt(rig.q_lower[bad]) + ", " +
-                         fmt(rig.q_upper[bad]) + "]";
+      *first_violation = rig.joint_names[bad] + " = " + fixed(c[bad]) + " rad (" +
+                         fixed(rad_to_deg(c[bad]), 1) + " deg) outside [" + fixed(rig.q_lower[bad]) + ", " +
+                         fixed(rig.q_upper[bad]) + "]";
     }
   }
 }
@@ -330,10 +322,10 @@ std::vector<Vector6d> arm_ik(const RigModel& rig, const Pose& world_T_flange,
     if (why_none) {
       const double max_reach = g.a2 + big_l;
       const double min_reach = std::abs(g.a2 - big_l);
-      *why_none = "out of reach: wrist centre is " + fmt(reach_dist, 3) +
+      *why_none = "out of reach: wrist centre is " + fixed(reach_dist, 3) +
                   " m from the shoulder (A2 axis), reach is " +
-                  (reach_dist > max_reach ? fmt(max_reach, 3) + " m"
-                                          : "at least " + fmt(min_reach, 3) + " m");
+                  (reach_dist > max_reach ? fixed(max_reach, 3) + " m"
+                                          : "at least " + fixed(min_reach, 3) + " m");
     }
     return {};
   }

@@ -8,6 +8,7 @@
 #include "core/geometry/mesh.hpp"
 #include "core/geometry/views.hpp"
 #include "eval/visibility.hpp"
+#include "core/base/units.hpp"
 
 namespace {
 
@@ -36,7 +37,7 @@ const Scene& box() {
 
 const std::vector<pbnbv::Pose>& hemisphere_views() {
   static const std::vector<pbnbv::Pose> v =
-      pbnbv::sphere_band_views(800, 10, 0.6, Eigen::Vector3d::Zero(), 0.0, M_PI / 2);
+      pbnbv::sphere_band_views(800, 10, 0.6, Eigen::Vector3d::Zero(), 0.0, pbnbv::kPi / 2);
   return v;
 }
 

@@ -11,6 +11,7 @@
 
 #include "eval/coverage.hpp"
 #include "core/geometry/mesh.hpp"
+#include "core/base/units.hpp"
 
 namespace pbnbv {
 namespace {
@@ -148,7 +149,7 @@ TEST(VisibleFromAny, CameraAboveSeesExactlyTheTopFace) {
 // (c = cos alpha, larger root) and the cap area fraction is (1 - x*) / 2. alpha = 90 deg gives
 // x* = r / d, the tangent cone.
 double sphere_visible_fraction(double r, double d, double alpha_deg) {
-  const double c = std::cos(alpha_deg * M_PI / 180.0);
+  const double c = std::cos(alpha_deg * kPi / 180.0);
   const double qa = d * d, qb = -2 * d * r * (1 - c * c), qc = r * r - c * c * (d * d + r * r);
   const double x = (-qb + std::sqrt(qb * qb - 4 * qa * qc)) / (2 * qa);
   return (1 - x) / 2;
@@ -255,7 +256,7 @@ TEST(VisibleFromAny, ThreadCountDoesNotChangeTheResult) {
   const SurfaceSamples s = sample_surface_with_normals(sphere, 3000, 5);
   std::vector<Pose> views;
   for (int i = 0; i < 5; ++i) {
-    const double az = i * 2 * M_PI / 5;
+    const double az = i * 2 * kPi / 5;
     views.push_back(look_at_z_up(Eigen::Vector3d(std::cos(az), std::sin(az), 0.5),
                                  Eigen::Vector3d::Zero()));
   }

@@ -13,11 +13,11 @@
 
 #include "file_test_util.hpp"
 #include "core/planning/view_scoring.hpp"
+#include "core/base/units.hpp"
 
 namespace pbnbv {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 Ellipsoid sphere(const Eigen::Vector3d& c, double r, EllipsoidClass cls) {
   Ellipsoid e;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/base/pose.hpp"
+#include "core/base/units.hpp"
 
 using namespace pbnbv;
 
@@ -40,10 +41,24 @@ TEST(Pose, PoseArraysRoundTripAndRejectBadQuaternions) {
 }
 
 TEST(Pose, AnglesWrapAndFindTheNearestEquivalent) {
-  EXPECT_NEAR(wrap_angle_rad(3 * M_PI / 2), -M_PI / 2, 1e-12);
-  EXPECT_NEAR(wrap_angle_rad(-M_PI), M_PI, 1e-12);
-  EXPECT_NEAR(nearest_equivalent_angle_rad(0.1, 6.2), 0.1 + 2 * M_PI, 1e-12);
-  EXPECT_NEAR(nearest_equivalent_angle_rad(-M_PI / 2, -3.0), -M_PI / 2, 1e-12);
+  EXPECT_NEAR(wrap_angle_rad(3 * kPi / 2), -kPi / 2, 1e-12);
+  EXPECT_NEAR(wrap_angle_rad(-kPi), kPi, 1e-12);
+  EXPECT_NEAR(nearest_equivalent_angle_rad(0.1, 6.2), 0.1 + 2 * kPi, 1e-12);
+  EXPECT_NEAR(nearest_equivalent_angle_rad(-kPi / 2, -3.0), -kPi / 2, 1e-12);
   EXPECT_NEAR(rotation_angle_rad(Eigen::Matrix3d::Identity(),
                                  Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix()), 0.3, 1e-12);
+}
+
+TEST(Pose, RotationAngleIsAccurateFromZeroToPi) {
+  const Eigen::Vector3d axis = Eigen::Vector3d(1, -2, 0.5).normalized();
+  const Eigen::Matrix3d a = Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.3, 0.1, -1).normalized()).toRotationMatrix();
+  // Tiny angles: acos((trace - 1) / 2) reads 1e-9 rad as 0 (or 2e-8); the relative error here
+  // stays at the level of the matrices' rounding.
+  for (double angle : {1e-12, 1e-9, 1e-6, 1e-3, 0.5, 2.0, kPi - 1e-3}) {
+    const Eigen::Matrix3d b = a * Eigen::AngleAxisd(angle, axis).toRotationMatrix();
+    EXPECT_NEAR(rotation_angle_rad(a, b), angle, 1e-15 + 1e-9 * angle) << angle;
+    EXPECT_NEAR(rotation_angle_rad(b, a), angle, 1e-15 + 1e-9 * angle) << angle;
+  }
+  EXPECT_NEAR(rotation_angle_rad(a, a * Eigen::AngleAxisd(kPi, axis).toRotationMatrix()), kPi, 1e-7);
+  EXPECT_EQ(rotation_angle_rad(a, a), 0.0);
 }

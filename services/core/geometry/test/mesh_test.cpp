@@ -1,4 +1,5 @@
 #include "core/geometry/mesh.hpp"
+#include "core/base/units.hpp"
 
 #include <gtest/gtest.h>
 
@@ -96,7 +97,7 @@ TEST(Primitives, BoxHasOutwardNormalsAndArea) {
 
 TEST(Primitives, IcosphereOnSphereOutwardAreaFromBelow) {
   const double r = 0.25;
-  const double sphere = 4 * M_PI * r * r;
+  const double sphere = 4 * kPi * r * r;
   double previous = 0.0;
   for (int s = 0; s <= 5; ++s) {
     const TriangleMesh m = make_icosphere(r, s);

@@ -1,5 +1,6 @@
 // Candidate and fixed view sets (views.hpp).
 #include "core/geometry/views.hpp"
+#include "core/base/units.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +11,6 @@
 namespace pbnbv {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 void expect_looks_at(const Pose& p, const Eigen::Vector3d& centre, double radius) {
   const Eigen::Vector3d to_centre = centre - p.translation();

@@ -14,14 +14,17 @@
 #include "core/io/mesh_file.hpp"
 #include "core/perception/cloud_filter.hpp"
 #include "core/perception/registration.hpp"
+#include "core/base/units.hpp"
 
 namespace {
 
 using pbnbv::PointCloud;
 using pbnbv::Pose;
 using pbnbv::TriangleMesh;
+using pbnbv::kPi;
+using pbnbv::rad_to_deg;
+using pbnbv::rotation_angle_rad;
 
-constexpr double kPi = 3.14159265358979323846;
 
 void add_part(TriangleMesh& mesh, const TriangleMesh& part, const Eigen::Vector3d& at) {
   const int base = static_cast<int>(mesh.vertices.size());
@@ -126,7 +129,7 @@ void BM_RegisterFrame(benchmark::State& state) {
   const Pose err = r.correction * c.perturbation;
   state.counters["accepted"] = r.accepted;
   state.counters["err_mm"] = err.translation().norm() * 1e3;
-  state.counters["err_deg"] = Eigen::AngleAxisd(err.linear()).angle() * 180 / kPi;
+  state.counters["err_deg"] = rad_to_deg(rotation_angle_rad(Eigen::Matrix3d::Identity(), err.linear()));
   state.counters["iterations"] = r.iterations;
   state.counters["overlap"] = r.overlap;
 }
@@ -177,7 +180,7 @@ void BM_RegisterFrameBunny(benchmark::State& state) {
   state.counters["frame_pts_ds"] = static_cast<double>(pbnbv::voxel_downsample(frame, 0.002).size());
   state.counters["accepted"] = r.accepted;
   state.counters["err_mm"] = err.translation().norm() * 1e3;
-  state.counters["err_deg"] = Eigen::AngleAxisd(err.linear()).angle() * 180 / kPi;
+  state.counters["err_deg"] = rad_to_deg(rotation_angle_rad(Eigen::Matrix3d::Identity(), err.linear()));
 }
 BENCHMARK(BM_RegisterFrameBunny)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 

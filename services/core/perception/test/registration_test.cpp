@@ -13,11 +13,11 @@
 #include "core/geometry/point_cloud.hpp"
 #include "core/base/pose.hpp"
 #include "core/geometry/mesh.hpp"
+#include "core/base/units.hpp"
 
 namespace pbnbv {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 double deg(double rad) { return rad * 180.0 / kPi; }
 double rad(double d) { return d * kPi / 180.0; }
 
@@ -220,7 +220,7 @@ TEST(Registration, RecoversFiveMillimetreOneDegreePerturbation) {
     EXPECT_TRUE(r.accepted) << r.reason;
     const Pose err = r.correction * p;  // identity when the correction undoes p
     te.push_back(err.translation().norm());
-    re.push_back(deg(Eigen::AngleAxisd(err.linear()).angle()));
+    re.push_back(deg(rotation_angle_rad(Eigen::Matrix3d::Identity(), err.linear())));
     EXPECT_NEAR(r.translation_m, (r.correction.translation()).norm(), 1e-12);
     const Eigen::AngleAxisd aa(err.linear());
     std::printf("  trial %d: err %.3f mm %.4f deg axis %+.2f %+.2f %+.2f; %s, %d it, %.0f ms\n",

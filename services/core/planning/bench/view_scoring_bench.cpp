@@ -10,16 +10,17 @@
 #include <vector>
 
 #include "core/planning/view_scoring.hpp"
+#include "core/base/units.hpp"
 
 namespace {
 
 using Eigen::Vector3d;
 using pbnbv::CameraIntrinsics;
+using pbnbv::kPi;
 using pbnbv::Ellipsoid;
 using pbnbv::EllipsoidClass;
 using pbnbv::Pose;
 
-constexpr double kPi = 3.14159265358979323846;
 
 std::vector<Pose> hemisphere(int n, double radius) {
   // Fibonacci points on the upper hemisphere (z in (0, 1]), each looking at the origin.

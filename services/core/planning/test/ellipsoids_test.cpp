@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/planning/ellipsoids.hpp"
+#include "core/base/units.hpp"
 
 using namespace pbnbv;
 using Eigen::Matrix3d;
@@ -44,7 +45,7 @@ std::vector<Vector3d> three_blobs(std::vector<Vector3d>* truth) {
 
 double log_normal(const Vector3d& x, const Vector3d& mu, const Matrix3d& cov) {
   const Vector3d d = x - mu;
-  return -0.5 * (3 * std::log(2 * M_PI) + std::log(cov.determinant()) + d.dot(cov.inverse() * d));
+  return -0.5 * (3 * std::log(2 * kPi) + std::log(cov.determinant()) + d.dot(cov.inverse() * d));
 }
 
 Matrix3d shape_matrix(const Ellipsoid& e) {

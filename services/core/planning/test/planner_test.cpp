@@ -1,6 +1,7 @@
 // One PB-NBV planning step (planner.hpp): the candidate sphere, the choice, partitions,
 // reachability, exclusion and termination, on scenes whose answer is plain geometry.
 #include "core/planning/planner.hpp"
+#include "core/base/units.hpp"
 
 #include <gtest/gtest.h>
 
@@ -22,7 +23,7 @@ Ellipsoid sphere(EllipsoidClass cls, const Eigen::Vector3d& c, double r) {
 PlanInput scene(double azimuth_deg, int beta) {
   PlanInput in;
   in.bbox = Eigen::AlignedBox3d(Eigen::Vector3d(-0.15, -0.15, 0.0), Eigen::Vector3d(0.15, 0.15, 0.3));
-  const double a = azimuth_deg * M_PI / 180.0;
+  const double a = azimuth_deg * kPi / 180.0;
   in.ellipsoids = {sphere(EllipsoidClass::kOccupied, Eigen::Vector3d(0, 0, 0.15), 0.1),
                    sphere(EllipsoidClass::kFrontier, Eigen::Vector3d(0.18 * std::cos(a), 0.18 * std::sin(a), 0.15), 0.08)};
   in.beta = beta;
@@ -32,7 +33,7 @@ PlanInput scene(double azimuth_deg, int beta) {
 
 double azimuth_deg(const Pose& p, const Eigen::Vector3d& centre) {
   const Eigen::Vector3d d = p.translation() - centre;
-  double a = std::atan2(d.y(), d.x()) * 180.0 / M_PI;
+  double a = std::atan2(d.y(), d.x()) * 180.0 / kPi;
   return a < 0 ? a + 360.0 : a;
 }
 
@@ -130,7 +131,7 @@ TEST(Planner, ExcludedViewsAreSkipped) {
   EXPECT_GT(r.num_excluded, 0);
   const Eigen::Vector3d a = (first.candidates[first.chosen].translation() - r.centre).normalized();
   const Eigen::Vector3d b = (r.candidates[r.chosen].translation() - r.centre).normalized();
-  EXPECT_GT(std::acos(std::clamp(a.dot(b), -1.0, 1.0)), 10.0 * M_PI / 180.0);
+  EXPECT_GT(std::acos(std::clamp(a.dot(b), -1.0, 1.0)), 10.0 * kPi / 180.0);
 }
 
 TEST(Planner, StopsWhenNoFrontierRemainsOrTheBestViewIsWorthTooLittle) {

@@ -1,6 +1,7 @@
 // Ellipsoid projection, clipped ellipse area, view scores and global partitioning
 // (view_scoring.hpp).
 #include "core/planning/view_scoring.hpp"
+#include "core/base/units.hpp"
 
 #include <gtest/gtest.h>
 
@@ -14,7 +15,6 @@
 namespace pbnbv {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 Ellipsoid sphere(const Eigen::Vector3d& c, double r,
                  EllipsoidClass cls = EllipsoidClass::kOccupied) {

@@ -5,12 +5,12 @@
 
 #include "core/rig/rig.hpp"
 #include "core/geometry/views.hpp"
+#include "core/base/units.hpp"
 
 namespace {
 
 using namespace pbnbv;
 
-constexpr double kPi = 3.14159265358979323846;
 
 const RigModel& arm_rig() {
   static const RigModel rig = load_rig(default_rig_path(RigKind::kArm));

@@ -14,11 +14,11 @@
 #include <sstream>
 
 #include "core/geometry/views.hpp"
+#include "core/base/units.hpp"
 
 namespace pbnbv {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kObjectZ = 0.15;  // 0.3 m cube resting on the platter: centre 0.15 m above it
 
 std::string read_text(const std::string& path) {

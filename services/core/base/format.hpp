@@ -1,0 +1,24 @@
+#pragma once
+// One number formatter for every program (libfmt): numbers on command lines and in files that
+// must read back as the same double, numbers in reports and logs with fixed decimals, and the
+// numbered file names of a scan's folder.
+#include <fmt/format.h>
+
+#include <string>
+
+namespace pbnbv {
+
+// The shortest text that reads back as exactly the same double (fmt's "{}"): 0.1 -> "0.1",
+// 1.0 / 3 -> "0.3333333333333333".
+inline std::string exact(double x) { return fmt::format("{}", x); }
+
+// x with `digits` decimals: fixed(2.345, 1) -> "2.3".
+inline std::string fixed(double x, int digits = 1) { return fmt::format("{:.{}f}", x, digits); }
+
+// A per-view file name of a scan's folder: view_file(3, "ply") -> "view_003.ply". Views are
+// counted from 0 in file names, as in scan.json's "view" field.
+inline std::string view_file(int view, const char* extension) {
+  return fmt::format("view_{:03d}.{}", view, extension);
+}
+
+}  // namespace pbnbv
