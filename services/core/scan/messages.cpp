@@ -1,0 +1,17 @@
+#include "core/scan/messages.hpp"
+
+namespace pbnbv {
+
+const char* to_string(MoveStatus s) {
+  switch (s) {
+    case MoveStatus::kReached: return "reached";
+    case MoveStatus::kUnreachable: return "unreachable";
+    case MoveStatus::kTimedOut: return "timed_out";
+    case MoveStatus::kRejected: return "rejected";
+    case MoveStatus::kPlanned: return "planned";
+    case MoveStatus::kBusy: return "busy";
+  }
+  return "unknown";
+}
+
+}  // namespace pbnbv
