@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# The dependency direction between layers, beyond what the include directories already enforce
+# at compile time (see pbnbv_library in CMakeLists.txt): only the rig library and the twin see
+# MuJoCo, only the report library draws with OpenCV, and the processes that need neither do not
+# load them (ldd).
+set -uo pipefail
+src=${PBNBV_SOURCE_DIR:?}
+bin=${PBNBV_BIN_DIR:?}
+fail=0
+
+# Library and service sources (not tests, not benchmarks) that include a header they must not.
+check_includes() {  # <pattern> <what> <allowed path regex>
+  local hits
+  hits=$(cd "$src" && grep -rlE "#include <$1" services twin --include=*.cpp --include=*.hpp |
+         grep -vE '/(test|bench)/' | grep -vE "$3" || true)
+  if [ -n "$hits" ]; then
+    echo "FAIL: $2 is included outside its layer by:"; echo "$hits" | sed 's/^/  /'
+    fail=1
+  else
+    echo "ok: $2 only in $3"
+  fi
+}
+check_includes 'mujoco/' "MuJoCo" '^(services/core/rig/|twin/)'
+check_includes 'opencv2/' "OpenCV" '^services/report/'
+
+# Processes that must not load a library.
+check_ldd() {  # <binary> <library pattern>...
+  local b=$1; shift
+  [ -x "$bin/$b" ] || { echo "FAIL: $bin/$b is missing"; fail=1; return; }
+  for lib in "$@"; do
+    if ldd "$bin/$b" | grep -q "$lib"; then
+      echo "FAIL: $b loads $lib:"; ldd "$bin/$b" | grep "$lib" | sed 's/^/  /'; fail=1
+    else
+      echo "ok: $b does not load $lib"
+    fi
+  done
+}
+check_ldd pbnbv-ellipsoids libmujoco libopencv libpcl
+check_ldd pbnbv-mapping libmujoco libopencv libpcl
+check_ldd pbnbv-registration libmujoco libopencv
+exit $fail
