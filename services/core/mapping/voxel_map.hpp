@@ -106,7 +106,8 @@ class VoxelMap {
   int last_ray_stride_px() const { return last_stride_px_; }
 
   // Writes the map as an OctoMap ColorOcTree (.ot, viewable in octovis): Occupied, Unknown and
-  // Frontier voxels as occupied nodes coloured by state, Empty voxels as free nodes.
+  // Frontier voxels as occupied nodes, Empty voxels as free nodes, each coloured by its state
+  // (state_colour.hpp: the palette the plan figures use too).
   void write_octomap(const std::string& path) const;
 
  private:
