@@ -1,5 +1,5 @@
 #pragma once
-// The five-state voxel map of PB-NBV (method.md "Voxel map", paper section III-B) with its
+// The five-state voxel map of PB-NBV (docs/method.md "Voxel map", paper section III-B) with its
 // bounding box B. Dense grid over B; rays traversed with a 3-D DDA (Amanatides & Woo).
 #include <Eigen/Geometry>
 #include <cstdint>
