@@ -3,8 +3,8 @@
 //   out: ELLIPSOIDS, HEARTBEAT
 // For every voxel map, clusters the Occupied and the Frontier voxel centres with a Gaussian
 // mixture (T in [1, T_max] by BIC) and publishes the minimum-volume enclosing ellipsoid of each
-// cluster, fitted to voxel corners (method.md "Ellipsoids"; core fit_ellipsoids). Idempotent: a
-// map already answered (same scan and iteration) is answered again with the stored result.
+// cluster, fitted to voxel corners (docs/method.md "Ellipsoids"; core fit_ellipsoids). Idempotent:
+// a map already answered (same scan and iteration) is answered again with the stored result.
 #include <chrono>
 #include <map>
 #include <sstream>

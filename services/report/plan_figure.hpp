@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/mapping/state_colour.hpp"
 #include "core/planning/ellipsoids.hpp"
 #include "core/planning/planner.hpp"
 #include "core/base/pose.hpp"
@@ -37,11 +38,11 @@ struct PlanFigure {
 // a header (title, then `lines`) above three panels
 //  1. top view (x right, y up, orthographic) and 2. side view (x right, z up), each a square
 //     world region centred on `centre` with half-width 1.1 x the largest distance of a candidate
-//     or past view from `centre`: B, the ellipsoids' shadow outlines (occupied blue-grey,
-//     frontier orange, filled translucent), candidate camera centres coloured by F (viridis;
-//     unreachable: small black cross; outside the partition: small grey dot; excluded: small
-//     red cross; candidates on the far half, below the centre in the top view / behind it in
-//     the side view, drawn paler),
+//     or past view from `centre`: B, the ellipsoids' shadow outlines (occupied blue, frontier
+//     orange: the map's palette; filled translucent), candidate camera centres coloured by F
+//     (viridis; unreachable: small black cross; outside the partition: small grey dot;
+//     excluded: small red cross; candidates on the far half, below the centre in the top view /
+//     behind it in the side view, drawn paler),
 //     past views as numbered white circles, the chosen view as a large magenta marker with a
 //     line to `centre`; in the top view, the sector boundaries with the allowed sectors shaded;
 //  3. a map of the candidate sphere, azimuth about `centre` (0..360 deg, x) against the polar
@@ -79,12 +80,16 @@ cv::Point2d sphere_map_pixel(const PlanFigureLayout& l, double azimuth_deg, doub
 // Azimuth in [0, 360) about centre (as sector_of) and polar angle from +z in [0, 180], degrees.
 Eigen::Vector2d azimuth_polar_deg(const Eigen::Vector3d& eye, const Eigen::Vector3d& centre);
 
-// Colours (BGR) the tests look for.
+// An RGB colour of the voxel palette as OpenCV's BGR.
+inline cv::Vec3b to_bgr(const Rgb& c) { return {c.b, c.g, c.r}; }
+
+// Colours (BGR) the tests look for. The ellipsoids take their voxel state's colour from the one
+// palette (state_colour.hpp), so a frontier is the same orange here as in the map's .ot file.
 struct PlanFigureColours {
   static cv::Vec3b background() { return {255, 255, 255}; }
   static cv::Vec3b chosen() { return {200, 30, 220}; }     // magenta
-  static cv::Vec3b frontier() { return {40, 140, 255}; }    // orange
-  static cv::Vec3b occupied() { return {170, 130, 100}; }   // blue-grey
+  static cv::Vec3b frontier() { return to_bgr(state_colour(VoxelState::kFrontier)); }  // orange
+  static cv::Vec3b occupied() { return to_bgr(state_colour(VoxelState::kOccupied)); }  // blue
   static cv::Vec3b past_view() { return {255, 255, 255}; }  // white disc, black ring and number
   static double fill_alpha() { return 0.35; }               // ellipsoid fill opacity
 };

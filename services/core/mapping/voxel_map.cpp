@@ -78,6 +78,7 @@
 // The result is therefore independent of ray order and thread interleaving: a voxel is Empty if
 // any ray saw it free, else Unknown if any ray saw it occluded while it was None.
 #include "core/mapping/voxel_map.hpp"
+#include "core/mapping/state_colour.hpp"
 
 #include <octomap/ColorOcTree.h>
 
@@ -844,13 +845,8 @@ void VoxelMap::write_octomap(const std::string& path) const {
         if (!tree.coordToKeyChecked(octomap::point3d(c.x(), c.y(), c.z()), key)) continue;
         // lazy_eval: no pruning while inserting, so every voxel is its own leaf.
         tree.updateNode(key, s != VoxelState::kEmpty, true);
-        switch (s) {
-          case VoxelState::kOccupied: tree.setNodeColor(key, 40, 110, 230); break;   // blue
-          case VoxelState::kUnknown: tree.setNodeColor(key, 150, 150, 150); break;   // grey
-          case VoxelState::kFrontier: tree.setNodeColor(key, 240, 60, 40); break;    // red
-          case VoxelState::kEmpty: tree.setNodeColor(key, 60, 200, 80); break;       // green
-          default: break;
-        }
+        const Rgb colour = state_colour(s);  // the one palette (state_colour.hpp)
+        tree.setNodeColor(key, colour.r, colour.g, colour.b);
       }
     }
   }

@@ -1,5 +1,5 @@
 #pragma once
-// The five-state voxel map of PB-NBV (method.md "Voxel map", paper section III-B) with its
+// The five-state voxel map of PB-NBV (docs/method.md "Voxel map", paper section III-B) with its
 // bounding box B. Dense grid over B; rays traversed with a 3-D DDA (Amanatides & Woo).
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -106,7 +106,8 @@ class VoxelMap {
   int last_ray_stride_px() const { return last_stride_px_; }
 
   // Writes the map as an OctoMap ColorOcTree (.ot, viewable in octovis): Occupied, Unknown and
-  // Frontier voxels as occupied nodes coloured by state, Empty voxels as free nodes.
+  // Frontier voxels as occupied nodes, Empty voxels as free nodes, each coloured by its state
+  // (state_colour.hpp: the palette the plan figures use too).
   void write_octomap(const std::string& path) const;
 
  private:

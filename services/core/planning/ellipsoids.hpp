@@ -1,5 +1,5 @@
 #pragma once
-// Ellipsoids of occupied and frontier structure (method.md "Ellipsoids", paper section III-C):
+// Ellipsoids of occupied and frontier structure (docs/method.md "Ellipsoids", paper III-C):
 // Gaussian-mixture clustering with the number of components chosen by BIC, then the
 // minimum-volume enclosing ellipsoid (MVEE) of each cluster, fitted to voxel extents.
 #include <Eigen/Geometry>

@@ -1,6 +1,6 @@
 #pragma once
-// One PB-NBV planning step as a plain function (method.md "Candidate views", "Scoring a
-// candidate view", "Global partitioning", plus our termination rule): candidates on the sphere
+// One PB-NBV planning step as a plain function (docs/method.md "Candidate views", "Scoring a
+// candidate view", "Global partitioning", "Termination"): candidates on the sphere
 // around B, reachability filter, F for every candidate, the partition rule, the choice and the
 // next best alternatives. The view scorer service wraps this; benchmarks and tests call it
 // directly.

@@ -1,5 +1,5 @@
 #pragma once
-// Volumetric information gain by ray casting: the approach PB-NBV replaces (method.md
+// Volumetric information gain by ray casting: the approach PB-NBV replaces (docs/method.md
 // "Paper's evaluation"), built as a fair, optimised peer so that the benchmark measures the
 // method and not a weak implementation. For each candidate view, rays are cast from the camera
 // centre through the voxel map, one ray per voxel footprint (at the distance of B's centre) over

@@ -1,6 +1,6 @@
 #pragma once
-// Scoring candidate views by projecting ellipsoids (method.md "Scoring a candidate view" and
-// "Global partitioning", paper sections III-D and III-E).
+// Scoring candidate views by projecting ellipsoids (docs/method.md "Scoring a candidate view"
+// and "Global partitioning", paper sections III-D and III-E).
 #include <vector>
 
 #include "core/geometry/camera_model.hpp"

@@ -35,7 +35,7 @@ struct ScanSettings {
   // ring_elevation_deg on the arm rig, 0 on the free rig).
   Eigen::Vector3d initial_view_m = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
 
-  // PB-NBV planning (method.md).
+  // PB-NBV planning (docs/method.md: "Candidate views", "Global partitioning", "Termination").
   int candidates = 800;          // N
   int parallels = 24;            // alpha
   int sectors = 4;               // beta

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "file_test_util.hpp"
+#include "core/mapping/state_colour.hpp"
 #include "core/planning/view_scoring.hpp"
 #include "core/base/units.hpp"
 
@@ -155,6 +156,35 @@ TEST(PlanFigure, EllipsoidShadowFollowsOrientation) {
             PlanFigureColours::background());
   EXPECT_EQ(at(img, side_view_pixel(l, Eigen::Vector3d(-0.3, 0, 0.2))),
             PlanFigureColours::background());
+}
+
+// The ellipsoids are drawn in their voxel state's colour from the one palette that the map's
+// .ot file uses (core/mapping/state_colour.hpp): frontier orange, occupied blue.
+TEST(PlanFigure, EllipsoidsTakeTheMapPalette) {
+  PlanFigure f = one_candidate();
+  f.ellipsoids = {sphere(Eigen::Vector3d(-0.3, 0.3, 0), 0.1, EllipsoidClass::kFrontier),
+                  sphere(Eigen::Vector3d(0.3, -0.3, 0), 0.1, EllipsoidClass::kOccupied)};
+  const cv::Mat img = draw_plan_figure(f);
+  const PlanFigureLayout l = plan_figure_layout(f);
+  // The palette's RGB as BGR: orange (255, 140, 40) and blue (40, 110, 230).
+  EXPECT_EQ(PlanFigureColours::frontier(), cv::Vec3b(40, 140, 255));
+  EXPECT_EQ(PlanFigureColours::occupied(), cv::Vec3b(230, 110, 40));
+  EXPECT_EQ(PlanFigureColours::frontier(), to_bgr(state_colour(VoxelState::kFrontier)));
+  EXPECT_EQ(PlanFigureColours::occupied(), to_bgr(state_colour(VoxelState::kOccupied)));
+  // Inside each shadow, off the grid lines and the outlines: the translucent fill of that colour
+  // over the white background.
+  const double a = PlanFigureColours::fill_alpha();
+  auto fill = [&](VoxelState s) {
+    const Rgb c = state_colour(s);
+    const double bgr[3] = {double(c.b), double(c.g), double(c.r)};
+    cv::Vec3b v;
+    for (int i = 0; i < 3; ++i) v[i] = cv::saturate_cast<uchar>(a * bgr[i] + (1 - a) * 255.0);
+    return v;
+  };
+  expect_colour(at(img, top_view_pixel(l, Eigen::Vector3d(-0.33, 0.27, 0))),
+                fill(VoxelState::kFrontier), 2, "frontier fill");
+  expect_colour(at(img, top_view_pixel(l, Eigen::Vector3d(0.27, -0.33, 0))),
+                fill(VoxelState::kOccupied), 2, "occupied fill");
 }
 
 TEST(PlanFigure, MapPanelPlacesCandidateByAzimuthAndPolarAngle) {

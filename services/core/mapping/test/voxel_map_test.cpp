@@ -1,6 +1,7 @@
 // The five-state voxel map (voxel_map.hpp) against geometry checkable by hand: synthetic depth
 // images ray-cast analytically (cube, sphere, plane), no renderer.
 #include "core/mapping/voxel_map.hpp"
+#include "core/mapping/state_colour.hpp"
 
 #include <gtest/gtest.h>
 #include <octomap/AbstractOcTree.h>
@@ -13,6 +14,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 
 namespace pbnbv {
 namespace {
@@ -689,12 +691,35 @@ TEST(VoxelMap, WriteOctomapRoundTrip) {
   }
   EXPECT_EQ(occupied, r.counts.occupied + r.counts.unknown + r.counts.frontier);
   EXPECT_EQ(free, r.counts.empty);
-  // A Frontier voxel is red.
-  const auto fr = map.centres(VoxelState::kFrontier);
-  ASSERT_FALSE(fr.empty());
-  const auto* node = color->search(fr[0].x(), fr[0].y(), fr[0].z());
-  ASSERT_NE(node, nullptr);
-  EXPECT_EQ(node->getColor(), octomap::ColorOcTreeNode::Color(240, 60, 40));
+  // Every cell read back has its state's colour from the one palette (the plan figures use the
+  // same): Occupied blue, Frontier orange, Unknown grey, Empty green.
+  int64_t checked[5] = {0, 0, 0, 0, 0};
+  for (auto it = color->begin_leafs(); it != color->end_leafs(); ++it) {
+    const octomap::point3d c = it.getCoordinate();
+    const VoxelState s = map.state_at(Vector3d(c.x(), c.y(), c.z()));
+    ASSERT_NE(s, VoxelState::kNone) << "a None cell was exported at " << c;
+    const Rgb want = state_colour(s);
+    EXPECT_EQ(it->getColor(), octomap::ColorOcTreeNode::Color(want.r, want.g, want.b))
+        << to_string(s) << " cell at " << c;
+    checked[static_cast<int>(s)] += std::llround(std::pow(it.getSize() / 0.03, 3));
+  }
+  EXPECT_EQ(checked[static_cast<int>(VoxelState::kOccupied)], r.counts.occupied);
+  EXPECT_EQ(checked[static_cast<int>(VoxelState::kFrontier)], r.counts.frontier);
+  EXPECT_EQ(checked[static_cast<int>(VoxelState::kUnknown)], r.counts.unknown);
+  EXPECT_EQ(checked[static_cast<int>(VoxelState::kEmpty)], r.counts.empty);
+  // The colours the README names, read at one voxel of each state.
+  const std::pair<VoxelState, octomap::ColorOcTreeNode::Color> named[] = {
+      {VoxelState::kOccupied, {40, 110, 230}},   // blue
+      {VoxelState::kFrontier, {255, 140, 40}},   // orange
+      {VoxelState::kUnknown, {150, 150, 150}},   // grey
+      {VoxelState::kEmpty, {60, 200, 80}}};      // green
+  for (const auto& [state, rgb] : named) {
+    const auto cells = map.centres(state);
+    ASSERT_FALSE(cells.empty()) << to_string(state);
+    const auto* node = color->search(cells[0].x(), cells[0].y(), cells[0].z());
+    ASSERT_NE(node, nullptr) << to_string(state);
+    EXPECT_EQ(node->getColor(), rgb) << to_string(state);
+  }
 }
 
 TEST(VoxelMap, RejectsBadInput) {
