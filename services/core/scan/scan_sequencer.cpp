@@ -68,26 +68,26 @@ void ScanSequencer::tick(double now_s) {
     case Phase::kMoving:
       if (awaited_.expired(now_s)) {
         view_.move_unanswered = true;
-        record_.add_view(view_, views_done_, now_s - t_start_s_);
+        record_.add_view(view_, done_.views_done, now_s - t_start_s_);
         return finish(ScanState::kFailed, "the motion executor did not answer the move to " + view_name(), now_s);
       }
       break;
     case Phase::kCapturing:
       if (awaited_.expired(now_s)) {
         view_.capture_unanswered = true;
-        record_.add_view(view_, views_done_, now_s - t_start_s_);
+        record_.add_view(view_, done_.views_done, now_s - t_start_s_);
         return finish(ScanState::kFailed, "the camera service did not answer the capture of " + view_name(), now_s);
       }
       break;
     case Phase::kRegistering:
       if (awaited_.expired(now_s)) {
-        record_.add_view(view_, views_done_, now_s - t_start_s_);
+        record_.add_view(view_, done_.views_done, now_s - t_start_s_);
         return finish(ScanState::kFailed, "the registration service did not answer " + view_name(), now_s);
       }
       break;
     case Phase::kMapping:
       if (awaited_.expired(now_s)) {
-        record_.add_view(view_, views_done_, now_s - t_start_s_);
+        record_.add_view(view_, done_.views_done, now_s - t_start_s_);
         return finish(ScanState::kFailed, "the mapping service did not answer " + view_name(), now_s);
       }
       break;
@@ -163,7 +163,7 @@ void ScanSequencer::on(const VoxelMapSummary& m, double now_s) {
 }
 
 void ScanSequencer::on(const EllipsoidSetSummary& e, double /*now_s*/) {
-  if (e.scan_id != s_.scan_id || e.iteration < latest_map_) return;
+  if (e.scan_id != s_.scan_id || e.iteration < done_.latest_map) return;
   ellipsoids_[e.iteration] = e;
 }
 
@@ -216,9 +216,9 @@ void ScanSequencer::begin_plan(double now_s) {
   r.iteration = iteration_;
   r.planner = s_.planner;
   r.seed = s_.seed + iteration_;
-  r.map_iteration = latest_map_;  // the newest map: the view scorer keeps only that one
-  r.views_done = views_taken_;
-  r.excluded = excluded_;
+  r.map_iteration = done_.latest_map;  // the newest map: the view scorer keeps only that one
+  r.views_done = done_.views_taken;
+  r.excluded = done_.excluded;
   r.num_candidates = s_.candidates;
   r.num_parallels = s_.parallels;
   r.num_sectors = s_.sectors;
@@ -227,16 +227,16 @@ void ScanSequencer::begin_plan(double now_s) {
   r.num_alternatives = s_.alternatives;
   r.stop_fraction = s_.stop_fraction;
   r.spread_when_done = s_.when_done == "spread";
-  r.first_quality = first_quality_;
+  r.first_quality = done_.first_quality;
   r.camera = s_.camera;
   r.depth_range = s_.depth_range;
   r.check_reachability = s_.rig == RigKind::kArm;
-  r.joint_position_rad = joints_;
-  r.turntable_angle_rad = turntable_;
+  r.joint_position_rad = done_.joints_rad;
+  r.turntable_angle_rad = done_.turntable_rad;
   r.object_z_m = s_.object_z_m;
   r.keepout = box_or_none(s_.keepout_min_m, s_.keepout_max_m);
   r.figure_path = record_.plan_figure_path(iteration_);
-  if (last_map_ < 0) {  // nothing to plan from: no request
+  if (done_.last_map < 0) {  // nothing to plan from: no request
     ViewPlan none;
     none.scan_id = s_.scan_id;
     none.iteration = iteration_;
@@ -252,18 +252,20 @@ void ScanSequencer::begin_plan(double now_s) {
 void ScanSequencer::planned(const ViewPlan& p, double now_s) {
   PlanRecord plan;
   plan.plan = p;
-  plan.map_of_view = latest_map_;
-  if (latest_map_summary_ && latest_map_summary_->iteration == latest_map_) plan.map_update_s = latest_map_summary_->update_s;
-  if (auto e = ellipsoids_.find(latest_map_); e != ellipsoids_.end()) plan.ellipsoids = e->second;
+  plan.map_of_view = done_.latest_map;
+  if (latest_map_summary_ && latest_map_summary_->iteration == done_.latest_map) {
+    plan.map_update_s = latest_map_summary_->update_s;
+  }
+  if (auto e = ellipsoids_.find(done_.latest_map); e != ellipsoids_.end()) plan.ellipsoids = e->second;
   if (p.outcome != PlanOutcome::kView) {
     const bool stop = p.outcome == PlanOutcome::kStop;
-    stop_ = ScanStop{p.reason, views_done_, stop ? "planner" : "planner failed"};
+    stop_ = ScanStop{p.reason, done_.views_done, stop ? "planner" : "planner failed"};
     record_.set_stop(*stop_);
     record_.set_planning_stopped(plan);
     if (stop) return finish(ScanState::kDone, "scan complete: " + p.reason, now_s);
     return finish(ScanState::kFailed, "no plan for " + view_name() + ": " + p.reason, now_s);
   }
-  if (!std::isfinite(first_quality_)) first_quality_ = p.first_quality;
+  if (!std::isfinite(done_.first_quality)) done_.first_quality = p.first_quality;
   options_ = {p.object_T_camera};
   options_.insert(options_.end(), p.alternatives.begin(), p.alternatives.end());
   const std::string quality = s_.planner == "pbnbv"     ? "F " + fixed(p.view_quality, 2) + " px, "
@@ -303,7 +305,7 @@ void ScanSequencer::moved(const MoveResult& r, double now_s) {
     view_.requested_object_T_camera = options_[option_];
   } else {
     view_.failed_moves.push_back({static_cast<int>(option_), r.status, r.reason});
-    excluded_.push_back(options_[option_]);
+    done_.excluded.push_back(options_[option_]);
     if (r.status == MoveStatus::kUnreachable && option_ + 1 < options_.size()) {  // the next alternative
       ++option_;
       return send_move(now_s);
@@ -313,12 +315,12 @@ void ScanSequencer::moved(const MoveResult& r, double now_s) {
   view_.move_round_trip_s = now_s - t_step_s_;
   if (r.status != MoveStatus::kReached) {
     progress(std::string(to_string(r.status)) + ": " + r.reason, true);
-    record_.add_view(view_, views_done_, now_s - t_start_s_);
+    record_.add_view(view_, done_.views_done, now_s - t_start_s_);
     return next_view(now_s);
   }
   moved_ = r;
-  joints_ = r.joint_position_rad;
-  turntable_ = r.turntable_angle_rad;
+  done_.joints_rad = r.joint_position_rad;
+  done_.turntable_rad = r.turntable_angle_rad;
   begin_capture(r.settled_utime, now_s);
 }
 
@@ -349,8 +351,8 @@ void ScanSequencer::captured(const CaptureResult& c, double now_s) {
   view_.capture_round_trip_s = now_s - t_step_s_;
   if (!c.ok) {
     progress("capture failed: " + c.message, true);
-    excluded_.push_back(moved_.reached_object_T_camera);
-    record_.add_view(view_, views_done_, now_s - t_start_s_);
+    done_.excluded.push_back(moved_.reached_object_T_camera);
+    record_.add_view(view_, done_.views_done, now_s - t_start_s_);
     return next_view(now_s);
   }
   begin_register(now_s);
@@ -378,22 +380,22 @@ void ScanSequencer::registered(double now_s) {
 void ScanSequencer::mapped(double now_s) {
   const VoxelMapSummary& m = *map_;
   const RegisteredCloud& reg = *registered_;
-  latest_map_ = iteration_;
+  done_.latest_map = iteration_;
   latest_map_summary_ = m;
-  ellipsoids_.erase(ellipsoids_.begin(), ellipsoids_.lower_bound(latest_map_));
+  ellipsoids_.erase(ellipsoids_.begin(), ellipsoids_.lower_bound(done_.latest_map));
   view_.map = m;
   view_.map_round_trip_s = now_s - t_step_s_;
   if (m.updated) {
-    last_map_ = iteration_;
-    views_taken_.push_back(reg.cloud.object_T_camera);
+    done_.last_map = iteration_;
+    done_.views_taken.push_back(reg.cloud.object_T_camera);
   } else {  // not mapped (e.g. registration rejected it): do not plan it again
-    excluded_.push_back(moved_.reached_object_T_camera);
+    done_.excluded.push_back(moved_.reached_object_T_camera);
   }
   set_status(ScanState::kIntegrating, "adding " + view_name(), now_s);
   view_.accumulate_s = record_.accumulate(reg, view_);
   view_.view_total_s = now_s - t_view_s_ + view_.accumulate_s;
-  ++views_done_;
-  record_.add_view(view_, views_done_, now_s - t_start_s_);
+  ++done_.views_done;
+  record_.add_view(view_, done_.views_done, now_s - t_start_s_);
   const std::string verdict = !reg.accepted ? std::string("registration rejected")
                               : reg.refined ? "registered (" + fixed(reg.translation_m * 1e3, 2) + " mm, " +
                                                   fixed(reg.rotation_deg, 2) + " deg)"
@@ -410,8 +412,8 @@ void ScanSequencer::mapped(double now_s) {
 
 void ScanSequencer::next_view(double now_s) {
   if (iteration_ + 1 < s_.views) return begin_view(iteration_ + 1, now_s);
-  if (views_done_ == 0) return finish(ScanState::kFailed, "no view produced a cloud", now_s);
-  stop_ = ScanStop{"view budget reached (--views " + std::to_string(s_.views) + ")", views_done_, "budget"};
+  if (done_.views_done == 0) return finish(ScanState::kFailed, "no view produced a cloud", now_s);
+  stop_ = ScanStop{"view budget reached (--views " + std::to_string(s_.views) + ")", done_.views_done, "budget"};
   record_.set_stop(*stop_);
   finish(ScanState::kDone, "scan complete: " + stop_->reason, now_s);
 }
@@ -421,8 +423,8 @@ void ScanSequencer::finish(ScanState state, const std::string& message, double n
   awaited_ = Awaited{};
   set_status(state, message, now_s);
   const char* name = state == ScanState::kDone ? "done" : state == ScanState::kStopped ? "stopped" : "failed";
-  record_.write(name, message, views_done_, now_s - t_start_s_);
-  summary_ = (state == ScanState::kDone ? "" : "scan ") + message + ": " + std::to_string(views_done_) + " of " +
+  record_.write(name, message, done_.views_done, now_s - t_start_s_);
+  summary_ = (state == ScanState::kDone ? "" : "scan ") + message + ": " + std::to_string(done_.views_done) + " of " +
              std::to_string(s_.views) + " views, " + std::to_string(record_.num_points()) + " points, " +
              fixed(now_s - t_start_s_, 2) + " s -> " + record_.scan_json_path().string();
 }
@@ -453,7 +455,7 @@ void ScanSequencer::publish_status(double now_s) {
   m.scan_id = s_.scan_id;
   m.iteration = iteration_;
   m.num_views_planned = s_.views;
-  m.num_views_done = views_done_;
+  m.num_views_done = done_.views_done;
   m.state = state_;
   m.message = message_;
   m.elapsed_s = now_s - t_start_s_;

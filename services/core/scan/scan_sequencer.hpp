@@ -6,7 +6,7 @@
 // or tick and queues what the caller must send (requests, SCAN_STATUS) and print (progress
 // lines); the scan's folder is written through ScanRecord.
 //
-// The sequence (README "Scan coordinator"):
+// The sequence (the README's "For each view"):
 // - wait until the rig and every service the planner needs have been heard from (startup
 //   deadline; the failure lists what is missing);
 // - the next view: the ring's (planner "ring"), the first view, or the view scorer's plan
@@ -82,6 +82,20 @@ struct Awaited {
   bool resend_due(double now_s) const { return request && now_s - last_sent_s >= resend_s; }
 };
 
+// What the scan has done so far: what the next plan request carries and the status counts.
+// Everything else about a finished view is in scan.json.
+struct ScanSoFar {
+  std::vector<Pose> views_taken;           // registered camera poses of mapped views
+  std::vector<Pose> excluded;              // views the rig could not reach, capture or map
+  double first_quality = std::numeric_limits<double>::quiet_NaN();  // F of the first plan
+  int last_map = -1;                       // last view integrated into the map
+  int latest_map = -1;                     // last view the mapping service answered
+  Vector6d joints_rad = Vector6d::Zero();  // the rig where the last view was reached
+  double turntable_rad = 0;
+  int views_done = 0;                      // views that produced a cloud
+  int64_t next_request_id = 1;             // request ids are unique within the scan
+};
+
 class ScanSequencer {
  public:
   // A sequencer for the scan `settings` writing to `out`. Throws std::invalid_argument for a
@@ -109,6 +123,7 @@ class ScanSequencer {
   // The closing line: "scan complete: ...: 3 of 3 views, 1234 points, 12.00 s -> DIR/scan.json".
   const std::string& summary() const { return summary_; }
   const ScanRecord& record() const { return record_; }
+  const ScanSoFar& so_far() const { return done_; }
 
  private:
   enum class Phase { kIdle, kWaitingReady, kPlanning, kMoving, kCapturing, kRegistering, kMapping, kFinished };
@@ -139,7 +154,7 @@ class ScanSequencer {
 
   void send(const ScanOutput& request, int64_t request_id, double resend_s, double deadline_s, double now_s);
   void wait_for_answer(double deadline_s, double now_s);
-  int64_t next_request_id() { return next_request_id_++; }
+  int64_t next_request_id() { return done_.next_request_id++; }
   void progress(const std::string& what, bool ends_view = false);
   void set_status(ScanState state, const std::string& message, double now_s);
   void publish_status(double now_s);
@@ -151,17 +166,9 @@ class ScanSequencer {
   std::vector<Pose> ring_;                  // planner "ring": every view
   Pose first_view_ = Pose::Identity();      // next-best-view planners: the first view
 
-  // The scan so far (what a plan request carries).
-  std::vector<Pose> views_taken_;           // registered camera poses of mapped views
-  std::vector<Pose> excluded_;              // views the rig could not reach, capture or map
-  double first_quality_ = std::numeric_limits<double>::quiet_NaN();
-  int last_map_ = -1;                       // last view integrated into the map
-  int latest_map_ = -1;                     // last view the mapping service answered
+  ScanSoFar done_;
   std::optional<VoxelMapSummary> latest_map_summary_;
-  std::map<int, EllipsoidSetSummary> ellipsoids_;  // by map view, from latest_map_ on
-  Vector6d joints_ = Vector6d::Zero();
-  double turntable_ = 0;
-  int views_done_ = 0;
+  std::map<int, EllipsoidSetSummary> ellipsoids_;  // by map view, from done_.latest_map on
   std::optional<ScanStop> stop_;
 
   // The view in progress.
@@ -178,7 +185,6 @@ class ScanSequencer {
   Awaited awaited_;
 
   std::set<std::string> seen_;
-  int64_t next_request_id_ = 1;
   double t_start_s_ = 0;
   double last_status_s_ = 0;
   ScanState state_ = ScanState::kStarting;

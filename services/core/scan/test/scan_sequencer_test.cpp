@@ -438,6 +438,7 @@ TEST_F(ScanSequencerTest, MoreThanAHundredAlternativesKeepRequestIdsUnique) {
   for (const auto& [t, r] : captures_) ids.insert(r.request_id);
   for (const auto& [t, r] : plans_) ids.insert(r.request_id);
   EXPECT_EQ(ids.size(), moves_.size() + captures_.size() + plans_.size()) << "a request id was used twice";
+  EXPECT_EQ(seq_->so_far().next_request_id, static_cast<int64_t>(ids.size()) + 1);
   const json scan = scan_json();
   EXPECT_EQ(scan["views"][1]["option"], 120);
   EXPECT_EQ(scan["views"][1]["failed_moves"].size(), 120u);
@@ -594,6 +595,11 @@ TEST_F(ScanSequencerTest, ARejectedRegistrationIsNotMergedAndItsViewIsExcludedFr
   ASSERT_EQ(next.excluded.size(), 1u);
   EXPECT_TRUE(next.excluded[0].isApprox(moves_of(1).back().object_T_camera));
   EXPECT_EQ(next.map_iteration, 1);
+  // At the end: views 0 and 2 mapped, view 1 excluded.
+  EXPECT_EQ(seq_->so_far().views_taken.size(), 2u);
+  EXPECT_EQ(seq_->so_far().excluded.size(), 1u);
+  EXPECT_EQ(seq_->so_far().last_map, 2);
+  EXPECT_EQ(seq_->so_far().views_done, 3);
   EXPECT_NE(std::find(lines_.begin(), lines_.end(),
                       "[view 2/3] done: 10 points, 10 in the model; registration rejected, 5 frontier voxels; "
                       "move 1.50 s, capture 0.75 s, register 0.25 s, map 2.00 ms, plan 122.00 ms"),
