@@ -43,30 +43,39 @@ void print_progress(const ProgressLine& p) {
   }
 }
 
-// Publishes the sequencer's requests and status (stamped now) and prints its lines.
+// Publishes a request or status of the sequencer, stamped now.
+template <class Plain>
+void publish(bus::Bus& bus, const char* channel, const Plain& plain) {
+  auto m = bus::to_msg(plain);
+  m.utime = bus::now_utime();
+  bus.publish(channel, m);
+}
+
+// Publishes the sequencer's requests and status and prints its lines, in order.
 void send(bus::Bus& bus, const std::vector<ScanOutput>& outputs) {
   for (const ScanOutput& out : outputs) {
     if (const auto* r = std::get_if<MoveRequest>(&out)) {
-      move_request_t m = bus::to_msg(*r);
-      m.utime = bus::now_utime();
-      bus.publish(channels::kMoveRequest, m);
+      publish(bus, channels::kMoveRequest, *r);
     } else if (const auto* r = std::get_if<CaptureRequest>(&out)) {
-      capture_request_t m = bus::to_msg(*r);
-      m.utime = bus::now_utime();
-      bus.publish(channels::kCaptureRequest, m);
+      publish(bus, channels::kCaptureRequest, *r);
     } else if (const auto* r = std::get_if<PlanRequest>(&out)) {
-      plan_request_t m = bus::to_msg(*r);
-      m.utime = bus::now_utime();
-      bus.publish(channels::kPlanRequest, m);
+      publish(bus, channels::kPlanRequest, *r);
     } else if (const auto* s = std::get_if<ScanStatus>(&out)) {
-      scan_status_t m = bus::to_msg(*s);
-      m.utime = bus::now_utime();
-      bus.publish(channels::kScanStatus, m);
-      bus.set_scan(s->scan_id, s->iteration);
+      publish(bus, channels::kScanStatus, *s);
+      bus.set_scan(s->scan_id, s->iteration);  // for the heartbeat
     } else if (const auto* p = std::get_if<ProgressLine>(&out)) {
       print_progress(*p);
     }
   }
+}
+
+// Subscribes to an answer channel: messages of the scan are checked and converted (a bad one is
+// rejected by the bus, named) and queued for the sequencer; those of another scan are ignored.
+template <class Msg>
+void take(bus::Bus& bus, const char* channel, const std::string& scan_id, std::vector<ScanEvent>& inbox) {
+  bus.subscribe<Msg>(channel, [scan_id, &inbox](const Msg& m) {
+    if (m.scan_id == scan_id) inbox.emplace_back(bus::from_msg(m));
+  });
 }
 
 // Runs the scan to its end; returns the process exit code.
@@ -76,24 +85,12 @@ int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out) {
   // Handlers only check and convert (a bad message is rejected by the bus); the sequencer
   // takes the events after each spin, so its own errors are not mistaken for bad messages.
   std::vector<ScanEvent> inbox;
-  bus.subscribe<move_result_t>(channels::kMoveResult, [&](const move_result_t& m) {
-    if (m.scan_id == scan_id) inbox.emplace_back(bus::from_msg(m));
-  });
-  bus.subscribe<point_cloud_t>(channels::kCloud, [&](const point_cloud_t& m) {
-    if (m.scan_id == scan_id) inbox.emplace_back(bus::from_msg(m));
-  });
-  bus.subscribe<registered_cloud_t>(channels::kRegisteredCloud, [&](const registered_cloud_t& m) {
-    if (m.scan_id == scan_id) inbox.emplace_back(bus::from_msg(m));
-  });
-  bus.subscribe<voxel_set_t>(channels::kVoxelMap, [&](const voxel_set_t& m) {
-    if (m.scan_id == scan_id) inbox.emplace_back(bus::from_msg(m));
-  });
-  bus.subscribe<ellipsoid_set_t>(channels::kEllipsoids, [&](const ellipsoid_set_t& m) {
-    if (m.scan_id == scan_id) inbox.emplace_back(bus::from_msg(m));
-  });
-  bus.subscribe<view_plan_t>(channels::kViewPlan, [&](const view_plan_t& m) {
-    if (m.scan_id == scan_id) inbox.emplace_back(bus::from_msg(m));
-  });
+  take<move_result_t>(bus, channels::kMoveResult, scan_id, inbox);
+  take<point_cloud_t>(bus, channels::kCloud, scan_id, inbox);
+  take<registered_cloud_t>(bus, channels::kRegisteredCloud, scan_id, inbox);
+  take<voxel_set_t>(bus, channels::kVoxelMap, scan_id, inbox);
+  take<ellipsoid_set_t>(bus, channels::kEllipsoids, scan_id, inbox);
+  take<view_plan_t>(bus, channels::kViewPlan, scan_id, inbox);
   bus.subscribe<arm_status_t>(channels::kArmStatus, [&](const arm_status_t&) { inbox.emplace_back(Heard{"ARM_STATUS"}); });
   bus.subscribe<turntable_status_t>(channels::kTurntableStatus,
                                     [&](const turntable_status_t&) { inbox.emplace_back(Heard{"TURNTABLE_STATUS"}); });

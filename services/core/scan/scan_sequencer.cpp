@@ -68,28 +68,20 @@ void ScanSequencer::tick(double now_s) {
     case Phase::kMoving:
       if (awaited_.expired(now_s)) {
         view_.move_unanswered = true;
-        record_.add_view(view_, done_.views_done, now_s - t_start_s_);
-        return finish(ScanState::kFailed, "the motion executor did not answer the move to " + view_name(), now_s);
+        return fail_view("the motion executor did not answer the move to " + view_name(), now_s);
       }
       break;
     case Phase::kCapturing:
       if (awaited_.expired(now_s)) {
         view_.capture_unanswered = true;
-        record_.add_view(view_, done_.views_done, now_s - t_start_s_);
-        return finish(ScanState::kFailed, "the camera service did not answer the capture of " + view_name(), now_s);
+        return fail_view("the camera service did not answer the capture of " + view_name(), now_s);
       }
       break;
     case Phase::kRegistering:
-      if (awaited_.expired(now_s)) {
-        record_.add_view(view_, done_.views_done, now_s - t_start_s_);
-        return finish(ScanState::kFailed, "the registration service did not answer " + view_name(), now_s);
-      }
+      if (awaited_.expired(now_s)) return fail_view("the registration service did not answer " + view_name(), now_s);
       break;
     case Phase::kMapping:
-      if (awaited_.expired(now_s)) {
-        record_.add_view(view_, done_.views_done, now_s - t_start_s_);
-        return finish(ScanState::kFailed, "the mapping service did not answer " + view_name(), now_s);
-      }
+      if (awaited_.expired(now_s)) return fail_view("the mapping service did not answer " + view_name(), now_s);
       break;
   }
   if (phase_ == Phase::kFinished) return;
@@ -416,6 +408,11 @@ void ScanSequencer::next_view(double now_s) {
   stop_ = ScanStop{"view budget reached (--views " + std::to_string(s_.views) + ")", done_.views_done, "budget"};
   record_.set_stop(*stop_);
   finish(ScanState::kDone, "scan complete: " + stop_->reason, now_s);
+}
+
+void ScanSequencer::fail_view(const std::string& message, double now_s) {
+  record_.add_view(view_, done_.views_done, now_s - t_start_s_);
+  finish(ScanState::kFailed, message, now_s);
 }
 
 void ScanSequencer::finish(ScanState state, const std::string& message, double now_s) {

@@ -150,6 +150,7 @@ class ScanSequencer {
   void mapped(double now_s);
   void end_view(double now_s);
   void next_view(double now_s);
+  void fail_view(const std::string& message, double now_s);  // records the view so far, fails the scan
   void finish(ScanState state, const std::string& message, double now_s);
 
   void send(const ScanOutput& request, int64_t request_id, double resend_s, double deadline_s, double now_s);
