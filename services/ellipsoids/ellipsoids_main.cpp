@@ -25,11 +25,9 @@ namespace {
 
 constexpr std::size_t kAnswersKept = 64;
 
-std::vector<Eigen::Vector3d> centres(const std::vector<std::vector<float>>& rows, int32_t count, const char* what) {
-  if (count != static_cast<int32_t>(rows.size())) {
-    throw std::invalid_argument(std::string("VOXEL_MAP ") + what + " count " + std::to_string(count) +
-                                " disagrees with its array (" + std::to_string(rows.size()) + ")");
-  }
+// The centres of one class ("occupied", "frontier") of a VOXEL_MAP's voxels; throws naming the
+// class and the index of a centre that is not finite.
+std::vector<Eigen::Vector3d> centres(const std::vector<std::vector<float>>& rows, const char* what) {
   std::vector<Eigen::Vector3d> out;
   out.reserve(rows.size());
   for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -57,8 +55,8 @@ class EllipsoidService {
       return;
     }
     bus::require_range(m.resolution_m, 1e-4, 1.0, "VOXEL_MAP resolution_m");
-    const std::vector<Eigen::Vector3d> occupied = centres(m.occupied_centres_m, m.num_occupied, "occupied");
-    const std::vector<Eigen::Vector3d> frontier = centres(m.frontier_centres_m, m.num_frontier, "frontier");
+    const std::vector<Eigen::Vector3d> occupied = centres(m.occupied_centres_m, "occupied");
+    const std::vector<Eigen::Vector3d> frontier = centres(m.frontier_centres_m, "frontier");
 
     EllipsoidParams p;
     p.t_max = t_max_;

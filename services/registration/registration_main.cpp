@@ -37,10 +37,6 @@ class RegistrationService {
 
  private:
   void on_cloud(const point_cloud_t& c) {
-    if (c.num_points != static_cast<int32_t>(c.points_m.size())) {
-      throw std::invalid_argument("CLOUD num_points = " + std::to_string(c.num_points) + " but " +
-                                  std::to_string(c.points_m.size()) + " points");
-    }
     bus_.set_scan(c.scan_id, c.iteration);
     if (const registered_cloud_t* answer = answers_.find({c.scan_id, c.request_id})) {
       bus_.publish(channels::kRegisteredCloud, *answer);  // a repeat: answer again

@@ -48,10 +48,6 @@ Eigen::AlignedBox3d bbox_of(const voxel_set_t& map) {
 // The request as the core planner takes it, validated; throws naming the bad field.
 PlanInput plan_input(const plan_request_t& r) {
   PlanInput in;
-  if (r.num_views_done != static_cast<int32_t>(r.views_done.size()) ||
-      r.num_excluded != static_cast<int32_t>(r.excluded.size())) {
-    throw std::invalid_argument("PLAN_REQUEST num_views_done / num_excluded disagree with their arrays");
-  }
   for (std::size_t i = 0; i < r.views_done.size(); ++i) {
     in.views_done.push_back(bus::from_msg(r.views_done[i], "PLAN_REQUEST views_done[" + std::to_string(i) + "]"));
   }
@@ -85,12 +81,7 @@ class ScorerService {
   ScorerService(bus::Bus& bus, const RigModel& rig) : bus_(bus), rig_(rig) {
     for (auto& c : checkers_) c = std::make_unique<ReachabilityChecker>(rig_);
     bus_.subscribe<voxel_set_t>(channels::kVoxelMap, [this](const voxel_set_t& m) { maps_.offer(m); });
-    bus_.subscribe<ellipsoid_set_t>(channels::kEllipsoids, [this](const ellipsoid_set_t& e) {
-      if (e.num_ellipsoids != static_cast<int32_t>(e.ellipsoids.size())) {
-        throw std::invalid_argument("ELLIPSOIDS num_ellipsoids disagrees with its array");
-      }
-      ellipsoids_.offer(e);
-    });
+    bus_.subscribe<ellipsoid_set_t>(channels::kEllipsoids, [this](const ellipsoid_set_t& e) { ellipsoids_.offer(e); });
     bus_.subscribe<plan_request_t>(channels::kPlanRequest, [this](const plan_request_t& r) { on_request(r); });
   }
 
@@ -224,9 +215,6 @@ class ScorerService {
 
   // The VOXEL_MAP's cells as the ray caster reads them; throws naming the message's bad field.
   static VoxelGrid grid_of(const voxel_set_t& map) {
-    if (map.num_cells != static_cast<int32_t>(map.cells.size())) {
-      throw std::invalid_argument("VOXEL_MAP num_cells disagrees with its array");
-    }
     VoxelGrid g;
     g.origin_m = Eigen::Vector3d(map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]);
     g.dims = Eigen::Vector3i(map.dims[0], map.dims[1], map.dims[2]);

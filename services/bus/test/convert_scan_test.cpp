@@ -78,3 +78,198 @@ TEST(ConvertScan, MoveResultStatusOutsideItsConstantsIsRejected) {
   m.status = 9;
   expect_error([&] { bus::from_msg(m); }, "MOVE_RESULT status");
 }
+
+// ---- The coordinator's other messages ----
+
+namespace {
+view_plan_t plan_message(int alternatives) {
+  view_plan_t m{};
+  m.scan_id = "s";
+  m.iteration = 2;
+  m.request_id = 7;
+  m.planner = "pbnbv";
+  m.outcome = view_plan_t::kView;
+  m.reason = "best F";
+  m.object_T_camera = bus::to_msg(look_at_z_up(Eigen::Vector3d(0.6, 0, 0.3), Eigen::Vector3d::Zero()));
+  m.view_quality = 1500;
+  m.partition = 2;
+  m.num_allowed_sectors = 2;
+  m.allowed_sectors = {1, 2};
+  m.sphere_centre_m[2] = 0.05;
+  m.num_scored = 700;
+  m.plan_s = 0.04;
+  m.num_alternatives = alternatives;
+  for (int a = 0; a < alternatives; ++a) {
+    m.alternatives.push_back(bus::to_msg(look_at_z_up(Eigen::Vector3d(0.6, 0.01 * (a + 1), 0.3), Eigen::Vector3d::Zero())));
+    m.alternative_quality.push_back(1400 - a);
+  }
+  return m;
+}
+}  // namespace
+
+TEST(ConvertScan, ViewPlanKeepsItsViewAlternativesAndFigures) {
+  const ViewPlan p = bus::from_msg(plan_message(3));
+  EXPECT_EQ(p.request_id, 7);
+  EXPECT_EQ(p.outcome, PlanOutcome::kView);
+  EXPECT_NEAR(p.object_T_camera.translation().x(), 0.6, 1e-12);
+  ASSERT_EQ(p.alternatives.size(), 3u);
+  EXPECT_NEAR(p.alternatives[2].translation().y(), 0.03, 1e-12);
+  EXPECT_EQ(p.alternative_quality, std::vector<double>({1400, 1399, 1398}));
+  EXPECT_EQ(p.allowed_sectors, std::vector<int>({1, 2}));
+  EXPECT_EQ(p.sphere_centre_m.z(), 0.05);
+  EXPECT_EQ(p.num_scored, 700);
+}
+
+TEST(ConvertScan, ViewPlanOutcomeAndPosesAreChecked) {
+  view_plan_t m = plan_message(2);
+  m.outcome = 3;
+  expect_error([&] { bus::from_msg(m); }, "VIEW_PLAN outcome");
+  m = plan_message(2);
+  m.alternatives[1].quat_wxyz[0] = 2;  // not a unit quaternion
+  expect_error([&] { bus::from_msg(m); }, "VIEW_PLAN alternatives[1]");
+  // A stop carries no view: its (unset) poses are not read.
+  m = plan_message(0);
+  m.outcome = view_plan_t::kStop;
+  m.object_T_camera.quat_wxyz[0] = 0;
+  const ViewPlan stop = bus::from_msg(m);
+  EXPECT_EQ(stop.outcome, PlanOutcome::kStop);
+  EXPECT_TRUE(stop.alternatives.empty());
+}
+
+TEST(ConvertScan, PlanRequestCarriesTheScanSoFar) {
+  PlanRequest r;
+  r.scan_id = "s";
+  r.request_id = 11;
+  r.views_done = {look_at_z_up(Eigen::Vector3d(0.6, 0, 0.3), Eigen::Vector3d::Zero())};
+  r.excluded = {look_at_z_up(Eigen::Vector3d(0, 0.6, 0.3), Eigen::Vector3d::Zero()),
+                look_at_z_up(Eigen::Vector3d(0, -0.6, 0.3), Eigen::Vector3d::Zero())};
+  r.camera.width = 640;
+  r.depth_range.max_m = 2.5;
+  r.joint_position_rad << 1, 2, 3, 4, 5, 6;
+  r.keepout = Eigen::AlignedBox3d(Eigen::Vector3d(-0.1, -0.1, -0.2), Eigen::Vector3d(0.1, 0.1, 0.2));
+  r.first_quality = std::numeric_limits<double>::quiet_NaN();
+  const plan_request_t m = bus::to_msg(r);
+  EXPECT_EQ(m.request_id, 11);
+  EXPECT_EQ(m.num_views_done, 1);
+  EXPECT_EQ(m.num_excluded, 2);
+  EXPECT_NEAR(m.excluded[1].position_m[1], -0.6, 1e-12);
+  EXPECT_EQ(m.width_px, 640);
+  EXPECT_EQ(m.depth_max_m, 2.5);
+  EXPECT_EQ(m.joint_position_rad[5], 6);
+  EXPECT_EQ(m.keepout_min_m[2], -0.2);
+  EXPECT_EQ(m.keepout_max_m[0], 0.1);
+  EXPECT_TRUE(std::isnan(m.first_quality));
+  // No keep-out box: zeros, as the scorer reads "none".
+  r.keepout = Eigen::AlignedBox3d();
+  const plan_request_t none = bus::to_msg(r);
+  EXPECT_EQ(none.keepout_min_m[0], 0);
+  EXPECT_EQ(none.keepout_max_m[2], 0);
+}
+
+TEST(ConvertScan, RegisteredCloudNamesItsBadField) {
+  CaptureResult c;
+  c.scan_id = "s";
+  c.points = {Eigen::Vector3f(0.1f, 0.2f, 0.3f)};
+  registered_cloud_t m;
+  m.scan_id = "s";
+  m.request_id = 4;
+  m.cloud = bus::to_msg(c);
+  m.kinematic_object_T_camera = bus::to_msg(Pose::Identity());
+  m.correction = bus::to_msg(Pose(Eigen::Translation3d(0.001, 0, 0)));
+  m.accepted = true;
+  m.translation_m = 0.001;
+  const RegisteredCloud r = bus::from_msg(m);
+  EXPECT_EQ(r.request_id, 4);
+  EXPECT_TRUE(r.accepted);
+  EXPECT_EQ(r.cloud.points.size(), 1u);
+  EXPECT_NEAR(r.correction.translation().x(), 0.001, 1e-15);
+  m.cloud.points_m[0][1] = std::nanf("");
+  expect_error([&] { bus::from_msg(m); }, "REGISTERED_CLOUD cloud: CLOUD points_m[0]");
+  m = registered_cloud_t{};
+  m.cloud = bus::to_msg(c);
+  m.kinematic_object_T_camera = bus::to_msg(Pose::Identity());
+  expect_error([&] { bus::from_msg(m); }, "REGISTERED_CLOUD correction");  // all-zero quaternion
+}
+
+TEST(ConvertScan, VoxelMapAndEllipsoidSummariesAreChecked) {
+  voxel_set_t v{};
+  v.scan_id = "s";
+  v.iteration = 3;
+  v.updated = true;
+  v.resolution_m = 0.03;
+  v.bbox_max_m[0] = 0.3;
+  v.num_empty = 12;
+  v.num_frontier = 2;
+  v.frontier_centres_m = {{0, 0, 0}, {0.03f, 0, 0}};
+  const VoxelMapSummary s = bus::from_msg(v);
+  EXPECT_EQ(s.iteration, 3);
+  EXPECT_EQ(s.num_empty, 12);
+  EXPECT_EQ(s.num_frontier, 2);
+  EXPECT_EQ(s.bbox_max_m.x(), 0.3);
+  v.num_unknown = -1;
+  expect_error([&] { bus::from_msg(v); }, "VOXEL_MAP num_unknown");
+  v.num_unknown = 0;
+  v.bbox_min_m[1] = std::numeric_limits<double>::infinity();
+  expect_error([&] { bus::from_msg(v); }, "VOXEL_MAP bbox corner 1");
+
+  ellipsoid_set_t e{};
+  e.scan_id = "s";
+  e.iteration = 3;
+  e.fit_s = 0.01;
+  e.num_ellipsoids = 2;
+  e.ellipsoids.resize(2);
+  e.ellipsoids[0].cls = ellipsoid_t::kOccupied;
+  e.ellipsoids[1].cls = ellipsoid_t::kFrontier;
+  e.ellipsoids[1].quat_wxyz[0] = 1;
+  e.ellipsoids[1].semi_axes_m[0] = 0.05;
+  e.ellipsoids[1].num_voxels = 9;
+  const EllipsoidSetSummary es = bus::from_msg(e);
+  ASSERT_EQ(es.ellipsoids.size(), 2u);
+  EXPECT_FALSE(es.ellipsoids[0].frontier);
+  EXPECT_TRUE(es.ellipsoids[1].frontier);
+  EXPECT_EQ(es.ellipsoids[1].semi_axes_m.x(), 0.05);
+  EXPECT_EQ(es.ellipsoids[1].num_voxels, 9);
+  e.ellipsoids[0].cls = 5;
+  expect_error([&] { bus::from_msg(e); }, "ELLIPSOIDS ellipsoids[0].cls");
+}
+
+TEST(ConvertScan, ScanStatesAreTheMessageConstants) {
+  const std::pair<ScanState, int8_t> states[] = {
+      {ScanState::kStarting, scan_status_t::kStarting}, {ScanState::kMoving, scan_status_t::kMoving},
+      {ScanState::kCapturing, scan_status_t::kCapturing}, {ScanState::kIntegrating, scan_status_t::kIntegrating},
+      {ScanState::kPlanning, scan_status_t::kPlanning}, {ScanState::kDone, scan_status_t::kDone},
+      {ScanState::kFailed, scan_status_t::kFailed},     {ScanState::kStopped, scan_status_t::kStopped}};
+  for (const auto& [state, constant] : states) {
+    ScanStatus s;
+    s.state = state;
+    EXPECT_EQ(bus::to_msg(s).state, constant);
+  }
+  ScanStatus s;
+  s.scan_id = "s";
+  s.iteration = 4;
+  s.num_views_done = 3;
+  s.num_points = 1234;
+  s.message = "moving to view 5";
+  const scan_status_t m = bus::to_msg(s);
+  EXPECT_EQ(m.iteration, 4);
+  EXPECT_EQ(m.num_views_done, 3);
+  EXPECT_EQ(m.num_points, 1234);
+  EXPECT_EQ(m.message, "moving to view 5");
+}
+
+TEST(ConvertScan, DecodedArraysAlwaysHaveTheLengthOfTheirCount) {
+  // Why no receiver checks "num_x == x.size()": lcm-gen's decoder reads the count and then
+  // exactly that many elements, so a decoded message always agrees with itself; a buffer too
+  // short for its count does not decode at all (the bus rejects it before any handler).
+  const view_plan_t sent = plan_message(4);
+  std::vector<uint8_t> buf(static_cast<std::size_t>(sent.getEncodedSize()));
+  ASSERT_EQ(sent.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+  view_plan_t got;
+  ASSERT_GT(got.decode(buf.data(), 0, static_cast<int>(buf.size())), 0);
+  EXPECT_EQ(got.alternatives.size(), 4u);
+  EXPECT_EQ(got.alternative_quality.size(), 4u);
+  EXPECT_EQ(got.allowed_sectors.size(), 2u);
+  // The same bytes cut before the last alternative quality: the decoder refuses them.
+  view_plan_t cut;
+  EXPECT_LT(cut.decode(buf.data(), 0, static_cast<int>(buf.size()) - 8), 0);
+}

@@ -14,4 +14,13 @@ const char* to_string(MoveStatus s) {
   return "unknown";
 }
 
+const char* to_string(PlanOutcome o) {
+  switch (o) {
+    case PlanOutcome::kView: return "view";
+    case PlanOutcome::kStop: return "stop";
+    case PlanOutcome::kFailed: return "failed";
+  }
+  return "unknown";
+}
+
 }  // namespace pbnbv

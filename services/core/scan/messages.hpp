@@ -4,10 +4,13 @@
 // from the LCM messages of the same names (bus/convert_scan.hpp); the sequencing classes of this
 // library work on these alone, so they are tested without a bus.
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/base/pose.hpp"
+#include "core/geometry/camera_model.hpp"
 #include "core/geometry/point_cloud.hpp"
 
 namespace pbnbv {
@@ -77,6 +80,135 @@ struct CaptureResult {
   double voxel_m = 0;
   double capture_s = 0, process_s = 0;
   PointCloud points;                       // object frame, m
+};
+
+// ---- What the coordinator sends and receives besides moves and captures ----------------------
+
+// REGISTERED_CLOUD: the registration service's answer to a CLOUD (same request_id). `cloud`
+// holds the registered pose and points when accepted, the kinematic ones otherwise.
+struct RegisteredCloud {
+  std::string scan_id;
+  int iteration = 0;
+  int64_t request_id = 0;                  // the CaptureRequest the cloud answered
+  CaptureResult cloud;
+  Pose kinematic_object_T_camera = Pose::Identity();
+  bool accepted = false;                   // merged into the model
+  bool refined = false;                    // the correction comes from ICP
+  std::string reason;
+  double constraint = 0;                   // 0..1, see registered_cloud_t
+  Pose correction = Pose::Identity();      // registered = correction * kinematic
+  double translation_m = 0;
+  double rotation_deg = 0;
+  double overlap = 0;
+  double rmse_m = 0;
+  int iterations = 0;                      // ICP iterations
+  int model_points = 0;
+  double register_s = 0;
+};
+
+// VOXEL_MAP as the coordinator records it: the map's state after a view, without the voxels.
+struct VoxelMapSummary {
+  std::string scan_id;
+  int iteration = 0;                       // view integrated last
+  bool updated = false;                    // false: this view left the map unchanged
+  std::string message;
+  double resolution_m = 0;
+  Eigen::Vector3d bbox_min_m = Eigen::Vector3d::Zero();  // B, object frame
+  Eigen::Vector3d bbox_max_m = Eigen::Vector3d::Zero();
+  int num_none = 0, num_empty = 0, num_occupied = 0, num_unknown = 0, num_frontier = 0;
+  double update_s = 0;                     // wall time of the map update
+};
+
+// One ellipsoid of ELLIPSOIDS as the fitter sent it (recorded, not computed with).
+struct EllipsoidSummary {
+  bool frontier = false;                   // false: an Occupied cluster
+  Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d semi_axes_m = Eigen::Vector3d::Zero();
+  std::array<double, 4> quat_wxyz = {1, 0, 0, 0};  // principal axes
+  int num_voxels = 0;
+};
+
+// ELLIPSOIDS as the coordinator records it in the plan made from it.
+struct EllipsoidSetSummary {
+  std::string scan_id;
+  int iteration = 0;                       // the map's view
+  int occupied_components = 0;             // T chosen by BIC
+  int frontier_components = 0;
+  double fit_s = 0;
+  std::vector<EllipsoidSummary> ellipsoids;
+};
+
+// PLAN_REQUEST: the coordinator asks the view scorer for the view after `iteration - 1`.
+struct PlanRequest {
+  std::string scan_id;
+  int iteration = 0;                       // the view to plan, 0-based
+  int64_t request_id = 0;
+  std::string planner;                     // "pbnbv", "raycast", "random"
+  int64_t seed = 0;                        // the random planner's seed for this request
+  int map_iteration = -1;                  // plan from the map of this view
+  std::vector<Pose> views_done;            // registered camera poses of the mapped views
+  std::vector<Pose> excluded;              // views the rig could not reach, capture or map
+  int num_candidates = 0;                  // N
+  int num_parallels = 0;                   // alpha
+  int num_sectors = 0;                     // beta
+  bool full_sphere = false;
+  double working_distance_m = 0;           // d_c
+  int num_alternatives = 0;
+  double stop_fraction = 0;
+  bool spread_when_done = false;
+  double first_quality = 0;                // F of the first planned view, NaN before it
+  CameraIntrinsics camera;
+  DepthRange depth_range;
+  bool check_reachability = false;         // arm rig
+  Vector6d joint_position_rad = Vector6d::Zero();  // the rig state the plan starts from
+  double turntable_angle_rad = 0;
+  double object_z_m = 0;
+  Eigen::AlignedBox3d keepout;             // empty: none
+  std::string figure_path;                 // PNG of this planning step; empty: none
+};
+
+enum class PlanOutcome : int8_t { kView = 0, kStop = 1, kFailed = 2 };
+const char* to_string(PlanOutcome o);      // "view", "stop", "failed"
+
+// VIEW_PLAN: the view scorer's answer to a PlanRequest (same request_id). Every number is 0
+// unless the scorer filled it (a plan that could not be asked for stays so).
+struct ViewPlan {
+  std::string scan_id;
+  int iteration = 0;
+  int64_t request_id = 0;
+  std::string planner;
+  PlanOutcome outcome = PlanOutcome::kFailed;
+  std::string reason;
+  Pose object_T_camera = Pose::Identity(); // the next view (outcome kView)
+  double view_quality = 0;                 // F (pbnbv, pixels) or gain (raycast, voxels)
+  double first_quality = 0;
+  double frontier_area_px = 0, occupied_area_px = 0;
+  int partition = 0;
+  std::vector<int> allowed_sectors;
+  bool partition_fallback = false;
+  Eigen::Vector3d sphere_centre_m = Eigen::Vector3d::Zero();
+  double sphere_radius_m = 0;
+  int num_candidates = 0, num_unreachable = 0, num_excluded = 0, num_scored = 0;
+  int num_frontier_ellipsoids = 0, num_occupied_ellipsoids = 0;
+  double candidates_s = 0, reachability_s = 0, scoring_s = 0, wait_s = 0, plan_s = 0;
+  std::vector<Pose> alternatives;          // next best views, best first (outcome kView)
+  std::vector<double> alternative_quality;
+};
+
+// SCAN_STATUS: where the scan is.
+enum class ScanState : int8_t {
+  kStarting = 0, kMoving = 1, kCapturing = 2, kIntegrating = 3, kPlanning = 4, kDone = 5, kFailed = 6, kStopped = 7
+};
+
+struct ScanStatus {
+  std::string scan_id;
+  int iteration = 0;                       // current view, 0-based
+  int num_views_planned = 0;
+  int num_views_done = 0;
+  ScanState state = ScanState::kStarting;
+  std::string message;
+  double elapsed_s = 0;
+  int num_points = 0;                      // in the accumulated cloud
 };
 
 }  // namespace pbnbv

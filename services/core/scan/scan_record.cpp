@@ -1,0 +1,232 @@
+#include "core/scan/scan_record.hpp"
+
+#include <chrono>
+
+#include "core/base/format.hpp"
+#include "core/base/units.hpp"
+#include "core/io/cloud_file.hpp"
+#include "core/io/json.hpp"
+#include "core/perception/cloud_filter.hpp"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace pbnbv {
+
+namespace {
+
+// A 6-vector as a JSON array.
+json to_json6(const Vector6d& q) { return std::vector<double>(q.data(), q.data() + 6); }
+
+// scan.json's "move" of a view that got its MOVE_RESULT.
+json move_json(const MoveResult& m) {
+  return {{"status", to_string(m.status)},
+          {"reason", m.reason},
+          {"reached_object_T_camera", to_json(m.reached_object_T_camera)},
+          {"position_error_m", m.position_error_m},
+          {"angle_error_deg", rad_to_deg(m.angle_error_rad)},
+          {"joint_target_rad", to_json6(m.joint_target_rad)},
+          {"joint_position_rad", to_json6(m.joint_position_rad)},
+          {"turntable_target_rad", m.turntable_target_rad},
+          {"turntable_angle_rad", m.turntable_angle_rad}};
+}
+
+// scan.json's "capture" of a view that got its CLOUD.
+json capture_json(const CaptureResult& c) {
+  return {{"status", c.ok ? "ok" : "failed"},
+          {"message", c.message},
+          {"camera_object_T_camera", to_json(c.object_T_camera)},
+          {"joint_position_rad", to_json6(c.joint_position_rad)},
+          {"turntable_angle_rad", c.turntable_angle_rad},
+          {"depth_frame_seq", c.depth_frame_seq},
+          {"num_valid_pixels", c.num_valid_pixels},
+          {"num_cropped", c.num_cropped},
+          {"num_points", c.points.size()}};
+}
+
+// scan.json's "registration": the registration service's verdict, in mm and degrees.
+json registration_json(const RegisteredCloud& r) {
+  return {{"accepted", r.accepted},
+          {"refined", r.refined},
+          {"constraint", r.constraint},
+          {"reason", r.reason},
+          {"correction", to_json(r.correction)},
+          {"translation_mm", r.translation_m * 1e3},
+          {"rotation_deg", r.rotation_deg},
+          {"overlap", r.overlap},
+          {"rmse_mm", r.rmse_m * 1e3},
+          {"iterations", r.iterations},
+          {"registered_object_T_camera", to_json(r.cloud.object_T_camera)},
+          {"kinematic_object_T_camera", to_json(r.kinematic_object_T_camera)}};
+}
+
+// scan.json's "map": the voxel map after the view, as counts per state inside B.
+json map_json(const VoxelMapSummary& m) {
+  return {{"updated", m.updated},
+          {"message", m.message},
+          {"resolution_m", m.resolution_m},
+          {"bbox_min_m", to_json(m.bbox_min_m)},
+          {"bbox_max_m", to_json(m.bbox_max_m)},
+          {"voxels",
+           {{"none", m.num_none},
+            {"empty", m.num_empty},
+            {"occupied", m.num_occupied},
+            {"unknown", m.num_unknown},
+            {"frontier", m.num_frontier}}}};
+}
+
+// The ellipsoids a plan was made from.
+json ellipsoids_json(const EllipsoidSetSummary& es) {
+  json list = json::array();
+  for (const auto& e : es.ellipsoids) {
+    list.push_back({{"class", e.frontier ? "frontier" : "occupied"},
+                    {"centre_m", to_json(e.centre_m)},
+                    {"semi_axes_m", to_json(e.semi_axes_m)},
+                    {"quat_wxyz", e.quat_wxyz},
+                    {"voxels", e.num_voxels}});
+  }
+  return {{"occupied_components", es.occupied_components}, {"frontier_components", es.frontier_components}, {"list", list}};
+}
+
+}  // namespace
+
+double planner_step_ms(const PlanRecord& p) {
+  const double fit_s = p.ellipsoids ? p.ellipsoids->fit_s : 0.0;
+  return (p.map_update_s + fit_s + p.plan.plan_s) * 1e3;
+}
+
+json to_json(const PlanRecord& r) {
+  const ViewPlan& p = r.plan;
+  json j = {{"planner", p.planner},
+            {"outcome", to_string(p.outcome)},
+            {"reason", p.reason},
+            {"map_of_view", r.map_of_view},
+            {"view_quality_px", p.view_quality},
+            {"first_quality_px", p.first_quality},
+            {"frontier_area_px", p.frontier_area_px},
+            {"occupied_area_px", p.occupied_area_px},
+            {"partition", p.partition},
+            {"allowed_sectors", p.allowed_sectors},
+            {"partition_fallback", p.partition_fallback},
+            {"sphere", {{"centre_m", to_json(p.sphere_centre_m)}, {"radius_m", p.sphere_radius_m}}},
+            {"candidates",
+             {{"generated", p.num_candidates},
+              {"unreachable", p.num_unreachable},
+              {"excluded", p.num_excluded},
+              {"scored", p.num_scored}}},
+            {"alternative_quality_px", p.alternative_quality}};
+  if (r.ellipsoids) j["ellipsoids"] = ellipsoids_json(*r.ellipsoids);
+  const double fit_s = r.ellipsoids ? r.ellipsoids->fit_s : 0.0;
+  j["time_ms"] = {{"map_update", r.map_update_s * 1e3}, {"ellipsoid_fit", fit_s * 1e3},
+                  {"candidates", p.candidates_s * 1e3}, {"reachability", p.reachability_s * 1e3},
+                  {"scoring", p.scoring_s * 1e3},      {"scorer_wait", p.wait_s * 1e3},
+                  {"view_selection", p.plan_s * 1e3}};
+  j["planner_step_ms"] = planner_step_ms(r);
+  j["figure"] = "plans/" + view_file(p.iteration, "png");  // written by the view scorer just after it answers
+  return j;
+}
+
+json to_json(const ViewRecord& v) {
+  json view = {{"view", v.view}};
+  if (v.initial_view) {
+    view["plan"] = {{"planner", "initial view"}};
+  } else if (v.plan) {
+    view["plan"] = to_json(*v.plan);
+  }
+  if (v.option) {
+    view["requested_object_T_camera"] = to_json(v.requested_object_T_camera);
+    view["option"] = *v.option;
+  }
+  if (!v.failed_moves.empty()) {
+    json attempts = json::array();
+    for (const auto& f : v.failed_moves) {
+      attempts.push_back({{"option", f.option}, {"status", to_string(f.status)}, {"reason", f.reason}});
+    }
+    view["failed_moves"] = attempts;
+  }
+  if (v.move_unanswered) {
+    view["move"] = {{"status", "no_answer"}, {"reason", "no MOVE_RESULT from the motion executor"}};
+  } else if (v.move) {
+    view["move"] = move_json(*v.move);
+    view["time_s"] = {{"plan", v.move->plan_s}, {"move", v.move->move_s}, {"settle", v.move->settle_s},
+                      {"rig_motion", v.move->rig_motion_s}, {"move_round_trip", v.move_round_trip_s}};
+  }
+  if (v.capture_unanswered) {
+    view["capture"] = {{"status", "no_answer"}};
+  } else if (v.capture) {
+    view["time_s"]["capture"] = v.capture->capture_s;
+    view["time_s"]["cloud"] = v.capture->process_s;
+    view["time_s"]["capture_round_trip"] = v.capture_round_trip_s;
+    view["capture"] = capture_json(*v.capture);
+  }
+  if (v.registration) {
+    view["registration"] = registration_json(*v.registration);
+    view["time_s"]["register"] = v.registration->register_s;
+    view["time_s"]["register_round_trip"] = v.register_round_trip_s;
+  }
+  if (v.map) {
+    view["map"] = map_json(*v.map);
+    view["time_s"]["map_update"] = v.map->update_s;
+    view["time_s"]["map_round_trip"] = v.map_round_trip_s;
+  }
+  if (!v.frame_file.empty()) {
+    view["frame_file"] = v.frame_file;
+    view["merged"] = v.merged;
+    view["time_s"]["accumulate"] = v.accumulate_s;
+    view["time_s"]["view_total"] = v.view_total_s;
+  }
+  return view;
+}
+
+json to_json(const ScanStop& s) { return {{"reason", s.reason}, {"after_views", s.after_views}, {"rule", s.rule}}; }
+
+ScanRecord::ScanRecord(fs::path out, const ScanSettings& settings)
+    : out_(std::move(out)), views_planned_(settings.views), voxel_m_(settings.voxel_m) {
+  fs::create_directories(out_ / "frames");
+  report_["settings"] = to_json(settings);
+  report_["views"] = json::array();
+}
+
+void ScanRecord::set_ring_plan(double radius_m, double elevation_deg) {
+  report_["plan"] = {{"planner", "ring"}, {"radius_m", radius_m}, {"elevation_deg", elevation_deg}};
+}
+
+void ScanRecord::set_next_best_view_plan(const std::string& planner, const Pose& initial_view) {
+  report_["plan"] = {{"planner", planner}, {"initial_view", to_json(initial_view)}};
+}
+
+std::string ScanRecord::plan_figure_path(int view) const {
+  fs::create_directories(out_ / "plans");
+  return (out_ / "plans" / view_file(view, "png")).string();
+}
+
+double ScanRecord::accumulate(const RegisteredCloud& r, ViewRecord& v) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::string name = view_file(v.view, "ply");
+  write_ply(r.cloud.points, (out_ / "frames" / name).string());
+  v.frame_file = "frames/" + name;
+  v.merged = r.accepted;
+  if (r.accepted) {
+    accumulated_.insert(accumulated_.end(), r.cloud.points.begin(), r.cloud.points.end());
+    accumulated_ = voxel_downsample(accumulated_, voxel_m_);
+    write_ply(accumulated_, (out_ / "cloud.ply").string());
+  }
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void ScanRecord::add_view(const ViewRecord& v, int views_done, double elapsed_s) {
+  report_["views"].push_back(to_json(v));
+  write("running", "", views_done, elapsed_s);
+}
+
+void ScanRecord::set_stop(const ScanStop& stop) { report_["stop"] = to_json(stop); }
+
+void ScanRecord::set_planning_stopped(const PlanRecord& p) { report_["planning_stopped"] = to_json(p); }
+
+void ScanRecord::write(const std::string& state, const std::string& message, int views_done, double elapsed_s) {
+  report_["status"] = {{"state", state},           {"message", message},        {"views_done", views_done},
+                       {"views_planned", views_planned_}, {"elapsed_s", elapsed_s}, {"num_points", accumulated_.size()}};
+  write_json_atomic(report_, (out_ / "scan.json").string());
+}
+
+}  // namespace pbnbv

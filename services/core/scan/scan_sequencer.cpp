@@ -1,0 +1,464 @@
+#include "core/scan/scan_sequencer.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "core/base/format.hpp"
+#include "core/base/units.hpp"
+#include "core/geometry/views.hpp"
+
+namespace fs = std::filesystem;
+
+namespace pbnbv {
+
+namespace {
+
+// An object-frame box from the settings' corners; equal corners mean "no box".
+Eigen::AlignedBox3d box_or_none(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m) {
+  if (min_m == max_m) return Eigen::AlignedBox3d();
+  return Eigen::AlignedBox3d(min_m, max_m);
+}
+
+}  // namespace
+
+ScanSequencer::ScanSequencer(ScanSettings settings, fs::path out, ScanTimeouts timeouts)
+    : s_(std::move(settings)), t_(timeouts), record_(std::move(out), s_) {
+  const Eigen::Vector3d half = s_.normalisation.extent_m / 2.0;
+  const double radius = s_.working_distance_m + half.norm();
+  const double elevation_rad = deg_to_rad(s_.ring_elevation_deg);
+  const double start_azimuth_rad = deg_to_rad(s_.ring_start_azimuth_deg);
+  if (s_.planner == "ring") {
+    ring_ = ring_views(s_.views, radius, elevation_rad, start_azimuth_rad, Eigen::Vector3d::Zero());
+    record_.set_ring_plan(radius, s_.ring_elevation_deg);
+  } else if (s_.planner == "pbnbv" || s_.planner == "raycast" || s_.planner == "random") {
+    if (s_.initial_view_m.allFinite()) {
+      first_view_ = look_at_z_up(s_.initial_view_m, Eigen::Vector3d::Zero());
+    } else {
+      first_view_ = ring_views(1, radius, elevation_rad, start_azimuth_rad, Eigen::Vector3d::Zero())[0];
+    }
+    record_.set_next_best_view_plan(s_.planner, first_view_);
+  } else {
+    throw std::invalid_argument("planner '" + s_.planner + "' is not available (pbnbv, raycast, random, ring)");
+  }
+}
+
+void ScanSequencer::start(double now_s) {
+  t_start_s_ = now_s;
+  phase_ = Phase::kWaitingReady;
+  set_status(ScanState::kStarting, "waiting for the rig and services", now_s);
+  check_ready(now_s);
+}
+
+void ScanSequencer::handle(const ScanEvent& event, double now_s) {
+  if (phase_ == Phase::kFinished) return;
+  std::visit([&](const auto& e) { on(e, now_s); }, event);
+}
+
+void ScanSequencer::tick(double now_s) {
+  switch (phase_) {
+    case Phase::kIdle:
+    case Phase::kFinished:
+      return;
+    case Phase::kWaitingReady:
+      check_ready(now_s);
+      break;
+    case Phase::kPlanning:
+      if (awaited_.expired(now_s)) return finish(ScanState::kFailed, "the view scorer did not answer the plan for " + view_name(), now_s);
+      break;
+    case Phase::kMoving:
+      if (awaited_.expired(now_s)) {
+        view_.move_unanswered = true;
+        return fail_view("the motion executor did not answer the move to " + view_name(), now_s);
+      }
+      break;
+    case Phase::kCapturing:
+      if (awaited_.expired(now_s)) {
+        view_.capture_unanswered = true;
+        return fail_view("the camera service did not answer the capture of " + view_name(), now_s);
+      }
+      break;
+    case Phase::kRegistering:
+      if (awaited_.expired(now_s)) return fail_view("the registration service did not answer " + view_name(), now_s);
+      break;
+    case Phase::kMapping:
+      if (awaited_.expired(now_s)) return fail_view("the mapping service did not answer " + view_name(), now_s);
+      break;
+  }
+  if (phase_ == Phase::kFinished) return;
+  if (awaited_.resend_due(now_s)) {
+    outputs_.push_back(*awaited_.request);
+    awaited_.last_sent_s = now_s;
+    ++awaited_.sends;
+  }
+  if (now_s - last_status_s_ >= t_.status_period_s) publish_status(now_s);
+}
+
+void ScanSequencer::stop(double now_s) {
+  if (phase_ != Phase::kFinished) finish(ScanState::kStopped, "interrupted", now_s);
+}
+
+std::vector<ScanOutput> ScanSequencer::take_outputs() {
+  std::vector<ScanOutput> out;
+  out.swap(outputs_);
+  return out;
+}
+
+int ScanSequencer::exit_code() const {
+  switch (state_) {
+    case ScanState::kDone: return 0;
+    case ScanState::kStopped: return 130;
+    default: return 1;
+  }
+}
+
+// ---- Events ----------------------------------------------------------------------------------
+
+void ScanSequencer::on(const Heard& h, double now_s) {
+  seen_.insert(h.what);
+  if (phase_ == Phase::kWaitingReady) check_ready(now_s);
+}
+
+void ScanSequencer::on(const ViewPlan& p, double now_s) {
+  if (p.scan_id != s_.scan_id || phase_ != Phase::kPlanning || p.request_id != awaited_.request_id) return;
+  planned(p, now_s);
+}
+
+void ScanSequencer::on(const MoveResult& r, double now_s) {
+  if (r.scan_id != s_.scan_id || phase_ != Phase::kMoving || r.request_id != awaited_.request_id) return;
+  if (r.status == MoveStatus::kBusy) {  // still finishing an earlier move: ask again now
+    outputs_.push_back(*awaited_.request);
+    awaited_.last_sent_s = now_s;
+    ++awaited_.sends;
+    return;
+  }
+  moved(r, now_s);
+}
+
+void ScanSequencer::on(const CaptureResult& c, double now_s) {
+  if (c.scan_id != s_.scan_id || phase_ != Phase::kCapturing || c.request_id != capture_id_) return;
+  captured(c, now_s);
+}
+
+void ScanSequencer::on(const RegisteredCloud& r, double now_s) {
+  // The registration may answer the cloud before the sequence has taken the cloud itself.
+  if (r.scan_id != s_.scan_id || r.request_id != capture_id_) return;
+  if (phase_ != Phase::kCapturing && phase_ != Phase::kRegistering) return;
+  registered_ = r;
+  if (phase_ == Phase::kRegistering) registered(now_s);
+}
+
+void ScanSequencer::on(const VoxelMapSummary& m, double now_s) {
+  if (m.scan_id != s_.scan_id || m.iteration != iteration_) return;
+  if (phase_ != Phase::kCapturing && phase_ != Phase::kRegistering && phase_ != Phase::kMapping) return;
+  map_ = m;
+  if (phase_ == Phase::kMapping) mapped(now_s);
+}
+
+void ScanSequencer::on(const EllipsoidSetSummary& e, double /*now_s*/) {
+  if (e.scan_id != s_.scan_id || e.iteration < done_.latest_map) return;
+  ellipsoids_[e.iteration] = e;
+}
+
+// ---- The sequence ----------------------------------------------------------------------------
+
+void ScanSequencer::check_ready(double now_s) {
+  std::set<std::string> need = {"ARM_STATUS", "heartbeat of motion", "heartbeat of camera",
+                                "heartbeat of registration", "heartbeat of mapping"};
+  if (s_.rig == RigKind::kArm) need.insert("TURNTABLE_STATUS");
+  if (s_.planner != "ring") need.insert("heartbeat of scorer");
+  if (s_.planner == "pbnbv") need.insert("heartbeat of ellipsoids");
+  std::string missing;
+  for (const auto& n : need) {
+    if (!seen_.count(n)) missing += (missing.empty() ? "" : ", ") + n;
+  }
+  if (missing.empty()) return begin_view(0, now_s);
+  if (now_s - t_start_s_ > s_.startup_timeout_s) {
+    finish(ScanState::kFailed, "not ready after " + fixed(s_.startup_timeout_s, 2) + " s: no " + missing, now_s);
+  }
+}
+
+void ScanSequencer::begin_view(int i, double now_s) {
+  iteration_ = i;
+  view_ = ViewRecord{};
+  view_.view = i;
+  t_view_s_ = now_s;
+  options_.clear();
+  option_ = 0;
+  capture_id_ = -1;
+  registered_.reset();
+  map_.reset();
+  if (s_.planner == "ring") {
+    options_ = {ring_[i]};
+    return begin_move(now_s);
+  }
+  if (i == 0) {
+    options_ = {first_view_};
+    view_.initial_view = true;
+    return begin_move(now_s);
+  }
+  progress("planning");
+  set_status(ScanState::kPlanning, "planning " + view_name(), now_s);
+  begin_plan(now_s);
+}
+
+void ScanSequencer::begin_plan(double now_s) {
+  phase_ = Phase::kPlanning;
+  PlanRequest r;
+  r.scan_id = s_.scan_id;
+  r.iteration = iteration_;
+  r.planner = s_.planner;
+  r.seed = s_.seed + iteration_;
+  r.map_iteration = done_.latest_map;  // the newest map: the view scorer keeps only that one
+  r.views_done = done_.views_taken;
+  r.excluded = done_.excluded;
+  r.num_candidates = s_.candidates;
+  r.num_parallels = s_.parallels;
+  r.num_sectors = s_.sectors;
+  r.full_sphere = s_.full_sphere;
+  r.working_distance_m = s_.working_distance_m;
+  r.num_alternatives = s_.alternatives;
+  r.stop_fraction = s_.stop_fraction;
+  r.spread_when_done = s_.when_done == "spread";
+  r.first_quality = done_.first_quality;
+  r.camera = s_.camera;
+  r.depth_range = s_.depth_range;
+  r.check_reachability = s_.rig == RigKind::kArm;
+  r.joint_position_rad = done_.joints_rad;
+  r.turntable_angle_rad = done_.turntable_rad;
+  r.object_z_m = s_.object_z_m;
+  r.keepout = box_or_none(s_.keepout_min_m, s_.keepout_max_m);
+  r.figure_path = record_.plan_figure_path(iteration_);
+  if (done_.last_map < 0) {  // nothing to plan from: no request
+    ViewPlan none;
+    none.scan_id = s_.scan_id;
+    none.iteration = iteration_;
+    none.planner = s_.planner;
+    none.outcome = PlanOutcome::kFailed;
+    none.reason = "no view has been mapped yet";
+    return planned(none, now_s);
+  }
+  r.request_id = next_request_id();
+  send(r, r.request_id, t_.resend_s, now_s + t_.plan_s, now_s);
+}
+
+void ScanSequencer::planned(const ViewPlan& p, double now_s) {
+  PlanRecord plan;
+  plan.plan = p;
+  plan.map_of_view = done_.latest_map;
+  if (latest_map_summary_ && latest_map_summary_->iteration == done_.latest_map) {
+    plan.map_update_s = latest_map_summary_->update_s;
+  }
+  if (auto e = ellipsoids_.find(done_.latest_map); e != ellipsoids_.end()) plan.ellipsoids = e->second;
+  if (p.outcome != PlanOutcome::kView) {
+    const bool stop = p.outcome == PlanOutcome::kStop;
+    stop_ = ScanStop{p.reason, done_.views_done, stop ? "planner" : "planner failed"};
+    record_.set_stop(*stop_);
+    record_.set_planning_stopped(plan);
+    if (stop) return finish(ScanState::kDone, "scan complete: " + p.reason, now_s);
+    return finish(ScanState::kFailed, "no plan for " + view_name() + ": " + p.reason, now_s);
+  }
+  if (!std::isfinite(done_.first_quality)) done_.first_quality = p.first_quality;
+  options_ = {p.object_T_camera};
+  options_.insert(options_.end(), p.alternatives.begin(), p.alternatives.end());
+  const std::string quality = s_.planner == "pbnbv"     ? "F " + fixed(p.view_quality, 2) + " px, "
+                              : s_.planner == "raycast" ? "gain " + fixed(p.view_quality, 2) + " voxels, "
+                                                        : "";
+  progress("planned: " + quality + std::to_string(p.num_scored) + " candidates scored");
+  view_.plan = std::move(plan);
+  begin_move(now_s);
+}
+
+void ScanSequencer::begin_move(double now_s) {
+  phase_ = Phase::kMoving;
+  progress("moving");
+  set_status(ScanState::kMoving, "moving to " + view_name(), now_s);
+  t_step_s_ = now_s;
+  option_ = 0;
+  send_move(now_s);
+}
+
+void ScanSequencer::send_move(double now_s) {
+  MoveRequest r;
+  r.scan_id = s_.scan_id;
+  r.iteration = iteration_;
+  r.request_id = next_request_id();
+  r.object_T_camera = options_[option_];
+  r.object_z_m = s_.object_z_m;
+  r.keepout = box_or_none(s_.keepout_min_m, s_.keepout_max_m);
+  r.speed_scale = s_.speed_scale;
+  r.timeout_s = s_.move_timeout_s;
+  r.plan_only = false;
+  send(r, r.request_id, t_.resend_s, now_s + s_.move_timeout_s + t_.move_extra_s, now_s);
+}
+
+void ScanSequencer::moved(const MoveResult& r, double now_s) {
+  if (r.status == MoveStatus::kReached) {
+    view_.option = static_cast<int>(option_);
+    view_.requested_object_T_camera = options_[option_];
+  } else {
+    view_.failed_moves.push_back({static_cast<int>(option_), r.status, r.reason});
+    done_.excluded.push_back(options_[option_]);
+    if (r.status == MoveStatus::kUnreachable && option_ + 1 < options_.size()) {  // the next alternative
+      ++option_;
+      return send_move(now_s);
+    }
+  }
+  view_.move = r;
+  view_.move_round_trip_s = now_s - t_step_s_;
+  if (r.status != MoveStatus::kReached) {
+    progress(std::string(to_string(r.status)) + ": " + r.reason, true);
+    record_.add_view(view_, done_.views_done, now_s - t_start_s_);
+    return next_view(now_s);
+  }
+  moved_ = r;
+  done_.joints_rad = r.joint_position_rad;
+  done_.turntable_rad = r.turntable_angle_rad;
+  begin_capture(r.settled_utime, now_s);
+}
+
+void ScanSequencer::begin_capture(int64_t not_before_utime, double now_s) {
+  phase_ = Phase::kCapturing;
+  progress("capturing");
+  set_status(ScanState::kCapturing, "capturing " + view_name(), now_s);
+  t_step_s_ = now_s;
+  CaptureRequest r;
+  r.scan_id = s_.scan_id;
+  r.iteration = iteration_;
+  r.request_id = next_request_id();
+  r.not_before_utime = not_before_utime;
+  r.object_z_m = s_.object_z_m;
+  r.crop = box_or_none(s_.crop_min_m, s_.crop_max_m);
+  r.ground_clearance_m = s_.ground_clearance_m;
+  r.voxel_m = s_.voxel_m;
+  r.timeout_s = s_.capture_timeout_s;
+  capture_id_ = r.request_id;
+  // The camera service retries the trigger itself (3 tries); re-send only if the whole answer
+  // is lost.
+  const double per_try_s = 3 * s_.capture_timeout_s + t_.capture_extra_s;
+  send(r, r.request_id, per_try_s, now_s + t_.capture_attempts * per_try_s, now_s);
+}
+
+void ScanSequencer::captured(const CaptureResult& c, double now_s) {
+  view_.capture = c;
+  view_.capture_round_trip_s = now_s - t_step_s_;
+  if (!c.ok) {
+    progress("capture failed: " + c.message, true);
+    done_.excluded.push_back(moved_.reached_object_T_camera);
+    record_.add_view(view_, done_.views_done, now_s - t_start_s_);
+    return next_view(now_s);
+  }
+  begin_register(now_s);
+}
+
+void ScanSequencer::begin_register(double now_s) {
+  phase_ = Phase::kRegistering;
+  set_status(ScanState::kIntegrating, "registering and mapping " + view_name(), now_s);
+  progress("registering");
+  t_step_s_ = now_s;
+  wait_for_answer(now_s + t_.answer_s, now_s);
+  if (registered_) registered(now_s);
+}
+
+void ScanSequencer::registered(double now_s) {
+  view_.registration = registered_;
+  view_.register_round_trip_s = now_s - t_step_s_;
+  phase_ = Phase::kMapping;
+  progress("mapping");
+  t_step_s_ = now_s;
+  wait_for_answer(now_s + t_.answer_s, now_s);
+  if (map_) mapped(now_s);
+}
+
+void ScanSequencer::mapped(double now_s) {
+  const VoxelMapSummary& m = *map_;
+  const RegisteredCloud& reg = *registered_;
+  done_.latest_map = iteration_;
+  latest_map_summary_ = m;
+  ellipsoids_.erase(ellipsoids_.begin(), ellipsoids_.lower_bound(done_.latest_map));
+  view_.map = m;
+  view_.map_round_trip_s = now_s - t_step_s_;
+  if (m.updated) {
+    done_.last_map = iteration_;
+    done_.views_taken.push_back(reg.cloud.object_T_camera);
+  } else {  // not mapped (e.g. registration rejected it): do not plan it again
+    done_.excluded.push_back(moved_.reached_object_T_camera);
+  }
+  set_status(ScanState::kIntegrating, "adding " + view_name(), now_s);
+  view_.accumulate_s = record_.accumulate(reg, view_);
+  view_.view_total_s = now_s - t_view_s_ + view_.accumulate_s;
+  ++done_.views_done;
+  record_.add_view(view_, done_.views_done, now_s - t_start_s_);
+  const std::string verdict = !reg.accepted ? std::string("registration rejected")
+                              : reg.refined ? "registered (" + fixed(reg.translation_m * 1e3, 2) + " mm, " +
+                                                  fixed(reg.rotation_deg, 2) + " deg)"
+                                            : std::string("kinematic pose kept");
+  std::string line = "done: " + std::to_string(view_.capture->points.size()) + " points, " +
+                     std::to_string(record_.num_points()) + " in the model; " + verdict + ", " +
+                     std::to_string(m.num_frontier) + " frontier voxels; move " +
+                     fixed(moved_.move_s + moved_.settle_s, 2) + " s, capture " + fixed(view_.capture->capture_s, 2) +
+                     " s, register " + fixed(reg.register_s, 2) + " s, map " + fixed(m.update_s * 1e3, 2) + " ms";
+  if (view_.plan) line += ", plan " + fixed(planner_step_ms(*view_.plan), 2) + " ms";
+  progress(line, true);
+  next_view(now_s);
+}
+
+void ScanSequencer::next_view(double now_s) {
+  if (iteration_ + 1 < s_.views) return begin_view(iteration_ + 1, now_s);
+  if (done_.views_done == 0) return finish(ScanState::kFailed, "no view produced a cloud", now_s);
+  stop_ = ScanStop{"view budget reached (--views " + std::to_string(s_.views) + ")", done_.views_done, "budget"};
+  record_.set_stop(*stop_);
+  finish(ScanState::kDone, "scan complete: " + stop_->reason, now_s);
+}
+
+void ScanSequencer::fail_view(const std::string& message, double now_s) {
+  record_.add_view(view_, done_.views_done, now_s - t_start_s_);
+  finish(ScanState::kFailed, message, now_s);
+}
+
+void ScanSequencer::finish(ScanState state, const std::string& message, double now_s) {
+  phase_ = Phase::kFinished;
+  awaited_ = Awaited{};
+  set_status(state, message, now_s);
+  const char* name = state == ScanState::kDone ? "done" : state == ScanState::kStopped ? "stopped" : "failed";
+  record_.write(name, message, done_.views_done, now_s - t_start_s_);
+  summary_ = (state == ScanState::kDone ? "" : "scan ") + message + ": " + std::to_string(done_.views_done) + " of " +
+             std::to_string(s_.views) + " views, " + std::to_string(record_.num_points()) + " points, " +
+             fixed(now_s - t_start_s_, 2) + " s -> " + record_.scan_json_path().string();
+}
+
+// ---- Output ----------------------------------------------------------------------------------
+
+void ScanSequencer::send(const ScanOutput& request, int64_t request_id, double resend_s, double deadline_s, double now_s) {
+  awaited_ = Awaited{request, request_id, now_s, now_s, resend_s, deadline_s, 1};
+  outputs_.push_back(request);
+}
+
+void ScanSequencer::wait_for_answer(double deadline_s, double now_s) {
+  awaited_ = Awaited{std::nullopt, -1, now_s, now_s, Awaited::kNever, deadline_s, 0};
+}
+
+void ScanSequencer::progress(const std::string& what, bool ends_view) {
+  outputs_.push_back(ProgressLine{"[view " + std::to_string(iteration_ + 1) + "/" + std::to_string(s_.views) + "] " + what, ends_view});
+}
+
+void ScanSequencer::set_status(ScanState state, const std::string& message, double now_s) {
+  state_ = state;
+  message_ = message;
+  publish_status(now_s);
+}
+
+void ScanSequencer::publish_status(double now_s) {
+  ScanStatus m;
+  m.scan_id = s_.scan_id;
+  m.iteration = iteration_;
+  m.num_views_planned = s_.views;
+  m.num_views_done = done_.views_done;
+  m.state = state_;
+  m.message = message_;
+  m.elapsed_s = now_s - t_start_s_;
+  m.num_points = static_cast<int>(record_.num_points());
+  outputs_.push_back(m);
+  last_status_s_ = now_s;
+}
+
+}  // namespace pbnbv

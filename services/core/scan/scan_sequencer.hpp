@@ -1,0 +1,197 @@
+#pragma once
+// The scan coordinator's per-view sequence as a plain class: plan -> move -> capture ->
+// register -> map -> accumulate for each view, driven by the answers it is handed (plain
+// structs, core/scan/messages.hpp) and by ticks of a clock the caller reads (`now_s`, seconds
+// on a monotonic clock). It never blocks and never touches a bus: each call consumes one event
+// or tick and queues what the caller must send (requests, SCAN_STATUS) and print (progress
+// lines); the scan's folder is written through ScanRecord.
+//
+// The sequence (the README's "For each view"):
+// - wait until the rig and every service the planner needs have been heard from (startup
+//   deadline; the failure lists what is missing);
+// - the next view: the ring's (planner "ring"), the first view, or the view scorer's plan
+//   (PLAN_REQUEST / VIEW_PLAN) with its next-best alternatives;
+// - move there; a view the rig cannot reach is replaced by the plan's next alternative;
+// - capture; a failed capture excludes the view and the scan goes on;
+// - wait for the registration's and the mapping service's answers to the view; a view the map
+//   did not take (e.g. registration rejected it) is excluded from later plans;
+// - write its frame, merge it into cloud.ply when accepted;
+// - stop on the planner's decision, the view budget, or no view produced.
+// Every request is re-sent with the same request_id while unanswered and has a deadline
+// (ScanTimeouts); request ids are unique within the scan.
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "core/scan/messages.hpp"
+#include "core/scan/scan_record.hpp"
+#include "core/scan/scan_settings.hpp"
+
+namespace pbnbv {
+
+// A progress line for the user: "[view 2/10] moving". `ends_view`: the view's last line.
+struct ProgressLine {
+  std::string text;
+  bool ends_view = false;
+};
+
+// What the sequencer asks its caller to do, in order: publish a request or a status, print a
+// line.
+using ScanOutput = std::variant<MoveRequest, CaptureRequest, PlanRequest, ScanStatus, ProgressLine>;
+
+// A sign of life the readiness wait counts: "ARM_STATUS", "TURNTABLE_STATUS", or
+// "heartbeat of <service>".
+struct Heard {
+  std::string what;
+};
+
+// What the sequencer reacts to besides ticks.
+using ScanEvent = std::variant<MoveResult, CaptureResult, RegisteredCloud, VoxelMapSummary, EllipsoidSetSummary,
+                               ViewPlan, Heard>;
+
+// How long the sequence waits, s.
+struct ScanTimeouts {
+  double resend_s = 3.0;          // re-send a move or plan request whose answer has not come
+  double plan_s = 90.0;           // the view scorer's answer (it waits up to 60 s for inputs)
+  double move_extra_s = 15.0;     // beyond the move's own timeout
+  double answer_s = 60.0;         // the registration's and the mapping service's answer to a view
+  int capture_attempts = 3;       // each waits 3 x the capture timeout + 5 s (the camera
+  double capture_extra_s = 5.0;   // service retries the trigger 3 times itself)
+  double status_period_s = 1.0;   // SCAN_STATUS while nothing changes
+};
+
+// An answer the sequence waits for: the request that asks for it (none: the answer follows
+// from another service's work), re-sent every resend_s until the deadline.
+struct Awaited {
+  static constexpr double kNever = std::numeric_limits<double>::infinity();
+  std::optional<ScanOutput> request;
+  int64_t request_id = -1;
+  double since_s = 0;             // first sent (or the wait began)
+  double last_sent_s = 0;
+  double resend_s = kNever;
+  double deadline_s = kNever;
+  int sends = 0;
+
+  bool expired(double now_s) const { return now_s >= deadline_s; }
+  bool resend_due(double now_s) const { return request && now_s - last_sent_s >= resend_s; }
+};
+
+// What the scan has done so far: what the next plan request carries and the status counts.
+// Everything else about a finished view is in scan.json.
+struct ScanSoFar {
+  std::vector<Pose> views_taken;           // registered camera poses of mapped views
+  std::vector<Pose> excluded;              // views the rig could not reach, capture or map
+  double first_quality = std::numeric_limits<double>::quiet_NaN();  // F of the first plan
+  int last_map = -1;                       // last view integrated into the map
+  int latest_map = -1;                     // last view the mapping service answered
+  Vector6d joints_rad = Vector6d::Zero();  // the rig where the last view was reached
+  double turntable_rad = 0;
+  int views_done = 0;                      // views that produced a cloud
+  int64_t next_request_id = 1;             // request ids are unique within the scan
+};
+
+class ScanSequencer {
+ public:
+  // A sequencer for the scan `settings` writing to `out`. Throws std::invalid_argument for a
+  // planner it does not know.
+  ScanSequencer(ScanSettings settings, std::filesystem::path out, ScanTimeouts timeouts = {});
+
+  // Starts the readiness wait at now_s (SCAN_STATUS "starting").
+  void start(double now_s);
+  // Consumes one answer or sign of life. Answers of another scan, and answers to requests
+  // that are no longer waited for, are ignored.
+  void handle(const ScanEvent& event, double now_s);
+  // Re-sends what is due, fails what is past its deadline, publishes the periodic status.
+  void tick(double now_s);
+  // The user asked to stop: the scan ends "stopped" ("interrupted"), the view in progress is
+  // not recorded.
+  void stop(double now_s);
+
+  // What to send and print since the last call, in order.
+  std::vector<ScanOutput> take_outputs();
+
+  bool finished() const { return phase_ == Phase::kFinished; }
+  // 0 done, 1 failed, 130 stopped (valid once finished).
+  int exit_code() const;
+  ScanState state() const { return state_; }
+  // The closing line: "scan complete: ...: 3 of 3 views, 1234 points, 12.00 s -> DIR/scan.json".
+  const std::string& summary() const { return summary_; }
+  const ScanRecord& record() const { return record_; }
+  const ScanSoFar& so_far() const { return done_; }
+
+ private:
+  enum class Phase { kIdle, kWaitingReady, kPlanning, kMoving, kCapturing, kRegistering, kMapping, kFinished };
+
+  void on(const MoveResult& r, double now_s);
+  void on(const CaptureResult& c, double now_s);
+  void on(const RegisteredCloud& r, double now_s);
+  void on(const VoxelMapSummary& m, double now_s);
+  void on(const EllipsoidSetSummary& e, double now_s);
+  void on(const ViewPlan& p, double now_s);
+  void on(const Heard& h, double now_s);
+
+  void check_ready(double now_s);
+  void begin_view(int i, double now_s);
+  void begin_plan(double now_s);
+  void planned(const ViewPlan& p, double now_s);
+  void begin_move(double now_s);
+  void send_move(double now_s);
+  void moved(const MoveResult& r, double now_s);
+  void begin_capture(int64_t not_before_utime, double now_s);
+  void captured(const CaptureResult& c, double now_s);
+  void begin_register(double now_s);
+  void registered(double now_s);
+  void mapped(double now_s);
+  void end_view(double now_s);
+  void next_view(double now_s);
+  void fail_view(const std::string& message, double now_s);  // records the view so far, fails the scan
+  void finish(ScanState state, const std::string& message, double now_s);
+
+  void send(const ScanOutput& request, int64_t request_id, double resend_s, double deadline_s, double now_s);
+  void wait_for_answer(double deadline_s, double now_s);
+  int64_t next_request_id() { return done_.next_request_id++; }
+  void progress(const std::string& what, bool ends_view = false);
+  void set_status(ScanState state, const std::string& message, double now_s);
+  void publish_status(double now_s);
+  std::string view_name() const { return "view " + std::to_string(iteration_ + 1); }
+
+  ScanSettings s_;
+  ScanTimeouts t_;
+  ScanRecord record_;
+  std::vector<Pose> ring_;                  // planner "ring": every view
+  Pose first_view_ = Pose::Identity();      // next-best-view planners: the first view
+
+  ScanSoFar done_;
+  std::optional<VoxelMapSummary> latest_map_summary_;
+  std::map<int, EllipsoidSetSummary> ellipsoids_;  // by map view, from done_.latest_map on
+  std::optional<ScanStop> stop_;
+
+  // The view in progress.
+  Phase phase_ = Phase::kIdle;
+  int iteration_ = 0;
+  ViewRecord view_;
+  double t_view_s_ = 0, t_step_s_ = 0;      // the view's start, the current step's start
+  std::vector<Pose> options_;               // the planned view and its alternatives
+  std::size_t option_ = 0;
+  MoveResult moved_;
+  int64_t capture_id_ = -1;
+  std::optional<RegisteredCloud> registered_;  // kept when it comes before it is waited for
+  std::optional<VoxelMapSummary> map_;
+  Awaited awaited_;
+
+  std::set<std::string> seen_;
+  double t_start_s_ = 0;
+  double last_status_s_ = 0;
+  ScanState state_ = ScanState::kStarting;
+  std::string message_;
+  std::string summary_;
+  std::vector<ScanOutput> outputs_;
+};
+
+}  // namespace pbnbv

@@ -1,0 +1,146 @@
+// scan.json's entries and the scan folder's clouds, from hand-made answers.
+#include "core/scan/scan_record.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/base/units.hpp"
+#include "core/io/cloud_file.hpp"
+#include "core/io/json.hpp"
+#include "file_test_util.hpp"
+
+using namespace pbnbv;
+using nlohmann::json;
+
+namespace {
+
+class ScanRecordTest : public pbnbv::testing::TempDirTest {
+ protected:
+  ScanSettings settings() const {
+    ScanSettings s;
+    s.scan_id = "record";
+    s.views = 4;
+    s.voxel_m = 0.002;
+    return s;
+  }
+};
+
+RegisteredCloud registered(bool accepted, const PointCloud& points) {
+  RegisteredCloud r;
+  r.accepted = accepted;
+  r.cloud.points = points;
+  return r;
+}
+
+TEST_F(ScanRecordTest, AcceptedViewsAreMergedAndDownsampledRejectedOnesOnlyKeptInFrames) {
+  ScanRecord record(dir_, settings());
+  EXPECT_TRUE(std::filesystem::is_directory(dir_ / "frames"));
+  // Two points 0.5 mm apart fall into one 2 mm voxel: merged into their centroid.
+  ViewRecord v0;
+  v0.view = 0;
+  record.accumulate(registered(true, {Eigen::Vector3f(0.0105f, 0.0105f, 0.0105f), Eigen::Vector3f(0.5f, 0, 0)}), v0);
+  ViewRecord v1;
+  v1.view = 1;
+  record.accumulate(registered(true, {Eigen::Vector3f(0.0110f, 0.0105f, 0.0105f)}), v1);
+  ViewRecord v2;
+  v2.view = 2;
+  record.accumulate(registered(false, {Eigen::Vector3f(-0.3f, 0, 0), Eigen::Vector3f(-0.2f, 0, 0)}), v2);
+  EXPECT_EQ(v0.frame_file, "frames/view_000.ply");
+  EXPECT_EQ(v2.frame_file, "frames/view_002.ply");
+  EXPECT_TRUE(v1.merged);
+  EXPECT_FALSE(v2.merged);
+  EXPECT_EQ(read_ply((dir_ / "frames/view_002.ply").string()).size(), 2u);
+  const PointCloud cloud = read_ply((dir_ / "cloud.ply").string());
+  ASSERT_EQ(cloud.size(), 2u);
+  EXPECT_EQ(record.num_points(), 2u);
+  bool centroid = false;
+  for (const auto& p : cloud) centroid |= std::abs(p.x() - 0.01075f) < 1e-6f;
+  EXPECT_TRUE(centroid) << "the two close points become their centroid";
+}
+
+TEST_F(ScanRecordTest, AViewEntryHasASectionPerStepReached) {
+  ViewRecord v;
+  v.view = 2;
+  v.option = 1;
+  v.requested_object_T_camera = look_at_z_up(Eigen::Vector3d(0.6, 0, 0.3), Eigen::Vector3d::Zero());
+  v.failed_moves.push_back({0, MoveStatus::kUnreachable, "no IK solution"});
+  MoveResult m;
+  m.status = MoveStatus::kReached;
+  m.angle_error_rad = kPi / 180;
+  m.move_s = 2;
+  v.move = m;
+  v.move_round_trip_s = 2.5;
+  CaptureResult c;
+  c.ok = true;
+  c.points.resize(3);
+  v.capture = c;
+  v.capture_round_trip_s = 1;
+  json j = to_json(v);
+  EXPECT_EQ(j["view"], 2);
+  EXPECT_EQ(j["option"], 1);
+  EXPECT_NEAR(j["requested_object_T_camera"]["position_m"][0].get<double>(), 0.6, 1e-12);
+  EXPECT_EQ(j["failed_moves"][0]["status"], "unreachable");
+  EXPECT_EQ(j["move"]["status"], "reached");
+  EXPECT_NEAR(j["move"]["angle_error_deg"].get<double>(), 1.0, 1e-12);
+  EXPECT_EQ(j["move"]["joint_position_rad"].size(), 6u);
+  EXPECT_EQ(j["time_s"]["move"], 2.0);
+  EXPECT_EQ(j["time_s"]["move_round_trip"], 2.5);
+  EXPECT_EQ(j["capture"]["num_points"], 3);
+  EXPECT_EQ(j["time_s"]["capture_round_trip"], 1.0);
+  EXPECT_FALSE(j.contains("registration"));
+  EXPECT_FALSE(j.contains("map"));
+  EXPECT_FALSE(j.contains("frame_file"));
+  EXPECT_FALSE(j.contains("plan"));
+
+  ViewRecord lost;
+  lost.move_unanswered = true;
+  j = to_json(lost);
+  EXPECT_EQ(j["move"], json({{"status", "no_answer"}, {"reason", "no MOVE_RESULT from the motion executor"}}));
+  EXPECT_FALSE(j.contains("time_s"));
+}
+
+TEST_F(ScanRecordTest, APlanEntryTimesThePlannerStepAsThePaperDoes) {
+  PlanRecord p;
+  p.plan.iteration = 4;
+  p.plan.planner = "pbnbv";
+  p.plan.outcome = PlanOutcome::kView;
+  p.plan.plan_s = 0.25;
+  p.plan.first_quality = std::nan("");
+  p.map_of_view = 3;
+  p.map_update_s = 0.5;
+  EXPECT_EQ(planner_step_ms(p), 750.0);  // no ellipsoids: map update + view selection
+  EllipsoidSetSummary e;
+  e.fit_s = 0.125;
+  p.ellipsoids = e;
+  EXPECT_EQ(planner_step_ms(p), 875.0);
+  const json j = to_json(p);
+  EXPECT_EQ(j["planner_step_ms"], 875.0);
+  EXPECT_EQ(j["time_ms"]["ellipsoid_fit"], 125.0);
+  EXPECT_EQ(j["figure"], "plans/view_004.png");
+  EXPECT_EQ(j["outcome"], "view");
+  EXPECT_EQ(j["map_of_view"], 3);
+  EXPECT_NE(j.dump().find("\"first_quality_px\":null"), std::string::npos) << "NaN is written as null";
+  EXPECT_EQ(j["ellipsoids"]["list"].size(), 0u);
+}
+
+TEST_F(ScanRecordTest, TheStatusAndStopAreWrittenWithTheViews) {
+  ScanRecord record(dir_, settings());
+  record.set_ring_plan(0.8, 30);
+  ViewRecord v;
+  record.add_view(v, 1, 2.5);
+  json j = read_json((dir_ / "scan.json").string());
+  EXPECT_EQ(j["status"], json({{"state", "running"}, {"message", ""}, {"views_done", 1}, {"views_planned", 4},
+                               {"elapsed_s", 2.5}, {"num_points", 0}}));
+  EXPECT_EQ(j["views"].size(), 1u);
+  EXPECT_EQ(j["plan"]["planner"], "ring");
+  EXPECT_FALSE(j.contains("stop"));
+  record.set_stop({"view budget reached (--views 4)", 1, "budget"});
+  record.write("done", "scan complete", 1, 3.0);
+  j = read_json((dir_ / "scan.json").string());
+  EXPECT_EQ(j["status"]["state"], "done");
+  EXPECT_EQ(j["stop"]["rule"], "budget");
+  EXPECT_EQ(j["settings"]["scan_id"], "record");
+}
+
+}  // namespace

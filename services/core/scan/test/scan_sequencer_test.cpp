@@ -1,0 +1,708 @@
+// The coordinator's per-view sequence without a bus: a fake clock stepped by 0.25 s, and
+// hand-made answers from the "services" (each arrives a fixed time after its request), so every
+// round trip, deadline and re-send below can be checked by hand.
+#include "core/scan/scan_sequencer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <set>
+
+#include "core/base/units.hpp"
+#include "core/io/cloud_file.hpp"
+#include "core/io/json.hpp"
+#include "file_test_util.hpp"
+
+using namespace pbnbv;
+using nlohmann::json;
+
+namespace {
+
+constexpr double kStep = 0.25;  // the fake clock's tick, s (exact in binary)
+
+// A scan's settings for the tests: a 0.2 m cube object, the arm rig, 3 views.
+ScanSettings test_settings(const std::string& planner, int views) {
+  ScanSettings s;
+  s.scan_id = "unit-scan";
+  s.rig = RigKind::kArm;
+  s.planner = planner;
+  s.views = views;
+  s.normalisation.extent_m = Eigen::Vector3d::Constant(0.2);
+  s.object_z_m = 0.1;
+  s.keepout_min_m = Eigen::Vector3d(-0.12, -0.12, -0.1);
+  s.keepout_max_m = Eigen::Vector3d::Constant(0.12);
+  s.working_distance_m = 0.6;
+  s.ring_elevation_deg = 30;
+  s.move_timeout_s = 60;
+  s.capture_timeout_s = 10;
+  s.startup_timeout_s = 90;
+  return s;
+}
+
+// Ten points 1 cm apart along x, 10 cm further on for each view: no two fall in one 2 mm voxel.
+PointCloud view_points(int view) {
+  PointCloud c;
+  for (int k = 0; k < 10; ++k) c.emplace_back(0.1f * view + 0.01f * k, 0.05f, 0.02f);
+  return c;
+}
+
+// A camera pose looking at the origin from `eye`.
+Pose view_from(double x, double y, double z) { return look_at_z_up(Eigen::Vector3d(x, y, z), Eigen::Vector3d::Zero()); }
+
+class ScanSequencerTest : public pbnbv::testing::TempDirTest {
+ protected:
+  // Starts a scan and lets every service be heard at t = 0.
+  void start(const ScanSettings& s, bool hear_everyone = true) {
+    settings_ = s;
+    seq_ = std::make_unique<ScanSequencer>(s, dir_);
+    seq_->start(now_);
+    collect();
+    if (hear_everyone) {
+      for (const char* w : {"ARM_STATUS", "TURNTABLE_STATUS", "heartbeat of motion", "heartbeat of camera",
+                            "heartbeat of registration", "heartbeat of mapping", "heartbeat of scorer",
+                            "heartbeat of ellipsoids"}) {
+        deliver(Heard{w});
+      }
+    }
+  }
+
+  // Steps the clock until the scan ends or `until_s`, delivering answers when they are due.
+  void run(double until_s = 3600) {
+    while (!seq_->finished() && now_ < until_s) {
+      now_ += kStep;
+      while (!due_.empty() && due_.begin()->first <= now_) {
+        const ScanEvent e = due_.begin()->second;
+        due_.erase(due_.begin());
+        deliver(e);
+      }
+      seq_->tick(now_);
+      collect();
+    }
+  }
+
+  void deliver(const ScanEvent& e) {
+    seq_->handle(e, now_);
+    collect();
+  }
+
+  // Takes the sequencer's outputs and lets the fake services answer its requests.
+  void collect() {
+    for (const ScanOutput& out : seq_->take_outputs()) {
+      if (const auto* r = std::get_if<MoveRequest>(&out)) {
+        moves_.push_back({now_, *r});
+        if (auto a = motion(*r)) later(2.0, *a);
+      } else if (const auto* r = std::get_if<CaptureRequest>(&out)) {
+        captures_.push_back({now_, *r});
+        answer_capture(*r);
+      } else if (const auto* r = std::get_if<PlanRequest>(&out)) {
+        plans_.push_back({now_, *r});
+        if (auto a = scorer(*r)) later(0.5, *a);
+      } else if (const auto* s = std::get_if<ScanStatus>(&out)) {
+        statuses_.push_back(*s);
+      } else if (const auto* p = std::get_if<ProgressLine>(&out)) {
+        lines_.push_back(p->text);
+      }
+    }
+  }
+
+  void later(double delay_s, const ScanEvent& e) { due_.emplace(now_ + delay_s, e); }
+
+  // The camera answers after 1 s, the registration 0.5 s after the cloud, the map 0.25 s after
+  // that and (pbnbv) the ellipsoids 0.25 s after the map.
+  void answer_capture(const CaptureRequest& r) {
+    std::optional<CaptureResult> c = camera(r);
+    if (!c) return;
+    later(1.0, *c);
+    if (auto reg = registration(*c)) {
+      later(1.5, *reg);
+      if (auto map = mapping(*reg)) {
+        later(1.75, *map);
+        if (settings_.planner == "pbnbv") later(2.0, ellipsoids(map->iteration));
+      }
+    }
+  }
+
+  // ---- The fake services' answers (a test replaces the one it is about) ----
+
+  std::function<std::optional<MoveResult>(const MoveRequest&)> motion = [](const MoveRequest& r) {
+    MoveResult m;
+    m.scan_id = r.scan_id;
+    m.iteration = r.iteration;
+    m.request_id = r.request_id;
+    m.status = MoveStatus::kReached;
+    m.requested_object_T_camera = m.reached_object_T_camera = r.object_T_camera;
+    m.position_error_m = 0.001;
+    m.angle_error_rad = 0.01;
+    m.joint_position_rad = Vector6d::Constant(0.1 * (r.iteration + 1));
+    m.joint_target_rad = m.joint_position_rad;
+    m.turntable_angle_rad = m.turntable_target_rad = 0.5 * r.iteration;
+    m.plan_s = 0.125;
+    m.move_s = 1.0;
+    m.settle_s = 0.5;
+    m.rig_motion_s = 1.25;
+    m.settled_utime = 1000000 * (r.iteration + 1);
+    return m;
+  };
+
+  std::function<std::optional<CaptureResult>(const CaptureRequest&)> camera = [](const CaptureRequest& r) {
+    CaptureResult c;
+    c.scan_id = r.scan_id;
+    c.iteration = r.iteration;
+    c.request_id = r.request_id;
+    c.ok = true;
+    c.message = "ok";
+    c.object_T_camera = view_from(0.5, 0.1 * r.iteration, 0.4);
+    c.depth_frame_seq = 100 + r.iteration;
+    c.num_valid_pixels = 5000;
+    c.num_cropped = 7;
+    c.capture_s = 0.75;
+    c.process_s = 0.0625;
+    c.points = view_points(r.iteration);
+    return c;
+  };
+
+  std::function<std::optional<RegisteredCloud>(const CaptureResult&)> registration = [](const CaptureResult& c) {
+    RegisteredCloud r;
+    r.scan_id = c.scan_id;
+    r.iteration = c.iteration;
+    r.request_id = c.request_id;
+    r.cloud = c;
+    r.kinematic_object_T_camera = c.object_T_camera;
+    r.accepted = c.ok;
+    r.reason = "kinematic pose kept";
+    r.register_s = 0.25;
+    return r;
+  };
+
+  std::function<std::optional<VoxelMapSummary>(const RegisteredCloud&)> mapping = [](const RegisteredCloud& r) {
+    VoxelMapSummary m;
+    m.scan_id = r.scan_id;
+    m.iteration = r.iteration;
+    m.updated = r.accepted;
+    m.message = r.accepted ? "updated" : "registration rejected the view";
+    m.resolution_m = 0.03;
+    m.bbox_min_m = Eigen::Vector3d::Constant(-0.3);
+    m.bbox_max_m = Eigen::Vector3d::Constant(0.3);
+    m.num_none = 100;
+    m.num_empty = 200;
+    m.num_occupied = 30;
+    m.num_unknown = 400;
+    m.num_frontier = 5;
+    m.update_s = 0.002;
+    return m;
+  };
+
+  static EllipsoidSetSummary ellipsoids(int map_view) {
+    EllipsoidSetSummary e;
+    e.scan_id = "unit-scan";
+    e.iteration = map_view;
+    e.occupied_components = 1;
+    e.frontier_components = 1;
+    e.fit_s = 0.02;
+    EllipsoidSummary f;
+    f.frontier = true;
+    f.centre_m = Eigen::Vector3d(0.01, 0.02, 0.03);
+    f.semi_axes_m = Eigen::Vector3d(0.05, 0.04, 0.03);
+    f.num_voxels = 12;
+    e.ellipsoids = {f};
+    return e;
+  }
+
+  // A plan for every request: a view from +y above, no alternatives.
+  std::function<std::optional<ViewPlan>(const PlanRequest&)> scorer = [](const PlanRequest& r) {
+    return make_plan(r, view_from(0.1, 0.7, 0.3 + 0.01 * r.iteration), {});
+  };
+
+  static ViewPlan make_plan(const PlanRequest& r, const Pose& best, const std::vector<Pose>& alternatives) {
+    ViewPlan p;
+    p.scan_id = r.scan_id;
+    p.iteration = r.iteration;
+    p.request_id = r.request_id;
+    p.planner = r.planner;
+    p.outcome = PlanOutcome::kView;
+    p.reason = "best F";
+    p.object_T_camera = best;
+    p.view_quality = 1234.5;
+    p.first_quality = 2000;
+    p.num_candidates = 800;
+    p.num_unreachable = 40;
+    p.num_scored = 760;
+    p.plan_s = 0.1;
+    p.alternatives = alternatives;
+    p.alternative_quality.assign(alternatives.size(), 1000.0);
+    return p;
+  }
+
+  json scan_json() const { return read_json((dir_ / "scan.json").string()); }
+
+  // Move requests of view i, in order.
+  std::vector<MoveRequest> moves_of(int i) const {
+    std::vector<MoveRequest> out;
+    for (const auto& [t, r] : moves_) {
+      if (r.iteration == i) out.push_back(r);
+    }
+    return out;
+  }
+
+  ScanSettings settings_;
+  std::unique_ptr<ScanSequencer> seq_;
+  double now_ = 0;
+  std::multimap<double, ScanEvent> due_;
+  std::vector<std::pair<double, MoveRequest>> moves_;
+  std::vector<std::pair<double, CaptureRequest>> captures_;
+  std::vector<std::pair<double, PlanRequest>> plans_;
+  std::vector<ScanStatus> statuses_;
+  std::vector<std::string> lines_;
+};
+
+TEST_F(ScanSequencerTest, ThreeViewRingScanEndToEnd) {
+  start(test_settings("ring", 3));
+  run();
+  ASSERT_TRUE(seq_->finished());
+  EXPECT_EQ(seq_->exit_code(), 0);
+  EXPECT_EQ(seq_->state(), ScanState::kDone);
+  // Each view: move answered after 2 s, cloud 1 s later, registration 0.5 s, map 0.25 s:
+  // 3.75 s a view, 11.25 s for three.
+  EXPECT_EQ(now_, 11.25);
+  ASSERT_EQ(moves_.size(), 3u);
+  ASSERT_EQ(captures_.size(), 3u);
+  EXPECT_TRUE(plans_.empty());
+  // The ring: radius d_c + half the cube's diagonal = 0.6 + 0.1 * sqrt(3), 30 deg up, azimuths
+  // 0, 120, 240 deg.
+  const double radius = 0.6 + 0.1 * std::sqrt(3.0);
+  for (int k = 0; k < 3; ++k) {
+    const double az = deg_to_rad(120.0 * k), el = deg_to_rad(30.0);
+    const Eigen::Vector3d eye = radius * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+    EXPECT_LT((moves_[k].second.object_T_camera.translation() - eye).norm(), 1e-12) << "view " << k;
+    EXPECT_EQ(moves_[k].first, 3.75 * k);
+    // The capture waits for a frame exposed after the rig settled.
+    EXPECT_EQ(captures_[k].second.not_before_utime, 1000000 * (k + 1));
+    EXPECT_EQ(captures_[k].first, 3.75 * k + 2.0);
+  }
+  // Keep-out and crop boxes pass from the settings to the requests.
+  EXPECT_EQ(moves_[0].second.keepout.min(), Eigen::Vector3d(-0.12, -0.12, -0.1));
+  EXPECT_EQ(captures_[0].second.crop.max(), Eigen::Vector3d::Constant(0.5));
+
+  const json scan = scan_json();
+  EXPECT_EQ(scan["status"]["state"], "done");
+  EXPECT_EQ(scan["status"]["message"], "scan complete: view budget reached (--views 3)");
+  EXPECT_EQ(scan["status"]["views_done"], 3);
+  EXPECT_EQ(scan["status"]["views_planned"], 3);
+  EXPECT_EQ(scan["status"]["num_points"], 30);
+  EXPECT_EQ(scan["status"]["elapsed_s"], 11.25);
+  EXPECT_EQ(scan["stop"], json({{"reason", "view budget reached (--views 3)"}, {"after_views", 3}, {"rule", "budget"}}));
+  EXPECT_EQ(scan["plan"]["planner"], "ring");
+  EXPECT_NEAR(scan["plan"]["radius_m"].get<double>(), radius, 1e-15);
+  EXPECT_EQ(scan["plan"]["elevation_deg"], 30.0);
+  EXPECT_EQ(scan["settings"]["scan_id"], "unit-scan");
+  ASSERT_EQ(scan["views"].size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    const json& v = scan["views"][k];
+    EXPECT_EQ(v["view"], k);
+    EXPECT_FALSE(v.contains("plan"));
+    EXPECT_EQ(v["option"], 0);
+    EXPECT_EQ(v["move"]["status"], "reached");
+    EXPECT_NEAR(v["move"]["angle_error_deg"].get<double>(), 0.01 * 180 / kPi, 1e-12);
+    EXPECT_EQ(v["capture"]["status"], "ok");
+    EXPECT_EQ(v["capture"]["num_points"], 10);
+    EXPECT_EQ(v["capture"]["depth_frame_seq"], 100 + k);
+    EXPECT_EQ(v["registration"]["accepted"], true);
+    EXPECT_EQ(v["map"]["voxels"]["frontier"], 5);
+    EXPECT_EQ(v["frame_file"], "frames/view_00" + std::to_string(k) + ".ply");
+    EXPECT_EQ(v["merged"], true);
+    EXPECT_EQ(v["time_s"]["move_round_trip"], 2.0);
+    EXPECT_EQ(v["time_s"]["capture_round_trip"], 1.0);
+    EXPECT_EQ(v["time_s"]["register_round_trip"], 0.5);
+    EXPECT_EQ(v["time_s"]["map_round_trip"], 0.25);
+    EXPECT_EQ(v["time_s"]["move"], 1.0);
+    EXPECT_GE(v["time_s"]["view_total"].get<double>(), 3.75);
+    EXPECT_EQ(read_ply((dir_ / v["frame_file"].get<std::string>()).string()).size(), 10u);
+  }
+  EXPECT_EQ(read_ply((dir_ / "cloud.ply").string()).size(), 30u);
+
+  // Status: starting, then per view moving, capturing, registering, adding; then done.
+  ASSERT_FALSE(statuses_.empty());
+  EXPECT_EQ(statuses_.front().state, ScanState::kStarting);
+  EXPECT_EQ(statuses_.back().state, ScanState::kDone);
+  EXPECT_EQ(statuses_.back().num_views_done, 3);
+  EXPECT_EQ(statuses_.back().num_points, 30);
+  int moving = 0;
+  for (const auto& s : statuses_) moving += s.state == ScanState::kMoving && s.message.rfind("moving to view", 0) == 0;
+  EXPECT_GE(moving, 3);
+  // Progress: the stages of each view, then its summary.
+  const std::vector<std::string> first = {"[view 1/3] moving", "[view 1/3] capturing", "[view 1/3] registering",
+                                          "[view 1/3] mapping"};
+  ASSERT_GE(lines_.size(), 5u);
+  EXPECT_EQ(std::vector<std::string>(lines_.begin(), lines_.begin() + 4), first);
+  EXPECT_EQ(lines_[4], "[view 1/3] done: 10 points, 10 in the model; kinematic pose kept, 5 frontier voxels; "
+                       "move 1.50 s, capture 0.75 s, register 0.25 s, map 2.00 ms");
+  EXPECT_EQ(seq_->summary(), "scan complete: view budget reached (--views 3): 3 of 3 views, 30 points, 11.25 s -> " +
+                                 (dir_ / "scan.json").string());
+}
+
+TEST_F(ScanSequencerTest, AnUnreachableBestViewIsReplacedByTheNextAlternative) {
+  const Pose best = view_from(0.0, 0.0, -0.7);  // from below the table: the rig cannot
+  const Pose alternative = view_from(0.7, 0.0, 0.3);
+  scorer = [&](const PlanRequest& r) { return make_plan(r, r.iteration == 1 ? best : view_from(0, 0.7, 0.3), {alternative}); };
+  motion = [inner = motion](const MoveRequest& r) {
+    std::optional<MoveResult> m = inner(r);
+    if (r.object_T_camera.translation().z() < 0) {
+      m->status = MoveStatus::kUnreachable;
+      m->reason = "no inverse kinematics solution";
+    }
+    return m;
+  };
+  start(test_settings("pbnbv", 3));
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  // View 1 (the first planned one): the best view, then its alternative, each with its own id.
+  const std::vector<MoveRequest> tries = moves_of(1);
+  ASSERT_EQ(tries.size(), 2u);
+  EXPECT_TRUE(tries[0].object_T_camera.isApprox(best));
+  EXPECT_TRUE(tries[1].object_T_camera.isApprox(alternative));
+  EXPECT_NE(tries[0].request_id, tries[1].request_id);
+  // The plan for view 2 excludes the unreachable view and starts from view 1's joints.
+  ASSERT_EQ(plans_.size(), 2u);
+  const PlanRequest& next = plans_[1].second;
+  EXPECT_EQ(next.iteration, 2);
+  EXPECT_EQ(next.map_iteration, 1);
+  EXPECT_EQ(next.seed, 1 + 2);
+  ASSERT_EQ(next.excluded.size(), 1u);
+  EXPECT_TRUE(next.excluded[0].isApprox(best));
+  EXPECT_EQ(next.views_done.size(), 2u);
+  EXPECT_EQ(next.joint_position_rad, Vector6d::Constant(0.2));
+  EXPECT_TRUE(next.check_reachability);
+  EXPECT_EQ(next.figure_path, (dir_ / "plans" / "view_002.png").string());
+  EXPECT_TRUE(std::filesystem::is_directory(dir_ / "plans"));
+  EXPECT_TRUE(std::isnan(plans_[0].second.first_quality)) << "unknown before the first plan";
+  EXPECT_EQ(next.first_quality, 2000);
+
+  const json scan = scan_json();
+  EXPECT_EQ(scan["plan"]["planner"], "pbnbv");
+  const json& v0 = scan["views"][0];
+  EXPECT_EQ(v0["plan"], json({{"planner", "initial view"}}));
+  const json& v1 = scan["views"][1];
+  EXPECT_EQ(v1["option"], 1);
+  ASSERT_EQ(v1["failed_moves"].size(), 1u);
+  EXPECT_EQ(v1["failed_moves"][0], json({{"option", 0}, {"status", "unreachable"}, {"reason", "no inverse kinematics solution"}}));
+  EXPECT_NEAR(v1["requested_object_T_camera"]["position_m"][0].get<double>(), 0.7, 1e-12);
+  EXPECT_EQ(v1["move"]["status"], "reached");
+  // Two moves of 2 s each.
+  EXPECT_EQ(v1["time_s"]["move_round_trip"], 4.0);
+  // The plan as recorded: from the map of view 0, with that map's and the ellipsoids' times.
+  const json& plan = v1["plan"];
+  EXPECT_EQ(plan["outcome"], "view");
+  EXPECT_EQ(plan["map_of_view"], 0);
+  EXPECT_EQ(plan["candidates"], json({{"generated", 800}, {"unreachable", 40}, {"excluded", 0}, {"scored", 760}}));
+  EXPECT_EQ(plan["figure"], "plans/view_001.png");
+  EXPECT_NEAR(plan["planner_step_ms"].get<double>(), 2.0 + 20.0 + 100.0, 1e-9);
+  EXPECT_NEAR(plan["time_ms"]["ellipsoid_fit"].get<double>(), 20.0, 1e-12);
+  ASSERT_EQ(plan["ellipsoids"]["list"].size(), 1u);
+  EXPECT_EQ(plan["ellipsoids"]["list"][0]["class"], "frontier");
+  EXPECT_EQ(plan["ellipsoids"]["list"][0]["voxels"], 12);
+  EXPECT_EQ(plan["alternative_quality_px"], json::array({1000.0}));
+}
+
+TEST_F(ScanSequencerTest, MoreThanAHundredAlternativesKeepRequestIdsUnique) {
+  // View 1's plan has 120 alternatives; only the last is reachable. The motion executor answers
+  // a request id it has seen with the answer it gave (idempotent requests), so an id reused by
+  // view 2 (as i * 100 + k did: view 1 option 100 = view 2 option 0 = 200) would get view 1's
+  // "unreachable".
+  std::vector<Pose> alternatives;
+  for (int k = 0; k < 120; ++k) alternatives.push_back(view_from(0.5 + 0.001 * k, 0.2, k < 119 ? -0.5 : 0.5));
+  scorer = [&](const PlanRequest& r) {
+    return make_plan(r, r.iteration == 1 ? view_from(0.5, -0.2, -0.5) : view_from(0, 0.7, 0.3), r.iteration == 1 ? alternatives : std::vector<Pose>{});
+  };
+  std::map<int64_t, MoveResult> answered;
+  motion = [&, inner = motion](const MoveRequest& r) -> std::optional<MoveResult> {
+    if (auto a = answered.find(r.request_id); a != answered.end()) return a->second;
+    std::optional<MoveResult> m = inner(r);
+    if (r.object_T_camera.translation().z() < 0) {
+      m->status = MoveStatus::kUnreachable;
+      m->reason = "below the table";
+    }
+    answered[r.request_id] = *m;
+    return m;
+  };
+  ScanSettings s = test_settings("pbnbv", 3);
+  s.alternatives = 120;
+  start(s);
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  ASSERT_EQ(moves_of(1).size(), 121u);
+  std::set<int64_t> ids;
+  for (const auto& [t, r] : moves_) ids.insert(r.request_id);
+  for (const auto& [t, r] : captures_) ids.insert(r.request_id);
+  for (const auto& [t, r] : plans_) ids.insert(r.request_id);
+  EXPECT_EQ(ids.size(), moves_.size() + captures_.size() + plans_.size()) << "a request id was used twice";
+  EXPECT_EQ(seq_->so_far().next_request_id, static_cast<int64_t>(ids.size()) + 1);
+  const json scan = scan_json();
+  EXPECT_EQ(scan["views"][1]["option"], 120);
+  EXPECT_EQ(scan["views"][1]["failed_moves"].size(), 120u);
+  EXPECT_EQ(scan["views"][2]["move"]["status"], "reached");
+  EXPECT_EQ(scan["status"]["views_done"], 3);
+  EXPECT_EQ(plans_[1].second.excluded.size(), 120u);
+}
+
+TEST_F(ScanSequencerTest, ALostMoveResultIsAskedForAgainAfterThreeSecondsWithTheSameId) {
+  int asked = 0;
+  motion = [&, inner = motion](const MoveRequest& r) -> std::optional<MoveResult> {
+    if (++asked == 1) return std::nullopt;  // the first answer is lost
+    return inner(r);
+  };
+  start(test_settings("ring", 1));
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  ASSERT_EQ(moves_.size(), 2u);
+  EXPECT_EQ(moves_[0].first, 0.0);
+  EXPECT_EQ(moves_[1].first, 3.0);
+  EXPECT_EQ(moves_[1].second.request_id, moves_[0].second.request_id);
+  EXPECT_TRUE(moves_[1].second.object_T_camera.isApprox(moves_[0].second.object_T_camera));
+  // Answered 2 s after the second request: 5 s after the first.
+  EXPECT_EQ(scan_json()["views"][0]["time_s"]["move_round_trip"], 5.0);
+}
+
+TEST_F(ScanSequencerTest, ABusyMotionExecutorIsAskedAgainAtOnce) {
+  int asked = 0;
+  motion = [&, inner = motion](const MoveRequest& r) -> std::optional<MoveResult> {
+    std::optional<MoveResult> m = inner(r);
+    if (++asked == 1) m->status = MoveStatus::kBusy;
+    return m;
+  };
+  start(test_settings("ring", 1));
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  ASSERT_EQ(moves_.size(), 2u);
+  EXPECT_EQ(moves_[1].first, 2.0);  // when "busy" arrived
+  EXPECT_EQ(moves_[1].second.request_id, moves_[0].second.request_id);
+}
+
+TEST_F(ScanSequencerTest, NoMoveResultFailsTheScanAtTheMoveTimeoutPlusFifteenSeconds) {
+  motion = [](const MoveRequest&) -> std::optional<MoveResult> { return std::nullopt; };
+  ScanSettings s = test_settings("ring", 2);
+  s.move_timeout_s = 20;
+  start(s);
+  run();
+  EXPECT_EQ(seq_->exit_code(), 1);
+  EXPECT_EQ(now_, 35.0);
+  EXPECT_EQ(moves_.size(), 12u);  // at 0, 3, ..., 33 s
+  const json scan = scan_json();
+  EXPECT_EQ(scan["status"]["message"], "the motion executor did not answer the move to view 1");
+  EXPECT_EQ(scan["views"][0]["move"]["status"], "no_answer");
+}
+
+TEST_F(ScanSequencerTest, TheRegistrationDeadlineFailsTheScanNamingTheRegistrationService) {
+  registration = [](const CaptureResult&) -> std::optional<RegisteredCloud> { return std::nullopt; };
+  start(test_settings("ring", 2));
+  run();
+  ASSERT_TRUE(seq_->finished());
+  EXPECT_EQ(seq_->exit_code(), 1);
+  EXPECT_EQ(seq_->state(), ScanState::kFailed);
+  // The cloud came at 3 s; the registration's answer is waited for 60 s.
+  EXPECT_EQ(now_, 63.0);
+  const json scan = scan_json();
+  EXPECT_EQ(scan["status"]["state"], "failed");
+  EXPECT_EQ(scan["status"]["message"], "the registration service did not answer view 1");
+  EXPECT_EQ(scan["status"]["views_done"], 0);
+  EXPECT_EQ(scan["status"]["elapsed_s"], 63.0);
+  EXPECT_FALSE(scan.contains("stop"));
+  ASSERT_EQ(scan["views"].size(), 1u);
+  EXPECT_EQ(scan["views"][0]["capture"]["status"], "ok");
+  EXPECT_FALSE(scan["views"][0].contains("registration"));
+  EXPECT_FALSE(scan["views"][0].contains("frame_file"));
+  EXPECT_EQ(seq_->summary(), "scan the registration service did not answer view 1: 0 of 2 views, 0 points, 63.00 s -> " +
+                                 (dir_ / "scan.json").string());
+}
+
+TEST_F(ScanSequencerTest, AMissingMapFailsTheScanNamingTheMappingService) {
+  mapping = [](const RegisteredCloud&) -> std::optional<VoxelMapSummary> { return std::nullopt; };
+  start(test_settings("ring", 2));
+  run();
+  EXPECT_EQ(seq_->exit_code(), 1);
+  EXPECT_EQ(now_, 3.5 + 60.0);
+  EXPECT_EQ(scan_json()["status"]["message"], "the mapping service did not answer view 1");
+  EXPECT_TRUE(scan_json()["views"][0].contains("registration"));
+}
+
+TEST_F(ScanSequencerTest, APlannerStopEndsTheScanDoneWithItsReason) {
+  scorer = [](const PlanRequest& r) {
+    ViewPlan p = make_plan(r, Pose::Identity(), {});
+    p.outcome = PlanOutcome::kStop;
+    p.reason = "no frontier ellipsoid remains";
+    return p;
+  };
+  start(test_settings("pbnbv", 5));
+  run();
+  ASSERT_TRUE(seq_->finished());
+  EXPECT_EQ(seq_->exit_code(), 0);
+  EXPECT_EQ(plans_.size(), 1u);
+  const json scan = scan_json();
+  EXPECT_EQ(scan["status"]["state"], "done");
+  EXPECT_EQ(scan["status"]["message"], "scan complete: no frontier ellipsoid remains");
+  EXPECT_EQ(scan["status"]["views_done"], 1);
+  EXPECT_EQ(scan["stop"], json({{"reason", "no frontier ellipsoid remains"}, {"after_views", 1}, {"rule", "planner"}}));
+  EXPECT_EQ(scan["planning_stopped"]["outcome"], "stop");
+  EXPECT_EQ(scan["planning_stopped"]["map_of_view"], 0);
+  EXPECT_EQ(scan["views"].size(), 1u);
+  EXPECT_EQ(seq_->summary().rfind("scan complete: no frontier ellipsoid remains: 1 of 5 views, 10 points", 0), 0u)
+      << seq_->summary();
+}
+
+TEST_F(ScanSequencerTest, AFailedPlanFailsTheScan) {
+  scorer = [](const PlanRequest& r) {
+    ViewPlan p = make_plan(r, Pose::Identity(), {});
+    p.outcome = PlanOutcome::kFailed;
+    p.reason = "no reachable candidate";
+    return p;
+  };
+  start(test_settings("raycast", 3));
+  run();
+  EXPECT_EQ(seq_->exit_code(), 1);
+  const json scan = scan_json();
+  EXPECT_EQ(scan["status"]["message"], "no plan for view 2: no reachable candidate");
+  EXPECT_EQ(scan["stop"]["rule"], "planner failed");
+}
+
+TEST_F(ScanSequencerTest, ARejectedRegistrationIsNotMergedAndItsViewIsExcludedFromTheNextPlan) {
+  registration = [inner = registration](const CaptureResult& c) {
+    std::optional<RegisteredCloud> r = inner(c);
+    if (c.iteration == 1) {
+      r->accepted = false;
+      r->reason = "overlap 0.05 below 0.3";
+    }
+    return r;
+  };
+  start(test_settings("pbnbv", 3));
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  const json scan = scan_json();
+  const json& v1 = scan["views"][1];
+  EXPECT_EQ(v1["registration"]["accepted"], false);
+  EXPECT_EQ(v1["map"]["updated"], false);
+  EXPECT_EQ(v1["merged"], false);
+  EXPECT_EQ(read_ply((dir_ / "frames" / "view_001.ply").string()).size(), 10u);  // kept in frames/
+  EXPECT_EQ(read_ply((dir_ / "cloud.ply").string()).size(), 20u);               // views 0 and 2 only
+  EXPECT_EQ(scan["status"]["num_points"], 20);
+  EXPECT_EQ(scan["status"]["views_done"], 3);
+  // The plan for view 2: only view 0 mapped, view 1's reached pose excluded, planned from the
+  // latest map (view 1's answer, unchanged).
+  ASSERT_EQ(plans_.size(), 2u);
+  const PlanRequest& next = plans_[1].second;
+  ASSERT_EQ(next.views_done.size(), 1u);
+  ASSERT_EQ(next.excluded.size(), 1u);
+  EXPECT_TRUE(next.excluded[0].isApprox(moves_of(1).back().object_T_camera));
+  EXPECT_EQ(next.map_iteration, 1);
+  // At the end: views 0 and 2 mapped, view 1 excluded.
+  EXPECT_EQ(seq_->so_far().views_taken.size(), 2u);
+  EXPECT_EQ(seq_->so_far().excluded.size(), 1u);
+  EXPECT_EQ(seq_->so_far().last_map, 2);
+  EXPECT_EQ(seq_->so_far().views_done, 3);
+  EXPECT_NE(std::find(lines_.begin(), lines_.end(),
+                      "[view 2/3] done: 10 points, 10 in the model; registration rejected, 5 frontier voxels; "
+                      "move 1.50 s, capture 0.75 s, register 0.25 s, map 2.00 ms, plan 122.00 ms"),
+            lines_.end());
+}
+
+TEST_F(ScanSequencerTest, AFailedCaptureExcludesTheViewAndTheScanGoesOn) {
+  camera = [inner = camera](const CaptureRequest& r) {
+    std::optional<CaptureResult> c = inner(r);
+    if (r.iteration == 0) {
+      c->ok = false;
+      c->message = "no DEPTH_FRAME for trigger 3 after 3 tries";
+      c->points.clear();
+    }
+    return c;
+  };
+  start(test_settings("ring", 2));
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  const json scan = scan_json();
+  EXPECT_EQ(scan["status"]["views_done"], 1);
+  ASSERT_EQ(scan["views"].size(), 2u);
+  EXPECT_EQ(scan["views"][0]["capture"]["status"], "failed");
+  EXPECT_FALSE(scan["views"][0].contains("frame_file"));
+  EXPECT_EQ(scan["views"][1]["merged"], true);
+}
+
+TEST_F(ScanSequencerTest, ALostCaptureIsAskedForAgainAfterThreeTimesItsTimeoutPlusFive) {
+  int asked = 0;
+  camera = [&, inner = camera](const CaptureRequest& r) -> std::optional<CaptureResult> {
+    if (++asked < 3) return std::nullopt;
+    return inner(r);
+  };
+  start(test_settings("ring", 1));
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  ASSERT_EQ(captures_.size(), 3u);
+  EXPECT_EQ(captures_[1].first - captures_[0].first, 35.0);
+  EXPECT_EQ(captures_[2].first - captures_[0].first, 70.0);
+  EXPECT_EQ(captures_[2].second.request_id, captures_[0].second.request_id);
+}
+
+TEST_F(ScanSequencerTest, TheStartupDeadlineNamesWhatWasNotHeard) {
+  ScanSettings s = test_settings("ring", 2);
+  s.startup_timeout_s = 5;
+  start(s, false);
+  deliver(Heard{"ARM_STATUS"});
+  for (const char* w : {"heartbeat of motion", "heartbeat of camera", "heartbeat of registration"}) deliver(Heard{w});
+  run();
+  EXPECT_EQ(seq_->exit_code(), 1);
+  EXPECT_EQ(now_, 5.25);
+  EXPECT_TRUE(moves_.empty());
+  EXPECT_EQ(scan_json()["status"]["message"], "not ready after 5.00 s: no TURNTABLE_STATUS, heartbeat of mapping");
+}
+
+TEST_F(ScanSequencerTest, StoppingEndsTheScanStoppedWithoutTheViewInProgress) {
+  start(test_settings("ring", 3));
+  run(5.0);  // view 1 done at 3.75 s; view 2 moving
+  seq_->stop(now_);
+  collect();
+  EXPECT_EQ(seq_->exit_code(), 130);
+  const json scan = scan_json();
+  EXPECT_EQ(scan["status"]["state"], "stopped");
+  EXPECT_EQ(scan["status"]["message"], "interrupted");
+  EXPECT_EQ(scan["views"].size(), 1u);
+  EXPECT_EQ(statuses_.back().state, ScanState::kStopped);
+}
+
+TEST_F(ScanSequencerTest, AnswersOfAnotherScanOrAnOldRequestAreIgnored) {
+  motion = [](const MoveRequest&) -> std::optional<MoveResult> { return std::nullopt; };
+  start(test_settings("ring", 1));
+  const MoveRequest asked = moves_.at(0).second;
+  MoveResult foreign;
+  foreign.scan_id = "another-scan";
+  foreign.request_id = asked.request_id;
+  foreign.status = MoveStatus::kUnreachable;
+  deliver(foreign);
+  MoveResult stale = foreign;
+  stale.scan_id = "unit-scan";
+  stale.request_id = asked.request_id + 1000;
+  deliver(stale);
+  run(10);
+  EXPECT_FALSE(seq_->finished());
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "scan.json")) << "nothing recorded yet";
+}
+
+TEST_F(ScanSequencerTest, StatusIsRepeatedEverySecondWhileWaiting) {
+  motion = [](const MoveRequest&) -> std::optional<MoveResult> { return std::nullopt; };
+  start(test_settings("ring", 1));
+  statuses_.clear();
+  run(10);
+  EXPECT_EQ(statuses_.size(), 10u);  // at 1, 2, ..., 10 s
+  EXPECT_EQ(statuses_.back().elapsed_s, 10.0);
+  EXPECT_EQ(statuses_.back().state, ScanState::kMoving);
+}
+
+TEST_F(ScanSequencerTest, AnUnknownPlannerIsRefusedByName) {
+  try {
+    ScanSequencer s(test_settings("spiral", 3), dir_);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("planner 'spiral'"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
