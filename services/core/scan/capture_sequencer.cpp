@@ -108,7 +108,7 @@ CaptureStep CaptureSequencer::tick(double now_s) {
     const bool turntable_after = !rig_.has_turntable || (!turntable_.empty() && turntable_.back().utime >= t);
     if ((arm_after && turntable_after) || now_s - job_->t_frame > kCaptureReadingWaitS) {
       const DepthFrame frame = std::move(*job_->frame);  // process() ends the job
-      return process(frame, now_s);
+      return process(frame);
     }
     return {};
   }
@@ -137,7 +137,7 @@ CaptureStep CaptureSequencer::tick(double now_s) {
 
 // The answer to the job from its frame: the pose from the readings nearest the exposure, the
 // object-frame cloud; a failure naming the frame and why when there is no reading to use.
-CaptureStep CaptureSequencer::process(const DepthFrame& f, double now_s) {
+CaptureStep CaptureSequencer::process(const DepthFrame& f) {
   CaptureStep step;
   const auto t0 = std::chrono::steady_clock::now();
   const CaptureRequest& r = job_->request;

@@ -79,7 +79,7 @@ class CaptureSequencer {
   };
 
   CaptureStep trigger(double now_s);
-  CaptureStep process(const DepthFrame& frame, double now_s);
+  CaptureStep process(const DepthFrame& frame);
   CaptureStep fail(const std::string& why, double now_s);
   CaptureResult blank(const CaptureRequest& r) const;
 

@@ -64,8 +64,6 @@ class MotionSequencer {
   MotionStep tick(double now_s);
 
   bool moving() const { return job_.has_value(); }
-  const ArmReading& arm() const { return arm_; }
-  const TurntableReading& turntable() const { return turntable_; }
 
  private:
   struct Job {
