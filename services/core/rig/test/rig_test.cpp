@@ -354,6 +354,11 @@ TEST_F(ArmRig, UnreachableViewsGiveReasons) {
   // With the cube-sized box the same view is reachable (the box is what blocks it).
   s = checker.solve(hemi, rig_->q_home, 0, cube_keepout(), kObjectZ);
   EXPECT_TRUE(s.reachable) << s.reason;
+  // An empty box (Eigen's default) and a flat one (no volume) are no box: reachable too.
+  EXPECT_TRUE(checker.solve(hemi, rig_->q_home, 0, Eigen::AlignedBox3d(), kObjectZ).reachable);
+  Eigen::AlignedBox3d flat = big;
+  flat.max().z() = flat.min().z();
+  EXPECT_TRUE(checker.solve(hemi, rig_->q_home, 0, flat, kObjectZ).reachable);
 
   // Below the table top: camera 0.75 m from the axis at world z = -0.05 (object frame
   // z = -0.05 - 0.215), looking straight down. With the shoulder 1 m above the table, reaching
