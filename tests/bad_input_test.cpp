@@ -272,6 +272,8 @@ TEST_F(BadInput, OutOfContractValuesAreRejectedWithTheFieldNamed) {
   lcm.publish("ARM_COMMAND", &five);
   ASSERT_TRUE(listener_->spin_until([] { return listener_->arm.fault.find("777001") != std::string::npos; }, 5.0));
   EXPECT_EQ(listener_->arm.mode, arm_status_t::kModeFault);
+  EXPECT_EQ(listener_->arm.fault_code, arm_status_t::kFaultCommandRejected);
+  EXPECT_EQ(listener_->arm.fault_command_seq, 777001);
   EXPECT_NE(listener_->arm.fault.find("num_joints"), std::string::npos) << listener_->arm.fault;
 
   arm_command_t beyond = five;
@@ -281,6 +283,7 @@ TEST_F(BadInput, OutOfContractValuesAreRejectedWithTheFieldNamed) {
   beyond.joint_position_rad[2] = 10.0;  // a3 far outside its range
   lcm.publish("ARM_COMMAND", &beyond);
   ASSERT_TRUE(listener_->spin_until([] { return listener_->arm.fault.find("777002") != std::string::npos; }, 5.0));
+  EXPECT_EQ(listener_->arm.fault_command_seq, 777002);
   EXPECT_NE(listener_->arm.fault.find("a3"), std::string::npos) << listener_->arm.fault;
   EXPECT_NE(listener_->arm.fault.find("limits"), std::string::npos) << listener_->arm.fault;
 

@@ -84,7 +84,8 @@ class RigSim {
 
   // Starts a synchronised ramp to `target` at `speed_scale` of the limits. Throws
   // std::invalid_argument naming the joint when a target is outside its limits or not finite
-  // (the command is then ignored: the rig keeps holding).
+  // (the command is then ignored: the rig keeps holding; the twin reports it in the status as
+  // kFaultCommandRejected with the command's seq).
   void command_arm(const Vector6d& target, double speed_scale, long seq);
   void command_turntable(double target_rad, double speed_scale, long seq);
   void hold_arm(long seq);  // stop where it is

@@ -66,10 +66,24 @@ int64_t rig_utime(int64_t epoch_utime, double sim_s) {
   return epoch_utime + static_cast<int64_t>(std::llround(sim_s * 1e6));
 }
 
+// The mode of a joint group as Status's constants (arm_status_t or turntable_status_t).
+template <class Status>
 int8_t mode_of(const twin::RigSim& sim, const twin::JointGroup& g) {
-  if (g.command_seq < 0 && sim.settled(g)) return arm_status_t::kModeIdle;
-  return sim.settled(g) ? arm_status_t::kModeSettled : arm_status_t::kModeMoving;
+  if (g.command_seq < 0 && sim.settled(g)) return Status::kModeIdle;
+  return sim.settled(g) ? Status::kModeSettled : Status::kModeMoving;
 }
+
+// The last command a driver refused, until it accepts one: the twin's only fault
+// (kFaultCommandRejected; it has no drive that can fail).
+struct Rejection {
+  std::string fault;         // empty: none
+  int64_t command_seq = -1;  // the refused command
+  void set(const std::string& what, int64_t seq) {
+    fault = what;
+    command_seq = seq;
+  }
+  void clear() { set("", -1); }
+};
 
 }  // namespace
 
@@ -147,7 +161,7 @@ int main(int argc, char** argv) {
     const int64_t epoch = bus::now_utime();
     long status_seq = 0;
     long frame_seq = 0;
-    std::string arm_fault, turntable_fault;
+    Rejection arm_fault, turntable_fault;
 
     bus.subscribe<arm_command_t>(channels::kArmCommand, [&](const arm_command_t& c) {
       try {
@@ -164,8 +178,8 @@ int main(int argc, char** argv) {
         }
         arm_fault.clear();
       } catch (const std::exception& e) {
-        arm_fault = "rejected ARM_COMMAND seq " + std::to_string(c.seq) + ": " + e.what();
-        throw std::invalid_argument(arm_fault);
+        arm_fault.set("rejected ARM_COMMAND seq " + std::to_string(c.seq) + ": " + e.what(), c.seq);
+        throw std::invalid_argument(arm_fault.fault);
       }
     });
     bus.subscribe<turntable_command_t>(channels::kTurntableCommand, [&](const turntable_command_t& c) {
@@ -173,8 +187,8 @@ int main(int argc, char** argv) {
         sim.command_turntable(c.angle_rad, c.speed_scale, c.seq);
         turntable_fault.clear();
       } catch (const std::exception& e) {
-        turntable_fault = "rejected TURNTABLE_COMMAND seq " + std::to_string(c.seq) + ": " + e.what();
-        throw std::invalid_argument(turntable_fault);
+        turntable_fault.set("rejected TURNTABLE_COMMAND seq " + std::to_string(c.seq) + ": " + e.what(), c.seq);
+        throw std::invalid_argument(turntable_fault.fault);
       }
     });
     bus.subscribe<depth_trigger_t>(channels::kDepthTrigger, [&](const depth_trigger_t& t) {
@@ -237,8 +251,11 @@ int main(int argc, char** argv) {
         s.joint_position_commanded_rad = bus::to_std(
             Eigen::Map<const Vector6d>(sim.arm().target.data()) + (sim.arm_position_reported() - sim.arm_position()));
         s.command_seq = sim.arm().command_seq;
-        s.mode = arm_fault.empty() ? mode_of(sim, sim.arm()) : arm_status_t::kModeFault;
-        s.fault = arm_fault;
+        const bool arm_faulted = !arm_fault.fault.empty();
+        s.mode = arm_faulted ? arm_status_t::kModeFault : mode_of<arm_status_t>(sim, sim.arm());
+        s.fault_code = arm_faulted ? arm_status_t::kFaultCommandRejected : arm_status_t::kFaultNone;
+        s.fault_command_seq = arm_fault.command_seq;
+        s.fault = arm_fault.fault;
         bus.publish(channels::kArmStatus, s);
         if (sim.has_turntable()) {
           turntable_status_t t;
@@ -248,8 +265,11 @@ int main(int argc, char** argv) {
           t.velocity_rad_s = sim.turntable_velocity();
           t.angle_commanded_rad = sim.turntable().target[0] + errors.turntable_offset_rad;
           t.command_seq = sim.turntable().command_seq;
-          t.mode = turntable_fault.empty() ? mode_of(sim, sim.turntable()) : arm_status_t::kModeFault;
-          t.fault = turntable_fault;
+          const bool turntable_faulted = !turntable_fault.fault.empty();
+          t.mode = turntable_faulted ? turntable_status_t::kModeFault : mode_of<turntable_status_t>(sim, sim.turntable());
+          t.fault_code = turntable_faulted ? turntable_status_t::kFaultCommandRejected : turntable_status_t::kFaultNone;
+          t.fault_command_seq = turntable_fault.command_seq;
+          t.fault = turntable_fault.fault;
           bus.publish(channels::kTurntableStatus, t);
         }
         ++status_seq;

@@ -159,9 +159,7 @@ std::vector<uint8_t> observable_mask(const BenchSpec& spec, const fs::path& scan
   const std::vector<Pose> candidates = candidate_views(Eigen::AlignedBox3d(-half, half), cs);
   const RigModel rig = load_rig(s.rig_model_path);
   ReachabilityChecker checker(rig);
-  KeepoutBox keepout;
-  keepout.min_m = s.keepout_min_m;
-  keepout.max_m = s.keepout_max_m;
+  const Eigen::AlignedBox3d keepout(s.keepout_min_m, s.keepout_max_m);
   const std::vector<ViewSolution> reach = checker.solve_batch(candidates, rig.q_home, 0.0, keepout, s.object_z_m);
   std::vector<Pose> reachable;
   for (std::size_t i = 0; i < candidates.size(); ++i) {

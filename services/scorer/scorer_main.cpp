@@ -192,11 +192,8 @@ class ScorerService {
     }
     Vector6d q;
     for (int k = 0; k < 6; ++k) q[k] = r.joint_position_rad[k];
-    KeepoutBox keepout;
-    for (int k = 0; k < 3; ++k) {
-      keepout.min_m[k] = r.keepout_min_m[k];
-      keepout.max_m[k] = r.keepout_max_m[k];
-    }
+    const Eigen::AlignedBox3d keepout(Eigen::Map<const Eigen::Vector3d>(r.keepout_min_m),
+                                      Eigen::Map<const Eigen::Vector3d>(r.keepout_max_m));
     std::vector<bool> ok(cands.size(), false);
     const std::size_t half = cands.size() / 2;
     auto run = [&](int worker, std::size_t lo, std::size_t hi) {

@@ -148,9 +148,7 @@ TEST(RigSim, MovesBetweenHemisphereViewsStayWithinLimitsAndSettleQuickly) {
   const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
   twin::RigSim sim(rig, twin::ObjectPlacement{}, model_out());
   ReachabilityChecker checker(rig);
-  KeepoutBox keepout;
-  keepout.min_m = Eigen::Vector3d(-0.17, -0.17, -0.15);
-  keepout.max_m = Eigen::Vector3d::Constant(0.17);
+  const Eigen::AlignedBox3d keepout(Eigen::Vector3d(-0.17, -0.17, -0.15), Eigen::Vector3d::Constant(0.17));
   const double radius = 0.6 + std::sqrt(3.0) * 0.15;
   int moves = 0;
   for (double polar_deg : {20.0, 45.0, 70.0, 85.0}) {

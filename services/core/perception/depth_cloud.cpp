@@ -27,8 +27,7 @@ PointCloud depth_to_object_cloud(const std::vector<float>& depth_m, const Camera
       if (!std::isfinite(z) || z < range.min_m || z > range.max_m) continue;
       ++s.num_valid_pixels;
       const Eigen::Vector3d p = r * back_project(k, u, v, z) + t;
-      if ((p.array() < crop.min_m.array()).any() || (p.array() > crop.max_m.array()).any() ||
-          p.z() <= floor_z) {
+      if ((!crop.volume_m.isEmpty() && !crop.volume_m.contains(p)) || p.z() <= floor_z) {
         ++s.num_cropped;
         continue;
       }

@@ -1,6 +1,7 @@
 #pragma once
 // Turning one depth frame into an object-frame cloud: decode, back-project, transform, crop,
 // downsample. Plain functions; the camera service calls them.
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -12,8 +13,7 @@
 namespace pbnbv {
 
 struct CloudCrop {
-  Eigen::Vector3d min_m = Eigen::Vector3d::Constant(-1e9);  // working volume, object frame
-  Eigen::Vector3d max_m = Eigen::Vector3d::Constant(1e9);
+  Eigen::AlignedBox3d volume_m;  // working volume, object frame (closed); empty: no limit
   double ground_z_m = -1e9;  // object-frame z of the turntable top; points at or below
   double ground_clearance_m = 0;  // ground_z + clearance are dropped
 };

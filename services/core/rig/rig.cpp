@@ -682,6 +682,13 @@ std::vector<Vector6d> inverse_kinematics(const RigModel& rig, const Pose& world_
 // ---------------------------------------------------------------------------------------------
 // ReachabilityChecker
 
+namespace {
+
+// A keep-out box that encloses a volume (not empty, not flat): only such a box is checked.
+bool has_volume(const Eigen::AlignedBox3d& box) { return !box.isEmpty() && box.sizes().minCoeff() > 0; }
+
+}  // namespace
+
 struct ReachabilityChecker::Impl {
   RigModel rig;
   ModelPtr model;
@@ -694,15 +701,15 @@ struct ReachabilityChecker::Impl {
   std::vector<std::string> side_name;  // per geom: name used in reasons
   std::vector<char> in_object;  // per geom: part of the object mount (never an occluder)
 
-  void set_keepout(const KeepoutBox& box, double object_z_m) {
+  void set_keepout(const Eigen::AlignedBox3d& box, double object_z_m) {
     mjModel* m = model.get();
-    const Eigen::Vector3d half = 0.5 * (box.max_m - box.min_m);
-    if (!(half.minCoeff() > 0)) {
+    if (!has_volume(box)) {
       m->geom_contype[keepout] = 0;
       m->geom_conaffinity[keepout] = 0;
       return;
     }
-    Eigen::Vector3d c = 0.5 * (box.max_m + box.min_m);
+    const Eigen::Vector3d half = 0.5 * box.sizes();
+    Eigen::Vector3d c = box.center();
     if (rig.kind == RigKind::kArm) c.z() += object_z_m;
     m->geom_contype[keepout] = keepout_contype;
     m->geom_conaffinity[keepout] = keepout_conaffinity;
@@ -719,15 +726,15 @@ struct ReachabilityChecker::Impl {
   // box corners pulled 20% towards its centre must not hit a rendered geom (groups 0..2) of the
   // rig, e.g. the arm's own links or the pedestal. Call after colliding() (uses its kinematics).
   // Returns the name of the blocking geom's body/geom, or "" when the view is clear.
-  std::string occluder(const Pose& world_T_camera, const KeepoutBox& box, double turntable_rad,
+  std::string occluder(const Pose& world_T_camera, const Eigen::AlignedBox3d& box, double turntable_rad,
                        double object_z_m) {
     const mjModel* m = model.get();
     mjData* d = data.get();
     const Pose w_o = object_in_world(rig, turntable_rad, object_z_m);
     std::vector<Eigen::Vector3d> targets{w_o.translation()};
-    const Eigen::Vector3d half = 0.5 * (box.max_m - box.min_m);
-    if (half.minCoeff() > 0) {
-      const Eigen::Vector3d c = 0.5 * (box.max_m + box.min_m);
+    if (has_volume(box)) {
+      const Eigen::Vector3d half = 0.5 * box.sizes();
+      const Eigen::Vector3d c = box.center();
       targets[0] = w_o * c;
       for (int k = 0; k < 8; ++k) {
         const Eigen::Vector3d s((k & 1) ? 1 : -1, (k & 2) ? 1 : -1, (k & 4) ? 1 : -1);
@@ -827,7 +834,7 @@ ReachabilityChecker::ReachabilityChecker(const RigModel& rig) : impl_(std::make_
 ReachabilityChecker::~ReachabilityChecker() = default;
 
 std::vector<std::string> ReachabilityChecker::collisions(const Vector6d& q, double turntable_rad,
-                                                         const KeepoutBox& keepout,
+                                                         const Eigen::AlignedBox3d& keepout,
                                                          double object_z_m) {
   impl_->set_keepout(keepout, object_z_m);
   return impl_->colliding(q, turntable_rad);
@@ -857,7 +864,7 @@ std::string join_unique(const std::vector<std::string>& v, size_t max_items = 3)
 }  // namespace
 
 ViewSolution ReachabilityChecker::solve(const Pose& object_T_camera, const Vector6d& q_current,
-                                        double turntable_current, const KeepoutBox& keepout,
+                                        double turntable_current, const Eigen::AlignedBox3d& keepout,
                                         double object_z_m) {
   Impl& im = *impl_;
   const RigModel& rig = im.rig;
@@ -945,7 +952,7 @@ ViewSolution ReachabilityChecker::solve(const Pose& object_T_camera, const Vecto
 
 std::vector<ViewSolution> ReachabilityChecker::solve_batch(
     const std::vector<Pose>& object_T_cameras, const Vector6d& q_current,
-    double turntable_current, const KeepoutBox& keepout, double object_z_m) {
+    double turntable_current, const Eigen::AlignedBox3d& keepout, double object_z_m) {
   std::vector<ViewSolution> out;
   out.reserve(object_T_cameras.size());
   for (const Pose& p : object_T_cameras) {

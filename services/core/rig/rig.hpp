@@ -79,13 +79,9 @@ struct ViewSolution {
   Pose world_T_camera = Pose::Identity();  // by forward kinematics of the solution
 };
 
-// Object keep-out volume for the collision check, an axis-aligned box in the object frame.
-struct KeepoutBox {
-  Eigen::Vector3d min_m = Eigen::Vector3d::Zero();
-  Eigen::Vector3d max_m = Eigen::Vector3d::Zero();  // min == max: no box
-};
-
 // Owns a MuJoCo model/data of the rig for collision checks; not thread-safe (one per thread).
+// `keepout`: the object's keep-out volume, an axis-aligned box in the object frame that the rig
+// must not enter and whose corners must be in sight; an empty or flat box: none.
 class ReachabilityChecker {
  public:
   explicit ReachabilityChecker(const RigModel& rig);
@@ -98,16 +94,16 @@ class ReachabilityChecker {
   // `turntable_current`) and the IK solution nearest `q_current` within joint limits that
   // collides with nothing. Free rig: the gantry configuration, turntable 0.
   ViewSolution solve(const Pose& object_T_camera, const Vector6d& q_current,
-                     double turntable_current, const KeepoutBox& keepout, double object_z_m);
+                     double turntable_current, const Eigen::AlignedBox3d& keepout, double object_z_m);
 
   // solve() for each pose (a planner's candidate views), same current state.
   std::vector<ViewSolution> solve_batch(const std::vector<Pose>& object_T_cameras,
                                         const Vector6d& q_current, double turntable_current,
-                                        const KeepoutBox& keepout, double object_z_m);
+                                        const Eigen::AlignedBox3d& keepout, double object_z_m);
 
   // Names of colliding geom pairs ("link_4 / table") at this configuration; empty = free.
   std::vector<std::string> collisions(const Vector6d& q, double turntable_rad,
-                                      const KeepoutBox& keepout, double object_z_m);
+                                      const Eigen::AlignedBox3d& keepout, double object_z_m);
 
  private:
   struct Impl;

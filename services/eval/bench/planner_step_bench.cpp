@@ -98,7 +98,7 @@ const Sequence& sequence() {
       twin::DepthRenderer renderer(sim.model(), "depth", k, DepthRange{});
       ReachabilityChecker solver(rig);
       auto render = [&](const Pose& view) {
-        const ViewSolution s = solver.solve(view, Vector6d::Zero(), 0.0, KeepoutBox{}, 0.0);
+        const ViewSolution s = solver.solve(view, Vector6d::Zero(), 0.0, Eigen::AlignedBox3d(), 0.0);
         if (!s.reachable) throw std::runtime_error("free rig cannot reach a view: " + s.reason);
         for (int j = 0; j < 6; ++j) sim.data()->qpos[sim.arm().qpos_adr[j]] = s.q[j];
         mj_forward(sim.model(), sim.data());

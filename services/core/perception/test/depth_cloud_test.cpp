@@ -82,8 +82,7 @@ TEST(DepthCloud, CropRemovesTheGroundAndPointsOutsideTheWorkingVolume) {
   EXPECT_EQ(depth_to_object_cloud(depth, k, DepthRange{}, object_T_camera, crop, 0.0, &stats).size(),
             static_cast<std::size_t>(k.width * k.height));
   // A working volume |x| <= 0.1 keeps the pixel columns with |u - cx| / fx <= 0.1.
-  crop.min_m = Eigen::Vector3d(-0.1, -1, -1);
-  crop.max_m = Eigen::Vector3d(0.1, 1, 1);
+  crop.volume_m = Eigen::AlignedBox3d(Eigen::Vector3d(-0.1, -1, -1), Eigen::Vector3d(0.1, 1, 1));
   const PointCloud kept = depth_to_object_cloud(depth, k, DepthRange{}, object_T_camera, crop, 0.0, &stats);
   for (const auto& p : kept) EXPECT_LE(std::abs(p.x()), 0.1 + 1e-6);
   EXPECT_EQ(static_cast<int>(kept.size()) + stats.num_cropped, k.width * k.height);

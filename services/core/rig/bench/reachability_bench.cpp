@@ -22,11 +22,8 @@ const RigModel& free_rig() {
   return rig;
 }
 
-KeepoutBox cube() {
-  KeepoutBox b;
-  b.min_m = Eigen::Vector3d(-0.15, -0.15, -0.15);
-  b.max_m = -b.min_m;
-  return b;
+Eigen::AlignedBox3d cube() {
+  return Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-0.15), Eigen::Vector3d::Constant(0.15));
 }
 
 std::vector<Pose> hemisphere() {

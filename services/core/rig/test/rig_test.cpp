@@ -34,11 +34,8 @@ std::string write_temp(const std::string& name, const std::string& text) {
   return path;
 }
 
-KeepoutBox cube_keepout() {
-  KeepoutBox b;
-  b.min_m = Eigen::Vector3d(-0.15, -0.15, -0.15);
-  b.max_m = Eigen::Vector3d(0.15, 0.15, 0.15);
-  return b;
+Eigen::AlignedBox3d cube_keepout() {
+  return Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-0.15), Eigen::Vector3d::Constant(0.15));
 }
 
 double hemisphere_radius() { return 0.6 + 0.5 * std::sqrt(3.0) * 0.3; }  // d_c + half diagonal
@@ -350,15 +347,18 @@ TEST_F(ArmRig, UnreachableViewsGiveReasons) {
 
   // Inside the keep-out box: a normal hemisphere view, but with a 1.4 m box around the object.
   const Pose hemi = ring_views(1, hemisphere_radius(), 45 * kPi / 180, 0.0, Eigen::Vector3d::Zero())[0];
-  KeepoutBox big;
-  big.min_m = Eigen::Vector3d(-0.7, -0.7, -0.15);
-  big.max_m = Eigen::Vector3d(0.7, 0.7, 1.0);
+  const Eigen::AlignedBox3d big(Eigen::Vector3d(-0.7, -0.7, -0.15), Eigen::Vector3d(0.7, 0.7, 1.0));
   s = checker.solve(hemi, rig_->q_home, 0, big, kObjectZ);
   EXPECT_FALSE(s.reachable);
   EXPECT_NE(s.reason.find("/ keepout"), std::string::npos) << s.reason;
   // With the cube-sized box the same view is reachable (the box is what blocks it).
   s = checker.solve(hemi, rig_->q_home, 0, cube_keepout(), kObjectZ);
   EXPECT_TRUE(s.reachable) << s.reason;
+  // An empty box (Eigen's default) and a flat one (no volume) are no box: reachable too.
+  EXPECT_TRUE(checker.solve(hemi, rig_->q_home, 0, Eigen::AlignedBox3d(), kObjectZ).reachable);
+  Eigen::AlignedBox3d flat = big;
+  flat.max().z() = flat.min().z();
+  EXPECT_TRUE(checker.solve(hemi, rig_->q_home, 0, flat, kObjectZ).reachable);
 
   // Below the table top: camera 0.75 m from the axis at world z = -0.05 (object frame
   // z = -0.05 - 0.215), looking straight down. With the shoulder 1 m above the table, reaching
@@ -562,7 +562,7 @@ TEST_F(FreeRig, RoundTripIncludingStraightDown) {
       EXPECT_LT((c.linear() - cam.linear()).cwiseAbs().maxCoeff(), 1e-9);
     }
     // solve(): object frame = world, turntable 0, camera pose = request.
-    const ViewSolution v = checker.solve(cam, rig_.q_home, 0.0, KeepoutBox{}, 0.0);
+    const ViewSolution v = checker.solve(cam, rig_.q_home, 0.0, Eigen::AlignedBox3d(), 0.0);
     ASSERT_TRUE(v.reachable) << v.reason;
     EXPECT_EQ(v.turntable_rad, 0.0);
     EXPECT_LT((v.world_T_camera.translation() - cam.translation()).norm(), 1e-9);
@@ -572,7 +572,7 @@ TEST_F(FreeRig, RoundTripIncludingStraightDown) {
   Vector6d cur = rig_.q_home;
   cur[3] = 0.9;
   const Pose down = look_at_z_up(Eigen::Vector3d(0, 0, 0.86), Eigen::Vector3d::Zero());
-  const ViewSolution v = checker.solve(down, cur, 0.0, KeepoutBox{}, 0.0);
+  const ViewSolution v = checker.solve(down, cur, 0.0, Eigen::AlignedBox3d(), 0.0);
   ASSERT_TRUE(v.reachable) << v.reason;
   EXPECT_NEAR(v.q[3], 0.9, 1e-9);
   EXPECT_NEAR(v.q[4], kPi / 2, 1e-9);

@@ -1,0 +1,97 @@
+#pragma once
+// Conversions between the rig channels (ARM_STATUS, TURNTABLE_STATUS, ARM_COMMAND,
+// TURNTABLE_COMMAND, DEPTH_FRAME) and the plain types of core/scan/rig_readings.hpp, with the
+// validation every receiver applies: each from_msg throws std::invalid_argument naming the
+// message and the field.
+#include <string>
+
+#include "bus/convert.hpp"
+#include "core/scan/rig_readings.hpp"
+#include "pbnbv/arm_command_t.hpp"
+#include "pbnbv/arm_status_t.hpp"
+#include "pbnbv/depth_frame_t.hpp"
+#include "pbnbv/turntable_command_t.hpp"
+#include "pbnbv/turntable_status_t.hpp"
+
+namespace pbnbv::bus {
+
+// A status's mode and fault code as the plain enums; throws naming `what` (the message) when
+// either is not one of its constants, or when the fault code and the mode disagree (a fault code
+// is set exactly when the mode is kModeFault).
+inline void rig_mode_from_msg(int8_t mode, int8_t fault_code, const std::string& what, RigMode* mode_out,
+                              RigFault* fault_out) {
+  if (mode < 0 || mode > 3) {
+    throw std::invalid_argument(what + " mode = " + std::to_string(mode) + " is not one of its constants (0..3)");
+  }
+  if (fault_code < 0 || fault_code > 2) {
+    throw std::invalid_argument(what + " fault_code = " + std::to_string(fault_code) +
+                                " is not one of its constants (0..2)");
+  }
+  *mode_out = static_cast<RigMode>(mode);
+  *fault_out = static_cast<RigFault>(fault_code);
+  if ((*mode_out == RigMode::kFault) != (*fault_out != RigFault::kNone)) {
+    throw std::invalid_argument(what + " fault_code = " + std::to_string(fault_code) + " disagrees with mode = " +
+                                std::to_string(mode) + " (a fault code is set exactly when the mode is kModeFault)");
+  }
+}
+
+inline ArmReading from_msg(const arm_status_t& m) {
+  ArmReading r;
+  r.utime = m.utime;
+  r.joint_position_rad = to_vector6(m.joint_position_rad, "ARM_STATUS joint_position_rad");
+  r.joint_velocity_rad_s = to_vector6(m.joint_velocity_rad_s, "ARM_STATUS joint_velocity_rad_s");
+  r.command_seq = m.command_seq;
+  rig_mode_from_msg(m.mode, m.fault_code, "ARM_STATUS", &r.mode, &r.fault_code);
+  r.fault_command_seq = m.fault_command_seq;
+  r.fault = m.fault;
+  return r;
+}
+
+inline TurntableReading from_msg(const turntable_status_t& m) {
+  TurntableReading r;
+  r.utime = m.utime;
+  require_range(m.angle_rad, -1e6, 1e6, "TURNTABLE_STATUS angle_rad");
+  r.angle_rad = m.angle_rad;
+  require_range(m.velocity_rad_s, -1e6, 1e6, "TURNTABLE_STATUS velocity_rad_s");
+  r.velocity_rad_s = m.velocity_rad_s;
+  r.command_seq = m.command_seq;
+  rig_mode_from_msg(m.mode, m.fault_code, "TURNTABLE_STATUS", &r.mode, &r.fault_code);
+  r.fault_command_seq = m.fault_command_seq;
+  r.fault = m.fault;
+  return r;
+}
+
+inline arm_command_t to_msg(const ArmCommand& c) {
+  arm_command_t m;
+  m.utime = 0;
+  m.seq = c.seq;
+  m.num_joints = 6;
+  m.joint_position_rad = to_std(c.joint_position_rad);
+  m.speed_scale = c.speed_scale;
+  m.mode = arm_command_t::kModePosition;
+  return m;
+}
+
+inline turntable_command_t to_msg(const TurntableCommand& c) {
+  turntable_command_t m;
+  m.utime = 0;
+  m.seq = c.seq;
+  m.angle_rad = c.angle_rad;
+  m.speed_scale = c.speed_scale;
+  return m;
+}
+
+// Throws naming the bad field (intrinsics, range, size, depth unit), as decode_frame.
+inline DepthFrame from_msg(const depth_frame_t& m) {
+  DecodedFrame d = decode_frame(m);
+  DepthFrame f;
+  f.utime = m.utime;
+  f.seq = m.seq;
+  f.trigger_seq = m.trigger_seq;
+  f.intrinsics = d.intrinsics;
+  f.range = d.range;
+  f.depth_m = std::move(d.depth_m);
+  return f;
+}
+
+}  // namespace pbnbv::bus

@@ -1,0 +1,166 @@
+// The rig channels <-> plain readings and commands: the fields carried over, and every
+// validation failure naming the message and the field.
+#include "bus/convert_rig.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace pbnbv {
+namespace {
+
+arm_status_t arm_status() {
+  arm_status_t m;
+  m.utime = 123456;
+  m.seq = 9;
+  m.num_joints = 6;
+  m.joint_names = {"a1", "a2", "a3", "a4", "a5", "a6"};
+  m.joint_position_rad = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6};
+  m.joint_velocity_rad_s = {0, 0, 0.02, 0, 0, 0};
+  m.joint_position_commanded_rad = m.joint_position_rad;
+  m.command_seq = 41;
+  m.mode = arm_status_t::kModeSettled;
+  m.fault_code = arm_status_t::kFaultNone;
+  m.fault_command_seq = -1;
+  return m;
+}
+
+turntable_status_t turntable_status() {
+  turntable_status_t m;
+  m.utime = 123456;
+  m.seq = 9;
+  m.angle_rad = 1.25;
+  m.velocity_rad_s = -0.5;
+  m.angle_commanded_rad = 1.25;
+  m.command_seq = 41;
+  m.mode = turntable_status_t::kModeMoving;
+  m.fault_code = turntable_status_t::kFaultNone;
+  m.fault_command_seq = -1;
+  return m;
+}
+
+// The message of the std::invalid_argument `f` throws ("" when it does not).
+template <class F>
+std::string error_of(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ConvertRig, ArmStatusFieldsCarryOver) {
+  arm_status_t m = arm_status();
+  m.mode = arm_status_t::kModeFault;
+  m.fault_code = arm_status_t::kFaultCommandRejected;
+  m.fault_command_seq = 42;
+  m.fault = "rejected ARM_COMMAND seq 42: joint a3 target 10 is outside its limits";
+  const ArmReading r = bus::from_msg(m);
+  EXPECT_EQ(r.utime, 123456);
+  EXPECT_EQ(r.joint_position_rad[2], 0.3);
+  EXPECT_EQ(r.joint_velocity_rad_s[2], 0.02);
+  EXPECT_EQ(r.command_seq, 41);
+  EXPECT_EQ(r.mode, RigMode::kFault);
+  EXPECT_EQ(r.fault_code, RigFault::kCommandRejected);
+  EXPECT_EQ(r.fault_command_seq, 42);
+  EXPECT_EQ(r.fault, m.fault);
+}
+
+TEST(ConvertRig, TurntableStatusHasItsOwnConstantsWithTheSameMeaning) {
+  turntable_status_t m = turntable_status();
+  const TurntableReading r = bus::from_msg(m);
+  EXPECT_EQ(r.angle_rad, 1.25);
+  EXPECT_EQ(r.velocity_rad_s, -0.5);
+  EXPECT_EQ(r.mode, RigMode::kMoving);
+  EXPECT_EQ(r.fault_code, RigFault::kNone);
+  m.mode = turntable_status_t::kModeFault;
+  m.fault_code = turntable_status_t::kFaultDriver;
+  m.fault_command_seq = 41;
+  EXPECT_EQ(bus::from_msg(m).fault_code, RigFault::kDriver);
+  EXPECT_EQ(bus::from_msg(m).fault_command_seq, 41);
+  // The plain enums follow both messages' constants.
+  EXPECT_EQ(static_cast<int>(RigMode::kSettled), turntable_status_t::kModeSettled);
+  EXPECT_EQ(static_cast<int>(RigMode::kSettled), arm_status_t::kModeSettled);
+  EXPECT_EQ(static_cast<int>(RigFault::kCommandRejected), turntable_status_t::kFaultCommandRejected);
+  EXPECT_EQ(static_cast<int>(RigFault::kDriver), arm_status_t::kFaultDriver);
+}
+
+TEST(ConvertRig, MalformedStatusesAreRejectedNamingTheField) {
+  arm_status_t m = arm_status();
+  m.joint_position_rad[4] = std::nan("");
+  EXPECT_EQ(error_of([&] { bus::from_msg(m); }), "ARM_STATUS joint_position_rad: joint 4 value nan is not finite");
+  m = arm_status();
+  m.mode = 7;
+  EXPECT_EQ(error_of([&] { bus::from_msg(m); }), "ARM_STATUS mode = 7 is not one of its constants (0..3)");
+  m = arm_status();
+  m.fault_code = 9;
+  EXPECT_EQ(error_of([&] { bus::from_msg(m); }), "ARM_STATUS fault_code = 9 is not one of its constants (0..2)");
+  m = arm_status();
+  m.mode = arm_status_t::kModeFault;  // a fault without its code
+  EXPECT_NE(error_of([&] { bus::from_msg(m); }).find("fault_code = 0 disagrees with mode = 3"), std::string::npos);
+  m = arm_status();
+  m.fault_code = arm_status_t::kFaultDriver;  // a code without the fault mode
+  EXPECT_NE(error_of([&] { bus::from_msg(m); }).find("fault_code = 2 disagrees with mode = 2"), std::string::npos);
+
+  turntable_status_t t = turntable_status();
+  t.angle_rad = INFINITY;
+  EXPECT_NE(error_of([&] { bus::from_msg(t); }).find("TURNTABLE_STATUS angle_rad = inf"), std::string::npos);
+  t = turntable_status();
+  t.velocity_rad_s = std::nan("");
+  EXPECT_NE(error_of([&] { bus::from_msg(t); }).find("TURNTABLE_STATUS velocity_rad_s"), std::string::npos);
+  t = turntable_status();
+  t.mode = -1;
+  EXPECT_EQ(error_of([&] { bus::from_msg(t); }), "TURNTABLE_STATUS mode = -1 is not one of its constants (0..3)");
+}
+
+TEST(ConvertRig, CommandsArePositionCommandsWithTheirSequenceNumber) {
+  ArmCommand a;
+  a.seq = 77;
+  a.joint_position_rad << 1, 2, 3, 4, 5, 6;
+  a.speed_scale = 0.25;
+  const arm_command_t m = bus::to_msg(a);
+  EXPECT_EQ(m.seq, 77);
+  EXPECT_EQ(m.num_joints, 6);
+  EXPECT_EQ(m.joint_position_rad, std::vector<double>({1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(m.speed_scale, 0.25);
+  EXPECT_EQ(m.mode, arm_command_t::kModePosition);
+  TurntableCommand t;
+  t.seq = 77;
+  t.angle_rad = -3.5;
+  t.speed_scale = 0.5;
+  const turntable_command_t tm = bus::to_msg(t);
+  EXPECT_EQ(tm.seq, 77);
+  EXPECT_EQ(tm.angle_rad, -3.5);
+  EXPECT_EQ(tm.speed_scale, 0.5);
+}
+
+TEST(ConvertRig, DepthFrameIsDecodedToMetres) {
+  depth_frame_t m;
+  m.utime = 5;
+  m.seq = 6;
+  m.trigger_seq = 7;
+  m.width = 2;
+  m.height = 1;
+  m.fx = m.fy = 10;
+  m.cx = 1;
+  m.cy = 0.5;
+  m.depth_min_m = 0.1;
+  m.depth_max_m = 3;
+  m.depth_unit_m = 1e-4;
+  m.num_bytes = 4;
+  m.depth = {0x10, 0x27, 0, 0};  // 10000 counts = 1 m; 0 = no return
+  const DepthFrame f = bus::from_msg(m);
+  EXPECT_EQ(f.utime, 5);
+  EXPECT_EQ(f.seq, 6);
+  EXPECT_EQ(f.trigger_seq, 7);
+  EXPECT_EQ(f.intrinsics.width, 2);
+  ASSERT_EQ(f.depth_m.size(), 2u);
+  EXPECT_FLOAT_EQ(f.depth_m[0], 1.0f);
+  EXPECT_EQ(f.depth_m[1], 0.0f);  // no return
+  m.depth_unit_m = 0;
+  EXPECT_NE(error_of([&] { bus::from_msg(m); }).find("depth_unit"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace pbnbv

@@ -1,0 +1,94 @@
+#pragma once
+// The camera service's sequencing, without a bus: capture requests are queued and served one at
+// a time; each is a DEPTH_TRIGGER with a fresh sequence number, triggered again when no frame
+// answers within the request's timeout (kCaptureTries triggers in all) or when the frame was
+// exposed before the request's not_before_utime. The camera pose at exposure comes from the arm
+// and turntable readings nearest the frame's exposure time (within kCaptureReadingMatchUs),
+// through the rig model's kinematics and hand-eye transform (never from the twin); the frame is
+// then back-projected into the object frame, cropped and downsampled. Every request is answered,
+// on failure with the reason. Time is the caller's: calls that need it take `now_s`.
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/rig/rig.hpp"
+#include "core/scan/messages.hpp"
+#include "core/scan/rig_readings.hpp"
+
+namespace pbnbv {
+
+inline constexpr int kCaptureTries = 3;                  // triggers per request
+inline constexpr int64_t kCaptureReadingMatchUs = 50000; // a reading within 50 ms of exposure
+inline constexpr int64_t kCaptureHistoryUs = 5000000;    // readings kept: the last 5 s of rig time
+inline constexpr double kCaptureStillRadS = 0.01;        // faster joints blur the pose: warn
+inline constexpr double kCaptureReadingWaitS = 1.0;      // wait for readings after the exposure
+
+// What one call asks the service to do: trigger the camera, publish an answer, log warnings.
+struct CaptureStep {
+  std::optional<int64_t> trigger_seq;  // publish a DEPTH_TRIGGER with this seq
+  std::optional<CaptureResult> result;
+  std::vector<std::string> warnings;
+};
+
+class CaptureSequencer {
+ public:
+  // `first_trigger_seq`: the first trigger's number; pass one a previous run cannot have used
+  // (e.g. the wall clock in microseconds), so a late frame never answers a new trigger.
+  CaptureSequencer(const RigModel& rig, int64_t first_trigger_seq);
+
+  // A status reading; the last kCaptureHistoryUs of rig time are kept.
+  void on_arm_status(const ArmReading& reading);
+  void on_turntable_status(const TurntableReading& reading);
+
+  // Queues a valid request. A request already queued or in progress is ignored (the service
+  // answers one already answered from its cache).
+  void on_request(const CaptureRequest& request);
+
+  // Whether a frame answering `trigger_seq` is awaited (any other frame is not ours, or late).
+  bool awaits_frame(int64_t trigger_seq) const;
+
+  // A decoded frame. Ignored unless awaited; exposed before the request's not_before_utime:
+  // triggers again; otherwise kept until readings on both sides of its exposure are in (or
+  // kCaptureReadingWaitS has passed), then made into the answer.
+  CaptureStep on_frame(DepthFrame frame, double now_s);
+  // An awaited frame that could not be decoded: the request fails naming the frame and why.
+  CaptureStep on_unusable_frame(int64_t frame_seq, int64_t trigger_seq, const std::string& why, double now_s);
+
+  // Starts the next queued request, processes a frame whose readings are in, triggers again or
+  // fails a request whose trigger timed out.
+  CaptureStep tick(double now_s);
+
+  bool busy() const { return job_.has_value(); }
+
+ private:
+  template <class T>
+  struct Stamped {
+    int64_t utime;
+    T value;
+    double speed;  // largest joint speed, rad/s
+  };
+  struct Job {
+    CaptureRequest request;
+    int64_t trigger_seq = 0;
+    int tries = 0;
+    double t_start = 0, t_trigger = 0, deadline = 0;
+    std::optional<DepthFrame> frame;  // received, waiting for the readings at its exposure
+    double t_frame = 0;
+  };
+
+  CaptureStep trigger(double now_s);
+  CaptureStep process(const DepthFrame& frame);
+  CaptureStep fail(const std::string& why, double now_s);
+  CaptureResult blank(const CaptureRequest& r) const;
+
+  const RigModel& rig_;
+  std::deque<Stamped<Vector6d>> arm_;
+  std::deque<Stamped<double>> turntable_;
+  std::deque<CaptureRequest> queue_;
+  std::optional<Job> job_;
+  int64_t next_trigger_seq_;
+};
+
+}  // namespace pbnbv

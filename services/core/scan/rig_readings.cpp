@@ -1,0 +1,14 @@
+#include "core/scan/rig_readings.hpp"
+
+namespace pbnbv {
+
+const char* to_string(RigFault f) {
+  switch (f) {
+    case RigFault::kNone: return "none";
+    case RigFault::kCommandRejected: return "command_rejected";
+    case RigFault::kDriver: return "driver";
+  }
+  return "unknown";
+}
+
+}  // namespace pbnbv
