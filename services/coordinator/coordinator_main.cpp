@@ -24,7 +24,7 @@
 
 #include "bus/bus.hpp"
 #include "bus/convert.hpp"
-#include "core/base/args.hpp"
+#include "cli/options.hpp"
 #include "core/geometry/point_cloud.hpp"
 #include "core/base/log.hpp"
 #include "core/io/cloud_file.hpp"
@@ -140,7 +140,7 @@ class Coordinator {
       // Where to go: the ring's view, the first view, or the view scorer's plan and its
       // alternatives.
       std::vector<Pose> options;
-      if (s_.planner == "ring") {
+      if (s_.planner == PlannerKind::kRing) {
         options = {views_[i]};
       } else if (i == 0) {
         options = {first_view_};
@@ -166,8 +166,8 @@ class Coordinator {
         for (std::size_t a = 0; a < plan->alternatives.size(); ++a) {
           options.push_back(bus::from_msg(plan->alternatives[a], "VIEW_PLAN alternatives"));
         }
-        progress("planned: " + std::string(s_.planner == "pbnbv" ? "F " + fixed(plan->view_quality, 2) + " px, "
-                                           : s_.planner == "raycast" ? "gain " + fixed(plan->view_quality, 2) + " voxels, " : "") +
+        progress("planned: " + std::string(s_.planner == PlannerKind::kPbnbv ? "F " + fixed(plan->view_quality, 2) + " px, "
+                                           : s_.planner == PlannerKind::kRaycast ? "gain " + fixed(plan->view_quality, 2) + " voxels, " : "") +
                  std::to_string(plan->num_scored) + " candidates scored");
       }
 
@@ -312,20 +312,18 @@ class Coordinator {
   void plan_views() {
     const Eigen::Vector3d half = s_.normalisation.extent_m / 2.0;
     const double radius = s_.working_distance_m + half.norm();
-    if (s_.planner == "ring") {
+    if (s_.planner == PlannerKind::kRing) {
       views_ = ring_views(s_.views, radius, s_.ring_elevation_deg * kPi / 180.0,
                           s_.ring_start_azimuth_deg * kPi / 180.0, Eigen::Vector3d::Zero());
       report_["plan"] = {{"planner", "ring"}, {"radius_m", radius}, {"elevation_deg", s_.ring_elevation_deg}};
-    } else if (s_.planner == "pbnbv" || s_.planner == "raycast" || s_.planner == "random") {
+    } else {
       if (s_.initial_view_m.allFinite()) {
         first_view_ = look_at_z_up(s_.initial_view_m, Eigen::Vector3d::Zero());
       } else {
         first_view_ = ring_views(1, radius, s_.ring_elevation_deg * kPi / 180.0, s_.ring_start_azimuth_deg * kPi / 180.0,
                                  Eigen::Vector3d::Zero())[0];
       }
-      report_["plan"] = {{"planner", s_.planner}, {"initial_view", to_json(first_view_)}};
-    } else {
-      throw std::invalid_argument("planner '" + s_.planner + "' is not available (pbnbv, raycast, random, ring)");
+      report_["plan"] = {{"planner", std::string(name_of(s_.planner))}, {"initial_view", to_json(first_view_)}};
     }
   }
 
@@ -369,7 +367,7 @@ class Coordinator {
     r.scan_id = s_.scan_id;
     r.iteration = i;
     r.request_id = i;
-    r.planner = s_.planner;
+    r.planner = std::string(name_of(s_.planner));
     r.map_iteration = latest_map_;  // the newest map: the view scorer keeps only that one
     for (const auto& v : views_taken_) r.views_done.push_back(bus::to_msg(v));
     r.num_views_done = static_cast<int32_t>(r.views_done.size());
@@ -378,11 +376,11 @@ class Coordinator {
     r.num_candidates = s_.candidates;
     r.num_parallels = s_.parallels;
     r.num_sectors = s_.sectors;
-    r.full_sphere = s_.full_sphere;
+    r.full_sphere = s_.area == CandidateArea::kFullSphere;
     r.working_distance_m = s_.working_distance_m;
     r.num_alternatives = s_.alternatives;
     r.stop_fraction = s_.stop_fraction;
-    r.spread_when_done = s_.when_done == "spread";
+    r.spread_when_done = s_.when_done == WhenDone::kSpread;
     r.first_quality = first_quality_;
     r.seed = s_.seed + i;
     r.depth_min_m = s_.depth_range.min_m;
@@ -406,7 +404,7 @@ class Coordinator {
     if (last_map_ < 0) {
       view_plan_t none{};
       none.iteration = i;
-      none.planner = s_.planner;
+      none.planner = std::string(name_of(s_.planner));
       none.outcome = view_plan_t::kFailed;
       none.reason = "no view has been mapped yet";
       return none;
@@ -424,8 +422,8 @@ class Coordinator {
     std::set<std::string> need = {"ARM_STATUS", "heartbeat of motion", "heartbeat of camera",
                                   "heartbeat of registration", "heartbeat of mapping"};
     if (s_.rig == RigKind::kArm) need.insert("TURNTABLE_STATUS");
-    if (s_.planner != "ring") need.insert("heartbeat of scorer");
-    if (s_.planner == "pbnbv") need.insert("heartbeat of ellipsoids");
+    if (uses_view_scorer(s_.planner)) need.insert("heartbeat of scorer");
+    if (uses_ellipsoids(s_.planner)) need.insert("heartbeat of ellipsoids");
     const bool ok = spin_until([&] {
       for (const auto& n : need) if (!seen_.count(n)) return false;
       return true;
@@ -619,18 +617,23 @@ class Coordinator {
 
 int main(int argc, char** argv) {
   set_log_name("coordinator");
+  CLI::App app{"pbnbv-coordinator: runs one scan view by view (plan, move, capture, register, map) and writes "
+               "its record",
+               "pbnbv-coordinator"};
+  cli::init(app);
+  std::string out, settings_path;
+  cli::add_text(app, "out", &out, "the scan's folder (scan.json, cloud.ply, frames/, plans/)", "DIR")->required();
+  cli::add_text(app, "settings", &settings_path, "the scan's settings [DIR/settings.json]", "PATH");
+  if (const std::optional<int> code = cli::parse(app, argc, argv, std::cout, std::cerr)) return *code;
   install_stop_handlers();
   try {
-    Args args(argc, argv);
-    const fs::path out = args.str("out");
-    const ScanSettings settings = scan_settings_from_json(read_json(args.str("settings", (out / "settings.json").string())));
-    args.reject_unknown();
+    if (settings_path.empty()) settings_path = (fs::path(out) / "settings.json").string();
+    const ScanSettings settings = scan_settings_from_json(read_json(settings_path));
     bus::Bus bus("coordinator");
     Coordinator coordinator(bus, settings, out);
     return coordinator.run();
   } catch (const std::exception& e) {
     log_error(e.what());
-    std::cerr << "usage: pbnbv-coordinator --out DIR [--settings DIR/settings.json]\n";
     return 2;
   }
 }
