@@ -86,27 +86,20 @@ bool scan_complete(const fs::path& dir) {
   }
 }
 
-std::string file_text(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 json machine_info() {
   json m;
   char host[256] = {0};
   ::gethostname(host, sizeof(host) - 1);
   m["host"] = host;
   m["cores"] = std::thread::hardware_concurrency();
-  std::istringstream cpu(file_text("/proc/cpuinfo"));
+  std::istringstream cpu(read_text("/proc/cpuinfo"));
   for (std::string line; std::getline(cpu, line);) {
     if (line.rfind("model name", 0) == 0) {
       m["cpu"] = line.substr(line.find(':') + 2);
       break;
     }
   }
-  std::istringstream mem(file_text("/proc/meminfo"));
+  std::istringstream mem(read_text("/proc/meminfo"));
   for (std::string line; std::getline(mem, line);) {
     if (line.rfind("MemTotal", 0) == 0) {
       std::istringstream ls(line.substr(9));

@@ -24,17 +24,6 @@ const char* const kGroupRig = "Rig and twin";
 const char* const kGroupCamera = "Depth camera";
 const char* const kGroupOutput = "Output";
 
-std::vector<std::string> split(const std::string& text, char sep) {
-  std::vector<std::string> out;
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    const std::size_t end = std::min(text.find(sep, start), text.size());
-    if (end > start) out.push_back(text.substr(start, end - start));
-    start = end + 1;
-  }
-  return out;
-}
-
 // A whole number from --values, in the setting's range; throws naming --values, the setting and
 // its range.
 int ablation_number(const Setting<int>& s, const std::string& text) {
@@ -263,7 +252,7 @@ void CommandLine::resolve_ablate() {
   ablate_.out = ablate_base_.out;
   const std::vector<std::string> values =
       ablate_values_.empty() ? default_ablation_values(param)
-                             : split(ablate_values_, param == AblatedParameter::kInitialView ? '/' : ',');
+                             : cli::detail::split_list(ablate_values_, param == AblatedParameter::kInitialView ? '/' : ',');
   if (values.empty()) throw std::invalid_argument("--values '" + ablate_values_ + "' lists no value");
   ablate_.runs.clear();
   for (const std::string& v : values) {

@@ -1,33 +1,21 @@
 // `pbnbv bench`, `ablate` and `spy` (commands.hpp).
 #include <unistd.h>
 
-#include <fstream>
 #include <iostream>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "core/io/json.hpp"
 #include "launcher/commands.hpp"
 
 namespace fs = std::filesystem;
 
 namespace pbnbv::launcher {
 
-namespace {
-
-std::string file_text(const fs::path& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-}  // namespace
-
 int run_bench(const eval::BenchSpec& spec, const fs::path& self) {
   const eval::BenchResult r = eval::run_bench(spec, self, std::cout);
-  std::cout << "\n" << file_text(spec.out / "report.md") << std::endl;
+  std::cout << "\n" << read_text((spec.out / "report.md").string()) << std::endl;
   int failed = 0;
   for (const auto& p : r.planners) failed += p.failed;
   std::cout << "outputs: " << (spec.out / "summary.json").string() << ", " << (spec.out / "report.md").string()
@@ -42,7 +30,7 @@ int run_bench(const eval::BenchSpec& spec, const fs::path& self) {
 
 int run_ablate(const AblateOptions& o, const fs::path& self) {
   eval::run_ablation(std::string(name_of(o.parameter)), o.runs, o.out, self, std::cout);
-  std::cout << "\n" << file_text(o.out / "ablation.md") << std::endl;
+  std::cout << "\n" << read_text((o.out / "ablation.md").string()) << std::endl;
   return 0;
 }
 
