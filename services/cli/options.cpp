@@ -61,12 +61,14 @@ std::vector<CLI::App*> selected_chain(CLI::App& app) {
   return chain;
 }
 
+// "pbnbv scan": the names along the chain, for messages.
 std::string chain_name(const std::vector<CLI::App*>& chain) {
   std::string name;
   for (const CLI::App* a : chain) name += (name.empty() ? "" : " ") + a->get_name();
   return name;
 }
 
+// "-x", "--name", "--name=value"; not a negative number ("-0.5").
 bool looks_like_option(const std::string& word) {
   double number = 0;
   return word.size() > 1 && word[0] == '-' && !detail::parse_number(word, &number);

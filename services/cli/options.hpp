@@ -77,6 +77,7 @@ std::string check_number(const Setting<T>& s, const std::string& text) {
   return "";
 }
 
+// The number in `text` (already checked by check_number).
 template <typename T>
 T to_number(const std::string& text) {
   if constexpr (std::is_integral_v<T>) {
@@ -98,6 +99,7 @@ std::string described(const Setting<T>& s, const std::string& default_text, bool
                      s.range_text());
 }
 
+// "red|green|blue": the names of E, as the help's type.
 template <typename E>
 std::string type_of_choice() {
   std::string t;
@@ -105,6 +107,7 @@ std::string type_of_choice() {
   return t;
 }
 
+// "" when `text` is one of E's names; else why not (naming the choices).
 template <typename E>
 std::string check_choice(const std::string& text) {
   const std::string missing = missing_value(text);

@@ -56,6 +56,7 @@ std::vector<std::string> default_ablation_values(AblatedParameter p);
 
 class CommandLine {
  public:
+  // Declares every command and its options.
   CommandLine();
   CommandLine(const CommandLine&) = delete;
   CommandLine& operator=(const CommandLine&) = delete;
@@ -90,10 +91,17 @@ class CommandLine {
     bool no_netns = false;
   };
 
+  // The options of `scan`, bound to scan_ and scan_pending_.
   void declare_scan();
+  // The options `bench` and `ablate` share, bound to *spec and *pending.
   void declare_bench_options(CLI::App* command, eval::BenchSpec* spec, BenchPending* pending);
+  // The defaults that depend on other options (ring elevation and registration by rig, the
+  // principal point by image size), then ScanSettings::validate. Throws std::invalid_argument.
   void resolve_scan();
+  // The object list (--objects, --object-dir or the default set), the output folder, then
+  // BenchSpec::validate. Throws std::invalid_argument.
   void resolve_bench(const CLI::App* command, eval::BenchSpec* spec, const BenchPending& pending);
+  // The ablated parameter and one benchmark per value of --values. Throws std::invalid_argument.
   void resolve_ablate();
 
   CLI::App app_;

@@ -25,6 +25,7 @@ namespace pbnbv::launcher {
 
 namespace {
 
+// The local date and time as 20250131-142501 (folder names and scan ids).
 std::string timestamp() {
   const std::time_t t = std::time(nullptr);
   std::tm tm{};

@@ -5,9 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
-#include <functional>
 #include <stdexcept>
 #include <string>
+
+#include "error_message.hpp"
 
 namespace pbnbv {
 
@@ -20,22 +21,15 @@ struct EnumNames<Fruit> {
 
 namespace {
 
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using testing::error_message;
 
 TEST(Setting, RangeIsInclusiveAndTheErrorNamesSettingValueAndRange) {
   constexpr Setting<int> views{"views", 10, 1, 1000, "", "at most this many views"};
   static_assert(views.allows(1) && views.allows(1000) && !views.allows(0) && !views.allows(1001));
   EXPECT_EQ(views.checked(1000), 1000);
-  EXPECT_EQ(message_of([&] { views.checked(2000); }), "--views 2000 is outside its range [1, 1000]");
+  EXPECT_EQ(error_message([&] { views.checked(2000); }), "--views 2000 is outside its range [1, 1000]");
   constexpr Setting<double> resolution{"resolution", 0.03, 0.002, 0.2, "m", "voxel map resolution"};
-  EXPECT_EQ(message_of([&] { resolution.checked(0.001); }), "--resolution 0.001 is outside its range [0.002, 0.2] m");
+  EXPECT_EQ(error_message([&] { resolution.checked(0.001); }), "--resolution 0.001 is outside its range [0.002, 0.2] m");
   constexpr Setting<int64_t> seed{"seed", 1, 0, int64_t{1} << 62, "", "seed"};
   EXPECT_EQ(seed.range_text(), "[0, 4611686018427387904]");
 }
@@ -53,7 +47,7 @@ TEST(EnumNames, EveryNameRoundTripsAndAnUnknownOneIsNamedWithTheChoices) {
   EXPECT_EQ(name_of(Fruit::kPear), "pear");
   EXPECT_EQ(choices_of<Fruit>(), "apple, pear or plum");
   EXPECT_EQ(names_of<Fruit>(), (std::vector<std::string>{"apple", "pear", "plum"}));
-  EXPECT_EQ(message_of([] { parse_name<Fruit>("Pear"); }), "unknown fruit 'Pear' (expected apple, pear or plum)");
+  EXPECT_EQ(error_message([] { parse_name<Fruit>("Pear"); }), "unknown fruit 'Pear' (expected apple, pear or plum)");
   EXPECT_THROW(parse_name<Fruit>(""), std::invalid_argument);
   EXPECT_THROW(name_of(static_cast<Fruit>(7)), std::logic_error);
 }

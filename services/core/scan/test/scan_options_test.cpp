@@ -4,9 +4,9 @@
 // unknown one is named with the choices; settings.json keeps the same text values.
 #include <gtest/gtest.h>
 
-#include <functional>
 #include <string>
 
+#include "error_message.hpp"
 #include "core/geometry/camera_options.hpp"
 #include "core/mapping/map_options.hpp"
 #include "core/mapping/voxel_map.hpp"
@@ -20,14 +20,7 @@
 namespace pbnbv {
 namespace {
 
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using testing::error_message;
 
 template <typename T>
 void expect_default_in_range(const Setting<T>& s) {
@@ -148,7 +141,7 @@ void expect_names_round_trip(const std::string& what, const std::string& choices
     EXPECT_EQ(parse_name<E>(n.name), n.value);
   }
   EXPECT_EQ(choices_of<E>(), choices);
-  EXPECT_EQ(message_of([] { parse_name<E>("nonsense"); }),
+  EXPECT_EQ(error_message([] { parse_name<E>("nonsense"); }),
             "unknown " + what + " 'nonsense' (expected " + choices + ")");
 }
 
@@ -192,16 +185,16 @@ TEST(ScanSettingsJson, KindsAreWrittenAsTheSameTextAndReadBack) {
 
   nlohmann::json bad = j;
   bad["planner"] = "greedy";
-  EXPECT_EQ(message_of([&] { scan_settings_from_json(bad); }),
+  EXPECT_EQ(error_message([&] { scan_settings_from_json(bad); }),
             "scan settings: unknown planner 'greedy' (expected pbnbv, raycast, random or ring)");
   bad = j;
   bad["planning"]["candidates"] = 0;
-  EXPECT_EQ(message_of([&] { scan_settings_from_json(bad); }),
+  EXPECT_EQ(error_message([&] { scan_settings_from_json(bad); }),
             "scan settings: --candidates 0 is outside its range [1, 100000]");
   bad = j;
   bad["planning"]["parallels"] = 900;
   bad["planning"]["candidates"] = 100;
-  EXPECT_EQ(message_of([&] { scan_settings_from_json(bad); }),
+  EXPECT_EQ(error_message([&] { scan_settings_from_json(bad); }),
             "scan settings: --parallels 900 must not exceed --candidates 100");
 }
 
