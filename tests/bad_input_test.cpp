@@ -355,7 +355,7 @@ TEST_F(BadInput, CoordinatorFinishesItsScanDespiteGarbageOnItsChannels) {
   s.scan_id = "garbage-scan";
   s.rig = RigKind::kArm;
   s.rig_model_path = default_rig_path(RigKind::kArm);
-  s.planner = "ring";
+  s.planner = PlannerKind::kRing;
   s.views = 2;
   s.object_name = "sphere";
   s.normalisation.extent_m = Eigen::Vector3d::Constant(0.3);

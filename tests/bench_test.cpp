@@ -53,7 +53,7 @@ TEST(BenchRules, SummaryMeansMediansAndFailures) {
   b.views_to_95 = 2;
   c.object = "c";
   c.error = "the scan did not complete";
-  const eval::PlannerSummary s = eval::summarise("pbnbv", {a, b, c}, 3);
+  const eval::PlannerSummary s = eval::summarise(PlannerKind::kPbnbv, {a, b, c}, 3);
   EXPECT_EQ(s.complete, 2);
   EXPECT_EQ(s.failed, 1);
   ASSERT_EQ(s.coverage_by_view.size(), 3u);

@@ -17,7 +17,9 @@
 
 #include "bus/bus.hpp"
 #include "bus/convert.hpp"
-#include "core/base/args.hpp"
+#include "bus/rig_options.hpp"
+#include "cli/options.hpp"
+#include "core/scan/scan_options.hpp"
 #include "core/base/log.hpp"
 #include "core/rig/rig.hpp"
 #include "twin/depth_renderer.hpp"
@@ -36,31 +38,6 @@ namespace {
 
 constexpr double kStatusPeriodS = 0.01;  // 100 Hz of rig time
 constexpr double kDepthUnitM = 1e-4;     // 0.1 mm per count
-
-void usage() {
-  std::cerr <<
-R"(usage: pbnbv-twin [options]
-  --rig arm|free           rig profile (models/rig_<rig>.xml)       [arm]
-  --model PATH             rig MJCF instead of the profile's file
-  --mesh PATH              object mesh in the normalised object frame (binary STL or OBJ)
-  --object-z M             object frame origin above the turntable top, m [0]
-  --model-out PATH         where to write the composed model            [twin_model.xml]
-  --width/--height PX      depth image size                             [1280 x 720]
-  --fx --fy --cx --cy PX   intrinsics                                   [696 696 640 360]
-  --depth-min/--depth-max M  sensor range                               [0.1 3.0]
-  --noise-sigma K          depth noise std = K * depth (0: off)         [0]
-  --dropout P              pixel dropout probability (0: off)           [0]
-  --seed N                 noise seed                                   [1]
-  --speed X                simulation speed, multiple of real time      [1]
- pose-error model (off by default): kinematic poses wrong the way a real rig's are
-  --hand-eye-error-mm MM   true camera mount off the model's by MM...   [0]
-  --hand-eye-error-deg DEG ...and turned by DEG (random direction/axis) [0]
-  --turntable-error-deg D  turntable reports its angle D off            [0]
-  --joint-error-deg D      each joint reports its angle off by N(0, D), new per move [0]
-  --error-seed N           seed of the error directions and draws       [7]
-  --truth-out PATH         append each frame's true camera pose (JSON lines; evaluation only)
-)";
-}
 
 int64_t rig_utime(int64_t epoch_utime, double sim_s) {
   return epoch_utime + static_cast<int64_t>(std::llround(sim_s * 1e6));
@@ -89,50 +66,67 @@ struct Rejection {
 
 int main(int argc, char** argv) {
   set_log_name("twin");
+  CLI::App app{"pbnbv-twin: the simulated rig (arm, turntable, depth camera) on the rig channels, as real drivers "
+               "would be",
+               "pbnbv-twin"};
+  cli::init(app);
+  bus::RigOptions rig_options;
+  bus::add_rig_options(app, &rig_options);
+  twin::ObjectPlacement object;
+  cli::add_text(app, "mesh", &object.mesh_path, "object mesh in the normalised object frame (binary STL or OBJ)", "PATH");
+  cli::add(app, Setting<double>{"object-z", 0.0, -1.0, 2.0, "m", "object frame origin above the turntable top"},
+           &object.object_z_m);
+  std::string model_out = "twin_model.xml";
+  cli::add_text(app, "model-out", &model_out, "where to write the composed model", "PATH");
+  CameraIntrinsics k;
+  std::optional<double> cx, cy;
+  cli::add(app, kImageWidth, &k.width);
+  cli::add(app, kImageHeight, &k.height);
+  cli::add(app, kFocalX, &k.fx);
+  cli::add(app, kFocalY, &k.fy);
+  cli::add(app, kPrincipalX, &cx, "width / 2");
+  cli::add(app, kPrincipalY, &cy, "height / 2");
+  DepthRange range;
+  cli::add(app, kDepthMin, &range.min_m);
+  cli::add(app, kDepthMax, &range.max_m);
+  twin::DepthNoise noise;
+  cli::add(app, kDepthNoise, &noise.sigma_per_m);
+  cli::add(app, kDropout, &noise.dropout);
+  int64_t noise_seed = 0;
+  cli::add(app, Setting<int64_t>{"seed", 1, 0, int64_t{1} << 40, "", "depth noise seed"}, &noise_seed);
+  // Run by hand the twin keeps real time, as the rig it stands for; `pbnbv scan` asks for
+  // --sim-speed (4 by default).
+  double speed = 0;
+  cli::add(app, kSimSpeed.renamed("speed", "simulation speed, multiple of real time").with_default(1.0), &speed);
+  double hand_eye_error_mm = 0, hand_eye_error_deg = 0, turntable_error_deg = 0, joint_error_deg = 0;
+  int64_t error_seed = 0;
+  cli::add(app, kHandEyeErrorMm, &hand_eye_error_mm);
+  cli::add(app, kHandEyeErrorDeg, &hand_eye_error_deg);
+  cli::add(app, kTurntableErrorDeg, &turntable_error_deg);
+  cli::add(app, kJointErrorDeg, &joint_error_deg);
+  cli::add(app, kErrorSeed, &error_seed);
+  std::string truth_path;
+  cli::add_text(app, "truth-out", &truth_path,
+                "append each frame's true camera pose to this file (JSON lines; evaluation only)", "PATH");
+  if (const std::optional<int> code = cli::parse(app, argc, argv, std::cout, std::cerr)) return *code;
   install_stop_handlers();
   try {
-    Args args(argc, argv);
-    if (args.flag("help")) {
-      usage();
-      return 0;
-    }
-    const RigKind kind = parse_rig_kind(args.str("rig", "arm"));
-    const std::string model_path = args.str("model", default_rig_path(kind));
-    twin::ObjectPlacement object;
-    object.mesh_path = args.str("mesh", "");
-    object.object_z_m = args.num("object-z", 0.0, -1.0, 2.0);
+    const std::string model_path = rig_options.model_path.empty() ? default_rig_path(rig_options.kind)
+                                                                  : rig_options.model_path;
     if (!object.mesh_path.empty()) {
       object.mesh_path = std::filesystem::absolute(object.mesh_path).string();
       if (!std::filesystem::exists(object.mesh_path)) {
         throw std::invalid_argument("--mesh " + object.mesh_path + " does not exist");
       }
     }
-    const std::string model_out = args.str("model-out", "twin_model.xml");
-    CameraIntrinsics k;
-    k.width = static_cast<int>(args.integer("width", k.width, 1, 16384));
-    k.height = static_cast<int>(args.integer("height", k.height, 1, 16384));
-    k.fx = args.num("fx", k.fx, 1e-6, 1e6);
-    k.fy = args.num("fy", k.fy, 1e-6, 1e6);
-    k.cx = args.num("cx", k.width / 2.0, 0, k.width);
-    k.cy = args.num("cy", k.height / 2.0, 0, k.height);
+    k.cx = cx.value_or(k.width / 2.0);
+    k.cy = cy.value_or(k.height / 2.0);
     k.validate();
-    DepthRange range;
-    range.min_m = args.num("depth-min", range.min_m, 1e-3, 100);
-    range.max_m = args.num("depth-max", range.max_m, 1e-3, 6.5);
     range.validate();
-    twin::DepthNoise noise;
-    noise.sigma_per_m = args.num("noise-sigma", 0.0, 0.0, 0.1);
-    noise.dropout = args.num("dropout", 0.0, 0.0, 1.0);
-    std::mt19937_64 rng(static_cast<uint64_t>(args.integer("seed", 1, 0, 1L << 40)));
-    const double speed = args.num("speed", 1.0, 0.01, 1000.0);
+    std::mt19937_64 rng(static_cast<uint64_t>(noise_seed));
     const twin::PoseErrorModel errors = twin::make_pose_error(
-        args.num("hand-eye-error-mm", 0.0, 0.0, 100.0) * 1e-3,
-        args.num("hand-eye-error-deg", 0.0, 0.0, 20.0) * kPi / 180,
-        args.num("turntable-error-deg", 0.0, -20.0, 20.0) * kPi / 180,
-        args.num("joint-error-deg", 0.0, 0.0, 5.0) * kPi / 180,
-        static_cast<uint64_t>(args.integer("error-seed", 7, 0, 1L << 40)));
-    const std::string truth_path = args.str("truth-out", "");
-    args.reject_unknown();
+        hand_eye_error_mm * 1e-3, hand_eye_error_deg * kPi / 180, turntable_error_deg * kPi / 180,
+        joint_error_deg * kPi / 180, static_cast<uint64_t>(error_seed));
 
     const RigModel rig = load_rig(model_path);
     twin::RigSim sim(rig, object, model_out, errors);
@@ -284,7 +278,6 @@ int main(int argc, char** argv) {
     return 0;
   } catch (const std::exception& e) {
     log_error(e.what());
-    usage();
     return 2;
   }
 }

@@ -312,7 +312,7 @@ inline plan_request_t to_msg(const PlanRequest& r) {
   m.scan_id = r.scan_id;
   m.iteration = r.iteration;
   m.request_id = r.request_id;
-  m.planner = r.planner;
+  m.planner = std::string(name_of(r.planner));
   m.seed = r.seed;
   m.map_iteration = r.map_iteration;
   for (const Pose& v : r.views_done) m.views_done.push_back(to_msg(v));
@@ -322,11 +322,11 @@ inline plan_request_t to_msg(const PlanRequest& r) {
   m.num_candidates = r.num_candidates;
   m.num_parallels = r.num_parallels;
   m.num_sectors = r.num_sectors;
-  m.full_sphere = r.full_sphere;
+  m.full_sphere = r.area == CandidateArea::kFullSphere;
   m.working_distance_m = r.working_distance_m;
   m.num_alternatives = r.num_alternatives;
   m.stop_fraction = r.stop_fraction;
-  m.spread_when_done = r.spread_when_done;
+  m.spread_when_done = r.when_done == WhenDone::kSpread;
   m.first_quality = r.first_quality;
   m.depth_min_m = r.depth_range.min_m;
   m.depth_max_m = r.depth_range.max_m;
@@ -352,7 +352,11 @@ inline ViewPlan from_msg(const view_plan_t& m) {
   p.scan_id = m.scan_id;
   p.iteration = m.iteration;
   p.request_id = m.request_id;
-  p.planner = m.planner;
+  try {
+    p.planner = parse_name<PlannerKind>(m.planner);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("VIEW_PLAN planner: ") + e.what());
+  }
   if (m.outcome < view_plan_t::kView || m.outcome > view_plan_t::kFailed) {
     throw std::invalid_argument("VIEW_PLAN outcome = " + std::to_string(m.outcome) + " is not one of its constants (0..2)");
   }

@@ -4,15 +4,14 @@
 
 namespace pbnbv::bus {
 
-int run_service(const std::string& name, const std::string& usage, int argc, char** argv, int spin_ms,
-                const std::function<std::function<void()>(const Args&, Bus&)>& make) {
+int run_service(const std::string& name, CLI::App& app, int argc, char** argv, int spin_ms,
+                const std::function<std::function<void()>(Bus&)>& make) {
   set_log_name(name);
+  if (const std::optional<int> code = cli::parse(app, argc, argv, std::cout, std::cerr)) return *code;
   install_stop_handlers();
   try {
-    const Args args(argc, argv);
     Bus bus(name);
-    const std::function<void()> tick = make(args, bus);
-    args.reject_unknown();
+    const std::function<void()> tick = make(bus);
     while (!stop_requested()) {
       bus.spin_once(spin_ms);
       if (tick) tick();
@@ -20,7 +19,6 @@ int run_service(const std::string& name, const std::string& usage, int argc, cha
     return 0;
   } catch (const std::exception& e) {
     log_error(e.what());
-    std::cerr << "usage: " << usage << "\n";
     return 2;
   }
 }

@@ -18,7 +18,6 @@
 #include "bus/reply_cache.hpp"
 #include "bus/rig_options.hpp"
 #include "bus/service.hpp"
-#include "core/base/args.hpp"
 #include "core/base/format.hpp"
 #include "core/base/log.hpp"
 #include "core/rig/rig.hpp"
@@ -102,9 +101,14 @@ class CameraService {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return bus::run_service("camera", "pbnbv-camera [--rig arm|free] [--model PATH]", argc, argv, 5,
-                          [](const Args& args, bus::Bus& bus) -> std::function<void()> {
-    auto rig = std::make_shared<RigModel>(bus::rig_from_args(args));
+  CLI::App app{"pbnbv-camera: captures a depth frame per CAPTURE_REQUEST and answers the cloud in the object frame, "
+               "posed by the rig's kinematics at exposure",
+               "pbnbv-camera"};
+  cli::init(app);
+  bus::RigOptions rig_options;
+  bus::add_rig_options(app, &rig_options);
+  return bus::run_service("camera", app, argc, argv, 5, [&](bus::Bus& bus) -> std::function<void()> {
+    auto rig = std::make_shared<RigModel>(bus::load_rig(rig_options));
     auto service = std::make_shared<CameraService>(bus, *rig);
     log_info("ready: hand-eye and kinematics from " + rig->model_path);
     return [rig, service] { service->tick(); };

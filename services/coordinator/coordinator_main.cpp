@@ -10,13 +10,14 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <optional>
 #include <iostream>
 #include <variant>
 #include <vector>
 
 #include "bus/bus.hpp"
 #include "bus/convert_scan.hpp"
-#include "core/base/args.hpp"
+#include "cli/options.hpp"
 #include "core/base/log.hpp"
 #include "core/io/json.hpp"
 #include "core/scan/scan_sequencer.hpp"
@@ -119,17 +120,22 @@ int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out) {
 
 int main(int argc, char** argv) {
   set_log_name("coordinator");
+  CLI::App app{"pbnbv-coordinator: runs one scan view by view (plan, move, capture, register, map) and writes "
+               "its record",
+               "pbnbv-coordinator"};
+  cli::init(app);
+  std::string out, settings_path;
+  cli::add_text(app, "out", &out, "the scan's folder (scan.json, cloud.ply, frames/, plans/)", "DIR")->required();
+  cli::add_text(app, "settings", &settings_path, "the scan's settings [DIR/settings.json]", "PATH");
+  if (const std::optional<int> code = cli::parse(app, argc, argv, std::cout, std::cerr)) return *code;
   install_stop_handlers();
   try {
-    Args args(argc, argv);
-    const fs::path out = args.str("out");
-    const ScanSettings settings = scan_settings_from_json(read_json(args.str("settings", (out / "settings.json").string())));
-    args.reject_unknown();
+    if (settings_path.empty()) settings_path = (fs::path(out) / "settings.json").string();
+    const ScanSettings settings = scan_settings_from_json(read_json(settings_path));
     bus::Bus bus("coordinator");
     return run(bus, settings, out);
   } catch (const std::exception& e) {
     log_error(e.what());
-    std::cerr << "usage: pbnbv-coordinator --out DIR [--settings DIR/settings.json]\n";
     return 2;
   }
 }

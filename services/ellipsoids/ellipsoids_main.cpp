@@ -95,11 +95,15 @@ class EllipsoidService {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return bus::run_service("ellipsoids", "pbnbv-ellipsoids [--tmax N (10)] [--seed N (1)]", argc, argv, 50,
-                          [](const Args& args, bus::Bus& bus) -> std::function<void()> {
-    const int t_max = args.integer("tmax", 10, 1, 200);
-    const uint64_t seed = static_cast<uint64_t>(args.integer("seed", 1, 0, 1 << 30));
-    auto service = std::make_shared<EllipsoidService>(bus, t_max, seed);
+  CLI::App app{"pbnbv-ellipsoids: fits the ellipsoids of every VOXEL_MAP (Gaussian mixture + BIC, MVEE)",
+               "pbnbv-ellipsoids"};
+  cli::init(app);
+  int t_max = 0;
+  int64_t seed = 0;
+  cli::add(app, kTMax, &t_max);
+  cli::add(app, kMixtureSeed, &seed);
+  return bus::run_service("ellipsoids", app, argc, argv, 50, [&](bus::Bus& bus) -> std::function<void()> {
+    auto service = std::make_shared<EllipsoidService>(bus, t_max, static_cast<uint64_t>(seed));
     log_info("ready: T_max " + std::to_string(t_max));
     return [service] {};
   });

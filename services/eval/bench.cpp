@@ -16,7 +16,6 @@
 #include <sstream>
 #include <thread>
 
-#include "core/base/args.hpp"
 #include "core/base/signals.hpp"
 #include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
@@ -42,22 +41,10 @@ using process::tail_lines;
 
 namespace {
 
-const std::vector<std::string> kPlanners = {"pbnbv", "raycast", "random", "ring"};
-
-std::vector<std::string> split(const std::string& s, char sep) {
-  std::vector<std::string> out;
-  std::string cur;
-  std::istringstream is(s);
-  while (std::getline(is, cur, sep)) {
-    if (!cur.empty()) out.push_back(cur);
-  }
-  return out;
-}
-
 // The command that runs one scan of the benchmark, in a private network namespace (as
 // scripts/netns-run does) when `netns`.
 std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, const std::string& object,
-                                   const std::string& planner, const fs::path& out) {
+                                   PlannerKind planner, const fs::path& out) {
   std::vector<std::string> a;
   if (s.netns) {
     if (::geteuid() == 0) a = {"unshare", "-n"};
@@ -68,15 +55,17 @@ std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, con
                        "sysctl -q -w net.core.rmem_max=67108864 net.core.rmem_default=33554432 2>/dev/null; exec \"$@\"",
                        "netns"});
   }
-  a.insert(a.end(), {self.string(), "scan", "--object", object, "--planner", planner, "--rig", s.rig, "--area", s.area,
+  a.insert(a.end(), {self.string(), "scan", "--object", object, "--planner", std::string(name_of(planner)), "--rig",
+                     std::string(name_of(s.rig)), "--area", std::string(name_of(s.area)),
                      "--views", std::to_string(s.views), "--resolution", exact(s.resolution_m), "--candidates",
                      std::to_string(s.candidates), "--tmax", std::to_string(s.tmax), "--beta", std::to_string(s.beta),
-                     "--size", exact(s.size_m), "--seed", std::to_string(s.seed), "--when-done", s.when_done, "--no-log", "--out", out.string()});
+                     "--size", exact(s.size_m), "--seed", std::to_string(s.seed), "--when-done",
+                     std::string(name_of(s.when_done)), "--no-log", "--out", out.string()});
   if (s.initial_view) {
     const Eigen::Vector3d& v = *s.initial_view;
     a.insert(a.end(), {"--initial-view", exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z())});
   }
-  if (!s.up.empty()) a.insert(a.end(), {"--up", s.up});
+  if (s.up) a.insert(a.end(), {"--up", std::string(name_of(*s.up))});
   return a;
 }
 
@@ -97,27 +86,20 @@ bool scan_complete(const fs::path& dir) {
   }
 }
 
-std::string file_text(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 json machine_info() {
   json m;
   char host[256] = {0};
   ::gethostname(host, sizeof(host) - 1);
   m["host"] = host;
   m["cores"] = std::thread::hardware_concurrency();
-  std::istringstream cpu(file_text("/proc/cpuinfo"));
+  std::istringstream cpu(read_text("/proc/cpuinfo"));
   for (std::string line; std::getline(cpu, line);) {
     if (line.rfind("model name", 0) == 0) {
       m["cpu"] = line.substr(line.find(':') + 2);
       break;
     }
   }
-  std::istringstream mem(file_text("/proc/meminfo"));
+  std::istringstream mem(read_text("/proc/meminfo"));
   for (std::string line; std::getline(mem, line);) {
     if (line.rfind("MemTotal", 0) == 0) {
       std::istringstream ls(line.substr(9));
@@ -154,7 +136,7 @@ std::vector<uint8_t> observable_mask(const BenchSpec& spec, const fs::path& scan
   CandidateSpec cs;
   cs.num_views = s.candidates;
   cs.num_parallels = s.parallels;
-  cs.full_sphere = s.full_sphere;
+  cs.area = s.area;
   cs.working_distance_m = s.working_distance_m;
   const std::vector<Pose> candidates = candidate_views(Eigen::AlignedBox3d(-half, half), cs);
   const RigModel rig = load_rig(s.rig_model_path);
@@ -181,7 +163,7 @@ std::vector<uint8_t> observable_mask(const BenchSpec& spec, const fs::path& scan
 struct Job {
   std::string object;   // as given
   std::string name;     // folder name
-  std::string planner;
+  PlannerKind planner = PlannerKind::kPbnbv;
   fs::path dir;
   fs::path log;
   std::string last_progress;
@@ -193,23 +175,33 @@ struct Job {
 void BenchSpec::validate() const {
   if (objects.empty()) throw std::invalid_argument("--objects: no object to benchmark");
   if (planners.empty()) throw std::invalid_argument("--planners: no planner to benchmark");
-  for (const auto& p : planners) {
-    if (std::find(kPlanners.begin(), kPlanners.end(), p) == kPlanners.end()) {
-      throw std::invalid_argument("--planners: unknown planner '" + p + "' (pbnbv, raycast, random, ring)");
-    }
+  kViews.checked(views);
+  kMapResolution.checked(resolution_m);
+  kCandidates.checked(candidates);
+  // The scans place the candidates on the default number of parallels.
+  if (candidates < kParallels.value) {
+    throw std::invalid_argument(fmt::format("--{} {}: the candidates lie on {} parallels, so at least {} are needed",
+                                            kCandidates.name, candidates, kParallels.value, kParallels.value));
   }
-  if (rig != "free" && rig != "arm") throw std::invalid_argument("--rig " + rig + ": expected free or arm");
-  if (area != "full" && area != "hemi") throw std::invalid_argument("--area " + area + ": expected full or hemi");
-  if (views < 1) throw std::invalid_argument("--views must be >= 1");
-  if (jobs < 1) throw std::invalid_argument("--jobs must be >= 1");
+  kTMax.checked(tmax);
+  kSectors.checked(beta);
+  kObjectSize.checked(size_m);
+  kPlannerSeed.checked(seed);
+  kJobs.checked(jobs);
+  if (initial_view && initial_view->norm() < 0.05) {
+    throw std::invalid_argument("--initial-view must be away from the object centre (at least 0.05 m)");
+  }
   if (out.empty()) throw std::invalid_argument("--out: an output folder is needed");
-  if (!up.empty() && up != "z" && up != "y") throw std::invalid_argument("--up " + up + ": expected z or y");
 }
 
 json to_json(const BenchSpec& s) {
-  json j = {{"objects", s.objects}, {"planners", s.planners}, {"rig", s.rig}, {"area", s.area}, {"views", s.views},
+  std::vector<std::string> planners;
+  for (const PlannerKind p : s.planners) planners.emplace_back(name_of(p));
+  json j = {{"objects", s.objects}, {"planners", planners}, {"rig", std::string(name_of(s.rig))},
+            {"area", std::string(name_of(s.area))}, {"views", s.views},
             {"resolution_m", s.resolution_m}, {"candidates", s.candidates}, {"tmax", s.tmax}, {"beta", s.beta},
-            {"size_m", s.size_m}, {"up", s.up.empty() ? "per object" : s.up}, {"seed", s.seed}, {"when_done", s.when_done},
+            {"size_m", s.size_m}, {"up", s.up ? std::string(name_of(*s.up)) : std::string("per object")}, {"seed", s.seed},
+            {"when_done", std::string(name_of(s.when_done))},
             {"coverage", {{"samples", s.coverage.num_samples}, {"seed", s.coverage.seed}, {"radius_m", s.coverage.radius_m}}}};
   j["initial_view"] = s.initial_view ? json{s.initial_view->x(), s.initial_view->y(), s.initial_view->z()} : json(nullptr);
   return j;
@@ -229,7 +221,7 @@ std::vector<double> pad_views(std::vector<double> v, int n) {
   return v;
 }
 
-PlannerSummary summarise(const std::string& planner, const std::vector<ObjectRun>& runs, int views) {
+PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs, int views) {
   PlannerSummary p;
   p.planner = planner;
   p.objects = runs;
@@ -278,7 +270,7 @@ json to_json(const BenchResult& r) {
   json j;
   std::vector<std::string> order;
   for (const auto& p : r.planners) {
-    order.push_back(p.planner);
+    order.emplace_back(name_of(p.planner));
     json objects = json::object();
     for (const auto& o : p.objects) {
       json oj = {{"coverage_by_view", o.coverage_by_view}, {"planner_ms", o.planner_ms},
@@ -294,7 +286,7 @@ json to_json(const BenchResult& r) {
                {"views_to_95_of_mean_curve", p.views_to_95_of_mean ? json(*p.views_to_95_of_mean) : json(nullptr)}, {"objects_complete", p.complete}, {"objects_failed", p.failed},
                {"objects", objects}};
     if (!p.observable_by_view.empty()) pj["observable_coverage_by_view"] = p.observable_by_view;
-    j[p.planner] = pj;
+    j[std::string(name_of(p.planner))] = pj;
   }
   j["planners"] = order;
   j["settings"] = to_json(r.spec);
@@ -351,8 +343,8 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       j.object = object;
       j.name = name;
       j.planner = planner;
-      j.dir = spec.out / planner / name;
-      j.log = spec.out / "logs" / (planner + "-" + name + ".log");
+      j.dir = spec.out / std::string(name_of(planner)) / name;
+      j.log = spec.out / "logs" / (std::string(name_of(planner)) + "-" + name + ".log");
       jobs.push_back(std::move(j));
     }
   }
@@ -374,7 +366,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
   std::size_t next = 0;
   int finished = total - static_cast<int>(todo.size());
   auto prefix = [&](const Job* j) {
-    return "[" + std::to_string(j - jobs.data() + 1) + "/" + std::to_string(total) + "] " + j->name + " - " + j->planner + ": ";
+    return "[" + std::to_string(j - jobs.data() + 1) + "/" + std::to_string(total) + "] " + j->name + " - " + std::string(name_of(j->planner)) + ": ";
   };
   while (next < todo.size() || !running.empty()) {
     if (stop_requested()) {
@@ -393,7 +385,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       if (fs::exists(j->dir)) fs::remove_all(j->dir);  // an incomplete scan starts again
       fs::create_directories(j->dir.parent_path());
       Child c;
-      c.name = j->planner + "-" + j->name;
+      c.name = std::string(name_of(j->planner)) + "-" + j->name;
       c.argv = scan_argv(spec, self, j->object, j->planner, j->dir);
       c.log_path = j->log.string();
       j->started = std::chrono::steady_clock::now();
@@ -446,7 +438,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
   result.spec = spec;
   result.spec.jobs = spec_in.jobs;
   std::map<std::string, std::vector<uint8_t>> masks;
-  std::map<std::string, std::vector<ObjectRun>> runs;
+  std::map<PlannerKind, std::vector<ObjectRun>> runs;
   for (auto& j : jobs) {
     ObjectRun r;
     r.object = j.name;
@@ -482,104 +474,16 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
   return result;
 }
 
-namespace {
-
-// The benchmark options shared by `bench` and `ablate`.
-BenchSpec bench_spec(Args& args) {
-  BenchSpec s;
-  if (args.has("objects") && args.has("object-dir")) throw std::invalid_argument("give --objects or --object-dir, not both");
-  if (args.has("object-dir")) {
-    const fs::path dir = args.str("object-dir");
-    if (!fs::is_directory(dir)) throw std::invalid_argument("--object-dir " + dir.string() + ": not a folder");
-    for (const auto& e : fs::directory_iterator(dir)) {
-      std::string ext = e.path().extension().string();
-      std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-      if (ext == ".obj" || ext == ".stl" || ext == ".off" || ext == ".ply") s.objects.push_back(e.path().string());
-    }
-    std::sort(s.objects.begin(), s.objects.end());
-    if (s.objects.empty()) throw std::invalid_argument("--object-dir " + dir.string() + ": no .obj, .stl, .off or .ply file");
-  } else if (args.has("objects")) {
-    s.objects = split(args.str("objects"), ',');
-  } else {
-    for (const auto& d : default_objects()) s.objects.push_back(d.name);
-  }
-  if (args.has("planners")) s.planners = split(args.str("planners"), ',');
-  s.rig = args.str("rig", "free");
-  s.area = args.str("area", "full");
-  s.views = static_cast<int>(args.integer("views", 10, 1, 1000));
-  s.resolution_m = args.num("resolution", 0.03, 0.002, 0.2);
-  s.candidates = static_cast<int>(args.integer("candidates", 800, 24, 100000));
-  s.tmax = static_cast<int>(args.integer("tmax", 10, 1, 200));
-  s.beta = static_cast<int>(args.integer("beta", 4, 1, 360));
-  if (args.has("initial-view")) s.initial_view = args.vec3("initial-view", Eigen::Vector3d::Zero());
-  s.size_m = args.num("size", 0.3, 0.01, 2.0);
-  s.up = args.str("up", "");
-  s.seed = args.integer("seed", 1, 0, int64_t{1} << 62);
-  s.when_done = args.str("when-done", "spread");
-  if (s.when_done != "stop" && s.when_done != "spread") throw std::invalid_argument("--when-done " + s.when_done + ": expected stop or spread");
-  s.jobs = static_cast<int>(args.integer("jobs", 1, 1, 64));
-  s.netns = !args.flag("no-netns");
-  return s;
-}
-
-}  // namespace
-
-int bench_command(int argc, char** argv, const fs::path& self) {
-  Args args(argc, argv, 2);
-  BenchSpec spec = bench_spec(args);
-  spec.out = fs::absolute(args.str("out", ""));
-  if (args.str("out", "").empty()) throw std::invalid_argument("--out DIR is required");
-  args.reject_unknown();
-  const BenchResult r = run_bench(spec, self, std::cout);
-  std::cout << "\n" << file_text((spec.out / "report.md").string()) << std::endl;
-  int failed = 0;
-  for (const auto& p : r.planners) failed += p.failed;
-  std::cout << "outputs: " << (spec.out / "summary.json").string() << ", " << (spec.out / "report.md").string()
-            << ", coverage.png, time.png; scans in " << spec.out.string() << "/<planner>/<object>/" << std::endl;
-  if (failed > 0) {
-    std::cerr << "pbnbv bench: " << failed << " scans did not complete (see summary.json and logs/); run the command "
-              << "again to retry them" << std::endl;
-    return 1;
-  }
-  return 0;
-}
-
-int ablate_command(int argc, char** argv, const fs::path& self) {
-  // pbnbv ablate tmax|beta|initial-view [--values ...] [bench options] --out DIR
-  if (argc < 3 || argv[2][0] == '-') throw std::invalid_argument("ablate: name the parameter: tmax, beta or initial-view");
-  const std::string param = argv[2];
-  Args args(argc, argv, 3);
-  BenchSpec base = bench_spec(args);
-  if (!args.has("planners")) base.planners = {"pbnbv"};
-  const fs::path out = fs::absolute(args.str("out", ""));
-  if (args.str("out", "").empty()) throw std::invalid_argument("--out DIR is required");
-  std::vector<std::string> values;
-  if (param == "tmax") values = {"5", "10", "20", "40"};
-  else if (param == "beta") values = {"1", "2", "4", "8"};
-  else if (param == "initial-view") values = {"0.9,0,0", "0,0.9,0", "0,0,0.9", "0,0.63,0.63"};
-  else throw std::invalid_argument("ablate: unknown parameter '" + param + "' (tmax, beta, initial-view)");
-  if (args.has("values")) values = split(args.str("values"), param == "initial-view" ? '/' : ',');
-  args.reject_unknown();
-
+std::vector<std::pair<std::string, BenchResult>> run_ablation(const std::string& param,
+                                                              const std::vector<std::pair<std::string, BenchSpec>>& runs,
+                                                              const fs::path& out, const fs::path& self, std::ostream& log) {
   std::vector<std::pair<std::string, BenchResult>> results;
-  for (const auto& v : values) {
-    BenchSpec s = base;
-    if (param == "tmax") s.tmax = std::stoi(v);
-    if (param == "beta") s.beta = std::stoi(v);
-    if (param == "initial-view") {
-      const auto xyz = split(v, ',');
-      if (xyz.size() != 3) throw std::invalid_argument("--values: initial view '" + v + "' is not x,y,z");
-      s.initial_view = Eigen::Vector3d(std::stod(xyz[0]), std::stod(xyz[1]), std::stod(xyz[2]));
-    }
-    std::string folder = param + "=" + v;
-    std::replace(folder.begin(), folder.end(), ',', '_');
-    s.out = out / folder;
-    std::cout << "=== " << param << " = " << v << " -> " << s.out.string() << std::endl;
-    results.emplace_back(v, run_bench(s, self, std::cout));
+  for (const auto& [value, spec] : runs) {
+    log << "=== " << param << " = " << value << " -> " << spec.out.string() << std::endl;
+    results.emplace_back(value, run_bench(spec, self, log));
   }
   write_ablation(param, results, out);
-  std::cout << "\n" << file_text((out / "ablation.md").string()) << std::endl;
-  return 0;
+  return results;
 }
 
 }  // namespace pbnbv::eval

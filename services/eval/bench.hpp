@@ -5,6 +5,8 @@
 // and resumable (a rerun skips the scans already complete in the output folder). The ablations
 // run the benchmark once per value of one PB-NBV parameter.
 #include <Eigen/Core>
+#include <array>
+#include <cstdint>
 #include <filesystem>
 #include <iosfwd>
 #include <optional>
@@ -13,31 +15,48 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/geometry/mesh.hpp"
+#include "core/mapping/map_options.hpp"
+#include "core/planning/kinds.hpp"
+#include "core/planning/planning_options.hpp"
+#include "core/rig/rig.hpp"
+#include "core/scan/scan_options.hpp"
 #include "eval/coverage.hpp"
 
 namespace pbnbv::eval {
 
+// The benchmark's own defaults (the scan's other settings keep theirs): the paper's comparison
+// setup (a free camera, candidates on the full sphere), the whole view budget spent as in the
+// paper's evaluation, every planner but the ring, one scan at a time.
+inline constexpr ChoiceSetting<RigKind> kBenchRig = kRig.with_default(RigKind::kFree);
+inline constexpr ChoiceSetting<CandidateArea> kBenchArea = kArea.with_default(CandidateArea::kFullSphere);
+inline constexpr ChoiceSetting<WhenDone> kBenchWhenDone = kWhenDone.with_default(WhenDone::kSpread);
+inline constexpr std::array<PlannerKind, 3> kBenchPlanners{PlannerKind::kPbnbv, PlannerKind::kRaycast,
+                                                            PlannerKind::kRandom};
+inline constexpr Setting<int> kJobs{"jobs", 1, 1, 64, "", "scans at once, each in its own network namespace"};
+
 struct BenchSpec {
   std::vector<std::string> objects;  // names (default set, built-ins) or mesh paths
-  std::vector<std::string> planners = {"pbnbv", "raycast", "random"};
-  std::string rig = "free";          // free | arm
-  std::string area = "full";         // full | hemi
-  int views = 10;
-  double resolution_m = 0.03;
-  int candidates = 800;
-  int tmax = 10;
-  int beta = 4;
+  std::vector<PlannerKind> planners = std::vector<PlannerKind>(kBenchPlanners.begin(), kBenchPlanners.end());
+  RigKind rig = kBenchRig.value;
+  CandidateArea area = kBenchArea.value;
+  int views = kViews.value;
+  double resolution_m = kMapResolution.value;
+  int candidates = kCandidates.value;
+  int tmax = kTMax.value;
+  int beta = kSectors.value;
   std::optional<Eigen::Vector3d> initial_view;  // none: the scan's default first view
-  double size_m = 0.3;
-  std::string up;                    // "" : each object's natural up axis
-  int64_t seed = 1;                  // the random planner's seed
-  std::string when_done = "spread";  // the paper's evaluation spends the whole view budget
-  int jobs = 1;                      // scans run at once (each in its own network namespace)
+  double size_m = kObjectSize.value;
+  std::optional<UpAxis> up;                     // none: each object's natural up axis
+  int64_t seed = kPlannerSeed.value;            // the random planner's seed
+  WhenDone when_done = kBenchWhenDone.value;
+  int jobs = kJobs.value;            // scans run at once (each in its own network namespace)
   bool netns = true;                 // false: every scan on the current LCM bus, one at a time
   std::filesystem::path out;
   CoverageParams coverage;
 
-  // Throws std::invalid_argument naming the option that is out of range.
+  // Throws std::invalid_argument naming the option that is out of range (the ranges of the
+  // table of scan options; the candidates must not be fewer than the parallels they lie on).
   void validate() const;
 };
 
@@ -46,7 +65,7 @@ nlohmann::json to_json(const BenchSpec& s);
 // One scan's evaluation as the summary keeps it.
 struct ObjectRun {
   std::string object;
-  std::string planner;
+  PlannerKind planner = PlannerKind::kPbnbv;
   bool complete = false;                  // the scan finished (state "done") and was evaluated
   std::string error;                      // why not
   std::vector<double> coverage_by_view;   // views 1..N; after an early stop the last figure holds
@@ -59,7 +78,7 @@ struct ObjectRun {
 };
 
 struct PlannerSummary {
-  std::string planner;
+  PlannerKind planner = PlannerKind::kPbnbv;
   std::vector<double> coverage_by_view;    // mean over the complete objects
   std::vector<double> observable_by_view;  // mean over the complete objects
   double planner_ms_median = 0, planner_ms_mean = 0;  // over every iteration of every object
@@ -73,7 +92,7 @@ struct PlannerSummary {
 // padded to n views with its last value; the summary of a planner's runs.
 std::optional<int> views_to_reach(const std::vector<double>& coverage_by_view, double percent);
 std::vector<double> pad_views(std::vector<double> v, int n);
-PlannerSummary summarise(const std::string& planner, const std::vector<ObjectRun>& runs, int views);
+PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs, int views);
 
 struct BenchResult {
   BenchSpec spec;
@@ -88,9 +107,12 @@ nlohmann::json to_json(const BenchResult& r);
 // `self` is the pbnbv executable that runs each scan. Progress goes to `log`.
 BenchResult run_bench(const BenchSpec& spec, const std::filesystem::path& self, std::ostream& log);
 
-// The command lines: `pbnbv bench ...` and `pbnbv ablate ...` (argv as main's).
-int bench_command(int argc, char** argv, const std::filesystem::path& self);
-int ablate_command(int argc, char** argv, const std::filesystem::path& self);
+// An ablation: one benchmark per value of `param` (runs: the value as text, its benchmark), in
+// the order given, then write_ablation into `out`. Progress goes to `log`.
+std::vector<std::pair<std::string, BenchResult>> run_ablation(const std::string& param,
+                                                              const std::vector<std::pair<std::string, BenchSpec>>& runs,
+                                                              const std::filesystem::path& out,
+                                                              const std::filesystem::path& self, std::ostream& log);
 
 // Writes report.md and the plots for a finished benchmark (report.cpp).
 void write_report(const BenchResult& r);

@@ -41,18 +41,22 @@ std::string command_of(const BenchSpec& s) {
   os << "build/bin/pbnbv bench --objects ";
   for (std::size_t i = 0; i < s.objects.size(); ++i) os << (i ? "," : "") << s.objects[i];
   os << " --planners ";
-  for (std::size_t i = 0; i < s.planners.size(); ++i) os << (i ? "," : "") << s.planners[i];
-  os << " --rig " << s.rig << " --area " << s.area << " --views " << s.views << " --resolution " << s.resolution_m
+  for (std::size_t i = 0; i < s.planners.size(); ++i) os << (i ? "," : "") << name_of(s.planners[i]);
+  os << " --rig " << name_of(s.rig) << " --area " << name_of(s.area) << " --views " << s.views << " --resolution " << s.resolution_m
      << " --candidates " << s.candidates << " --tmax " << s.tmax << " --beta " << s.beta;
   if (s.initial_view) os << " --initial-view " << s.initial_view->x() << "," << s.initial_view->y() << "," << s.initial_view->z();
-  if (s.size_m != 0.3) os << " --size " << s.size_m;
-  if (!s.up.empty()) os << " --up " << s.up;
-  if (s.when_done != "spread") os << " --when-done " << s.when_done;
+  if (s.size_m != kObjectSize.value) os << " --size " << s.size_m;
+  if (s.up) os << " --up " << name_of(*s.up);
+  if (s.when_done != kBenchWhenDone.value) os << " --when-done " << name_of(s.when_done);
   os << " --jobs " << s.jobs << " --out " << s.out.string();
   return os.str();
 }
 
-bool paper_setup(const BenchSpec& s) { return s.rig == "free" && s.area == "full"; }
+bool paper_setup(const BenchSpec& s) { return s.rig == RigKind::kFree && s.area == CandidateArea::kFullSphere; }
+
+std::string area_text(const BenchSpec& s, const char* hemisphere) {
+  return s.area == CandidateArea::kFullSphere ? "full sphere" : hemisphere;
+}
 
 // Median over the objects of the planner time at each planning iteration (views 2..n).
 std::vector<double> median_time_by_iteration(const PlannerSummary& p, int views) {
@@ -75,8 +79,8 @@ std::vector<double> median_time_by_iteration(const PlannerSummary& p, int views)
 void coverage_chart(const BenchResult& r, bool observable, const fs::path& path) {
   const BenchSpec& s = r.spec;
   LineChart c;
-  c.title = std::string(observable ? "Observable coverage" : "Coverage") + " after each view - " + s.rig + " rig, " +
-            (s.area == "full" ? "full sphere" : "hemisphere") + ", " + std::to_string(s.objects.size()) + " objects";
+  c.title = std::string(observable ? "Observable coverage" : "Coverage") + " after each view - " + std::string(name_of(s.rig)) + " rig, " +
+            area_text(s, "hemisphere") + ", " + std::to_string(s.objects.size()) + " objects";
   c.x_label = "views";
   c.y_label = observable ? "observable surface covered (%, mean)" : "surface covered (%, mean)";
   c.integer_x = true;
@@ -85,7 +89,7 @@ void coverage_chart(const BenchResult& r, bool observable, const fs::path& path)
   for (const auto& p : r.planners) {
     const std::vector<double>& y = observable ? p.observable_by_view : p.coverage_by_view;
     if (y.empty()) continue;
-    c.series.push_back({p.planner, view_numbers(static_cast<int>(y.size())), y});
+    c.series.push_back({std::string(name_of(p.planner)), view_numbers(static_cast<int>(y.size())), y});
   }
   if (!observable && paper_setup(s)) {
     std::vector<double> y = kReleaseCoverage;
@@ -104,10 +108,10 @@ void time_chart(const BenchResult& r, const fs::path& path) {
   c.integer_x = true;
   c.log_y = true;
   for (const auto& p : r.planners) {
-    if (p.planner == "ring") continue;
+    if (p.planner == PlannerKind::kRing) continue;
     const std::vector<double> t = median_time_by_iteration(p, r.spec.views);
     if (std::none_of(t.begin(), t.end(), [](double x) { return std::isfinite(x) && x > 0; })) continue;
-    c.series.push_back({p.planner, view_numbers(r.spec.views, 2), t});
+    c.series.push_back({std::string(name_of(p.planner)), view_numbers(r.spec.views, 2), t});
   }
   if (paper_setup(r.spec)) c.y_lines = {{kReleaseMedianMs, "authors' release, median (25.8 s)"}};
   if (c.series.empty()) return;
@@ -120,10 +124,10 @@ void write_report(const BenchResult& r) {
   const BenchSpec& s = r.spec;
   const int n = s.views;
   std::ostringstream md;
-  md << "# Benchmark: " << s.rig << " rig, " << (s.area == "full" ? "full sphere" : "hemisphere") << ", "
+  md << "# Benchmark: " << name_of(s.rig) << " rig, " << area_text(s, "hemisphere") << ", "
      << s.objects.size() << " objects, " << n << " views\n\n";
   md << "```\n" << command_of(s) << "\n```\n\n";
-  md << "Candidates " << s.candidates << " on the " << (s.area == "full" ? "full sphere" : "upper hemisphere")
+  md << "Candidates " << s.candidates << " on the " << area_text(s, "upper hemisphere")
      << ", voxel map resolution " << s.resolution_m << " m, T_max " << s.tmax << ", beta " << s.beta << ", object size "
      << s.size_m << " m (shortest bounding-box edge). Coverage: " << s.coverage.num_samples
      << " surface samples, a sample is covered by a captured point within " << s.coverage.radius_m * 1000 << " mm. "
@@ -137,11 +141,11 @@ void write_report(const BenchResult& r) {
   md << "\n";
   const PlannerSummary* pbnbv = nullptr;
   for (const auto& p : r.planners) {
-    if (p.planner == "pbnbv") pbnbv = &p;
-    md << "| " << p.planner << " |";
+    if (p.planner == PlannerKind::kPbnbv) pbnbv = &p;
+    md << "| " << name_of(p.planner) << " |";
     for (int i = 0; i < n; ++i) md << " " << (i < static_cast<int>(p.coverage_by_view.size()) ? f1(p.coverage_by_view[i]) : "-") << " |";
     md << " " << opt(p.views_to_95) << " (" << p.reached_95 << " of " << p.complete << " reach it) | ";
-    if (p.planner == "ring") md << "- (fixed views) |";
+    if (p.planner == PlannerKind::kRing) md << "- (fixed views) |";
     else md << ms(p.planner_ms_median) << " ms (" << ms(p.planner_ms_mean) << ") |";
     md << " " << p.complete << (p.failed ? " (" + std::to_string(p.failed) + " failed)" : "") << " |\n";
   }
@@ -153,8 +157,8 @@ void write_report(const BenchResult& r) {
   md << "\n";
   if (pbnbv && pbnbv->planner_ms_median > 0) {
     for (const auto& p : r.planners) {
-      if (&p == pbnbv || p.planner == "ring" || p.planner_ms_median <= 0) continue;
-      md << "- " << p.planner << " / pbnbv planner time, medians: " << f1(p.planner_ms_median / pbnbv->planner_ms_median)
+      if (&p == pbnbv || p.planner == PlannerKind::kRing || p.planner_ms_median <= 0) continue;
+      md << "- " << name_of(p.planner) << " / pbnbv planner time, medians: " << f1(p.planner_ms_median / pbnbv->planner_ms_median)
          << "x\n";
     }
     md << "\n";
@@ -169,7 +173,7 @@ void write_report(const BenchResult& r) {
     md << "\n";
     for (const auto& p : r.planners) {
       if (p.observable_by_view.empty()) continue;
-      md << "| " << p.planner << " |";
+      md << "| " << name_of(p.planner) << " |";
       for (int i = 0; i < n; ++i) md << " " << f1(p.observable_by_view[i]) << " |";
       md << "\n";
     }
@@ -177,7 +181,7 @@ void write_report(const BenchResult& r) {
   }
 
   md << "## Per object: coverage after view " << n << " (%), views to 95 % in brackets\n\n| object |";
-  for (const auto& p : r.planners) md << " " << p.planner << " |";
+  for (const auto& p : r.planners) md << " " << name_of(p.planner) << " |";
   md << "\n|---|";
   for (std::size_t i = 0; i < r.planners.size(); ++i) md << "---|";
   md << "\n";
@@ -229,8 +233,9 @@ void write_ablation(const std::string& param, const std::vector<std::pair<std::s
   md << "\n";
   for (const auto& [value, r] : runs) {
     for (const auto& p : r.planners) {
-      const std::string label = param + " " + value + (r.planners.size() > 1 ? " " + p.planner : "");
-      j["values"].push_back({{"value", value}, {"planner", p.planner}, {"coverage_by_view", p.coverage_by_view},
+      const std::string planner(name_of(p.planner));
+      const std::string label = param + " " + value + (r.planners.size() > 1 ? " " + planner : "");
+      j["values"].push_back({{"value", value}, {"planner", planner}, {"coverage_by_view", p.coverage_by_view},
                              {"views_to_95", p.views_to_95 ? json(*p.views_to_95) : json(nullptr)},
                              {"planner_ms_median", p.planner_ms_median}, {"planner_ms_mean", p.planner_ms_mean},
                              {"objects_complete", p.complete}, {"folder", r.spec.out.filename().string()}});

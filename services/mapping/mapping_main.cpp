@@ -17,7 +17,6 @@
 #include "bus/reply_cache.hpp"
 #include "bus/service.hpp"
 #include "bus/convert.hpp"
-#include "core/base/args.hpp"
 #include "core/base/format.hpp"
 #include "core/base/log.hpp"
 #include "core/mapping/voxel_map.hpp"
@@ -163,19 +162,24 @@ class MappingService {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return bus::run_service("mapping", "pbnbv-mapping [--resolution M] [--gamma M] [--out DIR]\n"
-                          "       [--volume-min x,y,z --volume-max x,y,z]   working volume, object frame, m", argc, argv, 10,
-                          [](const Args& args, bus::Bus& bus) -> std::function<void()> {
-    VoxelMapParams p;
-    p.resolution_m = args.num("resolution", p.resolution_m, 0.002, 0.2);
-    p.gamma_m = args.num("gamma", p.gamma_m, 0.0, 1.0);
+  CLI::App app{"pbnbv-mapping: the five-state voxel map, updated with every registered cloud", "pbnbv-mapping"};
+  cli::init(app);
+  VoxelMapParams p;
+  std::string out;
+  std::optional<Eigen::Vector3d> volume_min, volume_max;
+  cli::add(app, kMapResolution, &p.resolution_m);
+  cli::add(app, kFrontierMargin, &p.gamma_m);
+  cli::add_text(app, "out", &out, "write DIR/maps/view_NNN.ot (OctoMap) per view; empty: none", "DIR");
+  cli::add_point(app, "volume-min", &volume_min, "working volume's lower corner, object frame, m [unlimited]");
+  cli::add_point(app, "volume-max", &volume_max, "working volume's upper corner, object frame, m [unlimited]");
+  return bus::run_service("mapping", app, argc, argv, 10, [&](bus::Bus& bus) -> std::function<void()> {
     Eigen::AlignedBox3d volume;  // empty: unlimited
-    if (args.has("volume-min") || args.has("volume-max")) {
-      volume = Eigen::AlignedBox3d(args.vec3("volume-min", Eigen::Vector3d::Constant(-1e3)),
-                                   args.vec3("volume-max", Eigen::Vector3d::Constant(1e3)));
+    if (volume_min || volume_max) {
+      volume = Eigen::AlignedBox3d(volume_min.value_or(Eigen::Vector3d::Constant(-1e3)),
+                                   volume_max.value_or(Eigen::Vector3d::Constant(1e3)));
       if (volume.isEmpty()) throw std::invalid_argument("--volume-min must be below --volume-max on every axis");
     }
-    auto service = std::make_shared<MappingService>(bus, p, volume, fs::path(args.str("out", "")));
+    auto service = std::make_shared<MappingService>(bus, p, volume, fs::path(out));
     log_info("ready: resolution " + std::to_string(p.resolution_m) + " m");
     return [service] { service->tick(); };
   });

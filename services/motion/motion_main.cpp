@@ -17,7 +17,6 @@
 #include "bus/reply_cache.hpp"
 #include "bus/rig_options.hpp"
 #include "bus/service.hpp"
-#include "core/base/args.hpp"
 #include "core/base/format.hpp"
 #include "core/base/log.hpp"
 #include "core/rig/rig.hpp"
@@ -105,9 +104,12 @@ class MotionService {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return bus::run_service("motion", "pbnbv-motion [--rig arm|free] [--model PATH]", argc, argv, 5,
-                          [](const Args& args, bus::Bus& bus) -> std::function<void()> {
-    auto rig = std::make_shared<RigModel>(bus::rig_from_args(args));
+  CLI::App app{"pbnbv-motion: moves the arm and the turntable to each MOVE_REQUEST's camera pose", "pbnbv-motion"};
+  cli::init(app);
+  bus::RigOptions rig_options;
+  bus::add_rig_options(app, &rig_options);
+  return bus::run_service("motion", app, argc, argv, 5, [&](bus::Bus& bus) -> std::function<void()> {
+    auto rig = std::make_shared<RigModel>(bus::load_rig(rig_options));
     auto service = std::make_shared<MotionService>(bus, *rig);
     log_info("ready: " + rig->arm_name + " from " + rig->model_path);
     return [rig, service] { service->tick(); };

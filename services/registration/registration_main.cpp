@@ -14,7 +14,7 @@
 #include "bus/reply_cache.hpp"
 #include "bus/service.hpp"
 #include "bus/convert.hpp"
-#include "core/base/args.hpp"
+#include "core/perception/perception_options.hpp"
 #include "core/geometry/point_cloud.hpp"
 #include "core/base/log.hpp"
 #include "core/perception/cloud_filter.hpp"
@@ -113,22 +113,36 @@ class RegistrationService {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return bus::run_service(
-      "registration",
-      "pbnbv-registration [--icp-voxel M] [--max-correspondence M] [--max-iterations N] [--min-overlap F]\n"
-      "       [--max-rmse M] [--max-correction M] [--max-correction-deg D] [--model-voxel M] [--off]",
-      argc, argv, 20, [](const Args& args, bus::Bus& bus) -> std::function<void()> {
-        RegistrationParams p;
-        p.voxel_m = args.num("icp-voxel", p.voxel_m, 0.0005, 0.05);
-        p.max_correspondence_m = args.num("max-correspondence", p.max_correspondence_m, 0.001, 0.5);
-        p.max_iterations = static_cast<int>(args.integer("max-iterations", p.max_iterations, 1, 1000));
-        p.min_overlap = args.num("min-overlap", p.min_overlap, 0.0, 1.0);
-        p.max_rmse_m = args.num("max-rmse", p.max_rmse_m, 1e-5, 0.1);
-        p.max_translation_m = args.num("max-correction", p.max_translation_m, 1e-4, 1.0);
-        p.max_rotation_deg = args.num("max-correction-deg", p.max_rotation_deg, 0.01, 45.0);
-        const double model_voxel_m = args.num("model-voxel", 0.002, 0.0, 0.05);
-        auto service = std::make_shared<RegistrationService>(bus, p, model_voxel_m, args.flag("off"));
-        log_info("ready");
-        return [service] {};
-      });
+  CLI::App app{"pbnbv-registration: refines every captured view's pose by ICP against the model", "pbnbv-registration"};
+  cli::init(app);
+  // The registration's own settings (this program is their only user): defaults from
+  // RegistrationParams, ranges here.
+  RegistrationParams p;
+  const RegistrationParams d;
+  cli::add(app, Setting<double>{"icp-voxel", d.voxel_m, 0.0005, 0.05, "m", "both clouds downsampled to this for ICP"},
+           &p.voxel_m);
+  cli::add(app, Setting<double>{"max-correspondence", d.max_correspondence_m, 0.001, 0.5, "m",
+                                "ICP correspondence distance (coarse-to-fine from here)"},
+           &p.max_correspondence_m);
+  cli::add(app, Setting<int>{"max-iterations", d.max_iterations, 1, 1000, "", "ICP iterations at most"},
+           &p.max_iterations);
+  cli::add(app, Setting<double>{"min-overlap", d.min_overlap, 0.0, 1.0, "", "accept: at least this share of the view's points lies near the model after alignment"},
+           &p.min_overlap);
+  cli::add(app, Setting<double>{"max-rmse", d.max_rmse_m, 1e-5, 0.1, "m", "accept: RMS distance of the overlapping points at most this"},
+           &p.max_rmse_m);
+  cli::add(app, Setting<double>{"max-correction", d.max_translation_m, 1e-4, 1.0, "m",
+                                "accept: the correction moves the camera at most this far"},
+           &p.max_translation_m);
+  cli::add(app, Setting<double>{"max-correction-deg", d.max_rotation_deg, 0.01, 45.0, "deg",
+                                "accept: the correction turns the camera at most this much"},
+           &p.max_rotation_deg);
+  double model_voxel_m = 0;
+  cli::add(app, kCloudVoxel.renamed("model-voxel", "the model cloud's downsampling voxel (0: off)"), &model_voxel_m);
+  bool off = false;
+  cli::add_flag(app, "off", &off, "pass every view through with its kinematic pose (no ICP)");
+  return bus::run_service("registration", app, argc, argv, 20, [&](bus::Bus& bus) -> std::function<void()> {
+    auto service = std::make_shared<RegistrationService>(bus, p, model_voxel_m, off);
+    log_info("ready");
+    return [service] {};
+  });
 }

@@ -27,7 +27,7 @@ struct PlanFigure {
   std::vector<Pose> past_views;              // camera poses of the views taken so far
   Eigen::AlignedBox3d bbox;                  // bounding box B (empty: not drawn)
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // centre of the candidate sphere
-  int beta = 4;                              // partition sectors (0 or 1: no partition lines)
+  int beta = kSectors.value;                 // partition sectors (0 or 1: no partition lines)
   double sector_start_rad = 0;               // azimuth where sector 0 starts
   std::vector<int> allowed_sectors;          // sectors the choice was allowed from
   std::vector<std::string> lines;            // text lines printed under the title (F, T, timings)

@@ -54,22 +54,22 @@ PlanInput plan_input(const plan_request_t& r) {
   for (std::size_t i = 0; i < r.excluded.size(); ++i) {
     in.excluded.push_back(bus::from_msg(r.excluded[i], "PLAN_REQUEST excluded[" + std::to_string(i) + "]"));
   }
-  bus::require_range(r.num_candidates, 1, 100000, "PLAN_REQUEST num_candidates");
-  bus::require_range(r.num_parallels, 1, 1000, "PLAN_REQUEST num_parallels");
-  bus::require_range(r.num_sectors, 1, 360, "PLAN_REQUEST num_sectors");
-  bus::require_range(r.working_distance_m, 0.05, 10.0, "PLAN_REQUEST working_distance_m");
-  bus::require_range(r.num_alternatives, 0, 100, "PLAN_REQUEST num_alternatives");
-  bus::require_range(r.stop_fraction, 0.0, 1.0, "PLAN_REQUEST stop_fraction");
+  bus::require_range(r.num_candidates, kCandidates.min, kCandidates.max, "PLAN_REQUEST num_candidates");
+  bus::require_range(r.num_parallels, kParallels.min, kParallels.max, "PLAN_REQUEST num_parallels");
+  bus::require_range(r.num_sectors, kSectors.min, kSectors.max, "PLAN_REQUEST num_sectors");
+  bus::require_range(r.working_distance_m, kWorkingDistance.min, kWorkingDistance.max, "PLAN_REQUEST working_distance_m");
+  bus::require_range(r.num_alternatives, kAlternatives.min, kAlternatives.max, "PLAN_REQUEST num_alternatives");
+  bus::require_range(r.stop_fraction, kStopFraction.min, kStopFraction.max, "PLAN_REQUEST stop_fraction");
   if (!std::isnan(r.first_quality)) bus::require_range(r.first_quality, -1e12, 1e12, "PLAN_REQUEST first_quality");
   if (r.num_parallels > r.num_candidates) throw std::invalid_argument("PLAN_REQUEST num_parallels exceeds num_candidates");
   in.candidates.num_views = r.num_candidates;
   in.candidates.num_parallels = r.num_parallels;
-  in.candidates.full_sphere = r.full_sphere;
+  in.candidates.area = r.full_sphere ? CandidateArea::kFullSphere : CandidateArea::kHemisphere;
   in.candidates.working_distance_m = r.working_distance_m;
   in.beta = r.num_sectors;
   in.num_alternatives = r.num_alternatives;
   in.stop_fraction = r.stop_fraction;
-  in.spread_when_done = r.spread_when_done;
+  in.when_done = r.spread_when_done ? WhenDone::kSpread : WhenDone::kStop;
   in.first_quality = r.first_quality;
   in.camera = CameraIntrinsics{r.width_px, r.height_px, r.fx, r.fy, r.cx, r.cy};
   in.camera.validate();
@@ -89,7 +89,7 @@ class ScorerService {
     if (!pending_) return;
     const plan_request_t& r = pending_->request;
     const voxel_set_t* map = maps_.find(r.scan_id, r.map_iteration);
-    const bool needs_ellipsoids = r.planner == "pbnbv";
+    const bool needs_ellipsoids = uses_ellipsoids(pending_->planner);
     const ellipsoid_set_t* ell = needs_ellipsoids ? ellipsoids_.find(r.scan_id, r.map_iteration) : nullptr;
     // Only the latest map (and its ellipsoids) of each scan is kept: a request for an older one
     // can never be met, so it fails now, naming both.
@@ -118,6 +118,7 @@ class ScorerService {
  private:
   struct Pending {
     plan_request_t request;
+    PlannerKind planner = PlannerKind::kPbnbv;  // request.planner, parsed
     PlanInput input;
     double received_s = 0;
     double deadline_s = 0;
@@ -134,7 +135,12 @@ class ScorerService {
       return;
     }
     if (pending_ && pending_->request.scan_id == r.scan_id && pending_->request.request_id == r.request_id) return;
-    if (r.planner != "pbnbv" && r.planner != "raycast" && r.planner != "random") {
+    std::optional<PlannerKind> planner;
+    try {
+      planner = parse_name<PlannerKind>(r.planner);
+    } catch (const std::invalid_argument&) {
+    }
+    if (!planner || !uses_view_scorer(*planner)) {
       view_plan_t out = empty_answer(r);
       out.outcome = view_plan_t::kFailed;
       out.reason = "planner '" + r.planner + "' is not served by pbnbv-scorer (pbnbv, raycast, random)";
@@ -143,6 +149,7 @@ class ScorerService {
     }
     Pending p;
     p.request = r;
+    p.planner = *planner;
     try {
       p.input = plan_input(r);
       if (r.check_reachability) {
@@ -150,7 +157,7 @@ class ScorerService {
         bus::require_range(r.turntable_angle_rad, -1e3, 1e3, "PLAN_REQUEST turntable_angle_rad");
         bus::require_range(r.object_z_m, -10, 10, "PLAN_REQUEST object_z_m");
       }
-      if (r.planner == "raycast") {
+      if (p.planner == PlannerKind::kRaycast) {
         p.raycast.camera = p.input.camera;
         p.raycast.range = DepthRange{r.depth_min_m, r.depth_max_m};
         try {
@@ -243,9 +250,9 @@ class ScorerService {
         };
       }
       const double t0 = bus::now_s();
-      if (r.planner == "raycast") {
+      if (p.planner == PlannerKind::kRaycast) {
         result = plan_raycast(p.input, grid_of(map), p.raycast);
-      } else if (r.planner == "random") {
+      } else if (p.planner == PlannerKind::kRandom) {
         result = plan_random(p.input, static_cast<uint64_t>(r.seed));
       } else {
         result = plan_pbnbv(p.input);
@@ -265,8 +272,8 @@ class ScorerService {
         title << r.planner << ": view " << r.iteration + 1 << " - planned from the map of view " << r.map_iteration + 1;
         if (ell) title << " - T occupied " << ell->occupied_components << ", T frontier " << ell->frontier_components;
         PlanFigure figure = plan_figure(p.input, result, title.str());
-        if (r.planner == "raycast") figure.quality_label = "unobserved voxels each scored candidate's rays reach";
-        if (r.planner == "random") figure.quality_label = "random choice (no score)";
+        if (p.planner == PlannerKind::kRaycast) figure.quality_label = "unobserved voxels each scored candidate's rays reach";
+        if (p.planner == PlannerKind::kRandom) figure.quality_label = "random choice (no score)";
         write_plan_figure(figure, r.figure_path);
       } catch (const std::exception& e) {
         bus_.note_error(std::string("figure not written: ") + e.what());
@@ -357,9 +364,14 @@ class ScorerService {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return bus::run_service("scorer", "pbnbv-scorer [--rig arm|free | --model PATH]", argc, argv, 5,
-                          [](const Args& args, bus::Bus& bus) -> std::function<void()> {
-    const RigModel rig = bus::rig_from_args(args);
+  CLI::App app{"pbnbv-scorer: answers each PLAN_REQUEST with the next view (PB-NBV or a baseline) and its "
+               "alternatives, checking the rig can reach them",
+               "pbnbv-scorer"};
+  cli::init(app);
+  bus::RigOptions rig_options;
+  bus::add_rig_options(app, &rig_options);
+  return bus::run_service("scorer", app, argc, argv, 5, [&](bus::Bus& bus) -> std::function<void()> {
+    const RigModel rig = bus::load_rig(rig_options);
     auto service = std::make_shared<ScorerService>(bus, rig);
     log_info("ready");
     return [service] { service->tick(); };

@@ -6,16 +6,18 @@
 #include <string>
 #include <vector>
 
+#include "core/geometry/camera_options.hpp"
+
 namespace pbnbv {
 
 // Pinhole intrinsics in pixels. Defaults: the paper's simulated RealSense D435.
 struct CameraIntrinsics {
-  int width = 1280;
-  int height = 720;
-  double fx = 696.0;
-  double fy = 696.0;
-  double cx = 640.0;
-  double cy = 360.0;
+  int width = kImageWidth.value;
+  int height = kImageHeight.value;
+  double fx = kFocalX.value;
+  double fy = kFocalY.value;
+  double cx = kPrincipalX.value;
+  double cy = kPrincipalY.value;
 
   // Throws std::invalid_argument naming the bad field when a value is out of range
   // (size <= 0, focal length <= 0, principal point outside the image, non-finite).
@@ -24,8 +26,8 @@ struct CameraIntrinsics {
 
 // Valid depth interval of the sensor, metres along the optical axis (planar depth).
 struct DepthRange {
-  double min_m = 0.1;
-  double max_m = 3.0;
+  double min_m = kDepthMin.value;
+  double max_m = kDepthMax.value;
   void validate() const;  // throws std::invalid_argument when min <= 0 or max <= min
 };
 

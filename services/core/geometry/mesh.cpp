@@ -15,13 +15,6 @@
 
 namespace pbnbv {
 
-UpAxis parse_up_axis(const std::string& s) {
-  if (s == "z" || s == "Z") return UpAxis::kZ;
-  if (s == "y" || s == "Y") return UpAxis::kY;
-  throw std::runtime_error("parse_up_axis: unknown up axis '" + s + "' (expected \"z\" or \"y\")");
-}
-
-
 void mesh_bounds(const TriangleMesh& mesh, Eigen::Vector3d& lo, Eigen::Vector3d& hi) {
   if (mesh.vertices.empty()) {
     lo.setZero();

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "core/base/enum_names.hpp"
+
 namespace pbnbv {
 
 struct TriangleMesh {
@@ -15,7 +17,11 @@ struct TriangleMesh {
 
 // Which axis of the mesh file points up in the world.
 enum class UpAxis { kZ, kY };
-UpAxis parse_up_axis(const std::string& s);  // "z" | "y"; throws naming the value otherwise
+template <>
+struct EnumNames<UpAxis> {
+  static constexpr std::string_view what = "up axis";
+  static constexpr std::array<NamedValue<UpAxis>, 2> names{{{UpAxis::kZ, "z"}, {UpAxis::kY, "y"}}};
+};
 
 
 // What normalisation did, so anyone can map the mesh file's coordinates to the object frame:

@@ -17,5 +17,6 @@ Eigen::Vector3d vec3_from_json(const nlohmann::json& j, const std::string& what)
 void write_json_atomic(const nlohmann::json& j, const std::string& path);
 void write_text_atomic(const std::string& text, const std::string& path);  // tmp + rename
 nlohmann::json read_json(const std::string& path);  // throws naming the path
+std::string read_text(const std::string& path);     // the whole file; throws naming the path
 
 }  // namespace pbnbv

@@ -8,6 +8,7 @@
 
 #include "core/geometry/camera_model.hpp"
 #include "core/base/pose.hpp"
+#include "core/mapping/map_options.hpp"
 
 namespace pbnbv {
 
@@ -15,8 +16,8 @@ enum class VoxelState : uint8_t { kNone = 0, kEmpty = 1, kOccupied = 2, kUnknown
 const char* to_string(VoxelState s);
 
 struct VoxelMapParams {
-  double resolution_m = 0.03;      // voxel edge
-  double gamma_m = 0.1;            // B grows to cover a sphere of this radius around each Frontier voxel
+  double resolution_m = kMapResolution.value;  // voxel edge
+  double gamma_m = kFrontierMargin.value;      // B grows to cover a sphere of this radius around each Frontier voxel
   bool no_return_is_free = true;   // a pixel without a return (0) means free space up to max range
   // The ray set: one ray per `ray_stride_px` pixels in u and v; 0 = automatic: about one ray per
   // voxel footprint at the far side of B (every voxel in the frustum is crossed), never coarser

@@ -6,6 +6,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/mapping/map_options.hpp"
+#include "core/planning/planning_options.hpp"
+
 namespace pbnbv {
 
 enum class EllipsoidClass : uint8_t { kOccupied = 0, kFrontier = 1 };
@@ -46,9 +49,9 @@ GaussianMixture fit_mixture_by_bic(const std::vector<Eigen::Vector3d>& points, i
 Ellipsoid minimum_volume_ellipsoid(const std::vector<Eigen::Vector3d>& points, double tol = 1e-4);
 
 struct EllipsoidParams {
-  int t_max = 10;
-  uint64_t seed = 1;
-  double voxel_m = 0.03;  // voxel edge: clusters are fitted to voxel corners (8 per centre)
+  int t_max = kTMax.value;
+  uint64_t seed = kMixtureSeed.value;
+  double voxel_m = kMapResolution.value;  // voxel edge: clusters are fitted to voxel corners (8 per centre)
 };
 
 // Clusters the voxel centres of one class and fits an ellipsoid to each cluster's voxel

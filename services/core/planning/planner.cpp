@@ -31,7 +31,7 @@ std::vector<Pose> candidate_views(const Eigen::AlignedBox3d& bbox, const Candida
   double radius = 0;
   candidate_sphere(bbox, spec.working_distance_m, &centre, &radius);
   return sphere_band_views(spec.num_views, spec.num_parallels, radius, centre, 0.0,
-                           spec.full_sphere ? kPi : kPi / 2);
+                           spec.area == CandidateArea::kFullSphere ? kPi : kPi / 2);
 }
 
 // Candidates on the sphere around B, the reachability filter and the exclusions, shared by every
@@ -152,7 +152,7 @@ PlanResult plan_pbnbv(const PlanInput& in) {
   if (in.beta < 1) throw std::invalid_argument("beta (partition sectors) must be >= 1, got " + std::to_string(in.beta));
   if (!check_bbox(in, r)) return r;
   if (r.num_frontier_ellipsoids == 0) {
-    if (in.spread_when_done) {
+    if (in.when_done == WhenDone::kSpread) {
       prepare_candidates(in, r);
       return plan_spread(in, std::move(r), "no frontier ellipsoid remains");
     }
@@ -256,7 +256,7 @@ PlanResult plan_raycast(const PlanInput& in, const VoxelGrid& grid, const Raycas
   const double best = r.scores[r.chosen].quality;
   r.first_quality = std::isfinite(in.first_quality) ? in.first_quality : best;
   std::ostringstream os;
-  if (best <= 0 && in.spread_when_done) {
+  if (best <= 0 && in.when_done == WhenDone::kSpread) {
     return plan_spread(in, std::move(r), "no candidate sees an unobserved voxel");
   } else if (best <= 0) {
     r.outcome = PlanResult::Outcome::kStop;

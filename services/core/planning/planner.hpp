@@ -17,6 +17,8 @@
 #include "core/planning/raycast.hpp"
 #include "core/planning/view_scoring.hpp"
 #include "core/base/units.hpp"
+#include "core/planning/kinds.hpp"
+#include "core/planning/planning_options.hpp"
 
 namespace pbnbv {
 
@@ -30,10 +32,10 @@ enum class CandidateStatus : uint8_t {
 };
 
 struct CandidateSpec {
-  int num_views = 800;               // N
-  int num_parallels = 24;            // alpha
-  bool full_sphere = false;          // false: hemisphere above the centre of B
-  double working_distance_m = 0.6;   // d_c; R = d_c + d_b, d_b = half the diagonal of B
+  int num_views = kCandidates.value;             // N
+  int num_parallels = kParallels.value;          // alpha
+  CandidateArea area = kArea.value;              // kHemisphere: above the centre of B
+  double working_distance_m = kWorkingDistance.value;  // d_c; R = d_c + d_b, d_b = half the diagonal of B
 };
 
 // The candidate sphere for a bounding box: centre of B and R = d_c + d_b.
@@ -47,7 +49,7 @@ struct PlanInput {
   std::vector<Ellipsoid> ellipsoids;
   Eigen::AlignedBox3d bbox;          // B
   CandidateSpec candidates;
-  int beta = 4;                      // partition sectors; 1: no partitioning
+  int beta = kSectors.value;         // partition sectors; 1: no partitioning
   // Where sector 0 starts: centred on the first view (its azimuth - pi / beta), so that the first
   // view lies in the middle of the scanned sector and the two adjacent sectors lie symmetrically
   // on either side of it (the paper does not say where the sectors start; starting them at
@@ -62,13 +64,13 @@ struct PlanInput {
   // changing.
   bool skip_revisits = true;
   CameraIntrinsics camera;
-  double stop_fraction = 0.0;        // stop when best F < stop_fraction * first_quality
+  double stop_fraction = kStopFraction.value;  // stop when best F < stop_fraction * first_quality
   double first_quality = std::numeric_limits<double>::quiet_NaN();  // NaN: this is the first
-  int num_alternatives = 5;
+  int num_alternatives = kAlternatives.value;
   // When the planner has nothing left to aim at (PB-NBV: no frontier ellipsoid; raycast: no
-  // unobserved voxel in view) it stops (false), or (true: a fixed view budget, as in the
+  // unobserved voxel in view) it stops (kStop), or (kSpread: a fixed view budget, as in the
   // paper's evaluation) chooses the candidate farthest in angle from every view taken.
-  bool spread_when_done = false;
+  WhenDone when_done = kWhenDone.value;
   // Reachability of each candidate (the motion executor's check), called once with every
   // candidate (candidate_views(bbox, candidates), so a caller may compute it ahead), or empty:
   // all reachable.

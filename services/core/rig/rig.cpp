@@ -469,13 +469,9 @@ void check_chain_joints(const mjModel* m, const std::string& path,
 
 // ---------------------------------------------------------------------------------------------
 
-std::string to_string(RigKind kind) { return kind == RigKind::kArm ? "arm" : "free"; }
+std::string to_string(RigKind kind) { return std::string(name_of(kind)); }
 
-RigKind parse_rig_kind(const std::string& s) {
-  if (s == "arm") return RigKind::kArm;
-  if (s == "free") return RigKind::kFree;
-  throw std::invalid_argument("unknown rig kind \"" + s + "\" (expected \"arm\" or \"free\")");
-}
+RigKind parse_rig_kind(const std::string& s) { return parse_name<RigKind>(s); }
 
 std::string default_rig_path(RigKind kind) {
   const char* env = std::getenv("PBNBV_MODELS_DIR");

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/base/pose.hpp"
+#include "core/base/setting.hpp"
 
 namespace pbnbv {
 
@@ -18,8 +19,16 @@ enum class RigKind {
   kArm,   // 6-axis arm + turntable; object on the turntable
   kFree,  // no arm: a 6-DOF virtual gantry puts the camera anywhere; object floats at origin
 };
-std::string to_string(RigKind kind);  // "arm" | "free"
-RigKind parse_rig_kind(const std::string& s);  // throws naming the value
+template <>
+struct EnumNames<RigKind> {
+  static constexpr std::string_view what = "rig kind";
+  static constexpr std::array<NamedValue<RigKind>, 2> names{{{RigKind::kArm, "arm"}, {RigKind::kFree, "free"}}};
+};
+std::string to_string(RigKind kind);  // "arm" | "free" (name_of)
+RigKind parse_rig_kind(const std::string& s);  // parse_name: throws naming the value and the choices
+// The rig option of every program that works with a rig (pbnbv scan, motion, camera, scorer, twin).
+inline constexpr ChoiceSetting<RigKind> kRig{"rig", RigKind::kArm,
+                                             "arm + turntable, or a free-flying camera (the paper's setup)"};
 
 // Lengths of a spherical-wrist 6R arm with the KUKA joint layout (axes z, y, y, x, y, x at
 // zero), metres: base->A2 (a1 forward, d1 up), A2->A3 (a2), A3->wrist (a3 up, d4 forward),

@@ -12,6 +12,7 @@
 #include "core/base/pose.hpp"
 #include "core/geometry/camera_model.hpp"
 #include "core/geometry/point_cloud.hpp"
+#include "core/planning/kinds.hpp"
 
 namespace pbnbv {
 
@@ -143,7 +144,7 @@ struct PlanRequest {
   std::string scan_id;
   int iteration = 0;                       // the view to plan, 0-based
   int64_t request_id = 0;
-  std::string planner;                     // "pbnbv", "raycast", "random"
+  PlannerKind planner = PlannerKind::kPbnbv;  // pbnbv, raycast or random (not ring)
   int64_t seed = 0;                        // the random planner's seed for this request
   int map_iteration = -1;                  // plan from the map of this view
   std::vector<Pose> views_done;            // registered camera poses of the mapped views
@@ -151,11 +152,11 @@ struct PlanRequest {
   int num_candidates = 0;                  // N
   int num_parallels = 0;                   // alpha
   int num_sectors = 0;                     // beta
-  bool full_sphere = false;
+  CandidateArea area = CandidateArea::kHemisphere;
   double working_distance_m = 0;           // d_c
   int num_alternatives = 0;
   double stop_fraction = 0;
-  bool spread_when_done = false;
+  WhenDone when_done = WhenDone::kStop;
   double first_quality = 0;                // F of the first planned view, NaN before it
   CameraIntrinsics camera;
   DepthRange depth_range;
@@ -176,7 +177,7 @@ struct ViewPlan {
   std::string scan_id;
   int iteration = 0;
   int64_t request_id = 0;
-  std::string planner;
+  PlannerKind planner = PlannerKind::kPbnbv;
   PlanOutcome outcome = PlanOutcome::kFailed;
   std::string reason;
   Pose object_T_camera = Pose::Identity(); // the next view (outcome kView)

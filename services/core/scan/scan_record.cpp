@@ -97,7 +97,7 @@ double planner_step_ms(const PlanRecord& p) {
 
 json to_json(const PlanRecord& r) {
   const ViewPlan& p = r.plan;
-  json j = {{"planner", p.planner},
+  json j = {{"planner", name_of(p.planner)},
             {"outcome", to_string(p.outcome)},
             {"reason", p.reason},
             {"map_of_view", r.map_of_view},

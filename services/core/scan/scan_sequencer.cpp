@@ -27,18 +27,16 @@ ScanSequencer::ScanSequencer(ScanSettings settings, fs::path out, ScanTimeouts t
   const double radius = s_.working_distance_m + half.norm();
   const double elevation_rad = deg_to_rad(s_.ring_elevation_deg);
   const double start_azimuth_rad = deg_to_rad(s_.ring_start_azimuth_deg);
-  if (s_.planner == "ring") {
+  if (s_.planner == PlannerKind::kRing) {
     ring_ = ring_views(s_.views, radius, elevation_rad, start_azimuth_rad, Eigen::Vector3d::Zero());
     record_.set_ring_plan(radius, s_.ring_elevation_deg);
-  } else if (s_.planner == "pbnbv" || s_.planner == "raycast" || s_.planner == "random") {
+  } else {
     if (s_.initial_view_m.allFinite()) {
       first_view_ = look_at_z_up(s_.initial_view_m, Eigen::Vector3d::Zero());
     } else {
       first_view_ = ring_views(1, radius, elevation_rad, start_azimuth_rad, Eigen::Vector3d::Zero())[0];
     }
-    record_.set_next_best_view_plan(s_.planner, first_view_);
-  } else {
-    throw std::invalid_argument("planner '" + s_.planner + "' is not available (pbnbv, raycast, random, ring)");
+    record_.set_next_best_view_plan(std::string(name_of(s_.planner)), first_view_);
   }
 }
 
@@ -165,8 +163,8 @@ void ScanSequencer::check_ready(double now_s) {
   std::set<std::string> need = {"ARM_STATUS", "heartbeat of motion", "heartbeat of camera",
                                 "heartbeat of registration", "heartbeat of mapping"};
   if (s_.rig == RigKind::kArm) need.insert("TURNTABLE_STATUS");
-  if (s_.planner != "ring") need.insert("heartbeat of scorer");
-  if (s_.planner == "pbnbv") need.insert("heartbeat of ellipsoids");
+  if (uses_view_scorer(s_.planner)) need.insert("heartbeat of scorer");
+  if (uses_ellipsoids(s_.planner)) need.insert("heartbeat of ellipsoids");
   std::string missing;
   for (const auto& n : need) {
     if (!seen_.count(n)) missing += (missing.empty() ? "" : ", ") + n;
@@ -187,7 +185,7 @@ void ScanSequencer::begin_view(int i, double now_s) {
   capture_id_ = -1;
   registered_.reset();
   map_.reset();
-  if (s_.planner == "ring") {
+  if (s_.planner == PlannerKind::kRing) {
     options_ = {ring_[i]};
     return begin_move(now_s);
   }
@@ -214,11 +212,11 @@ void ScanSequencer::begin_plan(double now_s) {
   r.num_candidates = s_.candidates;
   r.num_parallels = s_.parallels;
   r.num_sectors = s_.sectors;
-  r.full_sphere = s_.full_sphere;
+  r.area = s_.area;
   r.working_distance_m = s_.working_distance_m;
   r.num_alternatives = s_.alternatives;
   r.stop_fraction = s_.stop_fraction;
-  r.spread_when_done = s_.when_done == "spread";
+  r.when_done = s_.when_done;
   r.first_quality = done_.first_quality;
   r.camera = s_.camera;
   r.depth_range = s_.depth_range;
@@ -260,8 +258,8 @@ void ScanSequencer::planned(const ViewPlan& p, double now_s) {
   if (!std::isfinite(done_.first_quality)) done_.first_quality = p.first_quality;
   options_ = {p.object_T_camera};
   options_.insert(options_.end(), p.alternatives.begin(), p.alternatives.end());
-  const std::string quality = s_.planner == "pbnbv"     ? "F " + fixed(p.view_quality, 2) + " px, "
-                              : s_.planner == "raycast" ? "gain " + fixed(p.view_quality, 2) + " voxels, "
+  const std::string quality = s_.planner == PlannerKind::kPbnbv     ? "F " + fixed(p.view_quality, 2) + " px, "
+                              : s_.planner == PlannerKind::kRaycast ? "gain " + fixed(p.view_quality, 2) + " voxels, "
                                                         : "";
   progress("planned: " + quality + std::to_string(p.num_scored) + " candidates scored");
   view_.plan = std::move(plan);

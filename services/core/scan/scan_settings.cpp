@@ -11,7 +11,7 @@ nlohmann::json to_json(const MeshNormalisation& n) {
   nlohmann::json rot = nlohmann::json::array();
   for (int r = 0; r < 3; ++r) rot.push_back({n.up_rotation(r, 0), n.up_rotation(r, 1), n.up_rotation(r, 2)});
   return {{"source_path", n.source_path},
-          {"up", n.up == UpAxis::kY ? "y" : "z"},
+          {"up", std::string(name_of(n.up))},
           {"up_rotation", rot},
           {"scale", n.scale},
           {"centre_removed_m", to_json(n.centre_m)},
@@ -26,7 +26,7 @@ nlohmann::json to_json(const ScanSettings& s) {
       {"scan_id", s.scan_id},
       {"rig", to_string(s.rig)},
       {"rig_model_path", s.rig_model_path},
-      {"planner", s.planner},
+      {"planner", std::string(name_of(s.planner))},
       {"views", s.views},
       {"object", {{"name", s.object_name}, {"normalisation", to_json(s.normalisation)}}},
       {"object_z_m", s.object_z_m},
@@ -35,8 +35,8 @@ nlohmann::json to_json(const ScanSettings& s) {
       {"ring_start_azimuth_deg", s.ring_start_azimuth_deg},
       {"initial_view_m", s.initial_view_m.allFinite() ? to_json(s.initial_view_m) : nlohmann::json(nullptr)},
       {"planning", {{"candidates", s.candidates}, {"parallels", s.parallels}, {"sectors", s.sectors},
-                    {"area", s.full_sphere ? "full" : "hemi"}, {"t_max", s.t_max},
-                    {"map_resolution_m", s.map_resolution_m}, {"stop_fraction", s.stop_fraction}, {"when_done", s.when_done},
+                    {"area", std::string(name_of(s.area))}, {"t_max", s.t_max},
+                    {"map_resolution_m", s.map_resolution_m}, {"stop_fraction", s.stop_fraction}, {"when_done", std::string(name_of(s.when_done))},
                     {"alternatives", s.alternatives}, {"seed", s.seed}}},
       {"keepout", {{"min_m", to_json(s.keepout_min_m)}, {"max_m", to_json(s.keepout_max_m)}}},
       {"crop", {{"min_m", to_json(s.crop_min_m)}, {"max_m", to_json(s.crop_max_m)},
@@ -59,12 +59,12 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.scan_id = j.at("scan_id").get<std::string>();
     s.rig = parse_rig_kind(j.at("rig").get<std::string>());
     s.rig_model_path = j.at("rig_model_path").get<std::string>();
-    s.planner = j.at("planner").get<std::string>();
+    s.planner = parse_name<PlannerKind>(j.at("planner").get<std::string>());
     s.views = j.at("views").get<int>();
     s.object_name = j.at("object").at("name").get<std::string>();
     const auto& n = j.at("object").at("normalisation");
     s.normalisation.source_path = n.at("source_path").get<std::string>();
-    s.normalisation.up = n.at("up").get<std::string>() == "y" ? UpAxis::kY : UpAxis::kZ;
+    s.normalisation.up = parse_name<UpAxis>(n.at("up").get<std::string>());
     s.normalisation.scale = n.at("scale").get<double>();
     s.normalisation.centre_m = vec3_from_json(n.at("centre_removed_m"), "centre_removed_m");
     s.normalisation.extent_m = vec3_from_json(n.at("extent_m"), "extent_m");
@@ -81,15 +81,13 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.candidates = pl.at("candidates").get<int>();
     s.parallels = pl.at("parallels").get<int>();
     s.sectors = pl.at("sectors").get<int>();
-    const std::string area = pl.at("area").get<std::string>();
-    if (area != "full" && area != "hemi") throw std::invalid_argument("scan settings: planning.area '" + area + "' is neither full nor hemi");
-    s.full_sphere = area == "full";
+    s.area = parse_name<CandidateArea>(pl.at("area").get<std::string>());
     s.t_max = pl.at("t_max").get<int>();
     s.map_resolution_m = pl.at("map_resolution_m").get<double>();
     s.stop_fraction = pl.at("stop_fraction").get<double>();
-    s.when_done = pl.value("when_done", std::string("stop"));
+    s.when_done = parse_name<WhenDone>(pl.value("when_done", std::string(name_of(kWhenDone.value))));
     s.alternatives = pl.at("alternatives").get<int>();
-    s.seed = pl.value("seed", int64_t{1});
+    s.seed = pl.value("seed", kPlannerSeed.value);
     s.keepout_min_m = vec3_from_json(j.at("keepout").at("min_m"), "keepout.min_m");
     s.keepout_max_m = vec3_from_json(j.at("keepout").at("max_m"), "keepout.max_m");
     s.crop_min_m = vec3_from_json(j.at("crop").at("min_m"), "crop.min_m");
@@ -110,10 +108,39 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.capture_timeout_s = j.at("capture_timeout_s").get<double>();
     s.sim_speed = j.at("sim_speed").get<double>();
     s.startup_timeout_s = j.at("startup_timeout_s").get<double>();
+    s.validate();
   } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument(std::string("scan settings: ") + e.what());
+  } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("scan settings: ") + e.what());
   }
   return s;
+}
+
+void ScanSettings::validate() const {
+  kViews.checked(views);
+  kWorkingDistance.checked(working_distance_m);
+  kRingElevation.checked(ring_elevation_deg);
+  kCandidates.checked(candidates);
+  kParallels.checked(parallels);
+  if (parallels > candidates) {
+    throw std::invalid_argument(fmt::format("--{} {} must not exceed --{} {}", kParallels.name, parallels,
+                                            kCandidates.name, candidates));
+  }
+  kSectors.checked(sectors);
+  kTMax.checked(t_max);
+  kMapResolution.checked(map_resolution_m);
+  kStopFraction.checked(stop_fraction);
+  kAlternatives.checked(alternatives);
+  kPlannerSeed.checked(seed);
+  kCloudVoxel.checked(voxel_m);
+  kSpeedScale.checked(speed_scale);
+  kSimSpeed.checked(sim_speed);
+  if (initial_view_m.allFinite() && initial_view_m.norm() < 0.05) {
+    throw std::invalid_argument("--initial-view must be away from the object centre (at least 0.05 m)");
+  }
+  camera.validate();
+  depth_range.validate();
 }
 
 void place_object(ScanSettings& s) {

@@ -54,7 +54,7 @@ PlanInput plan_input(const Step& s, const VoxelMap& map, std::vector<Ellipsoid> 
   PlanInput in;
   in.ellipsoids = std::move(ellipsoids);
   in.bbox = map.bounds();
-  in.candidates.full_sphere = true;
+  in.candidates.area = CandidateArea::kFullSphere;
   in.beta = 4;
   in.views_done = s.views_done;
   return in;

@@ -27,7 +27,7 @@ PlanInput scene(double azimuth_deg, int beta) {
   in.ellipsoids = {sphere(EllipsoidClass::kOccupied, Eigen::Vector3d(0, 0, 0.15), 0.1),
                    sphere(EllipsoidClass::kFrontier, Eigen::Vector3d(0.18 * std::cos(a), 0.18 * std::sin(a), 0.15), 0.08)};
   in.beta = beta;
-  in.candidates.full_sphere = false;
+  in.candidates.area = CandidateArea::kHemisphere;
   return in;
 }
 
@@ -160,7 +160,7 @@ TEST(Planner, StopsWhenNoFrontierRemainsOrTheBestViewIsWorthTooLittle) {
 TEST(Planner, WithABudgetLeftItFillsTheLargestGapInsteadOfStopping) {
   PlanInput in = scene(0.0, 4);
   in.ellipsoids.pop_back();  // nothing left to aim at
-  in.spread_when_done = true;
+  in.when_done = WhenDone::kSpread;
   Eigen::Vector3d centre;
   double radius = 0;
   candidate_sphere(in.bbox, in.candidates.working_distance_m, &centre, &radius);

@@ -144,7 +144,7 @@ PlanInput plan_input(const VoxelGrid& g) {
   in.bbox = g.bounds();
   in.candidates.num_views = 200;
   in.candidates.num_parallels = 10;
-  in.candidates.full_sphere = true;
+  in.candidates.area = CandidateArea::kFullSphere;
   in.candidates.working_distance_m = 1.0;
   in.camera = CameraIntrinsics{640, 480, 500, 500, 320, 240};
   return in;
@@ -177,7 +177,7 @@ TEST(RaycastPlanner, StopsWhenNothingIsUnobserved) {
 TEST(RaycastPlanner, WithABudgetLeftItFillsTheLargestGapInsteadOfStopping) {
   const VoxelGrid g = cube_grid(10, VoxelState::kEmpty);
   PlanInput in = plan_input(g);
-  in.spread_when_done = true;
+  in.when_done = WhenDone::kSpread;
   in.views_done = {look_at(Eigen::Vector3d(3, 0, 0), Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ())};
   const PlanResult r = plan_raycast(in, g, RaycastParams{});
   ASSERT_EQ(r.outcome, PlanResult::Outcome::kView) << r.reason;

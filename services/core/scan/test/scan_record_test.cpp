@@ -103,7 +103,7 @@ TEST_F(ScanRecordTest, AViewEntryHasASectionPerStepReached) {
 TEST_F(ScanRecordTest, APlanEntryTimesThePlannerStepAsThePaperDoes) {
   PlanRecord p;
   p.plan.iteration = 4;
-  p.plan.planner = "pbnbv";
+  p.plan.planner = PlannerKind::kPbnbv;
   p.plan.outcome = PlanOutcome::kView;
   p.plan.plan_s = 0.25;
   p.plan.first_quality = std::nan("");

@@ -1,0 +1,53 @@
+#pragma once
+// The planning-level kinds, named once (core/base/enum_names.hpp): which planner chooses the
+// views, where the candidate views lie, and what a planner does when nothing is left to aim at.
+// Text only at the edges (options, settings.json / summary.json, PLAN_REQUEST's planner string).
+#include <array>
+#include <cstdint>
+
+#include "core/base/enum_names.hpp"
+
+namespace pbnbv {
+
+enum class PlannerKind : uint8_t {
+  kPbnbv,    // next-best-view planning (PB-NBV): ellipsoids, view quality F, partitions
+  kRaycast,  // baseline: the candidate whose rays reveal the most unobserved voxels
+  kRandom,   // baseline: a uniformly random candidate
+  kRing,     // fixed views on a turntable ring (no planning step)
+};
+
+// Candidate views on the whole sphere around B, or on the hemisphere above its centre.
+enum class CandidateArea : uint8_t { kHemisphere, kFullSphere };
+
+// Nothing left to aim at (PB-NBV: no frontier ellipsoid; raycast: no unobserved voxel in view):
+// stop, or spend the remaining views on the candidates farthest from every view taken.
+enum class WhenDone : uint8_t { kStop, kSpread };
+
+template <>
+struct EnumNames<PlannerKind> {
+  static constexpr std::string_view what = "planner";
+  static constexpr std::array<NamedValue<PlannerKind>, 4> names{{{PlannerKind::kPbnbv, "pbnbv"},
+                                                                 {PlannerKind::kRaycast, "raycast"},
+                                                                 {PlannerKind::kRandom, "random"},
+                                                                 {PlannerKind::kRing, "ring"}}};
+};
+
+template <>
+struct EnumNames<CandidateArea> {
+  static constexpr std::string_view what = "candidate area";
+  static constexpr std::array<NamedValue<CandidateArea>, 2> names{
+      {{CandidateArea::kHemisphere, "hemi"}, {CandidateArea::kFullSphere, "full"}}};
+};
+
+template <>
+struct EnumNames<WhenDone> {
+  static constexpr std::string_view what = "when-done rule";
+  static constexpr std::array<NamedValue<WhenDone>, 2> names{{{WhenDone::kStop, "stop"}, {WhenDone::kSpread, "spread"}}};
+};
+
+// The planners that ask the view scorer for each view (all but the ring).
+constexpr bool uses_view_scorer(PlannerKind k) { return k != PlannerKind::kRing; }
+// The planners that need the ellipsoid fitter (PB-NBV only).
+constexpr bool uses_ellipsoids(PlannerKind k) { return k == PlannerKind::kPbnbv; }
+
+}  // namespace pbnbv

@@ -1,0 +1,41 @@
+#pragma once
+// The planning settings, each defined once (core/base/setting.hpp): default, allowed range,
+// unit and meaning. CandidateSpec and PlanInput take their defaults from here; so do the scan
+// settings, the benchmark, the ellipsoid fitter's and the launcher's options and their help.
+#include <cstdint>
+
+#include "core/base/setting.hpp"
+#include "core/planning/kinds.hpp"
+
+namespace pbnbv {
+
+inline constexpr ChoiceSetting<PlannerKind> kPlanner{
+    "planner", PlannerKind::kPbnbv,
+    "pbnbv: next-best-view planning (PB-NBV); ring: a fixed turntable ring; the benchmark's "
+    "baselines on PB-NBV's candidates: raycast (ray-casting information gain), random (a random candidate)"};
+inline constexpr ChoiceSetting<CandidateArea> kArea{
+    "area", CandidateArea::kHemisphere,
+    "candidate views on the hemisphere above the object, or on the full sphere (the paper's comparison: "
+    "--rig free --area full)"};
+inline constexpr ChoiceSetting<WhenDone> kWhenDone{
+    "when-done", WhenDone::kStop,
+    "when the map has nothing left to aim at (no frontier ellipsoid; raycast: no unobserved voxel in view): "
+    "stop, or spend the remaining views filling the largest gaps between the views taken"};
+
+inline constexpr Setting<int> kCandidates{"candidates", 800, 1, 100000, "", "candidate views per plan (N)"};
+inline constexpr Setting<int> kParallels{"parallels", 24, 1, 1000, "",
+                                         "parallels the candidates lie on (alpha); at most --candidates"};
+inline constexpr Setting<int> kSectors{"beta", 4, 1, 360, "", "global partitioning sectors (beta; 1: off)"};
+inline constexpr Setting<int> kTMax{"tmax", 10, 1, 200, "", "most Gaussian components per ellipsoid class (T_max)"};
+inline constexpr Setting<double> kWorkingDistance{"working-distance", 0.6, 0.15, 3.0, "m",
+                                                  "camera to the object's bounding sphere (d_c)"};
+inline constexpr Setting<double> kStopFraction{
+    "stop-fraction", 0.0, 0.0, 1.0, "",
+    "stop when the best view quality F falls below this times the first planned view's F (0: never; README says why)"};
+inline constexpr Setting<int> kAlternatives{"alternatives", 5, 0, 100, "",
+                                            "next-best views tried when the rig cannot reach the best"};
+inline constexpr Setting<int64_t> kMixtureSeed{"seed", 1, 0, int64_t{1} << 30, "",
+                                              "the Gaussian mixture's seed (k-means++ starts)"};
+inline constexpr Setting<int64_t> kPlannerSeed{"seed", 1, 0, int64_t{1} << 62, "", "the random planner's seed"};
+
+}  // namespace pbnbv

@@ -1,0 +1,64 @@
+#pragma once
+// The scan-level settings, each defined once (core/base/setting.hpp): default, allowed range,
+// unit and meaning. With the settings of the lower layers (core/geometry/camera_options.hpp,
+// core/mapping/map_options.hpp, core/perception/perception_options.hpp,
+// core/planning/planning_options.hpp, kRig in core/rig/rig.hpp) they are the table of scan
+// options: ScanSettings takes its defaults from them, and `pbnbv scan`, `bench`, `ablate`, the
+// services and the twin declare their options and help text from them.
+#include <array>
+#include <cstdint>
+
+#include "core/base/setting.hpp"
+#include "core/geometry/mesh.hpp"
+
+namespace pbnbv {
+
+// Registration on or off (`--registration on|off`).
+enum class OnOff : uint8_t { kOff, kOn };
+template <>
+struct EnumNames<OnOff> {
+  static constexpr std::string_view what = "switch";
+  static constexpr std::array<NamedValue<OnOff>, 2> names{{{OnOff::kOn, "on"}, {OnOff::kOff, "off"}}};
+};
+
+// The object.
+inline constexpr Setting<double> kObjectSize{"size", 0.3, 0.01, 2.0, "m",
+                                             "shortest bounding-box edge after normalisation"};
+inline constexpr ChoiceSetting<UpAxis> kUp{"up", UpAxis::kZ,
+                                           "which axis of the mesh file points up (default: the object's own: "
+                                           "y for bunny and teapot, z for a mesh file)"};
+
+// The views.
+inline constexpr Setting<int> kViews{"views", 10, 1, 1000, "", "at most this many views"};
+// The ring's elevation (ring planner's views, and the first view of a planned scan): 30 deg on
+// the arm rig; 0 deg on the free rig (kRingElevationFreeDeg).
+inline constexpr Setting<double> kRingElevation{"ring-elevation", 30.0, -89.0, 89.0, "deg",
+                                                "ring views and first view: elevation above the object centre"};
+inline constexpr double kRingElevationFreeDeg = 0.0;
+
+// Registration: on by default on the arm rig, off on the free rig (the paper's idealised
+// comparison setup, whose kinematic poses are exact).
+inline constexpr ChoiceSetting<OnOff> kRegistration{
+    "registration", OnOff::kOn, "refine every view's pose by ICP against the model (default: on arm, off free)"};
+
+// The rig's motion and the twin.
+inline constexpr Setting<double> kSpeedScale{"speed-scale", 1.0, 0.01, 1.0, "", "fraction of the joint speed limits"};
+inline constexpr Setting<double> kSimSpeed{"sim-speed", 4.0, 0.1, 100.0, "",
+                                           "twin simulation speed, multiple of real time"};
+inline constexpr Setting<double> kDepthNoise{"noise-sigma", 0.0, 0.0, 0.1, "",
+                                             "twin depth noise, std = K * depth (0: off)"};
+inline constexpr Setting<double> kDropout{"dropout", 0.0, 0.0, 1.0, "", "twin pixel dropout probability (0: off)"};
+// The twin's pose-error model: kinematic poses wrong the way a real rig's are (all 0: off).
+inline constexpr Setting<double> kHandEyeErrorMm{"hand-eye-error-mm", 0.0, 0.0, 100.0, "mm",
+                                                 "twin: the true camera mount is off the model's by this much "
+                                                 "(random direction)"};
+inline constexpr Setting<double> kHandEyeErrorDeg{"hand-eye-error-deg", 0.0, 0.0, 20.0, "deg",
+                                                  "twin: ... and turned by this much (random axis)"};
+inline constexpr Setting<double> kTurntableErrorDeg{"turntable-error-deg", 0.0, -20.0, 20.0, "deg",
+                                                    "twin: the turntable reports its angle off by this much"};
+inline constexpr Setting<double> kJointErrorDeg{"joint-error-deg", 0.0, 0.0, 5.0, "deg",
+                                                "twin: each joint reports its angle off by N(0, this), new per move"};
+inline constexpr Setting<int64_t> kErrorSeed{"error-seed", 7, 0, int64_t{1} << 40, "",
+                                             "seed of the twin's error directions and draws"};
+
+}  // namespace pbnbv

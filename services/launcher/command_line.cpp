@@ -1,0 +1,278 @@
+#include "launcher/command_line.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <stdexcept>
+
+#include "core/geometry/camera_options.hpp"
+#include "core/perception/perception_options.hpp"
+#include "eval/objects.hpp"
+
+namespace fs = std::filesystem;
+
+namespace pbnbv::launcher {
+
+namespace {
+
+const char* const kObjectHelp =
+    "mesh file (.obj .stl .off .ply) or a built-in object: bunny, teapot (fetched by ./scripts/setup), sphere, box";
+
+// Option groups of `pbnbv scan --help`.
+const char* const kGroupObject = "Object";
+const char* const kGroupPlanning = "Planning";
+const char* const kGroupRig = "Rig and twin";
+const char* const kGroupCamera = "Depth camera";
+const char* const kGroupOutput = "Output";
+
+// A whole number from --values, in the setting's range; throws naming --values, the setting and
+// its range.
+int ablation_number(const Setting<int>& s, const std::string& text) {
+  long long v = 0;
+  if (!cli::detail::parse_number(text, &v)) throw std::invalid_argument("--values: '" + text + "' is not a whole number");
+  if (v < s.min || v > s.max) {
+    throw std::invalid_argument("--values: --" + std::string(s.name) + " " + text + " is outside its range " +
+                                s.range_text());
+  }
+  return static_cast<int>(v);
+}
+
+}  // namespace
+
+std::vector<std::string> default_ablation_values(AblatedParameter p) {
+  switch (p) {
+    case AblatedParameter::kTMax:
+      return {"5", "10", "20", "40"};
+    case AblatedParameter::kBeta:
+      return {"1", "2", "4", "8"};
+    case AblatedParameter::kInitialView:
+      return {"0.9,0,0", "0,0.9,0", "0,0,0.9", "0,0.63,0.63"};
+  }
+  return {};
+}
+
+CommandLine::CommandLine()
+    : app_("pbnbv: scan unknown objects with a depth camera on an arm and a turntable, choosing each next view "
+           "with PB-NBV",
+           "pbnbv") {
+  cli::init(app_);
+  app_.require_subcommand(0, 1);  // one command: `pbnbv help scan` describes scan
+
+  scan_cmd_ = cli::add_command(app_, "scan", "twin-in-the-loop scan of an object");
+  declare_scan();
+
+  bench_cmd_ = cli::add_command(app_, "bench",
+                                "every planner on every object in the twin: coverage per view, planner time, "
+                                "report.md, plots");
+  declare_bench_options(bench_cmd_, &bench_, &bench_pending_);
+
+  ablate_cmd_ = cli::add_command(app_, "ablate",
+                                 "the paper's ablations: one benchmark per value of tmax, beta or initial-view, "
+                                 "one plot");
+  ablate_cmd_->add_option("parameter", ablate_parameter_, "the PB-NBV parameter to vary")
+      ->type_name("tmax|beta|initial-view")
+      ->check(CLI::Validator([](std::string& text) { return cli::detail::check_choice<AblatedParameter>(text); }, ""));
+  cli::add_text(*ablate_cmd_, "values", &ablate_values_,
+                "the values, comma-separated (initial views x,y,z separated by /) [tmax 5,10,20,40; beta 1,2,4,8; "
+                "initial-view 0.9,0,0/0,0.9,0/0,0,0.9/0,0.63,0.63]",
+                "V,V,...");
+  ablate_base_.planners = {PlannerKind::kPbnbv};
+  declare_bench_options(ablate_cmd_, &ablate_base_, &ablate_pending_);
+
+  spy_cmd_ = cli::add_command(app_, "spy", "lcm-spy with every pbnbv channel decoded");
+
+  help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
+  help_cmd_->add_option("command", help_topic_, "the command to describe");
+}
+
+void CommandLine::declare_scan() {
+  CLI::App& c = *scan_cmd_;
+  ScanSettings& s = scan_.settings;
+  ScanPending& p = scan_pending_;
+  cli::add_text(c, "object", &scan_.object, kObjectHelp, "PATH|NAME")->group(kGroupObject);
+  cli::add(c, kObjectSize, &scan_.size_m)->group(kGroupObject);
+  cli::add(c, kUp, &scan_.up)->group(kGroupObject);
+
+  cli::add(c, kPlanner, &s.planner)->group(kGroupPlanning);
+  cli::add(c, kPlannerSeed, &s.seed)->group(kGroupPlanning);
+  cli::add(c, kViews, &s.views)->group(kGroupPlanning);
+  cli::add(c, kArea, &s.area)->group(kGroupPlanning);
+  cli::add(c, kCandidates, &s.candidates)->group(kGroupPlanning);
+  cli::add(c, kParallels, &s.parallels)->group(kGroupPlanning);
+  cli::add(c, kSectors, &s.sectors)->group(kGroupPlanning);
+  cli::add(c, kTMax, &s.t_max)->group(kGroupPlanning);
+  cli::add(c, kStopFraction, &s.stop_fraction)->group(kGroupPlanning);
+  cli::add(c, kWhenDone, &s.when_done)->group(kGroupPlanning);
+  cli::add_point(c, "initial-view", &p.initial_view,
+                 "first camera position, object frame, m; looks at the origin [the ring's view at --ring-elevation, "
+                 "azimuth 0]")
+      ->group(kGroupPlanning);
+  cli::add(c, kWorkingDistance, &s.working_distance_m)->group(kGroupPlanning);
+  cli::add(c, kRingElevation, &p.ring_elevation_deg, "30 arm, 0 free")->group(kGroupPlanning);
+  cli::add(c, kCloudVoxel, &s.voxel_m)->group(kGroupPlanning);
+  cli::add(c, kMapResolution, &s.map_resolution_m)->group(kGroupPlanning);
+  cli::add(c, kRegistration, &p.registration)->group(kGroupPlanning);
+
+  cli::add(c, kRig, &s.rig)->group(kGroupRig);
+  cli::add(c, kSpeedScale, &s.speed_scale)->group(kGroupRig);
+  cli::add(c, kSimSpeed, &s.sim_speed)->group(kGroupRig);
+  cli::add(c, kDepthNoise, &scan_.noise_sigma)->group(kGroupRig);
+  cli::add(c, kDropout, &scan_.dropout)->group(kGroupRig);
+  cli::add(c, kHandEyeErrorMm, &scan_.hand_eye_error_mm)->group(kGroupRig);
+  cli::add(c, kHandEyeErrorDeg, &scan_.hand_eye_error_deg)->group(kGroupRig);
+  cli::add(c, kTurntableErrorDeg, &scan_.turntable_error_deg)->group(kGroupRig);
+  cli::add(c, kJointErrorDeg, &scan_.joint_error_deg)->group(kGroupRig);
+  cli::add(c, kErrorSeed, &scan_.error_seed)->group(kGroupRig);
+
+  cli::add(c, kImageWidth, &s.camera.width)->group(kGroupCamera);
+  cli::add(c, kImageHeight, &s.camera.height)->group(kGroupCamera);
+  cli::add(c, kFocalX, &s.camera.fx)->group(kGroupCamera);
+  cli::add(c, kFocalY, &s.camera.fy)->group(kGroupCamera);
+  cli::add(c, kPrincipalX, &p.cx, "width / 2")->group(kGroupCamera);
+  cli::add(c, kPrincipalY, &p.cy, "height / 2")->group(kGroupCamera);
+  cli::add(c, kDepthMin, &s.depth_range.min_m)->group(kGroupCamera);
+  cli::add(c, kDepthMax, &s.depth_range.max_m)->group(kGroupCamera);
+
+  cli::add_text(c, "out", &scan_.out, "output folder [out/<object>-<date-time>]", "DIR")->group(kGroupOutput);
+  cli::add_flag(c, "no-log", &scan_pending_.no_log, "do not record scan.lcmlog")->group(kGroupOutput);
+  cli::add_settings_file(c)->group(kGroupOutput);
+}
+
+void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec, BenchPending* pending) {
+  CLI::App& c = *command;
+  cli::add_words(c, "objects", &spec->objects, "object names or mesh paths [the default set, README]");
+  cli::add_text(c, "object-dir", &pending->object_dir, "every .obj/.stl/.off/.ply in DIR instead", "DIR");
+  cli::add_list(c, "planners", &spec->planners, "planners to compare");
+  cli::add(c, eval::kBenchRig, &spec->rig);
+  cli::add(c, eval::kBenchArea, &spec->area);
+  cli::add(c, kViews, &spec->views);
+  cli::add(c, kMapResolution, &spec->resolution_m);
+  cli::add(c, kCandidates, &spec->candidates);
+  cli::add(c, kTMax, &spec->tmax);
+  cli::add(c, kSectors, &spec->beta);
+  cli::add(c, kObjectSize, &spec->size_m);
+  cli::add(c, kUp, &spec->up);
+  cli::add_point(c, "initial-view", &spec->initial_view,
+                 "first camera position, object frame, m [the scan's default first view]");
+  cli::add(c, kPlannerSeed, &spec->seed);
+  cli::add(c, eval::kBenchWhenDone, &spec->when_done);
+  cli::add(c, eval::kJobs, &spec->jobs);
+  cli::add_flag(c, "no-netns", &pending->no_netns, "run the scans on the current LCM bus (one at a time)");
+  cli::add_text(c, "out", &pending->out, "results (required); a rerun skips the scans already complete there", "DIR");
+  cli::add_settings_file(c);
+}
+
+std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
+  if (const std::optional<int> code = cli::parse(app_, argc, argv, out, err)) return code;
+  const CLI::App* given = app_.get_subcommands().empty() ? nullptr : app_.get_subcommands().front();
+  try {
+    if (given == nullptr || given == help_cmd_) {
+      command_ = Command::kHelp;
+      if (help_topic_.empty()) {
+        out << usage();
+        return 0;
+      }
+      for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, help_cmd_}) {
+        if (c->get_name() == help_topic_) {
+          out << c->help("pbnbv");
+          return 0;
+        }
+      }
+      throw std::invalid_argument("unknown command '" + help_topic_ + "' (expected scan, bench, ablate, spy or help)");
+    }
+    if (given == scan_cmd_) {
+      command_ = Command::kScan;
+      resolve_scan();
+    } else if (given == bench_cmd_) {
+      command_ = Command::kBench;
+      resolve_bench(bench_cmd_, &bench_, bench_pending_);
+    } else if (given == ablate_cmd_) {
+      command_ = Command::kAblate;
+      resolve_ablate();
+    } else {
+      command_ = Command::kSpy;
+    }
+  } catch (const std::invalid_argument& e) {
+    err << "pbnbv " << given->get_name() << ": " << e.what() << "\n(pbnbv " << given->get_name()
+        << " --help lists the options)" << std::endl;
+    return 2;
+  }
+  return std::nullopt;
+}
+
+std::string CommandLine::usage() const {
+  // The formatter directly: App::help() would describe the command given (help) instead.
+  return app_.get_formatter()->make_help(&app_, "pbnbv", CLI::AppFormatMode::All);
+}
+
+void CommandLine::resolve_scan() {
+  ScanSettings& s = scan_.settings;
+  const ScanPending& p = scan_pending_;
+  s.rig_model_path = default_rig_path(s.rig);
+  s.ring_elevation_deg = p.ring_elevation_deg.value_or(s.rig == RigKind::kArm ? kRingElevation.value
+                                                                                : kRingElevationFreeDeg);
+  if (p.initial_view) s.initial_view_m = *p.initial_view;
+  s.camera.cx = p.cx.value_or(s.camera.width / 2.0);
+  s.camera.cy = p.cy.value_or(s.camera.height / 2.0);
+  // The free rig is the paper's idealised comparison setup (a camera placed exactly, as in the
+  // paper's simulation): its kinematic poses are exact, so registration is off by default there.
+  scan_.registration = p.registration.value_or(s.rig == RigKind::kArm ? OnOff::kOn : OnOff::kOff) == OnOff::kOn;
+  scan_.record_log = !p.no_log;
+  s.validate();
+}
+
+void CommandLine::resolve_bench(const CLI::App* command, eval::BenchSpec* spec, const BenchPending& pending) {
+  const bool objects_given = command->get_option("--objects")->count() > 0;
+  if (objects_given && !pending.object_dir.empty()) throw std::invalid_argument("give --objects or --object-dir, not both");
+  if (!pending.object_dir.empty()) {
+    const fs::path dir = pending.object_dir;
+    if (!fs::is_directory(dir)) throw std::invalid_argument("--object-dir " + dir.string() + ": not a folder");
+    for (const auto& e : fs::directory_iterator(dir)) {
+      std::string ext = e.path().extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return std::tolower(ch); });
+      if (ext == ".obj" || ext == ".stl" || ext == ".off" || ext == ".ply") spec->objects.push_back(e.path().string());
+    }
+    std::sort(spec->objects.begin(), spec->objects.end());
+    if (spec->objects.empty()) throw std::invalid_argument("--object-dir " + dir.string() + ": no .obj, .stl, .off or .ply file");
+  } else if (!objects_given) {
+    for (const auto& d : eval::default_objects()) spec->objects.push_back(d.name);
+  }
+  spec->netns = !pending.no_netns;
+  if (pending.out.empty()) throw std::invalid_argument("--out DIR is required");
+  spec->out = fs::absolute(pending.out);
+  spec->validate();
+}
+
+void CommandLine::resolve_ablate() {
+  if (ablate_parameter_.empty()) {
+    throw std::invalid_argument("name the parameter: tmax, beta or initial-view (pbnbv ablate tmax [options])");
+  }
+  const AblatedParameter param = parse_name<AblatedParameter>(ablate_parameter_);
+  resolve_bench(ablate_cmd_, &ablate_base_, ablate_pending_);
+  ablate_.parameter = param;
+  ablate_.out = ablate_base_.out;
+  const std::vector<std::string> values =
+      ablate_values_.empty() ? default_ablation_values(param)
+                             : cli::detail::split_list(ablate_values_, param == AblatedParameter::kInitialView ? '/' : ',');
+  if (values.empty()) throw std::invalid_argument("--values '" + ablate_values_ + "' lists no value");
+  ablate_.runs.clear();
+  for (const std::string& v : values) {
+    eval::BenchSpec s = ablate_base_;
+    if (param == AblatedParameter::kTMax) s.tmax = ablation_number(kTMax, v);
+    if (param == AblatedParameter::kBeta) s.beta = ablation_number(kSectors, v);
+    if (param == AblatedParameter::kInitialView) {
+      s.initial_view = cli::detail::parse_point(v);
+      if (!s.initial_view) throw std::invalid_argument("--values: initial view '" + v + "' is not x,y,z");
+    }
+    std::string folder = std::string(name_of(param)) + "=" + v;
+    std::replace(folder.begin(), folder.end(), ',', '_');
+    s.out = ablate_.out / folder;
+    try {
+      s.validate();
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("--values " + v + ": " + e.what());
+    }
+    ablate_.runs.emplace_back(v, s);
+  }
+}
+
+}  // namespace pbnbv::launcher

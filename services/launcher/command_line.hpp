@@ -1,0 +1,136 @@
+#pragma once
+// The command line of `pbnbv` (CLI11, cli/options.hpp): the commands scan, bench, ablate, spy and
+// help, each with its options from the table of scan options (defaults, ranges and help text
+// written once, in core/*/..._options.hpp and eval/bench.hpp), per-command --help, --version,
+// and settings files (--config FILE, TOML; the command line overrides the file). Parsing only:
+// running a command is scan_command.hpp / commands.hpp.
+#include <Eigen/Core>
+
+#include <filesystem>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cli/options.hpp"
+#include "core/scan/scan_settings.hpp"
+#include "eval/bench.hpp"
+
+namespace pbnbv::launcher {
+
+enum class Command { kHelp, kScan, kBench, kAblate, kSpy };
+
+// What `pbnbv scan` was asked for: the object, the scan's settings (ScanSettings, before the
+// object places them), what the launcher passes to the twin and the other processes.
+struct ScanOptions {
+  std::string object = "bunny";  // a mesh path or a built-in name
+  double size_m = kObjectSize.value;
+  std::optional<UpAxis> up;      // none: the object's own
+  ScanSettings settings;         // rig, planner, views, ..., camera, with every default resolved
+  bool registration = true;      // --registration on|off, resolved (on arm, off free)
+  // The twin's depth noise and pose-error model.
+  double noise_sigma = kDepthNoise.value;
+  double dropout = kDropout.value;
+  double hand_eye_error_mm = kHandEyeErrorMm.value;
+  double hand_eye_error_deg = kHandEyeErrorDeg.value;
+  double turntable_error_deg = kTurntableErrorDeg.value;
+  double joint_error_deg = kJointErrorDeg.value;
+  int64_t error_seed = kErrorSeed.value;
+  bool record_log = true;        // not --no-log
+  std::string out;               // empty: out/<object>-<date-time>
+};
+
+// The paper's three ablations: which PB-NBV parameter varies.
+enum class AblatedParameter { kTMax, kBeta, kInitialView };
+
+// What `pbnbv ablate` was asked for: one benchmark per value (the value as given, its spec).
+struct AblateOptions {
+  AblatedParameter parameter = AblatedParameter::kTMax;
+  std::vector<std::pair<std::string, eval::BenchSpec>> runs;
+  std::filesystem::path out;
+};
+
+// The values the paper's ablations try (text as on the command line: --values).
+std::vector<std::string> default_ablation_values(AblatedParameter p);
+
+class CommandLine {
+ public:
+  // Declares every command and its options.
+  CommandLine();
+  CommandLine(const CommandLine&) = delete;
+  CommandLine& operator=(const CommandLine&) = delete;
+
+  // Parses argv (argv[0] is the program). std::nullopt: run command(); else the exit code, the
+  // help / version printed to `out` (0) or what is wrong printed to `err` naming the option (2).
+  // Every default that depends on other options is resolved here (the ring elevation and the
+  // registration by rig, the principal point by image size) and the settings are validated, so
+  // a bad command line never starts a process.
+  std::optional<int> parse(int argc, const char* const* argv, std::ostream& out, std::ostream& err);
+
+  Command command() const { return command_; }
+  const ScanOptions& scan() const { return scan_; }
+  const eval::BenchSpec& bench() const { return bench_; }
+  const AblateOptions& ablate() const { return ablate_; }
+
+  // The whole usage: every command with its options.
+  std::string usage() const;
+
+ private:
+  // The raw values of the options whose defaults depend on others, or that need a file system
+  // look-up, before parse() resolves them.
+  struct ScanPending {
+    std::optional<double> ring_elevation_deg, cx, cy;
+    std::optional<OnOff> registration;
+    std::optional<Eigen::Vector3d> initial_view;
+    bool no_log = false;
+  };
+  struct BenchPending {
+    std::string object_dir;
+    std::string out;
+    bool no_netns = false;
+  };
+
+  // The options of `scan`, bound to scan_ and scan_pending_.
+  void declare_scan();
+  // The options `bench` and `ablate` share, bound to *spec and *pending.
+  void declare_bench_options(CLI::App* command, eval::BenchSpec* spec, BenchPending* pending);
+  // The defaults that depend on other options (ring elevation and registration by rig, the
+  // principal point by image size), then ScanSettings::validate. Throws std::invalid_argument.
+  void resolve_scan();
+  // The object list (--objects, --object-dir or the default set), the output folder, then
+  // BenchSpec::validate. Throws std::invalid_argument.
+  void resolve_bench(const CLI::App* command, eval::BenchSpec* spec, const BenchPending& pending);
+  // The ablated parameter and one benchmark per value of --values. Throws std::invalid_argument.
+  void resolve_ablate();
+
+  CLI::App app_;
+  CLI::App* scan_cmd_ = nullptr;
+  CLI::App* bench_cmd_ = nullptr;
+  CLI::App* ablate_cmd_ = nullptr;
+  CLI::App* spy_cmd_ = nullptr;
+  CLI::App* help_cmd_ = nullptr;
+  Command command_ = Command::kHelp;
+  ScanOptions scan_;
+  ScanPending scan_pending_;
+  eval::BenchSpec bench_;
+  BenchPending bench_pending_;
+  eval::BenchSpec ablate_base_;
+  BenchPending ablate_pending_;
+  std::string ablate_parameter_, ablate_values_;
+  AblateOptions ablate_;
+  std::string help_topic_;
+};
+
+}  // namespace pbnbv::launcher
+
+namespace pbnbv {
+template <>
+struct EnumNames<launcher::AblatedParameter> {
+  static constexpr std::string_view what = "ablation parameter";
+  static constexpr std::array<NamedValue<launcher::AblatedParameter>, 3> names{
+      {{launcher::AblatedParameter::kTMax, "tmax"},
+       {launcher::AblatedParameter::kBeta, "beta"},
+       {launcher::AblatedParameter::kInitialView, "initial-view"}}};
+};
+}  // namespace pbnbv

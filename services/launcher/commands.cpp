@@ -1,0 +1,51 @@
+// `pbnbv bench`, `ablate` and `spy` (commands.hpp).
+#include <unistd.h>
+
+#include <iostream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/io/json.hpp"
+#include "launcher/commands.hpp"
+
+namespace fs = std::filesystem;
+
+namespace pbnbv::launcher {
+
+int run_bench(const eval::BenchSpec& spec, const fs::path& self) {
+  const eval::BenchResult r = eval::run_bench(spec, self, std::cout);
+  std::cout << "\n" << read_text((spec.out / "report.md").string()) << std::endl;
+  int failed = 0;
+  for (const auto& p : r.planners) failed += p.failed;
+  std::cout << "outputs: " << (spec.out / "summary.json").string() << ", " << (spec.out / "report.md").string()
+            << ", coverage.png, time.png; scans in " << spec.out.string() << "/<planner>/<object>/" << std::endl;
+  if (failed > 0) {
+    std::cerr << "pbnbv bench: " << failed << " scans did not complete (see summary.json and logs/); run the command "
+              << "again to retry them" << std::endl;
+    return 1;
+  }
+  return 0;
+}
+
+int run_ablate(const AblateOptions& o, const fs::path& self) {
+  eval::run_ablation(std::string(name_of(o.parameter)), o.runs, o.out, self, std::cout);
+  std::cout << "\n" << read_text((o.out / "ablation.md").string()) << std::endl;
+  return 0;
+}
+
+int run_spy() {
+  const std::string classpath = std::string(PBNBV_LCM_JAR) + ":/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar";
+  if (!fs::exists(PBNBV_LCM_JAR)) {
+    throw std::runtime_error(std::string("message jar ") + PBNBV_LCM_JAR + " is missing: build the project first (./scripts/setup)");
+  }
+  // Debian's lcm-spy script passes -Xincgc, which Java 17 rejects; start the class directly.
+  std::vector<std::string> a = {"java", "-Djava.net.preferIPv4Stack=true", "-Xmx512m", "-cp", classpath, "lcm.spy.Spy"};
+  std::vector<char*> cargv;
+  for (auto& s : a) cargv.push_back(s.data());
+  cargv.push_back(nullptr);
+  ::execvp("java", cargv.data());
+  throw std::runtime_error("cannot run java (install default-jdk-headless: ./scripts/setup)");
+}
+
+}  // namespace pbnbv::launcher

@@ -1,0 +1,193 @@
+// `pbnbv`'s command line: every default comes from the table of scan options, the defaults that
+// depend on the rig are resolved, a settings file sets options and the command line overrides
+// it, and each bad option is named (with its value and range) before anything starts.
+#include "launcher/command_line.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace pbnbv::launcher {
+namespace {
+
+struct Parsed {
+  std::optional<int> code;
+  std::string out, err;
+};
+
+Parsed parse(CommandLine& line, std::vector<std::string> words) {
+  words.insert(words.begin(), "pbnbv");
+  std::vector<const char*> argv;
+  for (const auto& w : words) argv.push_back(w.c_str());
+  std::ostringstream out, err;
+  Parsed p;
+  p.code = line.parse(static_cast<int>(argv.size()), argv.data(), out, err);
+  p.out = out.str();
+  p.err = err.str();
+  return p;
+}
+
+std::string file_with(const std::string& name, const std::string& text) {
+  const fs::path path = fs::temp_directory_path() / ("pbnbv-command-line-test-" + name + ".toml");
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+TEST(LauncherCommandLine, ScanDefaultsAreTheTables) {
+  CommandLine line;
+  const Parsed p = parse(line, {"scan"});
+  ASSERT_EQ(p.code, std::nullopt) << p.err;
+  ASSERT_EQ(line.command(), Command::kScan);
+  const ScanOptions& o = line.scan();
+  const ScanSettings& s = o.settings;
+  EXPECT_EQ(o.object, "bunny");
+  EXPECT_DOUBLE_EQ(o.size_m, 0.3);
+  EXPECT_FALSE(o.up.has_value());
+  EXPECT_EQ(s.rig, RigKind::kArm);
+  EXPECT_EQ(s.planner, PlannerKind::kPbnbv);
+  EXPECT_EQ(s.views, 10);
+  EXPECT_EQ(s.candidates, 800);
+  EXPECT_EQ(s.parallels, 24);
+  EXPECT_EQ(s.sectors, 4);
+  EXPECT_EQ(s.t_max, 10);
+  EXPECT_EQ(s.area, CandidateArea::kHemisphere);
+  EXPECT_EQ(s.when_done, WhenDone::kStop);
+  EXPECT_DOUBLE_EQ(s.map_resolution_m, 0.03);
+  EXPECT_DOUBLE_EQ(s.voxel_m, 0.002);
+  EXPECT_DOUBLE_EQ(s.working_distance_m, 0.6);
+  EXPECT_DOUBLE_EQ(s.ring_elevation_deg, 30.0);  // arm rig
+  EXPECT_FALSE(s.initial_view_m.allFinite());
+  EXPECT_DOUBLE_EQ(s.sim_speed, 4.0);
+  EXPECT_DOUBLE_EQ(s.speed_scale, 1.0);
+  EXPECT_EQ(s.camera.width, 1280);
+  EXPECT_EQ(s.camera.height, 720);
+  EXPECT_DOUBLE_EQ(s.camera.fx, 696.0);
+  EXPECT_DOUBLE_EQ(s.camera.cx, 640.0);  // width / 2
+  EXPECT_DOUBLE_EQ(s.camera.cy, 360.0);
+  EXPECT_DOUBLE_EQ(s.depth_range.min_m, 0.1);
+  EXPECT_DOUBLE_EQ(s.depth_range.max_m, 3.0);
+  EXPECT_TRUE(o.registration);  // arm rig
+  EXPECT_TRUE(o.record_log);
+  EXPECT_EQ(o.error_seed, 7);
+  EXPECT_EQ(s.rig_model_path, default_rig_path(RigKind::kArm));
+}
+
+TEST(LauncherCommandLine, FreeRigDefaultsAndDependentDefaults) {
+  CommandLine line;
+  const Parsed p = parse(line, {"scan", "--rig", "free", "--width", "320", "--height", "180", "--initial-view", "0,0.9,0",
+                                "--no-log", "--up", "y"});
+  ASSERT_EQ(p.code, std::nullopt) << p.err;
+  const ScanOptions& o = line.scan();
+  EXPECT_DOUBLE_EQ(o.settings.ring_elevation_deg, 0.0);  // free rig
+  EXPECT_FALSE(o.registration);                          // free rig: exact poses
+  EXPECT_DOUBLE_EQ(o.settings.camera.cx, 160.0);
+  EXPECT_DOUBLE_EQ(o.settings.camera.cy, 90.0);
+  EXPECT_EQ(o.settings.initial_view_m, Eigen::Vector3d(0, 0.9, 0));
+  EXPECT_FALSE(o.record_log);
+  EXPECT_EQ(o.up, UpAxis::kY);
+}
+
+TEST(LauncherCommandLine, ASettingsFileSetsOptionsAndTheCommandLineOverridesIt) {
+  const std::string file = file_with("scan", "views = 3\nplanner = \"ring\"\n");
+  CommandLine line;
+  const Parsed p = parse(line, {"scan", "--config", file, "--views", "5"});
+  ASSERT_EQ(p.code, std::nullopt) << p.err;
+  EXPECT_EQ(line.scan().settings.views, 5);                      // the command line wins
+  EXPECT_EQ(line.scan().settings.planner, PlannerKind::kRing);  // from the file
+  CommandLine only_file;
+  ASSERT_EQ(parse(only_file, {"scan", "--config", file}).code, std::nullopt);
+  EXPECT_EQ(only_file.scan().settings.views, 3);
+  EXPECT_EQ(only_file.scan().settings.planner, PlannerKind::kRing);
+}
+
+TEST(LauncherCommandLine, BenchDefaultsAndAblationRuns) {
+  CommandLine line;
+  const Parsed p = parse(line, {"bench", "--objects", "sphere,box", "--out", "/tmp/pbnbv-bench"});
+  ASSERT_EQ(p.code, std::nullopt) << p.err;
+  const eval::BenchSpec& b = line.bench();
+  EXPECT_EQ(b.planners, (std::vector<PlannerKind>{PlannerKind::kPbnbv, PlannerKind::kRaycast, PlannerKind::kRandom}));
+  EXPECT_EQ(b.rig, RigKind::kFree);
+  EXPECT_EQ(b.area, CandidateArea::kFullSphere);
+  EXPECT_EQ(b.when_done, WhenDone::kSpread);
+  EXPECT_EQ(b.candidates, 800);
+  EXPECT_EQ(b.views, 10);
+  EXPECT_EQ(b.objects, (std::vector<std::string>{"sphere", "box"}));
+  EXPECT_TRUE(b.netns);
+
+  CommandLine ablate;
+  const Parsed a = parse(ablate, {"ablate", "tmax", "--values", "5,20", "--objects", "sphere", "--out", "/tmp/pbnbv-abl"});
+  ASSERT_EQ(a.code, std::nullopt) << a.err;
+  const AblateOptions& o = ablate.ablate();
+  EXPECT_EQ(o.parameter, AblatedParameter::kTMax);
+  ASSERT_EQ(o.runs.size(), 2u);
+  EXPECT_EQ(o.runs[0].first, "5");
+  EXPECT_EQ(o.runs[0].second.tmax, 5);
+  EXPECT_EQ(o.runs[1].second.tmax, 20);
+  EXPECT_EQ(o.runs[1].second.out, fs::path("/tmp/pbnbv-abl/tmax=20"));
+  EXPECT_EQ(o.runs[0].second.planners, (std::vector<PlannerKind>{PlannerKind::kPbnbv}));
+
+  CommandLine views;
+  ASSERT_EQ(parse(views, {"ablate", "initial-view", "--out", "/tmp/pbnbv-abl"}).code, std::nullopt);
+  ASSERT_EQ(views.ablate().runs.size(), 4u);
+  EXPECT_EQ(views.ablate().runs[3].second.initial_view, Eigen::Vector3d(0, 0.63, 0.63));
+  EXPECT_EQ(views.ablate().runs[3].second.out, fs::path("/tmp/pbnbv-abl/initial-view=0_0.63_0.63"));
+}
+
+// Each kind of bad option, on scan and on bench: exit 2, the message names the option (and the
+// value and range where there is one).
+TEST(LauncherCommandLine, BadOptionsAreNamed) {
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"scan", "--views"}, "pbnbv scan: --views needs a value"},
+      {{"scan", "--out", "--views", "3"}, "pbnbv scan: --out: missing value (the next word, '--views', is an option)"},
+      {{"scan", "--views", "3", "--views", "4"}, "pbnbv scan: --views is given 2 times (3, 4): give it once"},
+      {{"scan", "--views", "2000"}, "pbnbv scan: --views: 2000 is outside its range [1, 1000]"},
+      {{"scan", "--resolution", "0.5"}, "pbnbv scan: --resolution: 0.5 is outside its range [0.002, 0.2] m"},
+      {{"scan", "--veiws", "3"}, "pbnbv scan: unknown option --veiws (did you mean --views?)"},
+      {{"scan", "--planner", "best"}, "pbnbv scan: --planner: unknown planner 'best' (expected pbnbv, raycast, random or ring)"},
+      {{"scan", "--parallels", "30", "--candidates", "20"}, "pbnbv scan: --parallels 30 must not exceed --candidates 20"},
+      {{"bench", "--jobs", "--out", "x"}, "pbnbv bench: --jobs: missing value (the next word, '--out', is an option)"},
+      {{"bench", "--out", "x", "--jobs", "65"}, "pbnbv bench: --jobs: 65 is outside its range [1, 64]"},
+      {{"bench", "--out", "x", "--out", "y"}, "pbnbv bench: --out is given 2 times (x, y): give it once"},
+      {{"bench", "--out", "x", "--candidates", "10"},
+       "pbnbv bench: --candidates 10: the candidates lie on 24 parallels, so at least 24 are needed"},
+      {{"bench", "--objets", "sphere"}, "pbnbv bench: unknown option --objets (did you mean --objects?)"},
+      {{"bench", "--planners", "pbnbv,ring,pbnbv", "--out", "x"}, "pbnbv bench: --planners: 'pbnbv' is listed twice"},
+      {{"bench"}, "pbnbv bench: --out DIR is required"},
+      {{"ablate", "--out", "x"}, "pbnbv ablate: name the parameter: tmax, beta or initial-view"},
+      {{"ablate", "beta", "--values", "2,400", "--out", "x"}, "pbnbv ablate: --values: --beta 400 is outside its range [1, 360]"},
+      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, help)"},
+  };
+  for (const auto& [words, message] : cases) {
+    CommandLine line;
+    const Parsed p = parse(line, words);
+    EXPECT_EQ(p.code, std::optional<int>(2)) << words[0];
+    EXPECT_EQ(p.err.rfind(message, 0), 0u) << "got: " << p.err << "want: " << message;
+  }
+}
+
+TEST(LauncherCommandLine, HelpPrintsTheUsage) {
+  for (const std::vector<std::string>& words : {std::vector<std::string>{}, {"help"}, {"--help"}}) {
+    CommandLine line;
+    const Parsed p = parse(line, words);
+    EXPECT_EQ(p.code, std::optional<int>(0));
+    // Every command and its options, with the defaults of the table.
+    for (const char* part : {"scan", "bench", "ablate", "spy", "--views N", "at most this many views [10] (range [1, 1000])",
+                             "--candidates N", "[800]", "--when-done stop|spread", "[spread]", "--config FILE"}) {
+      EXPECT_NE(p.out.find(part), std::string::npos) << part;
+    }
+  }
+  CommandLine scan;
+  const Parsed p = parse(scan, {"scan", "--help"});
+  EXPECT_EQ(p.code, std::optional<int>(0));
+  EXPECT_NE(p.out.find("Usage: pbnbv scan"), std::string::npos) << p.out;
+  EXPECT_EQ(p.out.find("--jobs"), std::string::npos) << "a command's help lists only its own options";
+}
+
+}  // namespace
+}  // namespace pbnbv::launcher

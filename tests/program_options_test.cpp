@@ -1,0 +1,145 @@
+// The command line of every program, run as the user runs it: `pbnbv` and its commands, each
+// service and the twin answer --help and --version (the project's version) with exit 0, and a
+// missing value, a repeated option, a number out of its range, a bad choice and an unknown
+// option each end the program with exit 2 and a message naming the option, before the program
+// touches the bus, the renderer or the file system.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "test_util.hpp"
+
+using namespace pbnbv::testing;
+
+namespace {
+
+struct Case {
+  std::string args;     // after the program
+  std::string message;  // expected in the output
+};
+
+struct Program {
+  std::string name;        // the binary
+  std::string command;     // "scan" for pbnbv, else ""
+  std::vector<Case> bad;   // each exits 2 with its message
+  std::string help_names;  // an option the help must list
+};
+
+std::vector<Program> programs() {
+  return {
+      {"pbnbv",
+       "scan",
+       {{"--views", "--views needs a value"},
+        {"--out --views 3", "--out: missing value (the next word, '--views', is an option)"},
+        {"--views 3 --views 4", "--views is given 2 times (3, 4): give it once"},
+        {"--views 2000", "--views: 2000 is outside its range [1, 1000]"},
+        {"--planner best", "--planner: unknown planner 'best' (expected pbnbv, raycast, random or ring)"},
+        {"--veiws 3", "unknown option --veiws (did you mean --views?)"}},
+       "--tmax N"},
+      {"pbnbv",
+       "bench",
+       {{"--out", "--out needs a value"},
+        {"--jobs 2 --jobs 3 --out x", "--jobs is given 2 times (2, 3): give it once"},
+        {"--jobs 100 --out x", "--jobs: 100 is outside its range [1, 64]"},
+        {"--rig crane --out x", "--rig: unknown rig kind 'crane' (expected arm or free)"},
+        {"--objets sphere --out x", "unknown option --objets (did you mean --objects?)"}},
+       "--planners"},
+      {"pbnbv-motion",
+       "",
+       {{"--rig", "--rig needs a value"},
+        {"--rig arm --rig free", "--rig is given 2 times (arm, free): give it once"},
+        {"--rig crane", "--rig: unknown rig kind 'crane' (expected arm or free)"},
+        {"--modle x.xml", "unknown option --modle (did you mean --model?)"}},
+       "--model PATH"},
+      {"pbnbv-camera",
+       "",
+       {{"--model", "--model needs a value"},
+        {"--model a --model b", "--model is given 2 times (a, b): give it once"},
+        {"--rig crane", "--rig: unknown rig kind 'crane'"},
+        {"--rgi arm", "unknown option --rgi (did you mean --rig?)"}},
+       "--rig arm|free"},
+      {"pbnbv-registration",
+       "",
+       {{"--max-iterations", "--max-iterations needs a value"},
+        {"--off --off", "--off is given 2 times: give it once"},
+        {"--max-iterations 0", "--max-iterations: 0 is outside its range [1, 1000]"},
+        {"--max-rmse 1", "--max-rmse: 1 is outside its range [1e-05, 0.1] m"},
+        {"--icp-voxl 0.002", "unknown option --icp-voxl (did you mean --icp-voxel?)"}},
+       "--model-voxel M"},
+      {"pbnbv-mapping",
+       "",
+       {{"--resolution", "--resolution needs a value"},
+        {"--resolution 0.03 --resolution 0.01", "--resolution is given 2 times (0.03, 0.01): give it once"},
+        {"--resolution 0.5", "--resolution: 0.5 is outside its range [0.002, 0.2] m"},
+        {"--volume-min 1,2", "--volume-min: '1,2' is not three numbers x,y,z"},
+        {"--resolutoin 0.03", "unknown option --resolutoin (did you mean --resolution?)"}},
+       "--volume-max x,y,z"},
+      {"pbnbv-ellipsoids",
+       "",
+       {{"--tmax", "--tmax needs a value"},
+        {"--tmax 5 --tmax 6", "--tmax is given 2 times (5, 6): give it once"},
+        {"--tmax 500", "--tmax: 500 is outside its range [1, 200]"},
+        {"--tmax 5.5", "--tmax: '5.5' is not a whole number"},
+        {"--t-max 5", "unknown option --t-max (did you mean --tmax?)"}},
+       "--tmax N"},
+      {"pbnbv-scorer",
+       "",
+       {{"--rig", "--rig needs a value"},
+        {"--rig free --rig free", "--rig is given 2 times (free, free): give it once"},
+        {"--rig crane", "--rig: unknown rig kind 'crane'"},
+        {"--rigs arm", "unknown option --rigs (did you mean --rig?)"}},
+       "--model PATH"},
+      {"pbnbv-coordinator",
+       "",
+       {{"", "--out is required"},
+        {"--out", "--out needs a value"},
+        {"--out a --out b", "--out is given 2 times (a, b): give it once"},
+        {"--out a --setings s.json", "unknown option --setings (did you mean --settings?)"}},
+       "--settings PATH"},
+      {"pbnbv-twin",
+       "",
+       {{"--speed", "--speed needs a value"},
+        {"--speed 2 --speed 3", "--speed is given 2 times (2, 3): give it once"},
+        {"--speed 1000", "--speed: 1000 is outside its range [0.1, 100]"},
+        {"--fx 0", "--fx: 0 is outside its range [1, 100000] px"},
+        {"--rig crane", "--rig: unknown rig kind 'crane'"},
+        {"--mesh-file x.stl", "unknown option --mesh-file (did you mean --mesh?)"}},
+       "--hand-eye-error-mm MM"},
+  };
+}
+
+std::string command_of(const Program& p, const std::string& args) {
+  std::string c = bin_dir() + "/" + p.name;
+  if (!p.command.empty()) c += " " + p.command;
+  return c + (args.empty() ? "" : " " + args);
+}
+
+TEST(ProgramOptions, BadOptionsAreNamedAndExitTwo) {
+  for (const Program& p : programs()) {
+    for (const Case& c : p.bad) {
+      const std::string command = command_of(p, c.args);
+      const CommandResult r = run_command(command);
+      EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.output;
+      EXPECT_NE(r.output.find(c.message), std::string::npos) << command << "\n" << r.output;
+    }
+  }
+}
+
+TEST(ProgramOptions, HelpAndVersion) {
+  for (const Program& p : programs()) {
+    const std::string help = command_of(p, "--help");
+    const CommandResult h = run_command(help);
+    EXPECT_EQ(h.exit_code, 0) << help << "\n" << h.output;
+    EXPECT_NE(h.output.find(p.help_names), std::string::npos) << help << "\n" << h.output;
+    if (!p.command.empty()) continue;  // --version is the program's, not a command's
+    const std::string version = bin_dir() + "/" + p.name + " --version";
+    const CommandResult v = run_command(version);
+    EXPECT_EQ(v.exit_code, 0) << version << "\n" << v.output;
+    EXPECT_EQ(v.output, p.name + " " + PBNBV_TEST_VERSION + "\n") << version;
+  }
+  const CommandResult v = run_command(bin_dir() + "/pbnbv --version");
+  EXPECT_EQ(v.output, std::string("pbnbv ") + PBNBV_TEST_VERSION + "\n");
+}
+
+}  // namespace
