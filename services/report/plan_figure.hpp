@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "core/planning/ellipsoids.hpp"
+#include "core/planning/mvee.hpp"
 #include "core/planning/planner.hpp"
 #include "core/base/pose.hpp"
 
