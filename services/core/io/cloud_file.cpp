@@ -22,10 +22,12 @@ namespace pbnbv {
 
 namespace {
 
+// Throws "<ctx>: <path>: <what>".
 [[noreturn]] void fail(const char* ctx, const std::string& path, const std::string& what) {
   throw std::runtime_error(fmt::format("{}: {}: {}", ctx, path, what));
 }
 
+// Whether the machine stores numbers little-endian (PLY's binary_little_endian byte order).
 bool host_little_endian() {
   const std::uint16_t one = 1;
   unsigned char c;

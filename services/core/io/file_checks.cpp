@@ -18,6 +18,7 @@ namespace pbnbv {
 
 namespace {
 
+// Throws "<ctx>: <path>: <what>".
 [[noreturn]] void fail(const char* ctx, const std::string& path, const std::string& what) {
   throw std::runtime_error(fmt::format("{}: {}: {}", ctx, path, what));
 }
@@ -49,6 +50,7 @@ CGAL::IO::internal::PLY_element* find_element(CGAL::IO::internal::PLY_reader& re
   return nullptr;
 }
 
+// Whether element `e` has a property called `name`, of any type.
 bool has_named(CGAL::IO::internal::PLY_element& e, const char* name) {
   for (std::size_t k = 0; k < e.number_of_properties(); ++k) {
     if (e.property(k)->name() == name) return true;

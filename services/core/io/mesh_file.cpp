@@ -45,10 +45,12 @@ using Polygon = std::vector<std::size_t>;
 
 constexpr const char* kLoad = "load_mesh";
 
+// Throws "<ctx>: <path>: <what>".
 [[noreturn]] void fail(const char* ctx, const std::string& path, const std::string& what) {
   throw std::runtime_error(fmt::format("{}: {}: {}", ctx, path, what));
 }
 
+// `s` in lower case (ASCII).
 std::string lower(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return s;
@@ -85,6 +87,7 @@ TriangleMesh to_mesh(const std::string& path, const std::vector<Point>& points,
   return m;
 }
 
+// Whether triangle `t` has a repeated corner or (relative to its longest edge) no area.
 bool degenerate(const TriangleMesh& m, const Eigen::Vector3i& t) {
   if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) return true;
   const Eigen::Vector3d& a = m.vertices[static_cast<std::size_t>(t[0])];
@@ -157,15 +160,15 @@ TriangleMesh load_mesh(const std::string& path) {
   if (ext == ".obj") {
     CGAL::IO::set_mode(in, CGAL::IO::ASCII);
     if (!CGAL::IO::read_OBJ(in, points, polygons, quiet)) {
-      // The OBJ reader reads line by line and checks indices and emptiness only at the end:
-      // stopped before the end, it could not read a line; at the end, the checks below say why.
+      // The OBJ reader reads line by line and checks indices and emptiness only once it has
+      // read every line: stopped at the end of the file, our checks of those say why, or else
+      // it could not read the last line.
       in.clear();
-      if (in.tellg() < static_cast<std::streamoff>(std::filesystem::file_size(path))) {
-        fail(kLoad, path, "cannot read it as OBJ: CGAL::IO::read_OBJ stopped " + stopped_at(path, in, true));
+      if (in.tellg() >= static_cast<std::streamoff>(std::filesystem::file_size(path))) {
+        to_mesh(path, points, polygons);  // throws for an index out of range
+        if (polygons.empty()) fail(kLoad, path, "no triangles");
       }
-      TriangleMesh m = to_mesh(path, points, polygons);
-      finish_mesh(m, path);
-      fail(kLoad, path, "cannot read it as OBJ (CGAL::IO::read_OBJ failed)");
+      fail(kLoad, path, "cannot read it as OBJ: CGAL::IO::read_OBJ stopped " + stopped_at(path, in, true));
     }
   } else if (ext == ".off") {
     CGAL::IO::set_mode(in, CGAL::IO::ASCII);

@@ -380,6 +380,9 @@ TEST_F(MeshFiles, Errors) {
   const std::string inf = write("inf.off", "OFF\n3 1 0\n0 0 0\n1 0 inf\n0 1 0\n3 0 1 2\n");
   expect_error([&] { load_mesh(inf); }, {inf, "line 4", "'1 0 inf'"});
 
+  const std::string last = write("last.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nvv 1 2 3\n");
+  expect_error([&] { load_mesh(last); }, {last, "line 7", "'vv 1 2 3'"});
+
   const std::string huge = write("huge.obj", "v 0 0 0\nv 1 1e999 0\nv 0 1 0\nf 1 2 3\n");
   expect_error([&] { load_mesh(huge); }, {huge, "line 2", "'v 1 1e999 0'"});
   std::string stl_inf = stl_binary_box("binary", 1.0f);
