@@ -5,11 +5,11 @@
 // after reading; PLY headers are checked before (see check_ply_header). Writing (binary STL,
 // OBJ) is our own: a few lines each, exact, and what the twin and the reports read.
 //
-// CGAL's readers are slower than the hand-written ones they replace (mesh_file_bench, CPU time,
-// medians of two runs: armadillo.off, 52k triangles, 96-103 ms against 8.4 ms; bunny.obj
-// 4.5-6.0 ms against 0.6 ms), but a mesh is loaded once per process that needs it, so this is
-// at most a tenth of a second per scan for the largest default mesh, against 800 lines of
-// parsers of our own.
+// CGAL's readers are 7 to 12 times slower than the hand-written ones they replace
+// (mesh_file_bench, CPU time, medians: armadillo.off, 52k triangles, 84-122 ms against 8-12 ms;
+// the same as binary STL 48-90 ms against 7-8 ms; bunny.obj 4.9-5.2 ms against 0.6-0.8 ms), but
+// a mesh is loaded once by each process that needs it: at most about a tenth of a second per
+// scan for the largest default mesh, against 800 lines of parsers of our own.
 #include "core/io/mesh_file.hpp"
 
 #include <CGAL/IO/OBJ.h>

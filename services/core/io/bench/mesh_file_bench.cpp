@@ -1,5 +1,6 @@
 // Loading the default object meshes (build/data/meshes: the .off set, bunny.obj, teapot.obj),
-// each registered as BM_LoadMesh/<file>, and writing / reading a scan-sized point cloud (PLY).
+// each registered as BM_LoadMesh/<file>, the largest of them as binary STL, and writing /
+// reading a scan-sized point cloud (PLY).
 #include <benchmark/benchmark.h>
 #include <unistd.h>
 
@@ -46,6 +47,23 @@ const bool kMeshesRegistered = [] {
   }
   return true;
 }();
+
+// The eval runner reads each scan's normalised mesh back as binary STL: armadillo.off (52k
+// triangles) written once as binary STL and loaded.
+void BM_LoadMeshBinaryStl(benchmark::State& state) {
+  const fs::path off = fs::path(PBNBV_DATA_DIR) / "meshes" / "armadillo.off";
+  std::error_code ec;
+  if (!fs::exists(off, ec)) {
+    state.SkipWithError(("no " + off.string()).c_str());
+    return;
+  }
+  const std::string stl =
+      (fs::temp_directory_path() / ("pbnbv_io_bench_" + std::to_string(::getpid()) + "_armadillo.stl")).string();
+  pbnbv::write_stl_binary(pbnbv::load_mesh(off.string()), stl);
+  load_mesh_file(state, stl);
+  fs::remove(stl, ec);
+}
+BENCHMARK(BM_LoadMeshBinaryStl)->Unit(benchmark::kMillisecond);
 
 // A 300k-point cloud (about what a scan accumulates), Gaussian around the origin.
 const pbnbv::PointCloud& cloud() {
