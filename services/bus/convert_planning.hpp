@@ -7,7 +7,7 @@
 #include <string>
 
 #include "bus/convert.hpp"
-#include "core/planning/ellipsoids.hpp"
+#include "core/planning/mvee.hpp"
 #include "pbnbv/ellipsoid_t.hpp"
 
 namespace pbnbv::bus {

@@ -14,7 +14,7 @@
 #include "bus/convert_planning.hpp"
 #include "bus/reply_cache.hpp"
 #include "bus/service.hpp"
-#include "core/planning/ellipsoids.hpp"
+#include "core/planning/ellipsoid_fit.hpp"
 #include "core/base/log.hpp"
 #include "pbnbv/ellipsoid_set_t.hpp"
 #include "pbnbv/voxel_set_t.hpp"

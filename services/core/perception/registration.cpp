@@ -1,12 +1,12 @@
 #include "core/perception/cloud_filter.hpp"
 #include "core/perception/registration.hpp"
+#include "core/perception/index_search.hpp"
+#include "core/perception/neighbours.hpp"
 #include "core/base/format.hpp"
 #include "core/base/units.hpp"
 
 #include <Eigen/Eigenvalues>
 
-#include <pcl/common/centroid.h>
-#include <pcl/features/normal_3d.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/registration/correspondence_rejection.h>
@@ -22,7 +22,6 @@
 #include <limits>
 #include <memory>
 #include <string>
-#include <thread>
 #include <unordered_set>
 #include <vector>
 
@@ -39,262 +38,6 @@ class Icp : public pcl::IterativeClosestPointWithNormals<pcl::PointNormal, pcl::
   int iterations() const { return nr_iterations_; }
 };
 using Criteria = pcl::registration::DefaultConvergenceCriteria<double>;
-
-// A static 3-d tree over the xyz of a cloud, answering the k-NN and radius queries of
-// pcl::search with far less per-query overhead than the FLANN-backed pcl::search::KdTree (no
-// allocation, no OpenMP region per query). Thread-safe for queries; used by the normal
-// estimation, ICP's correspondence search and the overlap gate.
-template <typename PointT>
-class FastKdTree : public pcl::search::KdTree<PointT> {
- public:
-  using Base = pcl::search::KdTree<PointT>;
-  using typename Base::PointCloudConstPtr;
-  using typename Base::IndicesConstPtr;
-  using pcl::search::Search<PointT>::nearestKSearch;
-  using pcl::search::Search<PointT>::radiusSearch;
-  using Ptr = pcl::shared_ptr<FastKdTree<PointT>>;
-
-  FastKdTree() : Base(true) {}
-
-  void setInputCloud(const PointCloudConstPtr& cloud,
-                     const IndicesConstPtr& indices = IndicesConstPtr()) override {
-    this->input_ = cloud;
-    this->indices_ = indices;
-    pts_.clear();
-    ids_.clear();
-    nodes_.clear();
-    if (!cloud) return;
-    auto add = [&](pcl::index_t i) {
-      const auto& p = (*cloud)[i];
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return;
-      pts_.push_back(p.getVector3fMap());
-      ids_.push_back(i);
-    };
-    if (indices) {
-      for (pcl::index_t i : *indices) add(i);
-    } else {
-      for (pcl::index_t i = 0; i < static_cast<pcl::index_t>(cloud->size()); ++i) add(i);
-    }
-    nodes_.reserve(2 * pts_.size() / kLeaf + 2);
-    if (!pts_.empty()) build(0, static_cast<int>(pts_.size()));
-  }
-
-  int nearestKSearch(const PointT& point, int k, pcl::Indices& k_indices,
-                     std::vector<float>& k_sqr_distances) const override {
-    if (k == 1) {  // ICP's correspondence search
-      k_indices.resize(1);
-      k_sqr_distances.resize(1);
-      float d2;
-      const pcl::index_t i = nearest(point.getVector3fMap(), k1_bound_d2_, d2);
-      if (i < 0) {  // nothing within the bound: report a miss pcl's distance test drops
-        k_indices[0] = ids_.empty() ? 0 : ids_[0];
-        k_sqr_distances[0] = std::numeric_limits<float>::max();
-        return ids_.empty() ? 0 : 1;
-      }
-      k_indices[0] = i;
-      k_sqr_distances[0] = d2;
-      return 1;
-    }
-    return knn(point.getVector3fMap(), k, std::numeric_limits<float>::infinity(), k_indices,
-               k_sqr_distances);
-  }
-
-  int radiusSearch(const PointT& point, double radius, pcl::Indices& k_indices,
-                   std::vector<float>& k_sqr_distances, unsigned int max_nn = 0) const override {
-    k_indices.clear();
-    k_sqr_distances.clear();
-    if (nodes_.empty()) return 0;
-    const float r2 = static_cast<float>(radius * radius);
-    const Eigen::Vector3f q = point.getVector3fMap();
-    std::vector<std::pair<float, pcl::index_t>> found;
-    radius_all(q, r2, found);
-    std::sort(found.begin(), found.end());
-    if (max_nn > 0 && found.size() > max_nn) found.resize(max_nn);
-    for (const auto& f : found) {
-      k_sqr_distances.push_back(f.first);
-      k_indices.push_back(f.second);
-    }
-    return static_cast<int>(found.size());
-  }
-
-  // Single-neighbour queries (ICP's correspondences) only look this far (squared, m^2); a query
-  // with nothing nearer gets a miss at distance FLT_MAX. Keeps far-off frames cheap.
-  void set_k1_bound(double d) { k1_bound_d2_ = static_cast<float>(d * d); }
-
-  // Nearest point within sqrt(max_d2): its original index, or -1.
-  pcl::index_t nearest(const Eigen::Vector3f& q, float max_d2, float& d2) const {
-    d2 = max_d2;
-    int best = -1;
-    float dists[3];
-    const float rd = root_dist(q, dists);
-    if (!nodes_.empty() && rd <= d2) nn_rec(0, q, rd, dists, d2, best);
-    return best < 0 ? -1 : ids_[best];
-  }
-
- private:
-  static constexpr int kLeaf = 8;
-  struct Node {
-    int dim;  // -1: leaf over [begin, end)
-    int begin, end;
-    int left, right;
-    float left_max, right_min;  // extent of the children along dim
-  };
-
-  // Squared distance from q to the root's box, per dimension and summed (the incremental
-  // lower bound of the search, as in Arya & Mount / nanoflann).
-  float root_dist(const Eigen::Vector3f& q, float dists[3]) const {
-    float rd = 0;
-    for (int k = 0; k < 3; ++k) {
-      const float o = q[k] < lo_[k] ? lo_[k] - q[k] : q[k] > hi_[k] ? q[k] - hi_[k] : 0.0f;
-      dists[k] = o * o;
-      rd += dists[k];
-    }
-    return rd;
-  }
-
-  int build(int begin, int end) {
-    const int id = static_cast<int>(nodes_.size());
-    nodes_.push_back({-1, begin, end, -1, -1, 0.f, 0.f});
-    Eigen::Vector3f lo = pts_[begin], hi = pts_[begin];
-    for (int i = begin + 1; i < end; ++i) {
-      lo = lo.cwiseMin(pts_[i]);
-      hi = hi.cwiseMax(pts_[i]);
-    }
-    if (id == 0) {
-      lo_ = lo;
-      hi_ = hi;
-    }
-    if (end - begin <= kLeaf) return id;
-    int dim;
-    (hi - lo).maxCoeff(&dim);
-    const int mid = (begin + end) / 2;
-    // Reorder [begin, end) around the median of the split coordinate.
-    std::vector<int> order(end - begin);
-    for (int i = 0; i < end - begin; ++i) order[i] = begin + i;
-    std::nth_element(order.begin(), order.begin() + (mid - begin), order.end(),
-                     [&](int a, int b) { return pts_[a][dim] < pts_[b][dim]; });
-    std::vector<Eigen::Vector3f> p2(end - begin);
-    std::vector<pcl::index_t> i2(end - begin);
-    for (int i = 0; i < end - begin; ++i) {
-      p2[i] = pts_[order[i]];
-      i2[i] = ids_[order[i]];
-    }
-    std::copy(p2.begin(), p2.end(), pts_.begin() + begin);
-    std::copy(i2.begin(), i2.end(), ids_.begin() + begin);
-    float left_max = pts_[begin][dim];
-    for (int i = begin; i < mid; ++i) left_max = std::max(left_max, pts_[i][dim]);
-    float right_min = pts_[mid][dim];
-    for (int i = mid; i < end; ++i) right_min = std::min(right_min, pts_[i][dim]);
-    const int left = build(begin, mid);
-    const int right = build(mid, end);
-    Node& nd = nodes_[id];
-    nd.dim = dim;
-    nd.left = left;
-    nd.right = right;
-    nd.left_max = left_max;
-    nd.right_min = right_min;
-    return id;
-  }
-
-  // Calls visit(i) for the points of leaves whose box lies within `bound()` of q, nearest
-  // branch first; `bound` may shrink as points are found.
-  template <typename Visit, typename Bound>
-  void search(int n, const Eigen::Vector3f& q, float rd, float dists[3], Visit& visit,
-              Bound& bound) const {
-    const Node& nd = nodes_[n];
-    if (nd.dim < 0) {
-      for (int i = nd.begin; i < nd.end; ++i) visit(i);
-      return;
-    }
-    const float v = q[nd.dim];
-    const float to_left = v > nd.left_max ? v - nd.left_max : 0.0f;
-    const float to_right = v < nd.right_min ? nd.right_min - v : 0.0f;
-    const bool left_first = to_left <= to_right;
-    const int first = left_first ? nd.left : nd.right;
-    const int second = left_first ? nd.right : nd.left;
-    const float cut_first = left_first ? to_left : to_right;
-    const float cut_second = left_first ? to_right : to_left;
-    const float saved = dists[nd.dim];
-    {
-      const float c2 = cut_first * cut_first;
-      const float r = rd - saved + c2;
-      if (r <= bound()) {
-        dists[nd.dim] = c2;
-        search(first, q, r, dists, visit, bound);
-        dists[nd.dim] = saved;
-      }
-    }
-    {
-      const float c2 = cut_second * cut_second;
-      const float r = rd - saved + c2;
-      if (r <= bound()) {
-        dists[nd.dim] = c2;
-        search(second, q, r, dists, visit, bound);
-        dists[nd.dim] = saved;
-      }
-    }
-  }
-
-  void nn_rec(int root, const Eigen::Vector3f& q, float rd, float dists[3], float& d2,
-              int& best) const {
-    auto visit = [&](int i) {
-      const float d = (pts_[i] - q).squaredNorm();
-      if (d < d2 || (d == d2 && best < 0)) {
-        d2 = d;
-        best = i;
-      }
-    };
-    auto bound = [&]() { return d2; };
-    search(root, q, rd, dists, visit, bound);
-  }
-
-  int knn(const Eigen::Vector3f& q, int k, float max_d2, pcl::Indices& out_i,
-          std::vector<float>& out_d) const {
-    out_i.clear();
-    out_d.clear();
-    if (k <= 0 || nodes_.empty()) return 0;
-    k = std::min<int>(k, static_cast<int>(pts_.size()));
-    // Sorted best-k list (k is small: 12 for the normals).
-    std::vector<std::pair<float, int>> best;
-    best.reserve(k + 1);
-    auto visit = [&](int i) {
-      const float d = (pts_[i] - q).squaredNorm();
-      if (static_cast<int>(best.size()) == k ? d >= best.back().first : d > max_d2) return;
-      best.insert(std::upper_bound(best.begin(), best.end(), std::make_pair(d, i)), {d, i});
-      if (static_cast<int>(best.size()) > k) best.pop_back();
-    };
-    auto bound = [&]() {
-      return static_cast<int>(best.size()) < k ? max_d2 : best.back().first;
-    };
-    float dists[3];
-    const float rd = root_dist(q, dists);
-    if (rd <= max_d2) search(0, q, rd, dists, visit, bound);
-    for (const auto& b : best) {
-      out_d.push_back(b.first);
-      out_i.push_back(ids_[b.second]);
-    }
-    return static_cast<int>(best.size());
-  }
-
-  int radius_all(const Eigen::Vector3f& q, float r2,
-             std::vector<std::pair<float, pcl::index_t>>& found) const {
-    auto visit = [&](int i) {
-      const float d = (pts_[i] - q).squaredNorm();
-      if (d <= r2) found.emplace_back(d, ids_[i]);
-    };
-    auto bound = [&]() { return r2; };
-    float dists[3];
-    const float rd = root_dist(q, dists);
-    if (rd <= r2) search(0, q, rd, dists, visit, bound);
-    return static_cast<int>(found.size());
-  }
-
-  std::vector<Eigen::Vector3f> pts_;
-  std::vector<pcl::index_t> ids_;
-  std::vector<Node> nodes_;
-  Eigen::Vector3f lo_ = Eigen::Vector3f::Zero(), hi_ = Eigen::Vector3f::Zero();
-  float k1_bound_d2_ = std::numeric_limits<float>::infinity();
-};
 
 // Drops correspondences whose surface normals disagree by more than an angle (unsigned: the
 // normals are not oriented consistently). The source normals are turned by the pose at the start
@@ -381,55 +124,19 @@ PointCloud finite_points(const PointCloud& in) {
   return out;
 }
 
-// Points with usable normals: for every point a plane is fitted to its k nearest neighbours
-// with pcl's covariance + eigen plane fit (what pcl::NormalEstimation::computePointNormal does),
-// split over the cores by hand and using the fast tree; points without a plane are dropped.
+// Points with usable normals (estimate_normals: a plane fitted to the k nearest neighbours);
+// points without a plane are dropped.
 pcl::PointCloud<pcl::PointNormal>::Ptr with_normals(const PointCloud& pts) {
-  pcl::PointCloud<pcl::PointXYZ>::Ptr xyz(new pcl::PointCloud<pcl::PointXYZ>);
-  xyz->resize(pts.size());
-  for (size_t i = 0; i < pts.size(); ++i) {
-    (*xyz)[i].getVector3fMap() = pts[i];
-  }
-  pcl::PointCloud<pcl::PointNormal> all;
-  all.resize(pts.size());
-  std::vector<char> ok(pts.size(), 0);
-  if (pts.size() >= 3) {
-    FastKdTree<pcl::PointXYZ> tree;
-    tree.setInputCloud(xyz);
-    const int k = std::min<int>(kNormalNeighbours, static_cast<int>(pts.size()));
-    auto work = [&](size_t begin, size_t end) {
-      pcl::Indices nn;
-      std::vector<float> d2;
-      Eigen::Matrix3f cov;
-      Eigen::Vector4f centroid;
-      for (size_t i = begin; i < end; ++i) {
-        if (tree.nearestKSearch((*xyz)[i], k, nn, d2) < 3) continue;
-        if (pcl::computeMeanAndCovarianceMatrix(*xyz, nn, cov, centroid) < 3) continue;
-        float nx, ny, nz, curvature;
-        pcl::solvePlaneParameters(cov, nx, ny, nz, curvature);
-        const Eigen::Vector3f n(nx, ny, nz);
-        if (!n.allFinite() || !(n.norm() > 0.5f)) continue;
-        auto& o = all[i];
-        o.getVector3fMap() = pts[i];
-        o.getNormalVector3fMap() = n;
-        o.curvature = curvature;
-        ok[i] = 1;
-      }
-    };
-    const size_t threads = std::max<size_t>(
-        1, std::min<size_t>({std::thread::hardware_concurrency(), 4, pts.size() / 2000 + 1}));
-    std::vector<std::thread> pool;
-    const size_t chunk = (pts.size() + threads - 1) / threads;
-    for (size_t t = 1; t < threads; ++t) {
-      pool.emplace_back(work, std::min(pts.size(), t * chunk), std::min(pts.size(), (t + 1) * chunk));
-    }
-    work(0, std::min(pts.size(), chunk));
-    for (auto& th : pool) th.join();
-  }
+  const SurfaceNormals sn = estimate_normals(pts, kNormalNeighbours);
   pcl::PointCloud<pcl::PointNormal>::Ptr out(new pcl::PointCloud<pcl::PointNormal>);
   out->reserve(pts.size());
-  for (size_t i = 0; i < pts.size(); ++i) {
-    if (ok[i]) out->push_back(all[i]);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (!sn.valid[i]) continue;
+    pcl::PointNormal o;
+    o.getVector3fMap() = pts[i];
+    o.getNormalVector3fMap() = sn.normals[i];
+    o.curvature = sn.curvature[i];
+    out->push_back(o);
   }
   out->width = static_cast<uint32_t>(out->size());
   out->height = 1;
@@ -522,7 +229,7 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
     const auto target = with_normals(model_crop);
     const auto source = with_normals(frame_ds);
 
-    FastKdTree<pcl::PointNormal>::Ptr tree(new FastKdTree<pcl::PointNormal>);
+    IndexSearch<pcl::PointNormal>::Ptr tree(new IndexSearch<pcl::PointNormal>);
     Eigen::Matrix4d t_final = Eigen::Matrix4d::Identity();
     std::string icp_note;
     if (target->size() >= 3) tree->setInputCloud(target);
@@ -537,7 +244,7 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
       const float r2 = static_cast<float>(params.max_correspondence_m * params.max_correspondence_m);
       for (const auto& p : *source) {
         float d2;
-        const pcl::index_t i = tree->nearest(p.getVector3fMap(), r2, d2);
+        const pcl::index_t i = tree->index().nearest(p.getVector3fMap(), r2, d2);
         if (i >= 0) near.emplace_back(p.getVector3fMap().cast<double>(), (*target)[i].getNormalVector3fMap().cast<double>());
       }
       pinned = near.size() < 6 || overlap_constraint(near, nullptr) >= 0.5 * params.min_constraint;
@@ -629,7 +336,7 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
       for (const auto& p : frame_ds) {
         q.getVector3fMap() = r * p + t;
         float d2;
-        const pcl::index_t i = tree->nearest(q.getVector3fMap(), r2, d2);
+        const pcl::index_t i = tree->index().nearest(q.getVector3fMap(), r2, d2);
         if (i < 0) continue;
         ++n_overlap;
         // Point-to-plane distance to the model's local surface.

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "core/geometry/camera_model.hpp"
-#include "core/planning/ellipsoids.hpp"
+#include "core/planning/mvee.hpp"
 #include "core/base/pose.hpp"
 #include "core/planning/raycast.hpp"
 #include "core/planning/view_scoring.hpp"

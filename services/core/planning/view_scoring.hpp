@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "core/geometry/camera_model.hpp"
-#include "core/planning/ellipsoids.hpp"
+#include "core/planning/mvee.hpp"
 #include "core/base/pose.hpp"
 
 namespace pbnbv {

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "core/io/mesh_file.hpp"
-#include "core/planning/ellipsoids.hpp"
+#include "core/planning/ellipsoid_fit.hpp"
 #include "core/geometry/mesh.hpp"
 #include "core/planning/planner.hpp"
 #include "core/rig/rig.hpp"

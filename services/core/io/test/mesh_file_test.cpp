@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -34,6 +35,11 @@ void put_f32_le(std::string& s, float f) {
   uint32_t u;
   std::memcpy(&u, &f, 4);
   put_u32_le(s, u);
+}
+void put_f32_le_at(std::string& s, size_t at, float f) {
+  std::string b;
+  put_f32_le(b, f);
+  s.replace(at, 4, b);
 }
 Eigen::Vector3d normal(const TriangleMesh& m, const Eigen::Vector3i& t) {
   return (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]);
@@ -219,7 +225,7 @@ TEST_F(MeshFiles, OffCountsOnHeaderLineAndNoff) {
 
 TEST_F(MeshFiles, OffIndexOutOfRange) {
   const std::string p = write("bad.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n");
-  expect_error([&] { load_mesh(p); }, {p, "line 6", "out of range"});
+  expect_error([&] { load_mesh(p); }, {p, "line 6", "'3 0 1 3'"});
 }
 
 // ---- PLY ---------------------------------------------------------------------------------
@@ -334,26 +340,30 @@ TEST_F(MeshFiles, Errors) {
   const std::string unknown = write("mesh.xyz", "v 0 0 0\n");
   expect_error([&] { load_mesh(unknown); }, {unknown, "extension"});
 
-  const std::string malformed = write("bad_number.obj", "v 0 0 0\nv 1 0 0\nv 0 1.0.0 0\nf 1 2 3\n");
-  expect_error([&] { load_mesh(malformed); }, {malformed, "line 3", "malformed number"});
+  // CGAL's readers say only that they failed; where they stopped gives the line. (A number
+  // like "1.0.0" is not one of these: CGAL reads it as 1.0 followed by .0.)
+  const std::string malformed = write("bad_number.obj", "v 0 0 0\nv 1 0 0\nv 0 1 zero\nf 1 2 3\n");
+  expect_error([&] { load_mesh(malformed); }, {malformed, "line 3", "'v 0 1 zero'"});
 
   const std::string stl_bad = write("bad_number.stl",
                                     "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n"
                                     "vertex 1 0 zero\nvertex 0 1 0\nendloop\nendfacet\nendsolid\n");
-  expect_error([&] { load_mesh(stl_bad); }, {stl_bad, "line 5", "malformed number"});
+  // CGAL's STL reader tries binary after ASCII fails, so where it stopped says nothing.
+  expect_error([&] { load_mesh(stl_bad); }, {stl_bad, "not a valid ASCII STL"});
 
   const std::string ply_bad = write("bad_number.ply",
                                     "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
                                     "property float y\nproperty float z\nelement face 1\n"
                                     "property list uchar int vertex_indices\nend_header\n"
                                     "0 0 0\n1 0 0\n0 1 x\n3 0 1 2\n");
-  expect_error([&] { load_mesh(ply_bad); }, {ply_bad, "line 12", "malformed number"});
+  expect_error([&] { load_mesh(ply_bad); }, {ply_bad, "line 12", "'0 1 x'"});
 
   const std::string range = write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n");
-  expect_error([&] { load_mesh(range); }, {range, "line 5", "out of range"});
+  // Indices are checked after reading: the face is named (counted from 0), not its line.
+  expect_error([&] { load_mesh(range); }, {range, "face 1: vertex index 8 out of range (3 vertices"});
 
   const std::string neg = write("neg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n");
-  expect_error([&] { load_mesh(neg); }, {neg, "line 4", "out of range"});
+  expect_error([&] { load_mesh(neg); }, {neg, "face 0: vertex index -1 out of range"});
 
   const std::string ply_range = write("range.ply",
                                       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
@@ -362,17 +372,38 @@ TEST_F(MeshFiles, Errors) {
                                       "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n");
   expect_error([&] { load_mesh(ply_range); }, {ply_range, "out of range"});
 
+  // "nan", "inf" and numbers beyond a double are not numbers to CGAL's text readers; a binary
+  // file can hold a non-finite coordinate, caught after reading.
   const std::string nan = write("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n");
-  expect_error([&] { load_mesh(nan); }, {nan, "line 2", "non-finite"});
+  expect_error([&] { load_mesh(nan); }, {nan, "line 2", "'v 1 nan 0'"});
 
   const std::string inf = write("inf.off", "OFF\n3 1 0\n0 0 0\n1 0 inf\n0 1 0\n3 0 1 2\n");
-  expect_error([&] { load_mesh(inf); }, {inf, "line 4", "non-finite"});
+  expect_error([&] { load_mesh(inf); }, {inf, "line 4", "'1 0 inf'"});
+
+  const std::string last = write("last.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nvv 1 2 3\n");
+  expect_error([&] { load_mesh(last); }, {last, "line 7", "'vv 1 2 3'"});
+
+  const std::string huge = write("huge.obj", "v 0 0 0\nv 1 1e999 0\nv 0 1 0\nf 1 2 3\n");
+  expect_error([&] { load_mesh(huge); }, {huge, "line 2", "'v 1 1e999 0'"});
+  std::string stl_inf = stl_binary_box("binary", 1.0f);
+  put_f32_le_at(stl_inf, 84 + 12 + 4, std::numeric_limits<float>::infinity());  // first corner's y
+  const std::string inf_stl = write("inf.stl", stl_inf);
+  expect_error([&] { load_mesh(inf_stl); }, {inf_stl, "non-finite coordinate in vertex 0"});
+
+  // CGAL 5.5's read_PLY would read an integer coordinate through a null pointer: the header is
+  // checked first.
+  const std::string int_xyz = write("int_xyz.ply",
+                                    "ply\nformat ascii 1.0\nelement vertex 3\nproperty int x\n"
+                                    "property int y\nproperty int z\nelement face 1\n"
+                                    "property list uchar int vertex_indices\nend_header\n"
+                                    "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  expect_error([&] { load_mesh(int_xyz); }, {int_xyz, "'x' is not float or double"});
 
   const std::string empty = write("empty.obj", "# nothing but vertices\nv 0 0 0\nv 1 0 0\n");
   expect_error([&] { load_mesh(empty); }, {empty, "no triangles"});
 
   const std::string blank = write("blank.ply", "");
-  expect_error([&] { load_mesh(blank); }, {blank});
+  expect_error([&] { load_mesh(blank); }, {blank, "empty file"});
 
   const std::string all_degenerate = write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
   expect_error([&] { load_mesh(all_degenerate); }, {all_degenerate, "degenerate"});

@@ -11,7 +11,7 @@
 #include <tuple>
 #include <vector>
 
-#include "core/planning/ellipsoids.hpp"
+#include "core/planning/ellipsoid_fit.hpp"
 
 namespace {
 

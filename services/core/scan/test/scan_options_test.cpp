@@ -11,7 +11,7 @@
 #include "core/mapping/map_options.hpp"
 #include "core/mapping/voxel_map.hpp"
 #include "core/perception/perception_options.hpp"
-#include "core/planning/ellipsoids.hpp"
+#include "core/planning/ellipsoid_fit.hpp"
 #include "core/planning/planner.hpp"
 #include "core/planning/planning_options.hpp"
 #include "core/scan/scan_options.hpp"

@@ -1,30 +1,25 @@
-// Ellipsoids of occupied and frontier structure: Gaussian mixture by EM with T chosen by BIC,
-// then the minimum-volume enclosing ellipsoid (Khachiyan) of each cluster's voxel corners.
-#include "core/planning/ellipsoids.hpp"
+// Gaussian mixtures by EM with T chosen by BIC: k-means++ seeding and a few Lloyd steps, then
+// EM whose E-step is one vectorised kernel (compiled for AVX2 + FMA where the CPU has them).
+#include "core/planning/gmm.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Dense>
-#include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <array>
-#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <exception>
 #include <limits>
 #include <numeric>
 #include <random>
-#include <thread>
-#include <unordered_map>
+
+#include "core/base/parallel.hpp"
 
 namespace pbnbv {
 
 namespace {
 
-using Points3 = Eigen::Matrix<double, 3, Eigen::Dynamic>;
+using Points3 = Eigen::Matrix3Xd;
 using Eigen::Matrix3d;
-using Eigen::Matrix4d;
 using Eigen::MatrixXd;
 using Eigen::Vector3d;
 using Eigen::VectorXd;
@@ -33,50 +28,9 @@ constexpr double kLog2Pi = 1.8378770664093454835606594728112;  // ln(2 pi)
 // Log densities more than 50 below a point's best component are clamped (see exp_clamped).
 constexpr double kLogCut = -50.0;
 
-struct EmOptions {
-  int max_iterations = 200;
-  double tol_per_point = 1e-6;  // stop when the log-likelihood gain < tol_per_point * n
-};
-
-Points3 to_matrix(const std::vector<Vector3d>& pts) {
-  Points3 X(3, static_cast<Eigen::Index>(pts.size()));
-  for (size_t i = 0; i < pts.size(); ++i) X.col(static_cast<Eigen::Index>(i)) = pts[i];
-  return X;
-}
-
-// Runs fn(i) for every i in [0, count) on at most two threads (the caller's and one more),
-// which take the indices in increasing order from a shared counter. Each fn(i) must write
-// only its own results, so they do not depend on the scheduling.
-template <class Fn>
-void parallel_for(int count, const Fn& fn) {
-  static const unsigned cores = std::thread::hardware_concurrency();
-  if (count <= 1 || cores < 2) {
-    for (int i = 0; i < count; ++i) fn(i);
-    return;
-  }
-  std::atomic<int> next{0};
-  std::exception_ptr helper_error;
-  auto work = [&]() {
-    for (int i = next.fetch_add(1); i < count; i = next.fetch_add(1)) fn(i);
-  };
-  std::thread helper([&]() {
-    try {
-      work();
-    } catch (...) {
-      helper_error = std::current_exception();
-      next = count;
-    }
-  });
-  std::exception_ptr own_error;
-  try {
-    work();
-  } catch (...) {
-    own_error = std::current_exception();
-    next = count;
-  }
-  helper.join();
-  if (own_error) std::rethrow_exception(own_error);
-  if (helper_error) std::rethrow_exception(helper_error);
+// The points as the columns of a matrix (a copy).
+Points3 as_matrix(const std::vector<Vector3d>& pts) {
+  return Eigen::Map<const Points3>(pts.empty() ? nullptr : pts[0].data(), 3, static_cast<Eigen::Index>(pts.size()));
 }
 
 // Per point, the columns [1, x, y, z, xx, xy, xz, yy, yz, zz] of the (centred) data: the
@@ -596,7 +550,7 @@ void uncentre(GaussianMixture& g, const Vector3d& offset) {
 }
 
 // BIC search over T in [1, min(t_max, n)] on centred data, each T fitted with `opt`; ties keep
-// the smaller T. The candidate T run on two threads (each T's fit depends only on T, so the
+// the smaller T. The candidate T run in parallel (each T's fit depends only on T, so the
 // result does not depend on the scheduling). `labels` only if asked.
 GaussianMixture bic_search_impl(const Points3& X, int t_max, uint64_t seed, double min_variance,
                                 const EmOptions& opt, bool want_labels) {
@@ -607,10 +561,12 @@ GaussianMixture bic_search_impl(const Points3& X, int t_max, uint64_t seed, doub
   const Features F = make_features(X);
   const std::vector<Vector3d> seeds = kmeanspp_seeds(X, hi, seed);
   std::vector<GaussianMixture> fits(static_cast<size_t>(hi));
-  // Largest T (the most work) first, for balance.
-  parallel_for(hi, [&](int k) {
-    const int T = hi - k;
-    fits[static_cast<size_t>(T - 1)] = fit_gmm_seeded(X, F, seeds, T, min_variance, opt, false);
+  // Largest T (the most work) first, for balance; each fit writes only its own slot.
+  parallel_for(static_cast<size_t>(hi), [&](size_t begin, size_t end, int) {
+    for (size_t k = begin; k < end; ++k) {
+      const int T = hi - static_cast<int>(k);
+      fits[static_cast<size_t>(T - 1)] = fit_gmm_seeded(X, F, seeds, T, min_variance, opt, false);
+    }
   });
   size_t best = 0;
   for (size_t t = 1; t < fits.size(); ++t)
@@ -620,123 +576,11 @@ GaussianMixture bic_search_impl(const Points3& X, int t_max, uint64_t seed, doub
   return g;
 }
 
-// ---- MVEE ----
-
-Ellipsoid ellipsoid_from_shape(const Vector3d& c, const Matrix3d& A) {
-  Ellipsoid e;
-  e.centre = c;
-  Eigen::SelfAdjointEigenSolver<Matrix3d> es(0.5 * (A + A.transpose()));
-  // Eigenvalues ascending -> semi-axes descending.
-  for (int i = 0; i < 3; ++i) {
-    const double ev = std::max(es.eigenvalues()[i], 1e-300);
-    e.semi_axes[i] = 1.0 / std::sqrt(ev);
-    e.axes.col(i) = es.eigenvectors().col(i).normalized();
-  }
-  if (e.axes.determinant() < 0) e.axes.col(2) = -e.axes.col(2);
-  return e;
-}
-
-// Degenerate input (fewer than 4 points or affinely dependent): the principal frame of the
-// points, semi-axes sqrt(3) x the half extents (the box's MVEE), thin directions 1e-9 m.
-Ellipsoid degenerate_ellipsoid(const Points3& P) {
-  const Vector3d mean = P.rowwise().mean();
-  const Points3 D = P.colwise() - mean;
-  Eigen::SelfAdjointEigenSolver<Matrix3d> es(D * D.transpose());
-  Matrix3d R = es.eigenvectors().rowwise().reverse();  // largest first
-  if (R.determinant() < 0) R.col(2) = -R.col(2);
-  const Points3 L = R.transpose() * D;
-  const Vector3d lo = L.rowwise().minCoeff(), hi = L.rowwise().maxCoeff();
-  Ellipsoid e;
-  e.centre = mean + R * (0.5 * (lo + hi));
-  e.axes = R;
-  e.semi_axes = (0.5 * (hi - lo) * std::sqrt(3.0)).cwiseMax(1e-9);
-  return e;
-}
-
-using Lifted = Eigen::Matrix<double, 4, Eigen::Dynamic>;
-
-// Khachiyan's algorithm with Todd-Yildirim away steps on the lifted points Q (4 x N), from
-// the weights u (sum 1); rank-one updates of X^-1 = (Q U Q^T)^-1 and of M_i = q_i^T X^-1 q_i,
-// recomputed from scratch every 64 steps. Stops when max M <= (d+1)(1+tol) and min M over
-// the support >= (d+1)(1-tol). Returns false if X is singular (affinely dependent points).
-bool khachiyan(const Lifted& Q, VectorXd& u, double tol, Matrix4d& Xinv) {
-  constexpr double d = 3.0;
-  const Eigen::Index N = Q.cols();
-  VectorXd M(N);
-  auto recompute = [&]() {
-    const Matrix4d X = Q * u.asDiagonal() * Q.transpose();
-    const Eigen::LDLT<Matrix4d> ldlt(X);
-    const Eigen::Vector4d D = ldlt.vectorD();
-    if (ldlt.info() != Eigen::Success || !(D.minCoeff() > 1e-14 * D.cwiseAbs().maxCoeff())) return false;
-    Xinv = ldlt.solve(Matrix4d::Identity());
-    M = (Q.array() * (Xinv * Q).array()).colwise().sum().transpose();
-    return true;
-  };
-  if (!recompute()) return false;
-  const int max_iter = 100000;
-  for (int it = 0; it < max_iter; ++it) {
-    Eigen::Index j;
-    const double mj = M.maxCoeff(&j);
-    Eigen::Index k = -1;
-    double mk = std::numeric_limits<double>::infinity();
-    for (Eigen::Index i = 0; i < N; ++i)
-      if (u[i] > 0 && M[i] < mk) {
-        mk = M[i];
-        k = i;
-      }
-    const double eps_plus = mj / (d + 1) - 1;
-    const double eps_minus = 1 - mk / (d + 1);
-    if (eps_plus <= tol && eps_minus <= tol) break;
-    Eigen::Index idx;
-    double tau;  // X <- (1 - tau) X + tau q q^T
-    if (eps_plus >= eps_minus || u[k] >= 1 - 1e-12) {
-      idx = j;
-      tau = (mj - (d + 1)) / ((d + 1) * (mj - 1));
-    } else {
-      idx = k;
-      const double cap = u[k] / (1 - u[k]);
-      double step = cap;
-      if (mk - 1 > 1e-12) step = std::min(cap, (d + 1 - mk) / ((d + 1) * (mk - 1)));
-      tau = -step;
-    }
-    const Eigen::Vector4d wv = Xinv * Q.col(idx);
-    const double denom = (1 - tau) + tau * M[idx];
-    const VectorXd qw = Q.transpose() * wv;
-    M = (M.array() - tau * qw.array().square() / denom) / (1 - tau);
-    Xinv = (Xinv - (tau / denom) * wv * wv.transpose()) / (1 - tau);
-    u *= (1 - tau);
-    u[idx] += tau;
-    if (u[idx] < 1e-15) u[idx] = 0;
-    if (it % 64 == 63 && !recompute()) return false;
-  }
-  return recompute();
-}
-
 }  // namespace
-
-Eigen::Matrix4d Ellipsoid::quadric() const {
-  // T = [R c; 0 1], T^-1 = [R^T, -R^T c; 0 1]; Q = T^-T diag(1/a^2, 1/b^2, 1/c^2, -1) T^-1.
-  Matrix4d Tinv = Matrix4d::Identity();
-  Tinv.topLeftCorner<3, 3>() = axes.transpose();
-  Tinv.topRightCorner<3, 1>() = -axes.transpose() * centre;
-  Eigen::Vector4d d;
-  d << 1.0 / (semi_axes[0] * semi_axes[0]), 1.0 / (semi_axes[1] * semi_axes[1]),
-      1.0 / (semi_axes[2] * semi_axes[2]), -1.0;
-  return Tinv.transpose() * d.asDiagonal() * Tinv;
-}
-
-Eigen::Matrix4d Ellipsoid::dual_quadric() const {
-  Matrix4d T = Matrix4d::Identity();
-  T.topLeftCorner<3, 3>() = axes;
-  T.topRightCorner<3, 1>() = centre;
-  Eigen::Vector4d d;
-  d << semi_axes[0] * semi_axes[0], semi_axes[1] * semi_axes[1], semi_axes[2] * semi_axes[2], -1.0;
-  return T * d.asDiagonal() * T.transpose();
-}
 
 GaussianMixture fit_gaussian_mixture(const std::vector<Eigen::Vector3d>& points, int components,
                                      uint64_t seed, double min_variance) {
-  Points3 X = to_matrix(points);
+  Points3 X = as_matrix(points);
   if (X.cols() == 0) return GaussianMixture{};
   const Vector3d offset = X.rowwise().mean();
   X.colwise() -= offset;
@@ -749,7 +593,7 @@ GaussianMixture fit_gaussian_mixture(const std::vector<Eigen::Vector3d>& points,
 
 GaussianMixture fit_mixture_by_bic(const std::vector<Eigen::Vector3d>& points, int t_max,
                                    uint64_t seed, double min_variance) {
-  Points3 X = to_matrix(points);
+  Points3 X = as_matrix(points);
   const Vector3d offset = X.cols() ? Vector3d(X.rowwise().mean()) : Vector3d::Zero();
   X.colwise() -= offset;
   GaussianMixture g = bic_search_impl(X, t_max, seed, min_variance, EmOptions{}, true);
@@ -757,250 +601,20 @@ GaussianMixture fit_mixture_by_bic(const std::vector<Eigen::Vector3d>& points, i
   return g;
 }
 
-Ellipsoid minimum_volume_ellipsoid(const std::vector<Eigen::Vector3d>& points, double tol) {
-  const Points3 P = to_matrix(points);
-  const Eigen::Index N = P.cols();
-  if (N == 0) return Ellipsoid{};
-  if (N < 4) return degenerate_ellipsoid(P);
-  {
-    const Vector3d mean = P.rowwise().mean();
-    const Points3 D = P.colwise() - mean;
-    Eigen::SelfAdjointEigenSolver<Matrix3d> es(D * D.transpose() / static_cast<double>(N),
-                                               Eigen::EigenvaluesOnly);
-    const double emax = es.eigenvalues()[2];
-    if (!(emax > 0) || es.eigenvalues()[0] <= 1e-12 * emax) return degenerate_ellipsoid(P);
-  }
-  // Work in coordinates centred and scaled to O(1) for conditioning.
-  const Vector3d shift = P.rowwise().mean();
-  const double scale = std::max(1e-300, (P.colwise() - shift).cwiseAbs().maxCoeff());
-  Lifted Q(4, N);
-  Q.topRows<3>() = (P.colwise() - shift) / scale;
-  Q.row(3).setOnes();
-
-  // Active set: start from the extreme points along 13 directions, solve on the core, add
-  // the points that the core's ellipsoid leaves out, repeat (the result satisfies the same
-  // criterion over all points as a run on all of them).
-  std::vector<Eigen::Index> core;
-  {
-    static const double dirs[13][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0}, {1, -1, 0},
-                                       {1, 0, 1}, {1, 0, -1}, {0, 1, 1}, {0, 1, -1}, {1, 1, 1},
-                                       {1, 1, -1}, {1, -1, 1}, {-1, 1, 1}};
-    for (const auto& dv : dirs) {
-      const Eigen::RowVectorXd proj = Vector3d(dv[0], dv[1], dv[2]).transpose() * Q.topRows<3>();
-      Eigen::Index lo, hi;
-      proj.minCoeff(&lo);
-      proj.maxCoeff(&hi);
-      core.push_back(lo);
-      core.push_back(hi);
-    }
-    std::sort(core.begin(), core.end());
-    core.erase(std::unique(core.begin(), core.end()), core.end());
-  }
-  std::vector<double> u(core.size(), 1.0 / static_cast<double>(core.size()));
-  constexpr double d = 3.0;
-  Matrix4d Xinv;
-  for (int round = 0;; ++round) {
-    Lifted Qc(4, static_cast<Eigen::Index>(core.size()));
-    for (size_t i = 0; i < core.size(); ++i) Qc.col(static_cast<Eigen::Index>(i)) = Q.col(core[i]);
-    VectorXd uc = Eigen::Map<const VectorXd>(u.data(), static_cast<Eigen::Index>(u.size()));
-    if (!khachiyan(Qc, uc, tol, Xinv)) {
-      if (static_cast<Eigen::Index>(core.size()) == N) return degenerate_ellipsoid(P);
-      core.resize(static_cast<size_t>(N));
-      std::iota(core.begin(), core.end(), Eigen::Index{0});
-      u.assign(core.size(), 1.0 / static_cast<double>(N));
-      continue;
-    }
-    u.assign(uc.data(), uc.data() + uc.size());
-    if (static_cast<Eigen::Index>(core.size()) == N) break;
-    const VectorXd M = (Q.array() * (Xinv * Q).array()).colwise().sum().transpose();
-    const double limit = (d + 1) * (1 + tol);
-    std::vector<std::pair<double, Eigen::Index>> out;
-    for (Eigen::Index i = 0; i < N; ++i)
-      if (M[i] > limit) out.emplace_back(-M[i], i);
-    if (out.empty()) break;
-    std::vector<char> in_core(static_cast<size_t>(N), 0);
-    for (Eigen::Index i : core) in_core[static_cast<size_t>(i)] = 1;
-    const size_t add = std::min<size_t>(out.size(), 32);
-    std::partial_sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(add), out.end());
-    size_t added = 0;
-    for (size_t k = 0; k < add; ++k)
-      if (!in_core[static_cast<size_t>(out[k].second)]) {
-        core.push_back(out[k].second);
-        u.push_back(0.0);
-        ++added;
-      }
-    if (added == 0) break;  // only core points (within the core tolerance) remain outside
-  }
-  // Centre and shape in the scaled frame, from the core's weights.
-  Vector3d c = Vector3d::Zero();
-  Matrix3d S = Matrix3d::Zero();
-  for (size_t i = 0; i < core.size(); ++i) {
-    const Vector3d q = Q.col(core[i]).head<3>();
-    c += u[i] * q;
-    S += u[i] * q * q.transpose();
-  }
-  S -= c * c.transpose();
-  Matrix3d A = S.ldlt().solve(Matrix3d::Identity()) / d;
-  // Make it enclosing exactly (the tolerance leaves points up to (1 + tol)-ish outside).
-  const Points3 D = Q.topRows<3>().colwise() - c;
-  const double worst = (D.array() * (A * D).array()).colwise().sum().maxCoeff();
-  if (worst > 1) A /= worst;
-  return ellipsoid_from_shape(shift + scale * c, A / (scale * scale));
+GaussianMixture mixture_by_bic(const Eigen::Matrix3Xd& X, int t_max, uint64_t seed, double min_variance,
+                               const EmOptions& opt, bool want_labels) {
+  return bic_search_impl(X, t_max, seed, min_variance, opt, want_labels);
 }
 
-namespace {
-
-// The corners of the voxels that can be vertices of their convex hull, so the MVEE of the
-// returned corners equals that of all corners. A corner on the +x side of its voxel lies
-// strictly inside a segment between two other corners unless the voxel is the last of the
-// set along its x line (likewise -x/first, and y, z): only corners whose voxel is extreme on
-// the corner's side along all three axis lines are kept (shared ones once). If the centres
-// are not on a common lattice of pitch `voxel`, all corners are returned.
-std::vector<Vector3d> hull_candidate_corners(const std::vector<Vector3d>& centres, double voxel) {
-  const double h = 0.5 * voxel;
-  const size_t n = centres.size();
-  std::vector<Eigen::Vector3i> idx(n);
-  bool lattice = voxel > 0;
-  const Vector3d c0 = centres.empty() ? Vector3d::Zero() : centres[0];
-  for (size_t i = 0; i < n && lattice; ++i) {
-    const Vector3d q = (centres[i] - c0) / voxel;
-    const Vector3d r = q.array().round();
-    if ((q - r).cwiseAbs().maxCoeff() > 1e-3 || r.cwiseAbs().maxCoeff() > 1e6) lattice = false;
-    idx[i] = r.cast<int>();
-  }
-  std::vector<Vector3d> corners;
-  if (!lattice) {
-    corners.reserve(8 * n);
-    for (const auto& c : centres)
-      for (int m = 0; m < 8; ++m)
-        corners.push_back(c + Vector3d((m & 1) ? h : -h, (m & 2) ? h : -h, (m & 4) ? h : -h));
-    return corners;
-  }
-
-  Eigen::Vector3i lo = idx[0], hi = idx[0];
-  for (const auto& v : idx) {
-    lo = lo.cwiseMin(v);
-    hi = hi.cwiseMax(v);
-  }
-  const Eigen::Matrix<int64_t, 3, 1> dims = (hi - lo).cast<int64_t>().array() + 1;
-  // ext[i] bit 2a: voxel i is the first along its axis-a line; bit 2a+1: the last.
-  std::vector<uint8_t> ext(n, 0);
-  for (int axis = 0; axis < 3; ++axis) {
-    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-    auto mark = [&](auto& range_of) {
-      for (const auto& v : idx) {
-        auto& r = range_of(v);
-        r.first = std::min(r.first, v[axis]);
-        r.second = std::max(r.second, v[axis]);
-      }
-      for (size_t i = 0; i < n; ++i) {
-        const auto& r = range_of(idx[i]);
-        if (idx[i][axis] == r.first) ext[i] |= static_cast<uint8_t>(1u << (2 * axis));
-        if (idx[i][axis] == r.second) ext[i] |= static_cast<uint8_t>(2u << (2 * axis));
-      }
-    };
-    const std::pair<int, int> empty(std::numeric_limits<int>::max(), std::numeric_limits<int>::min());
-    const int64_t cells = dims[a1] * dims[a2];
-    if (cells <= 8 * static_cast<int64_t>(n) + 4096) {
-      std::vector<std::pair<int, int>> grid(static_cast<size_t>(cells), empty);
-      auto range_of = [&](const Eigen::Vector3i& v) -> std::pair<int, int>& {
-        return grid[static_cast<size_t>((v[a1] - lo[a1]) * dims[a2] + (v[a2] - lo[a2]))];
-      };
-      mark(range_of);
-    } else {
-      std::unordered_map<uint64_t, std::pair<int, int>> map;
-      map.reserve(2 * n);
-      auto range_of = [&](const Eigen::Vector3i& v) -> std::pair<int, int>& {
-        const uint64_t key = (static_cast<uint64_t>(static_cast<uint32_t>(v[a1])) << 32) |
-                             static_cast<uint32_t>(v[a2]);
-        return map.emplace(key, empty).first->second;
-      };
-      mark(range_of);
-    }
-  }
-  std::vector<std::array<int, 3>> ci;
-  for (size_t i = 0; i < n; ++i) {
-    for (int m = 0; m < 8; ++m) {
-      bool keep = true;
-      for (int a = 0; a < 3 && keep; ++a) keep = (ext[i] >> (2 * a + ((m >> a) & 1))) & 1u;
-      if (keep) ci.push_back({idx[i][0] + (m & 1), idx[i][1] + ((m >> 1) & 1), idx[i][2] + ((m >> 2) & 1)});
-    }
-  }
-  std::sort(ci.begin(), ci.end());
-  ci.erase(std::unique(ci.begin(), ci.end()), ci.end());
-  corners.reserve(ci.size());
-  const Vector3d base = c0 - Vector3d::Constant(h);
-  for (const auto& c : ci) corners.push_back(base + voxel * Vector3d(c[0], c[1], c[2]));
-  return corners;
+GaussianMixture continue_em(const Eigen::Matrix3Xd& X, const GaussianMixture& start, double min_variance,
+                            const EmOptions& opt) {
+  return em_run(make_features(X), start.weights, start.means, start.covariances, min_variance, opt, false);
 }
 
-}  // namespace
-
-std::vector<Ellipsoid> fit_ellipsoids(const std::vector<Eigen::Vector3d>& voxel_centres,
-                                      EllipsoidClass cls, const EllipsoidParams& params,
-                                      int* components) {
-  std::vector<Ellipsoid> out;
-  const size_t n = voxel_centres.size();
-  if (components) *components = 0;
-  if (n == 0) return out;
-  const double voxel = params.voxel_m;
-  if (n <= 3) {
-    Ellipsoid e = minimum_volume_ellipsoid(hull_candidate_corners(voxel_centres, voxel));
-    e.cls = cls;
-    e.num_points = static_cast<int>(n);
-    out.push_back(e);
-    if (components) *components = 1;
-    return out;
-  }
-
-  // EM on at most kMaxEmPoints centres (a seeded random subsample). The BIC search runs at
-  // most kSearchIterations EM iterations per T; the chosen mixture is then continued with the
-  // full stopping rule, and every voxel is labelled by its most probable component.
-  constexpr size_t kMaxEmPoints = 500;
-  constexpr int kSearchIterations = 10;
-  const double min_variance = voxel * voxel / 12.0;  // variance of a uniform voxel
-  std::vector<size_t> perm(n);
-  std::iota(perm.begin(), perm.end(), size_t{0});
-  const size_t m_em = std::min(n, kMaxEmPoints);
-  if (n > m_em) {
-    std::mt19937_64 rng(params.seed ^ 0x9e3779b97f4a7c15ULL);
-    for (size_t i = 0; i < m_em; ++i) {
-      std::uniform_int_distribution<size_t> pick(i, n - 1);
-      std::swap(perm[i], perm[pick(rng)]);
-    }
-  }
-  Points3 Xall = to_matrix(voxel_centres);
-  const Vector3d offset = Xall.rowwise().mean();
-  Xall.colwise() -= offset;
-  Points3 Xem(3, static_cast<Eigen::Index>(m_em));
-  for (size_t i = 0; i < m_em; ++i) Xem.col(static_cast<Eigen::Index>(i)) = Xall.col(static_cast<Eigen::Index>(perm[i]));
-  EmOptions search;
-  search.max_iterations = kSearchIterations;
-  GaussianMixture g = bic_search_impl(Xem, params.t_max, params.seed, min_variance, search, false);
-  {
-    EmOptions rest;
-    rest.max_iterations = EmOptions{}.max_iterations - kSearchIterations;
-    g = em_run(make_features(Xem), g.weights, g.means, g.covariances, min_variance, rest, false);
-  }
-  const int T = static_cast<int>(g.weights.size());
-  if (components) *components = T;
-
-  const std::vector<int> labels =
-      most_probable(make_features(Xall), prepare_all(g.weights, g.means, g.covariances, min_variance));
-  std::vector<std::vector<Vector3d>> members(static_cast<size_t>(T));
-  for (size_t i = 0; i < n; ++i) members[static_cast<size_t>(labels[i])].push_back(voxel_centres[i]);
-  members.erase(std::remove_if(members.begin(), members.end(),
-                               [](const std::vector<Vector3d>& m) { return m.empty(); }),
-                members.end());  // clusters that end up empty are dropped
-  out.resize(members.size());
-  parallel_for(static_cast<int>(members.size()), [&](int k) {
-    const auto& m = members[static_cast<size_t>(k)];
-    Ellipsoid e = minimum_volume_ellipsoid(hull_candidate_corners(m, voxel));
-    e.cls = cls;
-    e.num_points = static_cast<int>(m.size());
-    out[static_cast<size_t>(k)] = e;
-  });
-  return out;
+std::vector<int> most_probable_components(const Eigen::Matrix3Xd& X, const GaussianMixture& g,
+                                          double min_variance) {
+  std::vector<Matrix3d> cov = g.covariances;  // prepare_all may regularise them
+  return most_probable(make_features(X), prepare_all(g.weights, g.means, cov, min_variance));
 }
 
 }  // namespace pbnbv

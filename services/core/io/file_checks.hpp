@@ -1,0 +1,37 @@
+#pragma once
+// What CGAL's file readers leave unsaid, shared by the mesh and cloud readers of this folder:
+// where a reader stopped, and the checks of a PLY header CGAL needs done before it reads.
+#include <cstddef>
+#include <istream>
+#include <string>
+
+namespace pbnbv {
+
+// Throws std::runtime_error "<ctx>: <path>: ..." unless `path` names an existing, non-empty
+// file (not a directory) that can be opened for reading.
+void check_input_file(const std::string& path, const char* ctx);
+
+// Where a reader that failed on `in` (a text file at `path`) stopped: "at line N: '<text>'".
+// A reader that reads whole lines stops after the line it could not read (`whole_lines`: the
+// line of the last byte consumed); one that reads token by token stops at the token (the line
+// of the next byte). Clears the stream's error state.
+std::string stopped_at(const std::string& path, std::istream& in, bool whole_lines);
+
+// The counts a PLY header declares.
+struct PlyHeader {
+  std::size_t vertices = 0;
+  std::size_t faces = 0;
+};
+
+// Reads the PLY header on `in` (CGAL's PLY header reader) and checks that it has a vertex
+// element with x, y and z of type float or double (CGAL 5.5's read_PLY reads any other type
+// through a null pointer) and, with `faces`, that a face element, if any, has a vertex_indices
+// (or vertex_index) list of int or uint (the types CGAL reads). Throws std::runtime_error
+// "<ctx>: <path>: ..." saying what is wrong. Leaves `in` after the header.
+PlyHeader check_ply_header(std::istream& in, const std::string& path, const char* ctx, bool faces);
+
+// Why CGAL's read_PLY failed on `in` after `header` was checked: a binary body ends early
+// (truncated), a text one stopped at a line it could not read.
+std::string ply_failure(const PlyHeader& header, const std::string& path, std::istream& in);
+
+}  // namespace pbnbv

@@ -1,0 +1,33 @@
+#pragma once
+// Ellipsoids of occupied and frontier structure (docs/method.md "Ellipsoids", paper section
+// III-C): the voxel centres of one class clustered by a Gaussian mixture with T chosen by BIC
+// (gmm.hpp), then the minimum-volume enclosing ellipsoid (mvee.hpp) of each cluster, fitted to
+// the voxels' extents.
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "core/planning/gmm.hpp"
+#include "core/planning/mvee.hpp"
+#include "core/mapping/map_options.hpp"
+#include "core/planning/planning_options.hpp"
+
+namespace pbnbv {
+
+struct EllipsoidParams {
+  int t_max = kTMax.value;
+  uint64_t seed = kMixtureSeed.value;
+  double voxel_m = kMapResolution.value;  // voxel edge: clusters are fitted to voxel corners (8 per centre)
+};
+
+// Clusters the voxel centres of one class and fits an ellipsoid to each cluster's voxel
+// corners, so a one-voxel-thin cluster gives a thin, valid ellipsoid (only the corners that
+// can be vertices of the cluster's convex hull are passed to the MVEE, which depends on
+// nothing else). 0 voxels: no ellipsoid; 1, 2, 3 voxels: one ellipsoid around their corners.
+// Returns the ellipsoids and, in `components`, the T chosen. The candidate T, then the
+// clusters' MVEEs, run in parallel (parallel_for); the result does not depend on the timing.
+std::vector<Ellipsoid> fit_ellipsoids(const std::vector<Eigen::Vector3d>& voxel_centres,
+                                      EllipsoidClass cls, const EllipsoidParams& params,
+                                      int* components = nullptr);
+
+}  // namespace pbnbv
