@@ -1,0 +1,95 @@
+// The registration service on a real bus: a view placed 10 cm off by a wrong kinematic pose is
+// rejected by the registration gates, not merged into the model, and not integrated by the
+// mapping service, which says why.
+// Runs inside a private network namespace (see CMakeLists.txt).
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/geometry/mesh.hpp"
+#include "service_suite.hpp"
+
+namespace fs = std::filesystem;
+using namespace pbnbv;
+using namespace pbnbv::testing;
+
+namespace {
+
+// The registration and mapping services.
+class RegistrationService : public ServiceSuite {
+ protected:
+  static void SetUpTestSuite() {
+    const std::string bin = bin_dir();
+    start_suite("registration-service", {
+        {"registration", {bin + "/pbnbv-registration"}},
+        {"mapping", {bin + "/pbnbv-mapping"}},
+    });
+  }
+  static void TearDownTestSuite() { stop_suite(); }
+};
+
+TEST_F(RegistrationService, AViewTenCentimetresOffIsRejectedAndNotMerged) {
+  // Two views of a scene of three balls: the first defines the model; the second is the same
+  // surface but placed 10 cm off, as a wildly wrong kinematic pose would place it. (Balls, not
+  // boxes: a box shifted along one of its faces still lies on that face's plane.)
+  std::vector<Eigen::Vector3d> pts;
+  const std::vector<std::pair<double, Eigen::Vector3d>> balls = {
+      {0.06, Eigen::Vector3d(0, 0, 0)}, {0.04, Eigen::Vector3d(0.09, 0.03, 0.02)}, {0.03, Eigen::Vector3d(-0.02, 0.08, 0.05)}};
+  uint64_t seed = 3;
+  for (const auto& [r, c] : balls) {
+    for (const auto& p : sample_surface(make_icosphere(r, 3), 8000, seed++)) pts.push_back(p + c);
+  }
+  auto cloud_msg = [&](int64_t id, const Eigen::Vector3d& shift) {
+    point_cloud_t c;
+    c.utime = 0;
+    c.scan_id = "registration-gate";
+    c.iteration = static_cast<int32_t>(id);
+    c.request_id = id;
+    c.status = point_cloud_t::kOk;
+    c.frame = "object";
+    double p[3], q[4];
+    pose_to_arrays(look_at_z_up(Eigen::Vector3d(0.8, 0.1, 0.4), Eigen::Vector3d::Zero()), p, q);
+    std::copy(p, p + 3, c.object_T_camera.position_m);
+    std::copy(q, q + 4, c.object_T_camera.quat_wxyz);
+    c.num_joints = 6;
+    c.joint_position_rad.assign(6, 0.0);
+    c.turntable_angle_rad = 0;
+    c.depth_frame_seq = -1;  // no depth frame: the map cannot integrate it either way
+    c.depth_frame_utime = 0;
+    c.num_valid_pixels = c.num_cropped = 0;
+    c.voxel_m = 0.002;
+    c.capture_s = c.process_s = 0;
+    for (const auto& x : pts) {
+      const Eigen::Vector3d y = x + shift;
+      c.points_m.push_back({static_cast<float>(y.x()), static_cast<float>(y.y()), static_cast<float>(y.z())});
+    }
+    c.num_points = static_cast<int32_t>(c.points_m.size());
+    return c;
+  };
+  lcm::LCM& lcm = listener_->lcm();
+  const point_cloud_t first = cloud_msg(0, Eigen::Vector3d::Zero());
+  lcm.publish("CLOUD", &first);
+  ASSERT_TRUE(listener_->spin_until([] { return listener_->registered.count({"registration-gate", 0}) > 0; }, 20.0));
+  const registered_cloud_t a = listener_->registered[{"registration-gate", 0}];
+  EXPECT_TRUE(a.accepted) << a.reason;
+  const point_cloud_t off = cloud_msg(1, Eigen::Vector3d(0.1, 0.0, 0.0));
+  lcm.publish("CLOUD", &off);
+  ASSERT_TRUE(listener_->spin_until([] { return listener_->registered.count({"registration-gate", 1}) > 0; }, 20.0));
+  const registered_cloud_t b = listener_->registered[{"registration-gate", 1}];
+  EXPECT_FALSE(b.accepted) << b.reason;
+  EXPECT_NE(b.reason.find("rejected"), std::string::npos) << b.reason;
+  EXPECT_EQ(b.model_points, a.model_points) << "a rejected view must not be merged into the model";
+  // The kinematic pose is kept: the published points are the ones received.
+  EXPECT_FLOAT_EQ(b.cloud.points_m[0][0], off.points_m[0][0]);
+  // And the map does not integrate it, saying why.
+  ASSERT_TRUE(listener_->spin_until([] { return listener_->maps.count({"registration-gate", 1}) > 0; }, 20.0));
+  const voxel_set_t& m = listener_->maps[{"registration-gate", 1}];
+  EXPECT_FALSE(m.updated);
+  EXPECT_NE(m.message.find("registration rejected"), std::string::npos) << m.message;
+}
+
+}  // namespace
