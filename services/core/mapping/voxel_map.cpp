@@ -12,7 +12,8 @@
 //     - later frames: B first grows to cover this frame's Occupied voxels, so that every point
 //       is recorded and its rays are traversed.
 //  3. Every valid pixel's voxel becomes Occupied (sticky: traversal never writes Occupied).
-//  4. Rays from the camera centre, traversed with a 3-D DDA (Amanatides & Woo 1987) inside B:
+//  4. Rays from the camera centre, traversed with a 3-D DDA (Amanatides & Woo 1987; the one in
+//     core/geometry/voxel_traversal.hpp) inside B:
 //     - a ray with a return (planar depth z): None/Unknown/Frontier voxels before the first
 //       Occupied voxel become Empty, as long as the voxel is left before depth z (a voxel the
 //       ray leaves beyond z is not known to be free); from the first Occupied voxel, or from the
@@ -147,30 +148,31 @@ struct Grid {
 bool cast_ray(const Grid& g, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_free,
               bool has_return) {
   uint8_t* const cells = g.cells;
-  // Free phase: up to the first Occupied voxel or the first voxel not left before t_free; then
-  // the occluded phase: None -> Unknown to where the ray leaves B. A free ray ends at t_free.
-  bool occluded = false;
   const double t_max = has_return ? std::numeric_limits<double>::infinity() : t_free;
-  return traverse_voxels(g.lattice, o, d, 0.0, t_max, [&](int64_t lin, double, double t_out) {
-    uint8_t* c = cells + lin;
-    const uint8_t s = load_relaxed(c);
-    if (occluded) {
-      if (s == kNoneB) none_to_unknown(c);
-      return true;
-    }
-    if (s == kOccB) {
-      occluded = true;     // behind the first Occupied voxel: occluded
-      return has_return;   // a free ray stops at the first Occupied voxel
-    }
-    if (t_out > t_free) {  // the ray leaves this voxel beyond t_free
-      if (!has_return) return false;        // straddles max range: not known to be free
-      if (s == kNoneB) none_to_unknown(c);  // straddles the return depth: not known to be free
-      occluded = true;
-      return true;
-    }
-    if (s != kEmptyB) store_relaxed(c, kEmptyB);  // left before the return: observed free
-    return true;
-  });
+  return traverse_voxels(
+      g.lattice, o, d, 0.0, t_max,
+      // Free phase: up to the first Occupied voxel or the first voxel not left before t_free.
+      [&](int64_t lin, double, double t_out) {
+        uint8_t* c = cells + lin;
+        const uint8_t s = load_relaxed(c);
+        if (s == kOccB) {
+          // A free ray stops at the first Occupied voxel; behind it a ray with a return is occluded.
+          return has_return ? VoxelVisit::kHandOver : VoxelVisit::kStop;
+        }
+        if (t_out > t_free) {  // the ray leaves this voxel beyond t_free
+          if (!has_return) return VoxelVisit::kStop;  // straddles max range: not known to be free
+          if (s == kNoneB) none_to_unknown(c);        // straddles the return depth: not known to be free
+          return VoxelVisit::kHandOver;
+        }
+        if (s != kEmptyB) store_relaxed(c, kEmptyB);  // left before the return: observed free
+        return VoxelVisit::kNext;
+      },
+      // Occluded phase: None -> Unknown to where the ray leaves B.
+      [&](int64_t lin, double, double) {
+        uint8_t* c = cells + lin;
+        if (load_relaxed(c) == kNoneB) none_to_unknown(c);
+        return VoxelVisit::kNext;
+      });
 }
 
 // Lattice index box of the first frame's B (see the comment at integrate()).
@@ -412,7 +414,7 @@ VoxelCounts VoxelMap::update_frontiers() {
 
   std::vector<std::array<int64_t, 5>> n(static_cast<std::size_t>(nt), std::array<int64_t, 5>{});
   parallel_run(nt, [&](int tid, int n_threads) {
-    int64_t* cnt = n[tid].data();
+    int64_t cnt[5] = {0, 0, 0, 0, 0};  // local: the cell stores below cannot alias it
     for (int z = tid; z < nz; z += n_threads) {
       const uint8_t* c = dil + plane * z;
       const uint8_t* a = z > 0 ? c - plane : c;
@@ -427,6 +429,7 @@ VoxelCounts VoxelMap::update_frontiers() {
         ++cnt[v];
       }
     }
+    std::copy(cnt, cnt + 5, n[tid].begin());
   });
   VoxelCounts out;
   for (const auto& c : n) {

@@ -1,6 +1,7 @@
 #pragma once
 // The five-state voxel map of PB-NBV (method.md "Voxel map", paper section III-B) with its
-// bounding box B. Dense grid over B; rays traversed with a 3-D DDA (Amanatides & Woo).
+// bounding box B. Dense grid over B; rays traversed with the one voxel traversal (3-D DDA,
+// core/geometry/voxel_traversal.hpp).
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <string>

@@ -71,6 +71,8 @@ struct Caster {
     g.spacing_px = su;
     const VoxelLattice lattice{grid.dims, res};
     const Eigen::Vector3d o_grid = o - grid.origin_m;  // relative to the grid's min corner
+    const double t_near = p.range.min_m, t_far = p.range.max_m;
+    int64_t unknown = 0;
     const VoxelState* cells = grid.cells.data();
     uint32_t* st = stamp.data();
     for (double v = rect.v0 + 0.5 * sv; v < rect.v1; v += sv) {
@@ -82,17 +84,19 @@ struct Caster {
         ++g.rays;
         // The unobserved voxels (None, Unknown, Frontier) along the ray, each once per view, up
         // to the first Occupied voxel, where the ray leaves the grid or the depth range.
-        traverse_voxels(lattice, o_grid, d, p.range.min_m, p.range.max_m, [&](int64_t lin, double, double) {
+        traverse_voxels(lattice, o_grid, d, t_near, t_far, [&](int64_t lin, double t_in, double) {
+          if (t_in >= t_far) return false;
           const VoxelState s = cells[lin];
           if (s == VoxelState::kOccupied) return false;
           if (s != VoxelState::kEmpty && st[lin] != tag) {
             st[lin] = tag;
-            ++g.unknown;
+            ++unknown;
           }
           return true;
         });
       }
     }
+    g.unknown = unknown;
     return g;
   }
 };

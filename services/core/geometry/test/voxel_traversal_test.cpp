@@ -20,15 +20,20 @@ struct Visit {
   double t_in, t_out;
 };
 
-// Every cell the walk visits (lattice index from the linear one), with its t_in and t_out.
+// The lattice index of a linear one.
+Vector3i index_of(const VoxelLattice& g, int64_t lin) {
+  return Vector3i(static_cast<int>(lin % g.dims.x()), static_cast<int>((lin / g.dims.x()) % g.dims.y()),
+                  static_cast<int>(lin / (int64_t(g.dims.x()) * g.dims.y())));
+}
+
+// Every cell the part [t_min, t_max) of the ray crosses, with its t_in and t_out: the walk, whose
+// visitor ends it at t_max (as the ray-casting baseline does).
 std::vector<Visit> walk(const VoxelLattice& g, const Vector3d& o, const Vector3d& d, double t_min = 0.0,
                         double t_max = kInf, bool* entered = nullptr) {
   std::vector<Visit> out;
   const bool e = traverse_voxels(g, o, d, t_min, t_max, [&](int64_t lin, double t_in, double t_out) {
-    const int x = static_cast<int>(lin % g.dims.x());
-    const int y = static_cast<int>((lin / g.dims.x()) % g.dims.y());
-    const int z = static_cast<int>(lin / (int64_t(g.dims.x()) * g.dims.y()));
-    out.push_back({Vector3i(x, y, z), t_in, t_out});
+    if (t_in >= t_max) return false;
+    out.push_back({index_of(g, lin), t_in, t_out});
     return true;
   });
   if (entered) *entered = e;
@@ -111,12 +116,19 @@ TEST(VoxelTraversal, CellSizeAndOffsetScaleTheWalk) {
   EXPECT_NEAR(v.back().t_out, 0.375, 1e-15);
 }
 
-TEST(VoxelTraversal, TheParameterIntervalLimitsTheWalk) {
+TEST(VoxelTraversal, TheParameterIntervalSetsTheStartAndTheVisitorTheEnd) {
   // +x along a row of 5 cells entered at t = 1: [t_min, t_max) = [2.5, 4.0) covers cells 1 and 2
   // (cell 3 starts at exactly t = 4 and is not visited).
   const auto v = walk(k543, Vector3d(-1, 0.5, 0.5), Vector3d(1, 0, 0), 2.5, 4.0);
   EXPECT_EQ(cells(v), (std::vector<Vector3i>{{1, 0, 0}, {2, 0, 0}}));
   EXPECT_DOUBLE_EQ(v[0].t_in, 2.5);
+  // The walk itself goes on to the grid's end: a visitor that never stops sees cells 1 to 4.
+  int seen = 0;
+  traverse_voxels(k543, Vector3d(-1, 0.5, 0.5), Vector3d(1, 0, 0), 2.5, 4.0, [&](int64_t, double, double) {
+    ++seen;
+    return true;
+  });
+  EXPECT_EQ(seen, 4);
   // t_max short of the grid: not entered, nothing visited.
   bool entered = true;
   EXPECT_TRUE(walk(k543, Vector3d(-1, 0.5, 0.5), Vector3d(1, 0, 0), 0.0, 1.0, &entered).empty());
@@ -149,16 +161,60 @@ TEST(VoxelTraversal, TheVisitorEndsTheWalkAndTheLinearIndexIsXFastest) {
   EXPECT_EQ(last, 2 + 5 * (2 + 4 * 1));  // cell (2, 2, 1)
 }
 
-TEST(VoxelTraversal, TheWalkObjectGivesTheSameCells) {
-  VoxelWalk w(k543, Vector3d(0, 0.25, 0.5), Vector3d(1, 1, 0), 0.0, kInf);
-  ASSERT_TRUE(w.entered());
-  EXPECT_DOUBLE_EQ(w.t_enter(), 0.0);
-  EXPECT_DOUBLE_EQ(w.t_exit(), 3.75);  // leaves through y = 4
-  std::vector<Vector3i> seen;
-  do {
-    seen.push_back(w.index());
-  } while (w.next());
-  EXPECT_EQ(seen, cells(walk(k543, Vector3d(0, 0.25, 0.5), Vector3d(1, 1, 0))));
+TEST(VoxelTraversal, TheFirstVisitorHandsTheRestOfTheWalkToTheSecond) {
+  // Along +x through a row of 5 cells: the first visitor takes cells 0 and 1 and hands over after
+  // cell 1; the second gets cells 2, 3, 4 (to the grid's end) and is never given cell 1 again.
+  std::vector<int> first, then;
+  const bool entered = traverse_voxels(
+      k543, Vector3d(-1, 0.5, 0.5), Vector3d(1, 0, 0), 0.0, kInf,
+      [&](int64_t lin, double, double) {
+        first.push_back(index_of(k543, lin).x());
+        return first.size() == 2 ? VoxelVisit::kHandOver : VoxelVisit::kNext;
+      },
+      [&](int64_t lin, double t_in, double) {
+        then.push_back(index_of(k543, lin).x());
+        EXPECT_DOUBLE_EQ(t_in, index_of(k543, lin).x() + 1.0);
+        return VoxelVisit::kNext;
+      });
+  EXPECT_TRUE(entered);
+  EXPECT_EQ(first, (std::vector<int>{0, 1}));
+  EXPECT_EQ(then, (std::vector<int>{2, 3, 4}));
+  // Stopping in the first phase: the second visitor sees nothing.
+  then.clear();
+  traverse_voxels(
+      k543, Vector3d(-1, 0.5, 0.5), Vector3d(1, 0, 0), 0.0, kInf, [](int64_t, double, double) { return VoxelVisit::kStop; },
+      [&](int64_t lin, double, double) {
+        then.push_back(static_cast<int>(lin));
+        return VoxelVisit::kNext;
+      });
+  EXPECT_TRUE(then.empty());
+  // Handing over in the last cell: nothing is left for the second visitor.
+  traverse_voxels(
+      k543, Vector3d(-1, 0.5, 0.5), Vector3d(1, 0, 0), 5.5, kInf, [](int64_t, double, double) { return VoxelVisit::kHandOver; },
+      [&](int64_t lin, double, double) {
+        then.push_back(static_cast<int>(lin));
+        return VoxelVisit::kNext;
+      });
+  EXPECT_TRUE(then.empty());
+}
+
+TEST(VoxelTraversal, EachCellStartsWhereTheLastEnded) {
+  // An oblique ray through a 5 x 4 x 3 grid: the walk is a chain of neighbouring cells (one index
+  // step apart), t_in of each is t_out of the one before, and the chain runs from where the ray
+  // enters the box to where it leaves it.
+  const Vector3d o(-0.7, 0.3, 0.2), d(1.0, 0.55, 0.35);
+  const auto v = walk(k543, o, d);
+  ASSERT_GE(v.size(), 2u);
+  for (std::size_t i = 1; i < v.size(); ++i) {
+    EXPECT_EQ((v[i].cell - v[i - 1].cell).cwiseAbs().sum(), 1) << i;
+    EXPECT_EQ(v[i].t_in, v[i - 1].t_out) << i;
+    EXPECT_LE(v[i].t_in, v[i].t_out) << i;
+  }
+  EXPECT_DOUBLE_EQ(v.front().t_in, 0.7);                            // x = 0
+  EXPECT_DOUBLE_EQ(v.back().t_out, std::min(5.7, (3 - 0.2) / 0.35));  // x = 5 or z = 3, the first
+  // 3 - 0.2 = 2.8 over 0.35 is t = 8 (z = 3), beyond x = 5 at t = 5.7: the ray leaves through +x,
+  // at y = 0.3 + 5.7 * 0.55 = 3.435 and z = 0.2 + 5.7 * 0.35 = 2.195, inside that face.
+  EXPECT_EQ(v.back().cell, Vector3i(4, 3, 2));
 }
 
 }  // namespace
