@@ -586,10 +586,7 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
     grow_to_cover(occ_lo, occ_hi);
   }
 
-  Grid grid;
-  grid.cells = reinterpret_cast<uint8_t*>(cells_.data());
-  grid.lattice.dims = dims_;
-  grid.lattice.cell_m = res;
+  const Grid grid{reinterpret_cast<uint8_t*>(cells_.data()), VoxelLattice(dims_, res)};
 
   // 3. Occupied from every valid pixel (sticky).
   for (int t = 0; t < nt; ++t) {
@@ -621,20 +618,25 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
   block_kind_.assign(static_cast<size_t>(n_bu) * n_bv, kBlockNothing);
   block_depth_.resize(static_cast<size_t>(n_bu) * n_bv);
   parallel_run(nt, [&](int tid, int n_threads) {
-    const float lo_z = zlo_f, hi_z = zhi_f;  // locals: no reloads in the pixel loop
+    // Locals: the byte stores to `kinds` may alias anything reached through the captures, so
+    // these would be reloaded after every block.
+    const float lo_z = zlo_f, hi_z = zhi_f;
     const float res_f = static_cast<float>(res);
+    const int W_l = W, H_l = H, stride_l = stride, n_bu_l = n_bu, n_bv_l = n_bv;
+    const bool free_nr = free_no_return;
+    const float* depth_l = depth;
     uint8_t* kinds = block_kind_.data();
     float* zmins = block_depth_.data();
-    for (int bv = tid; bv < n_bv; bv += n_threads) {
-      const int v0 = bv * stride, v1 = std::min(H, v0 + stride);
-      for (int bu = 0; bu < n_bu; ++bu) {
-        const int u0 = bu * stride, u1 = std::min(W, u0 + stride);
+    for (int bv = tid; bv < n_bv_l; bv += n_threads) {
+      const int v0 = bv * stride_l, v1 = std::min(H_l, v0 + stride_l);
+      for (int bu = 0; bu < n_bu_l; ++bu) {
+        const int u0 = bu * stride_l, u1 = std::min(W_l, u0 + stride_l);
         int n_val = 0, n_nr = 0;
         float z_min = std::numeric_limits<float>::infinity(), z_max = 0.0f;
         for (int v = v0; v < v1; ++v) {
-          const int64_t row = int64_t(v) * W;
+          const int64_t row = int64_t(v) * W_l;
           for (int u = u0; u < u1; ++u) {
-            const float z = depth[row + u];
+            const float z = depth_l[row + u];
             if (pixel_valid(z, lo_z, hi_z)) {
               ++n_val;
               z_min = std::min(z_min, z);
@@ -645,13 +647,13 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
           }
         }
         const int n_pix = (v1 - v0) * (u1 - u0);
-        const int64_t b = int64_t(bv) * n_bu + bu;
+        const int64_t b = int64_t(bv) * n_bu_l + bu;
         uint8_t kind;
         if (n_val == n_pix && z_max - z_min <= res_f) {
           kind = kBlockSurface;
         } else if (n_nr == n_pix) {
-          kind = free_no_return ? kBlockFree : kBlockNothing;
-        } else if (n_val == 0 && !free_no_return) {
+          kind = free_nr ? kBlockFree : kBlockNothing;
+        } else if (n_val == 0 && !free_nr) {
           kind = kBlockNothing;  // only ignored pixels and returns that do not count as free
         } else {
           kind = kBlockMixed;
