@@ -1,54 +1,26 @@
 #include "eval/visibility.hpp"
 #include "core/base/units.hpp"
 
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
-#include <CGAL/Simple_cartesian.h>
+#include "core/base/parallel.hpp"
+#include "core/geometry/mesh_tree.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <exception>
 #include <numeric>
-#include <random>
-#include <sstream>
 #include <stdexcept>
 #include <string>
-#include <thread>
 
 namespace pbnbv {
 
 namespace {
 
-using K = CGAL::Simple_cartesian<double>;
-using Triangle = K::Triangle_3;
-using TriangleIterator = std::vector<Triangle>::const_iterator;
-using Primitive = CGAL::AABB_triangle_primitive<K, TriangleIterator>;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
-
+constexpr const char* kName = "visible_from_any";
 constexpr const char* kCtx = "visible_from_any: ";
 
 [[noreturn]] void fail(const std::string& what) { throw std::invalid_argument(kCtx + what); }
 
 std::string index_name(const char* array, std::size_t i) {
   return std::string(array) + "[" + std::to_string(i) + "]";
-}
-
-// Throws naming `what` when a triangle refers to a vertex that does not exist.
-void check_indices(const TriangleMesh& mesh, const char* ctx) {
-  const long long nv = static_cast<long long>(mesh.vertices.size());
-  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-    for (int k = 0; k < 3; ++k) {
-      const int v = mesh.triangles[i][k];
-      if (v < 0 || v >= nv) {
-        std::ostringstream os;
-        os << ctx << "mesh triangle " << i << " has vertex index " << v << " outside [0, " << nv
-           << ")";
-        throw std::invalid_argument(os.str());
-      }
-    }
-  }
 }
 
 // A view prepared for the per-sample tests.
@@ -63,7 +35,7 @@ SurfaceSamples sample_surface_with_normals(const TriangleMesh& mesh, std::size_t
                                            std::uint64_t seed) {
   SurfaceSamples out;
   if (n == 0) return out;
-  check_indices(mesh, "sample_surface_with_normals: ");
+  check_triangle_indices(mesh, "sample_surface_with_normals");
   out.points = sample_surface(mesh, n, seed, &out.normals);
   return out;
 }
@@ -78,7 +50,7 @@ std::vector<uint8_t> visible_from_any(const TriangleMesh& mesh,
          std::to_string(samples.size()) + " (need 0 or the same number)");
   }
   if (mesh.triangles.empty() || mesh.vertices.empty()) fail("mesh has no triangles");
-  check_indices(mesh, kCtx);
+  check_triangle_indices(mesh, kName);
   for (std::size_t i = 0; i < samples.size(); ++i) {
     if (!samples[i].allFinite()) fail(index_name("samples", i) + " is not finite");
   }
@@ -110,21 +82,8 @@ std::vector<uint8_t> visible_from_any(const TriangleMesh& mesh,
   std::vector<uint8_t> mask(samples.size(), 0);
   if (samples.empty() || views.empty()) return mask;
 
-  // --- Occlusion structure: AABB tree over the non-degenerate triangles -------------------------
-  std::vector<Triangle> tris;
-  tris.reserve(mesh.triangles.size());
-  for (const auto& t : mesh.triangles) {
-    const Eigen::Vector3d& a = mesh.vertices[static_cast<size_t>(t[0])];
-    const Eigen::Vector3d& b = mesh.vertices[static_cast<size_t>(t[1])];
-    const Eigen::Vector3d& c = mesh.vertices[static_cast<size_t>(t[2])];
-    if (!(a.allFinite() && b.allFinite() && c.allFinite())) fail("mesh has a non-finite vertex");
-    if ((b - a).cross(c - a).squaredNorm() == 0.0) continue;  // CGAL dislikes degenerate ones
-    tris.emplace_back(K::Point_3(a.x(), a.y(), a.z()), K::Point_3(b.x(), b.y(), b.z()),
-                      K::Point_3(c.x(), c.y(), c.z()));
-  }
-  if (tris.empty()) fail("mesh has only zero-area triangles");
-  Tree tree(tris.cbegin(), tris.cend());
-  tree.build();  // before the threads: queries on a built tree are const
+  // --- Occlusion structure: the mesh's AABB tree --------------------------------------------------
+  const MeshTree tree(mesh, false, kName);
 
   // Views are tried in a golden-ratio stride order rather than as given: view sets come ordered
   // by position (ring after ring), so consecutive views tend to see the same side and a sample on
@@ -163,44 +122,21 @@ std::vector<uint8_t> visible_from_any(const TriangleMesh& mesh,
     if (use_normals && facing < cos_max * normals[i].norm() * dist) return false;
     if (p.surface_offset_m >= dist) return true;  // nothing left to test
     const Eigen::Vector3d s = x + (p.surface_offset_m / dist) * to_cam;
-    const K::Segment_3 seg(K::Point_3(s.x(), s.y(), s.z()),
-                           K::Point_3(f.centre.x(), f.centre.y(), f.centre.z()));
-    return !tree.do_intersect(seg);
+    return !tree.segment_hits(s, f.centre);
   };
 
-  // --- Samples in blocks, handed out to the workers ---------------------------------------------
+  // --- Samples in chunks of at least kBlock, handed out to the workers (core/base/parallel.hpp) ---
   constexpr std::size_t kBlock = 128;
-  const std::size_t num_blocks = (samples.size() + kBlock - 1) / kBlock;
-  std::size_t workers =
-      p.threads > 0 ? static_cast<std::size_t>(p.threads)
-                    : static_cast<std::size_t>(std::max(1u, std::thread::hardware_concurrency()));
-  workers = std::min(workers, num_blocks);
-  std::atomic<std::size_t> next_block{0};
-  std::vector<std::exception_ptr> errors(workers);
-  auto run = [&](std::size_t slot) {
-    try {
-      for (std::size_t b = next_block++; b < num_blocks; b = next_block++) {
-        const std::size_t end = std::min(samples.size(), (b + 1) * kBlock);
-        for (std::size_t i = b * kBlock; i < end; ++i) {
-          for (const ViewFrame& f : frames) {
-            if (sees(i, f)) {
-              mask[i] = 1;
-              break;
-            }
-          }
+  parallel_for(samples.size(), [&](std::size_t begin, std::size_t end, int) {
+    for (std::size_t i = begin; i < end; ++i) {
+      for (const ViewFrame& f : frames) {
+        if (sees(i, f)) {
+          mask[i] = 1;
+          break;
         }
       }
-    } catch (...) {
-      errors[slot] = std::current_exception();
     }
-  };
-  std::vector<std::thread> threads;
-  for (std::size_t w = 1; w < workers; ++w) threads.emplace_back(run, w);
-  run(0);
-  for (auto& t : threads) t.join();
-  for (const auto& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
+  }, kBlock, p.threads);
   return mask;
 }
 

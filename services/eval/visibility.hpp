@@ -31,7 +31,7 @@ struct VisibilityParams {
   double max_incidence_deg = 85.0;  // a sample seen at a grazing angle beyond this (angle between
                                     // the surface normal and the direction to the camera) does
                                     // not count; in [0, 90]; needs normals
-  int threads = 0;                  // 0: hardware concurrency
+  int threads = 0;                  // at most this many workers; 0: one per core (core/base/parallel.hpp)
 };
 
 // mask[i] = 1 when sample i is seen by at least one view (object_T_camera, optical frame): it
@@ -39,7 +39,8 @@ struct VisibilityParams {
 // back_project and the twin's renderer), its planar depth is within the range, the surface faces
 // the camera within max_incidence (if normals is empty the incidence test is skipped; a zero
 // normal skips it for that sample), and the segment from the sample (moved surface_offset_m
-// towards the camera) to the camera centre does not hit the mesh (AABB tree over its triangles).
+// towards the camera) to the camera centre does not hit the mesh (MeshTree,
+// core/geometry/mesh_tree.hpp).
 // Each sample stops at the first view that sees it. No views: all zeros.
 // Throws std::invalid_argument naming the argument for: normals size neither 0 nor samples size,
 // a mesh without triangles or with a triangle index out of range, a non-finite sample, normal or

@@ -15,7 +15,6 @@
 #include <map>
 #include <optional>
 #include <sstream>
-#include <thread>
 
 #include "bus/bus.hpp"
 #include "bus/convert.hpp"
@@ -24,6 +23,7 @@
 #include "bus/rig_options.hpp"
 #include "bus/service.hpp"
 #include "core/base/log.hpp"
+#include "core/base/parallel.hpp"
 #include "core/planning/planner.hpp"
 #include "report/plan_figure.hpp"
 #include "core/rig/rig.hpp"
@@ -38,6 +38,7 @@ namespace {
 
 constexpr double kInputWaitS = 60.0;   // give up on a map / ellipsoids that never come
 constexpr std::size_t kAnswersKept = 64;
+constexpr std::size_t kCandidatesPerWorker = 16;  // reachability: below this another worker does not pay
 
 // The bounding box B of a voxel map message.
 Eigen::AlignedBox3d bbox_of(const voxel_set_t& map) {
@@ -79,7 +80,6 @@ PlanInput plan_input(const plan_request_t& r) {
 class ScorerService {
  public:
   ScorerService(bus::Bus& bus, const RigModel& rig) : bus_(bus), rig_(rig) {
-    for (auto& c : checkers_) c = std::make_unique<ReachabilityChecker>(rig_);
     bus_.subscribe<voxel_set_t>(channels::kVoxelMap, [this](const voxel_set_t& m) { maps_.offer(m); });
     bus_.subscribe<ellipsoid_set_t>(channels::kEllipsoids, [this](const ellipsoid_set_t& e) { ellipsoids_.offer(e); });
     bus_.subscribe<plan_request_t>(channels::kPlanRequest, [this](const plan_request_t& r) { on_request(r); });
@@ -105,7 +105,14 @@ class ScorerService {
            std::to_string(ell_kept) + "); ask for that one");
       return;
     }
-    if (map && !pending_->reachable && r.check_reachability) pending_->reachable = reachability(r, *map);
+    if (map && !pending_->reachable && r.check_reachability) {
+      try {
+        pending_->reachable = reachability(r, *map);
+      } catch (const std::exception& e) {  // from any worker of the check: this request fails
+        fail(std::string("reachability check failed: ") + e.what());
+        return;
+      }
+    }
     if (map && (ell || !needs_ellipsoids)) {
       answer(*map, ell);
     } else if (bus::now_s() > pending_->deadline_s) {
@@ -180,8 +187,8 @@ class ScorerService {
     tick();
   }
 
-  // The reachability of every candidate for B of this map, on two threads (one MuJoCo checker
-  // each).
+  // The reachability of every candidate for B of this map, on the workers of core/base/parallel.hpp
+  // (one MuJoCo checker each: a checker is not thread-safe).
   std::vector<bool> reachability(const plan_request_t& r, const voxel_set_t& map) {
     const auto t0 = std::chrono::steady_clock::now();
     const Eigen::AlignedBox3d box = bbox_of(map);
@@ -201,16 +208,18 @@ class ScorerService {
     for (int k = 0; k < 6; ++k) q[k] = r.joint_position_rad[k];
     const Eigen::AlignedBox3d keepout(Eigen::Map<const Eigen::Vector3d>(r.keepout_min_m),
                                       Eigen::Map<const Eigen::Vector3d>(r.keepout_max_m));
-    std::vector<bool> ok(cands.size(), false);
-    const std::size_t half = cands.size() / 2;
-    auto run = [&](int worker, std::size_t lo, std::size_t hi) {
-      const std::vector<Pose> part(cands.begin() + lo, cands.begin() + hi);
-      const std::vector<ViewSolution> s = checkers_[worker]->solve_batch(part, q, r.turntable_angle_rad, keepout, r.object_z_m);
-      for (std::size_t i = 0; i < s.size(); ++i) ok[lo + i] = s[i].reachable;
-    };
-    std::thread other(run, 1, half, cands.size());
-    run(0, 0, half);
-    other.join();
+    // Each candidate is solved on its own (same current state), so the answer does not depend on
+    // how the candidates are shared out. One byte per candidate: workers never write the same
+    // byte (a std::vector<bool> packs eight candidates into one).
+    const int workers = worker_count(cands.size(), kCandidatesPerWorker);
+    while (checkers_.size() < static_cast<std::size_t>(workers)) checkers_.push_back(std::make_unique<ReachabilityChecker>(rig_));
+    std::vector<uint8_t> reachable(cands.size(), 0);
+    parallel_for(cands.size(), [&](std::size_t begin, std::size_t end, int w) {
+      const std::vector<Pose> part(cands.begin() + begin, cands.begin() + end);
+      const std::vector<ViewSolution> s = checkers_[w]->solve_batch(part, q, r.turntable_angle_rad, keepout, r.object_z_m);
+      for (std::size_t i = 0; i < s.size(); ++i) reachable[begin + i] = s[i].reachable ? 1 : 0;
+    }, kCandidatesPerWorker, workers);
+    const std::vector<bool> ok(reachable.begin(), reachable.end());
     pending_->reachability_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     reach_key_ = key.str();
     reach_cache_ = ok;
@@ -352,7 +361,7 @@ class ScorerService {
 
   bus::Bus& bus_;
   RigModel rig_;
-  std::unique_ptr<ReachabilityChecker> checkers_[2];
+  std::vector<std::unique_ptr<ReachabilityChecker>> checkers_;  // one per worker, made on first use
   bus::LatestPerScan<voxel_set_t> maps_;
   bus::LatestPerScan<ellipsoid_set_t> ellipsoids_;
   std::optional<Pending> pending_;

@@ -1,19 +1,28 @@
 #include "core/geometry/mesh.hpp"
 
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
-#include <CGAL/Simple_cartesian.h>
-
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <exception>
 #include <random>
 #include <stdexcept>
-#include <thread>
+#include <unordered_map>
+
+#include "core/geometry/mesh_tree.hpp"
 
 namespace pbnbv {
+
+void check_triangle_indices(const TriangleMesh& mesh, const std::string& what) {
+  const long long nv = static_cast<long long>(mesh.vertices.size());
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const int v = mesh.triangles[i][k];
+      if (v < 0 || v >= nv) {
+        throw std::invalid_argument(what + ": mesh triangle " + std::to_string(i) + " has vertex index " +
+                                    std::to_string(v) + " outside [0, " + std::to_string(nv) + ")");
+      }
+    }
+  }
+}
 
 void mesh_bounds(const TriangleMesh& mesh, Eigen::Vector3d& lo, Eigen::Vector3d& hi) {
   if (mesh.vertices.empty()) {
@@ -185,65 +194,10 @@ std::vector<Eigen::Vector3d> sample_surface(const TriangleMesh& mesh, std::size_
 
 std::vector<double> distances_to_surface(const TriangleMesh& mesh,
                                          const std::vector<Eigen::Vector3d>& points) {
-  using K = CGAL::Simple_cartesian<double>;
-  using Triangle = K::Triangle_3;
-  using Iterator = std::vector<Triangle>::const_iterator;
-  using Primitive = CGAL::AABB_triangle_primitive<K, Iterator>;
-  using Traits = CGAL::AABB_traits<K, Primitive>;
-  using Tree = CGAL::AABB_tree<Traits>;
-
-  std::vector<double> out;
-  if (points.empty()) return out;
-  std::vector<Triangle> tris;
-  tris.reserve(mesh.triangles.size());
-  const long long nv = static_cast<long long>(mesh.vertices.size());
-  for (const auto& t : mesh.triangles) {
-    for (int k = 0; k < 3; ++k) {
-      if (t[k] < 0 || t[k] >= nv) {
-        throw std::invalid_argument("distances_to_surface: triangle index out of range");
-      }
-    }
-    const Eigen::Vector3d& a = mesh.vertices[static_cast<size_t>(t[0])];
-    const Eigen::Vector3d& b = mesh.vertices[static_cast<size_t>(t[1])];
-    const Eigen::Vector3d& c = mesh.vertices[static_cast<size_t>(t[2])];
-    if ((b - a).cross(c - a).squaredNorm() == 0.0) continue;  // CGAL dislikes degenerate ones
-    tris.emplace_back(K::Point_3(a.x(), a.y(), a.z()), K::Point_3(b.x(), b.y(), b.z()),
-                      K::Point_3(c.x(), c.y(), c.z()));
-  }
-  if (tris.empty()) throw std::invalid_argument("distances_to_surface: mesh has no triangles");
-  Tree tree(tris.cbegin(), tris.cend());
-  tree.build();
-  // The kd-tree of hints pays off beyond a few dozen queries.
-  if (points.size() >= 64) tree.accelerate_distance_queries();
-  else tree.do_not_accelerate_distance_queries();
-  out.resize(points.size());
-  std::vector<std::exception_ptr> errors(8);
-  auto run = [&](size_t slot, size_t begin, size_t end) {
-    try {
-      for (size_t i = begin; i < end; ++i) {
-        const Eigen::Vector3d& p = points[i];
-        out[i] = std::sqrt(tree.squared_distance(K::Point_3(p.x(), p.y(), p.z())));
-      }
-    } catch (...) {
-      errors[slot] = std::current_exception();
-    }
-  };
-  // Queries on the built tree are const and thread-safe; split large batches across cores.
-  const size_t hw = std::max(1u, std::thread::hardware_concurrency());
-  const size_t workers = std::min<size_t>({hw, 8, points.size() / 1000 + 1});
-  std::vector<std::thread> threads;
-  const size_t chunk = (points.size() + workers - 1) / workers;
-  for (size_t w = 1; w < workers; ++w) {
-    const size_t b = std::min(points.size(), w * chunk);
-    const size_t e = std::min(points.size(), b + chunk);
-    threads.emplace_back(run, w, b, e);
-  }
-  run(0, 0, std::min(points.size(), chunk));
-  for (auto& t : threads) t.join();
-  for (const auto& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
-  return out;
+  if (points.empty()) return {};
+  // The k-d tree of hints pays off beyond a few dozen queries.
+  const MeshTree tree(mesh, points.size() >= 64, "distances_to_surface");
+  return tree.distances_m(points);
 }
 
 }  // namespace pbnbv

@@ -41,6 +41,10 @@ struct MeshNormalisation {
 // shortest bounding-box edge is `shortest_edge_m`, move the bounding-box centre to the origin.
 MeshNormalisation normalise_mesh(TriangleMesh& mesh, double shortest_edge_m, UpAxis up);
 
+// Throws std::invalid_argument "<what>: mesh triangle i has vertex index v outside [0, n)" for
+// the first triangle that refers to a vertex that does not exist.
+void check_triangle_indices(const TriangleMesh& mesh, const std::string& what);
+
 // Axis-aligned bounding box corners of the mesh.
 void mesh_bounds(const TriangleMesh& mesh, Eigen::Vector3d& lo, Eigen::Vector3d& hi);
 
@@ -59,7 +63,8 @@ std::vector<Eigen::Vector3d> sample_surface(const TriangleMesh& mesh, std::size_
                                             std::vector<Eigen::Vector3d>* face_normals = nullptr);
 
 // Exact Euclidean distance from each point to the nearest point of the mesh surface
-// (triangles, not vertices), using an AABB tree over the triangles.
+// (triangles, not vertices): MeshTree (mesh_tree.hpp) built for this one batch. Throws
+// std::invalid_argument naming the bad triangle or point (see MeshTree); no points: empty.
 std::vector<double> distances_to_surface(const TriangleMesh& mesh,
                                          const std::vector<Eigen::Vector3d>& points);
 

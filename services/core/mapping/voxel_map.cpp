@@ -12,7 +12,8 @@
 //     - later frames: B first grows to cover this frame's Occupied voxels, so that every point
 //       is recorded and its rays are traversed.
 //  3. Every valid pixel's voxel becomes Occupied (sticky: traversal never writes Occupied).
-//  4. Rays from the camera centre, traversed with a 3-D DDA (Amanatides & Woo 1987) inside B:
+//  4. Rays from the camera centre, traversed with a 3-D DDA (Amanatides & Woo 1987; the one in
+//     core/geometry/voxel_traversal.hpp) inside B:
 //     - a ray with a return (planar depth z): None/Unknown/Frontier voxels before the first
 //       Occupied voxel become Empty, as long as the voxel is left before depth z (a voxel the
 //       ray leaves beyond z is not known to be free); from the first Occupied voxel, or from the
@@ -71,25 +72,30 @@
 // smooth surface block, voxels between the block's minimum depth and the surface (< resolution
 // + one voxel in front of the surface) are Unknown instead of Empty.
 //
-// Threads: 2 std::threads over interleaved block rows. The only writes during traversal are the
-// monotone transitions {None, Unknown, Frontier} -> Empty (relaxed atomic store; Empty always
-// wins) and None -> Unknown (relaxed compare-exchange from None, so it can never overwrite an
-// Empty written by the other thread). Occupied is written before traversal and never during it.
-// The result is therefore independent of ray order and thread interleaving: a voxel is Empty if
-// any ray saw it free, else Unknown if any ray saw it occluded while it was None.
+// Threads: the workers of core/base/parallel.hpp (one per core) over interleaved block rows. The
+// only writes during traversal are the monotone transitions {None, Unknown, Frontier} -> Empty
+// (relaxed atomic store; Empty always wins) and None -> Unknown (relaxed compare-exchange from
+// None, so it can never overwrite an Empty written by another worker). Occupied is written
+// before traversal and never during it. The result is therefore independent of ray order, thread
+// interleaving and the number of workers: a voxel is Empty if any ray saw it free, else Unknown
+// if any ray saw it occluded while it was None.
 #include "core/mapping/voxel_map.hpp"
 #include "core/mapping/state_colour.hpp"
 
 #include <octomap/ColorOcTree.h>
 
+#include "core/base/parallel.hpp"
+#include "core/geometry/voxel_traversal.hpp"
+
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <numeric>
 #include <sstream>
 #include <stdexcept>
-#include <thread>
 
 namespace pbnbv {
 
@@ -116,24 +122,10 @@ inline int lattice_floor(double x) {
 
 constexpr int64_t kMaxVoxels = int64_t(1) << 31;
 
-int worker_count() {
-  const unsigned hc = std::thread::hardware_concurrency();
-  return hc >= 2 ? 2 : 1;
-}
-
-// Runs f(thread_index, thread_count) on `n` threads (the caller's thread is index 0).
-template <class F>
-void run_parallel(int n, const F& f) {
-  if (n <= 1) {
-    f(0, 1);
-    return;
-  }
-  std::vector<std::thread> threads;
-  threads.reserve(n - 1);
-  for (int t = 1; t < n; ++t) threads.emplace_back([&f, t, n] { f(t, n); });
-  f(0, n);
-  for (auto& th : threads) th.join();
-}
+// Work shares below which another worker does not pay for its start (core/base/parallel.hpp):
+// image rows per worker in an update, voxels per worker in the frontier pass.
+constexpr std::size_t kRowsPerWorker = 32;
+constexpr int64_t kVoxelsPerWorker = 100000;
 
 inline uint8_t load_relaxed(const uint8_t* c) { return __atomic_load_n(c, __ATOMIC_RELAXED); }
 inline void store_relaxed(uint8_t* c, uint8_t v) { __atomic_store_n(c, v, __ATOMIC_RELAXED); }
@@ -147,112 +139,41 @@ inline int floor_index(double x_m, double res) { return static_cast<int>(std::fl
 // The dense grid as the ray caster sees it.
 struct Grid {
   uint8_t* cells;
-  int n[3];
-  double res;
-  double ext[3];  // B's edge lengths, metres
+  VoxelLattice lattice;  // dims_ cells of edge res, relative to B's min corner
 };
 
 // Traverses one ray o + t d (o relative to B's min corner; d = R (x_n, y_n, 1), so t is the planar
-// depth) through B with the DDA of Amanatides & Woo. has_return: the pixel saw a surface at depth
-// t_free; otherwise the ray is free up to t_free (= max range). Returns whether it entered B.
+// depth) through B (the one voxel traversal, core/geometry/voxel_traversal.hpp). has_return: the
+// pixel saw a surface at depth t_free; otherwise the ray is free up to t_free (= max range).
+// Returns whether it entered B.
 bool cast_ray(const Grid& g, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_free,
               bool has_return) {
-  double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < 3; ++i) {
-    if (std::abs(d[i]) < 1e-15) {
-      if (o[i] < 0.0 || o[i] > g.ext[i]) return false;
-      continue;
-    }
-    const double inv = 1.0 / d[i];
-    double ta = -o[i] * inv, tb = (g.ext[i] - o[i]) * inv;
-    if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
-  }
-  if (!has_return) t1 = std::min(t1, t_free);
-  if (!(t0 < t1)) return false;
-
-  const double res = g.res;
-  // Entry voxel (clamped: the entry point lies on B's surface up to rounding).
-  int ix = std::clamp(static_cast<int>(std::floor((o.x() + d.x() * t0) / res)), 0, g.n[0] - 1);
-  int iy = std::clamp(static_cast<int>(std::floor((o.y() + d.y() * t0) / res)), 0, g.n[1] - 1);
-  int iz = std::clamp(static_cast<int>(std::floor((o.z() + d.z() * t0) / res)), 0, g.n[2] - 1);
-  const int64_t nx = g.n[0], nxy = int64_t(g.n[0]) * g.n[1];
-  constexpr double kNever = std::numeric_limits<double>::infinity();
-  // Per axis: step direction, linear index step, t of the next boundary, t per voxel.
-  auto setup = [&](double oi, double di, int i, int64_t stride, int& s, int64_t& ls, double& tm,
-                   double& td) {
-    if (di > 0) {
-      s = 1;
-      ls = stride;
-      tm = ((i + 1) * res - oi) / di;
-      td = res / di;
-    } else if (di < 0) {
-      s = -1;
-      ls = -stride;
-      tm = (i * res - oi) / di;
-      td = -res / di;
-    } else {
-      s = 0;
-      ls = 0;
-      tm = kNever;
-      td = kNever;
-    }
-  };
-  int sx, sy, sz;
-  int64_t lx, ly, lz;
-  double tx, ty, tz, dx, dy, dz;
-  setup(o.x(), d.x(), ix, 1, sx, lx, tx, dx);
-  setup(o.y(), d.y(), iy, nx, sy, ly, ty, dy);
-  setup(o.z(), d.z(), iz, nxy, sz, lz, tz, dz);
-  int64_t lin = ix + nx * iy + nxy * iz;
-  const unsigned ux = g.n[0], uy = g.n[1], uz = g.n[2];
-  // Steps into the next voxel (across the boundary the ray meets first); false when the ray
-  // leaves B.
-  auto step = [&]() -> bool {
-    if (tx <= ty && tx <= tz) {
-      ix += sx;
-      if (static_cast<unsigned>(ix) >= ux) return false;
-      lin += lx;
-      tx += dx;
-    } else if (ty <= tz) {
-      iy += sy;
-      if (static_cast<unsigned>(iy) >= uy) return false;
-      lin += ly;
-      ty += dy;
-    } else {
-      iz += sz;
-      if (static_cast<unsigned>(iz) >= uz) return false;
-      lin += lz;
-      tz += dz;
-    }
-    return true;
-  };
-
   uint8_t* const cells = g.cells;
-  // Free phase: up to the first Occupied voxel or the first voxel not left before t_free.
-  for (;;) {
-    uint8_t* c = cells + lin;
-    const uint8_t s = load_relaxed(c);
-    if (s == kOccB) {
-      if (!has_return) return true;  // a free ray stops at the first Occupied voxel
-      break;                         // behind the first Occupied voxel: occluded
-    }
-    const double t_next = std::min(tx, std::min(ty, tz));  // where the ray leaves this voxel
-    if (t_next > t_free) {
-      if (!has_return) return true;  // straddles max range: not known to be free
-      if (s == kNoneB) none_to_unknown(c);  // straddles the return depth: not known to be free
-      break;
-    }
-    if (s != kEmptyB) store_relaxed(c, kEmptyB);  // left before the return: observed free
-    if (!step()) return true;
-  }
-  // Occluded phase: None -> Unknown to where the ray leaves B.
-  while (step()) {
-    uint8_t* c = cells + lin;
-    if (load_relaxed(c) == kNoneB) none_to_unknown(c);
-  }
-  return true;
+  const double t_max = has_return ? std::numeric_limits<double>::infinity() : t_free;
+  return traverse_voxels(
+      g.lattice, o, d, 0.0, t_max,
+      // Free phase: up to the first Occupied voxel or the first voxel not left before t_free.
+      [&](int64_t lin, double, double t_out) {
+        uint8_t* c = cells + lin;
+        const uint8_t s = load_relaxed(c);
+        if (s == kOccB) {
+          // A free ray stops at the first Occupied voxel; behind it a ray with a return is occluded.
+          return has_return ? VoxelVisit::kHandOver : VoxelVisit::kStop;
+        }
+        if (t_out > t_free) {  // the ray leaves this voxel beyond t_free
+          if (!has_return) return VoxelVisit::kStop;  // straddles max range: not known to be free
+          if (s == kNoneB) none_to_unknown(c);        // straddles the return depth: not known to be free
+          return VoxelVisit::kHandOver;
+        }
+        if (s != kEmptyB) store_relaxed(c, kEmptyB);  // left before the return: observed free
+        return VoxelVisit::kNext;
+      },
+      // Occluded phase: None -> Unknown to where the ray leaves B.
+      [&](int64_t lin, double, double) {
+        uint8_t* c = cells + lin;
+        if (load_relaxed(c) == kNoneB) none_to_unknown(c);
+        return VoxelVisit::kNext;
+      });
 }
 
 // Lattice index box of the first frame's B (see the comment at integrate()).
@@ -458,9 +379,11 @@ VoxelCounts VoxelMap::update_frontiers() {
   scratch_.resize(static_cast<size_t>(plane * nz));
   uint8_t* cells = reinterpret_cast<uint8_t*>(cells_.data());
   uint8_t* dil = scratch_.data();
-  const int nt = (plane * nz > 200000) ? worker_count() : 1;
+  // Several workers only for grids beyond about 200,000 voxels (each takes >= 100,000).
+  const int nt = worker_count(static_cast<std::size_t>(nz),
+                              static_cast<std::size_t>((kVoxelsPerWorker + plane - 1) / plane));
 
-  run_parallel(nt, [&](int tid, int n_threads) {
+  parallel_run(nt, [&](int tid, int n_threads) {
     std::vector<uint8_t> m(static_cast<size_t>(plane)), mx(static_cast<size_t>(plane));
     for (int z = tid; z < nz; z += n_threads) {
       const uint8_t* src = cells + plane * z;
@@ -490,9 +413,9 @@ VoxelCounts VoxelMap::update_frontiers() {
     }
   });
 
-  int64_t n[2][5] = {{0, 0, 0, 0, 0}, {0, 0, 0, 0, 0}};
-  run_parallel(nt, [&](int tid, int n_threads) {
-    int64_t* cnt = n[tid];
+  std::vector<std::array<int64_t, 5>> n(static_cast<std::size_t>(nt), std::array<int64_t, 5>{});
+  parallel_run(nt, [&](int tid, int n_threads) {
+    int64_t cnt[5] = {0, 0, 0, 0, 0};  // local: the cell stores below cannot alias it
     for (int z = tid; z < nz; z += n_threads) {
       const uint8_t* c = dil + plane * z;
       const uint8_t* a = z > 0 ? c - plane : c;
@@ -507,13 +430,16 @@ VoxelCounts VoxelMap::update_frontiers() {
         ++cnt[v];
       }
     }
+    std::copy(cnt, cnt + 5, n[tid].begin());
   });
   VoxelCounts out;
-  out.none = n[0][0] + n[1][0];
-  out.empty = n[0][1] + n[1][1];
-  out.occupied = n[0][2] + n[1][2];
-  out.unknown = n[0][3] + n[1][3];
-  out.frontier = n[0][4] + n[1][4];
+  for (const auto& c : n) {
+    out.none += c[0];
+    out.empty += c[1];
+    out.occupied += c[2];
+    out.unknown += c[3];
+    out.frontier += c[4];
+  }
   return out;
 }
 
@@ -556,7 +482,9 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
   const double zlo = view.range.min_m, zhi = view.range.max_m;
   const Eigen::Matrix3d R = view.object_T_camera.linear();
   const Eigen::Vector3d cam = view.object_T_camera.translation();
-  const int nt = worker_count();
+  // Workers (core/base/parallel.hpp): each takes a share of the image rows.
+  const int nt = worker_count(static_cast<std::size_t>(H), kRowsPerWorker);
+  if (points_.size() < static_cast<std::size_t>(nt)) points_.resize(static_cast<std::size_t>(nt));
 
   // 1. Classify pixels, back-project the valid ones, collect their lattice indices. The point
   // of pixel (u, v) at depth z is cam + z (a_u + b_v), a_u = R x_n(u), b_v = R (0, y_n(v), 1).
@@ -569,8 +497,8 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
     Eigen::Vector3i hi = Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
     int64_t valid = 0, no_return = 0, ignored = 0, outside = 0;
   };
-  PassOne part[2];
-  run_parallel(nt, [&](int tid, int n_threads) {
+  std::vector<PassOne> part(static_cast<std::size_t>(nt));
+  parallel_run(nt, [&](int tid, int n_threads) {
     const int v0 = H * tid / n_threads, v1 = H * (tid + 1) / n_threads;
     std::vector<Eigen::Vector3i>& pts = points_[tid];  // grows to the most valid pixels seen
     if (pts.size() < 4096) pts.resize(4096);
@@ -623,10 +551,17 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
     pr.lo = lo;
     pr.hi = hi;
   });
-  const int64_t n_valid = part[0].valid + part[1].valid;
-  const int64_t n_no_return = part[0].no_return + part[1].no_return;
-  const int64_t n_ignored = part[0].ignored + part[1].ignored;
-  const int64_t n_outside = part[0].outside + part[1].outside;
+  int64_t n_valid = 0, n_no_return = 0, n_ignored = 0, n_outside = 0;
+  Eigen::Vector3i occ_lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max());
+  Eigen::Vector3i occ_hi = Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
+  for (const PassOne& pr : part) {
+    n_valid += pr.valid;
+    n_no_return += pr.no_return;
+    n_ignored += pr.ignored;
+    n_outside += pr.outside;
+    occ_lo = occ_lo.cwiseMin(pr.lo);
+    occ_hi = occ_hi.cwiseMax(pr.hi);
+  }
   MapUpdateResult result;
   if (n_valid == 0) {
     std::ostringstream os;
@@ -641,8 +576,6 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
     result.time_s = elapsed();
     return result;
   }
-  Eigen::Vector3i occ_lo = part[0].lo.cwiseMin(part[1].lo);
-  Eigen::Vector3i occ_hi = part[0].hi.cwiseMax(part[1].hi);
 
   // 2. B before traversal.
   const bool first = !initialised_;
@@ -654,13 +587,7 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
     grow_to_cover(occ_lo, occ_hi);
   }
 
-  Grid grid;
-  grid.cells = reinterpret_cast<uint8_t*>(cells_.data());
-  grid.res = res;
-  for (int i = 0; i < 3; ++i) {
-    grid.n[i] = dims_[i];
-    grid.ext[i] = dims_[i] * res;
-  }
+  const Grid grid{reinterpret_cast<uint8_t*>(cells_.data()), VoxelLattice(dims_, res)};
 
   // 3. Occupied from every valid pixel (sticky).
   for (int t = 0; t < nt; ++t) {
@@ -691,21 +618,26 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
   enum : uint8_t { kBlockNothing = 0, kBlockSurface = 1, kBlockFree = 2, kBlockMixed = 3 };
   block_kind_.assign(static_cast<size_t>(n_bu) * n_bv, kBlockNothing);
   block_depth_.resize(static_cast<size_t>(n_bu) * n_bv);
-  run_parallel(nt, [&](int tid, int n_threads) {
-    const float lo_z = zlo_f, hi_z = zhi_f;  // locals: no reloads in the pixel loop
+  parallel_run(nt, [&](int tid, int n_threads) {
+    // Locals: the byte stores to `kinds` may alias anything reached through the captures, so
+    // these would be reloaded after every block.
+    const float lo_z = zlo_f, hi_z = zhi_f;
     const float res_f = static_cast<float>(res);
+    const int W_l = W, H_l = H, stride_l = stride, n_bu_l = n_bu, n_bv_l = n_bv;
+    const bool free_nr = free_no_return;
+    const float* depth_l = depth;
     uint8_t* kinds = block_kind_.data();
     float* zmins = block_depth_.data();
-    for (int bv = tid; bv < n_bv; bv += n_threads) {
-      const int v0 = bv * stride, v1 = std::min(H, v0 + stride);
-      for (int bu = 0; bu < n_bu; ++bu) {
-        const int u0 = bu * stride, u1 = std::min(W, u0 + stride);
+    for (int bv = tid; bv < n_bv_l; bv += n_threads) {
+      const int v0 = bv * stride_l, v1 = std::min(H_l, v0 + stride_l);
+      for (int bu = 0; bu < n_bu_l; ++bu) {
+        const int u0 = bu * stride_l, u1 = std::min(W_l, u0 + stride_l);
         int n_val = 0, n_nr = 0;
         float z_min = std::numeric_limits<float>::infinity(), z_max = 0.0f;
         for (int v = v0; v < v1; ++v) {
-          const int64_t row = int64_t(v) * W;
+          const int64_t row = int64_t(v) * W_l;
           for (int u = u0; u < u1; ++u) {
-            const float z = depth[row + u];
+            const float z = depth_l[row + u];
             if (pixel_valid(z, lo_z, hi_z)) {
               ++n_val;
               z_min = std::min(z_min, z);
@@ -716,13 +648,13 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
           }
         }
         const int n_pix = (v1 - v0) * (u1 - u0);
-        const int64_t b = int64_t(bv) * n_bu + bu;
+        const int64_t b = int64_t(bv) * n_bu_l + bu;
         uint8_t kind;
         if (n_val == n_pix && z_max - z_min <= res_f) {
           kind = kBlockSurface;
         } else if (n_nr == n_pix) {
-          kind = free_no_return ? kBlockFree : kBlockNothing;
-        } else if (n_val == 0 && !free_no_return) {
+          kind = free_nr ? kBlockFree : kBlockNothing;
+        } else if (n_val == 0 && !free_nr) {
           kind = kBlockNothing;  // only ignored pixels and returns that do not count as free
         } else {
           kind = kBlockMixed;
@@ -732,8 +664,8 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
       }
     }
   });
-  int64_t rays[2] = {0, 0};
-  run_parallel(nt, [&](int tid, int n_threads) {
+  std::vector<int64_t> rays(static_cast<std::size_t>(nt), 0);
+  parallel_run(nt, [&](int tid, int n_threads) {
     int64_t n_rays = 0;
     auto ray = [&](double u, double v, double t_free, bool has_return) {
       const Eigen::Vector3d d = R * Eigen::Vector3d((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0);
@@ -818,7 +750,7 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
 
   result.updated = true;
   result.counts = c;
-  result.rays = static_cast<int>(rays[0] + rays[1]);
+  result.rays = static_cast<int>(std::accumulate(rays.begin(), rays.end(), int64_t(0)));
   result.time_s = elapsed();
   std::ostringstream os;
   const Eigen::Vector3d size = dims_.cast<double>() * res;

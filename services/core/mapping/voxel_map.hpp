@@ -1,6 +1,7 @@
 #pragma once
 // The five-state voxel map of PB-NBV (docs/method.md "Voxel map", paper section III-B) with its
-// bounding box B. Dense grid over B; rays traversed with a 3-D DDA (Amanatides & Woo).
+// bounding box B. Dense grid over B; rays traversed with the one voxel traversal (3-D DDA,
+// core/geometry/voxel_traversal.hpp).
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
@@ -121,7 +122,8 @@ class VoxelMap {
                                                   // lo_ * resolution)
   bool initialised_ = false;                      // a frame with valid points has been integrated
   int last_stride_px_ = 0;
-  std::vector<Eigen::Vector3i> points_[2];        // scratch: lattice index of each valid pixel
+  std::vector<std::vector<Eigen::Vector3i>> points_;  // scratch per worker: lattice index of
+                                                      // each valid pixel
   std::vector<uint8_t> scratch_;                  // frontier pass scratch (one byte per voxel)
   std::vector<uint8_t> block_kind_;               // per-frame scratch (one byte per ray block)
   std::vector<float> block_depth_;                // per-frame scratch (nearest depth per block)

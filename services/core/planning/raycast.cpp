@@ -2,12 +2,14 @@
 #include "core/planning/raycast.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
-#include <thread>
+
+#include "core/base/parallel.hpp"
+#include "core/geometry/voxel_traversal.hpp"
 
 namespace pbnbv {
 
@@ -50,76 +52,10 @@ PixelRect projected_box(const Eigen::AlignedBox3d& box, const CameraIntrinsics& 
 
 namespace {
 
-// Slab test: the parameter interval [t0, t1] of o + t d inside the box (t0 > t1: a miss).
-void clip_to_box(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& lo,
-                 const Eigen::Vector3d& hi, double& t0, double& t1) {
-  for (int a = 0; a < 3; ++a) {
-    if (std::abs(d[a]) < 1e-15) {
-      if (o[a] < lo[a] || o[a] > hi[a]) {
-        t0 = 1;
-        t1 = 0;
-        return;
-      }
-      continue;
-    }
-    double ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
-    if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
-  }
-}
-
 struct Caster {
   const VoxelGrid& grid;
   const RaycastParams& p;
   std::vector<uint32_t> stamp;  // per voxel: tag of the last view that counted it
-
-  // Counts the unobserved voxels along one ray (grid units: position pg, direction qg; the ray
-  // parameter t is planar depth in metres) in [t0, t1].
-  int64_t cast(const Eigen::Vector3d& pg, const Eigen::Vector3d& qg, double t0, double t1, uint32_t tag) {
-    const Eigen::Vector3i& n = grid.dims;
-    Eigen::Vector3i i;
-    for (int a = 0; a < 3; ++a) {
-      i[a] = std::clamp(static_cast<int>(std::floor(pg[a] + t0 * qg[a])), 0, n[a] - 1);
-    }
-    const int64_t stride[3] = {1, int64_t(n.x()), int64_t(n.x()) * n.y()};
-    int64_t lin = i.x() + stride[1] * i.y() + stride[2] * i.z();
-    int step[3];
-    double t_max[3], t_delta[3];
-    for (int a = 0; a < 3; ++a) {
-      if (qg[a] > 0) {
-        step[a] = 1;
-        t_max[a] = (i[a] + 1 - pg[a]) / qg[a];
-        t_delta[a] = 1.0 / qg[a];
-      } else if (qg[a] < 0) {
-        step[a] = -1;
-        t_max[a] = (i[a] - pg[a]) / qg[a];
-        t_delta[a] = -1.0 / qg[a];
-      } else {
-        step[a] = 0;
-        t_max[a] = t_delta[a] = std::numeric_limits<double>::infinity();
-      }
-    }
-    int64_t count = 0;
-    const VoxelState* cells = grid.cells.data();
-    uint32_t* st = stamp.data();
-    double t = t0;
-    while (t < t1) {
-      const VoxelState s = cells[lin];
-      if (s == VoxelState::kOccupied) break;
-      if (s != VoxelState::kEmpty && st[lin] != tag) {
-        st[lin] = tag;
-        ++count;
-      }
-      const int a = t_max[0] < t_max[1] ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
-      t = t_max[a];
-      i[a] += step[a];
-      if (i[a] < 0 || i[a] >= n[a]) break;
-      lin += step[a] * stride[a];
-      t_max[a] += t_delta[a];
-    }
-    return count;
-  }
 
   RaycastGain view(const Pose& object_T_camera, uint32_t tag) {
     RaycastGain g;
@@ -133,20 +69,34 @@ struct Caster {
     const double su = std::max(1.0, p.camera.fx * res * p.ray_spacing_voxels / dist);
     const double sv = std::max(1.0, p.camera.fy * res * p.ray_spacing_voxels / dist);
     g.spacing_px = su;
-    const Eigen::Vector3d pg = (o - grid.origin_m) / res;
-    const Eigen::Vector3d lo = box.min(), hi = box.max();
+    const VoxelLattice lattice{grid.dims, res};
+    const Eigen::Vector3d o_grid = o - grid.origin_m;  // relative to the grid's min corner
+    const double t_near = p.range.min_m, t_far = p.range.max_m;
+    int64_t unknown = 0;
+    const VoxelState* cells = grid.cells.data();
+    uint32_t* st = stamp.data();
     for (double v = rect.v0 + 0.5 * sv; v < rect.v1; v += sv) {
       for (double u = rect.u0 + 0.5 * su; u < rect.u1; u += su) {
-        // Pixel centre (u - 0.5, v - 0.5) in the image convention of back_project.
+        // Pixel centre (u - 0.5, v - 0.5) in the image convention of back_project; t is the
+        // planar depth, so the depth range bounds it directly.
         const Eigen::Vector3d d = R * Eigen::Vector3d((u - 0.5 - p.camera.cx) / p.camera.fx,
                                                       (v - 0.5 - p.camera.cy) / p.camera.fy, 1.0);
-        double t0 = p.range.min_m, t1 = p.range.max_m;
-        clip_to_box(o, d, lo, hi, t0, t1);
         ++g.rays;
-        if (t0 >= t1) continue;
-        g.unknown += cast(pg, d / res, t0, t1, tag);
+        // The unobserved voxels (None, Unknown, Frontier) along the ray, each once per view, up
+        // to the first Occupied voxel, where the ray leaves the grid or the depth range.
+        traverse_voxels(lattice, o_grid, d, t_near, t_far, [&](int64_t lin, double t_in, double) {
+          if (t_in >= t_far) return false;
+          const VoxelState s = cells[lin];
+          if (s == VoxelState::kOccupied) return false;
+          if (s != VoxelState::kEmpty && st[lin] != tag) {
+            st[lin] = tag;
+            ++unknown;
+          }
+          return true;
+        });
       }
     }
+    g.unknown = unknown;
     return g;
   }
 };
@@ -167,20 +117,18 @@ std::vector<RaycastGain> raycast_gains(const VoxelGrid& grid, const std::vector<
   for (std::size_t i = 0; i < views.size(); ++i) {
     if (active.empty() || active[i]) todo.push_back(static_cast<int>(i));
   }
-  int threads = params.threads > 0 ? params.threads : static_cast<int>(std::thread::hardware_concurrency());
-  threads = std::clamp(threads, 1, std::max<int>(1, static_cast<int>(todo.size())));
-  std::atomic<std::size_t> next{0};
-  auto work = [&]() {
-    Caster c{grid, params, std::vector<uint32_t>(grid.cells.size(), 0)};
-    for (std::size_t k = next++; k < todo.size(); k = next++) {
+  // Views handed out in chunks to the workers (core/base/parallel.hpp), each worker with its own
+  // stamps, made on its first chunk; a view's tag is its place in `todo`, so the gains do not
+  // depend on which worker cast them.
+  const int workers = worker_count(todo.size(), 1, params.threads);
+  std::vector<std::unique_ptr<Caster>> casters(static_cast<std::size_t>(workers));
+  parallel_for(todo.size(), [&](std::size_t begin, std::size_t end, int w) {
+    if (!casters[w]) casters[w].reset(new Caster{grid, params, std::vector<uint32_t>(grid.cells.size(), 0)});
+    for (std::size_t k = begin; k < end; ++k) {
       const int i = todo[k];
-      out[i] = c.view(views[i], static_cast<uint32_t>(k + 1));
+      out[i] = casters[w]->view(views[i], static_cast<uint32_t>(k + 1));
     }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
+  }, 1, workers);
   return out;
 }
 

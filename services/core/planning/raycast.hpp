@@ -5,8 +5,9 @@
 // centre through the voxel map, one ray per voxel footprint (at the distance of B's centre) over
 // the image region that B projects to; along each ray the unobserved voxels (None, Unknown,
 // Frontier) are counted until the ray meets an Occupied voxel, leaves B or leaves the depth
-// range. A voxel crossed by several rays of one view counts once. Candidates are spread over
-// threads; each thread keeps a stamp per voxel instead of clearing a visited set per view.
+// range (the one voxel traversal, core/geometry/voxel_traversal.hpp). A voxel crossed by several
+// rays of one view counts once. Candidates are spread over the workers of core/base/parallel.hpp;
+// each worker keeps a stamp per voxel instead of clearing a visited set per view.
 #include <cstdint>
 #include <vector>
 
@@ -22,7 +23,7 @@ struct RaycastParams {
   // Ray spacing in voxel footprints at the distance from the camera to B's centre (1: one ray
   // per voxel footprint; smaller: denser). Never finer than one ray per pixel.
   double ray_spacing_voxels = 1.0;
-  int threads = 0;  // 0: hardware concurrency
+  int threads = 0;  // at most this many workers; 0: one per core (core/base/parallel.hpp)
   void validate() const;  // throws std::invalid_argument naming the field
 };
 
