@@ -176,7 +176,9 @@ TEST(ScanIntegration, CtrlCStopsEveryProcessAndKeepsTheScanSoFar) {
   EXPECT_TRUE(fs::exists(out / "cloud.ply"));
   const auto procs = read_json_file(out / "processes.json");
   for (const auto& p : procs) {
-    if (p["name"] != "coordinator") EXPECT_EQ(p["exit_code"], 0) << p.dump();
+    if (p["name"] != "coordinator") {
+      EXPECT_EQ(p["exit_code"], 0) << p.dump();
+    }
   }
   const CommandResult left = run_command("pgrep -f 'model-ou[t] " + out.string() + "'");
   EXPECT_NE(left.exit_code, 0) << "a twin is still running: " << left.output;

@@ -1,5 +1,6 @@
 #pragma once
-// Conversions between the planning messages and the planning library's types.
+// Conversions between the planning messages (VOXEL_MAP, ELLIPSOIDS, PLAN_REQUEST, VIEW_PLAN) and
+// the mapping and planning libraries' types, with the validation the view scorer applies.
 #include <Eigen/Geometry>
 #include <cmath>
 #include <sstream>
@@ -7,8 +8,15 @@
 #include <string>
 
 #include "bus/convert.hpp"
+#include "core/mapping/voxel_map.hpp"
+#include "core/planning/kinds.hpp"
 #include "core/planning/mvee.hpp"
+#include "core/planning/planner.hpp"
+#include "core/planning/planning_options.hpp"
 #include "pbnbv/ellipsoid_t.hpp"
+#include "pbnbv/plan_request_t.hpp"
+#include "pbnbv/view_plan_t.hpp"
+#include "pbnbv/voxel_set_t.hpp"
 
 namespace pbnbv::bus {
 
@@ -54,5 +62,108 @@ inline Ellipsoid from_msg(const ellipsoid_t& m, const std::string& what) {
   e.num_points = m.num_voxels;
   return e;
 }
+
+// The bounding box B of a voxel map message.
+inline Eigen::AlignedBox3d bbox_of(const voxel_set_t& map) {
+  return Eigen::AlignedBox3d(Eigen::Vector3d(map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]),
+                             Eigen::Vector3d(map.bbox_max_m[0], map.bbox_max_m[1], map.bbox_max_m[2]));
+}
+
+// The request as the core planner takes it, validated; throws naming the bad field.
+inline PlanInput plan_input_from_msg(const plan_request_t& r) {
+  PlanInput in;
+  for (std::size_t i = 0; i < r.views_done.size(); ++i) {
+    in.views_done.push_back(from_msg(r.views_done[i], "PLAN_REQUEST views_done[" + std::to_string(i) + "]"));
+  }
+  for (std::size_t i = 0; i < r.excluded.size(); ++i) {
+    in.excluded.push_back(from_msg(r.excluded[i], "PLAN_REQUEST excluded[" + std::to_string(i) + "]"));
+  }
+  require_range(r.num_candidates, kCandidates.min, kCandidates.max, "PLAN_REQUEST num_candidates");
+  require_range(r.num_parallels, kParallels.min, kParallels.max, "PLAN_REQUEST num_parallels");
+  require_range(r.num_sectors, kSectors.min, kSectors.max, "PLAN_REQUEST num_sectors");
+  require_range(r.working_distance_m, kWorkingDistance.min, kWorkingDistance.max, "PLAN_REQUEST working_distance_m");
+  require_range(r.num_alternatives, kAlternatives.min, kAlternatives.max, "PLAN_REQUEST num_alternatives");
+  require_range(r.stop_fraction, kStopFraction.min, kStopFraction.max, "PLAN_REQUEST stop_fraction");
+  if (!std::isnan(r.first_quality)) require_range(r.first_quality, -1e12, 1e12, "PLAN_REQUEST first_quality");
+  if (r.num_parallels > r.num_candidates) throw std::invalid_argument("PLAN_REQUEST num_parallels exceeds num_candidates");
+  in.candidates.num_views = r.num_candidates;
+  in.candidates.num_parallels = r.num_parallels;
+  in.candidates.area = r.full_sphere ? CandidateArea::kFullSphere : CandidateArea::kHemisphere;
+  in.candidates.working_distance_m = r.working_distance_m;
+  in.beta = r.num_sectors;
+  in.num_alternatives = r.num_alternatives;
+  in.stop_fraction = r.stop_fraction;
+  in.when_done = r.spread_when_done ? WhenDone::kSpread : WhenDone::kStop;
+  in.first_quality = r.first_quality;
+  in.camera = CameraIntrinsics{r.width_px, r.height_px, r.fx, r.fy, r.cx, r.cy};
+  in.camera.validate();
+  return in;
+}
+
+// The VOXEL_MAP's cells as the ray caster reads them; throws naming the message's bad field.
+inline VoxelGrid grid_from_msg(const voxel_set_t& map) {
+  VoxelGrid g;
+  g.origin_m = Eigen::Vector3d(map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]);
+  g.dims = Eigen::Vector3i(map.dims[0], map.dims[1], map.dims[2]);
+  g.resolution_m = map.resolution_m;
+  g.cells.resize(map.cells.size());
+  for (std::size_t i = 0; i < map.cells.size(); ++i) g.cells[i] = static_cast<VoxelState>(static_cast<uint8_t>(map.cells[i]));
+  g.validate("VOXEL_MAP of view " + std::to_string(map.iteration));
+  if (g.empty()) throw std::invalid_argument("VOXEL_MAP of view " + std::to_string(map.iteration) + " carries no cells (dims 0)");
+  return g;
+}
+
+
+// Writes a planning step's result into its VIEW_PLAN answer (the chosen view, its scores, the
+// partition, the candidate counts, the alternatives, the stage times).
+inline void fill_answer(view_plan_t& out, const PlanResult& res) {
+  out.outcome = res.outcome == PlanResult::Outcome::kView ? view_plan_t::kView
+                : res.outcome == PlanResult::Outcome::kStop ? view_plan_t::kStop : view_plan_t::kFailed;
+  out.reason = res.reason;
+  if (const ViewScore* s = res.chosen_score()) {
+    out.object_T_camera = to_msg(res.candidates[res.chosen]);
+    out.view_quality = s->quality;
+    out.frontier_area_px = s->frontier_sum;
+    out.occupied_area_px = s->occupied_sum;
+  }
+  out.first_quality = res.first_quality;
+  out.partition = res.partition;
+  out.allowed_sectors = res.allowed_sectors;
+  out.num_allowed_sectors = static_cast<int32_t>(out.allowed_sectors.size());
+  out.partition_fallback = res.partition_fallback;
+  for (int k = 0; k < 3; ++k) out.sphere_centre_m[k] = res.centre[k];
+  out.sphere_radius_m = res.radius_m;
+  out.num_candidates = static_cast<int32_t>(res.candidates.size());
+  out.num_unreachable = res.num_unreachable;
+  out.num_excluded = res.num_excluded;
+  out.num_scored = res.num_scored;
+  out.num_frontier_ellipsoids = res.num_frontier_ellipsoids;
+  out.num_occupied_ellipsoids = res.num_occupied_ellipsoids;
+  out.candidates_s = res.candidates_s;
+  out.scoring_s = res.scoring_s;
+  for (int a : res.alternatives) {
+    out.alternatives.push_back(to_msg(res.candidates[a]));
+    out.alternative_quality.push_back(res.scores[a].quality);
+  }
+  out.num_alternatives = static_cast<int32_t>(out.alternatives.size());
+}
+
+
+// The answer to `r` with nothing planned yet (outcome and reason to be set).
+inline view_plan_t empty_answer(const plan_request_t& r) {
+  view_plan_t out{};
+  out.scan_id = r.scan_id;
+  out.iteration = r.iteration;
+  out.request_id = r.request_id;
+  out.planner = r.planner;
+  out.object_T_camera = to_msg(Pose::Identity());
+  out.view_quality = 0;
+  out.first_quality = r.first_quality;
+  out.partition = -1;
+  out.num_allowed_sectors = 0;
+  out.num_alternatives = 0;
+  return out;
+}
+
 
 }  // namespace pbnbv::bus

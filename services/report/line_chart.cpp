@@ -1,5 +1,7 @@
 #include "report/line_chart.hpp"
 
+#include "report/canvas.hpp"
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -15,14 +17,21 @@
 namespace pbnbv {
 namespace {
 
+using drawing::Canvas;
+using drawing::kBlack;
+using drawing::kFont;
+using drawing::kFrame;
+using drawing::kSubText;
+using drawing::kText;
+using drawing::scalar;
+using drawing::text_size;
+
+
 constexpr int kMinWidth = 240;
 constexpr int kMinHeight = 160;
-constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
 
-// Drawing with sub-pixel precision: image coordinates (pixel centres at integers) to OpenCV's
-// fixed-point coordinates with kShift fractional bits.
-constexpr int kShift = 4;
-constexpr double kOne = 1 << kShift;
+// Image coordinates: pixel centres at integers.
+constexpr double kPixelCentre = 0.0;
 
 // Text scales (Hershey simplex) and layout (pixels).
 constexpr double kTitleScale = 0.7;
@@ -44,10 +53,6 @@ constexpr double kMarkerRadius = 3.5;
 constexpr int kLineThickness = 2;
 
 const cv::Scalar kBackground(255, 255, 255);
-const cv::Scalar kBlack(0, 0, 0);
-const cv::Scalar kText(40, 40, 40);
-const cv::Scalar kSubText(90, 90, 90);
-const cv::Scalar kFrame(150, 150, 150);
 const cv::Scalar kGrid(228, 228, 228);
 const cv::Scalar kMinorGrid(243, 243, 243);
 const cv::Scalar kRefLine(110, 110, 110);
@@ -55,15 +60,6 @@ const cv::Scalar kRefLine(110, 110, 110);
 // Line patterns: on/off lengths in pixels; solid has none.
 enum class Pattern { kSolid, kDashed, kDotted };
 constexpr int kPaletteSize = 7;
-
-cv::Scalar scalar(const cv::Vec3b& c) { return cv::Scalar(c[0], c[1], c[2]); }
-
-cv::Size text_size(const std::string& s, double scale, int thickness, int* baseline = nullptr) {
-  int base = 0;
-  const cv::Size sz = cv::getTextSize(s, kFont, scale, thickness, &base);
-  if (baseline) *baseline = base;
-  return sz;
-}
 
 std::string chart_name(const LineChart& c) {
   return c.title.empty() ? std::string("line chart (untitled)") : "line chart '" + c.title + "'";
@@ -620,66 +616,38 @@ Plan plan_chart(const LineChart& c, int w, int h) {
   return p;
 }
 
-// Draws into the plot area (clipped to it) or anywhere in the image; image coordinates.
-class Canvas {
- public:
-  Canvas(cv::Mat& img, const cv::Rect& rect) : img_(img(rect)), tl_(rect.tl()) {}
-
-  cv::Point fixed(const cv::Point2d& p) const {
-    return cv::Point(cvRound((p.x - tl_.x) * kOne), cvRound((p.y - tl_.y) * kOne));
-  }
-  void line(const cv::Point2d& a, const cv::Point2d& b, const cv::Scalar& colour,
-            int thickness) {
-    cv::line(img_, fixed(a), fixed(b), colour, thickness, cv::LINE_AA, kShift);
-  }
-  void disc(const cv::Point2d& c, double r, const cv::Scalar& colour) {
-    cv::circle(img_, fixed(c), cvRound(r * kOne), colour, cv::FILLED, cv::LINE_AA, kShift);
-  }
-  // Polyline with a pattern; the dash phase runs on along the line.
-  void pattern_line(const std::vector<cv::Point2d>& pts, const cv::Scalar& colour,
-                    Pattern pattern, const cv::Rect2d& clip) {
-    const double on = pattern == Pattern::kDashed ? 10.0 : 2.0;
-    const double off = pattern == Pattern::kDashed ? 6.0 : 5.0;
-    double phase = 0;  // distance along the line, modulo on + off
-    for (size_t k = 1; k < pts.size(); ++k) {
-      const double len = cv::norm(pts[k] - pts[k - 1]);
-      cv::Point2d a = pts[k - 1], b = pts[k];
-      double t0 = 0, t1 = 1;
-      if (len > 0 && clip_segment(a, b, clip, &t0, &t1)) {
-        if (pattern == Pattern::kSolid) {
-          line(a, b, colour, kLineThickness);
-        } else {
-          const cv::Point2d dir = (pts[k] - pts[k - 1]) / len;
-          // Walk from the clipped start; s is the distance from pts[k-1].
-          double s = t0 * len;
-          double pos = std::fmod(phase + s, on + off);
-          while (s < t1 * len) {
-            const bool is_on = pos < on;
-            const double piece = std::min((is_on ? on : on + off) - pos, t1 * len - s);
-            if (is_on && piece > 0) {
-              line(pts[k - 1] + dir * s, pts[k - 1] + dir * (s + piece), colour, kLineThickness);
-            }
-            s += piece;
-            pos = std::fmod(pos + piece, on + off);
+// Polyline with a pattern; the dash phase runs on along the line.
+void pattern_line(Canvas& canvas, const std::vector<cv::Point2d>& pts, const cv::Scalar& colour,
+                  Pattern pattern, const cv::Rect2d& clip) {
+  const double on = pattern == Pattern::kDashed ? 10.0 : 2.0;
+  const double off = pattern == Pattern::kDashed ? 6.0 : 5.0;
+  double phase = 0;  // distance along the line, modulo on + off
+  for (size_t k = 1; k < pts.size(); ++k) {
+    const double len = cv::norm(pts[k] - pts[k - 1]);
+    cv::Point2d a = pts[k - 1], b = pts[k];
+    double t0 = 0, t1 = 1;
+    if (len > 0 && clip_segment(a, b, clip, &t0, &t1)) {
+      if (pattern == Pattern::kSolid) {
+        canvas.line(a, b, colour, kLineThickness);
+      } else {
+        const cv::Point2d dir = (pts[k] - pts[k - 1]) / len;
+        // Walk from the clipped start; s is the distance from pts[k-1].
+        double s = t0 * len;
+        double pos = std::fmod(phase + s, on + off);
+        while (s < t1 * len) {
+          const bool is_on = pos < on;
+          const double piece = std::min((is_on ? on : on + off) - pos, t1 * len - s);
+          if (is_on && piece > 0) {
+            canvas.line(pts[k - 1] + dir * s, pts[k - 1] + dir * (s + piece), colour, kLineThickness);
           }
+          s += piece;
+          pos = std::fmod(pos + piece, on + off);
         }
       }
-      phase = std::fmod(phase + len, on + off);
     }
+    phase = std::fmod(phase + len, on + off);
   }
-  // Text with its baseline starting at p; align: 0 left, 1 centre, 2 right.
-  void text(const std::string& s, const cv::Point2d& p, double scale, const cv::Scalar& colour,
-            int thickness = 1, int align = 0) {
-    const cv::Size sz = text_size(s, scale, thickness);
-    const double x = p.x - (align == 1 ? sz.width / 2.0 : align == 2 ? sz.width : 0.0);
-    cv::putText(img_, s, cv::Point(cvRound(x - tl_.x), cvRound(p.y - tl_.y)), kFont, scale,
-                colour, thickness, cv::LINE_AA);
-  }
-
- private:
-  cv::Mat img_;
-  cv::Point tl_;
-};
+}
 
 // Text turned 90 degrees counter-clockwise (reading upwards), centred on `centre`; drawn dark on
 // the white image by taking the darker of the two.
@@ -706,7 +674,7 @@ void draw_series(Canvas& c, const ChartLayout& l, const ChartSeries& s, size_t i
   const Pattern pattern = series_pattern(s, i);
   const cv::Rect2d clip = clip_rect(l.plot);
   for (const auto& run : pixel_runs(l, s)) {
-    c.pattern_line(run, colour, pattern, clip);
+    pattern_line(c, run, colour, pattern, clip);
     for (const auto& q : run) {
       if (!clip.contains(q)) continue;
       if (s.markers) {
@@ -723,14 +691,14 @@ void draw_legend(cv::Mat& img, const Plan& p, const LineChart& chart) {
   if (r.empty()) return;
   cv::rectangle(img, r, kBackground, cv::FILLED);
   cv::rectangle(img, r, kFrame, 1);
-  Canvas all(img, cv::Rect(0, 0, img.cols, img.rows));
+  Canvas all(img, cv::Rect(0, 0, img.cols, img.rows), kPixelCentre);
   const int text_h = text_size("Ag", kLegendScale, 1).height;
   for (const auto& item : p.legend_items) {
     const ChartSeries& s = chart.series[item.series];
     const double cy = r.y + item.at.y + p.legend_row_h / 2.0 - 2;
     const cv::Point2d a(r.x + item.at.x, cy), b(r.x + item.at.x + kSwatch, cy);
     const cv::Scalar colour = scalar(chart_series_colour(item.series));
-    all.pattern_line({a, b}, colour, series_pattern(s, item.series),
+    pattern_line(all, {a, b}, colour, series_pattern(s, item.series),
                      cv::Rect2d(0, 0, img.cols, img.rows));
     if (s.markers) all.disc((a + b) / 2, kMarkerRadius, colour);
     all.text(item.text, {b.x + 8, cy + text_h / 2.0}, kLegendScale, kText);
@@ -807,14 +775,14 @@ cv::Mat draw_line_chart(const LineChart& chart, int width_px, int height_px) {
   }
 
   // Reference lines, data, reference labels.
-  Canvas plot(img, r);
+  Canvas plot(img, r, kPixelCentre);
   for (const auto& [y, text] : chart.y_lines) {
     if (!usable(l.x0, y, l.log_y)) continue;
     const int py = l.to_pixel(l.x0, y).y;
     if (py >= r.y && py < r.br().y) cv::line(img, {r.x, py}, {r.br().x - 1, py}, kRefLine, 1);
   }
   for (size_t i = 0; i < chart.series.size(); ++i) draw_series(plot, l, chart.series[i], i);
-  Canvas all(img, cv::Rect(0, 0, img.cols, img.rows));
+  Canvas all(img, cv::Rect(0, 0, img.cols, img.rows), kPixelCentre);
   for (const auto& ref : p.ref_labels) {
     cv::rectangle(img, ref.box, kBackground, cv::FILLED);
     all.text(ref.text, ref.org, kRefScale, kSubText);

@@ -1,5 +1,7 @@
 #include "report/plan_figure.hpp"
 
+#include "report/canvas.hpp"
+
 #include <fmt/format.h>
 #include "core/base/units.hpp"
 
@@ -19,6 +21,17 @@
 namespace pbnbv {
 namespace {
 
+using drawing::Canvas;
+using drawing::kBlack;
+using drawing::kFont;
+using drawing::kFrame;
+using drawing::kOne;
+using drawing::kShift;
+using drawing::kSubText;
+using drawing::kText;
+using drawing::scalar;
+
+
 
 // Layout (pixels).
 constexpr int kWidth = 1500;
@@ -28,17 +41,10 @@ constexpr int kLabelBlock = 26;   // panel labels above the panels
 constexpr int kPanel = 440;       // panels 1 and 2 are kPanel x kPanel
 constexpr int kBottom = 14;
 constexpr int kMapW = 480;        // panel 3: kMapW x kMapW / 2
-constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
 
-// Drawing with sub-pixel precision: figure coordinates (pixel i covers [i, i+1)) to OpenCV's
-// fixed-point coordinates (pixel centres at integers) with kShift fractional bits.
-constexpr int kShift = 4;
-constexpr double kOne = 1 << kShift;
+// Figure coordinates: pixel i covers [i, i+1), so its centre is at i + 0.5.
+constexpr double kPixelCentre = 0.5;
 
-const cv::Scalar kBlack(0, 0, 0);
-const cv::Scalar kText(40, 40, 40);
-const cv::Scalar kSubText(90, 90, 90);
-const cv::Scalar kFrame(150, 150, 150);
 const cv::Scalar kGrid(236, 236, 236);
 const cv::Scalar kSectorLine(120, 120, 120);
 const cv::Scalar kAllowedShade(228, 246, 230);  // light green
@@ -47,87 +53,12 @@ const cv::Scalar kOutsideColour(175, 175, 175);
 const cv::Scalar kUnscoredColour(120, 120, 120);
 const cv::Scalar kExcludedColour(30, 30, 210);
 
-cv::Scalar scalar(const cv::Vec3b& c) { return cv::Scalar(c[0], c[1], c[2]); }
-
 cv::Scalar mix(const cv::Scalar& a, const cv::Scalar& b, double t) {  // (1-t) a + t b
   return cv::Scalar(a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t,
                     a[2] + (b[2] - a[2]) * t);
 }
 
 cv::Scalar darker(const cv::Scalar& c, double f) { return mix(c, kBlack, f); }
-
-// A region of the figure that clips everything drawn into it; takes figure coordinates.
-class Canvas {
- public:
-  Canvas(cv::Mat& figure, const cv::Rect& rect) : img_(figure(rect)), tl_(rect.tl()) {}
-
-  cv::Point fixed(const cv::Point2d& p) const {
-    return cv::Point(cvRound((p.x - tl_.x - 0.5) * kOne), cvRound((p.y - tl_.y - 0.5) * kOne));
-  }
-  void disc(const cv::Point2d& c, double r, const cv::Scalar& colour) {
-    cv::circle(img_, fixed(c), cvRound(r * kOne), colour, cv::FILLED, cv::LINE_AA, kShift);
-  }
-  void ring(const cv::Point2d& c, double r, const cv::Scalar& colour, int thickness = 1) {
-    cv::circle(img_, fixed(c), cvRound(r * kOne), colour, thickness, cv::LINE_AA, kShift);
-  }
-  void line(const cv::Point2d& a, const cv::Point2d& b, const cv::Scalar& colour,
-            int thickness = 1) {
-    cv::line(img_, fixed(a), fixed(b), colour, thickness, cv::LINE_AA, kShift);
-  }
-  void cross(const cv::Point2d& c, double r, const cv::Scalar& colour) {
-    line(c + cv::Point2d(-r, -r), c + cv::Point2d(r, r), colour);
-    line(c + cv::Point2d(-r, r), c + cv::Point2d(r, -r), colour);
-  }
-  void rect(const cv::Point2d& a, const cv::Point2d& b, const cv::Scalar& colour,
-            int thickness = 1) {
-    cv::rectangle(img_, fixed(a), fixed(b), colour, thickness, cv::LINE_AA, kShift);
-  }
-  // Ellipse with semi-axes (a, b) px, the a-axis at angle_deg (image frame, clockwise).
-  void ellipse(const cv::Point2d& c, double a, double b, double angle_deg,
-               const cv::Scalar& colour, int thickness) {
-    const cv::Size axes(std::max(1, cvRound(a * kOne)), std::max(1, cvRound(b * kOne)));
-    cv::ellipse(img_, fixed(c), axes, angle_deg, 0, 360, colour, thickness, cv::LINE_AA, kShift);
-  }
-  void polygon(const std::vector<cv::Point2d>& pts, const cv::Scalar& colour) {
-    std::vector<cv::Point> q;
-    q.reserve(pts.size());
-    for (const auto& p : pts) q.push_back(fixed(p));
-    cv::fillPoly(img_, std::vector<std::vector<cv::Point>>{q}, colour, cv::LINE_AA, kShift);
-  }
-  // Text with its baseline starting at p; align: 0 left, 1 centre, 2 right.
-  void text(const std::string& s, const cv::Point2d& p, double scale, const cv::Scalar& colour,
-            int thickness = 1, int align = 0) {
-    int base = 0;
-    const cv::Size sz = cv::getTextSize(s, kFont, scale, thickness, &base);
-    const double x = p.x - (align == 1 ? sz.width / 2.0 : align == 2 ? sz.width : 0.0);
-    cv::putText(img_, s, cv::Point(cvRound(x - tl_.x), cvRound(p.y - tl_.y)), kFont, scale,
-                colour, thickness, cv::LINE_AA);
-  }
-  // Text centred on p both ways.
-  void text_centred(const std::string& s, const cv::Point2d& p, double scale,
-                    const cv::Scalar& colour, int thickness = 1) {
-    int base = 0;
-    const cv::Size sz = cv::getTextSize(s, kFont, scale, thickness, &base);
-    cv::putText(img_, s,
-                cv::Point(cvRound(p.x - tl_.x - sz.width / 2.0),
-                          cvRound(p.y - tl_.y + sz.height / 2.0)),
-                kFont, scale, colour, thickness, cv::LINE_AA);
-  }
-  // Text centred on p on a filled box.
-  void label(const std::string& s, const cv::Point2d& p, double scale, const cv::Scalar& colour,
-             const cv::Scalar& box) {
-    int base = 0;
-    const cv::Size sz = cv::getTextSize(s, kFont, scale, 1, &base);
-    const cv::Point2d h(sz.width / 2.0 + 3, sz.height / 2.0 + 3);
-    cv::rectangle(img_, fixed(p - h), fixed(p + h), box, cv::FILLED, cv::LINE_8, kShift);
-    text_centred(s, p, scale, colour, 1);
-  }
-  cv::Mat& mat() { return img_; }
-
- private:
-  cv::Mat img_;
-  cv::Point tl_;
-};
 
 // Viridis-like colour for t in [0, 1] (OpenCV's VIRIDIS map).
 cv::Scalar colour_map(double t) {
@@ -359,7 +290,7 @@ void draw_ellipsoids(Canvas& c, const PlanFigureLayout& l, const OrthoView& v,
 
 void draw_ortho_panel(cv::Mat& fig, const PlanFigureLayout& l, const OrthoView& v,
                       const PlanFigure& f, const FRange& range, bool top) {
-  Canvas c(fig, v.rect);
+  Canvas c(fig, v.rect, kPixelCentre);
   const double step = nice_step(2.0 * l.half_width_m);
   if (top) draw_sectors_top(c, l, v, f, false);
   draw_grid(c, l, v, step);
@@ -406,7 +337,7 @@ void draw_map_panel(cv::Mat& fig, const PlanFigureLayout& l, const PlanFigure& f
   const double start_deg = f.sector_start_rad * 180.0 / kPi;
   auto wrap_deg = [](double a) { return a - 360.0 * std::floor(a / 360.0); };
   {
-    Canvas c(fig, r);
+    Canvas c(fig, r, kPixelCentre);
     // Allowed sectors and sector boundaries.
     if (f.beta > 1) {
       for (int s : f.allowed_sectors) {
@@ -456,7 +387,7 @@ void draw_map_panel(cv::Mat& fig, const PlanFigureLayout& l, const PlanFigure& f
               0.42, kSectorLine, sector_background(f, s));
     }
   }
-  Canvas all(fig, cv::Rect(0, 0, fig.cols, fig.rows));
+  Canvas all(fig, cv::Rect(0, 0, fig.cols, fig.rows), kPixelCentre);
   all.rect({double(r.x), double(r.y)}, {double(r.br().x), double(r.br().y)}, kFrame);
   for (int az = 0; az <= 360; az += 90) {
     all.text(std::to_string(az), sphere_map_pixel(l, az, 180) + cv::Point2d(0, 16), 0.4, kSubText,
@@ -601,7 +532,7 @@ cv::Mat draw_plan_figure(const PlanFigure& f) {
   cv::Mat fig(l.size, CV_8UC3, scalar(PlanFigureColours::background()));
   const FRange range = f_range(f);
 
-  Canvas all(fig, cv::Rect(0, 0, fig.cols, fig.rows));
+  Canvas all(fig, cv::Rect(0, 0, fig.cols, fig.rows), kPixelCentre);
   all.text(f.title, {20.0, 30.0}, 0.75, kBlack, 2);
   for (size_t i = 0; i < f.lines.size(); ++i) {
     all.text(f.lines[i], {22.0, 30.0 + kLineStep * (i + 1.0)}, 0.5, kText);

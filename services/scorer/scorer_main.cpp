@@ -40,43 +40,6 @@ constexpr double kInputWaitS = 60.0;   // give up on a map / ellipsoids that nev
 constexpr std::size_t kAnswersKept = 64;
 constexpr std::size_t kCandidatesPerWorker = 16;  // reachability: below this another worker does not pay
 
-// The bounding box B of a voxel map message.
-Eigen::AlignedBox3d bbox_of(const voxel_set_t& map) {
-  return Eigen::AlignedBox3d(Eigen::Vector3d(map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]),
-                             Eigen::Vector3d(map.bbox_max_m[0], map.bbox_max_m[1], map.bbox_max_m[2]));
-}
-
-// The request as the core planner takes it, validated; throws naming the bad field.
-PlanInput plan_input(const plan_request_t& r) {
-  PlanInput in;
-  for (std::size_t i = 0; i < r.views_done.size(); ++i) {
-    in.views_done.push_back(bus::from_msg(r.views_done[i], "PLAN_REQUEST views_done[" + std::to_string(i) + "]"));
-  }
-  for (std::size_t i = 0; i < r.excluded.size(); ++i) {
-    in.excluded.push_back(bus::from_msg(r.excluded[i], "PLAN_REQUEST excluded[" + std::to_string(i) + "]"));
-  }
-  bus::require_range(r.num_candidates, kCandidates.min, kCandidates.max, "PLAN_REQUEST num_candidates");
-  bus::require_range(r.num_parallels, kParallels.min, kParallels.max, "PLAN_REQUEST num_parallels");
-  bus::require_range(r.num_sectors, kSectors.min, kSectors.max, "PLAN_REQUEST num_sectors");
-  bus::require_range(r.working_distance_m, kWorkingDistance.min, kWorkingDistance.max, "PLAN_REQUEST working_distance_m");
-  bus::require_range(r.num_alternatives, kAlternatives.min, kAlternatives.max, "PLAN_REQUEST num_alternatives");
-  bus::require_range(r.stop_fraction, kStopFraction.min, kStopFraction.max, "PLAN_REQUEST stop_fraction");
-  if (!std::isnan(r.first_quality)) bus::require_range(r.first_quality, -1e12, 1e12, "PLAN_REQUEST first_quality");
-  if (r.num_parallels > r.num_candidates) throw std::invalid_argument("PLAN_REQUEST num_parallels exceeds num_candidates");
-  in.candidates.num_views = r.num_candidates;
-  in.candidates.num_parallels = r.num_parallels;
-  in.candidates.area = r.full_sphere ? CandidateArea::kFullSphere : CandidateArea::kHemisphere;
-  in.candidates.working_distance_m = r.working_distance_m;
-  in.beta = r.num_sectors;
-  in.num_alternatives = r.num_alternatives;
-  in.stop_fraction = r.stop_fraction;
-  in.when_done = r.spread_when_done ? WhenDone::kSpread : WhenDone::kStop;
-  in.first_quality = r.first_quality;
-  in.camera = CameraIntrinsics{r.width_px, r.height_px, r.fx, r.fy, r.cx, r.cy};
-  in.camera.validate();
-  return in;
-}
-
 class ScorerService {
  public:
   ScorerService(bus::Bus& bus, const RigModel& rig) : bus_(bus), rig_(rig) {
@@ -148,7 +111,7 @@ class ScorerService {
     } catch (const std::invalid_argument&) {
     }
     if (!planner || !uses_view_scorer(*planner)) {
-      view_plan_t out = empty_answer(r);
+      view_plan_t out = bus::empty_answer(r);
       out.outcome = view_plan_t::kFailed;
       out.reason = "planner '" + r.planner + "' is not served by pbnbv-scorer (pbnbv, raycast, random)";
       publish(out);
@@ -158,7 +121,7 @@ class ScorerService {
     p.request = r;
     p.planner = *planner;
     try {
-      p.input = plan_input(r);
+      p.input = bus::plan_input_from_msg(r);
       if (r.check_reachability) {
         bus::to_vector6(std::vector<double>(r.joint_position_rad, r.joint_position_rad + 6), "PLAN_REQUEST joint_position_rad");
         bus::require_range(r.turntable_angle_rad, -1e3, 1e3, "PLAN_REQUEST turntable_angle_rad");
@@ -174,7 +137,7 @@ class ScorerService {
         }
       }
     } catch (const std::exception& e) {
-      view_plan_t out = empty_answer(r);
+      view_plan_t out = bus::empty_answer(r);
       out.outcome = view_plan_t::kFailed;
       out.reason = std::string("bad request: ") + e.what();
       publish(out);
@@ -191,7 +154,7 @@ class ScorerService {
   // (one MuJoCo checker each: a checker is not thread-safe).
   std::vector<bool> reachability(const plan_request_t& r, const voxel_set_t& map) {
     const auto t0 = std::chrono::steady_clock::now();
-    const Eigen::AlignedBox3d box = bbox_of(map);
+    const Eigen::AlignedBox3d box = bus::bbox_of(map);
     const std::vector<Pose> cands = candidate_views(box, pending_->input.candidates);
     // B often stops growing late in a scan: the same candidate set, the same answer. (The motion
     // executor checks the chosen view again, with the rig's actual state.)
@@ -226,28 +189,15 @@ class ScorerService {
     return ok;
   }
 
-  // The VOXEL_MAP's cells as the ray caster reads them; throws naming the message's bad field.
-  static VoxelGrid grid_of(const voxel_set_t& map) {
-    VoxelGrid g;
-    g.origin_m = Eigen::Vector3d(map.bbox_min_m[0], map.bbox_min_m[1], map.bbox_min_m[2]);
-    g.dims = Eigen::Vector3i(map.dims[0], map.dims[1], map.dims[2]);
-    g.resolution_m = map.resolution_m;
-    g.cells.resize(map.cells.size());
-    for (std::size_t i = 0; i < map.cells.size(); ++i) g.cells[i] = static_cast<VoxelState>(static_cast<uint8_t>(map.cells[i]));
-    g.validate("VOXEL_MAP of view " + std::to_string(map.iteration));
-    if (g.empty()) throw std::invalid_argument("VOXEL_MAP of view " + std::to_string(map.iteration) + " carries no cells (dims 0)");
-    return g;
-  }
-
   void answer(const voxel_set_t& map, const ellipsoid_set_t* ell) {
     Pending p = std::move(*pending_);
     pending_.reset();
     const plan_request_t& r = p.request;
     const double wait_s = bus::now_s() - p.received_s;
-    view_plan_t out = empty_answer(r);
+    view_plan_t out = bus::empty_answer(r);
     PlanResult result;
     try {
-      p.input.bbox = bbox_of(map);
+      p.input.bbox = bus::bbox_of(map);
       for (std::size_t i = 0; ell && i < ell->ellipsoids.size(); ++i) {
         p.input.ellipsoids.push_back(bus::from_msg(ell->ellipsoids[i], "ELLIPSOIDS ellipsoids[" + std::to_string(i) + "]"));
       }
@@ -260,13 +210,13 @@ class ScorerService {
       }
       const double t0 = bus::now_s();
       if (p.planner == PlannerKind::kRaycast) {
-        result = plan_raycast(p.input, grid_of(map), p.raycast);
+        result = plan_raycast(p.input, bus::grid_from_msg(map), p.raycast);
       } else if (p.planner == PlannerKind::kRandom) {
         result = plan_random(p.input, static_cast<uint64_t>(r.seed));
       } else {
         result = plan_pbnbv(p.input);
       }
-      fill(out, result);
+      bus::fill_answer(out, result);
       out.reachability_s = p.reachability_s;
       out.wait_s = wait_s;
       out.plan_s = bus::now_s() - t0 + p.reachability_s;
@@ -290,55 +240,8 @@ class ScorerService {
     }
   }
 
-  void fill(view_plan_t& out, const PlanResult& res) const {
-    out.outcome = res.outcome == PlanResult::Outcome::kView ? view_plan_t::kView
-                  : res.outcome == PlanResult::Outcome::kStop ? view_plan_t::kStop : view_plan_t::kFailed;
-    out.reason = res.reason;
-    if (const ViewScore* s = res.chosen_score()) {
-      out.object_T_camera = bus::to_msg(res.candidates[res.chosen]);
-      out.view_quality = s->quality;
-      out.frontier_area_px = s->frontier_sum;
-      out.occupied_area_px = s->occupied_sum;
-    }
-    out.first_quality = res.first_quality;
-    out.partition = res.partition;
-    out.allowed_sectors = res.allowed_sectors;
-    out.num_allowed_sectors = static_cast<int32_t>(out.allowed_sectors.size());
-    out.partition_fallback = res.partition_fallback;
-    for (int k = 0; k < 3; ++k) out.sphere_centre_m[k] = res.centre[k];
-    out.sphere_radius_m = res.radius_m;
-    out.num_candidates = static_cast<int32_t>(res.candidates.size());
-    out.num_unreachable = res.num_unreachable;
-    out.num_excluded = res.num_excluded;
-    out.num_scored = res.num_scored;
-    out.num_frontier_ellipsoids = res.num_frontier_ellipsoids;
-    out.num_occupied_ellipsoids = res.num_occupied_ellipsoids;
-    out.candidates_s = res.candidates_s;
-    out.scoring_s = res.scoring_s;
-    for (int a : res.alternatives) {
-      out.alternatives.push_back(bus::to_msg(res.candidates[a]));
-      out.alternative_quality.push_back(res.scores[a].quality);
-    }
-    out.num_alternatives = static_cast<int32_t>(out.alternatives.size());
-  }
-
-  static view_plan_t empty_answer(const plan_request_t& r) {
-    view_plan_t out{};
-    out.scan_id = r.scan_id;
-    out.iteration = r.iteration;
-    out.request_id = r.request_id;
-    out.planner = r.planner;
-    out.object_T_camera = bus::to_msg(Pose::Identity());
-    out.view_quality = 0;
-    out.first_quality = r.first_quality;
-    out.partition = -1;
-    out.num_allowed_sectors = 0;
-    out.num_alternatives = 0;
-    return out;
-  }
-
   void fail(const std::string& why) {
-    view_plan_t out = empty_answer(pending_->request);
+    view_plan_t out = bus::empty_answer(pending_->request);
     pending_.reset();
     out.outcome = view_plan_t::kFailed;
     out.reason = why;
