@@ -105,6 +105,11 @@ int main(int argc, char** argv) {
   cli::add(app, kTurntableErrorDeg, &turntable_error_deg);
   cli::add(app, kJointErrorDeg, &joint_error_deg);
   cli::add(app, kErrorSeed, &error_seed);
+  std::string scope;
+  cli::add_text(app, "scan", &scope,
+                "play the rig of this scan only: commands and triggers of other scans are ignored and counted "
+                "(default: obey every command, as a real driver does)",
+                "ID");
   std::string truth_path;
   cli::add_text(app, "truth-out", &truth_path,
                 "append each frame's true camera pose to this file (JSON lines; evaluation only)", "PATH");
@@ -149,6 +154,9 @@ int main(int argc, char** argv) {
              std::to_string(k.width) + "x" + std::to_string(k.height) + " on " + egl.description());
 
     bus::Bus bus("twin");
+    bus.serve_scan(scope);
+    // Statuses echo the scan of the last command accepted, frames the scan of their trigger.
+    std::string arm_scan = scope, turntable_scan = scope;
     // Pacing reference: rig time runs at `speed` x wall time from here (reset after a render,
     // which stops the clock of the rig while it runs).
     double wall0 = 0, sim0 = 0;
@@ -171,6 +179,7 @@ int main(int argc, char** argv) {
           throw std::invalid_argument("unknown mode " + std::to_string(c.mode));
         }
         arm_fault.clear();
+        arm_scan = c.scan_id;
       } catch (const std::exception& e) {
         arm_fault.set("rejected ARM_COMMAND seq " + std::to_string(c.seq) + ": " + e.what(), c.seq);
         throw std::invalid_argument(arm_fault.fault);
@@ -180,6 +189,7 @@ int main(int argc, char** argv) {
       try {
         sim.command_turntable(c.angle_rad, c.speed_scale, c.seq);
         turntable_fault.clear();
+        turntable_scan = c.scan_id;
       } catch (const std::exception& e) {
         turntable_fault.set("rejected TURNTABLE_COMMAND seq " + std::to_string(c.seq) + ": " + e.what(), c.seq);
         throw std::invalid_argument(turntable_fault.fault);
@@ -194,6 +204,7 @@ int main(int argc, char** argv) {
       f.utime = rig_utime(epoch, sim.time_s());
       f.seq = frame_seq++;
       f.trigger_seq = t.seq;
+      f.scan_id = t.scan_id;
       f.width = image.width;
       f.height = image.height;
       f.fx = k.fx;
@@ -238,6 +249,7 @@ int main(int argc, char** argv) {
         arm_status_t s;
         s.utime = utime;
         s.seq = status_seq;
+        s.scan_id = arm_scan;
         s.num_joints = 6;
         s.joint_names = rig.joint_names;
         s.joint_position_rad = bus::to_std(sim.arm_position_reported());
@@ -255,6 +267,7 @@ int main(int argc, char** argv) {
           turntable_status_t t;
           t.utime = utime;
           t.seq = status_seq;
+          t.scan_id = turntable_scan;
           t.angle_rad = sim.turntable_angle_reported();
           t.velocity_rad_s = sim.turntable_velocity();
           t.angle_commanded_rad = sim.turntable().target[0] + errors.turntable_offset_rad;

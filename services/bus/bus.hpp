@@ -10,12 +10,52 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+#include <utility>
 
 #include "bus/channels.hpp"
 #include "core/base/log.hpp"
 #include "core/base/signals.hpp"
 
+namespace pbnbv {
+class arm_status_t;
+class turntable_status_t;
+class depth_frame_t;
+class heartbeat_t;
+}  // namespace pbnbv
+
 namespace pbnbv::bus {
+
+// Messages that carry the scan they belong to (every pipeline message, and the rig's commands,
+// statuses and frames).
+template <class T, class = void>
+struct HasScanId : std::false_type {};
+template <class T>
+struct HasScanId<T, std::void_t<decltype(std::declval<const T&>().scan_id)>> : std::true_type {};
+
+// Messages whose sender may serve no particular scan, and then leaves scan_id empty: such a
+// message is for every scan. A rig driver's statuses and frames (a real driver serves one scan at
+// a time and need not echo the id), and heartbeats (a service not started for one scan).
+template <class T>
+struct MayBeUnscoped : std::false_type {};
+template <>
+struct MayBeUnscoped<arm_status_t> : std::true_type {};
+template <>
+struct MayBeUnscoped<turntable_status_t> : std::true_type {};
+template <>
+struct MayBeUnscoped<depth_frame_t> : std::true_type {};
+template <>
+struct MayBeUnscoped<heartbeat_t> : std::true_type {};
+
+// Whether a message of `scan_id` is for a process serving `scope` ("": every scan); an empty
+// scan_id is for every scan when the message MayBeUnscoped.
+inline bool in_scope(const std::string& scope, const std::string& scan_id, bool may_be_unscoped) {
+  return scope.empty() || scan_id == scope || (may_be_unscoped && scan_id.empty());
+}
+
+// The LCM URL every process uses: LCM_DEFAULT_URL if set, else the default multicast group on
+// this host (ttl=0) with an 8 MB receive buffer (lcm-logger is given the same).
+std::string lcm_url();
 
 // Microseconds since the epoch (wall clock).
 int64_t now_utime();
@@ -32,9 +72,20 @@ class Bus {
   // Publishes a last heartbeat (state "stopped") so the final counts are seen.
   ~Bus();
 
+  // Serves the scan `scan_id` only (set once, at start; "" = every scan): a message of another
+  // scan is counted as ignored and dropped before any handler sees it.
+  void serve_scan(const std::string& scan_id) {
+    scope_ = scan_id;
+    if (scan_id_.empty()) scan_id_ = scan_id;  // the heartbeat names the scan from the start
+  }
+  const std::string& scope() const { return scope_; }
+
+
   // Subscribes to `channel`; each message is decoded as T and passed to `handler`. A message
   // that does not decode, or whose handler throws std::exception (its validation failing),
-  // is logged with the channel and the reason, counted as rejected, and dropped.
+  // is counted as rejected and dropped; a message of another scan (serve_scan) is counted as
+  // ignored and dropped. Both are logged with the channel and the reason, at most one line per
+  // channel and kind every 10 s (then with the count of the lines left out).
   template <class T>
   void subscribe(const std::string& channel, std::function<void(const T&)> handler) {
     // Owned by the LCM connection for the process's lifetime (subscriptions are never removed).
@@ -62,6 +113,7 @@ class Bus {
   void note_error(const std::string& what);  // logs and remembers as last_error
   int64_t handled() const { return handled_; }
   int64_t rejected() const { return rejected_; }
+  int64_t ignored() const { return ignored_; }
   lcm::LCM& raw() { return lcm_; }
 
  private:
@@ -83,6 +135,12 @@ class Bus {
                                  " bytes) does not decode as " + T::getTypeName());
         return;
       }
+      if constexpr (HasScanId<T>::value) {
+        if (!in_scope(d->bus->scope_, msg.scan_id, MayBeUnscoped<T>::value)) {
+          d->bus->ignore(chan, msg.scan_id);
+          return;
+        }
+      }
       try {
         d->handler(msg);
         ++d->bus->handled_;
@@ -92,7 +150,9 @@ class Bus {
     }
   };
   void reject(const std::string& channel, const std::string& why);
+  void ignore(const std::string& channel, const std::string& scan_id);
   void heartbeat(bool force = false);
+  void report_suppressed(bool all);
 
   lcm::LCM lcm_;
   std::string service_;
@@ -102,6 +162,9 @@ class Bus {
   std::string last_error_;
   int64_t handled_ = 0;
   int64_t rejected_ = 0;
+  int64_t ignored_ = 0;
+  std::string scope_;
+  LogLimiter log_limit_;
   double next_heartbeat_s_ = 0;
 };
 

@@ -10,7 +10,8 @@
 namespace pbnbv::bus {
 
 // Runs a service: parses argv with `app` (whose options the caller declared, bound to its own
-// variables: a bad option, --help or --version ends the run before the bus is touched),
+// variables, plus --scan ID: serve that scan only; a bad option, --help or --version ends the
+// run before the bus is touched),
 // connects to the bus, builds the service with `make` (which subscribes and returns the periodic
 // tick, or nullptr), then handles messages (waiting at most `spin_ms` at a time) and ticks until
 // SIGINT or SIGTERM. Returns the process exit code: 0 on a clean stop or after --help /

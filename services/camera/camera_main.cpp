@@ -56,6 +56,7 @@ class CameraService {
       return;
     }
     sequencer_.on_request(bus::from_msg(m));  // a malformed request throws: rejected by the bus
+    scan_ = m.scan_id;  // the scan the triggers belong to from now on
   }
 
   void on_frame(const depth_frame_t& f) {
@@ -77,6 +78,7 @@ class CameraService {
       depth_trigger_t t;
       t.utime = bus::now_utime();
       t.seq = *step.trigger_seq;
+      t.scan_id = scan_;
       bus_.publish(channels::kDepthTrigger, t);
     }
     if (step.result) {
@@ -95,6 +97,7 @@ class CameraService {
   bus::Bus& bus_;
   const RigModel& rig_;
   CaptureSequencer sequencer_;
+  std::string scan_;  // of the request being captured
   bus::ReplyCache<std::pair<std::string, int64_t>, point_cloud_t> clouds_{kCloudsKept};
 };
 

@@ -71,38 +71,41 @@ void send(bus::Bus& bus, const std::vector<ScanOutput>& outputs) {
 }
 
 // Subscribes to an answer channel: messages of the scan are checked and converted (a bad one is
-// rejected by the bus, named) and queued for the sequencer; those of another scan are ignored.
+// rejected by the bus, named) and queued for the sequencer; the bus ignores and counts those of
+// another scan.
 template <class Msg>
-void take(bus::Bus& bus, const char* channel, const std::string& scan_id, std::vector<ScanEvent>& inbox) {
-  bus.subscribe<Msg>(channel, [scan_id, &inbox](const Msg& m) {
-    if (m.scan_id == scan_id) inbox.emplace_back(bus::from_msg(m));
-  });
+void take(bus::Bus& bus, const char* channel, std::vector<ScanEvent>& inbox) {
+  bus.subscribe<Msg>(channel, [&inbox](const Msg& m) { inbox.emplace_back(bus::from_msg(m)); });
 }
 
 // Runs the scan to its end; returns the process exit code.
 int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out) {
   ScanSequencer scan(settings, out);
-  const std::string& scan_id = settings.scan_id;
+  bus.serve_scan(settings.scan_id);
   // Handlers only check and convert (a bad message is rejected by the bus); the sequencer
   // takes the events after each spin, so its own errors are not mistaken for bad messages.
   std::vector<ScanEvent> inbox;
-  take<move_result_t>(bus, channels::kMoveResult, scan_id, inbox);
-  take<point_cloud_t>(bus, channels::kCloud, scan_id, inbox);
-  take<registered_cloud_t>(bus, channels::kRegisteredCloud, scan_id, inbox);
-  take<voxel_set_t>(bus, channels::kVoxelMap, scan_id, inbox);
-  take<ellipsoid_set_t>(bus, channels::kEllipsoids, scan_id, inbox);
-  take<view_plan_t>(bus, channels::kViewPlan, scan_id, inbox);
+  take<move_result_t>(bus, channels::kMoveResult, inbox);
+  take<point_cloud_t>(bus, channels::kCloud, inbox);
+  take<registered_cloud_t>(bus, channels::kRegisteredCloud, inbox);
+  take<voxel_set_t>(bus, channels::kVoxelMap, inbox);
+  take<ellipsoid_set_t>(bus, channels::kEllipsoids, inbox);
+  take<view_plan_t>(bus, channels::kViewPlan, inbox);
   bus.subscribe<arm_status_t>(channels::kArmStatus, [&](const arm_status_t&) { inbox.emplace_back(Heard{"ARM_STATUS"}); });
   bus.subscribe<turntable_status_t>(channels::kTurntableStatus,
                                     [&](const turntable_status_t&) { inbox.emplace_back(Heard{"TURNTABLE_STATUS"}); });
   bus.subscribe<heartbeat_t>(channels::kHeartbeat,
                              [&](const heartbeat_t& h) { inbox.emplace_back(Heard{"heartbeat of " + h.service}); });
 
+  const pid_t parent = ::getppid();
   scan.start(bus::now_s());
   while (!scan.finished()) {
     send(bus, scan.take_outputs());
     if (stop_requested()) {
-      scan.stop(bus::now_s());
+      // SIGTERM from the kernel when the launcher died (PR_SET_PDEATHSIG): say so.
+      const bool orphaned = ::getppid() != parent;
+      scan.stop(bus::now_s(), orphaned ? "stopped: the launcher (pid " + std::to_string(parent) + ") died"
+                                       : "stopped by the user");
       break;
     }
     bus.spin_once(kSpinMs);

@@ -132,8 +132,11 @@ void CommandLine::declare_scan() {
   cli::add(c, kDepthMin, &s.depth_range.min_m)->group(kGroupCamera);
   cli::add(c, kDepthMax, &s.depth_range.max_m)->group(kGroupCamera);
 
-  cli::add_text(c, "out", &scan_.out, "output folder [out/<object>-<date-time>]", "DIR")->group(kGroupOutput);
+  cli::add_text(c, "out", &scan_.out, "output folder [out/<object>-<date-time>-<4 digits of the scan id>]", "DIR")->group(kGroupOutput);
   cli::add_flag(c, "no-log", &scan_pending_.no_log, "do not record scan.lcmlog")->group(kGroupOutput);
+  cli::add_flag(c, "overwrite", &scan_.overwrite,
+                "delete what --out holds before scanning (a folder that is not empty is refused otherwise)")
+      ->group(kGroupOutput);
   cli::add_settings_file(c)->group(kGroupOutput);
 }
 

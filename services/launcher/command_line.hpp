@@ -38,7 +38,8 @@ struct ScanOptions {
   double joint_error_deg = kJointErrorDeg.value;
   int64_t error_seed = kErrorSeed.value;
   bool record_log = true;        // not --no-log
-  std::string out;               // empty: out/<object>-<date-time>
+  std::string out;               // empty: out/<object>-<date-time>-<last 4 digits of the scan id>
+  bool overwrite = false;        // --overwrite: empty a non-empty --out first
 };
 
 // The paper's three ablations: which PB-NBV parameter varies.

@@ -9,6 +9,8 @@
 #include <iostream>
 #include <thread>
 
+#include "bus/bus.hpp"
+#include "bus/log_audit.hpp"
 #include "core/base/format.hpp"
 #include "core/base/signals.hpp"
 #include "core/geometry/mesh.hpp"
@@ -35,6 +37,98 @@ std::string timestamp() {
   return b;
 }
 
+// A scan's folder: created if missing; one that holds anything is refused (a new scan would mix
+// its files with the old run's) unless `overwrite`, which empties it first.
+void prepare_out(const fs::path& out, bool overwrite) {
+  if (fs::exists(out) && !fs::is_directory(out)) {
+    throw std::invalid_argument("--out " + out.string() + " is a file, not a folder");
+  }
+  if (fs::exists(out) && !fs::is_empty(out)) {
+    if (!overwrite) {
+      std::string some;
+      int n = 0;
+      for (const auto& e : fs::directory_iterator(out)) {
+        if (n++ < 4) some += (some.empty() ? "" : ", ") + e.path().filename().string();
+      }
+      throw std::invalid_argument("--out " + out.string() + " is not empty (" + some + (n > 4 ? ", ..." : "") +
+                                  "): give a new folder, or --overwrite to delete what it holds");
+    }
+    for (const auto& e : fs::directory_iterator(out)) fs::remove_all(e.path());
+  }
+  fs::create_directories(out / "logs");
+}
+
+// processes.json: the launcher and every process it started, with PIDs (written at start, so
+// what runs can be found and stopped even if the launcher is gone) and, once stopped, how each
+// ended (exit_code: exit status, or 128 + signal; null while running).
+nlohmann::json processes_json(const std::string& scan_id, const std::vector<process::Child>& children) {
+  nlohmann::json procs = nlohmann::json::array();
+  for (const auto& c : children) {
+    procs.push_back({{"name", c.name},
+                     {"pid", c.pid},
+                     {"argv", c.argv},
+                     {"log", c.log_path},
+                     {"running", c.running},
+                     {"exit_code", c.running || c.pid < 0 ? nlohmann::json(nullptr) : nlohmann::json(c.exit_code)}});
+  }
+  return {{"scan_id", scan_id}, {"launcher_pid", static_cast<int>(::getpid())}, {"processes", procs}};
+}
+
+// How a process ended, for people: "exit status 3", "killed by signal 9 (SIGKILL)".
+std::string how_it_ended(int exit_code) {
+  if (exit_code > 128) {
+    const int sig = exit_code - 128;
+    const char* name = sigabbrev_np(sig);
+    return "killed by signal " + std::to_string(sig) + (name ? std::string(" (SIG") + name + ")" : "");
+  }
+  return "exit status " + std::to_string(exit_code);
+}
+
+// scan.json always ends in a final state: when the coordinator could not write it (it died, or
+// was stopped because another process died), the launcher does, naming the cause.
+void finish_record(const fs::path& out, const std::string& state, const std::string& cause) {
+  const fs::path path = out / "scan.json";
+  nlohmann::json scan = fs::exists(path) ? read_json(path.string()) : nlohmann::json::object();
+  nlohmann::json& status = scan["status"];
+  status["state"] = state;
+  status["message"] = cause;
+  write_json_atomic(scan, path.string());
+}
+
+// Says whether scan.lcmlog holds every DEPTH_FRAME, CLOUD, REGISTERED_CLOUD and VOXEL_MAP of the
+// views scan.json recorded.
+void audit_log(const fs::path& out, const std::string& scan_id) {
+  try {
+    const bus::LogContents log = bus::read_scan_log((out / "scan.lcmlog").string(), scan_id);
+    const nlohmann::json scan = read_json((out / "scan.json").string());
+    const nlohmann::json views = scan.value("views", nlohmann::json::array());
+    const std::vector<std::string> missing = bus::missing_from_log(log, views);
+    if (missing.empty()) {
+      std::cout << "scan.lcmlog: " << log.events << " messages, every depth frame, cloud, registered cloud and map of the "
+                << views.size() << " views" << std::endl;
+      return;
+    }
+    std::string list;
+    for (std::size_t i = 0; i < missing.size() && i < 8; ++i) list += "\n    " + missing[i];
+    std::cerr << "warning: scan.lcmlog lacks " << missing.size() << " of the scan's messages (lost by lcm-logger):" << list
+              << (missing.size() > 8 ? "\n    ..." : "") << std::endl;
+  } catch (const std::exception& e) {
+    std::cerr << "warning: scan.lcmlog not checked: " << e.what() << std::endl;
+  }
+}
+
+// The kernel's cap on a socket's receive buffer: LCM asks for 8 MB (a depth frame is 1.8 MB of
+// UDP fragments); a smaller cap loses fragments under load.
+void warn_small_receive_buffer() {
+  std::ifstream in("/proc/sys/net/core/rmem_max");
+  long bytes = 0;
+  if (!(in >> bytes) || bytes >= 8 * 1024 * 1024) return;
+  std::cerr << "warning: the kernel caps UDP receive buffers at " << bytes / 1024
+            << " kB (net.core.rmem_max); depth frames may be lost and re-requested. As root: "
+               "sysctl -w net.core.rmem_max=67108864 (README, 'Networking')"
+            << std::endl;
+}
+
 }  // namespace
 
 int run_scan(const ScanOptions& o, const fs::path& bin) {
@@ -44,14 +138,18 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
   TriangleMesh& mesh = object.mesh;
   s.normalisation = normalise_mesh(mesh, o.size_m, o.up.value_or(object.up));
   s.normalisation.source_path = object.source;
+  check_object_limits(mesh, s.normalisation, "the object '" + object.source + "'", true);
   s.object_name = object_name;
-  const fs::path out = fs::absolute(o.out.empty() ? "out/" + object_name + "-" + timestamp() : o.out);
+  s.scan_id = new_scan_id(object_name);
+  // By default a new folder named after the object, the time and the scan id's last 4 digits
+  // (two scans started in the same second do not share it).
+  const fs::path out = fs::absolute(
+      o.out.empty() ? "out/" + object_name + "-" + timestamp() + "-" + s.scan_id.substr(s.scan_id.size() - 4) : o.out);
 
   // The object rests on the turntable (arm rig) or floats at the origin (free rig).
   place_object(s);
-  s.scan_id = object_name + "-" + timestamp();
 
-  fs::create_directories(out / "logs");
+  prepare_out(out, o.overwrite);
   const std::string stl = (out / "object.stl").string();
   write_stl_binary(mesh, stl);
   write_obj(mesh, (out / "object.obj").string());
@@ -60,18 +158,25 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
   std::cout << "pbnbv scan: " << object_name << " (" << s.normalisation.num_triangles << " triangles, "
             << s.normalisation.extent_m.x() << " x " << s.normalisation.extent_m.y() << " x "
             << s.normalisation.extent_m.z() << " m) on the " << to_string(s.rig) << " rig, " << s.views
-            << " " << name_of(s.planner) << " views -> " << out.string() << std::endl;
+            << " " << name_of(s.planner) << " views -> " << out.string() << " (scan " << s.scan_id << ")" << std::endl;
+  warn_small_receive_buffer();
 
   std::vector<process::Child> children;
+  // Every process serves this scan only (--scan): other scans on the same bus are ignored.
   auto add = [&](const std::string& name, std::vector<std::string> argv, bool progress = false) {
     process::Child c;
     c.name = name;
     c.argv = std::move(argv);
+    if (name != "lcm-logger" && name != "coordinator") c.argv.insert(c.argv.end(), {"--scan", s.scan_id});
+    if (name == "lcm-logger" || name == "coordinator") c.death_signal = SIGTERM;  // they write on the way out
     c.log_path = (out / "logs" / (name + ".log")).string();
     c.stdout_to_terminal = progress;
     children.push_back(std::move(c));
   };
-  if (o.record_log) add("lcm-logger", {"/usr/bin/lcm-logger", "-q", "-f", (out / "scan.lcmlog").string()});
+  // The logger listens with the services' receive buffer (bus::lcm_url()).
+  if (o.record_log) {
+    add("lcm-logger", {"/usr/bin/lcm-logger", "-q", "--lcm-url=" + bus::lcm_url(), "-f", (out / "scan.lcmlog").string()});
+  }
   add("twin", {(bin / "pbnbv-twin").string(), "--rig", to_string(s.rig), "--mesh", stl,
                "--object-z", exact(s.object_z_m), "--model-out", (out / "twin_model.xml").string(),
                "--width", std::to_string(s.camera.width), "--height", std::to_string(s.camera.height),
@@ -103,7 +208,9 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
     process::stop_all(children, 5.0);
     throw;
   }
+  write_json_atomic(processes_json(s.scan_id, children), (out / "processes.json").string());
   process::Child* coordinator = &children.back();
+  std::string cause;  // why the scan ended early, when the coordinator could not say
   int code = 0;
   bool done = false;
   while (!done) {
@@ -123,9 +230,10 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
         code = c->exit_code;
         done = true;
       } else if (!done) {
-        std::cerr << "error: " << c->name << " stopped unexpectedly (exit status " << c->exit_code
-                  << "); the end of " << c->log_path << ":\n" << process::tail_lines(c->log_path, 8)
-                  << "stopping every process" << std::endl;
+        cause = c->name + " stopped unexpectedly (" + how_it_ended(c->exit_code) + "); see logs/" + c->name + ".log";
+        std::cerr << "error: " << c->name << " stopped unexpectedly (" << how_it_ended(c->exit_code) << "); the end of "
+                  << c->log_path << ":\n" << process::tail_lines(c->log_path, 8) << "stopping every process"
+                  << std::endl;
         code = 1;
         done = true;
       }
@@ -134,14 +242,18 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
   }
   process::stop_all(children, 5.0);
   // How every process ended (0 = clean exit), for the user and for the tests.
-  nlohmann::json procs = nlohmann::json::array();
-  for (const auto& c : children) procs.push_back({{"name", c.name}, {"exit_code", c.exit_code}});
-  write_json_atomic(procs, (out / "processes.json").string());
+  write_json_atomic(processes_json(s.scan_id, children), (out / "processes.json").string());
+  if (!cause.empty()) {
+    finish_record(out, "failed", cause);
+  } else if (code != 0 && code != 1 && code != 130) {  // the coordinator itself died
+    finish_record(out, "failed", "the coordinator stopped unexpectedly (" + how_it_ended(code) + "); see logs/coordinator.log");
+  }
   for (const auto& c : children) {
     if (c.exit_code != 0 && code == 0) {
       std::cerr << "warning: " << c.name << " exited with status " << c.exit_code << " (log: " << c.log_path << ")" << std::endl;
     }
   }
+  if (o.record_log && fs::exists(out / "scan.json")) audit_log(out, s.scan_id);
   if (code == 0) {
     // Against the ground truth the twin rendered: coverage after every view.
     try {

@@ -60,6 +60,7 @@ class MotionService {
       answer(std::move(result), true);
       throw;  // counted and logged by the bus as a rejection
     }
+    scan_ = m.scan_id;  // the scan the rig's commands belong to from now on
     apply(sequencer_.on_request(request, bus::now_s()));
   }
 
@@ -69,11 +70,13 @@ class MotionService {
     if (step.arm_command) {
       arm_command_t a = bus::to_msg(*step.arm_command);
       a.utime = bus::now_utime();
+      a.scan_id = scan_;
       bus_.publish(channels::kArmCommand, a);
     }
     if (step.turntable_command) {
       turntable_command_t t = bus::to_msg(*step.turntable_command);
       t.utime = bus::now_utime();
+      t.scan_id = scan_;
       bus_.publish(channels::kTurntableCommand, t);
     }
     if (step.result) {
@@ -98,6 +101,7 @@ class MotionService {
   bus::Bus& bus_;
   const RigModel& rig_;
   MotionSequencer sequencer_;
+  std::string scan_;  // of the request being executed
   bus::ReplyCache<std::pair<std::string, int64_t>, move_result_t> results_{kResultsKept};
 };
 

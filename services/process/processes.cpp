@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -24,9 +25,12 @@ void start(Child& child) {
     log_fd = ::open(child.log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (log_fd < 0) throw std::runtime_error("cannot open log " + child.log_path + ": " + std::strerror(errno));
   }
+  const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
   if (pid < 0) throw std::runtime_error("cannot start " + child.name + ": " + std::strerror(errno));
   if (pid == 0) {
+    // Die with the parent; if it died before this line, it will not tell us: leave at once.
+    if (::prctl(PR_SET_PDEATHSIG, child.death_signal) != 0 || ::getppid() != parent) ::_exit(126);
     if (log_fd >= 0) {
       if (!child.stdout_to_terminal) ::dup2(log_fd, STDOUT_FILENO);
       ::dup2(log_fd, STDERR_FILENO);

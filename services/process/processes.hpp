@@ -12,12 +12,17 @@ struct Child {
   std::vector<std::string> argv;
   std::string log_path;   // stdout+stderr go here ("" = inherit)
   bool stdout_to_terminal = false;  // keep stdout on the terminal (progress), stderr to the log
+  // What the child gets when the process that started it dies, however it dies (SIGKILL
+  // included: the kernel sends it, PR_SET_PDEATHSIG): SIGKILL for what has nothing to save,
+  // SIGTERM for what writes its record on the way out (the coordinator, lcm-logger).
+  int death_signal = 9;
   pid_t pid = -1;
   bool running = false;
   int exit_code = 0;      // valid when !running: exit status, or 128 + signal
 };
 
-// Starts the child; throws std::runtime_error naming it when fork/exec fails.
+// Starts the child; throws std::runtime_error naming it when fork/exec fails. The child dies
+// with the calling process (death_signal).
 void start(Child& child);
 
 // Reaps children that exited (non-blocking); returns the ones that just stopped.

@@ -31,3 +31,34 @@ void log_warn(const std::string& message) { emit("warning: ", message); }
 void log_error(const std::string& message) { emit("error: ", message); }
 
 }  // namespace pbnbv
+
+namespace pbnbv {
+
+bool LogLimiter::allow(const std::string& kind, double now_s) {
+  auto it = kinds_.find(kind);
+  if (it == kinds_.end() || (now_s - it->second.window_start_s >= window_s_ && it->second.suppressed == 0)) {
+    kinds_[kind] = Kind{now_s, 0};
+    return true;
+  }
+  ++it->second.suppressed;
+  return false;
+}
+
+std::map<std::string, long> LogLimiter::take_due(double now_s) {
+  std::map<std::string, long> due;
+  for (auto& [kind, k] : kinds_) {
+    if (k.suppressed > 0 && now_s - k.window_start_s >= window_s_) {
+      due[kind] = k.suppressed;
+      k = Kind{now_s, 0};
+    }
+  }
+  return due;
+}
+
+long LogLimiter::suppressed() const {
+  long n = 0;
+  for (const auto& [kind, k] : kinds_) n += k.suppressed;
+  return n;
+}
+
+}  // namespace pbnbv

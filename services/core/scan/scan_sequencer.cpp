@@ -91,8 +91,8 @@ void ScanSequencer::tick(double now_s) {
   if (now_s - last_status_s_ >= t_.status_period_s) publish_status(now_s);
 }
 
-void ScanSequencer::stop(double now_s) {
-  if (phase_ != Phase::kFinished) finish(ScanState::kStopped, "interrupted", now_s);
+void ScanSequencer::stop(double now_s, const std::string& why) {
+  if (phase_ != Phase::kFinished) finish(ScanState::kStopped, why, now_s);
 }
 
 std::vector<ScanOutput> ScanSequencer::take_outputs() {

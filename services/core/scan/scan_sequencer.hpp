@@ -109,9 +109,9 @@ class ScanSequencer {
   void handle(const ScanEvent& event, double now_s);
   // Re-sends what is due, fails what is past its deadline, publishes the periodic status.
   void tick(double now_s);
-  // The user asked to stop: the scan ends "stopped" ("interrupted"), the view in progress is
-  // not recorded.
-  void stop(double now_s);
+  // The scan is stopped from outside (the user; the launcher gone): it ends "stopped" with `why`
+  // as its message, the view in progress is not recorded.
+  void stop(double now_s, const std::string& why = "stopped by the user");
 
   // What to send and print since the last call, in order.
   std::vector<ScanOutput> take_outputs();

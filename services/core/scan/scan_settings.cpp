@@ -1,8 +1,13 @@
 #include "core/io/json.hpp"
 #include "core/scan/scan_settings.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+
+#include <cctype>
 #include <cstdio>
 #include <fstream>
+#include <random>
 #include <stdexcept>
 
 namespace pbnbv {
@@ -151,6 +156,53 @@ void place_object(ScanSettings& s) {
   if (s.rig == RigKind::kArm) s.keepout_min_m.z() = -half.z();  // down to the turntable top
   s.crop_min_m = -half - Eigen::Vector3d::Constant(0.05);
   s.crop_max_m = half + Eigen::Vector3d::Constant(0.05);
+}
+
+void check_object_limits(const TriangleMesh& mesh, const MeshNormalisation& n, const std::string& what, bool for_twin) {
+  if (for_twin && n.num_triangles > kTwinMaxTriangles) {
+    throw std::invalid_argument(what + " has " + std::to_string(n.num_triangles) + " triangles; the twin (MuJoCo) loads at most " +
+                                std::to_string(kTwinMaxTriangles) +
+                                " per mesh: simplify it first (e.g. quadric edge collapse to 100,000 faces)");
+  }
+  // Flatness along any direction: the spread of the vertices along their principal axes.
+  if (!mesh.vertices.empty()) {
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& v : mesh.vertices) mean += v;
+    mean /= static_cast<double>(mesh.vertices.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (const auto& v : mesh.vertices) cov += (v - mean) * (v - mean).transpose();
+    const Eigen::Vector3d spread = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvalues().cwiseMax(0).cwiseSqrt();
+    if (!(spread(0) * kMaxObjectAspect >= spread(2))) {
+      throw std::invalid_argument(fmt::format(
+          "{} is flat ({} vertices, {} triangles; its thinnest direction spreads {:.2g} of its widest): a sheet or a "
+          "degenerate mesh has no volume to scan",
+          what, mesh.vertices.size(), mesh.triangles.size(), spread(2) > 0 ? spread(0) / spread(2) : 0.0));
+    }
+  }
+  const double shortest = n.extent_m.minCoeff(), longest = n.extent_m.maxCoeff();
+  const auto m = [](double v) { return fmt::format("{:.3g} m", v); };
+  if (longest > kMaxObjectAspect * shortest) {
+    throw std::invalid_argument(fmt::format(
+        "{} is {:.0f} times longer than it is thick (its bounding box, normalised: {} x {} x {}): a flat or "
+        "degenerate mesh; a scan needs a solid object (longest / shortest edge at most {:.0f})",
+        what, longest / shortest, m(n.extent_m.x()), m(n.extent_m.y()), m(n.extent_m.z()), kMaxObjectAspect));
+  }
+  if (longest > kMaxObjectExtentM) {
+    throw std::invalid_argument(fmt::format(
+        "{} would be {} long once its shortest edge is scaled to {} (bounding box {} x {} x {}); the rig scans objects "
+        "up to {}: give a smaller --size",
+        what, m(longest), m(shortest), m(n.extent_m.x()), m(n.extent_m.y()), m(n.extent_m.z()), m(kMaxObjectExtentM)));
+  }
+}
+
+std::string new_scan_id(const std::string& name) {
+  std::random_device source;  // /dev/urandom (libstdc++ on Linux)
+  const uint64_t bits = (static_cast<uint64_t>(source()) << 32) ^ source();
+  std::string id;
+  for (char c : name) id += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.' ? c : '_';
+  char hex[17];
+  std::snprintf(hex, sizeof(hex), "%016llx", static_cast<unsigned long long>(bits));
+  return (id.empty() ? "scan" : id) + "-" + hex;
 }
 
 }  // namespace pbnbv

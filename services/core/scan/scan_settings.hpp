@@ -85,4 +85,22 @@ nlohmann::json to_json(const MeshNormalisation& n);
 // Fills object_z_m, the keep-out box and the cloud's crop box.
 void place_object(ScanSettings& s);
 
+// Limits on the object a scan is asked for, checked before anything starts.
+inline constexpr std::size_t kTwinMaxTriangles = 200000;  // MuJoCo's limit on one mesh's faces
+inline constexpr double kMaxObjectExtentM = 3.0;          // longest edge once normalised
+inline constexpr double kMaxObjectAspect = 1000.0;        // longest / shortest bounding-box edge
+
+// Throws std::invalid_argument naming `what` (the object) and the limit it breaks: more
+// triangles than the twin can load (`for_twin`); a flat mesh (a sheet, a single triangle: its
+// thinnest principal direction under 1/kMaxObjectAspect of its widest, whatever its tilt); a
+// bounding box so thin that scaling its shortest edge to the object size makes it absurdly long;
+// an object longer than the rig can walk around (kMaxObjectExtentM) once normalised (`mesh`
+// normalised as `n` says).
+void check_object_limits(const TriangleMesh& mesh, const MeshNormalisation& n, const std::string& what, bool for_twin);
+
+// A scan id unique on any bus: "<name>-" and 16 hex digits from the system's random source
+// (64 bits; two scans of one object started in the same second still differ). `name` is kept
+// for people reading logs; characters other than letters, digits, '-', '_' and '.' become '_'.
+std::string new_scan_id(const std::string& name);
+
 }  // namespace pbnbv

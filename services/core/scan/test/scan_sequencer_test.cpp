@@ -663,7 +663,7 @@ TEST_F(ScanSequencerTest, StoppingEndsTheScanStoppedWithoutTheViewInProgress) {
   EXPECT_EQ(seq_->exit_code(), 130);
   const json scan = scan_json();
   EXPECT_EQ(scan["status"]["state"], "stopped");
-  EXPECT_EQ(scan["status"]["message"], "interrupted");
+  EXPECT_EQ(scan["status"]["message"], "stopped by the user");
   EXPECT_EQ(scan["views"].size(), 1u);
   EXPECT_EQ(statuses_.back().state, ScanState::kStopped);
 }

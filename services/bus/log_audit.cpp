@@ -1,0 +1,71 @@
+#include "bus/log_audit.hpp"
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <stdexcept>
+
+#include "bus/channels.hpp"
+#include "pbnbv/depth_frame_t.hpp"
+#include "pbnbv/point_cloud_t.hpp"
+#include "pbnbv/registered_cloud_t.hpp"
+#include "pbnbv/voxel_set_t.hpp"
+
+namespace pbnbv::bus {
+
+namespace {
+
+template <class T>
+bool decode(const lcm::LogEvent& e, T* msg) {
+  try {
+    return msg->decode(e.data, 0, e.datalen) >= 0;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+}  // namespace
+
+LogContents read_scan_log(const std::string& path, const std::string& scan_id) {
+  lcm::LogFile file(path, "r");
+  if (!file.good()) throw std::runtime_error("cannot read the LCM log " + path);
+  LogContents c;
+  while (const lcm::LogEvent* e = file.readNextEvent()) {
+    ++c.events;
+    if (e->channel == channels::kDepthFrame) {
+      depth_frame_t m;
+      if (!decode(*e, &m)) ++c.undecodable;
+      else if (m.scan_id == scan_id || m.scan_id.empty()) c.depth_frames.insert(m.seq);
+    } else if (e->channel == channels::kCloud) {
+      point_cloud_t m;
+      if (!decode(*e, &m)) ++c.undecodable;
+      else if (m.scan_id == scan_id) c.clouds.insert(m.iteration);
+    } else if (e->channel == channels::kRegisteredCloud) {
+      registered_cloud_t m;
+      if (!decode(*e, &m)) ++c.undecodable;
+      else if (m.scan_id == scan_id) c.registered_clouds.insert(m.iteration);
+    } else if (e->channel == channels::kVoxelMap) {
+      voxel_set_t m;
+      if (!decode(*e, &m)) ++c.undecodable;
+      else if (m.scan_id == scan_id) c.voxel_maps.insert(m.iteration);
+    }
+  }
+  return c;
+}
+
+std::vector<std::string> missing_from_log(const LogContents& log, const nlohmann::json& views) {
+  std::vector<std::string> missing;
+  for (const nlohmann::json& v : views) {
+    const int i = v.at("view").get<int>();
+    const std::string name = "view " + std::to_string(i + 1) + ": ";
+    if (v.contains("capture") && v["capture"].contains("depth_frame_seq")) {
+      const int64_t seq = v["capture"]["depth_frame_seq"].get<int64_t>();
+      if (seq >= 0 && !log.depth_frames.count(seq)) missing.push_back(name + "DEPTH_FRAME " + std::to_string(seq));
+      if (!log.clouds.count(i)) missing.push_back(name + "CLOUD");
+    }
+    if (v.contains("registration") && !log.registered_clouds.count(i)) missing.push_back(name + "REGISTERED_CLOUD");
+    if (v.contains("map") && !log.voxel_maps.count(i)) missing.push_back(name + "VOXEL_MAP");
+  }
+  return missing;
+}
+
+}  // namespace pbnbv::bus

@@ -1,0 +1,86 @@
+// Scan ids: unique on a bus (two ids made in the same instant differ), readable, and safe in
+// file names and channel text. Object limits: what the twin cannot load and what no rig can scan.
+#include <gtest/gtest.h>
+
+#include <regex>
+#include <set>
+#include <string>
+
+#include "core/geometry/mesh.hpp"
+#include "core/scan/scan_settings.hpp"
+
+using namespace pbnbv;
+
+TEST(ScanId, ManyIdsOfOneObjectMadeAtOnceAreAllDifferent) {
+  std::set<std::string> ids;
+  for (int i = 0; i < 10000; ++i) ids.insert(new_scan_id("bunny"));
+  EXPECT_EQ(ids.size(), 10000u);  // a time stamp gives one id for all of them
+}
+
+TEST(ScanId, TheNameIsKeptAndSixteenHexDigitsFollow) {
+  const std::regex form("bunny-[0-9a-f]{16}");
+  EXPECT_TRUE(std::regex_match(new_scan_id("bunny"), form)) << new_scan_id("bunny");
+  EXPECT_TRUE(std::regex_match(new_scan_id("my part/v2 ü"), std::regex("my_part_v2___-[0-9a-f]{16}")))
+      << new_scan_id("my part/v2 ü");
+  EXPECT_TRUE(std::regex_match(new_scan_id(""), std::regex("scan-[0-9a-f]{16}")));
+}
+
+// The object limits, on bounding boxes worked out by hand.
+namespace {
+MeshNormalisation box(double x, double y, double z, std::size_t triangles = 12) {
+  MeshNormalisation n;
+  n.extent_m = Eigen::Vector3d(x, y, z);
+  n.num_triangles = triangles;
+  return n;
+}
+std::string error_of_mesh(const TriangleMesh& mesh, const MeshNormalisation& n, bool for_twin);
+std::string error_of(const MeshNormalisation& n, bool for_twin = true) {
+  const TriangleMesh mesh = make_box(n.extent_m);
+  return error_of_mesh(mesh, n, for_twin);
+}
+std::string error_of_mesh(const TriangleMesh& mesh, const MeshNormalisation& n, bool for_twin = true) {
+  try {
+    check_object_limits(mesh, n, "the object 'part.stl'", for_twin);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(ObjectLimits, AnOrdinaryObjectPasses) {
+  EXPECT_EQ(error_of(box(0.3, 0.45, 0.6, 200000)), "");  // MuJoCo's limit itself is allowed
+  EXPECT_EQ(error_of(box(0.3, 0.3, 3.0)), "");           // 10:1 and 3 m: at the limit
+}
+
+TEST(ObjectLimits, TooManyTrianglesForTheTwinIsNamed) {
+  const std::string e = error_of(box(0.3, 0.3, 0.3, 200001));
+  EXPECT_NE(e.find("'part.stl' has 200001 triangles"), std::string::npos) << e;
+  EXPECT_NE(e.find("at most 200000"), std::string::npos) << e;
+  EXPECT_EQ(error_of(box(0.3, 0.3, 0.3, 200001), false), "");  // a real rig renders nothing
+}
+
+TEST(ObjectLimits, AOneMicronSheetIsFlat) {
+  // A 0.3 m x 0.3 m sheet 1 um thick, its thickness scaled to 0.3 m: 90 km on each side.
+  const double scale = 0.3 / 1e-6;
+  const std::string e = error_of(box(0.3 * scale, 0.3 * scale, 0.3));
+  EXPECT_NE(e.find("'part.stl' is flat"), std::string::npos) << e;
+  // Its bounding box alone says so too, when the vertices do not (a thin rod's box, not flat).
+  const std::string rod = error_of_mesh(make_box({0.3, 0.3, 0.3}), box(0.3, 0.3, 0.3 * 2000));
+  EXPECT_NE(rod.find("2000 times longer than it is thick"), std::string::npos) << rod;
+}
+
+TEST(ObjectLimits, ASingleTiltedTriangleIsFlat) {
+  TriangleMesh t;
+  t.vertices = {{0, 0, 0}, {0.3, 0, 0.1}, {0, 0.3, 0.2}};  // no bounding-box edge is zero
+  t.triangles = {{0, 1, 2}};
+  MeshNormalisation n = box(0.3, 0.3, 0.2, 1);
+  const std::string e = error_of_mesh(t, n);
+  EXPECT_NE(e.find("is flat (3 vertices, 1 triangles"), std::string::npos) << e;
+}
+
+TEST(ObjectLimits, AnObjectLongerThanTheRigCanScanIsNamed) {
+  const std::string e = error_of(box(0.3, 0.3, 3.3));  // 11:1, 3.3 m long
+  EXPECT_NE(e.find("would be 3.3 m long"), std::string::npos) << e;
+  EXPECT_NE(e.find("smaller --size"), std::string::npos) << e;
+}
