@@ -1,5 +1,7 @@
 #pragma once
 // Shared by the unit tests that check an error's exact words.
+#include <gtest/gtest.h>
+
 #include <exception>
 #include <functional>
 #include <string>
@@ -15,5 +17,12 @@ inline std::string error_message(const std::function<void()>& f) {
   }
   return "(no error)";
 }
+
+// Expects `f` to throw an error whose message contains `needle`.
+inline void expect_error(const std::function<void()>& f, const std::string& needle) {
+  const std::string message = error_message(f);
+  EXPECT_NE(message.find(needle), std::string::npos) << "expected an error naming '" << needle << "', got: " << message;
+}
+
 
 }  // namespace pbnbv::testing

@@ -3,22 +3,17 @@
 
 #include <gtest/gtest.h>
 
+#include "error_message.hpp"
+
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <string>
 
 using namespace pbnbv;
+using pbnbv::testing::expect_error;
 
 namespace {
-void expect_error(const std::function<void()>& f, const std::string& needle) {
-  try {
-    f();
-    FAIL() << "expected an error naming " << needle;
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-  }
-}
 }  // namespace
 
 TEST(ConvertScan, MoveRequestRoundTripsAndAnEmptyKeepoutStaysEmpty) {

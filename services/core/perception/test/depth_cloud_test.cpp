@@ -1,6 +1,8 @@
 // Depth frame -> object-frame cloud, against geometry checkable by hand.
 #include <gtest/gtest.h>
 
+#include "small_camera.hpp"
+
 #include <cmath>
 
 #include "core/perception/depth_cloud.hpp"
@@ -9,15 +11,7 @@ using namespace pbnbv;
 
 namespace {
 
-CameraIntrinsics small_camera() {
-  CameraIntrinsics k;
-  k.width = 64;
-  k.height = 48;
-  k.fx = k.fy = 50.0;
-  k.cx = 32.0;
-  k.cy = 24.0;
-  return k;
-}
+using pbnbv::testing::small_camera;
 
 }  // namespace
 

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "small_camera.hpp"
+
 #include <cmath>
 
 #include "core/base/units.hpp"
@@ -34,15 +36,7 @@ CaptureRequest request(int64_t id = 7) {
   return r;
 }
 
-CameraIntrinsics small_camera() {
-  CameraIntrinsics k;
-  k.width = 64;
-  k.height = 48;
-  k.fx = k.fy = 50.0;
-  k.cx = 32.0;
-  k.cy = 24.0;
-  return k;
-}
+using pbnbv::testing::small_camera;
 
 DepthFrame flat_frame(int64_t trigger_seq, int64_t utime, float depth_m) {
   DepthFrame f;
