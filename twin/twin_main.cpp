@@ -110,6 +110,9 @@ int main(int argc, char** argv) {
                 "play the rig of this scan only: commands and triggers of other scans are ignored and counted "
                 "(default: obey every command, as a real driver does)",
                 "ID");
+  bool raw_depth = false;
+  cli::add_flag(app, "raw-depth", &raw_depth,
+                "send depth frames uncompressed (encoding raw; default zlib: 20x smaller, survives packet loss)");
   std::string truth_path;
   cli::add_text(app, "truth-out", &truth_path,
                 "append each frame's true camera pose to this file (JSON lines; evaluation only)", "PATH");
@@ -214,14 +217,21 @@ int main(int argc, char** argv) {
       f.depth_min_m = range.min_m;
       f.depth_max_m = range.max_m;
       f.depth_unit_m = kDepthUnitM;
-      f.num_bytes = image.width * image.height * 2;
-      f.depth.resize(f.num_bytes);
+      std::vector<uint8_t> raw(static_cast<std::size_t>(image.width) * image.height * 2);
       for (std::size_t i = 0; i < image.depth_m.size(); ++i) {
         const double counts = std::round(image.depth_m[i] / kDepthUnitM);
         const uint16_t v = counts > 0 && counts < 65535 ? static_cast<uint16_t>(counts) : 0;
-        f.depth[2 * i] = static_cast<uint8_t>(v & 0xff);
-        f.depth[2 * i + 1] = static_cast<uint8_t>(v >> 8);
+        raw[2 * i] = static_cast<uint8_t>(v & 0xff);
+        raw[2 * i + 1] = static_cast<uint8_t>(v >> 8);
       }
+      if (raw_depth) {
+        f.encoding = depth_frame_t::kEncodingRaw;
+        f.depth = std::move(raw);
+      } else {
+        f.encoding = depth_frame_t::kEncodingZlib;
+        f.depth = bus::deflate_bytes(raw, 1);
+      }
+      f.num_bytes = static_cast<int32_t>(f.depth.size());
       bus.publish(channels::kDepthFrame, f);
       if (truth.is_open()) {
         double p[3], q[4];

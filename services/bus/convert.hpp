@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "bus/depth_codec.hpp"
 #include "core/geometry/camera_model.hpp"
 #include "core/base/pose.hpp"
 #include "pbnbv/depth_frame_t.hpp"
@@ -60,14 +61,24 @@ struct DecodedFrame {
   std::vector<float> depth_m;
 };
 
-// Throws std::invalid_argument naming the bad field (intrinsics, range, size, depth unit).
+// Throws std::invalid_argument naming the bad field (intrinsics, range, encoding, size, depth
+// unit).
 inline DecodedFrame decode_frame(const depth_frame_t& f) {
   DecodedFrame d;
   d.intrinsics = CameraIntrinsics{f.width, f.height, f.fx, f.fy, f.cx, f.cy};
   d.intrinsics.validate();
   d.range = DepthRange{f.depth_min_m, f.depth_max_m};
   d.range.validate();
-  d.depth_m = decode_depth_u16(f.depth, f.width, f.height, f.depth_unit_m);
+  if (f.encoding == depth_frame_t::kEncodingRaw) {
+    d.depth_m = decode_depth_u16(f.depth, f.width, f.height, f.depth_unit_m);
+  } else if (f.encoding == depth_frame_t::kEncodingZlib) {
+    const std::vector<uint8_t> raw = inflate_bytes(f.depth, static_cast<std::size_t>(f.width) * f.height * 2,
+                                                   "DEPTH_FRAME " + std::to_string(f.seq) + " depth (zlib)");
+    d.depth_m = decode_depth_u16(raw, f.width, f.height, f.depth_unit_m);
+  } else {
+    throw std::invalid_argument("DEPTH_FRAME " + std::to_string(f.seq) + " encoding = " + std::to_string(f.encoding) +
+                                " is not one of its constants (0 raw, 1 zlib)");
+  }
   return d;
 }
 

@@ -64,6 +64,7 @@ class MappingService {
       bus_.publish(channels::kVoxelMap, *answer);  // a repeat: answer again
       return;
     }
+    if (pending_ && pending_->scan_id == r.scan_id && pending_->iteration == r.iteration) return;  // a repeat: still waiting
     if (pending_) {  // a newer view arrived: settle the older one now
       const registered_cloud_t older = std::move(*pending_);
       pending_.reset();

@@ -148,6 +148,7 @@ TEST(ConvertRig, DepthFrameIsDecodedToMetres) {
   m.depth_min_m = 0.1;
   m.depth_max_m = 3;
   m.depth_unit_m = 1e-4;
+  m.encoding = depth_frame_t::kEncodingRaw;
   m.num_bytes = 4;
   m.depth = {0x10, 0x27, 0, 0};  // 10000 counts = 1 m; 0 = no return
   const DepthFrame f = bus::from_msg(m);
@@ -160,6 +161,44 @@ TEST(ConvertRig, DepthFrameIsDecodedToMetres) {
   EXPECT_EQ(f.depth_m[1], 0.0f);  // no return
   m.depth_unit_m = 0;
   EXPECT_NE(error_of([&] { bus::from_msg(m); }).find("depth_unit"), std::string::npos);
+}
+
+// The same image compressed (what the twin sends) decodes to the same metres; compressed data
+// that is corrupt, or holds an image of another size, and an unknown encoding are named.
+TEST(ConvertRig, AZlibDepthFrameDecodesToTheSameMetresAndBadDataIsNamed) {
+  depth_frame_t m{};
+  m.seq = 6;
+  m.width = 2;
+  m.height = 1;
+  m.fx = m.fy = 10;
+  m.cx = 1;
+  m.cy = 0.5;
+  m.depth_min_m = 0.1;
+  m.depth_max_m = 3;
+  m.depth_unit_m = 1e-4;
+  m.encoding = depth_frame_t::kEncodingZlib;
+  m.depth = bus::deflate_bytes({0x10, 0x27, 0x88, 0x13});  // 1 m, 0.5 m
+  m.num_bytes = static_cast<int32_t>(m.depth.size());
+  const DepthFrame f = bus::from_msg(m);
+  ASSERT_EQ(f.depth_m.size(), 2u);
+  EXPECT_FLOAT_EQ(f.depth_m[0], 1.0f);
+  EXPECT_FLOAT_EQ(f.depth_m[1], 0.5f);
+
+  depth_frame_t longer = m;
+  longer.depth = bus::deflate_bytes({1, 0, 2, 0, 3, 0});  // three pixels for a 2 x 1 image
+  EXPECT_EQ(error_of([&] { bus::from_msg(longer); }),
+            "DEPTH_FRAME 6 depth (zlib) inflates to more than 4 bytes, the image needs 4");
+  depth_frame_t shorter = m;
+  shorter.depth = bus::deflate_bytes({1, 0});
+  EXPECT_EQ(error_of([&] { bus::from_msg(shorter); }), "DEPTH_FRAME 6 depth (zlib) inflates to 2 bytes, the image needs 4");
+  depth_frame_t corrupt = m;
+  corrupt.depth = {0x10, 0x27, 0x88, 0x13};  // raw bytes labelled zlib
+  EXPECT_NE(error_of([&] { bus::from_msg(corrupt); }).find("DEPTH_FRAME 6 depth (zlib) is not valid zlib data"),
+            std::string::npos);
+  depth_frame_t unknown = m;
+  unknown.encoding = 7;
+  EXPECT_EQ(error_of([&] { bus::from_msg(unknown); }),
+            "DEPTH_FRAME 6 encoding = 7 is not one of its constants (0 raw, 1 zlib)");
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "core/scan/capture_sequencer.hpp"
 
+#include <algorithm>
 #include <fmt/format.h>
 
 #include <chrono>
@@ -61,17 +62,16 @@ void CaptureSequencer::on_request(const CaptureRequest& r) {
 }
 
 bool CaptureSequencer::awaits_frame(int64_t trigger_seq) const {
-  return job_ && !job_->frame && trigger_seq == job_->trigger_seq;
+  return job_ && !job_->frame &&
+         std::find(job_->triggers.begin(), job_->triggers.end(), trigger_seq) != job_->triggers.end();
 }
 
-// A new trigger for the job: a fresh sequence number and a new deadline.
+// A new trigger for the job: a fresh sequence number (the job's deadline stays).
 CaptureStep CaptureSequencer::trigger(double now_s) {
-  ++job_->tries;
-  job_->trigger_seq = next_trigger_seq_++;
+  job_->triggers.push_back(next_trigger_seq_++);
   job_->t_trigger = now_s;
-  job_->deadline = now_s + job_->request.timeout_s;
   CaptureStep step;
-  step.trigger_seq = job_->trigger_seq;
+  step.trigger_seq = job_->triggers.back();
   return step;
 }
 
@@ -116,21 +116,22 @@ CaptureStep CaptureSequencer::tick(double now_s) {
     job_ = Job{};
     job_->request = queue_.front();
     job_->t_start = now_s;
+    job_->deadline = now_s + job_->request.timeout_s;
     queue_.pop_front();
     return trigger(now_s);
   }
   if (job_ && now_s > job_->deadline) {
-    if (job_->tries < kCaptureTries) {
-      const int64_t late = job_->trigger_seq;
-      CaptureStep step = trigger(now_s);
-      step.warnings.push_back(fmt::format("no DEPTH_FRAME for trigger {} within {} s: triggering again", late,
-                                          exact(job_->request.timeout_s)));
-      return step;
-    }
-    return fail(fmt::format("no DEPTH_FRAME answered {} triggers of {} s each: is the camera driver (or the twin) "
+    return fail(fmt::format("no usable DEPTH_FRAME answered {} triggers within {} s: is the camera driver (or the twin) "
                             "running?",
-                            kCaptureTries, exact(job_->request.timeout_s)),
+                            job_->triggers.size(), exact(job_->request.timeout_s)),
                 now_s);
+  }
+  if (job_ && now_s - job_->t_trigger >= kCaptureRetriggerS) {
+    const int64_t late = job_->triggers.back();
+    CaptureStep step = trigger(now_s);
+    step.warnings.push_back(
+        fmt::format("no DEPTH_FRAME for trigger {} within {} s: triggering again", late, exact(kCaptureRetriggerS)));
+    return step;
   }
   return {};
 }

@@ -1,8 +1,10 @@
 #pragma once
 // The camera service's sequencing, without a bus: capture requests are queued and served one at
-// a time; each is a DEPTH_TRIGGER with a fresh sequence number, triggered again when no frame
-// answers within the request's timeout (kCaptureTries triggers in all) or when the frame was
-// exposed before the request's not_before_utime. The camera pose at exposure comes from the arm
+// a time; each is a DEPTH_TRIGGER with a fresh sequence number, triggered again every
+// kCaptureRetriggerS while no frame answers (a frame lost on the bus costs about a second, not the
+// request's timeout) and when the frame was exposed before the request's not_before_utime; a frame
+// answering any of the request's triggers is taken (a camera slower than kCaptureRetriggerS still
+// succeeds). The request fails when no usable frame came within its timeout. The camera pose at exposure comes from the arm
 // and turntable readings nearest the frame's exposure time (within kCaptureReadingMatchUs),
 // through the rig model's kinematics and hand-eye transform (never from the twin); the frame is
 // then back-projected into the object frame, cropped and downsampled. Every request is answered,
@@ -19,7 +21,7 @@
 
 namespace pbnbv {
 
-inline constexpr int kCaptureTries = 3;                  // triggers per request
+inline constexpr double kCaptureRetriggerS = 1.0;        // trigger again after this long without a frame
 inline constexpr int64_t kCaptureReadingMatchUs = 50000; // a reading within 50 ms of exposure
 inline constexpr int64_t kCaptureHistoryUs = 5000000;    // readings kept: the last 5 s of rig time
 inline constexpr double kCaptureStillRadS = 0.01;        // faster joints blur the pose: warn
@@ -57,7 +59,7 @@ class CaptureSequencer {
   CaptureStep on_unusable_frame(int64_t frame_seq, int64_t trigger_seq, const std::string& why, double now_s);
 
   // Starts the next queued request, processes a frame whose readings are in, triggers again or
-  // fails a request whose trigger timed out.
+  // fails a request whose timeout passed.
   CaptureStep tick(double now_s);
 
   bool busy() const { return job_.has_value(); }
@@ -71,8 +73,7 @@ class CaptureSequencer {
   };
   struct Job {
     CaptureRequest request;
-    int64_t trigger_seq = 0;
-    int tries = 0;
+    std::vector<int64_t> triggers;   // every trigger of the request, the latest last
     double t_start = 0, t_trigger = 0, deadline = 0;
     std::optional<DepthFrame> frame;  // received, waiting for the readings at its exposure
     double t_frame = 0;

@@ -61,25 +61,25 @@ void ScanSequencer::tick(double now_s) {
       check_ready(now_s);
       break;
     case Phase::kPlanning:
-      if (awaited_.expired(now_s)) return finish(ScanState::kFailed, "the view scorer did not answer the plan for " + view_name(), now_s);
+      if (awaited_.expired(now_s)) return finish(ScanState::kFailed, waited("the view scorer", "VIEW_PLAN", "the plan request"), now_s);
       break;
     case Phase::kMoving:
       if (awaited_.expired(now_s)) {
         view_.move_unanswered = true;
-        return fail_view("the motion executor did not answer the move to " + view_name(), now_s);
+        return fail_view(waited("the motion executor", "MOVE_RESULT", "the move request"), now_s);
       }
       break;
     case Phase::kCapturing:
       if (awaited_.expired(now_s)) {
         view_.capture_unanswered = true;
-        return fail_view("the camera service did not answer the capture of " + view_name(), now_s);
+        return fail_view(waited("the camera service", "CLOUD", "the capture request"), now_s);
       }
       break;
     case Phase::kRegistering:
-      if (awaited_.expired(now_s)) return fail_view("the registration service did not answer " + view_name(), now_s);
+      if (awaited_.expired(now_s)) return fail_view(waited("the registration service", "REGISTERED_CLOUD", "the capture request"), now_s);
       break;
     case Phase::kMapping:
-      if (awaited_.expired(now_s)) return fail_view("the mapping service did not answer " + view_name(), now_s);
+      if (awaited_.expired(now_s)) return fail_view(waited("the mapping service", "VOXEL_MAP", "the capture request"), now_s);
       break;
   }
   if (phase_ == Phase::kFinished) return;
@@ -330,10 +330,11 @@ void ScanSequencer::begin_capture(int64_t not_before_utime, double now_s) {
   r.voxel_m = s_.voxel_m;
   r.timeout_s = s_.capture_timeout_s;
   capture_id_ = r.request_id;
-  // The camera service retries the trigger itself (3 tries); re-send only if the whole answer
-  // is lost.
-  const double per_try_s = 3 * s_.capture_timeout_s + t_.capture_extra_s;
-  send(r, r.request_id, per_try_s, now_s + t_.capture_attempts * per_try_s, now_s);
+  capture_request_ = r;
+  // The camera service re-triggers the camera itself and answers within the capture timeout;
+  // the request is re-sent (the same id: answered again, never captured twice) in case the
+  // request or its answer is lost.
+  send(r, r.request_id, t_.capture_resend_s, now_s + 2 * s_.capture_timeout_s + t_.capture_extra_s, now_s);
 }
 
 void ScanSequencer::captured(const CaptureResult& c, double now_s) {
@@ -432,7 +433,17 @@ void ScanSequencer::send(const ScanOutput& request, int64_t request_id, double r
 }
 
 void ScanSequencer::wait_for_answer(double deadline_s, double now_s) {
-  awaited_ = Awaited{std::nullopt, -1, now_s, now_s, Awaited::kNever, deadline_s, 0};
+  // REGISTERED_CLOUD and VOXEL_MAP follow from the view's CLOUD: when one is late, the capture
+  // request is sent again; the camera answers it again from its cache, the registration and the
+  // mapping service answer the repeated CLOUD and REGISTERED_CLOUD from theirs, so a message lost
+  // anywhere on that path is sent again.
+  const int sent = awaited_.request_id == capture_id_ ? awaited_.sends : 0;  // counted on from the capture
+  awaited_ = Awaited{capture_request_, capture_id_, now_s, now_s, t_.capture_resend_s, deadline_s, sent};
+}
+
+std::string ScanSequencer::waited(const std::string& from, const std::string& what, const std::string& request) const {
+  return from + " sent no " + what + " for " + view_name() + " in " + fixed(awaited_.deadline_s - awaited_.since_s, 0) +
+         " s (" + request + " sent " + std::to_string(awaited_.sends) + (awaited_.sends == 1 ? " time)" : " times)");
 }
 
 void ScanSequencer::progress(const std::string& what, bool ends_view) {

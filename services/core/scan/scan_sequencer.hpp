@@ -58,11 +58,14 @@ using ScanEvent = std::variant<MoveResult, CaptureResult, RegisteredCloud, Voxel
 // How long the sequence waits, s.
 struct ScanTimeouts {
   double resend_s = 3.0;          // re-send a move or plan request whose answer has not come
+  double capture_resend_s = 1.0;  // re-send the capture request while the view's CLOUD,
+                                  // REGISTERED_CLOUD or VOXEL_MAP has not come (each normally
+                                  // follows within 0.5 s)
   double plan_s = 90.0;           // the view scorer's answer (it waits up to 60 s for inputs)
   double move_extra_s = 15.0;     // beyond the move's own timeout
   double answer_s = 60.0;         // the registration's and the mapping service's answer to a view
-  int capture_attempts = 3;       // each waits 3 x the capture timeout + 5 s (the camera
-  double capture_extra_s = 5.0;   // service retries the trigger 3 times itself)
+  double capture_extra_s = 5.0;   // beyond twice the capture timeout (the camera service
+                                  // re-triggers within one timeout and then answers)
   double status_period_s = 1.0;   // SCAN_STATUS while nothing changes
 };
 
@@ -155,6 +158,9 @@ class ScanSequencer {
 
   void send(const ScanOutput& request, int64_t request_id, double resend_s, double deadline_s, double now_s);
   void wait_for_answer(double deadline_s, double now_s);
+  // What a deadline missed: "the mapping service sent no VOXEL_MAP for view 3 in 60 s (the capture
+  // request sent 21 times)".
+  std::string waited(const std::string& from, const std::string& what, const std::string& request) const;
   int64_t next_request_id() { return done_.next_request_id++; }
   void progress(const std::string& what, bool ends_view = false);
   void set_status(ScanState state, const std::string& message, double now_s);
@@ -181,6 +187,7 @@ class ScanSequencer {
   std::size_t option_ = 0;
   MoveResult moved_;
   int64_t capture_id_ = -1;
+  CaptureRequest capture_request_;          // re-sent while the view's answers are late
   std::optional<RegisteredCloud> registered_;  // kept when it comes before it is waited for
   std::optional<VoxelMapSummary> map_;
   Awaited awaited_;

@@ -195,29 +195,41 @@ TEST_F(Capture, WaitsUpToOneSecondForReadingsAfterTheExposure) {
   EXPECT_EQ(step.result->turntable_angle_rad, 0.5);
 }
 
-TEST_F(Capture, RetriggersTwiceThenFailsNamingTheTries) {
+TEST_F(Capture, RetriggersEverySecondThenFailsAtTheTimeoutNamingTheTriggers) {
   const int64_t first = start(1.0);
-  EXPECT_FALSE(seq_.tick(11.0).trigger_seq);  // the deadline is 1 + 10 s
-  CaptureStep step = seq_.tick(11.01);
+  EXPECT_FALSE(seq_.tick(1.99).trigger_seq);  // a lost frame costs kCaptureRetriggerS = 1 s
+  CaptureStep step = seq_.tick(2.0);
   ASSERT_TRUE(step.trigger_seq);
   EXPECT_EQ(*step.trigger_seq, first + 1);
   ASSERT_EQ(step.warnings.size(), 1u);
-  EXPECT_EQ(step.warnings[0], "no DEPTH_FRAME for trigger 500 within 10 s: triggering again");
-  // The first trigger's frame arriving late is not taken.
-  EXPECT_FALSE(seq_.awaits_frame(first));
-  step = seq_.tick(21.02);
-  ASSERT_TRUE(step.trigger_seq);
-  EXPECT_EQ(*step.trigger_seq, first + 2);
-  EXPECT_FALSE(seq_.tick(31.0).result);
-  step = seq_.tick(31.03);
+  EXPECT_EQ(step.warnings[0], "no DEPTH_FRAME for trigger 500 within 1 s: triggering again");
+  // Every trigger of the request is answered by its frame, the first one too (a slow camera).
+  EXPECT_TRUE(seq_.awaits_frame(first));
+  EXPECT_TRUE(seq_.awaits_frame(first + 1));
+  EXPECT_FALSE(seq_.awaits_frame(first + 2));
+  int triggers = 2;
+  for (double t = 3.0; t <= 11.0; t += 1.0) triggers += seq_.tick(t).trigger_seq ? 1 : 0;  // 3 .. 11 s
+  EXPECT_EQ(triggers, 11);  // at 1, 2, ..., 11 s
+  step = seq_.tick(11.01);  // the request's timeout: 1 + 10 s
   EXPECT_FALSE(step.trigger_seq);
   ASSERT_TRUE(step.result);
   EXPECT_FALSE(step.result->ok);
   EXPECT_EQ(step.result->message,
-            "no DEPTH_FRAME answered 3 triggers of 10 s each: is the camera driver (or the twin) running?");
-  EXPECT_NEAR(step.result->capture_s, 30.03, 1e-9);  // from the first trigger
+            "no usable DEPTH_FRAME answered 11 triggers within 10 s: is the camera driver (or the twin) running?");
+  EXPECT_NEAR(step.result->capture_s, 10.01, 1e-9);  // from the first trigger
   EXPECT_EQ(step.result->request_id, 7);
   EXPECT_FALSE(seq_.busy());
+}
+
+TEST_F(Capture, AFrameAnsweringAnEarlierTriggerOfTheRequestIsTaken) {
+  const int64_t first = start(1.0);
+  ASSERT_TRUE(seq_.tick(2.0).trigger_seq);  // triggered again: the camera is slower than 1 s
+  seq_.on_arm_status(arm_at(q_plus(0.0), kExposure + 10000));
+  seq_.on_turntable_status(turntable_at(0.0, kExposure + 10000));
+  const CaptureStep step = seq_.on_frame(flat_frame(first, kExposure, 0.5f), 2.5);
+  ASSERT_TRUE(step.result) << "the first trigger's frame was not taken";
+  EXPECT_TRUE(step.result->ok) << step.result->message;
+  EXPECT_FALSE(seq_.awaits_frame(first + 1));  // the request is answered: later frames are not its
 }
 
 TEST_F(Capture, AFrameExposedBeforeNotBeforeIsTriggeredAgain) {
@@ -226,14 +238,14 @@ TEST_F(Capture, AFrameExposedBeforeNotBeforeIsTriggeredAgain) {
   const int64_t first = start(1.0, r);
   seq_.on_arm_status(arm_at(q_plus(0.0), kExposure + 10000));
   seq_.on_turntable_status(turntable_at(0, kExposure + 10000));
-  // Exposed 1 us too early: a new trigger, a new deadline.
+  // Exposed 1 us too early: a new trigger (the request's deadline stays).
   CaptureStep step = seq_.on_frame(flat_frame(first, kExposure - 1, 1.0f), 1.5);
   EXPECT_FALSE(step.result);
   ASSERT_TRUE(step.trigger_seq);
   EXPECT_EQ(*step.trigger_seq, first + 1);
   ASSERT_EQ(step.warnings.size(), 1u);
   EXPECT_NE(step.warnings[0].find("before the rig settled"), std::string::npos) << step.warnings[0];
-  EXPECT_FALSE(seq_.tick(11.4).trigger_seq);  // deadline 1.5 + 10 s
+  EXPECT_FALSE(seq_.tick(2.4).trigger_seq);  // the next one 1 s after this trigger at 1.5 s
   // Exposed exactly at not_before: taken; the capture time counts from the second trigger.
   step = seq_.on_frame(flat_frame(first + 1, kExposure, 1.0f), 2.0);
   ASSERT_TRUE(step.result);
