@@ -58,6 +58,8 @@ using ScanEvent = std::variant<MoveResult, CaptureResult, RegisteredCloud, Voxel
 // How long the sequence waits, s.
 struct ScanTimeouts {
   double resend_s = 3.0;          // re-send a move or plan request whose answer has not come
+                                  // (a move takes seconds of rig time; the executor ignores a
+                                  // repeat of the move it is making)
   double capture_resend_s = 1.0;  // re-send the capture request while the view's CLOUD,
                                   // REGISTERED_CLOUD or VOXEL_MAP has not come (each normally
                                   // follows within 0.5 s)
