@@ -158,8 +158,8 @@ int main(int argc, char** argv) {
 
     bus::Bus bus("twin");
     bus.serve_scan(scope);
-    // Statuses echo the scan of the last command accepted, frames the scan of their trigger.
-    std::string arm_scan = scope, turntable_scan = scope;
+    // Statuses name the scan this twin plays the rig of ("" when it obeys every scan, as a real
+    // driver does); frames echo the scan of their trigger.
     // Pacing reference: rig time runs at `speed` x wall time from here (reset after a render,
     // which stops the clock of the rig while it runs).
     double wall0 = 0, sim0 = 0;
@@ -182,7 +182,6 @@ int main(int argc, char** argv) {
           throw std::invalid_argument("unknown mode " + std::to_string(c.mode));
         }
         arm_fault.clear();
-        arm_scan = c.scan_id;
       } catch (const std::exception& e) {
         arm_fault.set("rejected ARM_COMMAND seq " + std::to_string(c.seq) + ": " + e.what(), c.seq);
         throw std::invalid_argument(arm_fault.fault);
@@ -192,7 +191,6 @@ int main(int argc, char** argv) {
       try {
         sim.command_turntable(c.angle_rad, c.speed_scale, c.seq);
         turntable_fault.clear();
-        turntable_scan = c.scan_id;
       } catch (const std::exception& e) {
         turntable_fault.set("rejected TURNTABLE_COMMAND seq " + std::to_string(c.seq) + ": " + e.what(), c.seq);
         throw std::invalid_argument(turntable_fault.fault);
@@ -259,7 +257,7 @@ int main(int argc, char** argv) {
         arm_status_t s;
         s.utime = utime;
         s.seq = status_seq;
-        s.scan_id = arm_scan;
+        s.scan_id = scope;
         s.num_joints = 6;
         s.joint_names = rig.joint_names;
         s.joint_position_rad = bus::to_std(sim.arm_position_reported());
@@ -277,7 +275,7 @@ int main(int argc, char** argv) {
           turntable_status_t t;
           t.utime = utime;
           t.seq = status_seq;
-          t.scan_id = turntable_scan;
+          t.scan_id = scope;
           t.angle_rad = sim.turntable_angle_reported();
           t.velocity_rad_s = sim.turntable_velocity();
           t.angle_commanded_rad = sim.turntable().target[0] + errors.turntable_offset_rad;

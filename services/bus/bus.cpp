@@ -16,6 +16,8 @@ std::string lcm_url() {
   return "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
 }
 
+const std::string& scan_of(const heartbeat_t& m) { return m.serves_scan; }
+
 int64_t now_utime() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
              std::chrono::system_clock::now().time_since_epoch())
@@ -82,6 +84,7 @@ void Bus::heartbeat(bool force) {
   hb.service = service_;
   hb.pid = static_cast<int32_t>(getpid());
   hb.scan_id = scan_id_;
+  hb.serves_scan = scope_;
   hb.iteration = iteration_;
   hb.messages_handled = handled_;
   hb.messages_rejected = rejected_;

@@ -47,6 +47,14 @@ struct MayBeUnscoped<depth_frame_t> : std::true_type {};
 template <>
 struct MayBeUnscoped<heartbeat_t> : std::true_type {};
 
+// The scan a message belongs to, for the filter: its scan_id; a heartbeat's is the scan its
+// sender serves (its scan_id is only the last one it handled).
+template <class T>
+const std::string& scan_of(const T& m) {
+  return m.scan_id;
+}
+const std::string& scan_of(const heartbeat_t& m);
+
 // Whether a message of `scan_id` is for a process serving `scope` ("": every scan); an empty
 // scan_id is for every scan when the message MayBeUnscoped.
 inline bool in_scope(const std::string& scope, const std::string& scan_id, bool may_be_unscoped) {
@@ -136,8 +144,8 @@ class Bus {
         return;
       }
       if constexpr (HasScanId<T>::value) {
-        if (!in_scope(d->bus->scope_, msg.scan_id, MayBeUnscoped<T>::value)) {
-          d->bus->ignore(chan, msg.scan_id);
+        if (!in_scope(d->bus->scope_, scan_of(msg), MayBeUnscoped<T>::value)) {
+          d->bus->ignore(chan, scan_of(msg));
           return;
         }
       }

@@ -53,3 +53,12 @@ TEST(ScanScope, AProcessForOneScanTakesOnlyThatScansMessages) {
   EXPECT_TRUE(bus::in_scope(mine, "", true));                          // a driver that does not echo the id
   EXPECT_FALSE(bus::in_scope(mine, "box-0000000000000001", true));     // a driver of another scan's rig
 }
+
+TEST(ScanScope, AHeartbeatIsFilteredByTheScanItsSenderServesNotTheLastItHandled) {
+  heartbeat_t h{};
+  h.scan_id = "bunny-0000000000000001";  // an unscoped service's last scan
+  h.serves_scan = "";
+  EXPECT_TRUE(bus::in_scope("box-0000000000000002", bus::scan_of(h), MayBeUnscoped<heartbeat_t>::value));
+  h.serves_scan = "bunny-0000000000000001";  // a service of another scan
+  EXPECT_FALSE(bus::in_scope("box-0000000000000002", bus::scan_of(h), MayBeUnscoped<heartbeat_t>::value));
+}
