@@ -41,7 +41,8 @@ NbvScan nbv_scan(const std::string& name, const std::string& options, int views)
   s.scan = read_json_file(s.out / "scan.json");
   s.eval = eval::evaluate_scan(s.out);
   // Every process exited cleanly.
-  for (const auto& p : read_json_file(s.out / "processes.json")["processes"]) EXPECT_EQ(p["exit_code"], 0) << p.dump();
+  const nlohmann::json procs_json = read_json_file(s.out / "processes.json");
+  for (const auto& p : procs_json["processes"]) EXPECT_EQ(p["exit_code"], 0) << p.dump();
   EXPECT_EQ(s.scan["status"]["state"], "done");
   EXPECT_EQ(s.scan["settings"]["planner"], "pbnbv");
   EXPECT_EQ(s.scan["stop"]["rule"], "budget") << s.scan["stop"].dump();

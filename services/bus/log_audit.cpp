@@ -52,6 +52,20 @@ LogContents read_scan_log(const std::string& path, const std::string& scan_id) {
   return c;
 }
 
+LogContents read_scan_logs(const std::vector<std::string>& paths, const std::string& scan_id) {
+  LogContents all;
+  for (const std::string& p : paths) {
+    const LogContents c = read_scan_log(p, scan_id);
+    all.events += c.events;
+    all.undecodable += c.undecodable;
+    all.depth_frames.insert(c.depth_frames.begin(), c.depth_frames.end());
+    all.clouds.insert(c.clouds.begin(), c.clouds.end());
+    all.registered_clouds.insert(c.registered_clouds.begin(), c.registered_clouds.end());
+    all.voxel_maps.insert(c.voxel_maps.begin(), c.voxel_maps.end());
+  }
+  return all;
+}
+
 std::vector<std::string> missing_from_log(const LogContents& log, const nlohmann::json& views) {
   std::vector<std::string> missing;
   for (const nlohmann::json& v : views) {

@@ -23,6 +23,8 @@ struct LogContents {
 // Reads the log at `path`, keeping what belongs to `scan_id`. Throws std::runtime_error naming
 // the file when it cannot be opened.
 LogContents read_scan_log(const std::string& path, const std::string& scan_id);
+// The same over several files (a restarted lcm-logger goes on in scan.lcmlog.00, .01, ...).
+LogContents read_scan_logs(const std::vector<std::string>& paths, const std::string& scan_id);
 
 // The messages a scan's views (scan.json's "views") say were sent and the log lacks, one line
 // each ("view 3: DEPTH_FRAME 1733069123000042"); empty when the log holds them all. A view

@@ -7,10 +7,12 @@
 #include <csignal>
 #include <ctime>
 #include <iostream>
+#include <map>
 #include <thread>
 
 #include "bus/bus.hpp"
 #include "bus/log_audit.hpp"
+#include "pbnbv/heartbeat_t.hpp"
 #include "core/base/format.hpp"
 #include "core/base/signals.hpp"
 #include "core/geometry/mesh.hpp"
@@ -58,13 +60,27 @@ void prepare_out(const fs::path& out, bool overwrite) {
   fs::create_directories(out / "logs");
 }
 
-// processes.json: the launcher and every process it started, with PIDs (written at start, so
+// processes.json: the launcher and every process it started, with PIDs and restarts (written at start, so
 // what runs can be found and stopped even if the launcher is gone) and, once stopped, how each
 // ended (exit_code: exit status, or 128 + signal; null while running).
-nlohmann::json processes_json(const std::string& scan_id, const std::vector<process::Child>& children) {
+// How the launcher watches a process: restarts so far, when it was (re)started, when its
+// heartbeat was last heard (-1: not yet since the start).
+struct Watch {
+  int restarts = 0;
+  double started_s = 0;
+  double heard_s = -1;
+};
+constexpr int kMaxRestarts = 3;
+constexpr double kSilentS = 10.0;
+constexpr double kFirstHeartbeatS = 90.0;
+
+nlohmann::json processes_json(const std::string& scan_id, const std::vector<process::Child>& children,
+                              const std::map<std::string, Watch>& watch = {}) {
   nlohmann::json procs = nlohmann::json::array();
   for (const auto& c : children) {
+    const auto w = watch.find(c.name);
     procs.push_back({{"name", c.name},
+                     {"restarts", w == watch.end() ? 0 : w->second.restarts},
                      {"pid", c.pid},
                      {"argv", c.argv},
                      {"log", c.log_path},
@@ -99,12 +115,18 @@ void finish_record(const fs::path& out, const std::string& state, const std::str
 // views scan.json recorded.
 void audit_log(const fs::path& out, const std::string& scan_id) {
   try {
-    const bus::LogContents log = bus::read_scan_log((out / "scan.lcmlog").string(), scan_id);
+    std::vector<std::string> files;  // scan.lcmlog, and scan.lcmlog.NN after lcm-logger restarts
+    for (const auto& e : fs::directory_iterator(out)) {
+      if (e.path().filename().string().rfind("scan.lcmlog", 0) == 0) files.push_back(e.path().string());
+    }
+    std::sort(files.begin(), files.end());
+    const bus::LogContents log = bus::read_scan_logs(files, scan_id);
     const nlohmann::json scan = read_json((out / "scan.json").string());
     const nlohmann::json views = scan.value("views", nlohmann::json::array());
     const std::vector<std::string> missing = bus::missing_from_log(log, views);
     if (missing.empty()) {
-      std::cout << "scan.lcmlog: " << log.events << " messages, every depth frame, cloud, registered cloud and map of the "
+      std::cout << "scan.lcmlog" << (files.size() > 1 ? " (" + std::to_string(files.size()) + " files)" : "") << ": "
+                << log.events << " messages, every depth frame, cloud, registered cloud and map of the "
                 << views.size() << " views" << std::endl;
       return;
     }
@@ -188,7 +210,7 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
                "--error-seed", std::to_string(o.error_seed), "--truth-out", (out / "twin_truth.jsonl").string()});
   add("motion", {(bin / "pbnbv-motion").string(), "--rig", to_string(s.rig)});
   add("camera", {(bin / "pbnbv-camera").string(), "--rig", to_string(s.rig)});
-  add("registration", {(bin / "pbnbv-registration").string()});
+  add("registration", {(bin / "pbnbv-registration").string(), "--out", out.string()});
   if (!o.registration) children.back().argv.push_back("--off");
   // The map's working volume: the cloud's crop box, above the turntable top.
   Eigen::Vector3d volume_min = s.crop_min_m;
@@ -213,6 +235,34 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
   std::string cause;  // why the scan ended early, when the coordinator could not say
   int code = 0;
   bool done = false;
+
+  // Supervision: a service that dies (a signal, or an exit other than 2 = bad start) is started
+  // again, at most kMaxRestarts times each; one that sends no heartbeat for kSilentS is killed and
+  // started again the same way. The restarted service continues from the scan's folder and the
+  // coordinator's re-sent requests; lcm-logger goes on in scan.lcmlog.NN.
+  std::map<std::string, Watch> watch;
+  for (const auto& c : children) watch[c.name] = Watch{0, bus::now_s(), -1};
+  bus::Bus bus("launcher");
+  bus.serve_scan(s.scan_id);
+  bus.subscribe<heartbeat_t>(channels::kHeartbeat, [&](const heartbeat_t& h) {
+    for (const auto& c : children) {
+      if (c.name == h.service && c.pid == h.pid) watch[c.name].heard_s = bus::now_s();
+    }
+  });
+  auto restart = [&](process::Child& c, const std::string& why) {
+    Watch& w = watch[c.name];
+    ++w.restarts;
+    std::cerr << "\n" << c.name << " " << why << ": starting it again (restart " << w.restarts << " of " << kMaxRestarts
+              << ")" << std::endl;
+    if (c.name == "lcm-logger" && std::find(c.argv.begin(), c.argv.end(), "-i") == c.argv.end()) {
+      c.argv.insert(c.argv.begin() + 1, "-i");  // on into scan.lcmlog.00, .01, ...
+    }
+    c.append_log = true;
+    process::start(c);
+    w.started_s = bus::now_s();
+    w.heard_s = -1;
+    write_json_atomic(processes_json(s.scan_id, children, watch), (out / "processes.json").string());
+  };
   while (!done) {
     if (stop_requested()) {
       std::cout << "\ninterrupted: stopping every process" << std::endl;
@@ -229,20 +279,36 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
       if (c == coordinator) {
         code = c->exit_code;
         done = true;
+      } else if (!done && c->exit_code != 2 && watch[c->name].restarts < kMaxRestarts) {
+        restart(*c, "stopped unexpectedly (" + how_it_ended(c->exit_code) + ")");
       } else if (!done) {
-        cause = c->name + " stopped unexpectedly (" + how_it_ended(c->exit_code) + "); see logs/" + c->name + ".log";
-        std::cerr << "error: " << c->name << " stopped unexpectedly (" << how_it_ended(c->exit_code) << "); the end of "
+        const std::string after =
+            watch[c->name].restarts > 0 ? ", after " + std::to_string(watch[c->name].restarts) + " restarts" : "";
+        cause = c->name + " stopped unexpectedly (" + how_it_ended(c->exit_code) + after + "); see logs/" + c->name + ".log";
+        std::cerr << "error: " << c->name << " stopped unexpectedly (" << how_it_ended(c->exit_code) << after << "); the end of "
                   << c->log_path << ":\n" << process::tail_lines(c->log_path, 8) << "stopping every process"
                   << std::endl;
         code = 1;
         done = true;
       }
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    // A hung service: silent for kSilentS (kFirstHeartbeatS after a start: the twin loads its mesh).
+    const double now = bus::now_s();
+    for (auto& c : children) {
+      if (done || !c.running || &c == coordinator || c.name == "lcm-logger") continue;
+      const Watch& w = watch[c.name];
+      const double silent = w.heard_s < 0 ? now - w.started_s : now - w.heard_s;
+      if (silent > (w.heard_s < 0 ? kFirstHeartbeatS : kSilentS)) {
+        std::cerr << "\n" << c.name << " sent no heartbeat for " << fixed(silent, 1) << " s: killing it" << std::endl;
+        ::kill(c.pid, SIGKILL);  // reaped above on the next turn, then started again
+        watch[c.name].heard_s = now;  // not twice
+      }
+    }
+    bus.spin_once(20);
   }
   process::stop_all(children, 5.0);
   // How every process ended (0 = clean exit), for the user and for the tests.
-  write_json_atomic(processes_json(s.scan_id, children), (out / "processes.json").string());
+  write_json_atomic(processes_json(s.scan_id, children, watch), (out / "processes.json").string());
   if (!cause.empty()) {
     finish_record(out, "failed", cause);
   } else if (code != 0 && code != 1 && code != 130) {  // the coordinator itself died

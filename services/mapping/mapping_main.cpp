@@ -15,6 +15,7 @@
 
 #include "bus/bus.hpp"
 #include "bus/reply_cache.hpp"
+#include "bus/state_file.hpp"
 #include "bus/service.hpp"
 #include "bus/convert.hpp"
 #include "core/base/format.hpp"
@@ -37,6 +38,7 @@ class MappingService {
  public:
   MappingService(bus::Bus& bus, const VoxelMapParams& params, const Eigen::AlignedBox3d& working_volume, fs::path out)
       : bus_(bus), params_(params), working_volume_(working_volume), out_(std::move(out)) {
+    restore();
     bus_.subscribe<depth_frame_t>(channels::kDepthFrame, [this](const depth_frame_t& f) {
       frames_.push_back(f);
       if (frames_.size() > kFramesKept) frames_.pop_front();
@@ -118,10 +120,34 @@ class MappingService {
     out.utime = bus::now_utime();
     bus_.publish(channels::kVoxelMap, out);
     answers_.put({r.scan_id, r.iteration}, out);
+    save(out);
     std::ostringstream os;
     os << "view " << r.iteration << ": " << out.message << " (" << out.update_s * 1e3 << " ms; occupied "
        << out.num_occupied << ", frontier " << out.num_frontier << ", unknown " << out.num_unknown << ")";
     log_info(os.str());
+  }
+
+  // The state a restarted service continues from: DIR/state/mapping.map (the map) and
+  // DIR/state/mapping.answer (the last VOXEL_MAP), written after every view.
+  fs::path state_path(const char* name) const { return out_ / "state" / name; }
+
+  void save(const voxel_set_t& answer) {
+    if (out_.empty() || bus_.scope().empty()) return;  // only a service started for one scan
+    fs::create_directories(out_ / "state");
+    write_text_atomic(map_->serialise(), state_path("mapping.map").string());
+    bus::save_message(answer, state_path("mapping.answer").string());
+  }
+
+  // Continues the map of the scan this service serves when the folder holds it (a restart).
+  void restore() {
+    if (out_.empty() || bus_.scope().empty()) return;
+    const std::optional<voxel_set_t> last = bus::load_message<voxel_set_t>(state_path("mapping.answer").string());
+    if (!last || last->scan_id != bus_.scope()) return;
+    map_ = VoxelMap::restore(read_text(state_path("mapping.map").string()), params_, state_path("mapping.map").string());
+    scan_id_ = last->scan_id;
+    answers_.put({last->scan_id, last->iteration}, *last);
+    log_info("continuing the map of scan " + scan_id_ + " after view " + std::to_string(last->iteration) + " from " +
+             state_path("mapping.map").string());
   }
 
   void fill(voxel_set_t& out) const {

@@ -22,7 +22,7 @@ void start(Child& child) {
   argv.push_back(nullptr);
   int log_fd = -1;
   if (!child.log_path.empty()) {
-    log_fd = ::open(child.log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    log_fd = ::open(child.log_path.c_str(), O_WRONLY | O_CREAT | (child.append_log ? O_APPEND : O_TRUNC) | O_CLOEXEC, 0644);
     if (log_fd < 0) throw std::runtime_error("cannot open log " + child.log_path + ": " + std::strerror(errno));
   }
   const pid_t parent = ::getpid();

@@ -11,6 +11,7 @@ struct Child {
   std::string name;       // "twin", "motion", ...
   std::vector<std::string> argv;
   std::string log_path;   // stdout+stderr go here ("" = inherit)
+  bool append_log = false;  // append to the log (a restart) instead of starting it anew
   bool stdout_to_terminal = false;  // keep stdout on the terminal (progress), stderr to the log
   // What the child gets when the process that started it dies, however it dies (SIGKILL
   // included: the kernel sends it, PR_SET_PDEATHSIG): SIGKILL for what has nothing to save,

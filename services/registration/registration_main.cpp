@@ -10,7 +10,11 @@
 #include <iostream>
 #include <sstream>
 
+#include <filesystem>
+
 #include "bus/bus.hpp"
+#include "bus/state_file.hpp"
+#include "core/io/cloud_file.hpp"
 #include "bus/reply_cache.hpp"
 #include "bus/service.hpp"
 #include "bus/convert.hpp"
@@ -30,8 +34,10 @@ constexpr std::size_t kAnswersKept = 4;
 
 class RegistrationService {
  public:
-  RegistrationService(bus::Bus& bus, const RegistrationParams& params, double model_voxel_m, bool off)
-      : bus_(bus), params_(params), model_voxel_m_(model_voxel_m), off_(off) {
+  RegistrationService(bus::Bus& bus, const RegistrationParams& params, double model_voxel_m, bool off,
+                      std::filesystem::path out)
+      : bus_(bus), params_(params), model_voxel_m_(model_voxel_m), off_(off), out_(std::move(out)) {
+    restore();
     bus_.subscribe<point_cloud_t>(channels::kCloud, [this](const point_cloud_t& c) { on_cloud(c); });
   }
 
@@ -99,12 +105,39 @@ class RegistrationService {
     out.utime = bus::now_utime();
     bus_.publish(channels::kRegisteredCloud, out);
     answers_.put({out.scan_id, out.request_id}, out);
+    save(out);
+  }
+
+  // The state a restarted service continues from: DIR/state/registration.ply (the model) and
+  // DIR/state/registration.answer (the last REGISTERED_CLOUD), written after every view.
+  std::filesystem::path state_path(const char* name) const { return out_ / "state" / name; }
+
+  void save(const registered_cloud_t& answer) {
+    if (out_.empty() || bus_.scope().empty()) return;  // only a service started for one scan
+    std::filesystem::create_directories(out_ / "state");
+    const std::string model = state_path("registration.ply").string();
+    write_ply(model_, model + ".tmp");
+    std::filesystem::rename(model + ".tmp", model);
+    bus::save_message(answer, state_path("registration.answer").string());
+  }
+
+  // Continues the model of the scan this service serves when the folder holds it (a restart).
+  void restore() {
+    if (out_.empty() || bus_.scope().empty()) return;
+    const auto last = bus::load_message<registered_cloud_t>(state_path("registration.answer").string());
+    if (!last || last->scan_id != bus_.scope()) return;
+    model_ = read_ply(state_path("registration.ply").string());
+    scan_id_ = last->scan_id;
+    answers_.put({last->scan_id, last->request_id}, *last);
+    log_info("continuing the model of scan " + scan_id_ + " (" + std::to_string(model_.size()) + " points) after view " +
+             std::to_string(last->iteration) + " from " + state_path("registration.ply").string());
   }
 
   bus::Bus& bus_;
   RegistrationParams params_;
   double model_voxel_m_;
   bool off_;
+  std::filesystem::path out_;
   std::string scan_id_;
   PointCloud model_;
   bus::ReplyCache<std::pair<std::string, int64_t>, registered_cloud_t> answers_{kAnswersKept};
@@ -140,8 +173,11 @@ int main(int argc, char** argv) {
   cli::add(app, kCloudVoxel.renamed("model-voxel", "the model cloud's downsampling voxel (0: off)"), &model_voxel_m);
   bool off = false;
   cli::add_flag(app, "off", &off, "pass every view through with its kinematic pose (no ICP)");
+  std::string out;
+  cli::add_text(app, "out", &out,
+                "the scan's folder: with --scan, the model is kept in DIR/state and continued after a restart", "DIR");
   return bus::run_service("registration", app, argc, argv, 20, [&](bus::Bus& bus) -> std::function<void()> {
-    auto service = std::make_shared<RegistrationService>(bus, p, model_voxel_m, off);
+    auto service = std::make_shared<RegistrationService>(bus, p, model_voxel_m, off, out);
     log_info("ready");
     return [service] {};
   });

@@ -788,4 +788,61 @@ void VoxelMap::write_octomap(const std::string& path) const {
   }
 }
 
+namespace {
+constexpr char kMapMagic[] = "PBNBV-VOXELMAP 1\n";
+
+template <class T>
+void put(std::string& out, const T& v) {
+  out.append(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+
+template <class T>
+T take(const std::string& in, std::size_t& at, const std::string& what) {
+  if (at + sizeof(T) > in.size()) throw std::invalid_argument(what + " is cut short at byte " + std::to_string(at));
+  T v;
+  std::memcpy(&v, in.data() + at, sizeof(T));
+  at += sizeof(T);
+  return v;
+}
+}  // namespace
+
+std::string VoxelMap::serialise() const {
+  std::string out(kMapMagic);
+  put(out, params_.resolution_m);
+  for (int i = 0; i < 3; ++i) put(out, static_cast<int32_t>(lo_[i]));
+  for (int i = 0; i < 3; ++i) put(out, static_cast<int32_t>(dims_[i]));
+  put(out, static_cast<uint8_t>(initialised_));
+  out.append(reinterpret_cast<const char*>(cells_.data()), cells_.size());
+  return out;
+}
+
+VoxelMap VoxelMap::restore(const std::string& bytes, const VoxelMapParams& params, const std::string& what) {
+  const std::string magic(kMapMagic);
+  if (bytes.compare(0, magic.size(), magic) != 0) throw std::invalid_argument(what + " is not a saved voxel map");
+  std::size_t at = magic.size();
+  const double res = take<double>(bytes, at, what);
+  if (res != params.resolution_m) {
+    throw std::invalid_argument(what + " was saved at resolution " + std::to_string(res) + " m, the map is at " +
+                                std::to_string(params.resolution_m) + " m");
+  }
+  VoxelMap map(params);
+  for (int i = 0; i < 3; ++i) map.lo_[i] = take<int32_t>(bytes, at, what);
+  for (int i = 0; i < 3; ++i) map.dims_[i] = take<int32_t>(bytes, at, what);
+  map.initialised_ = take<uint8_t>(bytes, at, what) != 0;
+  if ((map.dims_.array() < 0).any() || static_cast<int64_t>(map.dims_.cast<int64_t>().prod()) != static_cast<int64_t>(bytes.size() - at)) {
+    throw std::invalid_argument(what + " holds " + std::to_string(bytes.size() - at) + " cells for a grid of " +
+                                std::to_string(map.dims_.x()) + " x " + std::to_string(map.dims_.y()) + " x " +
+                                std::to_string(map.dims_.z()));
+  }
+  map.cells_.resize(bytes.size() - at);
+  std::memcpy(map.cells_.data(), bytes.data() + at, map.cells_.size());
+  for (uint8_t c : std::string_view(bytes).substr(at)) {
+    if (c > static_cast<uint8_t>(VoxelState::kFrontier)) {
+      throw std::invalid_argument(what + " holds a cell state " + std::to_string(c) + " that is not a voxel state");
+    }
+  }
+  map.origin_ = map.lo_.cast<double>() * res;
+  return map;
+}
+
 }  // namespace pbnbv

@@ -112,6 +112,14 @@ class VoxelMap {
   // (state_colour.hpp: the palette the plan figures use too).
   void write_octomap(const std::string& path) const;
 
+  // The map's whole state as bytes (B's place and size, every cell), so that a restarted mapping
+  // service continues the same map: restore(serialise()) is the same map, and integrating the
+  // next frame into either gives the same cells.
+  std::string serialise() const;
+  // Throws std::invalid_argument naming `what` when the bytes are not a serialised map, are cut
+  // short, or were made at another resolution than `params`.
+  static VoxelMap restore(const std::string& bytes, const VoxelMapParams& params, const std::string& what);
+
  private:
   VoxelMapParams params_;
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  // min corner of B, on the voxel lattice

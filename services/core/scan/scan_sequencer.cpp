@@ -85,6 +85,11 @@ void ScanSequencer::tick(double now_s) {
   if (phase_ == Phase::kFinished) return;
   if (awaited_.resend_due(now_s)) {
     outputs_.push_back(*awaited_.request);
+    // A late plan may wait for a VOXEL_MAP or ELLIPSOIDS that was lost, or that a restarted
+    // ellipsoid fitter or view scorer never saw: the last view's capture request, sent again,
+    // makes the camera, the registration and the mapping service repeat their answers (from
+    // their caches) and the fitter fit that map again.
+    if (phase_ == Phase::kPlanning && !capture_request_.scan_id.empty()) outputs_.push_back(capture_request_);
     awaited_.last_sent_s = now_s;
     ++awaited_.sends;
   }

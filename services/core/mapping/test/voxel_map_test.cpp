@@ -798,3 +798,55 @@ TEST(VoxelMap, WorkingVolumeKeepsTheGroundOutOfTheMap) {
 }
 
 }  // namespace pbnbv
+
+namespace pbnbv {
+namespace {
+
+// A restarted mapping service continues from the saved map: the restored map has B and every
+// cell of the saved one, and the next frame leaves both identical.
+TEST(VoxelMap, ASavedMapRestoresAndContinuesIdentically) {
+  VoxelMapParams p;
+  p.resolution_m = 0.02;
+  VoxelMap map(p);
+  const CameraIntrinsics k = small_camera();
+  ASSERT_TRUE(integrate(map, k, from(Vector3d(0.6, 0.5, 0.4)), cube(kHalf)).updated);
+  VoxelMap restored = VoxelMap::restore(map.serialise(), p, "maps/state.bin");
+  EXPECT_EQ(restored.dims(), map.dims());
+  EXPECT_TRUE(restored.bounds().isApprox(map.bounds()));
+  EXPECT_EQ(all_states(restored), all_states(map));
+  EXPECT_EQ(restored.counts().occupied, map.counts().occupied);
+  ASSERT_TRUE(integrate(map, k, from(Vector3d(-0.6, 0.3, 0.5)), cube(kHalf)).updated);
+  ASSERT_TRUE(integrate(restored, k, from(Vector3d(-0.6, 0.3, 0.5)), cube(kHalf)).updated);
+  EXPECT_EQ(restored.dims(), map.dims());
+  EXPECT_EQ(all_states(restored), all_states(map));
+  // An empty map round-trips too.
+  EXPECT_TRUE(VoxelMap::restore(VoxelMap(p).serialise(), p, "empty").empty());
+}
+
+TEST(VoxelMap, ABadSavedMapIsNamed) {
+  VoxelMapParams p;
+  p.resolution_m = 0.02;
+  VoxelMap map(p);
+  ASSERT_TRUE(integrate(map, small_camera(), from(Vector3d(0.6, 0.5, 0.4)), cube(kHalf)).updated);
+  const std::string bytes = map.serialise();
+  const auto error = [&](const std::string& b, const VoxelMapParams& q) {
+    try {
+      VoxelMap::restore(b, q, "maps/state.bin");
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_EQ(error("not a map", p), "maps/state.bin is not a saved voxel map");
+  EXPECT_NE(error(bytes.substr(0, 20), p).find("maps/state.bin is cut short"), std::string::npos);
+  EXPECT_NE(error(bytes.substr(0, bytes.size() - 1), p).find("cells for a grid of"), std::string::npos);
+  VoxelMapParams coarse = p;
+  coarse.resolution_m = 0.03;
+  EXPECT_NE(error(bytes, coarse).find("was saved at resolution 0.020000 m, the map is at 0.030000 m"), std::string::npos);
+  std::string bad_cell = bytes;
+  bad_cell.back() = 9;
+  EXPECT_NE(error(bad_cell, p).find("a cell state 9"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace pbnbv

@@ -656,6 +656,26 @@ TEST_F(ScanSequencerTest, ALostRegisteredCloudOrMapIsAskedForAgainThroughTheCapt
   EXPECT_LT(now_, 20.0);  // not a 60 s deadline
 }
 
+// A plan that does not come (a lost map, a restarted fitter or scorer): with the plan request, the
+// last view's capture request is sent again, so that its map and ellipsoids are published again.
+TEST_F(ScanSequencerTest, ALatePlanSendsTheLastViewsCaptureRequestAgain) {
+  int asked = 0;
+  scorer = [&, inner = scorer](const PlanRequest& r) -> std::optional<ViewPlan> {
+    if (++asked == 1) return std::nullopt;  // the first plan request goes unanswered
+    return inner(r);
+  };
+  start(test_settings("pbnbv", 2));
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0) << scan_json()["status"].dump();
+  ASSERT_EQ(plans_.size(), 2u);
+  const double resent_at = plans_[1].first;
+  int repeats = 0;
+  for (const auto& [t, c] : captures_) repeats += t == resent_at && c.iteration == 0 ? 1 : 0;
+  std::string seen;
+  for (const auto& [t, c] : captures_) seen += " " + std::to_string(t) + ":" + std::to_string(c.iteration);
+  EXPECT_EQ(repeats, 1) << "the first view's capture request, with the plan request at " << resent_at << " s; captures at" << seen;
+}
+
 TEST_F(ScanSequencerTest, ALostCaptureIsAskedForAgainEverySecondWithTheSameId) {
   int asked = 0;
   camera = [&, inner = camera](const CaptureRequest& r) -> std::optional<CaptureResult> {
