@@ -159,13 +159,14 @@ TEST(Faults, PacketLossOfOneAndFivePercentCostsNoViewAndNoCoverage) {
 }
 
 // SIGKILL of each service (and of the twin and lcm-logger) at view 3 of a 10-view NBV scan on the
-// arm rig: the launcher starts it again, the restarted service continues from the scan's folder
+// arm rig, and SIGSTOP of the mapping service: the launcher starts it again (a stopped one once
+// its heartbeat has been missing for 10 s), the restarted service continues from the scan's folder
 // and the coordinator's re-sent requests, and the scan completes every view with the coverage of
 // an undisturbed run.
 TEST(Faults, EachKilledServiceIsRestartedAndTheScanCompletes) {
   const fs::path dir = fresh_dir("killed-service");
-  const auto run_killing = [&](const std::string& victim) {
-    const fs::path out = dir / (victim.empty() ? std::string("undisturbed") : victim);
+  const auto run_killing = [&](const std::string& victim, int sig = SIGKILL) {
+    const fs::path out = dir / (victim.empty() ? std::string("undisturbed") : victim + (sig == SIGKILL ? "" : "-stopped"));
     const std::string scan10 =
         std::string("--object bunny --rig arm --views 10") + (victim == "lcm-logger" ? "" : " --no-log");
     const pid_t pid = ::fork();
@@ -182,7 +183,7 @@ TEST(Faults, EachKilledServiceIsRestartedAndTheScanCompletes) {
         if (p["name"] == victim) victim_pid = p["pid"].get<int>();
       }
       EXPECT_GT(victim_pid, 0) << victim;
-      if (victim_pid > 0) ::kill(victim_pid, SIGKILL);
+      if (victim_pid > 0) ::kill(victim_pid, sig);
     }
     EXPECT_EQ(wait_exit(pid, 300), 0) << victim << ": " << read_text(out.string() + ".stdout");
     return out;
@@ -209,6 +210,20 @@ TEST(Faults, EachKilledServiceIsRestartedAndTheScanCompletes) {
     EXPECT_EQ(restarts, 1) << victim;
     ASSERT_EQ(coverage.size(), 10u) << victim;
     EXPECT_NEAR(coverage.back(), reference.back(), 1.0) << victim;
+    if (victim == "mapping") {
+      // Hung, not dead: SIGSTOP (never continued). Its heartbeat stops; 10 s later the launcher
+      // kills it and starts it again.
+      const fs::path hung = run_killing(victim, SIGSTOP);
+      const auto s2 = read_json_file(hung / "scan.json");
+      const std::vector<double> c2 = eval::evaluate_scan(hung).coverage_by_view;
+      std::cout << "mapping stopped (SIGSTOP) at view 3: " << s2["status"]["views_done"] << " views in "
+                << s2["status"]["elapsed_s"].get<double>() << " s, coverage after view 10 " << (c2.empty() ? 0.0 : c2.back())
+                << " %\n";
+      EXPECT_EQ(s2["status"]["views_done"], 10);
+      ASSERT_EQ(c2.size(), 10u);
+      EXPECT_NEAR(c2.back(), reference.back(), 1.0);
+      EXPECT_NE(read_text(hung.string() + ".stdout").find("mapping sent no heartbeat for"), std::string::npos);
+    }
     if (victim == "lcm-logger") {  // it went on in scan.lcmlog.00 and the two files hold every message
       EXPECT_NE(read_text(out.string() + ".stdout")
                     .find("scan.lcmlog (2 files): "),

@@ -115,9 +115,7 @@ class RegistrationService {
   void save(const registered_cloud_t& answer) {
     if (out_.empty() || bus_.scope().empty()) return;  // only a service started for one scan
     std::filesystem::create_directories(out_ / "state");
-    const std::string model = state_path("registration.ply").string();
-    write_ply(model_, model + ".tmp");
-    std::filesystem::rename(model + ".tmp", model);
+    write_ply(model_, state_path("registration.ply").string());
     bus::save_message(answer, state_path("registration.answer").string());
   }
 

@@ -1,5 +1,6 @@
 // Point cloud files: read by CGAL's point-set PLY reader, written by our own (see write_ply).
 #include "core/io/cloud_file.hpp"
+#include "core/io/json.hpp"
 
 #include <CGAL/IO/read_ply_points.h>
 #include <CGAL/Simple_cartesian.h>
@@ -60,11 +61,13 @@ void write_ply(const PointCloud& cloud, const std::string& path) {
       dst += 4;
     }
   }
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  if (!f) fail(ctx, path, std::string("cannot open for writing: ") + std::strerror(errno));
-  f.write(out.data(), static_cast<std::streamsize>(out.size()));
-  f.close();
-  if (!f) fail(ctx, path, "write failed");
+  // Atomically (temporary file + rename): a reader, or a process restarted after a crash, never
+  // sees half a cloud.
+  try {
+    write_text_atomic(out, path);
+  } catch (const std::exception& e) {
+    fail(ctx, path, e.what());
+  }
 }
 
 PointCloud read_ply(const std::string& path) {

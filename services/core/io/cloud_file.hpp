@@ -6,8 +6,8 @@
 
 namespace pbnbv {
 
-// Binary little-endian PLY with float x y z (what Open3D, PCL and MeshLab read). Throws
-// std::runtime_error naming the path on error.
+// Binary little-endian PLY with float x y z (what Open3D, PCL and MeshLab read), written
+// atomically (temporary file + rename). Throws std::runtime_error naming the path on error.
 void write_ply(const PointCloud& cloud, const std::string& path);
 // Reads a PLY point cloud (ascii or binary, float or double x y z; other properties and
 // elements skipped; non-finite points kept). Errors as load_mesh's for PLY.
