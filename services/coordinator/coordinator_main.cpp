@@ -79,7 +79,7 @@ void take(bus::Bus& bus, const char* channel, std::vector<ScanEvent>& inbox) {
 }
 
 // Runs the scan to its end; returns the process exit code.
-int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out) {
+int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out, bool resume) {
   ScanSequencer scan(settings, out);
   bus.serve_scan(settings.scan_id);
   // Handlers only check and convert (a bad message is rejected by the bus); the sequencer
@@ -98,7 +98,11 @@ int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out) {
                              [&](const heartbeat_t& h) { inbox.emplace_back(Heard{"heartbeat of " + h.service}); });
 
   const pid_t parent = ::getppid();
-  scan.start(bus::now_s());
+  if (resume) {
+    scan.resume(bus::now_s());
+  } else {
+    scan.start(bus::now_s());
+  }
   while (!scan.finished()) {
     send(bus, scan.take_outputs());
     if (stop_requested()) {
@@ -130,13 +134,15 @@ int main(int argc, char** argv) {
   std::string out, settings_path;
   cli::add_text(app, "out", &out, "the scan's folder (scan.json, cloud.ply, frames/, plans/)", "DIR")->required();
   cli::add_text(app, "settings", &settings_path, "the scan's settings [DIR/settings.json]", "PATH");
+  bool resume = false;
+  cli::add_flag(app, "resume", &resume, "continue the scan recorded in DIR (scan.json, cloud.ply) with its next view");
   if (const std::optional<int> code = cli::parse(app, argc, argv, std::cout, std::cerr)) return *code;
   install_stop_handlers();
   try {
     if (settings_path.empty()) settings_path = (fs::path(out) / "settings.json").string();
     const ScanSettings settings = scan_settings_from_json(read_json(settings_path));
     bus::Bus bus("coordinator");
-    return run(bus, settings, out);
+    return run(bus, settings, out, resume);
   } catch (const std::exception& e) {
     log_error(e.what());
     return 2;

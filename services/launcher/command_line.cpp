@@ -137,6 +137,10 @@ void CommandLine::declare_scan() {
   cli::add_flag(c, "overwrite", &scan_.overwrite,
                 "delete what --out holds before scanning (a folder that is not empty is refused otherwise)")
       ->group(kGroupOutput);
+  cli::add_text(c, "resume", &scan_.resume,
+                "continue the interrupted scan in DIR with its own settings and processes (other options are not used)",
+                "DIR")
+      ->group(kGroupOutput);
   cli::add_settings_file(c)->group(kGroupOutput);
 }
 

@@ -40,6 +40,7 @@ struct ScanOptions {
   bool record_log = true;        // not --no-log
   std::string out;               // empty: out/<object>-<date-time>-<last 4 digits of the scan id>
   bool overwrite = false;        // --overwrite: empty a non-empty --out first
+  std::string resume;            // --resume DIR: continue the interrupted scan there
 };
 
 // The paper's three ablations: which PB-NBV parameter varies.

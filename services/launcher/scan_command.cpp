@@ -153,7 +153,15 @@ void warn_small_receive_buffer() {
 
 }  // namespace
 
+// Starts `children` (the coordinator last), keeps them running (restarts, hang detection) until
+// the coordinator ends or the user stops the scan, stops them all, and reports: scan.json's final
+// state, the log check, coverage. Returns the exit code.
+int supervise(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, bool record_log);
+
+int resume_scan(const fs::path& dir);
+
 int run_scan(const ScanOptions& o, const fs::path& bin) {
+  if (!o.resume.empty()) return resume_scan(o.resume);
   ScanSettings s = o.settings;
   eval::ObjectSpec object = eval::resolve_object(o.object);
   const std::string object_name = object.name;
@@ -222,6 +230,10 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
   if (uses_view_scorer(s.planner)) add("scorer", {(bin / "pbnbv-scorer").string(), "--rig", to_string(s.rig)});
   add("coordinator", {(bin / "pbnbv-coordinator").string(), "--out", out.string()}, true);
 
+  return supervise(children, s, out, o.record_log);
+}
+
+int supervise(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, bool record_log) {
   install_stop_handlers();
 
   try {
@@ -319,7 +331,7 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
       std::cerr << "warning: " << c.name << " exited with status " << c.exit_code << " (log: " << c.log_path << ")" << std::endl;
     }
   }
-  if (o.record_log && fs::exists(out / "scan.json")) audit_log(out, s.scan_id);
+  if (record_log && fs::exists(out / "scan.json")) audit_log(out, s.scan_id);
   if (code == 0) {
     // Against the ground truth the twin rendered: coverage after every view.
     try {
@@ -342,11 +354,64 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
     std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
               << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
               << (out / "scan.json").string() << ", " << (out / "coverage.json").string()
-              << (o.record_log ? ", " + (out / "scan.lcmlog").string() : "") << std::endl;
+              << (record_log ? ", " + (out / "scan.lcmlog").string() : "") << std::endl;
   } else if (code != 130) {
     std::cerr << "scan failed (exit " << code << "); logs in " << (out / "logs").string() << std::endl;
   }
   return code;
+}
+
+// Whether `pid` still runs a program of this scan (its command line names the scan's folder).
+bool still_running(int pid, const fs::path& out) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/cmdline");
+  const std::string cmdline((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return !cmdline.empty() && cmdline.find(out.string()) != std::string::npos;
+}
+
+int resume_scan(const fs::path& dir) {
+  const fs::path out = fs::absolute(dir);
+  for (const char* f : {"processes.json", "settings.json"}) {
+    if (!fs::exists(out / f)) {
+      throw std::invalid_argument("--resume " + out.string() + ": no scan to resume there (" + f + " is missing)");
+    }
+  }
+  const ScanSettings s = scan_settings_from_json(read_json((out / "settings.json").string()));
+  if (fs::exists(out / "scan.json") &&
+      read_json((out / "scan.json").string()).value("status", nlohmann::json::object()).value("state", "") == "done") {
+    std::cout << "pbnbv scan: " << out.string() << " holds a complete scan (" << s.scan_id << "): nothing to resume"
+              << std::endl;
+    return 0;
+  }
+  const nlohmann::json procs = read_json((out / "processes.json").string());
+  std::vector<process::Child> children;
+  bool record_log = false;
+  for (const auto& p : procs.at("processes")) {
+    if (p.contains("pid") && p["pid"].is_number() && p["pid"].get<int>() > 0 && still_running(p["pid"].get<int>(), out)) {
+      throw std::invalid_argument("--resume " + out.string() + ": its " + p["name"].get<std::string>() + " (pid " +
+                                  std::to_string(p["pid"].get<int>()) + ") is still running");
+    }
+    process::Child c;
+    c.name = p.at("name").get<std::string>();
+    c.argv = p.at("argv").get<std::vector<std::string>>();
+    c.log_path = p.at("log").get<std::string>();
+    c.append_log = true;
+    if (c.name == "coordinator") {
+      c.argv.push_back("--resume");
+      c.stdout_to_terminal = true;
+      c.death_signal = SIGTERM;
+    }
+    if (c.name == "lcm-logger") {
+      if (std::find(c.argv.begin(), c.argv.end(), "-i") == c.argv.end()) c.argv.insert(c.argv.begin() + 1, "-i");
+      c.death_signal = SIGTERM;
+      record_log = true;
+    }
+    children.push_back(std::move(c));
+  }
+  if (children.empty() || children.back().name != "coordinator") {
+    throw std::invalid_argument("--resume " + out.string() + ": processes.json does not end with the coordinator");
+  }
+  std::cout << "pbnbv scan: resuming " << s.scan_id << " in " << out.string() << std::endl;
+  return supervise(children, s, out, record_log);
 }
 
 }  // namespace pbnbv::launcher

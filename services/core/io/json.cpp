@@ -1,5 +1,6 @@
 #include "core/io/json.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -18,6 +19,17 @@ nlohmann::json to_json(const Pose& p) {
   double pos[3], quat[4];
   pose_to_arrays(p, pos, quat);
   return {{"position_m", {pos[0], pos[1], pos[2]}}, {"quat_wxyz", {quat[0], quat[1], quat[2], quat[3]}}};
+}
+
+Pose pose_from_json(const nlohmann::json& j, const std::string& what) {
+  double pos[3], quat[4];
+  try {
+    for (int i = 0; i < 3; ++i) pos[i] = j.at("position_m").at(i).get<double>();
+    for (int i = 0; i < 4; ++i) quat[i] = j.at("quat_wxyz").at(i).get<double>();
+  } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument(what + " is not a pose {\"position_m\": [x, y, z], \"quat_wxyz\": [w, x, y, z]}");
+  }
+  return pose_from_arrays(pos, quat, what);  // checks finiteness and the quaternion's norm
 }
 
 void write_text_atomic(const std::string& text, const std::string& path) {

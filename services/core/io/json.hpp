@@ -10,6 +10,9 @@
 namespace pbnbv {
 
 nlohmann::json to_json(const Pose& p);  // {"position_m": [...], "quat_wxyz": [...]}
+// The pose to_json wrote; throws std::invalid_argument naming `what` when a field is missing or
+// not finite, or the quaternion is not a unit one (pose_from_arrays).
+Pose pose_from_json(const nlohmann::json& j, const std::string& what);
 nlohmann::json to_json(const Eigen::Vector3d& v);
 Eigen::Vector3d vec3_from_json(const nlohmann::json& j, const std::string& what);
 

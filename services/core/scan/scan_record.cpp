@@ -34,6 +34,7 @@ json move_json(const MoveResult& m) {
 // scan.json's "capture" of a view that got its CLOUD.
 json capture_json(const CaptureResult& c) {
   return {{"status", c.ok ? "ok" : "failed"},
+          {"request_id", c.request_id},
           {"message", c.message},
           {"camera_object_T_camera", to_json(c.object_T_camera)},
           {"joint_position_rad", to_json6(c.joint_position_rad)},
@@ -140,7 +141,10 @@ json to_json(const ViewRecord& v) {
   if (!v.failed_moves.empty()) {
     json attempts = json::array();
     for (const auto& f : v.failed_moves) {
-      attempts.push_back({{"option", f.option}, {"status", to_string(f.status)}, {"reason", f.reason}});
+      attempts.push_back({{"option", f.option},
+                          {"status", to_string(f.status)},
+                          {"reason", f.reason},
+                          {"object_T_camera", to_json(f.object_T_camera)}});
     }
     view["failed_moves"] = attempts;
   }
@@ -219,13 +223,27 @@ void ScanRecord::add_view(const ViewRecord& v, int views_done, double elapsed_s)
   write("running", "", views_done, elapsed_s);
 }
 
+void ScanRecord::continue_from_folder(const std::string& scan_id) {
+  const fs::path path = out_ / "scan.json";
+  if (!fs::exists(path)) throw std::invalid_argument("cannot resume: " + path.string() + " does not exist");
+  json before = read_json(path.string());
+  if (!before.contains("settings") || before["settings"].value("scan_id", "") != scan_id) {
+    throw std::invalid_argument("cannot resume: " + path.string() + " is not a record of scan " + scan_id);
+  }
+  report_["views"] = before.value("views", json::array());
+  if (before.contains("plan")) report_["plan"] = before["plan"];
+  if (before.contains("status")) report_["status"] = before["status"];
+  if (fs::exists(out_ / "cloud.ply")) accumulated_ = read_ply((out_ / "cloud.ply").string());
+}
+
 void ScanRecord::set_stop(const ScanStop& stop) { report_["stop"] = to_json(stop); }
 
 void ScanRecord::set_planning_stopped(const PlanRecord& p) { report_["planning_stopped"] = to_json(p); }
 
 void ScanRecord::write(const std::string& state, const std::string& message, int views_done, double elapsed_s) {
   report_["status"] = {{"state", state},           {"message", message},        {"views_done", views_done},
-                       {"views_planned", views_planned_}, {"elapsed_s", elapsed_s}, {"num_points", accumulated_.size()}};
+                       {"views_planned", views_planned_}, {"elapsed_s", elapsed_s}, {"num_points", accumulated_.size()},
+                       {"next_request_id", next_request_id_}};
   write_json_atomic(report_, (out_ / "scan.json").string());
 }
 

@@ -32,6 +32,7 @@ double planner_step_ms(const PlanRecord& p);
 // A move to an option of a view that did not reach it.
 struct FailedMove {
   int option = 0;
+  Pose object_T_camera = Pose::Identity();  // the option's pose (a resumed scan excludes it again)
   MoveStatus status = MoveStatus::kRejected;
   std::string reason;
 };
@@ -97,6 +98,13 @@ class ScanRecord {
   void write(const std::string& state, const std::string& message, int views_done, double elapsed_s);
 
   std::size_t num_points() const { return accumulated_.size(); }
+  // Request ids used so far end below this (written in scan.json's status, so that a resumed
+  // coordinator never reuses one a service still has an answer for).
+  void set_next_request_id(int64_t id) { next_request_id_ = id; }
+  // Continues the record in its folder: scan.json as written so far and the merged cloud (a
+  // resumed scan). Throws naming the file when scan.json is missing or not a scan of `scan_id`.
+  void continue_from_folder(const std::string& scan_id);
+  const nlohmann::json& report() const { return report_; }
   std::filesystem::path scan_json_path() const { return out_ / "scan.json"; }
 
  private:
@@ -105,6 +113,7 @@ class ScanRecord {
   double voxel_m_;
   nlohmann::json report_;
   PointCloud accumulated_;
+  int64_t next_request_id_ = 1;
 };
 
 }  // namespace pbnbv

@@ -1,9 +1,11 @@
 #include "core/scan/scan_sequencer.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 #include "core/base/format.hpp"
+#include "core/io/json.hpp"
 #include "core/base/units.hpp"
 #include "core/geometry/views.hpp"
 
@@ -38,6 +40,79 @@ ScanSequencer::ScanSequencer(ScanSettings settings, fs::path out, ScanTimeouts t
     }
     record_.set_next_best_view_plan(std::string(name_of(s_.planner)), first_view_);
   }
+}
+
+CaptureRequest ScanSequencer::capture_request(int iteration, int64_t request_id, int64_t not_before_utime) const {
+  CaptureRequest r;
+  r.scan_id = s_.scan_id;
+  r.iteration = iteration;
+  r.request_id = request_id;
+  r.not_before_utime = not_before_utime;
+  r.object_z_m = s_.object_z_m;
+  r.crop = box_or_none(s_.crop_min_m, s_.crop_max_m);
+  r.ground_clearance_m = s_.ground_clearance_m;
+  r.voxel_m = s_.voxel_m;
+  r.timeout_s = s_.capture_timeout_s;
+  return r;
+}
+
+void ScanSequencer::resume(double now_s) {
+  record_.continue_from_folder(s_.scan_id);
+  const nlohmann::json& report = record_.report();
+  const nlohmann::json views = report.value("views", nlohmann::json::array());
+  const std::string file = record_.scan_json_path().string();
+  int64_t max_id = 0;
+  for (const nlohmann::json& v : views) {
+    const int i = v.at("view").get<int>();
+    const std::string at = file + " view " + std::to_string(i + 1);
+    for (const nlohmann::json& f : v.value("failed_moves", nlohmann::json::array())) {
+      if (f.contains("object_T_camera")) done_.excluded.push_back(pose_from_json(f["object_T_camera"], at + " failed move"));
+    }
+    Pose reached = Pose::Identity();
+    if (v.contains("move") && v["move"].value("status", "") == "reached") {
+      reached = pose_from_json(v["move"].at("reached_object_T_camera"), at + " move");
+      for (int k = 0; k < 6; ++k) done_.joints_rad[k] = v["move"].at("joint_position_rad").at(k).get<double>();
+      done_.turntable_rad = v["move"].value("turntable_angle_rad", 0.0);
+    }
+    if (v.contains("plan") && v["plan"].contains("first_quality_px") && v["plan"]["first_quality_px"].is_number() &&
+        !std::isfinite(done_.first_quality)) {
+      done_.first_quality = v["plan"]["first_quality_px"].get<double>();
+    }
+    if (v.contains("capture")) {
+      const nlohmann::json& c = v["capture"];
+      if (c.contains("request_id")) {
+        max_id = std::max(max_id, c["request_id"].get<int64_t>());
+        capture_request_ = capture_request(i, c["request_id"].get<int64_t>(), 0);  // the last one stays
+      }
+      if (c.value("status", "") != "ok") done_.excluded.push_back(reached);
+    }
+    if (v.contains("map")) {
+      done_.latest_map = i;
+      ++done_.views_done;
+      if (v["map"].value("updated", false)) {
+        done_.last_map = i;
+        done_.views_taken.push_back(pose_from_json(v.at("registration").at("registered_object_T_camera"), at + " registration"));
+      } else {
+        done_.excluded.push_back(reached);
+      }
+    }
+    next_view_after_ready_ = i + 1;
+  }
+  const nlohmann::json status = report.value("status", nlohmann::json::object());
+  // Past every id recorded, with room for those the interrupted view sent but did not record.
+  done_.next_request_id = std::max<int64_t>(status.value("next_request_id", int64_t{1}), max_id + 1) + 1000;
+  record_.set_next_request_id(done_.next_request_id);
+  t_start_s_ = now_s - status.value("elapsed_s", 0.0);
+  if (status.value("state", "") == "done") {
+    phase_ = Phase::kFinished;
+    state_ = ScanState::kDone;
+    summary_ = "scan already complete: " + status.value("message", std::string()) + " -> " + file;
+    return;
+  }
+  phase_ = Phase::kWaitingReady;
+  set_status(ScanState::kStarting, "resuming after view " + std::to_string(next_view_after_ready_) + ": waiting for the rig and services",
+             now_s);
+  check_ready(now_s);
 }
 
 void ScanSequencer::start(double now_s) {
@@ -174,7 +249,13 @@ void ScanSequencer::check_ready(double now_s) {
   for (const auto& n : need) {
     if (!seen_.count(n)) missing += (missing.empty() ? "" : ", ") + n;
   }
-  if (missing.empty()) return begin_view(0, now_s);
+  if (missing.empty()) {
+    if (next_view_after_ready_ >= s_.views) {  // a resumed scan that had every view
+      iteration_ = s_.views - 1;
+      return next_view(now_s);
+    }
+    return begin_view(next_view_after_ready_, now_s);
+  }
   if (now_s - t_start_s_ > s_.startup_timeout_s) {
     finish(ScanState::kFailed, "not ready after " + fixed(s_.startup_timeout_s, 2) + " s: no " + missing, now_s);
   }
@@ -299,7 +380,7 @@ void ScanSequencer::moved(const MoveResult& r, double now_s) {
     view_.option = static_cast<int>(option_);
     view_.requested_object_T_camera = options_[option_];
   } else {
-    view_.failed_moves.push_back({static_cast<int>(option_), r.status, r.reason});
+    view_.failed_moves.push_back({static_cast<int>(option_), options_[option_], r.status, r.reason});
     done_.excluded.push_back(options_[option_]);
     if (r.status == MoveStatus::kUnreachable && option_ + 1 < options_.size()) {  // the next alternative
       ++option_;
@@ -324,16 +405,7 @@ void ScanSequencer::begin_capture(int64_t not_before_utime, double now_s) {
   progress("capturing");
   set_status(ScanState::kCapturing, "capturing " + view_name(), now_s);
   t_step_s_ = now_s;
-  CaptureRequest r;
-  r.scan_id = s_.scan_id;
-  r.iteration = iteration_;
-  r.request_id = next_request_id();
-  r.not_before_utime = not_before_utime;
-  r.object_z_m = s_.object_z_m;
-  r.crop = box_or_none(s_.crop_min_m, s_.crop_max_m);
-  r.ground_clearance_m = s_.ground_clearance_m;
-  r.voxel_m = s_.voxel_m;
-  r.timeout_s = s_.capture_timeout_s;
+  const CaptureRequest r = capture_request(iteration_, next_request_id(), not_before_utime);
   capture_id_ = r.request_id;
   capture_request_ = r;
   // The camera service re-triggers the camera itself and answers within the capture timeout;

@@ -109,6 +109,12 @@ class ScanSequencer {
 
   // Starts the readiness wait at now_s (SCAN_STATUS "starting").
   void start(double now_s);
+  // Continues the scan recorded in the folder (scan.json, cloud.ply) instead: the views taken and
+  // excluded, the first plan's quality, the last map, the rig's last reading, the request ids
+  // used; after the readiness wait the next view follows the last recorded one. A scan whose
+  // record says it ended "done" finishes at once. Throws std::invalid_argument naming the file
+  // when the folder holds no record of this scan.
+  void resume(double now_s);
   // Consumes one answer or sign of life. Answers of another scan, and answers to requests
   // that are no longer waited for, are ignored.
   void handle(const ScanEvent& event, double now_s);
@@ -163,7 +169,11 @@ class ScanSequencer {
   // What a deadline missed: "the mapping service sent no VOXEL_MAP for view 3 in 60 s (the capture
   // request sent 21 times)".
   std::string waited(const std::string& from, const std::string& what, const std::string& request) const;
-  int64_t next_request_id() { return done_.next_request_id++; }
+  int64_t next_request_id() {
+    record_.set_next_request_id(done_.next_request_id + 1);
+    return done_.next_request_id++;
+  }
+  CaptureRequest capture_request(int iteration, int64_t request_id, int64_t not_before_utime) const;
   void progress(const std::string& what, bool ends_view = false);
   void set_status(ScanState state, const std::string& message, double now_s);
   void publish_status(double now_s);
@@ -194,6 +204,7 @@ class ScanSequencer {
   std::optional<VoxelMapSummary> map_;
   Awaited awaited_;
 
+  int next_view_after_ready_ = 0;           // the view after the readiness wait (resume: the next)
   std::set<std::string> seen_;
   double t_start_s_ = 0;
   double last_status_s_ = 0;

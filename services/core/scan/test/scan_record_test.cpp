@@ -64,7 +64,7 @@ TEST_F(ScanRecordTest, AViewEntryHasASectionPerStepReached) {
   v.view = 2;
   v.option = 1;
   v.requested_object_T_camera = look_at_z_up(Eigen::Vector3d(0.6, 0, 0.3), Eigen::Vector3d::Zero());
-  v.failed_moves.push_back({0, MoveStatus::kUnreachable, "no IK solution"});
+  v.failed_moves.push_back({0, Pose::Identity(), MoveStatus::kUnreachable, "no IK solution"});
   MoveResult m;
   m.status = MoveStatus::kReached;
   m.angle_error_rad = kPi / 180;
@@ -131,7 +131,7 @@ TEST_F(ScanRecordTest, TheStatusAndStopAreWrittenWithTheViews) {
   record.add_view(v, 1, 2.5);
   json j = read_json((dir_ / "scan.json").string());
   EXPECT_EQ(j["status"], json({{"state", "running"}, {"message", ""}, {"views_done", 1}, {"views_planned", 4},
-                               {"elapsed_s", 2.5}, {"num_points", 0}}));
+                               {"elapsed_s", 2.5}, {"num_points", 0}, {"next_request_id", 1}}));
   EXPECT_EQ(j["views"].size(), 1u);
   EXPECT_EQ(j["plan"]["planner"], "ring");
   EXPECT_FALSE(j.contains("stop"));

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "error_message.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -387,7 +389,11 @@ TEST_F(ScanSequencerTest, AnUnreachableBestViewIsReplacedByTheNextAlternative) {
   const json& v1 = scan["views"][1];
   EXPECT_EQ(v1["option"], 1);
   ASSERT_EQ(v1["failed_moves"].size(), 1u);
-  EXPECT_EQ(v1["failed_moves"][0], json({{"option", 0}, {"status", "unreachable"}, {"reason", "no inverse kinematics solution"}}));
+  EXPECT_EQ(v1["failed_moves"][0]["option"], 0);
+  EXPECT_EQ(v1["failed_moves"][0]["status"], "unreachable");
+  EXPECT_EQ(v1["failed_moves"][0]["reason"], "no inverse kinematics solution");
+  // The unreachable option's pose, so that a resumed scan excludes it again: the plan's best view.
+  EXPECT_NEAR(v1["failed_moves"][0]["object_T_camera"]["position_m"][2].get<double>(), -0.7, 1e-12);
   EXPECT_NEAR(v1["requested_object_T_camera"]["position_m"][0].get<double>(), 0.7, 1e-12);
   EXPECT_EQ(v1["move"]["status"], "reached");
   // Two moves of 2 s each.
@@ -743,6 +749,69 @@ TEST_F(ScanSequencerTest, StatusIsRepeatedEverySecondWhileWaiting) {
   EXPECT_EQ(statuses_.size(), 10u);  // at 1, 2, ..., 10 s
   EXPECT_EQ(statuses_.back().elapsed_s, 10.0);
   EXPECT_EQ(statuses_.back().state, ScanState::kMoving);
+}
+
+}  // namespace
+
+namespace {
+
+// A scan stopped after two views (the launcher killed, the machine rebooted) and resumed from its
+// folder by a new sequencer: it goes on with view 3, plans it from the two views taken, never
+// reuses a request id, keeps the first plan's quality for the stop rule, and ends with the same
+// record as one that was never interrupted (three views, the merged cloud of all three).
+TEST_F(ScanSequencerTest, AStoppedScanResumesFromItsFolderWithTheNextView) {
+  const ScanSettings s = test_settings("pbnbv", 3);
+  start(s);
+  const auto views = [&] { return std::filesystem::exists(dir_ / "scan.json") ? scan_json()["views"].size() : 0u; };
+  while (!seq_->finished() && views() < 2) run(now_ + 0.25);
+  ASSERT_EQ(scan_json()["views"].size(), 2u);
+  seq_->stop(now_, "stopped: the launcher died");
+  const json stopped = scan_json();
+  ASSERT_EQ(stopped["status"]["state"], "stopped");
+  // F of the first plan, which the stop rule compares against (scan.json keeps it).
+  const double first_quality = stopped["views"][1]["plan"]["first_quality_px"].get<double>();
+  ASSERT_TRUE(std::isfinite(first_quality));
+  int64_t max_id = 0;
+  for (const auto& [t, r] : moves_) max_id = std::max(max_id, r.request_id);
+  for (const auto& [t, r] : captures_) max_id = std::max(max_id, r.request_id);
+  for (const auto& [t, r] : plans_) max_id = std::max(max_id, r.request_id);
+  const std::size_t plans_before = plans_.size(), moves_before = moves_.size();
+  due_.clear();  // the old processes are gone with their answers
+
+  seq_ = std::make_unique<ScanSequencer>(s, dir_);
+  seq_->resume(now_);
+  collect();
+  for (const char* w : {"ARM_STATUS", "TURNTABLE_STATUS", "heartbeat of motion", "heartbeat of camera",
+                        "heartbeat of registration", "heartbeat of mapping", "heartbeat of scorer",
+                        "heartbeat of ellipsoids"}) {
+    deliver(Heard{w});
+  }
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0) << scan_json()["status"].dump();
+  const json done = scan_json();
+  EXPECT_EQ(done["status"]["state"], "done");
+  EXPECT_EQ(done["status"]["views_done"], 3);
+  ASSERT_EQ(done["views"].size(), 3u);
+  EXPECT_EQ(done["views"][2]["view"], 2);
+  // The new plan: for view 3 (iteration 2), from the two views taken, with the first quality.
+  ASSERT_GT(plans_.size(), plans_before);
+  const PlanRequest& p = plans_[plans_before].second;
+  EXPECT_EQ(p.iteration, 2);
+  EXPECT_EQ(p.views_done.size(), 2u);
+  EXPECT_EQ(p.map_iteration, 1);
+  EXPECT_EQ(p.first_quality, first_quality);
+  // Every request after the resume has an id above every id before it.
+  for (std::size_t k = moves_before; k < moves_.size(); ++k) EXPECT_GT(moves_[k].second.request_id, max_id);
+  EXPECT_GT(p.request_id, max_id);
+  EXPECT_GT(done["status"]["elapsed_s"].get<double>(), stopped["status"]["elapsed_s"].get<double>());
+}
+
+TEST_F(ScanSequencerTest, ResumingAFolderWithoutThisScanIsNamed) {
+  const ScanSettings s = test_settings("ring", 2);
+  ScanSequencer seq(s, dir_ / "empty");
+  EXPECT_NE(pbnbv::testing::error_message([&] { seq.resume(0.0); }).find("cannot resume: " + (dir_ / "empty" / "scan.json").string() +
+                                                           " does not exist"),
+            std::string::npos);
 }
 
 }  // namespace
