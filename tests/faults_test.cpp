@@ -236,12 +236,13 @@ TEST(Faults, EachKilledServiceIsRestartedAndTheScanCompletes) {
 }
 
 // SIGKILL of the launcher: the kernel stops every process it started (none is left after 2 s)
-// and the coordinator records why the scan stopped.
-TEST(Faults, AKilledLauncherLeavesNoProcessBehind) {
+// and the coordinator records why the scan stopped; `pbnbv scan --resume` then completes the scan
+// from its folder with the coverage of an uninterrupted one.
+TEST(Faults, AKilledLauncherLeavesNoProcessBehindAndTheScanResumes) {
   const fs::path out = fresh_dir("killed-launcher") / "scan";
   const pid_t pid = ::fork();
   if (pid == 0) {
-    const std::string cmd = netns_run() + " " + scan_command(out, "--object sphere --planner ring --views 40 --sim-speed 2");
+    const std::string cmd = netns_run() + " " + scan_command(out, "--object sphere --planner ring --views 8 --sim-speed 2");
     ::execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
     ::_exit(127);
   }
@@ -271,6 +272,29 @@ TEST(Faults, AKilledLauncherLeavesNoProcessBehind) {
             std::string::npos)
       << scan["status"].dump();
   EXPECT_GE(scan["status"]["views_done"].get<int>(), 1);
+
+  const int before = scan["status"]["views_done"].get<int>();
+  const CommandResult resumed = run_command(netns_run() + " " + bin_dir() + "/pbnbv scan --resume " + out.string());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  const auto done = read_json_file(out / "scan.json");
+  EXPECT_EQ(done["status"]["state"], "done");
+  EXPECT_EQ(done["status"]["views_done"], 8);
+  ASSERT_EQ(done["views"].size(), 8u);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(done["views"][i]["view"], i);
+  // The uninterrupted scan, for comparison.
+  const fs::path whole = out.parent_path() / "whole";
+  ASSERT_EQ(run_command(netns_run() + " " + scan_command(whole, "--object sphere --planner ring --views 8 --sim-speed 20"))
+                .exit_code,
+            0);
+  const double c_resumed = eval::evaluate_scan(out).coverage_by_view.back();
+  const double c_whole = eval::evaluate_scan(whole).coverage_by_view.back();
+  std::cout << "killed after " << before << " views, resumed: " << c_resumed << " % after 8 views (uninterrupted "
+            << c_whole << " %)\n";
+  EXPECT_NEAR(c_resumed, c_whole, 1.0);
+  // Resuming a complete scan does nothing.
+  const CommandResult again = run_command(bin_dir() + "/pbnbv scan --resume " + out.string());
+  EXPECT_EQ(again.exit_code, 0);
+  EXPECT_NE(again.output.find("nothing to resume"), std::string::npos) << again.output;
 }
 
 // A folder that holds a scan is not mixed with a new one; --overwrite empties it first.

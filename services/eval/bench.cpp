@@ -55,6 +55,10 @@ std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, con
                        "sysctl -q -w net.core.rmem_max=67108864 net.core.rmem_default=33554432 2>/dev/null; exec \"$@\"",
                        "netns"});
   }
+  if (fs::exists(out / "processes.json") && fs::exists(out / "settings.json")) {
+    a.insert(a.end(), {self.string(), "scan", "--resume", out.string()});  // an interrupted scan goes on
+    return a;
+  }
   a.insert(a.end(), {self.string(), "scan", "--object", object, "--planner", std::string(name_of(planner)), "--rig",
                      std::string(name_of(s.rig)), "--area", std::string(name_of(s.area)),
                      "--views", std::to_string(s.views), "--resolution", exact(s.resolution_m), "--candidates",
@@ -382,7 +386,8 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
     }
     while (static_cast<int>(running.size()) < spec.jobs && next < todo.size()) {
       Job* j = todo[next++];
-      if (fs::exists(j->dir)) fs::remove_all(j->dir);  // an incomplete scan starts again
+      // An interrupted scan is resumed (scan_argv); a folder without its processes.json starts anew.
+      if (fs::exists(j->dir) && !fs::exists(j->dir / "processes.json")) fs::remove_all(j->dir);
       fs::create_directories(j->dir.parent_path());
       Child c;
       c.name = std::string(name_of(j->planner)) + "-" + j->name;

@@ -164,7 +164,7 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add(c, eval::kBenchWhenDone, &spec->when_done);
   cli::add(c, eval::kJobs, &spec->jobs);
   cli::add_flag(c, "no-netns", &pending->no_netns, "run the scans on the current LCM bus (one at a time)");
-  cli::add_text(c, "out", &pending->out, "results (required); a rerun skips the scans already complete there", "DIR");
+  cli::add_text(c, "out", &pending->out, "results (required); a rerun skips the scans already complete there and resumes interrupted ones", "DIR");
   cli::add_settings_file(c);
 }
 
