@@ -192,7 +192,7 @@ TEST(Faults, EachKilledServiceIsRestartedAndTheScanCompletes) {
   const std::vector<double> reference = eval::evaluate_scan(undisturbed).coverage_by_view;
   ASSERT_EQ(reference.size(), 10u);
   for (const std::string victim :
-       {"twin", "motion", "camera", "registration", "mapping", "ellipsoids", "scorer", "lcm-logger"}) {
+       {"twin", "motion", "camera", "registration", "mapping", "ellipsoids", "scorer", "coordinator", "lcm-logger"}) {
     const fs::path out = run_killing(victim);
     const auto scan = read_json_file(out / "scan.json");
     const std::vector<double> coverage = eval::evaluate_scan(out).coverage_by_view;

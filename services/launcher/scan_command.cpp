@@ -288,7 +288,11 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
       break;
     }
     for (process::Child* c : process::reap(children)) {
-      if (c == coordinator) {
+      if (c == coordinator && c->exit_code > 128 && c->exit_code != 130 && watch[c->name].restarts < kMaxRestarts) {
+        // Killed (not stopped by the user, not failed on its own terms): it goes on from scan.json.
+        if (std::find(c->argv.begin(), c->argv.end(), "--resume") == c->argv.end()) c->argv.push_back("--resume");
+        restart(*c, "stopped unexpectedly (" + how_it_ended(c->exit_code) + ")");
+      } else if (c == coordinator) {
         code = c->exit_code;
         done = true;
       } else if (!done && c->exit_code != 2 && watch[c->name].restarts < kMaxRestarts) {
