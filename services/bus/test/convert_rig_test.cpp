@@ -135,8 +135,9 @@ TEST(ConvertRig, CommandsArePositionCommandsWithTheirSequenceNumber) {
   EXPECT_EQ(tm.speed_scale, 0.5);
 }
 
-TEST(ConvertRig, DepthFrameIsDecodedToMetres) {
-  depth_frame_t m;
+// A 2 x 1 frame (f = 10 px, 0.1 mm units) without its depth bytes.
+depth_frame_t two_pixel_frame(int8_t encoding) {
+  depth_frame_t m{};
   m.utime = 5;
   m.seq = 6;
   m.trigger_seq = 7;
@@ -148,7 +149,12 @@ TEST(ConvertRig, DepthFrameIsDecodedToMetres) {
   m.depth_min_m = 0.1;
   m.depth_max_m = 3;
   m.depth_unit_m = 1e-4;
-  m.encoding = depth_frame_t::kEncodingRaw;
+  m.encoding = encoding;
+  return m;
+}
+
+TEST(ConvertRig, DepthFrameIsDecodedToMetres) {
+  depth_frame_t m = two_pixel_frame(depth_frame_t::kEncodingRaw);
   m.num_bytes = 4;
   m.depth = {0x10, 0x27, 0, 0};  // 10000 counts = 1 m; 0 = no return
   const DepthFrame f = bus::from_msg(m);
@@ -166,17 +172,7 @@ TEST(ConvertRig, DepthFrameIsDecodedToMetres) {
 // The same image compressed (what the twin sends) decodes to the same metres; compressed data
 // that is corrupt, or holds an image of another size, and an unknown encoding are named.
 TEST(ConvertRig, AZlibDepthFrameDecodesToTheSameMetresAndBadDataIsNamed) {
-  depth_frame_t m{};
-  m.seq = 6;
-  m.width = 2;
-  m.height = 1;
-  m.fx = m.fy = 10;
-  m.cx = 1;
-  m.cy = 0.5;
-  m.depth_min_m = 0.1;
-  m.depth_max_m = 3;
-  m.depth_unit_m = 1e-4;
-  m.encoding = depth_frame_t::kEncodingZlib;
+  depth_frame_t m = two_pixel_frame(depth_frame_t::kEncodingZlib);
   m.depth = bus::deflate_bytes({0x10, 0x27, 0x88, 0x13});  // 1 m, 0.5 m
   m.num_bytes = static_cast<int32_t>(m.depth.size());
   const DepthFrame f = bus::from_msg(m);
