@@ -12,7 +12,10 @@
 #include <string>
 #include <thread>
 
+#include <lcm/lcm-cpp.hpp>
+
 #include "bus/log_audit.hpp"
+#include "pbnbv/arm_status_t.hpp"
 #include "eval/evaluate.hpp"
 #include "scan_checks.hpp"
 #include "test_util.hpp"
@@ -295,6 +298,51 @@ TEST(Faults, AKilledLauncherLeavesNoProcessBehindAndTheScanResumes) {
   const CommandResult again = run_command(bin_dir() + "/pbnbv scan --resume " + out.string());
   EXPECT_EQ(again.exit_code, 0);
   EXPECT_NE(again.output.find("nothing to resume"), std::string::npos) << again.output;
+}
+
+// `pbnbv stop` in the middle of a move: the motion executor holds the arm where it is (the twin's
+// arm is still within a few status periods), the scan ends "stopped" with the reason and keeps
+// the views it has.
+TEST(Faults, StopMidMoveHaltsTheRigAndTheScanKeepsWhatItHas) {
+  const fs::path out = fresh_dir("stop") / "scan";
+  const std::string scan = scan_command(out, "--object sphere --planner ring --views 8 --sim-speed 1");
+  // In one namespace: the scan, and `pbnbv stop` 0.5 s after the first view is recorded (the
+  // 45-degree move to view 2 takes about 1.2 s at --sim-speed 1).
+  const std::string wait_view = "until [ -f " + out.string() + "/scan.json ] && grep -q '\"frame_file\"' " + out.string() +
+                                "/scan.json; do sleep 0.02; done";
+  const CommandResult r = run_command(netns_run() + " sh -c '" + scan + " & p=$!; " + wait_view + "; sleep 0.5; " +
+                                      bin_dir() + "/pbnbv stop --reason \"operator abort\"; wait $p; echo scan exit $?'");
+  EXPECT_NE(r.output.find("scan exit 130"), std::string::npos) << r.output << read_text(out.string() + ".stdout");
+  const auto j = read_json_file(out / "scan.json");
+  EXPECT_EQ(j["status"]["state"], "stopped");
+  EXPECT_EQ(j["status"]["message"], "operator abort (STOP)");
+  EXPECT_GE(j["status"]["views_done"].get<int>(), 1);
+  EXPECT_LT(j["status"]["views_done"].get<int>(), 8);
+  EXPECT_NE(read_text(out / "logs" / "motion.log").find("STOP (operator abort): holding the rig"), std::string::npos);
+  // The log: from 50 ms after STOP (5 status periods at --sim-speed 1) the arm's statuses show it
+  // still.
+  lcm::LogFile log((out / "scan.lcmlog").string(), "r");
+  ASSERT_TRUE(log.good());
+  int64_t stop_at = -1, still_from = -1;
+  double speed_after = 0;
+  int statuses_after = 0;
+  while (const lcm::LogEvent* e = log.readNextEvent()) {
+    if (e->channel == "STOP" && stop_at < 0) stop_at = e->timestamp;
+    if (e->channel == "ARM_STATUS" && stop_at >= 0 && e->timestamp > stop_at + 50000) {
+      arm_status_t s;
+      if (s.decode(e->data, 0, e->datalen) < 0) continue;
+      double v = 0;
+      for (double q : s.joint_velocity_rad_s) v = std::max(v, std::abs(q));
+      speed_after = std::max(speed_after, v);
+      ++statuses_after;
+      if (still_from < 0) still_from = e->timestamp;
+    }
+  }
+  ASSERT_GE(stop_at, 0) << "no STOP in the log";
+  EXPECT_GT(statuses_after, 0);
+  std::cout << "after STOP: " << statuses_after << " arm statuses from 50 ms on, largest joint speed " << speed_after
+            << " rad/s\n";
+  EXPECT_LT(speed_after, 1e-6);
 }
 
 // A folder that holds a scan is not mixed with a new one; --overwrite empties it first.

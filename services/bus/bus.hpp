@@ -22,6 +22,7 @@ class arm_status_t;
 class turntable_status_t;
 class depth_frame_t;
 class heartbeat_t;
+class stop_request_t;
 }  // namespace pbnbv
 
 namespace pbnbv::bus {
@@ -46,6 +47,8 @@ template <>
 struct MayBeUnscoped<depth_frame_t> : std::true_type {};
 template <>
 struct MayBeUnscoped<heartbeat_t> : std::true_type {};
+template <>
+struct MayBeUnscoped<stop_request_t> : std::true_type {};  // "": stop every scan
 
 // The scan a message belongs to, for the filter: its scan_id; a heartbeat's is the scan its
 // sender serves (its scan_id is only the last one it handled).

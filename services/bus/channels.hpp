@@ -17,6 +17,7 @@ inline constexpr const char* kCaptureRequest = "CAPTURE_REQUEST";  // capture_re
 inline constexpr const char* kCloud = "CLOUD";                     // point_cloud_t
 inline constexpr const char* kScanStatus = "SCAN_STATUS";          // scan_status_t
 inline constexpr const char* kHeartbeat = "HEARTBEAT";             // heartbeat_t
+inline constexpr const char* kStop = "STOP";                       // stop_request_t
 // Perception and planning.
 inline constexpr const char* kRegisteredCloud = "REGISTERED_CLOUD";  // registered_cloud_t
 inline constexpr const char* kVoxelMap = "VOXEL_MAP";                // voxel_set_t

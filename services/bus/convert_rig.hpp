@@ -68,7 +68,7 @@ inline arm_command_t to_msg(const ArmCommand& c) {
   m.num_joints = 6;
   m.joint_position_rad = to_std(c.joint_position_rad);
   m.speed_scale = c.speed_scale;
-  m.mode = arm_command_t::kModePosition;
+  m.mode = c.hold ? arm_command_t::kModeHold : arm_command_t::kModePosition;
   return m;
 }
 

@@ -24,6 +24,7 @@
 #include "core/scan/scan_settings.hpp"
 #include "pbnbv/arm_status_t.hpp"
 #include "pbnbv/heartbeat_t.hpp"
+#include "pbnbv/stop_request_t.hpp"
 #include "pbnbv/turntable_status_t.hpp"
 
 using namespace pbnbv;
@@ -32,6 +33,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int kSpinMs = 20;  // longest wait for a message before the sequencer's tick
+constexpr double kStopLingerS = 0.3;  // after STOP, before the scan's processes are stopped
 
 // Prints a progress line: on a terminal one line per view (each stage overwrites the last),
 // otherwise (logs, pipes) every stage on its own line.
@@ -94,6 +96,8 @@ int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out, bool r
   bus.subscribe<arm_status_t>(channels::kArmStatus, [&](const arm_status_t&) { inbox.emplace_back(Heard{"ARM_STATUS"}); });
   bus.subscribe<turntable_status_t>(channels::kTurntableStatus,
                                     [&](const turntable_status_t&) { inbox.emplace_back(Heard{"TURNTABLE_STATUS"}); });
+  std::optional<std::string> stop_reason;  // STOP heard (the motion executor holds the rig)
+  bus.subscribe<stop_request_t>(channels::kStop, [&](const stop_request_t& s) { stop_reason = s.reason; });
   bus.subscribe<heartbeat_t>(channels::kHeartbeat,
                              [&](const heartbeat_t& h) { inbox.emplace_back(Heard{"heartbeat of " + h.service}); });
 
@@ -113,6 +117,12 @@ int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out, bool r
       break;
     }
     bus.spin_once(kSpinMs);
+    if (stop_reason) {
+      // The motion executor holds the rig; stay on the bus a moment so the log records it still.
+      scan.stop(bus::now_s(), *stop_reason + " (STOP)");
+      for (const double end = bus::now_s() + kStopLingerS; bus::now_s() < end;) bus.spin_once(kSpinMs);
+      break;
+    }
     for (const ScanEvent& e : inbox) scan.handle(e, bus::now_s());
     inbox.clear();
     scan.tick(bus::now_s());

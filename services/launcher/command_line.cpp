@@ -80,6 +80,10 @@ CommandLine::CommandLine()
 
   spy_cmd_ = cli::add_command(app_, "spy", "lcm-spy with every pbnbv channel decoded");
 
+  stop_cmd_ = cli::add_command(app_, "stop", "halt the rig now and end the scan (STOP on the bus); what it has is kept");
+  cli::add_text(*stop_cmd_, "scan", &stop_.scan_id, "the scan to stop (its id, in scan.json) [every scan on the bus]", "ID");
+  cli::add_text(*stop_cmd_, "reason", &stop_.reason, "why, for the record [stopped by the user]", "TEXT");
+
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");
 }
@@ -195,6 +199,8 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
     } else if (given == ablate_cmd_) {
       command_ = Command::kAblate;
       resolve_ablate();
+    } else if (given == stop_cmd_) {
+      command_ = Command::kStop;
     } else {
       command_ = Command::kSpy;
     }

@@ -19,7 +19,13 @@
 
 namespace pbnbv::launcher {
 
-enum class Command { kHelp, kScan, kBench, kAblate, kSpy };
+enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop };
+
+// What `pbnbv stop` was asked for.
+struct StopOptions {
+  std::string scan_id;  // "" : every scan on the bus
+  std::string reason = "stopped by the user";
+};
 
 // What `pbnbv scan` was asked for: the object, the scan's settings (ScanSettings, before the
 // object places them), what the launcher passes to the twin and the other processes.
@@ -71,6 +77,7 @@ class CommandLine {
   std::optional<int> parse(int argc, const char* const* argv, std::ostream& out, std::ostream& err);
 
   Command command() const { return command_; }
+  const StopOptions& stop() const { return stop_; }
   const ScanOptions& scan() const { return scan_; }
   const eval::BenchSpec& bench() const { return bench_; }
   const AblateOptions& ablate() const { return ablate_; }
@@ -111,6 +118,8 @@ class CommandLine {
   CLI::App* bench_cmd_ = nullptr;
   CLI::App* ablate_cmd_ = nullptr;
   CLI::App* spy_cmd_ = nullptr;
+  CLI::App* stop_cmd_ = nullptr;
+  StopOptions stop_;
   CLI::App* help_cmd_ = nullptr;
   Command command_ = Command::kHelp;
   ScanOptions scan_;

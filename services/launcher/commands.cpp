@@ -6,8 +6,13 @@
 #include <string>
 #include <vector>
 
+#include <chrono>
+#include <thread>
+
+#include "bus/bus.hpp"
 #include "core/io/json.hpp"
 #include "launcher/commands.hpp"
+#include "pbnbv/stop_request_t.hpp"
 
 namespace fs = std::filesystem;
 
@@ -46,6 +51,21 @@ int run_spy() {
   cargv.push_back(nullptr);
   ::execvp("java", cargv.data());
   throw std::runtime_error("cannot run java (install default-jdk-headless: ./scripts/setup)");
+}
+
+int run_stop(const StopOptions& o) {
+  bus::Bus bus("stop");
+  stop_request_t m;
+  m.scan_id = o.scan_id;
+  m.reason = o.reason;
+  for (int i = 0; i < 3; ++i) {
+    m.utime = bus::now_utime();
+    bus.publish(channels::kStop, m);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  std::cout << "pbnbv stop: STOP sent to " << (o.scan_id.empty() ? std::string("every scan") : "scan " + o.scan_id)
+            << " on " << bus::lcm_url() << std::endl;
+  return 0;
 }
 
 }  // namespace pbnbv::launcher

@@ -24,4 +24,7 @@ int run_ablate(const AblateOptions& o, const std::filesystem::path& self);
 // `pbnbv spy`: lcm-spy with the project's message types (replaces this process).
 int run_spy();
 
+// `pbnbv stop`: STOP on the bus (three times over 0.2 s: UDP may lose one).
+int run_stop(const StopOptions& o);
+
 }  // namespace pbnbv::launcher

@@ -28,6 +28,8 @@ int main(int argc, char** argv) {
         return launcher::run_ablate(line.ablate(), self);
       case launcher::Command::kSpy:
         return launcher::run_spy();
+      case launcher::Command::kStop:
+        return launcher::run_stop(line.stop());
       case launcher::Command::kHelp:
         std::cout << line.usage();
         return 0;

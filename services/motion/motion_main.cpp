@@ -21,6 +21,7 @@
 #include "core/base/log.hpp"
 #include "core/rig/rig.hpp"
 #include "core/scan/motion_sequencer.hpp"
+#include "pbnbv/stop_request_t.hpp"
 
 using namespace pbnbv;
 
@@ -40,6 +41,10 @@ class MotionService {
       });
     }
     bus_.subscribe<move_request_t>(channels::kMoveRequest, [this](const move_request_t& r) { on_request(r); });
+    bus_.subscribe<stop_request_t>(channels::kStop, [this](const stop_request_t& s) {
+      log_warn("STOP (" + s.reason + "): holding the rig where it is");
+      apply(sequencer_.halt("STOP (" + s.reason + ")", bus::now_s()));
+    });
   }
 
   void tick() { apply(sequencer_.tick(bus::now_s())); }

@@ -237,4 +237,21 @@ MotionStep MotionSequencer::finish(MoveStatus status, const std::string& reason,
   return step;
 }
 
+MotionStep MotionSequencer::halt(const std::string& why, double now_s) {
+  MotionStep step;
+  if (job_) step = finish(MoveStatus::kRejected, "halted: " + why, now_s);
+  ArmCommand hold;
+  hold.seq = next_seq_++;
+  hold.joint_position_rad = arm_.joint_position_rad;
+  hold.hold = true;
+  step.arm_command = hold;
+  if (rig_.has_turntable) {
+    TurntableCommand t;
+    t.seq = next_seq_++;
+    t.angle_rad = turntable_.angle_rad;
+    step.turntable_command = t;
+  }
+  return step;
+}
+
 }  // namespace pbnbv

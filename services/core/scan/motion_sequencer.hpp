@@ -63,6 +63,10 @@ class MotionSequencer {
   // rig's fault on the command, or timed out.
   MotionStep tick(double now_s);
 
+  // STOP: holds the arm where it is and the turntable at its last reading (new commands, sent
+  // at once), and answers the move in progress kRejected with `why`.
+  MotionStep halt(const std::string& why, double now_s);
+
   bool moving() const { return job_.has_value(); }
 
  private:

@@ -58,6 +58,7 @@ struct ArmCommand {
   int64_t seq = 0;                            // increasing; ARM_STATUS command_seq echoes it
   Vector6d joint_position_rad = Vector6d::Zero();
   double speed_scale = 1.0;                   // (0, 1] of the joint speed limits
+  bool hold = false;                          // stop where the arm is (the targets are ignored)
 };
 
 // TURNTABLE_COMMAND: turn to an angle (not wrapped).

@@ -443,3 +443,33 @@ TEST(FreeMotion, NoTurntableCommandAndNoTurntableStatusNeeded) {
 
 }  // namespace
 }  // namespace pbnbv
+
+namespace pbnbv {
+namespace {
+
+// STOP mid-move: the arm is told to hold where it is, the turntable to stay at its last reading,
+// each with a new sequence number, and the move is answered kRejected naming why.
+TEST_F(ArmMotion, HaltHoldsTheRigWhereItIsAndEndsTheMoveInProgress) {
+  start();
+  const Vector6d halfway = 0.5 * (arm_rig().q_home + arm_target_);
+  seq_.on_arm_status(arm_at(halfway, kFirstSeq, RigMode::kMoving, 6000000), 101.0);
+  seq_.on_turntable_status(turntable_at(0.25, kFirstSeq, RigMode::kMoving, 6000000), 101.0);
+  const MotionStep step = seq_.halt("STOP (operator abort)", 101.0);
+  ASSERT_TRUE(step.arm_command && step.turntable_command);
+  EXPECT_TRUE(step.arm_command->hold);
+  EXPECT_EQ(step.arm_command->joint_position_rad, halfway);
+  EXPECT_EQ(step.turntable_command->angle_rad, 0.25);
+  EXPECT_GT(step.arm_command->seq, kFirstSeq);
+  EXPECT_GT(step.turntable_command->seq, step.arm_command->seq);
+  ASSERT_TRUE(step.result);
+  EXPECT_EQ(step.result->status, MoveStatus::kRejected);
+  EXPECT_EQ(step.result->reason, "halted: STOP (operator abort)");
+  EXPECT_FALSE(seq_.moving());
+  // Idle, a halt still holds the rig (and answers nothing).
+  const MotionStep again = seq_.halt("STOP", 102.0);
+  EXPECT_TRUE(again.arm_command && again.arm_command->hold);
+  EXPECT_FALSE(again.result);
+}
+
+}  // namespace
+}  // namespace pbnbv
