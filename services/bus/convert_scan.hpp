@@ -107,7 +107,7 @@ inline MoveResult from_msg(const move_result_t& m) {
   r.scan_id = m.scan_id;
   r.iteration = m.iteration;
   r.request_id = m.request_id;
-  if (m.status < move_result_t::kReached || m.status > move_result_t::kBusy) {
+  if (m.status < move_result_t::kReached || m.status > move_result_t::kRigSilent) {
     throw std::invalid_argument("MOVE_RESULT status = " + std::to_string(m.status) + " is not one of its constants (0..5)");
   }
   r.status = static_cast<MoveStatus>(m.status);

@@ -10,6 +10,7 @@ const char* to_string(MoveStatus s) {
     case MoveStatus::kRejected: return "rejected";
     case MoveStatus::kPlanned: return "planned";
     case MoveStatus::kBusy: return "busy";
+    case MoveStatus::kRigSilent: return "rig_silent";
   }
   return "unknown";
 }

@@ -29,7 +29,9 @@ struct MoveRequest {
   bool plan_only = false;               // only check reachability
 };
 
-enum class MoveStatus : int8_t { kReached = 0, kUnreachable = 1, kTimedOut = 2, kRejected = 3, kPlanned = 4, kBusy = 5 };
+enum class MoveStatus : int8_t {
+  kReached = 0, kUnreachable = 1, kTimedOut = 2, kRejected = 3, kPlanned = 4, kBusy = 5, kRigSilent = 6
+};
 const char* to_string(MoveStatus s);  // "reached", "unreachable", "timed_out", ...
 
 // MOVE_RESULT: what became of a MoveRequest.

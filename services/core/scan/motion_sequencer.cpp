@@ -62,7 +62,7 @@ MotionStep MotionSequencer::on_request(const MoveRequest& r, double now_s) {
   }
   if (now_s - arm_rx_s_ > kMotionStatusStaleS ||
       (rig_.has_turntable && now_s - turntable_rx_s_ > kMotionStatusStaleS)) {
-    result.status = MoveStatus::kTimedOut;
+    result.status = MoveStatus::kRigSilent;
     result.reason = "no recent ARM_STATUS/TURNTABLE_STATUS from the rig: is its driver (or the twin) running?";
     step.result = result;
     return step;

@@ -209,6 +209,21 @@ void ScanSequencer::on(const MoveResult& r, double now_s) {
     ++awaited_.sends;
     return;
   }
+  if (r.status == MoveStatus::kRigSilent) {
+    // The rig's drivers are silent (a driver restarting, a cable): the scan pauses with the rig
+    // still and asks again at every re-send, for up to t_.rig_silent_s, then fails naming them.
+    if (!paused_) {
+      paused_ = true;
+      progress("paused: " + r.reason);
+      set_status(ScanState::kMoving, "paused: " + r.reason, now_s);
+      awaited_.deadline_s = std::max(awaited_.deadline_s, now_s + t_.rig_silent_s);
+    }
+    return;
+  }
+  if (paused_) {
+    paused_ = false;
+    progress("resumed: the rig is back");
+  }
   moved(r, now_s);
 }
 

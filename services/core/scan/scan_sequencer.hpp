@@ -60,6 +60,7 @@ struct ScanTimeouts {
   double resend_s = 3.0;          // re-send a move or plan request whose answer has not come
                                   // (a move takes seconds of rig time; the executor ignores a
                                   // repeat of the move it is making)
+  double rig_silent_s = 600.0;    // a view's move waits this long for silent rig drivers
   double capture_resend_s = 1.0;  // re-send the capture request while the view's CLOUD,
                                   // REGISTERED_CLOUD or VOXEL_MAP has not come (each normally
                                   // follows within 0.5 s)
@@ -205,6 +206,7 @@ class ScanSequencer {
   Awaited awaited_;
 
   int next_view_after_ready_ = 0;           // the view after the readiness wait (resume: the next)
+  bool paused_ = false;                     // the rig's drivers are silent: waiting for them
   std::set<std::string> seen_;
   double t_start_s_ = 0;
   double last_status_s_ = 0;

@@ -306,17 +306,17 @@ TEST_F(ArmMotion, PlanOnlyAnswersTheTargetsWithoutMoving) {
   EXPECT_EQ(seq_.on_request(reachable_request(2), 100.0).arm_command->seq, kFirstSeq);
 }
 
-TEST_F(ArmMotion, WithoutRecentStatusTheRequestTimesOutAtOnceAndIsNotKept) {
+TEST_F(ArmMotion, WithoutRecentStatusTheRequestIsAnsweredRigSilentAtOnceAndIsNotKept) {
   // Readings received at 100 s; a request at 101.01 s finds them stale (> 1 s).
   const MotionStep step = seq_.on_request(reachable_request(), 101.01);
   ASSERT_TRUE(step.result);
-  EXPECT_EQ(step.result->status, MoveStatus::kTimedOut);
+  EXPECT_EQ(step.result->status, MoveStatus::kRigSilent);
   EXPECT_NE(step.result->reason.find("no recent ARM_STATUS/TURNTABLE_STATUS"), std::string::npos);
   EXPECT_FALSE(step.keep_result);
   EXPECT_FALSE(seq_.moving());
   // The turntable alone silent is enough.
   seq_.on_arm_status(arm_at(arm_rig().q_home, -1, RigMode::kIdle, 6000000), 101.5);
-  EXPECT_EQ(seq_.on_request(reachable_request(), 101.5).result->status, MoveStatus::kTimedOut);
+  EXPECT_EQ(seq_.on_request(reachable_request(), 101.5).result->status, MoveStatus::kRigSilent);
   // Fresh readings: it moves.
   idle_readings(101.6);
   EXPECT_TRUE(seq_.on_request(reachable_request(), 101.6).arm_command);

@@ -806,6 +806,35 @@ TEST_F(ScanSequencerTest, AStoppedScanResumesFromItsFolderWithTheNextView) {
   EXPECT_GT(done["status"]["elapsed_s"].get<double>(), stopped["status"]["elapsed_s"].get<double>());
 }
 
+// The rig's drivers silent for 40 s (longer than a move's deadline): the scan pauses at the view
+// with the rig still, asks again at every re-send, and goes on when they are back; no view is
+// lost or excluded.
+TEST_F(ScanSequencerTest, ASilentRigPausesTheScanUntilItIsBack) {
+  motion = [&, inner = motion](const MoveRequest& r) -> std::optional<MoveResult> {
+    std::optional<MoveResult> m = inner(r);
+    if (now_ < 40.0 && r.iteration == 1) {
+      m->status = MoveStatus::kRigSilent;
+      m->reason = "no recent ARM_STATUS/TURNTABLE_STATUS from the rig";
+    }
+    return m;
+  };
+  ScanSettings s = test_settings("ring", 3);
+  s.move_timeout_s = 20;  // the view's move deadline would be 35 s
+  start(s);
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0) << scan_json()["status"].dump();
+  EXPECT_EQ(scan_json()["status"]["views_done"], 3);
+  EXPECT_FALSE(scan_json()["views"][1].contains("failed_moves"));
+  EXPECT_GT(now_, 40.0);
+  bool paused = false, resumed = false;
+  for (const std::string& l : lines_) {
+    paused = paused || l.find("paused: no recent ARM_STATUS") != std::string::npos;
+    resumed = resumed || l.find("resumed: the rig is back") != std::string::npos;
+  }
+  EXPECT_TRUE(paused);
+  EXPECT_TRUE(resumed);
+}
+
 TEST_F(ScanSequencerTest, ResumingAFolderWithoutThisScanIsNamed) {
   const ScanSettings s = test_settings("ring", 2);
   ScanSequencer seq(s, dir_ / "empty");
