@@ -165,7 +165,9 @@ int main(int argc, char** argv) {
     double wall0 = 0, sim0 = 0;
     const int64_t epoch = bus::now_utime();
     long status_seq = 0;
-    long frame_seq = 0;
+    // Frame numbers start at the wall clock (microseconds): a restarted twin never repeats one, so
+    // twin_truth.jsonl and the frames of one scan stay unambiguous.
+    int64_t frame_seq = bus::now_utime();
     Rejection arm_fault, turntable_fault;
 
     bus.subscribe<arm_command_t>(channels::kArmCommand, [&](const arm_command_t& c) {
