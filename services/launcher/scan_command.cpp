@@ -151,6 +151,20 @@ void warn_small_receive_buffer() {
             << std::endl;
 }
 
+// What a process gets when the launcher dies (PR_SET_PDEATHSIG): SIGTERM for the two that write
+// their record on the way out (the coordinator's scan.json, lcm-logger's log), SIGKILL for the rest.
+int death_signal_of(const std::string& name) { return name == "lcm-logger" || name == "coordinator" ? SIGTERM : SIGKILL; }
+
+// A process started again for the same scan (a restart, a resume) continues it: the coordinator
+// from scan.json (--resume), lcm-logger into the next free scan.lcmlog.NN (-i), each log appended.
+// Idempotent: an argument already there (an earlier restart) is not added twice.
+void continue_scan(process::Child& c) {
+  const auto has = [&](const char* arg) { return std::find(c.argv.begin(), c.argv.end(), arg) != c.argv.end(); };
+  if (c.name == "coordinator" && !has("--resume")) c.argv.push_back("--resume");
+  if (c.name == "lcm-logger" && !has("-i")) c.argv.insert(c.argv.begin() + 1, "-i");
+  c.append_log = true;
+}
+
 }  // namespace
 
 // Starts `children` (the coordinator last), keeps them running (restarts, hang detection) until
@@ -198,7 +212,7 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
     c.name = name;
     c.argv = std::move(argv);
     if (name != "lcm-logger" && name != "coordinator") c.argv.insert(c.argv.end(), {"--scan", s.scan_id});
-    if (name == "lcm-logger" || name == "coordinator") c.death_signal = SIGTERM;  // they write on the way out
+    c.death_signal = death_signal_of(name);
     c.log_path = (out / "logs" / (name + ".log")).string();
     c.stdout_to_terminal = progress;
     children.push_back(std::move(c));
@@ -266,10 +280,7 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
     ++w.restarts;
     std::cerr << "\n" << c.name << " " << why << ": starting it again (restart " << w.restarts << " of " << kMaxRestarts
               << ")" << std::endl;
-    if (c.name == "lcm-logger" && std::find(c.argv.begin(), c.argv.end(), "-i") == c.argv.end()) {
-      c.argv.insert(c.argv.begin() + 1, "-i");  // on into scan.lcmlog.00, .01, ...
-    }
-    c.append_log = true;
+    continue_scan(c);
     process::start(c);
     w.started_s = bus::now_s();
     w.heard_s = -1;
@@ -290,7 +301,6 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
     for (process::Child* c : process::reap(children)) {
       if (c == coordinator && c->exit_code > 128 && c->exit_code != 130 && watch[c->name].restarts < kMaxRestarts) {
         // Killed (not stopped by the user, not failed on its own terms): it goes on from scan.json.
-        if (std::find(c->argv.begin(), c->argv.end(), "--resume") == c->argv.end()) c->argv.push_back("--resume");
         restart(*c, "stopped unexpectedly (" + how_it_ended(c->exit_code) + ")");
       } else if (c == coordinator) {
         code = c->exit_code;
@@ -398,17 +408,10 @@ int resume_scan(const fs::path& dir) {
     c.name = p.at("name").get<std::string>();
     c.argv = p.at("argv").get<std::vector<std::string>>();
     c.log_path = p.at("log").get<std::string>();
-    c.append_log = true;
-    if (c.name == "coordinator") {
-      c.argv.push_back("--resume");
-      c.stdout_to_terminal = true;
-      c.death_signal = SIGTERM;
-    }
-    if (c.name == "lcm-logger") {
-      if (std::find(c.argv.begin(), c.argv.end(), "-i") == c.argv.end()) c.argv.insert(c.argv.begin() + 1, "-i");
-      c.death_signal = SIGTERM;
-      record_log = true;
-    }
+    c.death_signal = death_signal_of(c.name);
+    c.stdout_to_terminal = c.name == "coordinator";  // its progress lines
+    record_log = record_log || c.name == "lcm-logger";
+    continue_scan(c);
     children.push_back(std::move(c));
   }
   if (children.empty() || children.back().name != "coordinator") {
