@@ -46,6 +46,17 @@ double external_coverage(const fs::path& out, const fs::path& mesh_path, double 
   return e.coverage_by_view.empty() ? 0.0 : e.coverage_by_view.back();
 }
 
+// A working volume as a user measures it: the object's bounding box rounded up to the centimetre.
+std::string measured_volume(const fs::path& twin_run) {
+  const auto settings = read_json_file(twin_run / "settings.json");
+  std::string volume = "box:";
+  for (int i = 0; i < 3; ++i) {
+    const double edge = settings["object"]["normalisation"]["extent_m"][i].get<double>();
+    volume += (i ? "," : "") + std::to_string(std::ceil(edge * 100) / 100);
+  }
+  return volume;
+}
+
 // The same object scanned the twin-in-the-loop way and as an unknown object on an external rig
 // (the twin started separately with the same mesh): both complete, the external one without a
 // mesh, given only a working volume measured as a user would (the object's bounding box rounded
@@ -57,13 +68,8 @@ void compare_with_twin_in_the_loop(const std::string& name, const std::string& m
                                       kCamera + " --sim-speed 20 --out " + twin_run.string());
   ASSERT_EQ(a.exit_code, 0) << a.output;
   const double twin_coverage = read_json_file(twin_run / "coverage.json")["coverage_by_view"].back().get<double>();
-  const auto twin_settings = read_json_file(twin_run / "settings.json");
-  const double object_z = twin_settings["object_z_m"].get<double>();
-  std::string volume = "box:";
-  for (int i = 0; i < 3; ++i) {
-    const double edge = twin_settings["object"]["normalisation"]["extent_m"][i].get<double>();
-    volume += (i ? "," : "") + std::to_string(std::ceil(edge * 100) / 100);
-  }
+  const double object_z = read_json_file(twin_run / "settings.json")["object_z_m"].get<double>();
+  const std::string volume = measured_volume(twin_run);
 
   const fs::path external = fresh_dir(name + "-external");
   const CommandResult b = run_command(with_twin_as_hardware(
@@ -150,4 +156,41 @@ TEST(ExternalRig, AWorkingVolumeTheArmCannotReachIsRefused) {
   EXPECT_NE(r.output.find("around the working volume box:2,2,2 cannot reach the first view"), std::string::npos)
       << r.output;
   EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+// Two hosts joined by a link (network namespaces and a veth pair, multicast ttl=1): the rig's
+// computer runs the twin as the drivers plus the motion executor and the camera service
+// (pbnbv rig-host); the compute host runs the rest (pbnbv scan --external-rig --rig-host). The scan
+// completes with the coverage of the same scan on one host.
+TEST(TwoHosts, AScanAcrossALinkCoversWhatItDoesOnOneHost) {
+  const fs::path twin_run = fresh_dir("two-hosts-object");
+  const CommandResult a = run_command(netns_run() + " " + bin_dir() + "/pbnbv scan --object bunny --views 1 " + kCamera +
+                                      " --sim-speed 20 --no-log --out " + twin_run.string());
+  ASSERT_EQ(a.exit_code, 0) << a.output;
+  const double object_z = read_json_file(twin_run / "settings.json")["object_z_m"].get<double>();
+  const std::string twin = "--mesh " + (twin_run / "object.stl").string() + " --object-z " + std::to_string(object_z);
+  const std::string scan = "--views 5 --working-volume " + measured_volume(twin_run);
+
+  const fs::path one = fresh_dir("one-host");
+  const CommandResult b = run_command(with_twin_as_hardware(
+      twin + " --model-out " + (one / "hw.xml").string(),
+      bin_dir() + "/pbnbv scan --external-rig " + scan + " --out " + (one / "scan").string()));
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+
+  const fs::path two = fresh_dir("two-hosts");
+  const CommandResult c = run_command("PBNBV_BIN_DIR=" + bin_dir() + " " + source_dir() + "/tests/two_hosts.sh " +
+                                      two.string() + " '" + twin + " " + kCamera + "' '" + scan + "'");
+  ASSERT_EQ(c.exit_code, 0) << c.output << "\n" << run_command("tail -n 20 " + (two / "rig-host" / "*.log").string()).output;
+  // The compute host started neither the motion executor nor the camera: the rig host's served it.
+  for (const auto& p : read_json_file(two / "scan" / "processes.json")["processes"]) {
+    EXPECT_NE(p["name"], "motion");
+    EXPECT_NE(p["name"], "camera");
+  }
+  const double one_host = external_coverage(one / "scan", twin_run / "object.stl", object_z);
+  const double two_hosts = external_coverage(two / "scan", twin_run / "object.stl", object_z);
+  const double log_mb = fs::file_size(two / "scan" / "scan.lcmlog") / 1e6;
+  const double seconds = read_json_file(two / "scan" / "scan.json")["status"]["elapsed_s"].get<double>();
+  std::cout << "coverage after 5 views: one host " << one_host << " %, two hosts " << two_hosts << " %; the link carried "
+            << log_mb << " MB in " << seconds << " s\n";
+  EXPECT_NEAR(two_hosts, one_host, 1.0);
 }

@@ -84,6 +84,12 @@ CommandLine::CommandLine()
   cli::add_text(*stop_cmd_, "scan", &stop_.scan_id, "the scan to stop (its id, in scan.json) [every scan on the bus]", "ID");
   cli::add_text(*stop_cmd_, "reason", &stop_.reason, "why, for the record [stopped by the user]", "TEXT");
 
+  rig_host_cmd_ = cli::add_command(app_, "rig-host",
+                                   "on the rig's computer: run the motion executor and the camera service beside the "
+                                   "drivers, for scans started on another host (pbnbv scan --external-rig --rig-host)");
+  cli::add_text(*rig_host_cmd_, "rig-model", &rig_host_.rig_model, "the rig's MJCF file [models/rig_arm.xml]", "FILE");
+  cli::add_text(*rig_host_cmd_, "logs", &rig_host_.logs, "folder for their logs [rig-host-logs]", "DIR");
+
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");
 }
@@ -131,6 +137,10 @@ void CommandLine::declare_scan() {
       ->group(kGroupRig);
   cli::add(c, Setting<double>{"driver-timeout", 10.0, 0.5, 600.0, "s", "external rig: how long to wait for each driver"},
            &scan_.driver_timeout_s)
+      ->group(kGroupRig);
+  cli::add_flag(c, "rig-host", &scan_.rig_host,
+                "external rig: the motion executor and the camera service run on the rig's computer (pbnbv rig-host "
+                "there); this host starts the rest")
       ->group(kGroupRig);
   cli::add_flag(c, "dry-run", &scan_.dry_run,
                 "external rig: check the drivers, plan the first view and check the reachability of the candidates, "
@@ -201,7 +211,7 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
         out << usage();
         return 0;
       }
-      for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, help_cmd_}) {
+      for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, stop_cmd_, rig_host_cmd_, help_cmd_}) {
         if (c->get_name() == help_topic_) {
           out << c->help("pbnbv");
           return 0;
@@ -220,6 +230,14 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
       resolve_ablate();
     } else if (given == stop_cmd_) {
       command_ = Command::kStop;
+    } else if (given == rig_host_cmd_) {
+      command_ = Command::kRigHost;
+      if (rig_host_.rig_model.empty()) rig_host_.rig_model = default_rig_path(RigKind::kArm);
+      try {
+        rig_host_.rig_model = load_rig(fs::absolute(rig_host_.rig_model).string()).model_path;
+      } catch (const std::runtime_error& e) {
+        throw std::invalid_argument(std::string("--rig-model: ") + e.what());
+      }
     } else {
       command_ = Command::kSpy;
     }
@@ -281,7 +299,7 @@ void CommandLine::resolve_scan() {
     s.working_volume = scan_.working_volume.empty() ? working_volume_of(load_rig(s.rig_model_path))
                                                     : parse_working_volume(scan_.working_volume);
   } else {
-    for (const char* external_only : {"--working-volume", "--driver-timeout", "--dry-run"}) {
+    for (const char* external_only : {"--working-volume", "--driver-timeout", "--dry-run", "--rig-host"}) {
       if (scan_cmd_->get_option(external_only)->count() > 0) {
         throw std::invalid_argument(std::string(external_only) + " applies to --external-rig only");
       }

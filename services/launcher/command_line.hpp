@@ -19,12 +19,19 @@
 
 namespace pbnbv::launcher {
 
-enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop };
+enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigHost };
 
 // What `pbnbv stop` was asked for.
 struct StopOptions {
   std::string scan_id;  // "" : every scan on the bus
   std::string reason = "stopped by the user";
+};
+
+// What `pbnbv rig-host` was asked for: the rig's computer runs the motion executor and the camera
+// service beside the drivers; the scans come from another host (pbnbv scan --external-rig --rig-host).
+struct RigHostOptions {
+  std::string rig_model;            // the rig file ("" : models/rig_arm.xml)
+  std::string logs = "rig-host-logs";  // their logs
 };
 
 // What `pbnbv scan` was asked for: the object, the scan's settings (ScanSettings, before the
@@ -49,6 +56,7 @@ struct ScanOptions {
   std::string working_volume;    // --working-volume: "cylinder:R,H" | "box:X,Y,Z" ("": the rig file's)
   double driver_timeout_s = 10;  // --driver-timeout: how long to wait for the rig's drivers
   bool dry_run = false;          // --dry-run: plan and check the first views, move nothing
+  bool rig_host = false;         // --rig-host: the motion executor and the camera run on the rig's computer
   std::string out;               // empty: out/<object>-<date-time>-<last 4 digits of the scan id>
   bool overwrite = false;        // --overwrite: empty a non-empty --out first
   std::string resume;            // --resume DIR: continue the interrupted scan there
@@ -83,6 +91,7 @@ class CommandLine {
 
   Command command() const { return command_; }
   const StopOptions& stop() const { return stop_; }
+  const RigHostOptions& rig_host() const { return rig_host_; }
   const ScanOptions& scan() const { return scan_; }
   const eval::BenchSpec& bench() const { return bench_; }
   const AblateOptions& ablate() const { return ablate_; }
@@ -137,6 +146,8 @@ class CommandLine {
   std::string ablate_parameter_, ablate_values_;
   AblateOptions ablate_;
   std::string help_topic_;
+  CLI::App* rig_host_cmd_ = nullptr;
+  RigHostOptions rig_host_;
 };
 
 }  // namespace pbnbv::launcher

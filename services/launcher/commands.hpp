@@ -27,4 +27,8 @@ int run_spy();
 // `pbnbv stop`: STOP on the bus (three times over 0.2 s: UDP may lose one).
 int run_stop(const StopOptions& o);
 
+// `pbnbv rig-host`: the motion executor and the camera service, serving every scan on the bus,
+// kept running (a crashed one is started again, up to 3 times) until Ctrl-C.
+int run_rig_host(const RigHostOptions& o, const std::filesystem::path& bin);
+
 }  // namespace pbnbv::launcher

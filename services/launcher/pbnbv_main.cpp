@@ -3,6 +3,8 @@
 //   pbnbv bench [options]    every planner on every object in the twin
 //   pbnbv ablate tmax|beta|initial-view [options]
 //   pbnbv spy                lcm-spy with every pbnbv channel decoded
+//   pbnbv stop [options]     halt the rig and end a scan
+//   pbnbv rig-host [options] the motion executor and camera service on the rig's computer
 // The command line is launcher/command_line.hpp; running each command, launcher/commands.hpp.
 #include <filesystem>
 #include <iostream>
@@ -30,6 +32,8 @@ int main(int argc, char** argv) {
         return launcher::run_spy();
       case launcher::Command::kStop:
         return launcher::run_stop(line.stop());
+      case launcher::Command::kRigHost:
+        return launcher::run_rig_host(line.rig_host(), self.parent_path());
       case launcher::Command::kHelp:
         std::cout << line.usage();
         return 0;

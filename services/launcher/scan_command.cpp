@@ -182,8 +182,10 @@ int run_external_scan(const ScanOptions& o, const fs::path& bin);
 // camera, registration, mapping, the planner's services and the coordinator, last.
 void add_pipeline(const ScanOptions& o, const ScanSettings& s, const fs::path& out, const fs::path& bin,
                   const std::function<void(const std::string&, std::vector<std::string>, bool)>& add) {
-  add("motion", {(bin / "pbnbv-motion").string(), "--model", s.rig_model_path}, false);
-  add("camera", {(bin / "pbnbv-camera").string(), "--model", s.rig_model_path}, false);
+  if (!o.rig_host) {  // else they run on the rig's computer (pbnbv rig-host)
+    add("motion", {(bin / "pbnbv-motion").string(), "--model", s.rig_model_path}, false);
+    add("camera", {(bin / "pbnbv-camera").string(), "--model", s.rig_model_path}, false);
+  }
   std::vector<std::string> registration = {(bin / "pbnbv-registration").string(), "--out", out.string()};
   if (!o.registration) registration.push_back("--off");
   add("registration", registration, false);
@@ -467,6 +469,41 @@ bool still_running(int pid, const fs::path& out) {
   std::ifstream in("/proc/" + std::to_string(pid) + "/cmdline");
   const std::string cmdline((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   return !cmdline.empty() && cmdline.find(out.string()) != std::string::npos;
+}
+
+int run_rig_host(const RigHostOptions& o, const fs::path& bin) {
+  install_stop_handlers();
+  const fs::path logs = fs::absolute(o.logs);
+  fs::create_directories(logs);
+  std::vector<process::Child> children;
+  for (const char* name : {"motion", "camera"}) {
+    process::Child c;
+    c.name = name;
+    c.argv = {(bin / ("pbnbv-" + std::string(name))).string(), "--model", o.rig_model};
+    c.log_path = (logs / (c.name + ".log")).string();
+    c.append_log = true;
+    children.push_back(std::move(c));
+  }
+  for (auto& c : children) process::start(c);
+  std::cout << "pbnbv rig-host: motion executor and camera service for " << o.rig_model << " on " << bus::lcm_url()
+            << ", logs in " << logs.string() << " (Ctrl-C stops them)" << std::endl;
+  std::map<std::string, int> restarts;
+  int code = 0;
+  while (!stop_requested() && code == 0) {
+    for (process::Child* c : process::reap(children)) {
+      if (++restarts[c->name] > kMaxRestarts) {
+        std::cerr << "error: " << c->name << " stopped (" << how_it_ended(c->exit_code) << ") " << kMaxRestarts
+                  << " times; the end of " << c->log_path << ":\n" << process::tail_lines(c->log_path, 8);
+        code = 1;
+        break;
+      }
+      std::cerr << c->name << " stopped (" << how_it_ended(c->exit_code) << "): starting it again" << std::endl;
+      process::start(*c);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  process::stop_all(children, 5.0);
+  return code;  // stopped by the user: the normal end of a host
 }
 
 int resume_scan(const fs::path& dir) {
