@@ -57,7 +57,7 @@ CommandLine::CommandLine()
   cli::init(app_);
   app_.require_subcommand(0, 1);  // one command: `pbnbv help scan` describes scan
 
-  scan_cmd_ = cli::add_command(app_, "scan", "twin-in-the-loop scan of an object");
+  scan_cmd_ = cli::add_command(app_, "scan", "scan an object: the twin in the loop, or a rig whose drivers run outside (--external-rig)");
   declare_scan();
 
   bench_cmd_ = cli::add_command(app_, "bench",
@@ -89,6 +89,12 @@ CommandLine::CommandLine()
                                    "drivers, for scans started on another host (pbnbv scan --external-rig --rig-host)");
   cli::add_text(*rig_host_cmd_, "rig-model", &rig_host_.rig_model, "the rig's MJCF file [models/rig_arm.xml]", "FILE");
   cli::add_text(*rig_host_cmd_, "logs", &rig_host_.logs, "folder for their logs [rig-host-logs]", "DIR");
+
+  import_urdf_cmd_ = cli::add_command(app_, "import-urdf",
+                                      "an arm's URDF as MJCF (MuJoCo's URDF compiler), the first step of a rig file "
+                                      "(README 'Bring your own rig')");
+  import_urdf_cmd_->add_option("urdf", import_urdf_.urdf, "the arm's URDF file")->required()->type_name("FILE");
+  cli::add_text(*import_urdf_cmd_, "out", &import_urdf_.out, "the MJCF to write [the URDF's name with .xml]", "FILE");
 
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");
@@ -211,13 +217,13 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
         out << usage();
         return 0;
       }
-      for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, stop_cmd_, rig_host_cmd_, help_cmd_}) {
+      for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, stop_cmd_, rig_host_cmd_, import_urdf_cmd_, help_cmd_}) {
         if (c->get_name() == help_topic_) {
           out << c->help("pbnbv");
           return 0;
         }
       }
-      throw std::invalid_argument("unknown command '" + help_topic_ + "' (expected scan, bench, ablate, spy or help)");
+      throw std::invalid_argument("unknown command '" + help_topic_ + "' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf or help)");
     }
     if (given == scan_cmd_) {
       command_ = Command::kScan;
@@ -230,6 +236,12 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
       resolve_ablate();
     } else if (given == stop_cmd_) {
       command_ = Command::kStop;
+    } else if (given == import_urdf_cmd_) {
+      command_ = Command::kImportUrdf;
+      if (import_urdf_.out.empty()) import_urdf_.out = fs::path(import_urdf_.urdf).replace_extension(".xml").string();
+      if (fs::absolute(import_urdf_.out) == fs::absolute(import_urdf_.urdf)) {
+        throw std::invalid_argument("--out " + import_urdf_.out + " would overwrite the URDF");
+      }
     } else if (given == rig_host_cmd_) {
       command_ = Command::kRigHost;
       if (rig_host_.rig_model.empty()) rig_host_.rig_model = default_rig_path(RigKind::kArm);

@@ -19,7 +19,7 @@
 
 namespace pbnbv::launcher {
 
-enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigHost };
+enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigHost, kImportUrdf };
 
 // What `pbnbv stop` was asked for.
 struct StopOptions {
@@ -32,6 +32,12 @@ struct StopOptions {
 struct RigHostOptions {
   std::string rig_model;            // the rig file ("" : models/rig_arm.xml)
   std::string logs = "rig-host-logs";  // their logs
+};
+
+// What `pbnbv import-urdf` was asked for.
+struct ImportUrdfOptions {
+  std::string urdf;  // the arm's URDF
+  std::string out;   // the MJCF to write ("" : the URDF's name with .xml)
 };
 
 // What `pbnbv scan` was asked for: the object, the scan's settings (ScanSettings, before the
@@ -92,6 +98,7 @@ class CommandLine {
   Command command() const { return command_; }
   const StopOptions& stop() const { return stop_; }
   const RigHostOptions& rig_host() const { return rig_host_; }
+  const ImportUrdfOptions& import_urdf() const { return import_urdf_; }
   const ScanOptions& scan() const { return scan_; }
   const eval::BenchSpec& bench() const { return bench_; }
   const AblateOptions& ablate() const { return ablate_; }
@@ -148,6 +155,8 @@ class CommandLine {
   std::string help_topic_;
   CLI::App* rig_host_cmd_ = nullptr;
   RigHostOptions rig_host_;
+  CLI::App* import_urdf_cmd_ = nullptr;
+  ImportUrdfOptions import_urdf_;
 };
 
 }  // namespace pbnbv::launcher

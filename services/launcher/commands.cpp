@@ -11,6 +11,7 @@
 
 #include "bus/bus.hpp"
 #include "core/io/json.hpp"
+#include "core/rig/urdf_import.hpp"
 #include "launcher/commands.hpp"
 #include "pbnbv/stop_request_t.hpp"
 
@@ -65,6 +66,27 @@ int run_stop(const StopOptions& o) {
   }
   std::cout << "pbnbv stop: STOP sent to " << (o.scan_id.empty() ? std::string("every scan") : "scan " + o.scan_id)
             << " on " << bus::lcm_url() << std::endl;
+  return 0;
+}
+
+int run_import_urdf(const ImportUrdfOptions& o) {
+  const ImportedArm arm = import_urdf(o.urdf, o.out);
+  std::string joints;
+  for (const auto& j : arm.hinge_joints) joints += (joints.empty() ? "" : ", ") + j;
+  std::cout << "pbnbv import-urdf: " << o.out << ": " << arm.bodies.size() << " bodies, " << arm.hinge_joints.size()
+            << " hinge joints (" << joints << ")" << std::endl;
+  if (!arm.other_joints.empty()) {
+    std::cerr << "warning: " << arm.other_joints.size() << " joints that are not hinges (a rig's arm has only hinges)"
+              << std::endl;
+  }
+  if (arm.hinge_joints.size() != 6) {
+    std::cerr << "warning: a rig's arm has 6 hinge joints from its base to the flange; this one has "
+              << arm.hinge_joints.size() << std::endl;
+  }
+  std::cout << "next: put its bodies under the \"base\" body of a copy of models/rig_arm.xml, name the last body "
+               "\"flange\", keep \"camera_optical\" under it, set the <custom> limits and home; then pbnbv rig-check "
+               "and pbnbv scan --external-rig --dry-run (README, 'Bring your own rig')"
+            << std::endl;
   return 0;
 }
 

@@ -31,4 +31,7 @@ int run_stop(const StopOptions& o);
 // kept running (a crashed one is started again, up to 3 times) until Ctrl-C.
 int run_rig_host(const RigHostOptions& o, const std::filesystem::path& bin);
 
+// `pbnbv import-urdf`: writes the arm's MJCF and says what to do next with it.
+int run_import_urdf(const ImportUrdfOptions& o);
+
 }  // namespace pbnbv::launcher

@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
         return launcher::run_spy();
       case launcher::Command::kStop:
         return launcher::run_stop(line.stop());
+      case launcher::Command::kImportUrdf:
+        return launcher::run_import_urdf(line.import_urdf());
       case launcher::Command::kRigHost:
         return launcher::run_rig_host(line.rig_host(), self.parent_path());
       case launcher::Command::kHelp:
