@@ -7,6 +7,7 @@
 #include "core/geometry/camera_options.hpp"
 #include "core/perception/perception_options.hpp"
 #include "eval/objects.hpp"
+#include "rigcheck/rigcheck_options.hpp"
 
 namespace fs = std::filesystem;
 
@@ -83,6 +84,17 @@ CommandLine::CommandLine()
   stop_cmd_ = cli::add_command(app_, "stop", "halt the rig now and end the scan (STOP on the bus); what it has is kept");
   cli::add_text(*stop_cmd_, "scan", &stop_.scan_id, "the scan to stop (its id, in scan.json) [every scan on the bus]", "ID");
   cli::add_text(*stop_cmd_, "reason", &stop_.reason, "why, for the record [stopped by the user]", "TEXT");
+
+  rig_check_cmd_ = cli::add_command(app_, "rig-check",
+                                    "exercise the rig's drivers on the bus (twin or real) and print a pass/fail table "
+                                    "against the contract and the rig file; moves a wrist joint 3 deg and the "
+                                    "turntable 5 deg, and back");
+  rig_check_.rig_model = default_rig_path(RigKind::kArm);
+  cli::add_text(*rig_check_cmd_, "rig-model", &rig_check_.rig_model,
+                "the rig file (MJCF) the drivers are held to [models/rig_arm.xml]", "FILE");
+  cli::add(*rig_check_cmd_, rigcheck::kDriverDeadline, &rig_check_.deadline_s);
+  cli::add_flag(*rig_check_cmd_, "passive", &rig_check_.passive,
+                "only the checks that move nothing (statuses, one triggered frame)");
 
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");
@@ -182,13 +194,13 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
         out << usage();
         return 0;
       }
-      for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, help_cmd_}) {
+      for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, stop_cmd_, rig_check_cmd_, help_cmd_}) {
         if (c->get_name() == help_topic_) {
           out << c->help("pbnbv");
           return 0;
         }
       }
-      throw std::invalid_argument("unknown command '" + help_topic_ + "' (expected scan, bench, ablate, spy or help)");
+      throw std::invalid_argument("unknown command '" + help_topic_ + "' (expected scan, bench, ablate, spy, stop, rig-check or help)");
     }
     if (given == scan_cmd_) {
       command_ = Command::kScan;
@@ -201,6 +213,8 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
       resolve_ablate();
     } else if (given == stop_cmd_) {
       command_ = Command::kStop;
+    } else if (given == rig_check_cmd_) {
+      command_ = Command::kRigCheck;
     } else {
       command_ = Command::kSpy;
     }

@@ -19,12 +19,19 @@
 
 namespace pbnbv::launcher {
 
-enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop };
+enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigCheck };
 
 // What `pbnbv stop` was asked for.
 struct StopOptions {
   std::string scan_id;  // "" : every scan on the bus
   std::string reason = "stopped by the user";
+};
+
+// What `pbnbv rig-check` was asked for.
+struct RigCheckOptions {
+  std::string rig_model;  // the rig file the drivers are held to
+  double deadline_s = 5;  // per driver answer
+  bool passive = false;   // --passive: the preflight only, nothing commanded to move
 };
 
 // What `pbnbv scan` was asked for: the object, the scan's settings (ScanSettings, before the
@@ -78,6 +85,7 @@ class CommandLine {
 
   Command command() const { return command_; }
   const StopOptions& stop() const { return stop_; }
+  const RigCheckOptions& rig_check() const { return rig_check_; }
   const ScanOptions& scan() const { return scan_; }
   const eval::BenchSpec& bench() const { return bench_; }
   const AblateOptions& ablate() const { return ablate_; }
@@ -120,6 +128,8 @@ class CommandLine {
   CLI::App* spy_cmd_ = nullptr;
   CLI::App* stop_cmd_ = nullptr;
   StopOptions stop_;
+  CLI::App* rig_check_cmd_ = nullptr;
+  RigCheckOptions rig_check_;
   CLI::App* help_cmd_ = nullptr;
   Command command_ = Command::kHelp;
   ScanOptions scan_;

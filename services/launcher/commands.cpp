@@ -13,6 +13,7 @@
 #include "core/io/json.hpp"
 #include "launcher/commands.hpp"
 #include "pbnbv/stop_request_t.hpp"
+#include "rigcheck/rig_check.hpp"
 
 namespace fs = std::filesystem;
 
@@ -65,6 +66,24 @@ int run_stop(const StopOptions& o) {
   }
   std::cout << "pbnbv stop: STOP sent to " << (o.scan_id.empty() ? std::string("every scan") : "scan " + o.scan_id)
             << " on " << bus::lcm_url() << std::endl;
+  return 0;
+}
+
+int run_rig_check(const RigCheckOptions& o) {
+  const RigModel rig = load_rig(o.rig_model);
+  bus::Bus bus("rig-check");
+  std::cout << "pbnbv rig-check: the drivers on " << bus::lcm_url() << " against " << o.rig_model
+            << (o.passive ? " (passive: nothing is commanded to move)" : "") << std::endl;
+  const rigcheck::PreflightResult r =
+      o.passive ? rigcheck::preflight(bus, rig, o.deadline_s) : rigcheck::rig_check(bus, rig, o.deadline_s);
+  std::cout << rigcheck::format_table(r.lines);
+  int failed = 0;
+  for (const auto& l : r.lines) failed += l.passed ? 0 : 1;
+  if (failed > 0) {
+    std::cout << "pbnbv rig-check: FAILED, " << failed << " of " << r.lines.size() << " checks" << std::endl;
+    return 1;
+  }
+  std::cout << "pbnbv rig-check: passed, " << r.lines.size() << " checks" << std::endl;
   return 0;
 }
 

@@ -27,4 +27,8 @@ int run_spy();
 // `pbnbv stop`: STOP on the bus (three times over 0.2 s: UDP may lose one).
 int run_stop(const StopOptions& o);
 
+// `pbnbv rig-check`: rigcheck::rig_check (or preflight with --passive) on the bus, its table
+// printed. 0 only when every line passed; 1 otherwise.
+int run_rig_check(const RigCheckOptions& o);
+
 }  // namespace pbnbv::launcher

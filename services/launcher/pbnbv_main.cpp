@@ -3,6 +3,7 @@
 //   pbnbv bench [options]    every planner on every object in the twin
 //   pbnbv ablate tmax|beta|initial-view [options]
 //   pbnbv spy                lcm-spy with every pbnbv channel decoded
+//   pbnbv rig-check [--rig-model FILE] [--deadline S] [--passive]   the drivers against the contract
 // The command line is launcher/command_line.hpp; running each command, launcher/commands.hpp.
 #include <filesystem>
 #include <iostream>
@@ -30,6 +31,8 @@ int main(int argc, char** argv) {
         return launcher::run_spy();
       case launcher::Command::kStop:
         return launcher::run_stop(line.stop());
+      case launcher::Command::kRigCheck:
+        return launcher::run_rig_check(line.rig_check());
       case launcher::Command::kHelp:
         std::cout << line.usage();
         return 0;

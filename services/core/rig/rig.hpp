@@ -7,11 +7,13 @@
 // kinematics from here, never from the twin's state.
 #include <Eigen/Geometry>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/base/pose.hpp"
 #include "core/base/setting.hpp"
+#include "core/geometry/camera_model.hpp"
 
 namespace pbnbv {
 
@@ -37,6 +39,16 @@ struct ArmGeometry {
   double a1 = 0, d1 = 0, a2 = 0, a3 = 0, d4 = 0, d6 = 0;
 };
 
+// The depth camera the rig carries, as its rig file states it (optional): what a driver's
+// DEPTH_FRAME must match (pbnbv rig-check). MJCF:
+//   <custom><numeric name="pbnbv_camera" data="width height fx fy cx cy depth_min depth_max"/>
+//           <text name="pbnbv_camera_id" data="SERIAL"/></custom>   (the id is optional)
+struct RigCamera {
+  CameraIntrinsics intrinsics;  // pixels
+  DepthRange range;             // metres, planar depth
+  std::string id;               // the camera's serial / id; "" = any
+};
+
 struct RigModel {
   RigKind kind = RigKind::kArm;
   std::string model_path;
@@ -53,6 +65,7 @@ struct RigModel {
   Pose world_T_turntable = Pose::Identity();  // turntable top centre at angle 0, z = axis
   double preferred_azimuth_rad = 0;       // world azimuth about the turntable axis where the
                                           // arm sees best (towards the arm base)
+  std::optional<RigCamera> camera;        // none: the rig file states no camera
 };
 
 // Reads the rig from its MJCF file. Throws std::runtime_error naming the file and what is wrong
