@@ -87,12 +87,15 @@ class RigCheck : public ::testing::Test {
     }
   }
 
-  // Starts the twin (no object, small images; `extra` appended) and waits for its ARM_STATUS.
-  void start_twin(const std::vector<std::string>& extra) {
+  // Starts the twin (no object; `camera`: its image size and focal lengths, by default the test
+  // rig file's; `extra` appended) and waits for its ARM_STATUS.
+  void start_twin(const std::vector<std::string>& extra,
+                  const std::vector<std::string>& camera = {"--width", "320", "--height", "180", "--fx", "174",
+                                                            "--fy", "174"}) {
     process::Child c;
     c.name = "twin";
-    c.argv = {bin_dir() + "/pbnbv-twin", "--rig", "arm", "--model-out", (dir_ / "twin_model.xml").string(),
-              "--width", "320", "--height", "180", "--fx", "174", "--fy", "174"};
+    c.argv = {bin_dir() + "/pbnbv-twin", "--rig", "arm", "--model-out", (dir_ / "twin_model.xml").string()};
+    c.argv.insert(c.argv.end(), camera.begin(), camera.end());
     c.argv.insert(c.argv.end(), extra.begin(), extra.end());
     c.log_path = (dir_ / "twin.log").string();
     children_.push_back(c);
@@ -179,7 +182,7 @@ TEST_F(RigCheck, UtimeGoingBackwardsFails) { expect_fault_named("utime-backwards
 TEST_F(RigCheck, LateExposureStampsFail) { expect_fault_named("late-exposure", "late exposure stamps"); }
 
 TEST_F(RigCheck, AFrameOfAnotherSizeFailsAndNothingMoves) {
-  start_twin({"--width", "640", "--height", "360", "--fx", "348", "--fy", "348"});
+  start_twin({}, {"--width", "640", "--height", "360", "--fx", "348", "--fy", "348"});
   const Outcome o = rig_check();
   EXPECT_EQ(o.exit_code, 1) << o.output;
   EXPECT_TRUE(fails_naming(o.output, "frame size 640x360 disagrees with the rig file's camera 320x180")) << o.output;

@@ -4,6 +4,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <optional>
 
@@ -207,6 +208,7 @@ std::vector<double> to_vec(const Vector6d& q) { return std::vector<double>(q.dat
 struct Trial {
   std::string who;                     // "arm", "turntable"
   std::vector<DriverSample>* samples;  // the recorder's, for this driver
+  double speed_limit_rad_s;            // the slowest joint's
   std::function<void(int64_t seq, const std::vector<double>& target, double speed_scale)> send;
 };
 
@@ -216,8 +218,16 @@ void run_trial(Recorder& r, const Trial& t, const std::vector<double>& start, co
   const auto echoed = [&](int64_t s) { return !t.samples->empty() && t.samples->back().command_seq == s; };
   const auto move = [&](const std::string& check, int64_t s, const std::vector<double>& target) {
     const double sent = bus::now_s();
+    // The deadline, plus twice the travel at the commanded speed (a driver that ignored a limit
+    // may have gone far).
+    const std::vector<double> from = t.samples->empty() ? target : t.samples->back().position;
+    double travel = 0;
+    for (std::size_t i = 0; i < std::min(from.size(), target.size()); ++i) {
+      travel = std::max(travel, std::abs(target[i] - from[i]));
+    }
+    const double timeout = deadline_s + 2 * travel / (kSpeedScale * t.speed_limit_rad_s);
     drive(r, [&] { t.send(s, target, kSpeedScale); }, [&] { return !echoed(s); },
-          [&] { return check_move(check, *t.samples, s, target, kMotionWithinToleranceRad, sent).passed; }, deadline_s);
+          [&] { return check_move(check, *t.samples, s, target, kMotionWithinToleranceRad, sent).passed; }, timeout);
     lines->push_back(check_move(check, *t.samples, s, target, kMotionWithinToleranceRad, sent));
   };
   move(t.who + " small move (" + move_what + ")", seq, moved);
@@ -268,7 +278,7 @@ PreflightResult rig_check(bus::Bus& bus, const RigModel& rig, double deadline_s)
   Vector6d beyond = q1;
   beyond[kWristJoint] = rig.q_upper[kWristJoint] + kBeyondLimitRad;
   int64_t seq = bus::now_utime();
-  const Trial arm{"arm", &r.arm_samples, [&](int64_t s, const std::vector<double>& target, double speed_scale) {
+  const Trial arm{"arm", &r.arm_samples, rig.qd_max.minCoeff(), [&](int64_t s, const std::vector<double>& target, double speed_scale) {
                     ArmCommand c;
                     c.seq = s;
                     c.joint_position_rad = Eigen::Map<const Vector6d>(target.data());
@@ -286,7 +296,7 @@ PreflightResult rig_check(bus::Bus& bus, const RigModel& rig, double deadline_s)
   if (rig.has_turntable && r.turntable) {
     // The turntable: 5 deg and back; a quarter turn at speed_scale 2 (outside (0, 1]) refused.
     const double a0 = r.turntable->angle_rad;
-    const Trial turntable{"turntable", &r.turntable_samples,
+    const Trial turntable{"turntable", &r.turntable_samples, rig.turntable_qd_max,
                           [&](int64_t s, const std::vector<double>& target, double speed_scale) {
                             TurntableCommand c;
                             c.seq = s;
