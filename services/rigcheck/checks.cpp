@@ -175,7 +175,11 @@ CheckLine check_depth_within_range(const DepthFrame& f) {
   }
   const std::string check = "frame depths within its range";
   const std::string figure = fmt::format("{} of {} px outside", outside, valid);
-  if (valid == 0) return line(check, false, "0 valid px", "the frame has no valid pixel: is the lens covered?");
+  if (valid == 0) {
+    return line(check, true, "0 valid px",
+                fmt::format("no return within {}..{} m: nothing to compare (an empty scene; or is the lens covered?)",
+                            exact(f.range.min_m), exact(f.range.max_m)));
+  }
   // A few pixels at the range's edges round outside it; a wrong unit moves most of them.
   if (outside > valid / 100) {
     return line(check, false, figure,

@@ -72,7 +72,8 @@ CheckLine check_trigger_answered(const std::optional<DepthFrame>& frame, int64_t
 // with "not stated" when the rig file has no camera).
 std::vector<CheckLine> check_frame_against_camera(const DepthFrame& frame, const std::optional<RigCamera>& camera);
 // Nonzero depths lie inside the frame's own range (the contract reports the rest as 0): a frame
-// whose values are in another unit than depth_unit_m says mostly fails this.
+// whose values are in another unit than depth_unit_m says mostly fails this. A frame without a
+// valid pixel (an empty scene) passes with nothing compared.
 CheckLine check_depth_within_range(const DepthFrame& frame);
 // The exposure [start, start + duration] holds utime and lies on the status clock: not before the
 // status preceding the trigger (`status_before_utime`) nor after the newest status received with
