@@ -108,10 +108,11 @@ class RigCheck : public ::testing::Test {
 
   // Runs `pbnbv rig-check` against the test's rig file, counting the commands on the bus while it
   // runs.
-  Outcome rig_check() {
+  Outcome rig_check(const std::vector<std::string>& extra = {}) {
     std::vector<process::Child> run(1);
     run[0].name = "rig-check";
     run[0].argv = {bin_dir() + "/pbnbv", "rig-check", "--rig-model", rig_.string(), "--deadline", "3"};
+    run[0].argv.insert(run[0].argv.end(), extra.begin(), extra.end());
     run[0].log_path = (dir_ / "rig_check.log").string();
     const auto t0 = std::chrono::steady_clock::now();
     process::start(run[0]);
@@ -171,6 +172,16 @@ TEST_F(RigCheck, PassesOnTheTwin) {
   EXPECT_NE(o.output.find("| pass | command_rejected"), std::string::npos) << o.output;
   EXPECT_GT(o.arm_commands, 0);
   EXPECT_GT(o.turntable_commands, 0);
+}
+
+TEST_F(RigCheck, PassiveCommandsNothing) {
+  start_twin({});
+  const Outcome o = rig_check({"--passive"});
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_NE(o.output.find("frame size "), std::string::npos) << o.output;
+  EXPECT_EQ(o.output.find("small move"), std::string::npos) << o.output;
+  EXPECT_EQ(o.arm_commands, 0);
+  EXPECT_EQ(o.turntable_commands, 0);
 }
 
 TEST_F(RigCheck, SlowStatusFails) { expect_fault_named("slow-status", "slow status"); }

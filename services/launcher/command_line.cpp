@@ -91,7 +91,7 @@ CommandLine::CommandLine()
                                     "turntable 5 deg, and back");
   rig_check_.rig_model = default_rig_path(RigKind::kArm);
   cli::add_text(*rig_check_cmd_, "rig-model", &rig_check_.rig_model,
-                "the rig file (MJCF) the drivers are held to [models/rig_arm.xml]", "FILE");
+                "the rig file (MJCF) the drivers are held to", "FILE");
   cli::add(*rig_check_cmd_, rigcheck::kDriverDeadline, &rig_check_.deadline_s);
   cli::add_flag(*rig_check_cmd_, "passive", &rig_check_.passive,
                 "only the checks that move nothing (statuses, one triggered frame)");
