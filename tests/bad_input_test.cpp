@@ -141,6 +141,7 @@ TEST_F(BadInput, OutOfContractValuesAreRejectedWithTheFieldNamed) {
   lcm.publish("ARM_COMMAND", &beyond);
   ASSERT_TRUE(listener_->spin_until([] { return listener_->arm.fault.find("777002") != std::string::npos; }, 5.0));
   EXPECT_EQ(listener_->arm.fault_command_seq, 777002);
+  EXPECT_EQ(listener_->arm.fault_code, arm_status_t::kFaultOutOfLimits);
   EXPECT_NE(listener_->arm.fault.find("a3"), std::string::npos) << listener_->arm.fault;
   EXPECT_NE(listener_->arm.fault.find("limits"), std::string::npos) << listener_->arm.fault;
 

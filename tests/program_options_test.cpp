@@ -45,6 +45,13 @@ std::vector<Program> programs() {
         {"--rig crane --out x", "--rig: unknown rig kind 'crane' (expected arm or free)"},
         {"--objets sphere --out x", "unknown option --objets (did you mean --objects?)"}},
        "--planners"},
+      {"pbnbv",
+       "rig-check",
+       {{"--deadline 0", "--deadline: 0 is outside its range [0.5, 600] s"},
+        {"--rig-model", "--rig-model needs a value"},
+        {"--rig-model /nonexistent.xml", "pbnbv rig-check: rig model /nonexistent.xml: cannot open the file"},
+        {"--dedline 3", "unknown option --dedline (did you mean --deadline?)"}},
+       "--passive"},
       {"pbnbv-motion",
        "",
        {{"--rig", "--rig needs a value"},
@@ -104,7 +111,8 @@ std::vector<Program> programs() {
         {"--speed 1000", "--speed: 1000 is outside its range [0.1, 100]"},
         {"--fx 0", "--fx: 0 is outside its range [1, 100000] px"},
         {"--rig crane", "--rig: unknown rig kind 'crane'"},
-        {"--mesh-file x.stl", "unknown option --mesh-file (did you mean --mesh?)"}},
+        {"--mesh-file x.stl", "unknown option --mesh-file (did you mean --mesh?)"},
+        {"--fault slow", "--fault: unknown driver fault 'slow' (expected slow-status, no-seq-echo"}},
        "--hand-eye-error-mm MM"},
   };
 }

@@ -22,6 +22,23 @@ namespace pbnbv::testing {
 
 namespace fs = std::filesystem;
 
+// A copy of models/<model> in `dir` whose stated camera (<custom> pbnbv_camera) is `camera`
+// ("width height fx fy cx cy depth_min depth_max"): the tests' twin renders small frames, and a
+// rig file holds a driver to its own camera.
+inline fs::path rig_with_camera(const fs::path& models, const std::string& model, const fs::path& dir,
+                                const std::string& camera) {
+  std::ifstream in(models / model);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string key = "<numeric name=\"pbnbv_camera\" data=\"";
+  const std::size_t at = text.find(key);
+  if (at == std::string::npos) throw std::runtime_error(model + " states no camera (pbnbv_camera)");
+  const std::size_t end = text.find('"', at + key.size());
+  text.replace(at + key.size(), end - at - key.size(), camera);
+  const fs::path out = dir / (fs::path(model).stem().string() + "-camera.xml");
+  std::ofstream(out) << text;
+  return out;
+}
+
 // Distances of a cloud's points to a mesh's surface, m.
 struct Distances {
   double median = 0, p95 = 0;

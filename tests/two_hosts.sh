@@ -4,9 +4,9 @@
 #   rig host:     the twin (as the rig's drivers) and `pbnbv rig-host` (motion executor, camera)
 #   compute host: `pbnbv scan --external-rig --rig-host` (registration, mapping, ellipsoids,
 #                 scorer, coordinator, lcm-logger)
-# Usage: two_hosts.sh OUT TWIN_OPTIONS SCAN_OPTIONS   (needs root: ip netns)
+# Usage: two_hosts.sh OUT RIG_MODEL TWIN_OPTIONS SCAN_OPTIONS   (needs root: ip netns)
 set -euo pipefail
-OUT=$1; TWIN_OPTIONS=$2; SCAN_OPTIONS=$3
+OUT=$1; RIG_MODEL=$2; TWIN_OPTIONS=$3; SCAN_OPTIONS=$4
 BIN=${PBNBV_BIN_DIR:?}
 ID=$$
 RIG=pbnbv-rig-$ID; COMPUTE=pbnbv-compute-$ID
@@ -34,8 +34,8 @@ host "$COMPUTE" "vc$ID" 10.77.0.2
 export LCM_DEFAULT_URL="udpm://239.255.76.67:7667?ttl=1&recv_buf_size=8388608"
 mkdir -p "$OUT/rig-host"
 # shellcheck disable=SC2086
-ip netns exec "$RIG" "$BIN/pbnbv-twin" --speed 20 $TWIN_OPTIONS --model-out "$OUT/rig-host/twin_model.xml" \
+ip netns exec "$RIG" "$BIN/pbnbv-twin" --speed 20 --model "$RIG_MODEL" $TWIN_OPTIONS --model-out "$OUT/rig-host/twin_model.xml" \
   >"$OUT/rig-host/twin.log" 2>&1 &
-ip netns exec "$RIG" "$BIN/pbnbv" rig-host --logs "$OUT/rig-host" >"$OUT/rig-host/rig-host.log" 2>&1 &
+ip netns exec "$RIG" "$BIN/pbnbv" rig-host --rig-model "$RIG_MODEL" --logs "$OUT/rig-host" >"$OUT/rig-host/rig-host.log" 2>&1 &
 # shellcheck disable=SC2086
 ip netns exec "$COMPUTE" "$BIN/pbnbv" scan --external-rig --rig-host $SCAN_OPTIONS --out "$OUT/scan"

@@ -154,15 +154,21 @@ JointGroup RigSim::make_group(const std::vector<std::string>& joints,
 
 void RigSim::start_ramp(JointGroup& g, const std::vector<double>& target, double speed_scale,
                         long seq) {
+  if (ignore_limits_) speed_scale = std::clamp(speed_scale, 0.01, 1.0);
   if (!(speed_scale > 0 && speed_scale <= 1)) {
     throw std::invalid_argument("speed_scale " + std::to_string(speed_scale) + " is outside (0, 1]");
   }
   for (std::size_t i = 0; i < target.size(); ++i) {
-    if (!std::isfinite(target[i]) || target[i] < g.lower[i] - 1e-9 || target[i] > g.upper[i] + 1e-9) {
+    if (!std::isfinite(target[i])) {
+      std::ostringstream os;
+      os << "joint " << g.names[i] << " target " << target[i] << " is not finite";
+      throw std::invalid_argument(os.str());
+    }
+    if (!ignore_limits_ && (target[i] < g.lower[i] - 1e-9 || target[i] > g.upper[i] + 1e-9)) {
       std::ostringstream os;
       os << "joint " << g.names[i] << " target " << target[i] << " is outside its limits ["
          << g.lower[i] << ", " << g.upper[i] << "]";
-      throw std::invalid_argument(os.str());
+      throw OutOfLimits(os.str());
     }
   }
   // Synchronised smoothstep ramp: the slowest joint sets the duration.

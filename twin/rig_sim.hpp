@@ -9,6 +9,7 @@
 
 #include <optional>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -56,6 +57,12 @@ struct PoseErrorModel {
 PoseErrorModel make_pose_error(double hand_eye_m, double hand_eye_rad, double turntable_rad,
                                double joint_sigma_rad, uint64_t seed);
 
+// A command target outside its joint's limits (the twin reports kFaultOutOfLimits; other
+// std::invalid_argument from a command: kFaultCommandRejected).
+struct OutOfLimits : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
+
 // A group of joints moving together under one command (the arm's 6, or the turntable).
 struct JointGroup {
   std::vector<int> qpos_adr;   // addresses in qpos
@@ -82,13 +89,17 @@ class RigSim {
   RigSim(const RigSim&) = delete;
   RigSim& operator=(const RigSim&) = delete;
 
-  // Starts a synchronised ramp to `target` at `speed_scale` of the limits. Throws
-  // std::invalid_argument naming the joint when a target is outside its limits or not finite
-  // (the command is then ignored: the rig keeps holding; the twin reports it in the status as
-  // kFaultCommandRejected with the command's seq).
+  // Starts a synchronised ramp to `target` at `speed_scale` of the limits. Throws OutOfLimits
+  // naming the joint when a target is outside its limits, std::invalid_argument when it is not
+  // finite or speed_scale is outside (0, 1] (the command is then ignored: the rig keeps holding;
+  // the twin reports it in the status as kFaultOutOfLimits / kFaultCommandRejected with the
+  // command's seq).
   void command_arm(const Vector6d& target, double speed_scale, long seq);
   void command_turntable(double target_rad, double speed_scale, long seq);
   void hold_arm(long seq);  // stop where it is
+  // A faulty driver (pbnbv-twin --fault ignore-limits): targets outside the joint limits are
+  // executed (the joints stop at their mechanical limits) and speed_scale is clamped into (0, 1].
+  void set_ignore_limits(bool on) { ignore_limits_ = on; }
 
   // Advances physics by one timestep.
   void step();
@@ -125,6 +136,7 @@ class RigSim {
   std::mt19937_64 rng_;
   JointGroup arm_;
   std::optional<JointGroup> turntable_;
+  bool ignore_limits_ = false;
 };
 
 }  // namespace pbnbv::twin

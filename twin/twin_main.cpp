@@ -3,6 +3,8 @@
 //   in:  ARM_COMMAND, TURNTABLE_COMMAND, DEPTH_TRIGGER
 //   out: ARM_STATUS, TURNTABLE_STATUS (every 10 ms of rig time), DEPTH_FRAME (per trigger),
 //        HEARTBEAT
+// The reference driver of the contract (README "Writing a driver"); --fault makes it a faulty one
+// (twin/driver_faults.hpp), for `pbnbv rig-check`'s tests.
 #include <unistd.h>
 
 #include <cmath>
@@ -23,6 +25,7 @@
 #include "core/base/log.hpp"
 #include "core/rig/rig.hpp"
 #include "twin/depth_renderer.hpp"
+#include "twin/driver_faults.hpp"
 #include "pbnbv/arm_command_t.hpp"
 #include "pbnbv/arm_status_t.hpp"
 #include "pbnbv/depth_frame_t.hpp"
@@ -37,7 +40,9 @@ using namespace pbnbv;
 namespace {
 
 constexpr double kStatusPeriodS = 0.01;  // 100 Hz of rig time
+constexpr double kSlowStatusPeriodS = 0.05;  // --fault slow-status: 20 Hz
 constexpr double kDepthUnitM = 1e-4;     // 0.1 mm per count
+constexpr const char* kCameraId = "pbnbv-twin";  // depth_frame_t camera_id
 
 int64_t rig_utime(int64_t epoch_utime, double sim_s) {
   return epoch_utime + static_cast<int64_t>(std::llround(sim_s * 1e6));
@@ -50,16 +55,24 @@ int8_t mode_of(const twin::RigSim& sim, const twin::JointGroup& g) {
   return sim.settled(g) ? Status::kModeSettled : Status::kModeMoving;
 }
 
-// The last command a driver refused, until it accepts one: the twin's only fault
-// (kFaultCommandRejected; it has no drive that can fail).
+// The last command a driver refused, until it accepts one: the twin's only faults
+// (kFaultOutOfLimits, kFaultCommandRejected; it has no drive that can fail).
 struct Rejection {
   std::string fault;         // empty: none
   int64_t command_seq = -1;  // the refused command
-  void set(const std::string& what, int64_t seq) {
+  bool out_of_limits = false;
+  void set(const std::string& what, int64_t seq, bool limits = false) {
     fault = what;
     command_seq = seq;
+    out_of_limits = limits;
   }
   void clear() { set("", -1); }
+  // The status's fault_code (arm_status_t or turntable_status_t constants).
+  template <class Status>
+  int8_t code() const {
+    if (fault.empty()) return Status::kFaultNone;
+    return out_of_limits ? Status::kFaultOutOfLimits : Status::kFaultCommandRejected;
+  }
 };
 
 }  // namespace
@@ -116,6 +129,11 @@ int main(int argc, char** argv) {
   std::string truth_path;
   cli::add_text(app, "truth-out", &truth_path,
                 "append each frame's true camera pose to this file (JSON lines; evaluation only)", "PATH");
+  std::vector<twin::DriverFault> faults;
+  cli::add_list(app, "fault", &faults,
+                "play a faulty driver, for pbnbv rig-check's tests: slow-status (20 Hz), no-seq-echo, depth-unit-mm "
+                "(counts in mm, unit field 0.1 mm), no-trigger-id, ignore-limits (executes out-of-limit commands), "
+                "utime-backwards, late-exposure (frames stamped 1 s late)");
   if (const std::optional<int> code = cli::parse(app, argc, argv, std::cout, std::cerr)) return *code;
   install_stop_handlers();
   try {
@@ -138,6 +156,10 @@ int main(int argc, char** argv) {
 
     const RigModel rig = load_rig(model_path);
     twin::RigSim sim(rig, object, model_out, errors);
+    using twin::DriverFault;
+    const auto faulty = [&](DriverFault f) { return twin::has_fault(faults, f); };
+    sim.set_ignore_limits(faulty(DriverFault::kIgnoreLimits));
+    for (const DriverFault f : faults) log_warn("playing a faulty driver: " + std::string(name_of(f)));
     std::ofstream truth;
     if (!truth_path.empty()) {
       truth.open(truth_path, std::ios::app);
@@ -185,7 +207,8 @@ int main(int argc, char** argv) {
         }
         arm_fault.clear();
       } catch (const std::exception& e) {
-        arm_fault.set("rejected ARM_COMMAND seq " + std::to_string(c.seq) + ": " + e.what(), c.seq);
+        arm_fault.set("rejected ARM_COMMAND seq " + std::to_string(c.seq) + ": " + e.what(), c.seq,
+                      dynamic_cast<const twin::OutOfLimits*>(&e) != nullptr);
         throw std::invalid_argument(arm_fault.fault);
       }
     });
@@ -194,7 +217,8 @@ int main(int argc, char** argv) {
         sim.command_turntable(c.angle_rad, c.speed_scale, c.seq);
         turntable_fault.clear();
       } catch (const std::exception& e) {
-        turntable_fault.set("rejected TURNTABLE_COMMAND seq " + std::to_string(c.seq) + ": " + e.what(), c.seq);
+        turntable_fault.set("rejected TURNTABLE_COMMAND seq " + std::to_string(c.seq) + ": " + e.what(), c.seq,
+                            dynamic_cast<const twin::OutOfLimits*>(&e) != nullptr);
         throw std::invalid_argument(turntable_fault.fault);
       }
     });
@@ -204,9 +228,13 @@ int main(int argc, char** argv) {
       twin::DepthImage image = renderer.render(sim.data());
       if (noise.enabled()) twin::apply_depth_noise(image, noise, rng);
       depth_frame_t f;
-      f.utime = rig_utime(epoch, sim.time_s());
+      // The renderer exposes instantaneously: the exposure starts and ends at this rig time.
+      f.utime = rig_utime(epoch, sim.time_s()) + (faulty(DriverFault::kLateExposure) ? 1000000 : 0);
+      f.exposure_start_utime = f.utime;
+      f.exposure_us = 0;
+      f.camera_id = kCameraId;
       f.seq = frame_seq++;
-      f.trigger_seq = t.seq;
+      f.trigger_seq = faulty(DriverFault::kNoTriggerId) ? -1 : t.seq;
       f.scan_id = t.scan_id;
       f.width = image.width;
       f.height = image.height;
@@ -218,8 +246,9 @@ int main(int argc, char** argv) {
       f.depth_max_m = range.max_m;
       f.depth_unit_m = kDepthUnitM;
       std::vector<uint8_t> raw(static_cast<std::size_t>(image.width) * image.height * 2);
+      const double unit_m = faulty(DriverFault::kDepthUnitMm) ? 1e-3 : kDepthUnitM;
       for (std::size_t i = 0; i < image.depth_m.size(); ++i) {
-        const double counts = std::round(image.depth_m[i] / kDepthUnitM);
+        const double counts = std::round(image.depth_m[i] / unit_m);
         const uint16_t v = counts > 0 && counts < 65535 ? static_cast<uint16_t>(counts) : 0;
         raw[2 * i] = static_cast<uint8_t>(v & 0xff);
         raw[2 * i + 1] = static_cast<uint8_t>(v >> 8);
@@ -250,14 +279,20 @@ int main(int argc, char** argv) {
     wall0 = bus::now_s();
     sim0 = sim.time_s();
     double next_status = sim.time_s();
+    const double status_period_s = faulty(DriverFault::kSlowStatus) ? kSlowStatusPeriodS : kStatusPeriodS;
     while (!stop_requested()) {
       bus.spin_once(0);
       sim.step();
       if (sim.time_s() + 1e-12 >= next_status) {
-        next_status += kStatusPeriodS;
-        const int64_t utime = rig_utime(epoch, sim.time_s());
+        next_status += status_period_s;
+        const bool backwards = faulty(DriverFault::kUtimeBackwards) && status_seq % 20 == 19;
+        const int64_t utime = rig_utime(epoch, sim.time_s()) - (backwards ? 50000 : 0);
+        // The driver's own clock: the simulation's, from the twin's start.
+        const int64_t driver_utime = std::llround(sim.time_s() * 1e6);
+        const bool no_echo = faulty(DriverFault::kNoSeqEcho);
         arm_status_t s;
         s.utime = utime;
+        s.driver_utime = driver_utime;
         s.seq = status_seq;
         s.scan_id = scope;
         s.num_joints = 6;
@@ -266,25 +301,26 @@ int main(int argc, char** argv) {
         s.joint_velocity_rad_s = bus::to_std(sim.arm_velocity());
         s.joint_position_commanded_rad = bus::to_std(
             Eigen::Map<const Vector6d>(sim.arm().target.data()) + (sim.arm_position_reported() - sim.arm_position()));
-        s.command_seq = sim.arm().command_seq;
+        s.command_seq = no_echo ? -1 : sim.arm().command_seq;
         const bool arm_faulted = !arm_fault.fault.empty();
         s.mode = arm_faulted ? arm_status_t::kModeFault : mode_of<arm_status_t>(sim, sim.arm());
-        s.fault_code = arm_faulted ? arm_status_t::kFaultCommandRejected : arm_status_t::kFaultNone;
+        s.fault_code = arm_fault.code<arm_status_t>();
         s.fault_command_seq = arm_fault.command_seq;
         s.fault = arm_fault.fault;
         bus.publish(channels::kArmStatus, s);
         if (sim.has_turntable()) {
           turntable_status_t t;
           t.utime = utime;
+          t.driver_utime = driver_utime;
           t.seq = status_seq;
           t.scan_id = scope;
           t.angle_rad = sim.turntable_angle_reported();
           t.velocity_rad_s = sim.turntable_velocity();
           t.angle_commanded_rad = sim.turntable().target[0] + errors.turntable_offset_rad;
-          t.command_seq = sim.turntable().command_seq;
+          t.command_seq = no_echo ? -1 : sim.turntable().command_seq;
           const bool turntable_faulted = !turntable_fault.fault.empty();
           t.mode = turntable_faulted ? turntable_status_t::kModeFault : mode_of<turntable_status_t>(sim, sim.turntable());
-          t.fault_code = turntable_faulted ? turntable_status_t::kFaultCommandRejected : turntable_status_t::kFaultNone;
+          t.fault_code = turntable_fault.code<turntable_status_t>();
           t.fault_command_seq = turntable_fault.command_seq;
           t.fault = turntable_fault.fault;
           bus.publish(channels::kTurntableStatus, t);

@@ -23,9 +23,9 @@ inline void rig_mode_from_msg(int8_t mode, int8_t fault_code, const std::string&
   if (mode < 0 || mode > 3) {
     throw std::invalid_argument(what + " mode = " + std::to_string(mode) + " is not one of its constants (0..3)");
   }
-  if (fault_code < 0 || fault_code > 2) {
+  if (fault_code < 0 || fault_code > 3) {
     throw std::invalid_argument(what + " fault_code = " + std::to_string(fault_code) +
-                                " is not one of its constants (0..2)");
+                                " is not one of its constants (0..3)");
   }
   *mode_out = static_cast<RigMode>(mode);
   *fault_out = static_cast<RigFault>(fault_code);
@@ -38,6 +38,7 @@ inline void rig_mode_from_msg(int8_t mode, int8_t fault_code, const std::string&
 inline ArmReading from_msg(const arm_status_t& m) {
   ArmReading r;
   r.utime = m.utime;
+  r.driver_utime = m.driver_utime;
   r.joint_position_rad = to_vector6(m.joint_position_rad, "ARM_STATUS joint_position_rad");
   r.joint_velocity_rad_s = to_vector6(m.joint_velocity_rad_s, "ARM_STATUS joint_velocity_rad_s");
   r.command_seq = m.command_seq;
@@ -50,6 +51,7 @@ inline ArmReading from_msg(const arm_status_t& m) {
 inline TurntableReading from_msg(const turntable_status_t& m) {
   TurntableReading r;
   r.utime = m.utime;
+  r.driver_utime = m.driver_utime;
   require_range(m.angle_rad, -1e6, 1e6, "TURNTABLE_STATUS angle_rad");
   r.angle_rad = m.angle_rad;
   require_range(m.velocity_rad_s, -1e6, 1e6, "TURNTABLE_STATUS velocity_rad_s");
@@ -88,6 +90,9 @@ inline DepthFrame from_msg(const depth_frame_t& m) {
   f.utime = m.utime;
   f.seq = m.seq;
   f.trigger_seq = m.trigger_seq;
+  f.exposure_start_utime = m.exposure_start_utime;
+  f.exposure_us = m.exposure_us;
+  f.camera_id = m.camera_id;
   f.intrinsics = d.intrinsics;
   f.range = d.range;
   f.depth_m = std::move(d.depth_m);

@@ -7,6 +7,7 @@
 #include "core/geometry/camera_options.hpp"
 #include "core/perception/perception_options.hpp"
 #include "eval/objects.hpp"
+#include "rigcheck/rigcheck_options.hpp"
 
 namespace fs = std::filesystem;
 
@@ -95,6 +96,16 @@ CommandLine::CommandLine()
                                       "(README 'Bring your own rig')");
   import_urdf_cmd_->add_option("urdf", import_urdf_.urdf, "the arm's URDF file")->required()->type_name("FILE");
   cli::add_text(*import_urdf_cmd_, "out", &import_urdf_.out, "the MJCF to write [the URDF's name with .xml]", "FILE");
+  rig_check_cmd_ = cli::add_command(app_, "rig-check",
+                                    "exercise the rig's drivers on the bus (twin or real) and print a pass/fail table "
+                                    "against the contract and the rig file; moves a wrist joint 3 deg and the "
+                                    "turntable 5 deg, and back");
+  rig_check_.rig_model = default_rig_path(RigKind::kArm);
+  cli::add_text(*rig_check_cmd_, "rig-model", &rig_check_.rig_model,
+                "the rig file (MJCF) the drivers are held to", "FILE");
+  cli::add(*rig_check_cmd_, rigcheck::kDriverDeadline, &rig_check_.deadline_s);
+  cli::add_flag(*rig_check_cmd_, "passive", &rig_check_.passive,
+                "only the checks that move nothing (statuses, one triggered frame)");
 
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");
@@ -217,13 +228,15 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
         out << usage();
         return 0;
       }
-      for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, stop_cmd_, rig_host_cmd_, import_urdf_cmd_, help_cmd_}) {
+      for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, stop_cmd_, rig_check_cmd_, rig_host_cmd_,
+                                import_urdf_cmd_, help_cmd_}) {
         if (c->get_name() == help_topic_) {
           out << c->help("pbnbv");
           return 0;
         }
       }
-      throw std::invalid_argument("unknown command '" + help_topic_ + "' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf or help)");
+      throw std::invalid_argument("unknown command '" + help_topic_ +
+                                  "' (expected scan, bench, ablate, spy, stop, rig-check, rig-host, import-urdf or help)");
     }
     if (given == scan_cmd_) {
       command_ = Command::kScan;
@@ -250,6 +263,8 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
       } catch (const std::runtime_error& e) {
         throw std::invalid_argument(std::string("--rig-model: ") + e.what());
       }
+    } else if (given == rig_check_cmd_) {
+      command_ = Command::kRigCheck;
     } else {
       command_ = Command::kSpy;
     }

@@ -19,7 +19,7 @@
 
 namespace pbnbv::launcher {
 
-enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigHost, kImportUrdf };
+enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigCheck, kRigHost, kImportUrdf };
 
 // What `pbnbv stop` was asked for.
 struct StopOptions {
@@ -38,6 +38,13 @@ struct RigHostOptions {
 struct ImportUrdfOptions {
   std::string urdf;  // the arm's URDF
   std::string out;   // the MJCF to write ("" : the URDF's name with .xml)
+};
+
+// What `pbnbv rig-check` was asked for.
+struct RigCheckOptions {
+  std::string rig_model;  // the rig file the drivers are held to
+  double deadline_s = 5;  // per driver answer
+  bool passive = false;   // --passive: the preflight only, nothing commanded to move
 };
 
 // What `pbnbv scan` was asked for: the object, the scan's settings (ScanSettings, before the
@@ -99,6 +106,7 @@ class CommandLine {
   const StopOptions& stop() const { return stop_; }
   const RigHostOptions& rig_host() const { return rig_host_; }
   const ImportUrdfOptions& import_urdf() const { return import_urdf_; }
+  const RigCheckOptions& rig_check() const { return rig_check_; }
   const ScanOptions& scan() const { return scan_; }
   const eval::BenchSpec& bench() const { return bench_; }
   const AblateOptions& ablate() const { return ablate_; }
@@ -142,6 +150,8 @@ class CommandLine {
   CLI::App* spy_cmd_ = nullptr;
   CLI::App* stop_cmd_ = nullptr;
   StopOptions stop_;
+  CLI::App* rig_check_cmd_ = nullptr;
+  RigCheckOptions rig_check_;
   CLI::App* help_cmd_ = nullptr;
   Command command_ = Command::kHelp;
   ScanOptions scan_;

@@ -14,6 +14,7 @@
 #include "core/rig/urdf_import.hpp"
 #include "launcher/commands.hpp"
 #include "pbnbv/stop_request_t.hpp"
+#include "rigcheck/rig_check.hpp"
 
 namespace fs = std::filesystem;
 
@@ -87,6 +88,24 @@ int run_import_urdf(const ImportUrdfOptions& o) {
                "\"flange\", keep \"camera_optical\" under it, set the <custom> limits and home; then pbnbv rig-check "
                "and pbnbv scan --external-rig --dry-run (README, 'Bring your own rig')"
             << std::endl;
+  return 0;
+}
+
+int run_rig_check(const RigCheckOptions& o) {
+  const RigModel rig = load_rig(o.rig_model);
+  bus::Bus bus("rig-check");
+  std::cout << "pbnbv rig-check: the drivers on " << bus::lcm_url() << " against " << o.rig_model
+            << (o.passive ? " (passive: nothing is commanded to move)" : "") << std::endl;
+  const rigcheck::PreflightResult r =
+      o.passive ? rigcheck::preflight(bus, rig, o.deadline_s) : rigcheck::rig_check(bus, rig, o.deadline_s);
+  std::cout << rigcheck::format_table(r.lines);
+  int failed = 0;
+  for (const auto& l : r.lines) failed += l.passed ? 0 : 1;
+  if (failed > 0) {
+    std::cout << "pbnbv rig-check: FAILED, " << failed << " of " << r.lines.size() << " checks" << std::endl;
+    return 1;
+  }
+  std::cout << "pbnbv rig-check: passed, " << r.lines.size() << " checks" << std::endl;
   return 0;
 }
 

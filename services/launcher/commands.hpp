@@ -33,5 +33,8 @@ int run_rig_host(const RigHostOptions& o, const std::filesystem::path& bin);
 
 // `pbnbv import-urdf`: writes the arm's MJCF and says what to do next with it.
 int run_import_urdf(const ImportUrdfOptions& o);
+// `pbnbv rig-check`: rigcheck::rig_check (or preflight with --passive) on the bus, its table
+// printed. 0 only when every line passed; 1 otherwise.
+int run_rig_check(const RigCheckOptions& o);
 
 }  // namespace pbnbv::launcher

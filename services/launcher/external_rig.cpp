@@ -14,15 +14,11 @@
 #include "core/planning/planner.hpp"
 #include "core/scan/scan_sequencer.hpp"
 #include "pbnbv/arm_command_t.hpp"
-#include "pbnbv/depth_trigger_t.hpp"
 #include "pbnbv/turntable_command_t.hpp"
 
 namespace pbnbv::launcher {
 
 namespace {
-
-constexpr double kMinStatusHz = 50.0;  // the contract's lowest status rate (lcmtypes/*_status_t.lcm)
-constexpr double kRateWindowS = 0.5;
 
 std::string joints_text(const Vector6d& q) {
   std::string t;
@@ -32,98 +28,21 @@ std::string joints_text(const Vector6d& q) {
 
 }  // namespace
 
-DriversSeen wait_for_drivers(bus::Bus& bus, const RigModel& rig, const std::string& scan_id, double timeout_s) {
-  DriversSeen seen;
-  std::optional<arm_status_t> arm;
-  std::optional<turntable_status_t> turntable;
-  std::optional<depth_frame_t> frame;
-  int arm_count = 0, turntable_count = 0;
-  const int64_t trigger_seq = bus::now_utime();
-  bus.subscribe<arm_status_t>(channels::kArmStatus, [&](const arm_status_t& m) {
-    arm = m;
-    ++arm_count;
-  });
-  bus.subscribe<turntable_status_t>(channels::kTurntableStatus, [&](const turntable_status_t& m) {
-    turntable = m;
-    ++turntable_count;
-  });
-  bus.subscribe<depth_frame_t>(channels::kDepthFrame, [&](const depth_frame_t& m) {
-    if (m.trigger_seq == trigger_seq) frame = m;
-  });
-  const std::string hint = " (is its driver running, and on this LCM URL: " + bus::lcm_url() + "?)";
-  const double t0 = bus::now_s();
-  double last_trigger = -1e9;
-  while (!(arm && (turntable || !rig.has_turntable) && frame)) {
-    const double now = bus::now_s();
-    if (now - t0 > timeout_s) {
-      std::string missing;
-      if (!arm) missing += ", no ARM_STATUS";
-      if (!turntable && rig.has_turntable) missing += ", no TURNTABLE_STATUS";
-      if (!frame) missing += ", no DEPTH_FRAME answering DEPTH_TRIGGER seq " + std::to_string(trigger_seq);
-      throw std::runtime_error("the rig's drivers did not answer in " + fixed(timeout_s, 1) + " s: " + missing.substr(2) + hint);
+rigcheck::PreflightResult check_drivers(bus::Bus& bus, const RigModel& rig, double timeout_s, std::ostream& out) {
+  rigcheck::PreflightResult r = rigcheck::preflight(bus, rig, timeout_s);
+  out << rigcheck::format_table(r.lines);
+  if (!r.passed) {
+    std::string failed;
+    for (const rigcheck::CheckLine& l : r.lines) {
+      if (!l.passed) failed += "\n  " + l.check + ": " + (l.detail.empty() ? l.figure : l.detail);
     }
-    if (now - last_trigger >= 1.0) {  // a lost trigger or frame is asked for again
-      depth_trigger_t t;
-      t.utime = bus::now_utime();
-      t.seq = trigger_seq;
-      t.scan_id = scan_id;
-      bus.publish(channels::kDepthTrigger, t);
-      last_trigger = now;
-    }
-    bus.spin_once(20);
+    throw std::runtime_error("the rig's drivers failed the check (nothing was commanded to move; pbnbv rig-check "
+                             "--rig-model " + rig.model_path + " tests them further):" + failed);
   }
-  // Rates over a short window.
-  const int arm0 = arm_count, turntable0 = turntable_count;
-  const double w0 = bus::now_s();
-  while (bus::now_s() - w0 < kRateWindowS) bus.spin_once(10);
-  const double window = bus::now_s() - w0;
-  seen.arm_status_hz = (arm_count - arm0) / window;
-  seen.turntable_status_hz = (turntable_count - turntable0) / window;
-
-  const ArmReading a = bus::from_msg(*arm);  // throws naming a malformed field
-  if (static_cast<int>(arm->joint_names.size()) != 6 || arm->joint_names != rig.joint_names) {
-    std::string names;
-    for (const auto& n : arm->joint_names) names += (names.empty() ? "" : ", ") + n;
-    std::string expected;
-    for (const auto& n : rig.joint_names) expected += (expected.empty() ? "" : ", ") + n;
-    throw std::runtime_error("ARM_STATUS names the joints [" + names + "], the rig file " + rig.model_path + " [" + expected + "]");
-  }
-  for (int i = 0; i < 6; ++i) {
-    const double q = a.joint_position_rad[i];
-    if (q < rig.q_lower[i] - 1e-6 || q > rig.q_upper[i] + 1e-6) {
-      throw std::runtime_error(fmt::format("ARM_STATUS joint {} at {:.2f} deg is outside the rig file's limits [{:.2f}, {:.2f}] deg "
-                                           "({}): is this the rig the file describes?",
-                                           rig.joint_names[i], rad_to_deg(q), rad_to_deg(rig.q_lower[i]),
-                                           rad_to_deg(rig.q_upper[i]), rig.model_path));
-    }
-  }
-  if (seen.arm_status_hz < kMinStatusHz) {
-    throw std::runtime_error(fmt::format("ARM_STATUS arrives at {:.0f} Hz, the contract asks for at least {:.0f} Hz",
-                                         seen.arm_status_hz, kMinStatusHz));
-  }
-  seen.q = a.joint_position_rad;
-  if (rig.has_turntable) {
-    const TurntableReading t = bus::from_msg(*turntable);
-    if (seen.turntable_status_hz < kMinStatusHz) {
-      throw std::runtime_error(fmt::format("TURNTABLE_STATUS arrives at {:.0f} Hz, the contract asks for at least {:.0f} Hz",
-                                           seen.turntable_status_hz, kMinStatusHz));
-    }
-    seen.turntable_rad = t.angle_rad;
-  }
-  DepthFrame f;
-  try {
-    f = bus::from_msg(*frame);
-  } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(std::string("the camera's first frame: ") + e.what());
-  }
-  seen.camera = f.intrinsics;
-  seen.range = f.range;
-  seen.frame_width = f.intrinsics.width;
-  seen.frame_height = f.intrinsics.height;
-  return seen;
+  return r;
 }
 
-FirstViews plan_first_views(const ScanSettings& s, const RigModel& rig, const DriversSeen& seen) {
+FirstViews plan_first_views(const ScanSettings& s, const RigModel& rig, const rigcheck::PreflightResult& seen) {
   FirstViews f;
   f.views = views_known_at_start(s);
   ReachabilityChecker checker(rig);
@@ -164,7 +83,7 @@ void require_reachable(const FirstViews& f, const ScanSettings& s) {
   }
 }
 
-std::string describe(const FirstViews& f, const RigModel& rig, const DriversSeen& seen) {
+std::string describe(const FirstViews& f, const RigModel& rig, const rigcheck::PreflightResult& seen) {
   std::ostringstream os;
   os << "rig now: joints [" << joints_text(seen.q) << "] deg";
   if (rig.has_turntable) os << ", turntable " << fixed(rad_to_deg(seen.turntable_rad), 1) << " deg";

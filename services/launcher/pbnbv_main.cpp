@@ -5,6 +5,7 @@
 //   pbnbv spy                lcm-spy with every pbnbv channel decoded
 //   pbnbv stop [options]     halt the rig and end a scan
 //   pbnbv rig-host [options] the motion executor and camera service on the rig's computer
+//   pbnbv rig-check [--rig-model FILE] [--deadline S] [--passive]   the drivers against the contract
 // The command line is launcher/command_line.hpp; running each command, launcher/commands.hpp.
 #include <filesystem>
 #include <iostream>
@@ -36,6 +37,8 @@ int main(int argc, char** argv) {
         return launcher::run_import_urdf(line.import_urdf());
       case launcher::Command::kRigHost:
         return launcher::run_rig_host(line.rig_host(), self.parent_path());
+      case launcher::Command::kRigCheck:
+        return launcher::run_rig_check(line.rig_check());
       case launcher::Command::kHelp:
         std::cout << line.usage();
         return 0;

@@ -279,15 +279,11 @@ int run_external_scan(const ScanOptions& o, const fs::path& bin) {
   std::cout << "pbnbv scan: an unknown object in the working volume " << s.working_volume->to_text() << " of the rig "
             << rig.model_path << " (" << rig.arm_name << "), drivers outside; waiting for them on " << bus::lcm_url()
             << std::endl;
-  DriversSeen seen;
+  rigcheck::PreflightResult seen;
   {
     bus::Bus bus("launcher");
-    seen = wait_for_drivers(bus, rig, s.scan_id, o.driver_timeout_s);
+    seen = check_drivers(bus, rig, o.driver_timeout_s, std::cout);
   }
-  std::cout << "drivers: ARM_STATUS " << fixed(seen.arm_status_hz, 0) << " Hz"
-            << (rig.has_turntable ? ", TURNTABLE_STATUS " + fixed(seen.turntable_status_hz, 0) + " Hz" : std::string())
-            << ", DEPTH_FRAME " << seen.frame_width << "x" << seen.frame_height << " fx " << fixed(seen.camera.fx, 1)
-            << ", range " << fixed(seen.range.min_m, 2) << "-" << fixed(seen.range.max_m, 2) << " m" << std::endl;
   // The camera is the driver's: what the planner scores and the ray-casting baseline casts.
   s.camera = seen.camera;
   s.depth_range = seen.range;

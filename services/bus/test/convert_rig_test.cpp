@@ -12,6 +12,7 @@ namespace {
 arm_status_t arm_status() {
   arm_status_t m;
   m.utime = 123456;
+  m.driver_utime = 789;
   m.seq = 9;
   m.num_joints = 6;
   m.joint_names = {"a1", "a2", "a3", "a4", "a5", "a6"};
@@ -28,6 +29,7 @@ arm_status_t arm_status() {
 turntable_status_t turntable_status() {
   turntable_status_t m;
   m.utime = 123456;
+  m.driver_utime = 790;
   m.seq = 9;
   m.angle_rad = 1.25;
   m.velocity_rad_s = -0.5;
@@ -53,16 +55,17 @@ std::string error_of(F f) {
 TEST(ConvertRig, ArmStatusFieldsCarryOver) {
   arm_status_t m = arm_status();
   m.mode = arm_status_t::kModeFault;
-  m.fault_code = arm_status_t::kFaultCommandRejected;
+  m.fault_code = arm_status_t::kFaultOutOfLimits;
   m.fault_command_seq = 42;
   m.fault = "rejected ARM_COMMAND seq 42: joint a3 target 10 is outside its limits";
   const ArmReading r = bus::from_msg(m);
   EXPECT_EQ(r.utime, 123456);
+  EXPECT_EQ(r.driver_utime, 789);
   EXPECT_EQ(r.joint_position_rad[2], 0.3);
   EXPECT_EQ(r.joint_velocity_rad_s[2], 0.02);
   EXPECT_EQ(r.command_seq, 41);
   EXPECT_EQ(r.mode, RigMode::kFault);
-  EXPECT_EQ(r.fault_code, RigFault::kCommandRejected);
+  EXPECT_EQ(r.fault_code, RigFault::kOutOfLimits);
   EXPECT_EQ(r.fault_command_seq, 42);
   EXPECT_EQ(r.fault, m.fault);
 }
@@ -70,6 +73,7 @@ TEST(ConvertRig, ArmStatusFieldsCarryOver) {
 TEST(ConvertRig, TurntableStatusHasItsOwnConstantsWithTheSameMeaning) {
   turntable_status_t m = turntable_status();
   const TurntableReading r = bus::from_msg(m);
+  EXPECT_EQ(r.driver_utime, 790);
   EXPECT_EQ(r.angle_rad, 1.25);
   EXPECT_EQ(r.velocity_rad_s, -0.5);
   EXPECT_EQ(r.mode, RigMode::kMoving);
@@ -84,6 +88,8 @@ TEST(ConvertRig, TurntableStatusHasItsOwnConstantsWithTheSameMeaning) {
   EXPECT_EQ(static_cast<int>(RigMode::kSettled), arm_status_t::kModeSettled);
   EXPECT_EQ(static_cast<int>(RigFault::kCommandRejected), turntable_status_t::kFaultCommandRejected);
   EXPECT_EQ(static_cast<int>(RigFault::kDriver), arm_status_t::kFaultDriver);
+  EXPECT_EQ(static_cast<int>(RigFault::kOutOfLimits), arm_status_t::kFaultOutOfLimits);
+  EXPECT_EQ(static_cast<int>(RigFault::kOutOfLimits), turntable_status_t::kFaultOutOfLimits);
 }
 
 TEST(ConvertRig, MalformedStatusesAreRejectedNamingTheField) {
@@ -95,7 +101,7 @@ TEST(ConvertRig, MalformedStatusesAreRejectedNamingTheField) {
   EXPECT_EQ(error_of([&] { bus::from_msg(m); }), "ARM_STATUS mode = 7 is not one of its constants (0..3)");
   m = arm_status();
   m.fault_code = 9;
-  EXPECT_EQ(error_of([&] { bus::from_msg(m); }), "ARM_STATUS fault_code = 9 is not one of its constants (0..2)");
+  EXPECT_EQ(error_of([&] { bus::from_msg(m); }), "ARM_STATUS fault_code = 9 is not one of its constants (0..3)");
   m = arm_status();
   m.mode = arm_status_t::kModeFault;  // a fault without its code
   EXPECT_NE(error_of([&] { bus::from_msg(m); }).find("fault_code = 0 disagrees with mode = 3"), std::string::npos);
@@ -139,6 +145,9 @@ TEST(ConvertRig, CommandsArePositionCommandsWithTheirSequenceNumber) {
 depth_frame_t two_pixel_frame(int8_t encoding) {
   depth_frame_t m{};
   m.utime = 5;
+  m.exposure_start_utime = 4;
+  m.exposure_us = 2;
+  m.camera_id = "test-camera";
   m.seq = 6;
   m.trigger_seq = 7;
   m.width = 2;
@@ -161,6 +170,9 @@ TEST(ConvertRig, DepthFrameIsDecodedToMetres) {
   EXPECT_EQ(f.utime, 5);
   EXPECT_EQ(f.seq, 6);
   EXPECT_EQ(f.trigger_seq, 7);
+  EXPECT_EQ(f.exposure_start_utime, 4);
+  EXPECT_EQ(f.exposure_us, 2);
+  EXPECT_EQ(f.camera_id, "test-camera");
   EXPECT_EQ(f.intrinsics.width, 2);
   ASSERT_EQ(f.depth_m.size(), 2u);
   EXPECT_FLOAT_EQ(f.depth_m[0], 1.0f);

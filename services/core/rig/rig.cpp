@@ -117,6 +117,34 @@ std::vector<double> custom_numeric(const mjModel* m, const std::string& path, co
   return std::vector<double>(p, p + expected_size);
 }
 
+// The optional <custom> camera (RigCamera); throws naming the file and the value.
+std::optional<RigCamera> read_camera(const mjModel* m, const std::string& path) {
+  const int id_text = mj_name2id(m, mjOBJ_TEXT, "pbnbv_camera_id");
+  if (mj_name2id(m, mjOBJ_NUMERIC, "pbnbv_camera") < 0) {
+    if (id_text >= 0) fail(path, "pbnbv_camera_id is given without <custom><numeric name=\"pbnbv_camera\">");
+    return std::nullopt;
+  }
+  const std::vector<double> v = custom_numeric(m, path, "pbnbv_camera", 8);
+  RigCamera c;
+  for (int i : {0, 1}) {
+    if (!(v[i] >= 1 && v[i] <= 16384 && v[i] == std::round(v[i]))) {
+      fail(path, std::string("pbnbv_camera ") + (i == 0 ? "width" : "height") + " = " + std::to_string(v[i]) +
+                     " is not a whole number of pixels in [1, 16384] (data=\"width height fx fy cx cy depth_min "
+                     "depth_max\")");
+    }
+  }
+  c.intrinsics = CameraIntrinsics{static_cast<int>(v[0]), static_cast<int>(v[1]), v[2], v[3], v[4], v[5]};
+  c.range = DepthRange{v[6], v[7]};
+  try {
+    c.intrinsics.validate();
+    c.range.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(path, std::string("pbnbv_camera (data=\"width height fx fy cx cy depth_min depth_max\"): ") + e.what());
+  }
+  if (id_text >= 0) c.id = std::string(m->text_data + m->text_adr[id_text]);
+  return c;
+}
+
 int body_id(const mjModel* m, const std::string& path, const char* name) {
   const int id = mj_name2id(m, mjOBJ_BODY, name);
   if (id < 0) fail(path, std::string("missing body \"") + name + "\"");
@@ -655,6 +683,7 @@ RigModel load_rig(const std::string& path) {
   if (const int platter = mj_name2id(m, mjOBJ_GEOM, "platter"); platter >= 0 && m->geom_type[platter] == mjGEOM_CYLINDER) {
     rig.turntable_radius_m = m->geom_size[3 * platter];
   }
+  rig.camera = read_camera(m, path);
   return rig;
 }
 

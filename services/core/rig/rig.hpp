@@ -14,6 +14,7 @@
 #include "core/base/pose.hpp"
 #include "core/base/setting.hpp"
 #include "core/rig/working_volume.hpp"
+#include "core/geometry/camera_model.hpp"
 
 namespace pbnbv {
 
@@ -39,6 +40,16 @@ struct ArmGeometry {
   double a1 = 0, d1 = 0, a2 = 0, a3 = 0, d4 = 0, d6 = 0;
 };
 
+// The depth camera the rig carries, as its rig file states it (optional): what a driver's
+// DEPTH_FRAME must match (pbnbv rig-check). MJCF:
+//   <custom><numeric name="pbnbv_camera" data="width height fx fy cx cy depth_min depth_max"/>
+//           <text name="pbnbv_camera_id" data="SERIAL"/></custom>   (the id is optional)
+struct RigCamera {
+  CameraIntrinsics intrinsics;  // pixels
+  DepthRange range;             // metres, planar depth
+  std::string id;               // the camera's serial / id; "" = any
+};
+
 struct RigModel {
   RigKind kind = RigKind::kArm;
   std::string model_path;
@@ -60,6 +71,7 @@ struct RigModel {
   // turntable.
   std::optional<WorkingVolume> working_volume;
   double turntable_radius_m = 0;          // the platter's radius (geom "platter"); 0: no platter
+  std::optional<RigCamera> camera;        // none: the rig file states no camera
 };
 
 // The rig file's working volume, or one derived from the turntable: a cylinder 1.25 times the

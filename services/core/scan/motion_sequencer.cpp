@@ -171,7 +171,7 @@ MotionStep MotionSequencer::tick(double now_s) {
     const RigFault code = arm_fault ? arm_.fault_code : turntable_.fault_code;
     const std::string& text = arm_fault ? arm_.fault : turntable_.fault;
     const char* who = arm_fault ? "arm" : "turntable";
-    if (code == RigFault::kCommandRejected) {
+    if (code == RigFault::kCommandRejected || code == RigFault::kOutOfLimits) {
       return finish(MoveStatus::kUnreachable, fmt::format("the rig rejected the command: {}", text), now_s);
     }
     return finish(MoveStatus::kTimedOut,

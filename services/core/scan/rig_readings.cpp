@@ -7,6 +7,7 @@ const char* to_string(RigFault f) {
     case RigFault::kNone: return "none";
     case RigFault::kCommandRejected: return "command_rejected";
     case RigFault::kDriver: return "driver";
+    case RigFault::kOutOfLimits: return "out_of_limits";
   }
   return "unknown";
 }

@@ -23,15 +23,17 @@ enum class RigMode : int8_t {
 // Why a driver is in kFault (arm_status_t / turntable_status_t kFault*; the same values for both).
 enum class RigFault : int8_t {
   kNone = 0,             // no fault
-  kCommandRejected = 1,  // a command was refused (target outside the joint limits or not finite,
-                         // speed_scale outside (0, 1], malformed); the rig keeps holding
+  kCommandRejected = 1,  // a command was refused as malformed (target not finite, speed_scale
+                         // outside (0, 1], wrong joint count); the rig keeps holding
   kDriver = 2,           // the drive itself failed (amplifier, following error, emergency stop)
+  kOutOfLimits = 3,      // a command was refused: a target outside its joint's limits
 };
-const char* to_string(RigFault f);  // "none", "command_rejected", "driver"
+const char* to_string(RigFault f);  // "none", "command_rejected", "driver", "out_of_limits"
 
 // ARM_STATUS: the measured state of the arm (or the free rig's gantry).
 struct ArmReading {
   int64_t utime = 0;                          // rig clock, microseconds
+  int64_t driver_utime = 0;                   // the driver's own clock, microseconds
   Vector6d joint_position_rad = Vector6d::Zero();
   Vector6d joint_velocity_rad_s = Vector6d::Zero();
   int64_t command_seq = -1;                   // last ARM_COMMAND accepted (-1: none)
@@ -44,6 +46,7 @@ struct ArmReading {
 // TURNTABLE_STATUS: the measured state of the turntable.
 struct TurntableReading {
   int64_t utime = 0;                          // rig clock, microseconds
+  int64_t driver_utime = 0;                   // the driver's own clock, microseconds
   double angle_rad = 0;                       // not wrapped
   double velocity_rad_s = 0;
   int64_t command_seq = -1;                   // last TURNTABLE_COMMAND accepted (-1: none)
@@ -70,7 +73,10 @@ struct TurntableCommand {
 
 // DEPTH_FRAME, decoded: planar depth in metres (0 or non-finite: no return), row-major.
 struct DepthFrame {
-  int64_t utime = 0;        // exposure, rig clock, microseconds
+  int64_t utime = 0;        // exposure (middle), rig clock, microseconds
+  int64_t exposure_start_utime = 0;  // rig clock, microseconds
+  int32_t exposure_us = 0;  // exposure duration, microseconds
+  std::string camera_id;    // the camera's serial / id
   int64_t seq = -1;         // the camera's frame number
   int64_t trigger_seq = -1; // the DEPTH_TRIGGER it answers
   CameraIntrinsics intrinsics;

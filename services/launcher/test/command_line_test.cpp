@@ -165,6 +165,21 @@ TEST(LauncherCommandLine, BenchDefaultsAndAblationRuns) {
 
 // Each kind of bad option, on scan and on bench: exit 2, the message names the option (and the
 // value and range where there is one).
+TEST(LauncherCommandLine, RigCheckDefaultsAndOptions) {
+  CommandLine line;
+  ASSERT_EQ(parse(line, {"rig-check"}).code, std::nullopt);
+  EXPECT_EQ(line.command(), Command::kRigCheck);
+  EXPECT_EQ(line.rig_check().rig_model, default_rig_path(RigKind::kArm));
+  EXPECT_EQ(line.rig_check().deadline_s, 5.0);
+  EXPECT_FALSE(line.rig_check().passive);
+  CommandLine given;
+  ASSERT_EQ(parse(given, {"rig-check", "--rig-model", "my_rig.xml", "--deadline", "2.5", "--passive"}).code,
+            std::nullopt);
+  EXPECT_EQ(given.rig_check().rig_model, "my_rig.xml");
+  EXPECT_EQ(given.rig_check().deadline_s, 2.5);
+  EXPECT_TRUE(given.rig_check().passive);
+}
+
 TEST(LauncherCommandLine, BadOptionsAreNamed) {
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
       {{"scan", "--views"}, "pbnbv scan: --views needs a value"},
@@ -185,7 +200,8 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
       {{"bench"}, "pbnbv bench: --out DIR is required"},
       {{"ablate", "--out", "x"}, "pbnbv ablate: name the parameter: tmax, beta or initial-view"},
       {{"ablate", "beta", "--values", "2,400", "--out", "x"}, "pbnbv ablate: --values: --beta 400 is outside its range [1, 360]"},
-      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf, help)"},
+      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf, rig-check, help)"},
+      {{"rig-check", "--deadline", "0"}, "pbnbv rig-check: --deadline: 0 is outside its range [0.5, 600] s"},
   };
   for (const auto& [words, message] : cases) {
     CommandLine line;
@@ -201,7 +217,7 @@ TEST(LauncherCommandLine, HelpPrintsTheUsage) {
     const Parsed p = parse(line, words);
     EXPECT_EQ(p.code, std::optional<int>(0));
     // Every command and its options, with the defaults of the table.
-    for (const char* part : {"scan", "bench", "ablate", "spy", "--views N", "at most this many views [10] (range [1, 1000])",
+    for (const char* part : {"scan", "bench", "ablate", "spy", "rig-check", "--views N", "at most this many views [10] (range [1, 1000])",
                              "--candidates N", "[800]", "--when-done stop|spread", "[spread]", "--config FILE"}) {
       EXPECT_NE(p.out.find(part), std::string::npos) << part;
     }

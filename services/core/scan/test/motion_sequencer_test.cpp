@@ -349,13 +349,26 @@ TEST_F(ArmMotion, ArmRejectingTheCommandEndsTheMoveAsUnreachable) {
   ArmReading a = arm_at(arm_rig().q_home, -1, RigMode::kFault, 6000000);
   a.fault_code = RigFault::kCommandRejected;
   a.fault_command_seq = kFirstSeq;
-  a.fault = "rejected ARM_COMMAND seq 1: joint a3 target 10 is outside its limits [-2.09, 2.72]";
+  a.fault = "rejected ARM_COMMAND seq 1: joint a3 target nan is not finite";
   seq_.on_arm_status(a, 100.2);
   const MotionStep done = seq_.tick(100.2);
   ASSERT_TRUE(done.result);
   EXPECT_EQ(done.result->status, MoveStatus::kUnreachable);
   EXPECT_EQ(done.result->reason, "the rig rejected the command: " + a.fault);
   EXPECT_FALSE(done.arm_command);  // no re-send of a refused command
+}
+
+TEST_F(ArmMotion, ArmRefusingATargetOutsideItsLimitsEndsTheMoveAsUnreachable) {
+  start();
+  ArmReading a = arm_at(arm_rig().q_home, -1, RigMode::kFault, 6000000);
+  a.fault_code = RigFault::kOutOfLimits;
+  a.fault_command_seq = kFirstSeq;
+  a.fault = "rejected ARM_COMMAND seq 1: joint a3 target 10 is outside its limits [-2.09, 2.72]";
+  seq_.on_arm_status(a, 100.2);
+  const MotionStep done = seq_.tick(100.2);
+  ASSERT_TRUE(done.result);
+  EXPECT_EQ(done.result->status, MoveStatus::kUnreachable);
+  EXPECT_EQ(done.result->reason, "the rig rejected the command: " + a.fault);
 }
 
 TEST_F(ArmMotion, TurntableRejectingTheCommandEndsTheMoveAsUnreachable) {
