@@ -21,6 +21,8 @@
 #include "cli/options.hpp"
 #include "core/scan/scan_options.hpp"
 #include "core/base/log.hpp"
+#include "core/io/json.hpp"
+#include "core/rig/calibration.hpp"
 #include "core/rig/rig.hpp"
 #include "twin/depth_renderer.hpp"
 #include "pbnbv/arm_command_t.hpp"
@@ -76,6 +78,13 @@ int main(int argc, char** argv) {
   cli::add_text(app, "mesh", &object.mesh_path, "object mesh in the normalised object frame (binary STL or OBJ)", "PATH");
   cli::add(app, Setting<double>{"object-z", 0.0, -1.0, 2.0, "m", "object frame origin above the turntable top"},
            &object.object_z_m);
+  cli::add(app, kSphereRadius.renamed("calibration-sphere", "put the calibration sphere of this radius on the platter "
+                                      "mark (0: none; see pbnbv calibrate)").with_default(0.0),
+           &object.calibration_sphere_radius_m);
+  object.calibration_sphere_offset_m = kSphereOffset.value;
+  cli::add(app, kSphereOffset.renamed("calibration-sphere-offset", "the calibration sphere's centre from the turntable axis, "
+                                      "on the platter's +x axis"),
+           &object.calibration_sphere_offset_m);
   std::string model_out = "twin_model.xml";
   cli::add_text(app, "model-out", &model_out, "where to write the composed model", "PATH");
   CameraIntrinsics k;
@@ -116,6 +125,9 @@ int main(int argc, char** argv) {
   std::string truth_path;
   cli::add_text(app, "truth-out", &truth_path,
                 "append each frame's true camera pose to this file (JSON lines; evaluation only)", "PATH");
+  std::string truth_rig_path;
+  cli::add_text(app, "truth-rig-out", &truth_rig_path,
+                "write the true hand-eye transform and turntable zero to this JSON file (evaluation only)", "PATH");
   if (const std::optional<int> code = cli::parse(app, argc, argv, std::cout, std::cerr)) return *code;
   install_stop_handlers();
   try {
@@ -132,12 +144,37 @@ int main(int argc, char** argv) {
     k.validate();
     range.validate();
     std::mt19937_64 rng(static_cast<uint64_t>(noise_seed));
-    const twin::PoseErrorModel errors = twin::make_pose_error(
+    twin::PoseErrorModel errors = twin::make_pose_error(
         hand_eye_error_mm * 1e-3, hand_eye_error_deg * kPi / 180, turntable_error_deg * kPi / 180,
         joint_error_deg * kPi / 180, static_cast<uint64_t>(error_seed));
 
     const RigModel rig = load_rig(model_path);
+    if (object.calibration_sphere_radius_m > 0 && object.calibration_sphere_radius_m + object.calibration_sphere_offset_m > 0.2) {
+      throw std::invalid_argument("--calibration-sphere " + std::to_string(object.calibration_sphere_radius_m) +
+                                  " m at --calibration-sphere-offset " + std::to_string(object.calibration_sphere_offset_m) +
+                                  " m reaches beyond the platter (radius 0.2 m)");
+    }
+    // The turntable reports its reading: the platter's true angle plus the model's zero (a
+    // calibrated file's pbnbv_turntable_zero) plus the error model's offset.
+    const double turntable_error_rad = errors.turntable_offset_rad;
+    errors.turntable_offset_rad += rig.turntable_zero_rad;
     twin::RigSim sim(rig, object, model_out, errors);
+    if (!truth_rig_path.empty()) {
+      nlohmann::json j;
+      j["model"] = model_path;
+      j["flange_T_camera"] = to_json(rig.flange_T_camera * errors.hand_eye_error);
+      j["model_flange_T_camera"] = to_json(rig.flange_T_camera);
+      j["turntable_zero_rad"] = errors.turntable_offset_rad;
+      j["model_turntable_zero_rad"] = rig.turntable_zero_rad;
+      j["turntable_error_rad"] = turntable_error_rad;
+      j["turntable_axis_direction_world"] = to_json(Eigen::Vector3d(rig.world_T_turntable.linear().col(2)));
+      j["turntable_axis_point_world"] = to_json(Eigen::Vector3d(rig.world_T_turntable.translation()));
+      if (object.calibration_sphere_radius_m > 0) {
+        j["calibration_sphere"] = {{"radius_m", object.calibration_sphere_radius_m},
+                                   {"offset_m", object.calibration_sphere_offset_m}};
+      }
+      write_json_atomic(j, truth_rig_path);
+    }
     std::ofstream truth;
     if (!truth_path.empty()) {
       truth.open(truth_path, std::ios::app);

@@ -14,12 +14,24 @@
 #include <vector>
 
 #include "cli/options.hpp"
+#include "core/rig/calibration.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "eval/bench.hpp"
 
 namespace pbnbv::launcher {
 
-enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop };
+enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kCalibrate };
+
+// What `pbnbv calibrate` was asked for (core/rig/calibration.hpp).
+struct CalibrateOptions {
+  std::string rig_model;          // the rig file to calibrate
+  CalibrationSphere sphere;
+  int views = 24;                 // arm poses (each at its own turntable angle)
+  double speed_scale = 0.5;       // fraction of the joint speed limits
+  double status_wait_s = 5;       // the drivers' first statuses must come within this
+  bool fixed_axis = false;        // keep the model's turntable axis (else estimated and reported)
+  std::string out;                // empty: out/calibration-<date-time>
+};
 
 // What `pbnbv stop` was asked for.
 struct StopOptions {
@@ -78,6 +90,7 @@ class CommandLine {
 
   Command command() const { return command_; }
   const StopOptions& stop() const { return stop_; }
+  const CalibrateOptions& calibrate() const { return calibrate_; }
   const ScanOptions& scan() const { return scan_; }
   const eval::BenchSpec& bench() const { return bench_; }
   const AblateOptions& ablate() const { return ablate_; }
@@ -120,6 +133,8 @@ class CommandLine {
   CLI::App* spy_cmd_ = nullptr;
   CLI::App* stop_cmd_ = nullptr;
   StopOptions stop_;
+  CLI::App* calibrate_cmd_ = nullptr;
+  CalibrateOptions calibrate_;
   CLI::App* help_cmd_ = nullptr;
   Command command_ = Command::kHelp;
   ScanOptions scan_;

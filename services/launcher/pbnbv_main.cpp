@@ -3,6 +3,7 @@
 //   pbnbv bench [options]    every planner on every object in the twin
 //   pbnbv ablate tmax|beta|initial-view [options]
 //   pbnbv spy                lcm-spy with every pbnbv channel decoded
+//   pbnbv calibrate --rig-model FILE --sphere-radius R   hand-eye and turntable calibration
 // The command line is launcher/command_line.hpp; running each command, launcher/commands.hpp.
 #include <filesystem>
 #include <iostream>
@@ -28,6 +29,8 @@ int main(int argc, char** argv) {
         return launcher::run_ablate(line.ablate(), self);
       case launcher::Command::kSpy:
         return launcher::run_spy();
+      case launcher::Command::kCalibrate:
+        return launcher::run_calibrate(line.calibrate());
       case launcher::Command::kStop:
         return launcher::run_stop(line.stop());
       case launcher::Command::kHelp:
