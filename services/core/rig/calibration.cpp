@@ -213,12 +213,18 @@ SphereFit fit_sphere_known_radius(const std::vector<Eigen::Vector3d>& points, do
     fit.why = "no three points on a sphere of radius " + std::to_string(radius_m) + " m";
     return fit;
   }
+  // Least squares on the inliers, the band narrowing to 3 x their rms (a stray point near the
+  // surface then stops pulling the centre), never below 0.1 mm.
   Eigen::Vector3d centre = best_c;
   std::vector<Eigen::Vector3d> in;
-  for (int round = 0; round < 4; ++round) {
-    in = inliers_of(points, centre, radius_m, o.inlier_m);
+  double band = o.inlier_m;
+  for (int round = 0; round < 8; ++round) {
+    in = inliers_of(points, centre, radius_m, band);
     if (static_cast<int>(in.size()) < 4) break;
     centre = refine_centre(in, radius_m, centre);
+    double s2 = 0;
+    for (const Eigen::Vector3d& p : in) s2 += std::pow((p - centre).norm() - radius_m, 2);
+    band = std::min(o.inlier_m, std::max(3 * std::sqrt(s2 / in.size()), 1e-4));
   }
   in = inliers_of(points, centre, radius_m, o.inlier_m);
   fit.centre = centre;

@@ -19,9 +19,10 @@ namespace {
 
 constexpr double kDeg = kPi / 180;
 
-// The visible side of a sphere seen from the origin (points facing the origin), a plane below
-// it at z = plane_z (the camera looks along +z) and uniformly scattered clutter.
-std::vector<Eigen::Vector3d> scene(const Eigen::Vector3d& centre, double r, double sigma, int clutter, uint64_t seed) {
+// The visible side of a sphere seen from the origin (points facing the origin), a plane `gap_m`
+// below it (the camera looks along +z, image y down) and uniformly scattered clutter.
+std::vector<Eigen::Vector3d> scene(const Eigen::Vector3d& centre, double r, double sigma, int clutter, uint64_t seed,
+                                   double gap_m = 0.01) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> n(0, 1);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -32,9 +33,9 @@ std::vector<Eigen::Vector3d> scene(const Eigen::Vector3d& centre, double r, doub
     if (d.dot(-p.normalized()) <= 0.05) continue;  // facing away from the camera
     pts.push_back(p + sigma * Eigen::Vector3d(n(rng), n(rng), n(rng)));
   }
-  // A plane the sphere rests on (normal towards the camera's -y), 5000 points.
+  // A plane under the sphere (normal towards the camera's -y), 5000 points.
   for (int i = 0; i < 5000; ++i) {
-    pts.emplace_back(0.3 * u(rng), centre.y() + r, centre.z() + 0.3 * u(rng));
+    pts.emplace_back(0.3 * u(rng), centre.y() + r + gap_m, centre.z() + 0.3 * u(rng));
   }
   for (int i = 0; i < clutter; ++i) pts.emplace_back(0.4 * u(rng), 0.4 * u(rng), 0.5 + 0.3 * u(rng));
   return pts;
@@ -47,6 +48,15 @@ TEST(SphereFit, ExactPointsGiveTheCentre) {
   EXPECT_LT((f.centre - c).norm(), 1e-9);
   EXPECT_GE(f.inliers, 5000);
   EXPECT_GT(f.cap_spread, 0.2);  // the visible side of a sphere, not a patch
+}
+
+TEST(SphereFit, APlaneTouchingTheSphereBiasesTheCentreByLessThanAMicrometre) {
+  // The plane the sphere rests on, uncropped: its points next to the contact lie within the
+  // inlier band (pbnbv calibrate crops them: 10 mm above the platter).
+  const Eigen::Vector3d c(0.03, -0.02, 0.55);
+  const SphereFit f = fit_sphere_known_radius(scene(c, 0.05, 0, 0, 1, 0.0), 0.05);
+  ASSERT_TRUE(f.ok) << f.why;
+  EXPECT_LT((f.centre - c).norm(), 1e-5);
 }
 
 TEST(SphereFit, NoisyPointsGiveTheCentreWithinATenthOfAMillimetre) {
