@@ -64,7 +64,7 @@ TEST(CalibrationIntegration, RecoversTheTwinsTrueMountAndTurntableZero) {
   EXPECT_LE(cal["turntable_axis"]["tilt_from_model_deg"].get<double>(), 0.05);
   // The error was there to be found, and the calibration explains the frames down to the fit.
   EXPECT_GT(cal["rms_before_mm"].get<double>(), 3.0);
-  EXPECT_LT(cal["rms_after_mm"].get<double>(), 0.3);
+  EXPECT_LT(cal["rms_after_mm"].get<double>(), 0.02);
   EXPECT_GE(cal["frames_used"].get<int>(), 18);
   // The calibrated file is the model's with the mount and the zero replaced.
   EXPECT_TRUE(fs::exists(dir / "cal" / "rig_calibrated.xml"));

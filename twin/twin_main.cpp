@@ -188,6 +188,13 @@ int main(int argc, char** argv) {
          << " deg, joints sigma " << errors.joint_sigma_rad * 180 / kPi << " deg";
       log_info(os.str());
     }
+    if (object.calibration_sphere_radius_m > 0) {
+      // MuJoCo draws a sphere as an inscribed polyhedron (28 x 16 facets by default: up to 0.3 mm
+      // inside a 50 mm sphere, which biases the fitted centre along each view); 256 x 256 keeps
+      // the drawn surface within 5 um of the sphere (twin/test/depth_renderer_test.cpp).
+      sim.model()->vis.quality.numslices = 256;
+      sim.model()->vis.quality.numstacks = 256;
+    }
     twin::EglContext egl;
     twin::DepthRenderer renderer(sim.model(), "depth", k, range);
     log_info("rig '" + rig.arm_name + "' from " + model_path + ", rendering " +
