@@ -116,15 +116,20 @@ class CalibrationRun {
     }
   }
 
-  MoveResult move(const MoveRequest& request) {
-    move_result_.reset();
-    apply(motion_.on_request(request, bus::now_s()));
-    while (!move_result_ && !stop_requested()) {
-      bus_.spin_once(5);
-      apply(motion_.tick(bus::now_s()));
+  // A move; when the drivers' statuses are stale (a driver busy or restarting: the twin sends
+  // none while it renders), waits up to wait_s for them and asks again.
+  MoveResult move(MoveRequest request, double wait_s) {
+    MoveResult r = move_once(request);
+    const double deadline = bus::now_s() + wait_s;
+    while (r.status == MoveStatus::kRigSilent && bus::now_s() < deadline && !stop_requested()) {
+      const long arm = arm_statuses_, turntable = turntable_statuses_;
+      while ((arm_statuses_ == arm || turntable_statuses_ == turntable) && bus::now_s() < deadline && !stop_requested()) {
+        bus_.spin_once(20);
+      }
+      ++request.request_id;
+      r = move_once(request);
     }
-    if (!move_result_) throw std::runtime_error("interrupted");
-    return *move_result_;
+    return r;
   }
 
   CaptureResult capture(const CaptureRequest& request) {
@@ -139,6 +144,17 @@ class CalibrationRun {
   }
 
  private:
+  MoveResult move_once(const MoveRequest& request) {
+    move_result_.reset();
+    apply(motion_.on_request(request, bus::now_s()));
+    while (!move_result_ && !stop_requested()) {
+      bus_.spin_once(5);
+      apply(motion_.tick(bus::now_s()));
+    }
+    if (!move_result_) throw std::runtime_error("interrupted");
+    return *move_result_;
+  }
+
   void apply(const MotionStep& step) {
     for (const std::string& w : step.warnings) std::cerr << "pbnbv calibrate: " << w << std::endl;
     if (step.arm_command) {
@@ -222,9 +238,10 @@ int run_calibrate(const CalibrateOptions& o) {
     m.object_T_camera = views[i];
     m.speed_scale = o.speed_scale;
     m.timeout_s = kMoveTimeoutS;
-    const MoveResult moved = run.move(m);
+    const MoveResult moved = run.move(m, o.status_wait_s);
     if (moved.status == MoveStatus::kRigSilent) {
-      throw std::runtime_error("view " + std::to_string(i) + ": the rig's drivers fell silent: " + moved.reason);
+      throw std::runtime_error("view " + std::to_string(i) + ": the rig's drivers fell silent for more than " +
+                               fixed(o.status_wait_s, 1) + " s (--status-wait): " + moved.reason);
     }
     if (moved.status != MoveStatus::kReached) {
       std::cerr << "pbnbv calibrate: view " << i << " skipped: " << to_string(moved.status) << ": " << moved.reason
