@@ -7,11 +7,13 @@
 // kinematics from here, never from the twin's state.
 #include <Eigen/Geometry>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/base/pose.hpp"
 #include "core/base/setting.hpp"
+#include "core/rig/working_volume.hpp"
 
 namespace pbnbv {
 
@@ -57,7 +59,17 @@ struct RigModel {
                                           // zero (the calibration mark on its +x axis), rad:
                                           // <custom><numeric name="pbnbv_turntable_zero">
                                           // (optional, 0; written by `pbnbv calibrate`)
+  // Where an unknown object may be (<custom><text name="pbnbv_working_volume"
+  // data="cylinder:R,H"/> or "box:X,Y,Z"); without it, working_volume_of() derives one from the
+  // turntable.
+  std::optional<WorkingVolume> working_volume;
+  double turntable_radius_m = 0;          // the platter's radius (geom "platter"); 0: no platter
 };
+
+// The rig file's working volume, or one derived from the turntable: a cylinder 1.25 times the
+// platter's radius (objects may overhang it a little) and twice as tall as that radius is long
+// (without a platter: radius 0.25 m, height 0.5 m).
+WorkingVolume working_volume_of(const RigModel& rig);
 
 // Reads the rig from its MJCF file. Throws std::runtime_error naming the file and what is wrong
 // (missing file, MuJoCo parse error, missing body/joint, wrong joint axis for the arm layout).
