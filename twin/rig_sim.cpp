@@ -45,6 +45,15 @@ std::string compose_model_xml(const std::string& rig_xml_path, const ObjectPlace
       << object.object_z_m << "\" group=\"0\" rgba=\"0.8 0.75 0.6 1\" mass=\"0.5\"/>";
     geom = g.str();
   }
+  if (object.calibration_sphere_radius_m > 0) {
+    std::ostringstream g;
+    g.precision(17);
+    const double r = object.calibration_sphere_radius_m;
+    // On the object mount (the platter top at the turntable's zero), turning with the platter.
+    g << "<geom name=\"calibration_sphere\" type=\"sphere\" size=\"" << r << "\" pos=\""
+      << object.calibration_sphere_offset_m << " 0 " << r << "\" group=\"0\" rgba=\"0.9 0.9 0.9 1\" mass=\"0.2\"/>";
+    geom += g.str();
+  }
   replace_marker(xml, kAssetMarker, asset, rig_xml_path);
   replace_marker(xml, kGeomMarker, geom, rig_xml_path);
   return xml;

@@ -23,10 +23,15 @@ namespace pbnbv::twin {
 struct ObjectPlacement {
   std::string mesh_path;  // binary STL or OBJ in the object frame; "" = empty rig
   double object_z_m = 0;
+  // The calibration sphere (pbnbv calibrate): radius (0 = none), resting on the platter top with
+  // its centre above the platter's +x axis, this far from the turntable axis (the mark).
+  double calibration_sphere_radius_m = 0;
+  double calibration_sphere_offset_m = 0;
 };
 
-// Reads the rig's MJCF text and returns it with the object's asset and geom inserted at the
-// PBNBV_OBJECT_ASSET / PBNBV_OBJECT_GEOM markers. Throws std::runtime_error naming the file
+// Reads the rig's MJCF text and returns it with the object's asset and geom (and the calibration
+// sphere's geom, a native MuJoCo sphere) inserted at the PBNBV_OBJECT_ASSET / PBNBV_OBJECT_GEOM
+// markers. Throws std::runtime_error naming the file
 // when a marker is missing.
 std::string compose_model_xml(const std::string& rig_xml_path, const ObjectPlacement& object);
 

@@ -23,6 +23,8 @@
 #include "cli/options.hpp"
 #include "core/scan/scan_options.hpp"
 #include "core/base/log.hpp"
+#include "core/io/json.hpp"
+#include "core/rig/calibration.hpp"
 #include "core/rig/rig.hpp"
 #include "twin/depth_renderer.hpp"
 #include "twin/driver_faults.hpp"
@@ -89,6 +91,13 @@ int main(int argc, char** argv) {
   cli::add_text(app, "mesh", &object.mesh_path, "object mesh in the normalised object frame (binary STL or OBJ)", "PATH");
   cli::add(app, Setting<double>{"object-z", 0.0, -1.0, 2.0, "m", "object frame origin above the turntable top"},
            &object.object_z_m);
+  cli::add(app, kSphereRadius.renamed("calibration-sphere", "put the calibration sphere of this radius on the platter "
+                                      "mark (0: none; see pbnbv calibrate)").with_default(0.0),
+           &object.calibration_sphere_radius_m);
+  object.calibration_sphere_offset_m = kSphereOffset.value;
+  cli::add(app, kSphereOffset.renamed("calibration-sphere-offset", "the calibration sphere's centre from the turntable axis, "
+                                      "on the platter's +x axis"),
+           &object.calibration_sphere_offset_m);
   std::string model_out = "twin_model.xml";
   cli::add_text(app, "model-out", &model_out, "where to write the composed model", "PATH");
   CameraIntrinsics k;
@@ -134,6 +143,9 @@ int main(int argc, char** argv) {
                 "play a faulty driver, for pbnbv rig-check's tests: slow-status (20 Hz), no-seq-echo, depth-unit-mm "
                 "(counts in mm, unit field 0.1 mm), no-trigger-id, ignore-limits (executes out-of-limit commands), "
                 "utime-backwards, late-exposure (frames stamped 1 s late)");
+  std::string truth_rig_path;
+  cli::add_text(app, "truth-rig-out", &truth_rig_path,
+                "write the true hand-eye transform and turntable zero to this JSON file (evaluation only)", "PATH");
   if (const std::optional<int> code = cli::parse(app, argc, argv, std::cout, std::cerr)) return *code;
   install_stop_handlers();
   try {
@@ -150,16 +162,41 @@ int main(int argc, char** argv) {
     k.validate();
     range.validate();
     std::mt19937_64 rng(static_cast<uint64_t>(noise_seed));
-    const twin::PoseErrorModel errors = twin::make_pose_error(
+    twin::PoseErrorModel errors = twin::make_pose_error(
         hand_eye_error_mm * 1e-3, hand_eye_error_deg * kPi / 180, turntable_error_deg * kPi / 180,
         joint_error_deg * kPi / 180, static_cast<uint64_t>(error_seed));
 
     const RigModel rig = load_rig(model_path);
+    if (object.calibration_sphere_radius_m > 0 && object.calibration_sphere_radius_m + object.calibration_sphere_offset_m > 0.2) {
+      throw std::invalid_argument("--calibration-sphere " + std::to_string(object.calibration_sphere_radius_m) +
+                                  " m at --calibration-sphere-offset " + std::to_string(object.calibration_sphere_offset_m) +
+                                  " m reaches beyond the platter (radius 0.2 m)");
+    }
+    // The turntable reports its reading: the platter's true angle plus the model's zero (a
+    // calibrated file's pbnbv_turntable_zero) plus the error model's offset.
+    const double turntable_error_rad = errors.turntable_offset_rad;
+    errors.turntable_offset_rad += rig.turntable_zero_rad;
     twin::RigSim sim(rig, object, model_out, errors);
     using twin::DriverFault;
     const auto faulty = [&](DriverFault f) { return twin::has_fault(faults, f); };
     sim.set_ignore_limits(faulty(DriverFault::kIgnoreLimits));
     for (const DriverFault f : faults) log_warn("playing a faulty driver: " + std::string(name_of(f)));
+    if (!truth_rig_path.empty()) {
+      nlohmann::json j;
+      j["model"] = model_path;
+      j["flange_T_camera"] = to_json(rig.flange_T_camera * errors.hand_eye_error);
+      j["model_flange_T_camera"] = to_json(rig.flange_T_camera);
+      j["turntable_zero_rad"] = errors.turntable_offset_rad;
+      j["model_turntable_zero_rad"] = rig.turntable_zero_rad;
+      j["turntable_error_rad"] = turntable_error_rad;
+      j["turntable_axis_direction_world"] = to_json(Eigen::Vector3d(rig.world_T_turntable.linear().col(2)));
+      j["turntable_axis_point_world"] = to_json(Eigen::Vector3d(rig.world_T_turntable.translation()));
+      if (object.calibration_sphere_radius_m > 0) {
+        j["calibration_sphere"] = {{"radius_m", object.calibration_sphere_radius_m},
+                                   {"offset_m", object.calibration_sphere_offset_m}};
+      }
+      write_json_atomic(j, truth_rig_path);
+    }
     std::ofstream truth;
     if (!truth_path.empty()) {
       truth.open(truth_path, std::ios::app);
@@ -172,6 +209,13 @@ int main(int argc, char** argv) {
          << r.angle() * 180 / kPi << " deg, turntable " << errors.turntable_offset_rad * 180 / kPi
          << " deg, joints sigma " << errors.joint_sigma_rad * 180 / kPi << " deg";
       log_info(os.str());
+    }
+    if (object.calibration_sphere_radius_m > 0) {
+      // MuJoCo draws a sphere as an inscribed polyhedron (28 x 16 facets by default: up to 0.3 mm
+      // inside a 50 mm sphere, which biases the fitted centre along each view); 256 x 256 keeps
+      // the drawn surface within 5 um of the sphere (twin/test/depth_renderer_test.cpp).
+      sim.model()->vis.quality.numslices = 256;
+      sim.model()->vis.quality.numstacks = 256;
     }
     twin::EglContext egl;
     twin::DepthRenderer renderer(sim.model(), "depth", k, range);

@@ -106,6 +106,24 @@ CommandLine::CommandLine()
   cli::add(*rig_check_cmd_, rigcheck::kDriverDeadline, &rig_check_.deadline_s);
   cli::add_flag(*rig_check_cmd_, "passive", &rig_check_.passive,
                 "only the checks that move nothing (statuses, one triggered frame)");
+  calibrate_cmd_ = cli::add_command(app_, "calibrate",
+                                    "hand-eye and turntable calibration from depth: the rig's drivers (or the twin) on "
+                                    "the bus, a sphere of known radius on the platter mark");
+  {
+    CLI::App& c = *calibrate_cmd_;
+    cli::add_text(c, "rig-model", &calibrate_.rig_model, "the rig file (MJCF) to calibrate", "FILE")->required();
+    cli::add(c, kSphereRadius, &calibrate_.sphere.radius_m)->required();
+    cli::add(c, kSphereOffset, &calibrate_.sphere.offset_m);
+    cli::add(c, Setting<int>{"views", 24, 6, 200, "", "arm poses looking at the sphere, each at its own turntable angle"},
+             &calibrate_.views);
+    cli::add(c, Setting<double>{"speed-scale", 0.5, 0.05, 1.0, "", "fraction of the joint speed limits"},
+             &calibrate_.speed_scale);
+    cli::add(c, Setting<double>{"status-wait", 5.0, 0.5, 120.0, "s", "the drivers' statuses must come within this"},
+             &calibrate_.status_wait_s);
+    cli::add_flag(c, "fixed-axis", &calibrate_.fixed_axis, "do not estimate the turntable axis (keep the model's)");
+    cli::add_text(c, "out", &calibrate_.out,
+                  "folder for rig_calibrated.xml, calibration.json and report.md [out/calibration-<date-time>]", "DIR");
+  }
 
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");
@@ -229,14 +247,14 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
         return 0;
       }
       for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, stop_cmd_, rig_check_cmd_, rig_host_cmd_,
-                                import_urdf_cmd_, help_cmd_}) {
+                                import_urdf_cmd_, calibrate_cmd_, help_cmd_}) {
         if (c->get_name() == help_topic_) {
           out << c->help("pbnbv");
           return 0;
         }
       }
       throw std::invalid_argument("unknown command '" + help_topic_ +
-                                  "' (expected scan, bench, ablate, spy, stop, rig-check, rig-host, import-urdf or help)");
+                                  "' (expected scan, bench, ablate, spy, stop, rig-check, rig-host, import-urdf, calibrate or help)");
     }
     if (given == scan_cmd_) {
       command_ = Command::kScan;
@@ -265,6 +283,12 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
       }
     } else if (given == rig_check_cmd_) {
       command_ = Command::kRigCheck;
+    } else if (given == calibrate_cmd_) {
+      command_ = Command::kCalibrate;
+      if (calibrate_.sphere.radius_m + calibrate_.sphere.offset_m > 0.2 + 1e-9) {
+        throw std::invalid_argument("--sphere-radius " + std::to_string(calibrate_.sphere.radius_m) + " m at --sphere-offset " +
+                                    std::to_string(calibrate_.sphere.offset_m) + " m reaches beyond the platter's 0.2 m radius");
+      }
     } else {
       command_ = Command::kSpy;
     }

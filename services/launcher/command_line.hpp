@@ -14,12 +14,24 @@
 #include <vector>
 
 #include "cli/options.hpp"
+#include "core/rig/calibration.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "eval/bench.hpp"
 
 namespace pbnbv::launcher {
 
-enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigCheck, kRigHost, kImportUrdf };
+enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigCheck, kRigHost, kImportUrdf, kCalibrate };
+
+// What `pbnbv calibrate` was asked for (core/rig/calibration.hpp).
+struct CalibrateOptions {
+  std::string rig_model;          // the rig file to calibrate
+  CalibrationSphere sphere;
+  int views = 24;                 // arm poses (each at its own turntable angle)
+  double speed_scale = 0.5;       // fraction of the joint speed limits
+  double status_wait_s = 5;       // the drivers' first statuses must come within this
+  bool fixed_axis = false;        // keep the model's turntable axis (else estimated and reported)
+  std::string out;                // empty: out/calibration-<date-time>
+};
 
 // What `pbnbv stop` was asked for.
 struct StopOptions {
@@ -107,6 +119,7 @@ class CommandLine {
   const RigHostOptions& rig_host() const { return rig_host_; }
   const ImportUrdfOptions& import_urdf() const { return import_urdf_; }
   const RigCheckOptions& rig_check() const { return rig_check_; }
+  const CalibrateOptions& calibrate() const { return calibrate_; }
   const ScanOptions& scan() const { return scan_; }
   const eval::BenchSpec& bench() const { return bench_; }
   const AblateOptions& ablate() const { return ablate_; }
@@ -152,6 +165,8 @@ class CommandLine {
   StopOptions stop_;
   CLI::App* rig_check_cmd_ = nullptr;
   RigCheckOptions rig_check_;
+  CLI::App* calibrate_cmd_ = nullptr;
+  CalibrateOptions calibrate_;
   CLI::App* help_cmd_ = nullptr;
   Command command_ = Command::kHelp;
   ScanOptions scan_;

@@ -24,6 +24,11 @@ int run_ablate(const AblateOptions& o, const std::filesystem::path& self);
 // `pbnbv spy`: lcm-spy with the project's message types (replaces this process).
 int run_spy();
 
+// `pbnbv calibrate`: hand-eye and turntable calibration with the drivers on the bus (the twin or
+// the real rig): rig_calibrated.xml, calibration.json and report.md in the output folder. 0: done.
+// Throws naming what is missing (a silent driver, too few views with the sphere).
+int run_calibrate(const CalibrateOptions& o);
+
 // `pbnbv stop`: STOP on the bus (three times over 0.2 s: UDP may lose one).
 int run_stop(const StopOptions& o);
 

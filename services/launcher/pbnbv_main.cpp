@@ -6,6 +6,7 @@
 //   pbnbv stop [options]     halt the rig and end a scan
 //   pbnbv rig-host [options] the motion executor and camera service on the rig's computer
 //   pbnbv rig-check [--rig-model FILE] [--deadline S] [--passive]   the drivers against the contract
+//   pbnbv calibrate --rig-model FILE --sphere-radius R   hand-eye and turntable calibration
 // The command line is launcher/command_line.hpp; running each command, launcher/commands.hpp.
 #include <filesystem>
 #include <iostream>
@@ -31,6 +32,8 @@ int main(int argc, char** argv) {
         return launcher::run_ablate(line.ablate(), self);
       case launcher::Command::kSpy:
         return launcher::run_spy();
+      case launcher::Command::kCalibrate:
+        return launcher::run_calibrate(line.calibrate());
       case launcher::Command::kStop:
         return launcher::run_stop(line.stop());
       case launcher::Command::kImportUrdf:

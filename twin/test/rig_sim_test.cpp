@@ -144,6 +144,27 @@ TEST(RigSim, ObjectIsInsertedAtTheMarkersAndAMissingMarkerIsNamed) {
   }
 }
 
+TEST(RigSim, TheCalibrationSphereRestsOnTheMarkAndTurnsWithThePlatter) {
+  const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
+  twin::ObjectPlacement placement;
+  placement.calibration_sphere_radius_m = 0.05;
+  placement.calibration_sphere_offset_m = 0.1;
+  twin::RigSim sim(rig, placement, model_out());
+  const int geom = mj_name2id(sim.model(), mjOBJ_GEOM, "calibration_sphere");
+  ASSERT_GE(geom, 0);
+  EXPECT_EQ(sim.model()->geom_type[geom], mjGEOM_SPHERE);
+  EXPECT_DOUBLE_EQ(sim.model()->geom_size[3 * geom], 0.05);
+  // A quarter turn of the platter takes the centre from (0.1, 0, top + 0.05) to (0, 0.1, ...):
+  // the platter top is z = 0.065 (models/rig_arm.xml).
+  sim.command_turntable(kPi / 2, 1.0, 1);
+  for (int i = 0; i < 5000 && !sim.settled(sim.turntable()); ++i) sim.step();
+  mj_forward(sim.model(), sim.data());
+  const Eigen::Vector3d c(sim.data()->geom_xpos[3 * geom], sim.data()->geom_xpos[3 * geom + 1],
+                          sim.data()->geom_xpos[3 * geom + 2]);
+  EXPECT_LT((c - Eigen::Vector3d(0, 0.1, 0.065 + 0.05)).norm(), 1e-5);  // settled within 1e-4 rad
+  EXPECT_LT((c - object_in_world(rig, sim.turntable_angle_reported(), 0) * Eigen::Vector3d(0.1, 0, 0.05)).norm(), 1e-12);
+}
+
 TEST(RigSim, MovesBetweenHemisphereViewsStayWithinLimitsAndSettleQuickly) {
   const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
   twin::RigSim sim(rig, twin::ObjectPlacement{}, model_out());

@@ -653,6 +653,10 @@ RigModel load_rig(const std::string& path) {
     if (!(rig.turntable_qd_max > 0)) fail(path, "pbnbv_turntable_speed_limit must be positive");
     const Eigen::Vector3d b_rel = rig.world_T_base.translation() - rig.world_T_turntable.translation();
     rig.preferred_azimuth_rad = std::atan2(b_rel.y(), b_rel.x());
+    if (mj_name2id(m, mjOBJ_NUMERIC, "pbnbv_turntable_zero") >= 0) {
+      rig.turntable_zero_rad = custom_numeric(m, path, "pbnbv_turntable_zero", 1)[0];
+      if (!(std::abs(rig.turntable_zero_rad) <= kPi)) fail(path, "pbnbv_turntable_zero must be within [-pi, pi]");
+    }
   } else {
     if (tt >= 0) fail(path, "the free rig must not have a turntable joint");
     if (m->body_weldid[mount] != 0) fail(path, "body \"object_mount\" must be static");
@@ -707,7 +711,7 @@ Pose camera_in_world(const RigModel& rig, const Vector6d& q) {
 Pose object_in_world(const RigModel& rig, double turntable_rad, double object_z_m) {
   if (rig.kind == RigKind::kFree || !rig.has_turntable) return Pose::Identity();
   Pose p = rig.world_T_turntable;
-  p.linear() = p.linear() * rot_z(turntable_rad);
+  p.linear() = p.linear() * rot_z(turntable_rad - rig.turntable_zero_rad);
   p.translation() += p.linear().col(2) * object_z_m;
   return p;
 }
@@ -800,7 +804,7 @@ struct ReachabilityChecker::Impl {
     mjModel* m = model.get();
     mjData* d = data.get();
     for (int i = 0; i < 6; ++i) d->qpos[qadr[i]] = q[i];
-    if (turntable_qadr >= 0) d->qpos[turntable_qadr] = turntable_rad;
+    if (turntable_qadr >= 0) d->qpos[turntable_qadr] = turntable_rad - rig.turntable_zero_rad;
     mj_kinematics(m, d);
     mj_collision(m, d);
     std::vector<std::string> out;
@@ -928,7 +932,7 @@ ViewSolution ReachabilityChecker::solve(const Pose& object_T_camera, const Vecto
     const double psi = std::atan2(c.y(), c.x());
     for (double off : offsets_deg) {
       const double t = above ? turntable_current + off * kPi / 180.0
-                             : rig.preferred_azimuth_rad + off * kPi / 180.0 - psi;
+                             : rig.preferred_azimuth_rad + off * kPi / 180.0 - psi + rig.turntable_zero_rad;
       angles.push_back(nearest_equivalent_angle_rad(t, turntable_current));
     }
   } else {

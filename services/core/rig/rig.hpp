@@ -66,6 +66,10 @@ struct RigModel {
   Pose world_T_turntable = Pose::Identity();  // turntable top centre at angle 0, z = axis
   double preferred_azimuth_rad = 0;       // world azimuth about the turntable axis where the
                                           // arm sees best (towards the arm base)
+  double turntable_zero_rad = 0;          // the turntable's reading when the platter is at its
+                                          // zero (the calibration mark on its +x axis), rad:
+                                          // <custom><numeric name="pbnbv_turntable_zero">
+                                          // (optional, 0; written by `pbnbv calibrate`)
   // Where an unknown object may be (<custom><text name="pbnbv_working_volume"
   // data="cylinder:R,H"/> or "box:X,Y,Z"); without it, working_volume_of() derives one from the
   // turntable.
@@ -89,8 +93,8 @@ std::string default_rig_path(RigKind kind);
 // Forward kinematics.
 Pose flange_in_world(const RigModel& rig, const Vector6d& q);
 Pose camera_in_world(const RigModel& rig, const Vector6d& q);
-// Object frame in the world: turntable top frame turned by `turntable_rad` about its axis and
-// lifted by `object_z_m` along it. Free rig: identity (the object floats at the world origin).
+// Object frame in the world: turntable top frame turned by `turntable_rad` (a reading: minus
+// turntable_zero_rad) about its axis and lifted by `object_z_m` along it. Free rig: identity (the object floats at the world origin).
 Pose object_in_world(const RigModel& rig, double turntable_rad, double object_z_m);
 // Camera (optical frame) in the object frame, from joint and turntable readings.
 Pose camera_in_object(const RigModel& rig, const Vector6d& q, double turntable_rad,

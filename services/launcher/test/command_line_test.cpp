@@ -200,8 +200,13 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
       {{"bench"}, "pbnbv bench: --out DIR is required"},
       {{"ablate", "--out", "x"}, "pbnbv ablate: name the parameter: tmax, beta or initial-view"},
       {{"ablate", "beta", "--values", "2,400", "--out", "x"}, "pbnbv ablate: --values: --beta 400 is outside its range [1, 360]"},
-      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf, rig-check, help)"},
+      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf, rig-check, calibrate, help)"},
       {{"rig-check", "--deadline", "0"}, "pbnbv rig-check: --deadline: 0 is outside its range [0.5, 600] s"},
+      {{"calibrate", "--sphere-radius", "0.05"}, "pbnbv calibrate: --rig-model is required"},
+      {{"calibrate", "--rig-model", "r.xml", "--sphere-radius", "0.12", "--sphere-offset", "0.1"},
+       "pbnbv calibrate: --sphere-radius 0.120000 m at --sphere-offset 0.100000 m reaches beyond the platter's 0.2 m radius"},
+      {{"calibrate", "--rig-model", "r.xml", "--sphere-radius", "0.5"},
+       "pbnbv calibrate: --sphere-radius: 0.5 is outside its range [0.01, 0.15] m"},
   };
   for (const auto& [words, message] : cases) {
     CommandLine line;
