@@ -117,6 +117,9 @@ void CommandLine::declare_scan() {
   cli::add(c, kRegistration, &p.registration)->group(kGroupPlanning);
 
   cli::add(c, kRig, &s.rig)->group(kGroupRig);
+  cli::add_text(c, "rig-model", &p.rig_model,
+                "the rig's MJCF file (README 'Bring your own rig'); its kind decides --rig [models/rig_<rig>.xml]", "FILE")
+      ->group(kGroupRig);
   cli::add(c, kSpeedScale, &s.speed_scale)->group(kGroupRig);
   cli::add(c, kSimSpeed, &s.sim_speed)->group(kGroupRig);
   cli::add(c, kDepthNoise, &scan_.noise_sigma)->group(kGroupRig);
@@ -220,7 +223,23 @@ std::string CommandLine::usage() const {
 void CommandLine::resolve_scan() {
   ScanSettings& s = scan_.settings;
   const ScanPending& p = scan_pending_;
-  s.rig_model_path = default_rig_path(s.rig);
+  if (!p.rig_model.empty()) {
+    // The file decides the kind of rig: --rig may only agree with it.
+    RigModel rig;
+    try {
+      rig = load_rig(fs::absolute(p.rig_model).string());
+    } catch (const std::runtime_error& e) {
+      throw std::invalid_argument(std::string("--rig-model: ") + e.what());
+    }
+    if (scan_cmd_->get_option("--rig")->count() > 0 && s.rig != rig.kind) {
+      throw std::invalid_argument("--rig " + to_string(s.rig) + " disagrees with --rig-model " + rig.model_path +
+                                  ", which describes a rig of kind " + to_string(rig.kind));
+    }
+    s.rig = rig.kind;
+    s.rig_model_path = rig.model_path;
+  } else {
+    s.rig_model_path = default_rig_path(s.rig);
+  }
   s.ring_elevation_deg = p.ring_elevation_deg.value_or(s.rig == RigKind::kArm ? kRingElevation.value
                                                                                 : kRingElevationFreeDeg);
   if (p.initial_view) s.initial_view_m = *p.initial_view;

@@ -92,6 +92,7 @@ class CommandLine {
     std::optional<double> ring_elevation_deg, cx, cy;
     std::optional<OnOff> registration;
     std::optional<Eigen::Vector3d> initial_view;
+    std::string rig_model;  // --rig-model FILE
     bool no_log = false;
   };
   struct BenchPending {

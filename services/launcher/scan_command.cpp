@@ -221,7 +221,7 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
   if (o.record_log) {
     add("lcm-logger", {"/usr/bin/lcm-logger", "-q", "--lcm-url=" + bus::lcm_url(), "-f", (out / "scan.lcmlog").string()});
   }
-  add("twin", {(bin / "pbnbv-twin").string(), "--rig", to_string(s.rig), "--mesh", stl,
+  add("twin", {(bin / "pbnbv-twin").string(), "--model", s.rig_model_path, "--mesh", stl,
                "--object-z", exact(s.object_z_m), "--model-out", (out / "twin_model.xml").string(),
                "--width", std::to_string(s.camera.width), "--height", std::to_string(s.camera.height),
                "--fx", exact(s.camera.fx), "--fy", exact(s.camera.fy), "--cx", exact(s.camera.cx), "--cy", exact(s.camera.cy),
@@ -230,8 +230,8 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
                "--hand-eye-error-mm", exact(o.hand_eye_error_mm), "--hand-eye-error-deg", exact(o.hand_eye_error_deg),
                "--turntable-error-deg", exact(o.turntable_error_deg), "--joint-error-deg", exact(o.joint_error_deg),
                "--error-seed", std::to_string(o.error_seed), "--truth-out", (out / "twin_truth.jsonl").string()});
-  add("motion", {(bin / "pbnbv-motion").string(), "--rig", to_string(s.rig)});
-  add("camera", {(bin / "pbnbv-camera").string(), "--rig", to_string(s.rig)});
+  add("motion", {(bin / "pbnbv-motion").string(), "--model", s.rig_model_path});
+  add("camera", {(bin / "pbnbv-camera").string(), "--model", s.rig_model_path});
   add("registration", {(bin / "pbnbv-registration").string(), "--out", out.string()});
   if (!o.registration) children.back().argv.push_back("--off");
   // The map's working volume: the cloud's crop box, above the turntable top.
@@ -241,7 +241,7 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
   add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", exact(s.map_resolution_m), "--out", out.string(),
                   "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m)});
   if (uses_ellipsoids(s.planner)) add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
-  if (uses_view_scorer(s.planner)) add("scorer", {(bin / "pbnbv-scorer").string(), "--rig", to_string(s.rig)});
+  if (uses_view_scorer(s.planner)) add("scorer", {(bin / "pbnbv-scorer").string(), "--model", s.rig_model_path});
   add("coordinator", {(bin / "pbnbv-coordinator").string(), "--out", out.string()}, true);
 
   return supervise(children, s, out, o.record_log);

@@ -93,6 +93,30 @@ TEST(LauncherCommandLine, FreeRigDefaultsAndDependentDefaults) {
   EXPECT_EQ(o.up, UpAxis::kY);
 }
 
+TEST(LauncherCommandLine, TheRigFileDecidesTheKindOfRig) {
+  const std::string free_model = default_rig_path(RigKind::kFree);
+  {
+    CommandLine line;
+    const Parsed p = parse(line, {"scan", "--rig-model", free_model});
+    ASSERT_EQ(p.code, std::nullopt) << p.err;
+    EXPECT_EQ(line.scan().settings.rig, RigKind::kFree);
+    EXPECT_EQ(line.scan().settings.rig_model_path, free_model);
+    EXPECT_FALSE(line.scan().registration);  // the free rig's default
+  }
+  {
+    CommandLine line;
+    const Parsed p = parse(line, {"scan", "--rig-model", free_model, "--rig", "arm"});
+    EXPECT_EQ(p.code, 2);
+    EXPECT_NE(p.err.find("--rig arm disagrees with --rig-model " + free_model), std::string::npos) << p.err;
+  }
+  {
+    CommandLine line;
+    const Parsed p = parse(line, {"scan", "--rig-model", "/no/such/rig.xml"});
+    EXPECT_EQ(p.code, 2);
+    EXPECT_NE(p.err.find("--rig-model: rig model /no/such/rig.xml: cannot open the file"), std::string::npos) << p.err;
+  }
+}
+
 TEST(LauncherCommandLine, ASettingsFileSetsOptionsAndTheCommandLineOverridesIt) {
   const std::string file = file_with("scan", "views = 3\nplanner = \"ring\"\n");
   CommandLine line;
