@@ -176,10 +176,12 @@ void moves_between_hemisphere_views(const RigModel& rig) {
       // On target: the camera is where forward kinematics of the target puts it.
       const Pose reached = camera_in_world(rig, sim.arm_position());
       EXPECT_LT((reached.translation() - camera_in_world(rig, sol.q).translation()).norm(), 1e-3);
+      // (MuJoCo's body poses are those of the step's start: the settled arm's residual motion
+      // in one 2 ms step, ~1e-6 m, separates them from the joint readings.)
       const Pose truth = sim.true_camera_in_object(0.15);
       const Pose model = camera_in_object(rig, sim.arm_position(), sim.turntable_angle(), 0.15);
-      EXPECT_LT((truth.translation() - model.translation()).norm(), 1e-9);
-      EXPECT_LT(rotation_angle_rad(truth.linear(), model.linear()), 1e-9);
+      EXPECT_LT((truth.translation() - model.translation()).norm(), 2e-5);
+      EXPECT_LT(rotation_angle_rad(truth.linear(), model.linear()), 2e-5);
     }
   }
 }
