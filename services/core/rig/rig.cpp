@@ -19,7 +19,12 @@
 // (1) collides with nothing (arm-side geoms vs table, floor, pedestal, arm base, turntable and
 // the keep-out box, with 5 mm clearance) and (2) has a free line of sight from the optical
 // centre to the object (rays to the keep-out box centre and its corners pulled 20% inwards
-// must not hit a rendered rig geom, e.g. the arm's own links or the pedestal) wins.
+// must not hit a rendered rig geom, e.g. the arm's own links or the pedestal) wins. The line of
+// sight is checked first (cheaper); when what blocks or collides does not depend on the
+// configuration (the environment blocks the view, or the camera itself collides) no other
+// solution at that angle is tried. With the general IK the solutions come in stages of seeds
+// (in a batch the neighbouring candidate's solution; the current configuration and home; spread
+// seeds), each stage checked before the next is solved.
 #include "core/rig/rig.hpp"
 #include "core/base/format.hpp"
 #include "core/base/units.hpp"

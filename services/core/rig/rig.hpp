@@ -1,6 +1,7 @@
 #pragma once
-// The rig as plain data read from its MJCF file (models/rig_arm.xml, models/rig_free.xml), and
-// its kinematics: forward kinematics, analytic inverse kinematics, the split of a requested
+// The rig as plain data read from its MJCF file (models/rig_arm.xml, rig_ur5e.xml, rig_free.xml), and
+// its kinematics: forward kinematics along the arm's joint chain, inverse kinematics (closed form
+// for the spherical-wrist layout, damped least squares for any other 6R chain), the split of a requested
 // camera pose into a turntable angle and an arm configuration, and the reachability check
 // (IK + joint limits + MuJoCo collision check against table, turntable, pedestal and the object
 // keep-out box). The same file describes the twin and a calibrated real rig; services read the
