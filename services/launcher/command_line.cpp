@@ -120,6 +120,22 @@ void CommandLine::declare_scan() {
   cli::add_text(c, "rig-model", &p.rig_model,
                 "the rig's MJCF file (README 'Bring your own rig'); its kind decides --rig [models/rig_<rig>.xml]", "FILE")
       ->group(kGroupRig);
+  cli::add_flag(c, "external-rig", &scan_.external_rig,
+                "the rig's drivers run outside (a physical rig, or a twin started on its own): start no twin; the object "
+                "is unknown (no --object), only its working volume")
+      ->group(kGroupRig);
+  cli::add_text(c, "working-volume", &scan_.working_volume,
+                "where the unknown object stands, on the turntable: cylinder:RADIUS,HEIGHT or box:X,Y,Z, m [the rig "
+                "file's pbnbv_working_volume, else derived from the turntable]",
+                "SHAPE")
+      ->group(kGroupRig);
+  cli::add(c, Setting<double>{"driver-timeout", 10.0, 0.5, 600.0, "s", "external rig: how long to wait for each driver"},
+           &scan_.driver_timeout_s)
+      ->group(kGroupRig);
+  cli::add_flag(c, "dry-run", &scan_.dry_run,
+                "external rig: check the drivers, plan the first view and check the reachability of the candidates, "
+                "print what would be commanded, and move nothing")
+      ->group(kGroupRig);
   cli::add(c, kSpeedScale, &s.speed_scale)->group(kGroupRig);
   cli::add(c, kSimSpeed, &s.sim_speed)->group(kGroupRig);
   cli::add(c, kDepthNoise, &scan_.noise_sigma)->group(kGroupRig);
@@ -249,6 +265,28 @@ void CommandLine::resolve_scan() {
   // paper's simulation): its kinematic poses are exact, so registration is off by default there.
   scan_.registration = p.registration.value_or(s.rig == RigKind::kArm ? OnOff::kOn : OnOff::kOff) == OnOff::kOn;
   scan_.record_log = !p.no_log;
+  if (scan_.external_rig) {
+    // The object is unknown: nothing of the twin's object or of its simulation applies.
+    for (const char* twin_only : {"--object", "--size", "--up", "--sim-speed", "--noise-sigma", "--dropout",
+                                  "--hand-eye-error-mm", "--hand-eye-error-deg", "--turntable-error-deg",
+                                  "--joint-error-deg", "--error-seed", "--width", "--height", "--fx", "--fy", "--cx",
+                                  "--cy", "--depth-min", "--depth-max"}) {
+      if (scan_cmd_->get_option(twin_only)->count() > 0) {
+        throw std::invalid_argument(std::string(twin_only) +
+                                    " does not apply to --external-rig: the object is unknown and the camera and its "
+                                    "range are the driver's (checked against the rig file)");
+      }
+    }
+    s.external_rig = true;
+    s.working_volume = scan_.working_volume.empty() ? working_volume_of(load_rig(s.rig_model_path))
+                                                    : parse_working_volume(scan_.working_volume);
+  } else {
+    for (const char* external_only : {"--working-volume", "--driver-timeout", "--dry-run"}) {
+      if (scan_cmd_->get_option(external_only)->count() > 0) {
+        throw std::invalid_argument(std::string(external_only) + " applies to --external-rig only");
+      }
+    }
+  }
   s.validate();
 }
 

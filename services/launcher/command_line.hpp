@@ -44,6 +44,11 @@ struct ScanOptions {
   double joint_error_deg = kJointErrorDeg.value;
   int64_t error_seed = kErrorSeed.value;
   bool record_log = true;        // not --no-log
+  // A rig whose drivers run outside (--external-rig): no twin, an unknown object.
+  bool external_rig = false;
+  std::string working_volume;    // --working-volume: "cylinder:R,H" | "box:X,Y,Z" ("": the rig file's)
+  double driver_timeout_s = 10;  // --driver-timeout: how long to wait for the rig's drivers
+  bool dry_run = false;          // --dry-run: plan and check the first views, move nothing
   std::string out;               // empty: out/<object>-<date-time>-<last 4 digits of the scan id>
   bool overwrite = false;        // --overwrite: empty a non-empty --out first
   std::string resume;            // --resume DIR: continue the interrupted scan there

@@ -21,6 +21,8 @@
 #include "eval/evaluate.hpp"
 #include "eval/objects.hpp"
 #include "launcher/commands.hpp"
+#include "launcher/external_rig.hpp"
+#include "pbnbv/stop_request_t.hpp"
 #include "process/processes.hpp"
 
 namespace fs = std::filesystem;
@@ -174,8 +176,45 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
 
 int resume_scan(const fs::path& dir);
 
+int run_external_scan(const ScanOptions& o, const fs::path& bin);
+
+// The processes of a scan after the rig (the twin, or nothing on an external rig): motion,
+// camera, registration, mapping, the planner's services and the coordinator, last.
+void add_pipeline(const ScanOptions& o, const ScanSettings& s, const fs::path& out, const fs::path& bin,
+                  const std::function<void(const std::string&, std::vector<std::string>, bool)>& add) {
+  add("motion", {(bin / "pbnbv-motion").string(), "--model", s.rig_model_path}, false);
+  add("camera", {(bin / "pbnbv-camera").string(), "--model", s.rig_model_path}, false);
+  std::vector<std::string> registration = {(bin / "pbnbv-registration").string(), "--out", out.string()};
+  if (!o.registration) registration.push_back("--off");
+  add("registration", registration, false);
+  // The map's working volume: the cloud's crop box, above the turntable top.
+  Eigen::Vector3d volume_min = s.crop_min_m;
+  if (s.rig == RigKind::kArm) volume_min.z() = std::max(volume_min.z(), -s.object_z_m + s.ground_clearance_m);
+  auto vec = [&](const Eigen::Vector3d& v) { return exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z()); };
+  add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", exact(s.map_resolution_m), "--out", out.string(),
+                  "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m)}, false);
+  if (uses_ellipsoids(s.planner)) add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)}, false);
+  if (uses_view_scorer(s.planner)) add("scorer", {(bin / "pbnbv-scorer").string(), "--model", s.rig_model_path}, false);
+  add("coordinator", {(bin / "pbnbv-coordinator").string(), "--out", out.string()}, true);
+}
+
+// A process of the scan: every one serves this scan only (--scan), other scans on the same bus
+// are ignored; its output goes to logs/NAME.log (and the terminal for the coordinator's progress).
+process::Child scan_process(const std::string& name, std::vector<std::string> argv, const ScanSettings& s,
+                            const fs::path& out, bool progress) {
+  process::Child c;
+  c.name = name;
+  c.argv = std::move(argv);
+  if (name != "lcm-logger" && name != "coordinator") c.argv.insert(c.argv.end(), {"--scan", s.scan_id});
+  c.death_signal = death_signal_of(name);
+  c.log_path = (out / "logs" / (name + ".log")).string();
+  c.stdout_to_terminal = progress;
+  return c;
+}
+
 int run_scan(const ScanOptions& o, const fs::path& bin) {
   if (!o.resume.empty()) return resume_scan(o.resume);
+  if (o.external_rig) return run_external_scan(o, bin);
   ScanSettings s = o.settings;
   eval::ObjectSpec object = eval::resolve_object(o.object);
   const std::string object_name = object.name;
@@ -206,20 +245,12 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
   warn_small_receive_buffer();
 
   std::vector<process::Child> children;
-  // Every process serves this scan only (--scan): other scans on the same bus are ignored.
-  auto add = [&](const std::string& name, std::vector<std::string> argv, bool progress = false) {
-    process::Child c;
-    c.name = name;
-    c.argv = std::move(argv);
-    if (name != "lcm-logger" && name != "coordinator") c.argv.insert(c.argv.end(), {"--scan", s.scan_id});
-    c.death_signal = death_signal_of(name);
-    c.log_path = (out / "logs" / (name + ".log")).string();
-    c.stdout_to_terminal = progress;
-    children.push_back(std::move(c));
+  auto add = [&](const std::string& name, std::vector<std::string> argv, bool progress) {
+    children.push_back(scan_process(name, std::move(argv), s, out, progress));
   };
   // The logger listens with the services' receive buffer (bus::lcm_url()).
   if (o.record_log) {
-    add("lcm-logger", {"/usr/bin/lcm-logger", "-q", "--lcm-url=" + bus::lcm_url(), "-f", (out / "scan.lcmlog").string()});
+    add("lcm-logger", {"/usr/bin/lcm-logger", "-q", "--lcm-url=" + bus::lcm_url(), "-f", (out / "scan.lcmlog").string()}, false);
   }
   add("twin", {(bin / "pbnbv-twin").string(), "--model", s.rig_model_path, "--mesh", stl,
                "--object-z", exact(s.object_z_m), "--model-out", (out / "twin_model.xml").string(),
@@ -229,21 +260,58 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
                "--noise-sigma", exact(o.noise_sigma), "--dropout", exact(o.dropout), "--speed", exact(s.sim_speed),
                "--hand-eye-error-mm", exact(o.hand_eye_error_mm), "--hand-eye-error-deg", exact(o.hand_eye_error_deg),
                "--turntable-error-deg", exact(o.turntable_error_deg), "--joint-error-deg", exact(o.joint_error_deg),
-               "--error-seed", std::to_string(o.error_seed), "--truth-out", (out / "twin_truth.jsonl").string()});
-  add("motion", {(bin / "pbnbv-motion").string(), "--model", s.rig_model_path});
-  add("camera", {(bin / "pbnbv-camera").string(), "--model", s.rig_model_path});
-  add("registration", {(bin / "pbnbv-registration").string(), "--out", out.string()});
-  if (!o.registration) children.back().argv.push_back("--off");
-  // The map's working volume: the cloud's crop box, above the turntable top.
-  Eigen::Vector3d volume_min = s.crop_min_m;
-  if (s.rig == RigKind::kArm) volume_min.z() = std::max(volume_min.z(), -s.object_z_m + s.ground_clearance_m);
-  auto vec = [&](const Eigen::Vector3d& v) { return exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z()); };
-  add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", exact(s.map_resolution_m), "--out", out.string(),
-                  "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m)});
-  if (uses_ellipsoids(s.planner)) add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
-  if (uses_view_scorer(s.planner)) add("scorer", {(bin / "pbnbv-scorer").string(), "--model", s.rig_model_path});
-  add("coordinator", {(bin / "pbnbv-coordinator").string(), "--out", out.string()}, true);
+               "--error-seed", std::to_string(o.error_seed), "--truth-out", (out / "twin_truth.jsonl").string()}, false);
+  add_pipeline(o, s, out, bin, add);
 
+  return supervise(children, s, out, o.record_log);
+}
+
+// An external-rig scan: the drivers are checked (nothing moves), the first views planned and their
+// reachability checked, then every process but a twin is started; the object is unknown.
+int run_external_scan(const ScanOptions& o, const fs::path& bin) {
+  ScanSettings s = o.settings;
+  const RigModel rig = load_rig(s.rig_model_path);
+  s.object_name = "unknown";
+  s.scan_id = new_scan_id("scan");
+  place_object(s);  // in the working volume
+  std::cout << "pbnbv scan: an unknown object in the working volume " << s.working_volume->to_text() << " of the rig "
+            << rig.model_path << " (" << rig.arm_name << "), drivers outside; waiting for them on " << bus::lcm_url()
+            << std::endl;
+  DriversSeen seen;
+  {
+    bus::Bus bus("launcher");
+    seen = wait_for_drivers(bus, rig, s.scan_id, o.driver_timeout_s);
+  }
+  std::cout << "drivers: ARM_STATUS " << fixed(seen.arm_status_hz, 0) << " Hz"
+            << (rig.has_turntable ? ", TURNTABLE_STATUS " + fixed(seen.turntable_status_hz, 0) + " Hz" : std::string())
+            << ", DEPTH_FRAME " << seen.frame_width << "x" << seen.frame_height << " fx " << fixed(seen.camera.fx, 1)
+            << ", range " << fixed(seen.range.min_m, 2) << "-" << fixed(seen.range.max_m, 2) << " m" << std::endl;
+  // The camera is the driver's: what the planner scores and the ray-casting baseline casts.
+  s.camera = seen.camera;
+  s.depth_range = seen.range;
+  s.validate();
+  const FirstViews first = plan_first_views(s, rig, seen);
+  if (o.dry_run) {
+    std::cout << "dry run: nothing is commanded\n" << describe(first, rig, seen);
+    require_reachable(first, s);
+    return 0;
+  }
+  require_reachable(first, s);
+
+  const fs::path out = fs::absolute(o.out.empty() ? "out/scan-" + timestamp() + "-" + s.scan_id.substr(s.scan_id.size() - 4) : o.out);
+  prepare_out(out, o.overwrite);
+  write_json_atomic(to_json(s), (out / "settings.json").string());
+  std::cout << "scanning: " << s.views << " " << name_of(s.planner) << " views -> " << out.string() << " (scan "
+            << s.scan_id << ")" << std::endl;
+  warn_small_receive_buffer();
+  std::vector<process::Child> children;
+  auto add = [&](const std::string& name, std::vector<std::string> argv, bool progress) {
+    children.push_back(scan_process(name, std::move(argv), s, out, progress));
+  };
+  if (o.record_log) {
+    add("lcm-logger", {"/usr/bin/lcm-logger", "-q", "--lcm-url=" + bus::lcm_url(), "-f", (out / "scan.lcmlog").string()}, false);
+  }
+  add_pipeline(o, s, out, bin, add);
   return supervise(children, s, out, o.record_log);
 }
 
@@ -332,6 +400,20 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
     }
     bus.spin_once(20);
   }
+  if (code != 0) {
+    // Leave the rig stopped where it is: the motion executor halts it on STOP (three times: UDP may
+    // lose one); a rig whose motion executor is gone is held by the launcher itself.
+    stop_request_t stop;
+    stop.scan_id = s.scan_id;
+    stop.reason = cause.empty() ? (code == 130 ? "interrupted" : "the scan failed") : cause;
+    for (int i = 0; i < 3; ++i) {
+      stop.utime = bus::now_utime();
+      bus.publish(channels::kStop, stop);
+      bus.spin_once(100);
+    }
+    const auto motion = std::find_if(children.begin(), children.end(), [](const process::Child& c) { return c.name == "motion"; });
+    if (motion == children.end() || !motion->running) hold_rig(bus, s.scan_id);
+  }
   process::stop_all(children, 5.0);
   // How every process ended (0 = clean exit), for the user and for the tests.
   write_json_atomic(processes_json(s.scan_id, children, watch), (out / "processes.json").string());
@@ -346,7 +428,12 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
     }
   }
   if (record_log && fs::exists(out / "scan.json")) audit_log(out, s.scan_id);
-  if (code == 0) {
+  if (code == 0 && s.external_rig) {
+    std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
+              << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
+              << (out / "scan.json").string() << (record_log ? ", " + (out / "scan.lcmlog").string() : "")
+              << " (no coverage: the object is unknown)" << std::endl;
+  } else if (code == 0) {
     // Against the ground truth the twin rendered: coverage after every view.
     try {
       const CoverageParams cp;

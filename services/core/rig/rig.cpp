@@ -962,7 +962,25 @@ RigModel load_rig(const std::string& path) {
     if (!(qd[i] > 0)) fail(path, "pbnbv_joint_speed_limits[" + std::to_string(i) + "] must be positive");
   }
   if (!within_limits(rig, rig.q_home)) fail(path, "pbnbv_q_home is outside the joint limits");
+  if (const int wv = mj_name2id(m, mjOBJ_TEXT, "pbnbv_working_volume"); wv >= 0) {
+    try {
+      rig.working_volume = parse_working_volume(std::string(m->text_data + m->text_adr[wv]));
+    } catch (const std::invalid_argument& e) {
+      fail(path, std::string("pbnbv_working_volume: ") + e.what());
+    }
+  }
+  if (const int platter = mj_name2id(m, mjOBJ_GEOM, "platter"); platter >= 0 && m->geom_type[platter] == mjGEOM_CYLINDER) {
+    rig.turntable_radius_m = m->geom_size[3 * platter];
+  }
   return rig;
+}
+
+WorkingVolume working_volume_of(const RigModel& rig) {
+  if (rig.working_volume) return *rig.working_volume;
+  WorkingVolume w;
+  w.radius_m = rig.turntable_radius_m > 0 ? 1.25 * rig.turntable_radius_m : 0.25;
+  w.height_m = 2 * w.radius_m;
+  return w;
 }
 
 Pose flange_in_world(const RigModel& rig, const Vector6d& q) {

@@ -9,11 +9,13 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/base/pose.hpp"
 #include "core/base/setting.hpp"
+#include "core/rig/working_volume.hpp"
 
 namespace pbnbv {
 
@@ -72,7 +74,17 @@ struct RigModel {
   Pose world_T_turntable = Pose::Identity();  // turntable top centre at angle 0, z = axis
   double preferred_azimuth_rad = 0;       // world azimuth about the turntable axis where the
                                           // arm sees best (towards the arm base)
+  // Where an unknown object may be (<custom><text name="pbnbv_working_volume"
+  // data="cylinder:R,H"/> or "box:X,Y,Z"); without it, working_volume_of() derives one from the
+  // turntable.
+  std::optional<WorkingVolume> working_volume;
+  double turntable_radius_m = 0;          // the platter's radius (geom "platter"); 0: no platter
 };
+
+// The rig file's working volume, or one derived from the turntable: a cylinder 1.25 times the
+// platter's radius (objects may overhang it a little) and twice as tall as that radius is long
+// (without a platter: radius 0.25 m, height 0.5 m).
+WorkingVolume working_volume_of(const RigModel& rig);
 
 // Reads the rig from its MJCF file. An arm is any serial chain of 6 hinge joints from a static
 // body to body "flange" (named in order base to flange); the spherical-wrist layout is detected.

@@ -23,21 +23,25 @@ Eigen::AlignedBox3d box_or_none(const Eigen::Vector3d& min_m, const Eigen::Vecto
 
 }  // namespace
 
+std::vector<Pose> views_known_at_start(const ScanSettings& s) {
+  const double radius = s.working_distance_m + (s.expected_extent_m() / 2.0).norm();
+  const double elevation_rad = deg_to_rad(s.ring_elevation_deg);
+  const double start_azimuth_rad = deg_to_rad(s.ring_start_azimuth_deg);
+  if (s.planner == PlannerKind::kRing) {
+    return ring_views(s.views, radius, elevation_rad, start_azimuth_rad, Eigen::Vector3d::Zero());
+  }
+  if (s.initial_view_m.allFinite()) return {look_at_z_up(s.initial_view_m, Eigen::Vector3d::Zero())};
+  return ring_views(1, radius, elevation_rad, start_azimuth_rad, Eigen::Vector3d::Zero());
+}
+
 ScanSequencer::ScanSequencer(ScanSettings settings, fs::path out, ScanTimeouts timeouts)
     : s_(std::move(settings)), t_(timeouts), record_(std::move(out), s_) {
-  const Eigen::Vector3d half = s_.normalisation.extent_m / 2.0;
-  const double radius = s_.working_distance_m + half.norm();
-  const double elevation_rad = deg_to_rad(s_.ring_elevation_deg);
-  const double start_azimuth_rad = deg_to_rad(s_.ring_start_azimuth_deg);
+  const std::vector<Pose> start = views_known_at_start(s_);
   if (s_.planner == PlannerKind::kRing) {
-    ring_ = ring_views(s_.views, radius, elevation_rad, start_azimuth_rad, Eigen::Vector3d::Zero());
-    record_.set_ring_plan(radius, s_.ring_elevation_deg);
+    ring_ = start;
+    record_.set_ring_plan(s_.working_distance_m + (s_.expected_extent_m() / 2.0).norm(), s_.ring_elevation_deg);
   } else {
-    if (s_.initial_view_m.allFinite()) {
-      first_view_ = look_at_z_up(s_.initial_view_m, Eigen::Vector3d::Zero());
-    } else {
-      first_view_ = ring_views(1, radius, elevation_rad, start_azimuth_rad, Eigen::Vector3d::Zero())[0];
-    }
+    first_view_ = start.front();
     record_.set_next_best_view_plan(std::string(name_of(s_.planner)), first_view_);
   }
 }

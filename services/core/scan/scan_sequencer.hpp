@@ -102,6 +102,11 @@ struct ScanSoFar {
   int64_t next_request_id = 1;             // request ids are unique within the scan
 };
 
+// The views a scan knows before it has seen anything (object_T_camera): every view of the ring
+// planner, or the first view of a next-best-view scan (--initial-view, else the ring's first), on
+// a sphere of radius d_c plus half the diagonal of the expected extent.
+std::vector<Pose> views_known_at_start(const ScanSettings& s);
+
 class ScanSequencer {
  public:
   // A sequencer for the scan `settings` writing to `out`. Throws std::invalid_argument for a

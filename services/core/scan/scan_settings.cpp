@@ -33,7 +33,9 @@ nlohmann::json to_json(const ScanSettings& s) {
       {"rig_model_path", s.rig_model_path},
       {"planner", std::string(name_of(s.planner))},
       {"views", s.views},
-      {"object", {{"name", s.object_name}, {"normalisation", to_json(s.normalisation)}}},
+      {"external_rig", s.external_rig},
+      {"object", s.working_volume ? nlohmann::json{{"name", s.object_name}, {"working_volume", s.working_volume->to_text()}}
+                                  : nlohmann::json{{"name", s.object_name}, {"normalisation", to_json(s.normalisation)}}},
       {"object_z_m", s.object_z_m},
       {"working_distance_m", s.working_distance_m},
       {"ring_elevation_deg", s.ring_elevation_deg},
@@ -66,7 +68,11 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.rig_model_path = j.at("rig_model_path").get<std::string>();
     s.planner = parse_name<PlannerKind>(j.at("planner").get<std::string>());
     s.views = j.at("views").get<int>();
+    s.external_rig = j.value("external_rig", false);
     s.object_name = j.at("object").at("name").get<std::string>();
+    if (j.at("object").contains("working_volume")) {
+      s.working_volume = parse_working_volume(j.at("object").at("working_volume").get<std::string>());
+    } else {
     const auto& n = j.at("object").at("normalisation");
     s.normalisation.source_path = n.at("source_path").get<std::string>();
     s.normalisation.up = parse_name<UpAxis>(n.at("up").get<std::string>());
@@ -77,6 +83,7 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
       for (int c = 0; c < 3; ++c) s.normalisation.up_rotation(r, c) = n.at("up_rotation").at(r).at(c).get<double>();
     s.normalisation.num_vertices = n.at("num_vertices").get<std::size_t>();
     s.normalisation.num_triangles = n.at("num_triangles").get<std::size_t>();
+    }
     s.object_z_m = j.at("object_z_m").get<double>();
     s.working_distance_m = j.at("working_distance_m").get<double>();
     s.ring_elevation_deg = j.at("ring_elevation_deg").get<double>();
@@ -148,8 +155,12 @@ void ScanSettings::validate() const {
   depth_range.validate();
 }
 
+Eigen::Vector3d ScanSettings::expected_extent_m() const {
+  return working_volume ? Eigen::Vector3d(working_volume->bounds().sizes()) : normalisation.extent_m;
+}
+
 void place_object(ScanSettings& s) {
-  const Eigen::Vector3d half = s.normalisation.extent_m / 2.0;
+  const Eigen::Vector3d half = s.expected_extent_m() / 2.0;
   s.object_z_m = s.rig == RigKind::kArm ? half.z() : 0.0;
   s.keepout_min_m = -half - Eigen::Vector3d::Constant(0.02);
   s.keepout_max_m = half + Eigen::Vector3d::Constant(0.02);

@@ -4,6 +4,7 @@
 // (core/scan/scan_options.hpp and the settings of the layers below). Written into scan.json as "settings", so a scan's
 // output folder says exactly how it was made and can be resumed or repeated from it.
 #include <limits>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -26,10 +27,20 @@ struct ScanSettings {
   PlannerKind planner = kPlanner.value;  // next best view, fixed ring views, or a baseline
   int views = kViews.value;              // at most this many views
 
-  // Object (twin runs): how the mesh was normalised and where its frame sits.
+  // The rig's drivers run outside (a physical rig, or a twin started as one): the launcher
+  // starts no twin and the object is unknown.
+  bool external_rig = false;
+
+  // Object. Twin runs: how the mesh was normalised. An unknown object (external rig): only the
+  // working volume it stands in; the object frame sits at the volume's centre.
   std::string object_name;
   MeshNormalisation normalisation;
+  std::optional<WorkingVolume> working_volume;  // set exactly when the object is unknown
   double object_z_m = 0;  // object frame origin above the turntable top (arm rig)
+
+  // The object's bounding-box edges as far as the scan knows before it starts: the normalised
+  // mesh's, or the working volume's (the first view's distance, the keep-out box, the crop).
+  Eigen::Vector3d expected_extent_m() const;
 
   // View geometry.
   double working_distance_m = kWorkingDistance.value;  // d_c: camera to the object's bounding sphere
@@ -80,9 +91,11 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j);  // throws naming
 
 nlohmann::json to_json(const MeshNormalisation& n);
 
-// Where the normalised object sits and what the rig must keep clear of (s.normalisation and
-// s.rig set): on the arm rig it rests on the turntable, on the free rig it floats at the origin.
-// Fills object_z_m, the keep-out box and the cloud's crop box.
+// Where the object sits and what the rig must keep clear of (s.rig and s.normalisation or
+// s.working_volume set): on the arm rig it rests on the turntable, on the free rig it floats at
+// the origin. Fills object_z_m, the keep-out box and the cloud's crop box from
+// s.expected_extent_m(): an unknown object's keep-out box is its whole working volume (what the
+// camera has not seen may be anywhere in it).
 void place_object(ScanSettings& s);
 
 // Limits on the object a scan is asked for, checked before anything starts.

@@ -84,3 +84,30 @@ TEST(ObjectLimits, AnObjectLongerThanTheRigCanScanIsNamed) {
   EXPECT_NE(e.find("would be 3.3 m long"), std::string::npos) << e;
   EXPECT_NE(e.find("smaller --size"), std::string::npos) << e;
 }
+
+// An unknown object in a working volume on the arm rig: the object frame at the volume's centre,
+// the keep-out box the whole volume (2 cm around it, down to the turntable top), the crop 5 cm
+// around it; the settings file says so and reads back without a mesh normalisation.
+TEST(UnknownObject, ItsFrameKeepOutAndCropComeFromTheWorkingVolume) {
+  ScanSettings s;
+  s.rig = RigKind::kArm;
+  s.scan_id = "scan-0123456789abcdef";
+  s.rig_model_path = "models/rig_arm.xml";
+  s.external_rig = true;
+  s.object_name = "unknown";
+  s.working_volume = parse_working_volume("cylinder:0.2,0.5");
+  place_object(s);
+  EXPECT_DOUBLE_EQ(s.object_z_m, 0.25);
+  EXPECT_TRUE(s.keepout_min_m.isApprox(Eigen::Vector3d(-0.22, -0.22, -0.25)));
+  EXPECT_TRUE(s.keepout_max_m.isApprox(Eigen::Vector3d(0.22, 0.22, 0.27)));
+  EXPECT_TRUE(s.crop_min_m.isApprox(Eigen::Vector3d(-0.25, -0.25, -0.3)));
+  EXPECT_TRUE(s.crop_max_m.isApprox(Eigen::Vector3d(0.25, 0.25, 0.3)));
+  const nlohmann::json j = to_json(s);
+  EXPECT_EQ(j["object"]["working_volume"], "cylinder:0.2,0.5");
+  EXPECT_FALSE(j["object"].contains("normalisation"));
+  const ScanSettings back = scan_settings_from_json(j);
+  EXPECT_TRUE(back.external_rig);
+  ASSERT_TRUE(back.working_volume.has_value());
+  EXPECT_EQ(back.working_volume->to_text(), "cylinder:0.2,0.5");
+  EXPECT_TRUE(back.expected_extent_m().isApprox(Eigen::Vector3d(0.4, 0.4, 0.5)));
+}

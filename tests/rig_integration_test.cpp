@@ -1,0 +1,153 @@
+// The physical-rig path, proven against the twin started on its own as "the hardware" (exactly as
+// a driver would be started): `pbnbv scan --external-rig` starts no twin, is given no mesh, waits
+// for the drivers and scans an unknown object in the rig's working volume. Each case runs in its
+// own private network namespace.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "core/geometry/mesh.hpp"
+#include "core/io/mesh_file.hpp"
+#include "core/rig/working_volume.hpp"
+#include "eval/evaluate.hpp"
+#include "scan_checks.hpp"
+#include "test_util.hpp"
+
+namespace fs = std::filesystem;
+using namespace pbnbv;
+using namespace pbnbv::testing;
+
+namespace {
+
+const char* const kCamera = "--width 320 --height 180";
+
+// A shell line that starts the twin as the rig's drivers (no --scan: it obeys every scan, as a
+// real driver does), runs `commands`, stops the twin and exits with the commands' status.
+std::string with_twin_as_hardware(const std::string& twin_options, const std::string& commands) {
+  return netns_run() + " sh -c '" + bin_dir() + "/pbnbv-twin --speed 20 " + kCamera + " " + twin_options +
+         " >/dev/null 2>&1 & T=$!; " + commands + "; rc=$?; kill $T; wait $T; exit $rc'";
+}
+
+std::string rig_model(const std::string& name) { return source_dir() + "/models/" + name; }
+
+// Coverage after the last view of an external-rig scan against the mesh the twin rendered:
+// `twin_object_z` is where the twin put the mesh's frame above the turntable top; the scan's
+// object frame sits at the working volume's centre, so the mesh is moved into it first.
+double external_coverage(const fs::path& out, const fs::path& mesh_path, double twin_object_z) {
+  const auto settings = read_json_file(out / "settings.json");
+  const double scan_object_z = settings["object_z_m"].get<double>();
+  TriangleMesh mesh = load_mesh(mesh_path.string());
+  for (auto& v : mesh.vertices) v.z() += twin_object_z - scan_object_z;
+  write_stl_binary(mesh, (out / "object.stl").string());
+  const eval::ScanEvaluation e = eval::evaluate_scan(out);
+  return e.coverage_by_view.empty() ? 0.0 : e.coverage_by_view.back();
+}
+
+// The same object scanned the twin-in-the-loop way and as an unknown object on an external rig
+// (the twin started separately with the same mesh): both complete, the external one without a
+// mesh, given only a working volume measured as a user would (the object's bounding box rounded
+// up to the next centimetre), and their coverage differs by at most a point.
+void compare_with_twin_in_the_loop(const std::string& name, const std::string& model) {
+  const fs::path twin_run = fresh_dir(name + "-twin-in-the-loop");
+  const std::string options = "--rig-model " + rig_model(model) + " --views 6";
+  const CommandResult a = run_command(netns_run() + " " + bin_dir() + "/pbnbv scan --object bunny " + options + " " +
+                                      kCamera + " --sim-speed 20 --out " + twin_run.string());
+  ASSERT_EQ(a.exit_code, 0) << a.output;
+  const double twin_coverage = read_json_file(twin_run / "coverage.json")["coverage_by_view"].back().get<double>();
+  const auto twin_settings = read_json_file(twin_run / "settings.json");
+  const double object_z = twin_settings["object_z_m"].get<double>();
+  std::string volume = "box:";
+  for (int i = 0; i < 3; ++i) {
+    const double edge = twin_settings["object"]["normalisation"]["extent_m"][i].get<double>();
+    volume += (i ? "," : "") + std::to_string(std::ceil(edge * 100) / 100);
+  }
+
+  const fs::path external = fresh_dir(name + "-external");
+  const CommandResult b = run_command(with_twin_as_hardware(
+      "--model " + rig_model(model) + " --mesh " + (twin_run / "object.stl").string() + " --object-z " +
+          std::to_string(object_z) + " --model-out " + (external.parent_path() / (name + "-hw.xml")).string(),
+      bin_dir() + "/pbnbv scan --external-rig " + options + " --working-volume " + volume + " --out " + external.string()));
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+  EXPECT_NE(b.output.find("drivers: ARM_STATUS"), std::string::npos) << b.output;
+  EXPECT_NE(b.output.find("no coverage: the object is unknown"), std::string::npos) << b.output;
+  // No twin, no mesh: the settings hold the working volume, not a normalisation.
+  const auto procs = read_json_file(external / "processes.json");
+  for (const auto& p : procs["processes"]) {
+    EXPECT_NE(p["name"], "twin");
+    EXPECT_EQ(p["exit_code"], 0) << p.dump();
+  }
+  const auto settings = read_json_file(external / "settings.json");
+  EXPECT_TRUE(settings["external_rig"].get<bool>());
+  EXPECT_FALSE(settings["object"].contains("normalisation"));
+  const WorkingVolume w = parse_working_volume(settings["object"]["working_volume"].get<std::string>());
+  EXPECT_EQ(w.to_text(), parse_working_volume(volume).to_text());
+  EXPECT_DOUBLE_EQ(settings["object_z_m"].get<double>(), w.height_m / 2);  // the volume's centre
+  EXPECT_FALSE(fs::exists(external / "object.stl"));
+  const auto scan = read_json_file(external / "scan.json");
+  EXPECT_EQ(scan["status"]["state"], "done");
+  EXPECT_EQ(scan["views"].size(), 6u);
+
+  const double external_coverage_pct = external_coverage(external, twin_run / "object.stl", object_z);
+  std::cout << name << ": coverage after 6 views, twin in the loop " << twin_coverage << " %, external rig "
+            << external_coverage_pct << " %\n";
+  EXPECT_NEAR(external_coverage_pct, twin_coverage, 1.0);
+}
+
+}  // namespace
+
+TEST(ExternalRig, AnUnknownObjectIsScannedAsWellAsWithTheTwinInTheLoop) {
+  compare_with_twin_in_the_loop("kuka", "rig_arm.xml");
+}
+
+// --dry-run checks the drivers, plans the first view and its reachability, prints the commands it
+// would send, and sends none: lcm-logger records the bus meanwhile and holds no ARM_COMMAND.
+TEST(ExternalRig, ADryRunCommandsNothing) {
+  const fs::path dir = fresh_dir("external-dry-run");
+  const std::string log = (dir / "bus.lcmlog").string();
+  const CommandResult r = run_command(with_twin_as_hardware(
+      "--model-out " + (dir / "hw.xml").string(),
+      "/usr/bin/lcm-logger -q -f " + log + " & L=$!; sleep 0.5; " + bin_dir() +
+          "/pbnbv scan --external-rig --dry-run; rc=$?; sleep 0.3; kill $L; wait $L; (exit $rc)"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("dry run: nothing is commanded"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("view 1 at"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("ARM_COMMAND ["), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("candidate views around the working volume are reachable"), std::string::npos) << r.output;
+  std::ifstream in(log, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_GT(bytes.size(), 10000u) << "the logger heard the twin's statuses";
+  EXPECT_NE(bytes.find("ARM_STATUS"), std::string::npos);
+  EXPECT_NE(bytes.find("DEPTH_TRIGGER"), std::string::npos);  // the driver check asks for one frame
+  EXPECT_EQ(bytes.find("ARM_COMMAND"), std::string::npos);
+  EXPECT_EQ(bytes.find("TURNTABLE_COMMAND"), std::string::npos);
+}
+
+// No driver on the bus: the scan names each missing one after --driver-timeout, creates no output
+// folder and starts nothing.
+TEST(ExternalRig, ADriverThatNeverAnswersIsNamed) {
+  const fs::path out = fresh_dir("external-no-driver");
+  fs::remove_all(out);
+  const CommandResult r = run_command(netns_run() + " " + bin_dir() + "/pbnbv scan --external-rig --driver-timeout 1.5 --out " +
+                                      out.string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("the rig's drivers did not answer in 1.5 s: no ARM_STATUS, no TURNTABLE_STATUS, no DEPTH_FRAME"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// A working volume the arm cannot see around: refused before anything moves, naming the rig file,
+// the volume and why the first view is out of reach.
+TEST(ExternalRig, AWorkingVolumeTheArmCannotReachIsRefused) {
+  const fs::path dir = fresh_dir("external-unreachable");
+  const CommandResult r = run_command(with_twin_as_hardware(
+      "--model-out " + (dir / "hw.xml").string(),
+      bin_dir() + "/pbnbv scan --external-rig --working-volume box:2,2,2 --out " + (dir / "out").string()));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("around the working volume box:2,2,2 cannot reach the first view"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
