@@ -102,3 +102,23 @@ TEST(NbvIntegration, ThreeViewScanOnTheFreeRigFullSphere) {
   EXPECT_GT(s.eval.coverage_by_view.back(), 85.0);
   EXPECT_EQ(s.scan["views"][1]["plan"]["candidates"]["unreachable"], 0);
 }
+
+TEST(NbvIntegration, Ur5eRigScansLikeTheKuka) {
+  // The same 5-view PB-NBV scan of the bunny on the KUKA rig (analytic IK) and on the UR5e rig
+  // (models/rig_ur5e.xml: general IK in the view scorer and the motion executor; the twin plays
+  // the UR5e). Both reach the whole candidate hemisphere, so the planner's choices and the
+  // coverage must agree within 2 points. Registration off: the twin's kinematic poses are exact,
+  // and an ICP rejection (a registration matter, not the rig's) would drop a view from one scan
+  // only. A half-size camera (same field of view) keeps it short.
+  const std::string common =
+      "--object bunny --size 0.2 --registration off --width 640 --height 360 --fx 348 --fy 348 --cx 320 --cy 180";
+  const NbvScan kuka = nbv_scan("nbv-kuka", common + " --rig arm", 5);
+  const NbvScan ur5e = nbv_scan("nbv-ur5e", common + " --rig-model " + source_dir() + "/models/rig_ur5e.xml", 5);
+  check_views(kuka, 5);
+  check_views(ur5e, 5);
+  const double k = kuka.eval.coverage_by_view.back(), u = ur5e.eval.coverage_by_view.back();
+  std::cout << "coverage after 5 views: KUKA " << k << " %, UR5e " << u << " %\n";
+  EXPECT_NEAR(u, k, 2.0);
+  // The UR5e scan ran with the UR5e: its settings name the model.
+  EXPECT_NE(ur5e.scan["settings"].dump().find("rig_ur5e.xml"), std::string::npos);
+}

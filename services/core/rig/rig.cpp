@@ -1,11 +1,15 @@
 // The rig read from its MJCF file, its kinematics and the reachability check. See rig.hpp.
 //
-// Arm kinematics (KUKA layout, all joint frames parallel to the base frame at q = 0, the arm
-// stretched forward along the base +x):
+// Arm kinematics: the chain of 6 hinge joints as the MJCF body tree gives it (RigModel::chain):
+//   base_T_flange = prod_i [ parent_T_body_i  T(anchor_i) R(axis_i, q_i) T(-anchor_i) ]
+//                   last_T_flange
+// which is what MuJoCo's mj_kinematics computes, so the two agree to rounding.
+// Analytic IK for the spherical-wrist KUKA layout (detected on load: all joint frames parallel
+// to the base frame at q = 0, the arm stretched forward along the base +x):
 //   base_T_flange = Rz(q1) T(a1,0,d1) Ry(q2) T(a2,0,0) Ry(q3) T(0,0,a3) Rx(q4) T(d4,0,0) Ry(q5)
 //                   T(d6,0,0) Rx(q6)
-// which is exactly the body tree of models/rig_arm.xml (link bodies with identity rotations,
-// hinge joints at the body origins), so this code and MuJoCo's mj_kinematics agree to rounding.
+// General IK for any other chain: Levenberg-Marquardt (damped least squares with adaptive
+// damping) on the chain's geometric Jacobian, from several seeds, joint limits respected.
 //
 // Free rig (virtual gantry): world_T_flange = T(x,y,z) Rz(yaw) Ry(pitch) Rx(roll).
 //
@@ -15,7 +19,12 @@
 // (1) collides with nothing (arm-side geoms vs table, floor, pedestal, arm base, turntable and
 // the keep-out box, with 5 mm clearance) and (2) has a free line of sight from the optical
 // centre to the object (rays to the keep-out box centre and its corners pulled 20% inwards
-// must not hit a rendered rig geom, e.g. the arm's own links or the pedestal) wins.
+// must not hit a rendered rig geom, e.g. the arm's own links or the pedestal) wins. The line of
+// sight is checked first (cheaper); when what blocks or collides does not depend on the
+// configuration (the environment blocks the view, or the camera itself collides) no other
+// solution at that angle is tried. With the general IK the solutions come in stages of seeds
+// (in a batch the neighbouring candidate's solution; the current configuration and home; spread
+// seeds), each stage checked before the next is solved.
 #include "core/rig/rig.hpp"
 #include "core/base/format.hpp"
 #include "core/base/units.hpp"
@@ -166,21 +175,53 @@ bool is_identity_rotation(const Pose& p, double tol = 1e-9) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Arm forward kinematics on the base frame.
-Pose arm_base_T_flange(const ArmGeometry& g, const Vector6d& q) {
-  const double c1 = std::cos(q[0]), s1 = std::sin(q[0]);
-  const double c23 = std::cos(q[1] + q[2]), s23 = std::sin(q[1] + q[2]);
-  const double c2 = std::cos(q[1]), s2 = std::sin(q[1]);
-  // Wrist centre in the arm plane (x forward, z up, relative to the A2 axis).
-  const double r = g.a2 * c2 + g.d4 * c23 + g.a3 * s23;
-  const double s = -g.a2 * s2 - g.d4 * s23 + g.a3 * c23;
-  const Eigen::Matrix3d r03 = rot_z(q[0]) * rot_y(q[1] + q[2]);
-  const Eigen::Matrix3d r36 = rot_x(q[3]) * rot_y(q[4]) * rot_x(q[5]);
-  Pose p = Pose::Identity();
-  p.linear() = r03 * r36;
-  const Eigen::Vector3d wc((g.a1 + r) * c1, (g.a1 + r) * s1, g.d1 + s);
-  p.translation() = wc + g.d6 * p.linear().col(0);
-  return p;
+// Arm forward kinematics on the base frame, along the chain.
+
+// The motion of a hinge joint in its body frame: rotation by q about the axis through anchor.
+Pose joint_motion(const ChainJoint& j, double q) {
+  Pose m = Pose::Identity();
+  m.linear() = Eigen::AngleAxisd(q, j.axis).toRotationMatrix();
+  m.translation() = j.anchor - m.linear() * j.anchor;
+  return m;
+}
+
+Pose chain_base_T_flange(const RigModel& rig, const Vector6d& q) {
+  Pose t = Pose::Identity();
+  for (int i = 0; i < 6; ++i) t = t * rig.chain[i].parent_T_body * joint_motion(rig.chain[i], q[i]);
+  return t * rig.last_T_flange;
+}
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+// Flange in the base frame and the geometric Jacobian (rows: linear velocity of the flange
+// origin, angular velocity; base frame). Rotation and translation kept apart (no 4x4 products).
+Pose chain_fk_jacobian(const RigModel& rig, const Vector6d& q, Matrix6d* jac) {
+  Eigen::Vector3d z[6], p[6];
+  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 6; ++i) {
+    const ChainJoint& j = rig.chain[i];
+    t += r * j.parent_T_body.translation();
+    r = r * j.parent_T_body.linear();
+    z[i] = r * j.axis;
+    p[i] = t + r * j.anchor;
+    // Rotation by q about the axis through the anchor (Rodrigues).
+    const double c = std::cos(q[i]), s = std::sin(q[i]);
+    const Eigen::Vector3d& a = j.axis;
+    Eigen::Matrix3d k;
+    k << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
+    const Eigen::Matrix3d rj = Eigen::Matrix3d::Identity() + s * k + (1 - c) * (k * k);
+    t += r * (j.anchor - rj * j.anchor);
+    r = r * rj;
+  }
+  Pose f = Pose::Identity();
+  f.translation() = t + r * rig.last_T_flange.translation();
+  f.linear() = r * rig.last_T_flange.linear();
+  for (int i = 0; i < 6; ++i) {
+    jac->block<3, 1>(0, i) = z[i].cross(f.translation() - p[i]);
+    jac->block<3, 1>(3, i) = z[i];
+  }
+  return f;
 }
 
 Pose free_world_T_flange(const Vector6d& q) {
@@ -387,6 +428,221 @@ std::vector<Vector6d> arm_ik(const RigModel& rig, const Pose& world_T_flange,
   return uniq;
 }
 
+// ---------------------------------------------------------------------------------------------
+// General IK (any 6R chain).
+
+constexpr int kSeedIterations = 40;        // LM iterations per seed (typically 5-15 suffice)
+constexpr double kConvergedError = 1e-24;  // squared pose error (m^2 + rad^2) counted converged
+constexpr double kMaxStepRad = 0.5;        // largest joint step per iteration
+constexpr int kStallWindow = 5;            // LM gives up when the error has not fallen below
+constexpr double kStallRatioFast = 0.25;   // this fraction of itself within the window: the
+constexpr double kStallRatioFull = 0.9;    // reachability check gives up early, the full search
+                                           // late
+constexpr int kFullSearchSpreadSeeds = 32;  // inverse_kinematics(): spread seeds after ref, home
+constexpr int kReachSpreadSeeds = 6;       // ReachabilityChecker: spread seeds when the near
+                                           // seeds give no collision-free solution
+
+// target - current as a twist: position (m), rotation vector (rad), both in the same frame.
+Vector6d twist_error(const Pose& target, const Pose& cur) {
+  Vector6d e;
+  e.head<3>() = target.translation() - cur.translation();
+  const Eigen::Matrix3d r = target.linear() * cur.linear().transpose();
+  const Eigen::Vector3d v(r(2, 1) - r(1, 2), r(0, 2) - r(2, 0), r(1, 0) - r(0, 1));
+  const double s = 0.5 * v.norm(), c = 0.5 * (r.trace() - 1.0);
+  if (c < -0.99) {  // near pi: the skew part loses the axis
+    const Eigen::AngleAxisd aa(r);
+    e.tail<3>() = aa.angle() * aa.axis();
+  } else {
+    e.tail<3>() = s < 1e-15 ? Eigen::Vector3d(0.5 * v) : Eigen::Vector3d(std::atan2(s, c) / (2 * s) * v);
+  }
+  return e;
+}
+
+// Joint i's value brought into its limits: a 2*pi turn (the same geometry) when that fits, else
+// clamped.
+double into_limits(const RigModel& rig, int i, double v) {
+  const double lo = rig.q_lower[i], hi = rig.q_upper[i];
+  if (v < lo) {
+    const double w = v + 2.0 * kPi * std::ceil((lo - v) / (2.0 * kPi));
+    return w <= hi ? w : lo;
+  }
+  if (v > hi) {
+    const double w = v - 2.0 * kPi * std::ceil((v - hi) / (2.0 * kPi));
+    return w >= lo ? w : hi;
+  }
+  return v;
+}
+
+// Levenberg-Marquardt from `seed` towards base_T_target (flange in the base frame); joints kept
+// within their limits at every step. True when the pose error vanished.
+bool lm_solve(const RigModel& rig, const Pose& base_T_target, const Vector6d& seed, int max_iter,
+              double stall_ratio, Vector6d* q_out) {
+  Vector6d q;
+  for (int i = 0; i < 6; ++i) q[i] = into_limits(rig, i, seed[i]);
+  Matrix6d jac, jac_next;
+  Vector6d e = twist_error(base_T_target, chain_fk_jacobian(rig, q, &jac));
+  double f = e.squaredNorm();
+  double lambda = 1e-3;
+  double f_before = f;  // error kStallWindow iterations ago
+  for (int it = 0; it < max_iter && f > kConvergedError; ++it) {
+    if (it > 0 && it % kStallWindow == 0) {
+      if (f > stall_ratio * f_before) break;  // stalled: a local minimum or a joint limit in the way
+      f_before = f;
+    }
+    Matrix6d a = jac.transpose() * jac;
+    a.diagonal().array() += lambda;
+    Vector6d dq = a.llt().solve(jac.transpose() * e);  // a is positive definite
+    const double mx = dq.cwiseAbs().maxCoeff();
+    if (!(mx < 1e9)) return false;  // NaN or runaway
+    if (mx > kMaxStepRad) dq *= kMaxStepRad / mx;
+    Vector6d qn = q + dq;
+    for (int i = 0; i < 6; ++i) qn[i] = into_limits(rig, i, qn[i]);
+    const Vector6d en = twist_error(base_T_target, chain_fk_jacobian(rig, qn, &jac_next));
+    const double fn = en.squaredNorm();
+    if (fn < f) {
+      q = qn;
+      e = en;
+      f = fn;
+      jac = jac_next;
+      lambda = std::max(lambda * 0.1, 1e-12);
+    } else {
+      lambda *= 10.0;
+      if (lambda > 1e4) break;  // stuck in a local minimum or against a limit
+    }
+  }
+  if (f > kConvergedError) return false;
+  *q_out = q;
+  return true;
+}
+
+// Quasi-random configurations spread over the joint ranges (Halton sequence; ranges wider than
+// one turn cut to +-pi, other turns being the same geometry).
+std::vector<Vector6d> spread_seeds(const RigModel& rig, int n) {
+  static constexpr int kBases[6] = {2, 3, 5, 7, 11, 13};
+  std::vector<Vector6d> out;
+  for (int k = 1; k <= n; ++k) {
+    Vector6d q;
+    for (int i = 0; i < 6; ++i) {
+      double f = 1, r = 0;
+      for (int x = k; x > 0; x /= kBases[i]) {
+        f /= kBases[i];
+        r += f * (x % kBases[i]);
+      }
+      const double lo = std::max(rig.q_lower[i], -kPi), hi = std::min(rig.q_upper[i], kPi);
+      q[i] = lo + r * (hi - lo);
+    }
+    out.push_back(q);
+  }
+  return out;
+}
+
+// Upper bound of the distance from joint 1's axis point to the flange origin: each joint turns
+// the rest of the chain about its own axis point, so the distances between consecutive axis
+// points (and from the last to the flange) never change.
+double chain_reach_bound(const RigModel& rig, Eigen::Vector3d* first_anchor) {
+  Pose t = Pose::Identity();
+  double sum = 0;
+  Eigen::Vector3d prev;
+  for (int i = 0; i < 6; ++i) {
+    t = t * rig.chain[i].parent_T_body;
+    const Eigen::Vector3d p = t * rig.chain[i].anchor;
+    if (i == 0) *first_anchor = p;
+    else sum += (p - prev).norm();
+    prev = p;
+  }
+  return sum + ((t * rig.last_T_flange).translation() - prev).norm();
+}
+
+// "out of reach" reason when the flange pose is provably beyond the chain's reach, else "".
+std::string general_out_of_reach(const RigModel& rig, const Pose& base_T_target) {
+  Eigen::Vector3d p1;
+  const double bound = chain_reach_bound(rig, &p1);
+  const double dist = (base_T_target.translation() - p1).norm();
+  if (dist <= bound + 1e-9) return "";
+  return "out of reach: the flange is " + fixed(dist, 3) + " m from the first joint, the arm reaches at most " +
+         fixed(bound, 3) + " m";
+}
+
+// The value of joint i equal to v up to whole turns, within the limits, nearest `reference`
+// (v itself when no other turn fits).
+double nearest_in_limits(const RigModel& rig, int i, double v, double reference) {
+  double best = v;
+  for (int k = -2; k <= 2; ++k) {
+    const double w = nearest_equivalent_angle_rad(v, reference) + 2.0 * kPi * k;
+    if (w < rig.q_lower[i] - kLimitTol || w > rig.q_upper[i] + kLimitTol) continue;
+    if (std::abs(w - reference) < std::abs(best - reference)) best = std::clamp(w, rig.q_lower[i], rig.q_upper[i]);
+  }
+  return best;
+}
+
+// Same configuration up to whole turns of each joint.
+bool same_modulo_turns(const Vector6d& a, const Vector6d& b) {
+  for (int i = 0; i < 6; ++i) {
+    if (std::abs(wrap_angle_rad(a[i] - b[i])) > 1e-6) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+namespace {
+
+bool general_ik_seed(const RigModel& rig, const Pose& world_T_flange, const Vector6d& seed,
+                     double stall_ratio, Vector6d* q) {
+  Vector6d sol;
+  if (!lm_solve(rig, rig.world_T_base.inverse() * world_T_flange, seed, kSeedIterations, stall_ratio, &sol)) {
+    return false;
+  }
+  const auto [ep, er] = pose_error(flange_in_world(rig, sol), world_T_flange);
+  if (ep > kVerifyPosTol || er > kVerifyRotTol || !within_limits(rig, sol)) return false;
+  *q = sol;
+  return true;
+}
+
+}  // namespace
+
+bool general_ik_from_seed(const RigModel& rig, const Pose& world_T_flange, const Vector6d& seed,
+                          Vector6d* q) {
+  if (rig.kind != RigKind::kArm) throw std::invalid_argument("general_ik_from_seed: not an arm rig");
+  return general_ik_seed(rig, world_T_flange, seed, kStallRatioFull, q);
+}
+
+namespace {
+
+// General IK: the distinct solutions reached from q_ref, home and the spread seeds, with their
+// +-2*pi variants.
+std::vector<Vector6d> general_ik(const RigModel& rig, const Pose& world_T_flange,
+                                 const Vector6d& q_ref, std::string* why_none) {
+  const std::string far = general_out_of_reach(rig, rig.world_T_base.inverse() * world_T_flange);
+  if (!far.empty()) {
+    if (why_none) *why_none = far;
+    return {};
+  }
+  std::vector<Vector6d> seeds{q_ref, rig.q_home};
+  const std::vector<Vector6d> spread = spread_seeds(rig, kFullSearchSpreadSeeds);
+  seeds.insert(seeds.end(), spread.begin(), spread.end());
+  std::vector<Vector6d> distinct;
+  for (const Vector6d& seed : seeds) {
+    Vector6d q;
+    if (!general_ik_seed(rig, world_T_flange, seed, kStallRatioFull, &q)) continue;
+    bool dup = false;
+    for (const Vector6d& d : distinct) dup = dup || same_modulo_turns(d, q);
+    if (!dup) distinct.push_back(q);
+  }
+  const std::array<bool, 6> revolute{true, true, true, true, true, true};
+  std::vector<Vector6d> sols;
+  std::string violation;
+  for (const Vector6d& q : distinct) expand_variants(rig, q, revolute, &sols, &violation);
+  if (sols.empty() && why_none) {
+    *why_none = distinct.empty()
+                    ? "no IK solution within the joint limits from " + std::to_string(seeds.size()) +
+                          " seeds (out of reach or beyond the limits)"
+                    : "all " + std::to_string(distinct.size()) + " solutions violate joint limits" +
+                          (violation.empty() ? std::string() : " (e.g. " + violation + ")");
+  }
+  return sols;
+}
+
 // Free-rig IK: slides = position, ZYX Euler angles of the flange rotation.
 std::vector<Vector6d> free_ik(const RigModel& rig, const Pose& world_T_flange,
                               const Vector6d& q_ref, std::string* why_none) {
@@ -438,6 +694,11 @@ std::vector<Vector6d> free_ik(const RigModel& rig, const Pose& world_T_flange,
 std::vector<Vector6d> ik_with_ref(const RigModel& rig, const Pose& world_T_flange,
                                   const Vector6d& q_ref, std::string* why_none) {
   if (rig.kind == RigKind::kFree) return free_ik(rig, world_T_flange, q_ref, why_none);
+  if (rig.ik == IkMethod::kGeneral) return general_ik(rig, world_T_flange, q_ref, why_none);
+  if (!rig.spherical_wrist) {
+    throw std::invalid_argument("rig model " + rig.model_path +
+                                ": the analytic IK needs the spherical-wrist layout; use the general IK");
+  }
   return arm_ik(rig, world_T_flange, q_ref, why_none);
 }
 
@@ -493,6 +754,98 @@ void check_chain_joints(const mjModel* m, const std::string& path,
   }
 }
 
+// Pose of body `to` in the frame of its ancestor `from` (all joints at zero).
+Pose relative_static_pose(const mjModel* m, int from, int to) {
+  Pose p = Pose::Identity();
+  for (int b = to; b != from; b = m->body_parentid[b]) p = body_local_pose(m, b) * p;
+  return p;
+}
+
+// The spherical-wrist KUKA layout (ArmGeometry) of the chain, if it has it.
+bool match_spherical_wrist(const RigModel& rig, ArmGeometry* g) {
+  const Eigen::Vector3d ex = Eigen::Vector3d::UnitX(), ey = Eigen::Vector3d::UnitY(),
+                        ez = Eigen::Vector3d::UnitZ();
+  const std::array<Eigen::Vector3d, 6> axes{ez, ey, ey, ex, ey, ex};
+  // link_1 at the base origin; link_2 at (a1, 0, d1); link_3 at (a2, 0, 0);
+  // link_4 at (0, 0, a3); link_5 at (d4, 0, 0); link_6 at (d6, 0, 0).
+  const std::array<Eigen::Vector3d, 6> mask{
+      Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 1), Eigen::Vector3d(1, 0, 0),
+      Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(1, 0, 0)};
+  for (int i = 0; i < 6; ++i) {
+    const ChainJoint& j = rig.chain[i];
+    const Eigen::Vector3d off = j.parent_T_body.translation();
+    if (!near(j.axis, axes[i]) || !near(j.anchor, Eigen::Vector3d::Zero()) ||
+        !is_identity_rotation(j.parent_T_body) || !near(off.cwiseProduct(mask[i]), off)) {
+      return false;
+    }
+  }
+  if (!near(rig.last_T_flange.translation(), Eigen::Vector3d::Zero()) || !is_identity_rotation(rig.last_T_flange)) {
+    return false;
+  }
+  g->a1 = rig.chain[1].parent_T_body.translation().x();
+  g->d1 = rig.chain[1].parent_T_body.translation().z();
+  g->a2 = rig.chain[2].parent_T_body.translation().x();
+  g->a3 = rig.chain[3].parent_T_body.translation().z();
+  g->d4 = rig.chain[4].parent_T_body.translation().x();
+  g->d6 = rig.chain[5].parent_T_body.translation().x();
+  return g->a2 > 0 && g->d4 > 0 && g->d6 >= 0;
+}
+
+// The arm's chain: the hinge joints on the path from the world to body "flange", base first.
+void load_arm_chain(const mjModel* m, const std::string& path, int flange, RigModel* rig) {
+  std::vector<int> jids;  // flange first
+  for (int b = flange; b > 0; b = m->body_parentid[b]) {
+    const char* bn = mj_id2name(m, mjOBJ_BODY, b);
+    const std::string body = bn ? std::string("body \"") + bn + "\"" : "body " + std::to_string(b);
+    if (m->body_jntnum[b] > 1) {
+      fail(path, body + " carries " + std::to_string(m->body_jntnum[b]) +
+                     " joints; the arm chain takes one hinge joint per body");
+    }
+    if (m->body_jntnum[b] == 0) continue;
+    const int j = m->body_jntadr[b];
+    const char* jn = mj_id2name(m, mjOBJ_JOINT, j);
+    const std::string joint = jn ? std::string("joint \"") + jn + "\"" : "joint " + std::to_string(j);
+    if (m->jnt_type[j] != mjJNT_HINGE) {
+      static const char* kTypes[4] = {"free", "ball", "slide", "hinge"};
+      fail(path, joint + " on the chain to body \"flange\" is a " + kTypes[m->jnt_type[j]] +
+                     " joint; the arm chain takes hinge joints only");
+    }
+    if (!jn) fail(path, joint + " on the chain to body \"flange\" has no name");
+    jids.push_back(j);
+  }
+  std::reverse(jids.begin(), jids.end());
+  if (jids.size() != 6) {
+    std::string names;
+    for (int j : jids) names += std::string(names.empty() ? "" : ", ") + mj_id2name(m, mjOBJ_JOINT, j);
+    fail(path, "the chain from the world to body \"flange\" has " + std::to_string(jids.size()) +
+                   " hinge joints (" + (names.empty() ? std::string("none") : names) + "); an arm needs 6");
+  }
+  int prev_body = m->body_parentid[m->jnt_bodyid[jids[0]]];
+  rig->world_T_base = body_world_pose_static(m, prev_body);
+  for (int i = 0; i < 6; ++i) {
+    const int j = jids[i];
+    const std::string name = mj_id2name(m, mjOBJ_JOINT, j);
+    if (!m->jnt_limited[j]) fail(path, "joint \"" + name + "\" has no range");
+    if (std::abs(m->qpos0[m->jnt_qposadr[j]]) > 1e-12) {
+      fail(path, "joint \"" + name + "\" has a nonzero reference position");
+    }
+    rig->joint_names.push_back(name);
+    rig->q_lower[i] = m->jnt_range[2 * j];
+    rig->q_upper[i] = m->jnt_range[2 * j + 1];
+    if (!(rig->q_lower[i] < rig->q_upper[i])) fail(path, "joint \"" + name + "\" has an empty range");
+    const int b = m->jnt_bodyid[j];
+    ChainJoint& c = rig->chain[i];
+    c.parent_T_body = relative_static_pose(m, prev_body, b);
+    c.axis = Eigen::Vector3d(m->jnt_axis[3 * j], m->jnt_axis[3 * j + 1], m->jnt_axis[3 * j + 2]).normalized();
+    c.anchor = Eigen::Vector3d(m->jnt_pos[3 * j], m->jnt_pos[3 * j + 1], m->jnt_pos[3 * j + 2]);
+    prev_body = b;
+  }
+  rig->last_T_flange = relative_static_pose(m, prev_body, flange);
+  rig->spherical_wrist = match_spherical_wrist(*rig, &rig->arm);
+  if (!rig->spherical_wrist) rig->arm = ArmGeometry{};
+  rig->ik = rig->spherical_wrist ? IkMethod::kAnalytic : IkMethod::kGeneral;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -501,11 +854,13 @@ std::string to_string(RigKind kind) { return std::string(name_of(kind)); }
 
 RigKind parse_rig_kind(const std::string& s) { return parse_name<RigKind>(s); }
 
-std::string default_rig_path(RigKind kind) {
+std::string model_file_path(const std::string& file_name) {
   const char* env = std::getenv("PBNBV_MODELS_DIR");
   const std::string dir = (env && *env) ? std::string(env) : std::string(PBNBV_MODELS_DIR);
-  return dir + "/rig_" + to_string(kind) + ".xml";
+  return dir + "/" + file_name;
 }
+
+std::string default_rig_path(RigKind kind) { return model_file_path("rig_" + to_string(kind) + ".xml"); }
 
 RigModel load_rig(const std::string& path) {
   ModelPtr mp = load_mj_model(path);
@@ -523,85 +878,47 @@ RigModel load_rig(const std::string& path) {
                            : (rig.kind == RigKind::kFree ? "virtual gantry" : "");
   }
 
-  std::vector<ChainSpec> spec;
   const Eigen::Vector3d ex = Eigen::Vector3d::UnitX(), ey = Eigen::Vector3d::UnitY(),
                         ez = Eigen::Vector3d::UnitZ();
-  if (rig.kind == RigKind::kArm) {
-    spec = {{"a1", mjJNT_HINGE, ez}, {"a2", mjJNT_HINGE, ey}, {"a3", mjJNT_HINGE, ey},
-            {"a4", mjJNT_HINGE, ex}, {"a5", mjJNT_HINGE, ey}, {"a6", mjJNT_HINGE, ex}};
-  } else {
-    spec = {{"gantry_x", mjJNT_SLIDE, ex},     {"gantry_y", mjJNT_SLIDE, ey},
-            {"gantry_z", mjJNT_SLIDE, ez},     {"gantry_yaw", mjJNT_HINGE, ez},
-            {"gantry_pitch", mjJNT_HINGE, ey}, {"gantry_roll", mjJNT_HINGE, ex}};
-  }
-  std::vector<int> jids, bids;
-  check_chain_joints(m, path, spec, &jids, &bids);
-  for (int i = 0; i < 6; ++i) {
-    rig.joint_names.push_back(spec[i].name);
-    rig.q_lower[i] = m->jnt_range[2 * jids[i]];
-    rig.q_upper[i] = m->jnt_range[2 * jids[i] + 1];
-    if (!(rig.q_lower[i] < rig.q_upper[i])) {
-      fail(path, std::string("joint \"") + spec[i].name + "\" has an empty range");
-    }
-  }
-
-  // Base: the parent of the first joint's body, welded to the world.
-  const int base_body = m->body_parentid[bids[0]];
-  if (m->body_weldid[base_body] != 0) {
-    fail(path, "the body carrying the first joint must be attached to a static body");
-  }
-  rig.world_T_base = body_world_pose_static(m, base_body);
-
-  // Link offsets.
-  std::vector<Eigen::Vector3d> off;
-  for (int i = 0; i < 6; ++i) off.push_back(body_local_pose(m, bids[i]).translation());
-  if (rig.kind == RigKind::kArm) {
-    // link_1 at the base origin; link_2 at (a1, 0, d1); link_3 at (a2, 0, 0);
-    // link_4 at (0, 0, a3); link_5 at (d4, 0, 0); link_6 at (d6, 0, 0).
-    const std::array<Eigen::Vector3d, 6> mask{
-        Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 1), Eigen::Vector3d(1, 0, 0),
-        Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(1, 0, 0)};
-    for (int i = 0; i < 6; ++i) {
-      const Eigen::Vector3d masked = off[i].cwiseProduct(mask[i]);
-      if (!near(masked, off[i])) {
-        fail(path, "body of joint " + rig.joint_names[i] + " has offset " + vec_str(off[i]) +
-                       " from its parent; the spherical-wrist layout allows only the components " +
-                       vec_str(mask[i]));
-      }
-    }
-    rig.arm.a1 = off[1].x();
-    rig.arm.d1 = off[1].z();
-    rig.arm.a2 = off[2].x();
-    rig.arm.a3 = off[3].z();
-    rig.arm.d4 = off[4].x();
-    rig.arm.d6 = off[5].x();
-    if (!(rig.arm.a2 > 0 && rig.arm.d4 > 0 && rig.arm.d6 >= 0)) {
-      fail(path, "arm lengths a2, d4 must be positive and d6 non-negative");
-    }
-  } else {
-    for (int i = 0; i < 6; ++i) {
-      if (!near(off[i], Eigen::Vector3d::Zero())) {
-        fail(path, "gantry body of joint " + rig.joint_names[i] + " must sit at its parent's "
-                       "origin (offset " + vec_str(off[i]) + ")");
-      }
-    }
-  }
-
-  // Flange and camera.
   const int flange = body_id(m, path, "flange");
   const int camera = body_id(m, path, "camera_optical");
-  if (m->body_parentid[flange] != bids[5]) {
-    fail(path, "body \"flange\" must be a child of the last joint's body");
-  }
-  if (!near(body_local_pose(m, flange).translation(), Eigen::Vector3d::Zero()) ||
-      !is_identity_rotation(body_local_pose(m, flange))) {
-    fail(path, "body \"flange\" must coincide with the last joint's body frame");
-  }
-  if (m->body_parentid[camera] != flange) {
-    fail(path, "body \"camera_optical\" must be a child of body \"flange\"");
-  }
   if (m->body_jntnum[flange] != 0 || m->body_jntnum[camera] != 0) {
     fail(path, "bodies \"flange\" and \"camera_optical\" must not carry joints");
+  }
+  if (rig.kind == RigKind::kArm) {
+    load_arm_chain(m, path, flange, &rig);
+  } else {
+    const std::vector<ChainSpec> spec = {
+        {"gantry_x", mjJNT_SLIDE, ex},     {"gantry_y", mjJNT_SLIDE, ey},
+        {"gantry_z", mjJNT_SLIDE, ez},     {"gantry_yaw", mjJNT_HINGE, ez},
+        {"gantry_pitch", mjJNT_HINGE, ey}, {"gantry_roll", mjJNT_HINGE, ex}};
+    std::vector<int> jids, bids;
+    check_chain_joints(m, path, spec, &jids, &bids);
+    for (int i = 0; i < 6; ++i) {
+      rig.joint_names.push_back(spec[i].name);
+      rig.q_lower[i] = m->jnt_range[2 * jids[i]];
+      rig.q_upper[i] = m->jnt_range[2 * jids[i] + 1];
+      if (!(rig.q_lower[i] < rig.q_upper[i])) {
+        fail(path, std::string("joint \"") + spec[i].name + "\" has an empty range");
+      }
+      if (!near(body_local_pose(m, bids[i]).translation(), Eigen::Vector3d::Zero())) {
+        fail(path, "gantry body of joint " + rig.joint_names[i] + " must sit at its parent's origin");
+      }
+    }
+    const int base_body = m->body_parentid[bids[0]];
+    if (m->body_weldid[base_body] != 0) {
+      fail(path, "the body carrying the first joint must be attached to a static body");
+    }
+    rig.world_T_base = body_world_pose_static(m, base_body);
+    if (m->body_parentid[flange] != bids[5] || !near(body_local_pose(m, flange).translation(), Eigen::Vector3d::Zero()) ||
+        !is_identity_rotation(body_local_pose(m, flange))) {
+      fail(path, "body \"flange\" must be a child of the last joint's body, coinciding with its frame");
+    }
+  }
+
+  // Camera.
+  if (m->body_parentid[camera] != flange) {
+    fail(path, "body \"camera_optical\" must be a child of body \"flange\"");
   }
   rig.flange_T_camera = body_local_pose(m, camera);
   if (mj_name2id(m, mjOBJ_CAMERA, "depth") < 0) fail(path, "missing camera \"depth\"");
@@ -701,7 +1018,7 @@ WorkingVolume working_volume_of(const RigModel& rig) {
 
 Pose flange_in_world(const RigModel& rig, const Vector6d& q) {
   if (rig.kind == RigKind::kFree) return rig.world_T_base * free_world_T_flange(q);
-  return rig.world_T_base * arm_base_T_flange(rig.arm, q);
+  return rig.world_T_base * chain_base_T_flange(rig, q);
 }
 
 Pose camera_in_world(const RigModel& rig, const Vector6d& q) {
@@ -722,8 +1039,8 @@ Pose camera_in_object(const RigModel& rig, const Vector6d& q, double turntable_r
 }
 
 std::vector<Vector6d> inverse_kinematics(const RigModel& rig, const Pose& world_T_flange,
-                                         std::string* why_none) {
-  return ik_with_ref(rig, world_T_flange, Vector6d::Zero(), why_none);
+                                         std::string* why_none, const Vector6d& q_ref) {
+  return ik_with_ref(rig, world_T_flange, q_ref, why_none);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -747,6 +1064,10 @@ struct ReachabilityChecker::Impl {
   std::vector<char> arm_side;  // per geom: on the moving arm (or gantry) side
   std::vector<std::string> side_name;  // per geom: name used in reasons
   std::vector<char> in_object;  // per geom: part of the object mount (never an occluder)
+  std::vector<char> follows_flange;  // per geom: on the last joint's body or below (its pose is
+                                     // fixed by the flange pose alone)
+  bool have_neighbour = false;  // solve_batch: the previous candidate's solution seeds the next
+  Vector6d neighbour = Vector6d::Zero();
 
   void set_keepout(const Eigen::AlignedBox3d& box, double object_z_m) {
     mjModel* m = model.get();
@@ -771,10 +1092,10 @@ struct ReachabilityChecker::Impl {
 
   // Line of sight: rays from the optical centre to the object frame origin and to the keep-out
   // box corners pulled 20% towards its centre must not hit a rendered geom (groups 0..2) of the
-  // rig, e.g. the arm's own links or the pedestal. Call after colliding() (uses its kinematics).
+  // rig, e.g. the arm's own links or the pedestal. Call after place() (uses its kinematics).
   // Returns the name of the blocking geom's body/geom, or "" when the view is clear.
   std::string occluder(const Pose& world_T_camera, const Eigen::AlignedBox3d& box, double turntable_rad,
-                       double object_z_m) {
+                       double object_z_m, bool* view_fixed = nullptr) {
     const mjModel* m = model.get();
     mjData* d = data.get();
     const Pose w_o = object_in_world(rig, turntable_rad, object_z_m);
@@ -794,19 +1115,36 @@ struct ReachabilityChecker::Impl {
       const Eigen::Vector3d vec = t - eye;
       int gid = -1;
       const mjtNum x = mj_ray(m, d, eye.data(), vec.data(), groups, 1, -1, &gid);
-      if (gid >= 0 && x >= 0 && x < 1.0 && !in_object[gid]) return side_name[gid];
+      if (gid >= 0 && x >= 0 && x < 1.0 && !in_object[gid]) {
+        if (view_fixed) *view_fixed = !arm_side[gid] || follows_flange[gid];
+        return side_name[gid];
+      }
     }
     return "";
   }
 
   // Colliding arm/environment geom pairs at this state (keep-out box already set).
-  std::vector<std::string> colliding(const Vector6d& q, double turntable_rad) {
-    mjModel* m = model.get();
+  // `view_fixed` (optional): every colliding pair involves a geom that follows the flange (its
+  // pose is fixed by the view, whatever the configuration).
+  std::vector<std::string> colliding(const Vector6d& q, double turntable_rad, bool* view_fixed = nullptr) {
+    place(q, turntable_rad);
+    return colliding_placed(view_fixed);
+  }
+
+  // Kinematics of the model at this state (for occluder() and colliding_placed()).
+  void place(const Vector6d& q, double turntable_rad) {
     mjData* d = data.get();
     for (int i = 0; i < 6; ++i) d->qpos[qadr[i]] = q[i];
     if (turntable_qadr >= 0) d->qpos[turntable_qadr] = turntable_rad - rig.turntable_zero_rad;
-    mj_kinematics(m, d);
+    mj_kinematics(model.get(), d);
+  }
+
+  // colliding() at the state last placed.
+  std::vector<std::string> colliding_placed(bool* view_fixed = nullptr) {
+    mjModel* m = model.get();
+    mjData* d = data.get();
     mj_collision(m, d);
+    if (view_fixed) *view_fixed = true;
     std::vector<std::string> out;
     for (int i = 0; i < d->ncon; ++i) {
       const mjContact& c = d->contact[i];
@@ -814,6 +1152,7 @@ struct ReachabilityChecker::Impl {
       if (a1 == a2) continue;
       if (c.dist >= kContactMargin) continue;
       const int ga = a1 ? c.geom1 : c.geom2, ge = a1 ? c.geom2 : c.geom1;
+      if (view_fixed) *view_fixed = *view_fixed && follows_flange[ga];
       const std::string s = side_name[ga] + " / " + side_name[ge];
       if (std::find(out.begin(), out.end(), s) == out.end()) out.push_back(s);
     }
@@ -843,6 +1182,8 @@ ReachabilityChecker::ReachabilityChecker(const RigModel& rig) : impl_(std::make_
   const int mount = mj_name2id(m, mjOBJ_BODY, "object_mount");
   im.arm_side.assign(m->ngeom, 0);
   im.in_object.assign(m->ngeom, 0);
+  im.follows_flange.assign(m->ngeom, 0);
+  const int last = m->jnt_bodyid[mj_name2id(m, mjOBJ_JOINT, rig.joint_names[5].c_str())];
   im.side_name.assign(m->ngeom, "");
   int arm_contype = 0, arm_conaffinity = 0;
   for (int g = 0; g < m->ngeom; ++g) {
@@ -856,6 +1197,7 @@ ReachabilityChecker::ReachabilityChecker(const RigModel& rig) : impl_(std::make_
     im.arm_side[g] = arm;
     for (int bb = body; bb > 0; bb = m->body_parentid[bb]) {
       if (bb == mount) im.in_object[g] = 1;
+      if (bb == last) im.follows_flange[g] = 1;
     }
     const char* bn = mj_id2name(m, mjOBJ_BODY, body);
     const char* gn = mj_id2name(m, mjOBJ_GEOM, g);
@@ -945,41 +1287,104 @@ ViewSolution ReachabilityChecker::solve(const Pose& object_T_camera, const Vecto
     const double t = angles[a];
     const Pose world_T_camera = object_in_world(rig, t, object_z_m) * object_T_camera;
     const Pose world_T_flange = world_T_camera * rig.flange_T_camera.inverse();
-    std::string why;
-    std::vector<Vector6d> sols = ik_with_ref(rig, world_T_flange, q_current, &why);
-    std::string reason;
-    if (sols.empty()) {
-      reason = why;
-    } else {
+    // Candidate solutions in order of motion cost; the first collision-free one with the
+    // object in sight wins. Configurations equal up to whole joint turns share their geometry:
+    // one that failed is not checked again.
+    std::vector<std::string> hits, blocks;
+    std::vector<Vector6d> failed;
+    int checked = 0;
+    // True when a solution is clear; sets `hopeless` when what failed does not depend on the
+    // configuration (the view itself is blocked, or the camera collides), so that no other
+    // solution at this turntable angle can be clear.
+    bool hopeless = false;
+    auto first_clear = [&](std::vector<Vector6d> sols) {
       std::sort(sols.begin(), sols.end(), [&](const Vector6d& x, const Vector6d& y) {
         return motion_cost(rig, x, q_current) < motion_cost(rig, y, q_current);
       });
-      std::vector<std::string> hits, blocks;
       for (const Vector6d& q : sols) {
-        const std::vector<std::string> col = im.colliding(q, t);
+        ++checked;
+        if (std::any_of(failed.begin(), failed.end(), [&](const Vector6d& f) { return same_modulo_turns(f, q); })) {
+          continue;
+        }
+        // Line of sight first (rays are cheaper than the collision check, and a view blocked by
+        // the environment is blocked for every solution).
+        im.place(q, t);
+        const Pose w_c = camera_in_world(rig, q);
+        const std::string occ = im.occluder(w_c, keepout, t, object_z_m, &hopeless);
+        if (!occ.empty()) {
+          if (std::find(blocks.begin(), blocks.end(), occ) == blocks.end()) blocks.push_back(occ);
+          if (hopeless) return false;
+          failed.push_back(q);
+          continue;
+        }
+        const std::vector<std::string> col = im.colliding_placed(&hopeless);
         if (!col.empty()) {
           for (const std::string& s : col) {
             if (std::find(hits.begin(), hits.end(), s) == hits.end()) hits.push_back(s);
           }
-          continue;
-        }
-        const Pose w_c = camera_in_world(rig, q);
-        const std::string occ = im.occluder(w_c, keepout, t, object_z_m);
-        if (!occ.empty()) {
-          if (std::find(blocks.begin(), blocks.end(), occ) == blocks.end()) blocks.push_back(occ);
+          if (hopeless) return false;
+          failed.push_back(q);
           continue;
         }
         out.reachable = true;
         out.q = q;
         out.turntable_rad = t;
         out.world_T_camera = w_c;
-        return out;
+        return true;
       }
+      return false;
+    };
+    std::string reason;
+    if (rig.kind == RigKind::kArm && rig.ik == IkMethod::kGeneral) {
+      // General IK, seeds in stages, each stage's solutions checked before the next is tried:
+      // in a batch the previous candidate's solution (a neighbouring view: a few iterations, and
+      // the branch continues the current configuration's), then the current configuration and
+      // home, then spread seeds (in a batch only when a near seed converged). Each solution is
+      // taken in its whole-turn variant nearest the current configuration.
+      reason = general_out_of_reach(rig, rig.world_T_base.inverse() * world_T_flange);
+      if (reason.empty()) {
+        std::vector<std::vector<Vector6d>> stages;
+        if (im.have_neighbour) stages.push_back({im.neighbour});
+        stages.push_back({q_current, rig.q_home});
+        stages.push_back(spread_seeds(rig, kReachSpreadSeeds));
+        int n_seeds = 0;
+        for (const auto& st : stages) n_seeds += static_cast<int>(st.size());
+        std::vector<Vector6d> found;
+        for (const std::vector<Vector6d>& seeds : stages) {
+          std::vector<Vector6d> fresh;
+          for (const Vector6d& seed : seeds) {
+            Vector6d q;
+            if (!general_ik_seed(rig, world_T_flange, seed, kStallRatioFast, &q)) continue;
+            if (std::any_of(found.begin(), found.end(), [&](const Vector6d& f) { return same_modulo_turns(f, q); })) {
+              continue;
+            }
+            for (int i = 0; i < 6; ++i) q[i] = nearest_in_limits(rig, i, q[i], q_current[i]);
+            found.push_back(q);
+            fresh.push_back(q);
+          }
+          if (first_clear(fresh)) return out;
+          if (hopeless) break;
+          // In a batch, when not even the near seeds converge, spread seeds rarely find a
+          // solution (measured: none of the 800 hemisphere views needed them) but cost most of
+          // the time: skipped.
+          if (im.have_neighbour && found.empty() && &seeds == &stages[stages.size() - 2]) break;
+        }
+        if (found.empty()) {
+          reason = "no IK solution within the joint limits from " + std::to_string(n_seeds) +
+                   " seeds (out of reach or beyond the limits)";
+        }
+      }
+    } else {
+      std::string why;
+      std::vector<Vector6d> sols = ik_with_ref(rig, world_T_flange, q_current, &why);
+      if (sols.empty()) reason = why;
+      else if (first_clear(sols)) return out;
+    }
+    if (reason.empty()) {
       if (blocks.empty()) {
-        reason = "all " + std::to_string(sols.size()) + " IK solutions collide (" +
-                 join_unique(hits) + ")";
+        reason = "all " + std::to_string(checked) + " IK solutions collide (" + join_unique(hits) + ")";
       } else {
-        reason = "all " + std::to_string(sols.size()) + " IK solutions collide or have the view "
+        reason = "all " + std::to_string(checked) + " IK solutions collide or have the view "
                  "blocked (" + join_unique(hits) + (hits.empty() ? "" : "; ") + "view blocked by " +
                  join_unique(blocks) + ")";
       }
@@ -1002,9 +1407,16 @@ std::vector<ViewSolution> ReachabilityChecker::solve_batch(
     double turntable_current, const Eigen::AlignedBox3d& keepout, double object_z_m) {
   std::vector<ViewSolution> out;
   out.reserve(object_T_cameras.size());
+  // Neighbouring candidates have nearby solutions: each seeds the next one's general IK.
+  impl_->have_neighbour = false;
   for (const Pose& p : object_T_cameras) {
     out.push_back(solve(p, q_current, turntable_current, keepout, object_z_m));
+    if (out.back().reachable) {
+      impl_->neighbour = out.back().q;
+      impl_->have_neighbour = true;
+    }
   }
+  impl_->have_neighbour = false;
   return out;
 }
 

@@ -1,11 +1,13 @@
 #pragma once
-// The rig as plain data read from its MJCF file (models/rig_arm.xml, models/rig_free.xml), and
-// its kinematics: forward kinematics, analytic inverse kinematics, the split of a requested
+// The rig as plain data read from its MJCF file (models/rig_arm.xml, rig_ur5e.xml, rig_free.xml), and
+// its kinematics: forward kinematics along the arm's joint chain, inverse kinematics (closed form
+// for the spherical-wrist layout, damped least squares for any other 6R chain), the split of a requested
 // camera pose into a turntable angle and an arm configuration, and the reachability check
 // (IK + joint limits + MuJoCo collision check against table, turntable, pedestal and the object
 // keep-out box). The same file describes the twin and a calibrated real rig; services read the
 // kinematics from here, never from the twin's state.
 #include <Eigen/Geometry>
+#include <array>
 #include <memory>
 #include <optional>
 #include <string>
@@ -35,7 +37,7 @@ inline constexpr ChoiceSetting<RigKind> kRig{"rig", RigKind::kArm,
 
 // Lengths of a spherical-wrist 6R arm with the KUKA joint layout (axes z, y, y, x, y, x at
 // zero), metres: base->A2 (a1 forward, d1 up), A2->A3 (a2), A3->wrist (a3 up, d4 forward),
-// wrist centre -> flange (d6).
+// wrist centre -> flange (d6). Set only when the chain has this layout (the analytic IK).
 struct ArmGeometry {
   double a1 = 0, d1 = 0, a2 = 0, a3 = 0, d4 = 0, d6 = 0;
 };
@@ -50,6 +52,18 @@ struct RigCamera {
   std::string id;               // the camera's serial / id; "" = any
 };
 
+// One joint of the arm's serial chain, as the MJCF body tree gives it (all joints at zero).
+struct ChainJoint {
+  Pose parent_T_body = Pose::Identity();  // this joint's body in the previous joint's body (the
+                                          // base for the first), fixed bodies between folded in
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();     // unit hinge axis, body frame
+  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();    // a point on the axis, body frame, m
+};
+
+// How inverse_kinematics solves an arm: closed form for the spherical-wrist layout above, or
+// damped least squares on the chain's geometric Jacobian (any 6R chain).
+enum class IkMethod { kAnalytic, kGeneral };
+
 struct RigModel {
   RigKind kind = RigKind::kArm;
   std::string model_path;
@@ -58,7 +72,12 @@ struct RigModel {
   Vector6d q_lower, q_upper;              // joint limits, rad (m for gantry slides)
   Vector6d qd_max;                        // joint speed limits, rad/s (m/s)
   Vector6d q_home;                        // a safe start configuration
-  ArmGeometry arm;                        // kArm only
+  std::array<ChainJoint, 6> chain{};      // kArm: base -> joint bodies (forward kinematics)
+  Pose last_T_flange = Pose::Identity();  // kArm: flange in the last joint's body
+  bool spherical_wrist = false;           // kArm: the chain has the ArmGeometry layout
+  IkMethod ik = IkMethod::kGeneral;       // kArm: kAnalytic when spherical_wrist (set on load);
+                                          // a caller may set kGeneral to force the general IK
+  ArmGeometry arm;                        // kArm with spherical_wrist only
   Pose world_T_base = Pose::Identity();   // arm base (A1 axis at the floor of link 1)
   Pose flange_T_camera = Pose::Identity(); // hand-eye: optical frame in the flange frame
   bool has_turntable = false;
@@ -83,12 +102,16 @@ struct RigModel {
 // (without a platter: radius 0.25 m, height 0.5 m).
 WorkingVolume working_volume_of(const RigModel& rig);
 
-// Reads the rig from its MJCF file. Throws std::runtime_error naming the file and what is wrong
-// (missing file, MuJoCo parse error, missing body/joint, wrong joint axis for the arm layout).
+// Reads the rig from its MJCF file. An arm is any serial chain of 6 hinge joints from a static
+// body to body "flange" (named in order base to flange); the spherical-wrist layout is detected.
+// Throws std::runtime_error naming the file and what is wrong (missing file, MuJoCo parse
+// error, missing body, a chain of the wrong length or with a slide joint, no joint range).
 RigModel load_rig(const std::string& mjcf_path);
 
 // models/rig_<kind>.xml under the installed models directory.
 std::string default_rig_path(RigKind kind);
+// A file under the installed models directory (e.g. "rig_ur5e.xml").
+std::string model_file_path(const std::string& file_name);
 
 // Forward kinematics.
 Pose flange_in_world(const RigModel& rig, const Vector6d& q);
@@ -103,8 +126,16 @@ Pose camera_in_object(const RigModel& rig, const Vector6d& q, double turntable_r
 // All inverse kinematics solutions of the flange pose within joint limits (including the
 // +-2*pi variants of joints whose range allows them), each verified by forward kinematics to
 // 1e-6 m / 1e-6 rad. Empty when none exists. `why_none` (optional) receives the reason.
+// The general IK (rig.ik == kGeneral) finds the solutions it converges to from `q_ref` first,
+// home, and spread seeds: all of them for common arms, but not provably all.
 std::vector<Vector6d> inverse_kinematics(const RigModel& rig, const Pose& world_T_flange,
-                                         std::string* why_none = nullptr);
+                                         std::string* why_none = nullptr,
+                                         const Vector6d& q_ref = Vector6d::Zero());
+
+// General IK from one seed: damped least squares on the chain's Jacobian, joint limits
+// respected. True (and *q set, verified by FK to 1e-6 m / 1e-6 rad) when it converged.
+bool general_ik_from_seed(const RigModel& rig, const Pose& world_T_flange, const Vector6d& seed,
+                          Vector6d* q);
 
 // A requested view split into a turntable angle and an arm configuration.
 struct ViewSolution {

@@ -1,10 +1,14 @@
-// Inverse kinematics and reachability check throughput (models/rig_arm.xml, rig_free.xml).
+// Inverse kinematics and reachability check throughput (models/rig_arm.xml, rig_ur5e.xml,
+// rig_free.xml): the analytic IK of the KUKA, the general IK on the KUKA (forced) and on the UR5e,
+// side by side.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <memory>
 
 #include "core/rig/rig.hpp"
 #include "core/geometry/views.hpp"
+#include "core/base/parallel.hpp"
 #include "core/base/units.hpp"
 
 namespace {
@@ -14,6 +18,21 @@ using namespace pbnbv;
 
 const RigModel& arm_rig() {
   static const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
+  return rig;
+}
+
+// The KUKA with the general IK forced (for comparison with its analytic IK).
+const RigModel& arm_rig_general() {
+  static const RigModel rig = [] {
+    RigModel r = arm_rig();
+    r.ik = IkMethod::kGeneral;
+    return r;
+  }();
+  return rig;
+}
+
+const RigModel& ur5e_rig() {
+  static const RigModel rig = load_rig(model_file_path("rig_ur5e.xml"));
   return rig;
 }
 
@@ -48,6 +67,39 @@ void BM_ArmInverseKinematics(benchmark::State& state) {
 }
 BENCHMARK(BM_ArmInverseKinematics);
 
+// All solutions of one flange pose (full search: reference, home, 32 spread seeds).
+void BM_GeneralInverseKinematics(benchmark::State& state, const RigModel* rig) {
+  Vector6d q;
+  q << 0.3, -0.9, 1.2, 0.4, 0.8, 0.5;
+  const Pose target = flange_in_world(*rig, q);
+  size_t n = 0;
+  for (auto _ : state) {
+    auto sols = inverse_kinematics(*rig, target);
+    n = sols.size();
+    benchmark::DoNotOptimize(sols);
+  }
+  state.counters["solutions"] = static_cast<double>(n);
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK_CAPTURE(BM_GeneralInverseKinematics, kuka, &arm_rig_general());
+BENCHMARK_CAPTURE(BM_GeneralInverseKinematics, ur5e, &ur5e_rig());
+
+// One converged solve from a seed 0.1 rad away (what the reachability check does per candidate
+// when the neighbouring candidate's solution seeds it).
+void BM_GeneralIkFromNearSeed(benchmark::State& state, const RigModel* rig) {
+  Vector6d q;
+  q << 0.3, -0.9, 1.2, 0.4, 0.8, 0.5;
+  const Pose target = flange_in_world(*rig, q);
+  const Vector6d seed = q + Vector6d::Constant(0.1);
+  Vector6d sol;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(general_ik_from_seed(*rig, target, seed, &sol));
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK_CAPTURE(BM_GeneralIkFromNearSeed, kuka, &arm_rig_general());
+BENCHMARK_CAPTURE(BM_GeneralIkFromNearSeed, ur5e, &ur5e_rig());
+
 void BM_ArmForwardKinematics(benchmark::State& state) {
   const RigModel& rig = arm_rig();
   Vector6d q;
@@ -77,6 +129,34 @@ void BM_ArmSolveBatchHemisphere(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(views.size()));
 }
 BENCHMARK(BM_ArmSolveBatchHemisphere)->Unit(benchmark::kMillisecond);
+
+// The view scorer's reachability step: the 800 hemisphere candidates shared out over
+// range(0) workers (parallel_for in chunks of 16, one checker per worker, as in
+// services/scorer), side by side for the KUKA with its analytic IK, the KUKA with the general IK
+// forced and the UR5e (general IK). Checkers are built once, as the scorer keeps them.
+void BM_Reachability800(benchmark::State& state, const RigModel* rig) {
+  const int workers = static_cast<int>(state.range(0));
+  std::vector<std::unique_ptr<ReachabilityChecker>> checkers;
+  for (int w = 0; w < workers; ++w) checkers.push_back(std::make_unique<ReachabilityChecker>(*rig));
+  const std::vector<Pose> views = hemisphere();
+  std::vector<uint8_t> reachable(views.size(), 0);
+  for (auto _ : state) {
+    parallel_for(views.size(), [&](std::size_t begin, std::size_t end, int w) {
+      const std::vector<Pose> part(views.begin() + begin, views.begin() + end);
+      const auto sols = checkers[w]->solve_batch(part, rig->q_home, 0.0, cube(), 0.15);
+      for (std::size_t i = 0; i < sols.size(); ++i) reachable[begin + i] = sols[i].reachable ? 1 : 0;
+    }, 16, workers);
+    benchmark::DoNotOptimize(reachable);
+  }
+  int n = 0;
+  for (uint8_t r : reachable) n += r;
+  state.counters["reachable"] = n;
+  state.counters["workers"] = workers;
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(views.size()));
+}
+BENCHMARK_CAPTURE(BM_Reachability800, kuka_analytic, &arm_rig())->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_Reachability800, kuka_general, &arm_rig_general())->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_Reachability800, ur5e_general, &ur5e_rig())->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_FreeSolveBatchHemisphere(benchmark::State& state) {
   const RigModel& rig = free_rig();
