@@ -84,6 +84,15 @@ CommandLine::CommandLine()
   cli::add_text(*stop_cmd_, "scan", &stop_.scan_id, "the scan to stop (its id, in scan.json) [every scan on the bus]", "ID");
   cli::add_text(*stop_cmd_, "reason", &stop_.reason, "why, for the record [stopped by the user]", "TEXT");
 
+  replay_cmd_ = cli::add_command(app_, "replay",
+                                 "run a recorded scan's frames and poses through the pipeline again (no twin, no rig) "
+                                 "and compare its decisions with the recording's");
+  replay_cmd_->add_option("dir", replay_.dir, "the recorded scan's folder (scan.json, settings.json, scan.lcmlog)")
+      ->type_name("DIR");
+  cli::add_text(*replay_cmd_, "out", &replay_.out, "the replay's folder [DIR-replay-<date-time>]", "DIR");
+  cli::add(*replay_cmd_, kPlanner, &replay_.planner);
+  cli::add_flag(*replay_cmd_, "overwrite", &replay_.overwrite, "delete what --out holds first");
+
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");
 }
@@ -182,13 +191,13 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
         out << usage();
         return 0;
       }
-      for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, help_cmd_}) {
+      for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, stop_cmd_, replay_cmd_, help_cmd_}) {
         if (c->get_name() == help_topic_) {
           out << c->help("pbnbv");
           return 0;
         }
       }
-      throw std::invalid_argument("unknown command '" + help_topic_ + "' (expected scan, bench, ablate, spy or help)");
+      throw std::invalid_argument("unknown command '" + help_topic_ + "' (expected scan, bench, ablate, spy, stop, replay or help)");
     }
     if (given == scan_cmd_) {
       command_ = Command::kScan;
@@ -201,6 +210,9 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
       resolve_ablate();
     } else if (given == stop_cmd_) {
       command_ = Command::kStop;
+    } else if (given == replay_cmd_) {
+      command_ = Command::kReplay;
+      if (replay_.dir.empty()) throw std::invalid_argument("name the recorded scan's folder: pbnbv replay DIR");
     } else {
       command_ = Command::kSpy;
     }

@@ -1,6 +1,6 @@
 #pragma once
-// The command line of `pbnbv` (CLI11, cli/options.hpp): the commands scan, bench, ablate, spy and
-// help, each with its options from the table of scan options (defaults, ranges and help text
+// The command line of `pbnbv` (CLI11, cli/options.hpp): the commands scan, bench, ablate, spy, stop,
+// replay and help, each with its options from the table of scan options (defaults, ranges and help text
 // written once, in core/*/..._options.hpp and eval/bench.hpp), per-command --help, --version,
 // and settings files (--config FILE, TOML; the command line overrides the file). Parsing only:
 // running a command is scan_command.hpp / commands.hpp.
@@ -19,12 +19,20 @@
 
 namespace pbnbv::launcher {
 
-enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop };
+enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kReplay };
 
 // What `pbnbv stop` was asked for.
 struct StopOptions {
   std::string scan_id;  // "" : every scan on the bus
   std::string reason = "stopped by the user";
+};
+
+// What `pbnbv replay` was asked for.
+struct ReplayOptions {
+  std::string dir;                     // the recorded scan's folder
+  std::string out;                     // empty: DIR-replay-<date-time> beside it
+  std::optional<PlannerKind> planner;  // none: the recording's
+  bool overwrite = false;
 };
 
 // What `pbnbv scan` was asked for: the object, the scan's settings (ScanSettings, before the
@@ -78,6 +86,7 @@ class CommandLine {
 
   Command command() const { return command_; }
   const StopOptions& stop() const { return stop_; }
+  const ReplayOptions& replay() const { return replay_; }
   const ScanOptions& scan() const { return scan_; }
   const eval::BenchSpec& bench() const { return bench_; }
   const AblateOptions& ablate() const { return ablate_; }
@@ -120,6 +129,8 @@ class CommandLine {
   CLI::App* spy_cmd_ = nullptr;
   CLI::App* stop_cmd_ = nullptr;
   StopOptions stop_;
+  CLI::App* replay_cmd_ = nullptr;
+  ReplayOptions replay_;
   CLI::App* help_cmd_ = nullptr;
   Command command_ = Command::kHelp;
   ScanOptions scan_;

@@ -24,6 +24,13 @@ int run_ablate(const AblateOptions& o, const std::filesystem::path& self);
 // `pbnbv spy`: lcm-spy with the project's message types (replaces this process).
 int run_spy();
 
+// `pbnbv replay`: the recorded scan in o.dir run through the pipeline again with its own frames and
+// poses (pbnbv-replay-rig plays its scan.lcmlog instead of the twin; the coordinator follows its
+// views and records this planner's plans), then replay.json and a table: per view, the recording's
+// decisions against the replay's. Throws std::invalid_argument naming what is missing or wrong in
+// the folder before anything starts. 0: the replay completed (see replay.json for differences).
+int run_replay(const ReplayOptions& o, const std::filesystem::path& bin);
+
 // `pbnbv stop`: STOP on the bus (three times over 0.2 s: UDP may lose one).
 int run_stop(const StopOptions& o);
 

@@ -3,6 +3,8 @@
 //   pbnbv bench [options]    every planner on every object in the twin
 //   pbnbv ablate tmax|beta|initial-view [options]
 //   pbnbv spy                lcm-spy with every pbnbv channel decoded
+//   pbnbv stop [--scan ID]   halt the rig and end the scan
+//   pbnbv replay DIR         run a recorded scan through the pipeline again and compare
 // The command line is launcher/command_line.hpp; running each command, launcher/commands.hpp.
 #include <filesystem>
 #include <iostream>
@@ -30,6 +32,8 @@ int main(int argc, char** argv) {
         return launcher::run_spy();
       case launcher::Command::kStop:
         return launcher::run_stop(line.stop());
+      case launcher::Command::kReplay:
+        return launcher::run_replay(line.replay(), self.parent_path());
       case launcher::Command::kHelp:
         std::cout << line.usage();
         return 0;

@@ -12,6 +12,7 @@
 
 #include "bus/bus.hpp"
 #include "bus/log_audit.hpp"
+#include "bus/rig_log.hpp"
 #include "pbnbv/heartbeat_t.hpp"
 #include "core/base/format.hpp"
 #include "core/base/signals.hpp"
@@ -21,6 +22,7 @@
 #include "eval/evaluate.hpp"
 #include "eval/objects.hpp"
 #include "launcher/commands.hpp"
+#include "launcher/supervise.hpp"
 #include "process/processes.hpp"
 
 namespace fs = std::filesystem;
@@ -28,37 +30,6 @@ namespace fs = std::filesystem;
 namespace pbnbv::launcher {
 
 namespace {
-
-// The local date and time as 20250131-142501 (folder names and scan ids).
-std::string timestamp() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  localtime_r(&t, &tm);
-  char b[32];
-  std::strftime(b, sizeof(b), "%Y%m%d-%H%M%S", &tm);
-  return b;
-}
-
-// A scan's folder: created if missing; one that holds anything is refused (a new scan would mix
-// its files with the old run's) unless `overwrite`, which empties it first.
-void prepare_out(const fs::path& out, bool overwrite) {
-  if (fs::exists(out) && !fs::is_directory(out)) {
-    throw std::invalid_argument("--out " + out.string() + " is a file, not a folder");
-  }
-  if (fs::exists(out) && !fs::is_empty(out)) {
-    if (!overwrite) {
-      std::string some;
-      int n = 0;
-      for (const auto& e : fs::directory_iterator(out)) {
-        if (n++ < 4) some += (some.empty() ? "" : ", ") + e.path().filename().string();
-      }
-      throw std::invalid_argument("--out " + out.string() + " is not empty (" + some + (n > 4 ? ", ..." : "") +
-                                  "): give a new folder, or --overwrite to delete what it holds");
-    }
-    for (const auto& e : fs::directory_iterator(out)) fs::remove_all(e.path());
-  }
-  fs::create_directories(out / "logs");
-}
 
 // processes.json: the launcher and every process it started, with PIDs and restarts (written at start, so
 // what runs can be found and stopped even if the launcher is gone) and, once stopped, how each
@@ -115,11 +86,7 @@ void finish_record(const fs::path& out, const std::string& state, const std::str
 // views scan.json recorded.
 void audit_log(const fs::path& out, const std::string& scan_id) {
   try {
-    std::vector<std::string> files;  // scan.lcmlog, and scan.lcmlog.NN after lcm-logger restarts
-    for (const auto& e : fs::directory_iterator(out)) {
-      if (e.path().filename().string().rfind("scan.lcmlog", 0) == 0) files.push_back(e.path().string());
-    }
-    std::sort(files.begin(), files.end());
+    const std::vector<std::string> files = bus::scan_log_files(out.string());  // scan.lcmlog, .NN after restarts
     const bus::LogContents log = bus::read_scan_logs(files, scan_id);
     const nlohmann::json scan = read_json((out / "scan.json").string());
     const nlohmann::json views = scan.value("views", nlohmann::json::array());
@@ -167,10 +134,70 @@ void continue_scan(process::Child& c) {
 
 }  // namespace
 
-// Starts `children` (the coordinator last), keeps them running (restarts, hang detection) until
-// the coordinator ends or the user stops the scan, stops them all, and reports: scan.json's final
-// state, the log check, coverage. Returns the exit code.
-int supervise(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, bool record_log);
+// The local date and time as 20250131-142501 (folder names and scan ids).
+std::string timestamp() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  localtime_r(&t, &tm);
+  char b[32];
+  std::strftime(b, sizeof(b), "%Y%m%d-%H%M%S", &tm);
+  return b;
+}
+
+// A scan's folder: created if missing; one that holds anything is refused (a new scan would mix
+// its files with the old run's) unless `overwrite`, which empties it first.
+void prepare_out(const fs::path& out, bool overwrite) {
+  if (fs::exists(out) && !fs::is_directory(out)) {
+    throw std::invalid_argument("--out " + out.string() + " is a file, not a folder");
+  }
+  if (fs::exists(out) && !fs::is_empty(out)) {
+    if (!overwrite) {
+      std::string some;
+      int n = 0;
+      for (const auto& e : fs::directory_iterator(out)) {
+        if (n++ < 4) some += (some.empty() ? "" : ", ") + e.path().filename().string();
+      }
+      throw std::invalid_argument("--out " + out.string() + " is not empty (" + some + (n > 4 ? ", ..." : "") +
+                                  "): give a new folder, or --overwrite to delete what it holds");
+    }
+    for (const auto& e : fs::directory_iterator(out)) fs::remove_all(e.path());
+  }
+  fs::create_directories(out / "logs");
+}
+
+process::Child scan_process(const std::string& name, std::vector<std::string> argv, const ScanSettings& s,
+                            const fs::path& out, bool progress) {
+  process::Child c;
+  c.name = name;
+  c.argv = std::move(argv);
+  if (name != "lcm-logger" && name != "coordinator") c.argv.insert(c.argv.end(), {"--scan", s.scan_id});
+  c.death_signal = death_signal_of(name);
+  c.log_path = (out / "logs" / (name + ".log")).string();
+  c.stdout_to_terminal = progress;
+  return c;
+}
+
+void add_services(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, const fs::path& bin,
+                  bool registration, const std::vector<std::string>& coordinator_extra) {
+  auto add = [&](const std::string& name, std::vector<std::string> argv, bool progress = false) {
+    children.push_back(scan_process(name, std::move(argv), s, out, progress));
+  };
+  add("motion", {(bin / "pbnbv-motion").string(), "--rig", to_string(s.rig)});
+  add("camera", {(bin / "pbnbv-camera").string(), "--rig", to_string(s.rig)});
+  add("registration", {(bin / "pbnbv-registration").string(), "--out", out.string()});
+  if (!registration) children.back().argv.push_back("--off");
+  // The map's working volume: the cloud's crop box, above the turntable top.
+  Eigen::Vector3d volume_min = s.crop_min_m;
+  if (s.rig == RigKind::kArm) volume_min.z() = std::max(volume_min.z(), -s.object_z_m + s.ground_clearance_m);
+  auto vec = [&](const Eigen::Vector3d& v) { return exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z()); };
+  add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", exact(s.map_resolution_m), "--out", out.string(),
+                  "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m)});
+  if (uses_ellipsoids(s.planner)) add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
+  if (uses_view_scorer(s.planner)) add("scorer", {(bin / "pbnbv-scorer").string(), "--rig", to_string(s.rig)});
+  std::vector<std::string> coordinator = {(bin / "pbnbv-coordinator").string(), "--out", out.string()};
+  coordinator.insert(coordinator.end(), coordinator_extra.begin(), coordinator_extra.end());
+  add("coordinator", coordinator, true);
+}
 
 int resume_scan(const fs::path& dir);
 
@@ -207,15 +234,8 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
 
   std::vector<process::Child> children;
   // Every process serves this scan only (--scan): other scans on the same bus are ignored.
-  auto add = [&](const std::string& name, std::vector<std::string> argv, bool progress = false) {
-    process::Child c;
-    c.name = name;
-    c.argv = std::move(argv);
-    if (name != "lcm-logger" && name != "coordinator") c.argv.insert(c.argv.end(), {"--scan", s.scan_id});
-    c.death_signal = death_signal_of(name);
-    c.log_path = (out / "logs" / (name + ".log")).string();
-    c.stdout_to_terminal = progress;
-    children.push_back(std::move(c));
+  auto add = [&](const std::string& name, std::vector<std::string> argv) {
+    children.push_back(scan_process(name, std::move(argv), s, out));
   };
   // The logger listens with the services' receive buffer (bus::lcm_url()).
   if (o.record_log) {
@@ -230,24 +250,13 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
                "--hand-eye-error-mm", exact(o.hand_eye_error_mm), "--hand-eye-error-deg", exact(o.hand_eye_error_deg),
                "--turntable-error-deg", exact(o.turntable_error_deg), "--joint-error-deg", exact(o.joint_error_deg),
                "--error-seed", std::to_string(o.error_seed), "--truth-out", (out / "twin_truth.jsonl").string()});
-  add("motion", {(bin / "pbnbv-motion").string(), "--rig", to_string(s.rig)});
-  add("camera", {(bin / "pbnbv-camera").string(), "--rig", to_string(s.rig)});
-  add("registration", {(bin / "pbnbv-registration").string(), "--out", out.string()});
-  if (!o.registration) children.back().argv.push_back("--off");
-  // The map's working volume: the cloud's crop box, above the turntable top.
-  Eigen::Vector3d volume_min = s.crop_min_m;
-  if (s.rig == RigKind::kArm) volume_min.z() = std::max(volume_min.z(), -s.object_z_m + s.ground_clearance_m);
-  auto vec = [&](const Eigen::Vector3d& v) { return exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z()); };
-  add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", exact(s.map_resolution_m), "--out", out.string(),
-                  "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m)});
-  if (uses_ellipsoids(s.planner)) add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
-  if (uses_view_scorer(s.planner)) add("scorer", {(bin / "pbnbv-scorer").string(), "--rig", to_string(s.rig)});
-  add("coordinator", {(bin / "pbnbv-coordinator").string(), "--out", out.string()}, true);
+  add_services(children, s, out, bin, o.registration);
 
   return supervise(children, s, out, o.record_log);
 }
 
-int supervise(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, bool record_log) {
+int supervise(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, bool record_log,
+              bool evaluate) {
   install_stop_handlers();
 
   try {
@@ -346,7 +355,7 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
     }
   }
   if (record_log && fs::exists(out / "scan.json")) audit_log(out, s.scan_id);
-  if (code == 0) {
+  if (code == 0 && evaluate) {
     // Against the ground truth the twin rendered: coverage after every view.
     try {
       const CoverageParams cp;

@@ -161,7 +161,9 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
       {{"bench"}, "pbnbv bench: --out DIR is required"},
       {{"ablate", "--out", "x"}, "pbnbv ablate: name the parameter: tmax, beta or initial-view"},
       {{"ablate", "beta", "--values", "2,400", "--out", "x"}, "pbnbv ablate: --values: --beta 400 is outside its range [1, 360]"},
-      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, help)"},
+      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, replay, help)"},
+      {{"replay"}, "pbnbv replay: name the recorded scan's folder: pbnbv replay DIR"},
+      {{"replay", "d", "--planner", "rign"}, "pbnbv replay: --planner"},
   };
   for (const auto& [words, message] : cases) {
     CommandLine line;
