@@ -378,7 +378,7 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
               << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
               << (out / "scan.json").string() << ", " << (out / "coverage.json").string()
               << (record_log ? ", " + (out / "scan.lcmlog").string() : "") << std::endl;
-  } else if (code != 130) {
+  } else if (code != 0 && code != 130) {
     std::cerr << "scan failed (exit " << code << "); logs in " << (out / "logs").string() << std::endl;
   }
   return code;
