@@ -97,12 +97,19 @@ inline DepthFrame from_msg(const depth_frame_t& m) {
 }
 
 // The recorded rig (bus/rig_log.hpp) as the timeline the replay player plays: each message's rig
-// time, place in the log, stillness (mode settled or idle) and command targets.
+// time, place in the log, stillness (mode settled or idle), the command followed, command targets.
 inline RigTimeline timeline_of(const RigLog& log) {
   const auto still = [](int8_t mode) { return mode == arm_status_t::kModeSettled || mode == arm_status_t::kModeIdle; };
   RigTimeline t;
-  for (const auto& s : log.arm_statuses) t.arm.push_back({s.msg.utime, s.order, still(s.msg.mode)});
-  for (const auto& s : log.turntable_statuses) t.turntable.push_back({s.msg.utime, s.order, still(s.msg.mode)});
+  for (const auto& s : log.arm_statuses) {
+    t.arm.push_back({s.msg.utime, s.order, still(s.msg.mode), s.msg.command_seq,
+                     to_vector6(s.msg.joint_position_commanded_rad, "ARM_STATUS joint_position_commanded_rad")});
+  }
+  for (const auto& s : log.turntable_statuses) {
+    RecordedStatus r{s.msg.utime, s.order, still(s.msg.mode), s.msg.command_seq, Vector6d::Zero()};
+    r.commanded_rad[0] = s.msg.angle_commanded_rad;
+    t.turntable.push_back(r);
+  }
   for (const auto& f : log.frames) t.frames.push_back({f.msg.utime, f.order});
   for (const auto& c : log.arm_commands) {
     RecordedCommand r;

@@ -52,6 +52,22 @@ class ReplayRigService {
       frame.scan_id = t.scan_id;
       bus_.publish(channels::kDepthFrame, frame);
     });
+    // Views whose still readings before the exposure the log lost (ReplayRig's StatusSpan).
+    const auto warn_lost = [](std::size_t view, const char* what, const StatusSpan& span, int64_t played_utime) {
+      if (!span.restamp_utime) return;
+      log_warn("recorded view " + std::to_string(view + 1) + ": the log lacks the still " + what +
+               " before the frame's exposure; the first one after it (" +
+               std::to_string((played_utime - *span.restamp_utime) / 1000) +
+               " ms later) stands for them, so the camera pose may differ from the recording's by what the rig moved "
+               "in between");
+    };
+    for (std::size_t v = 0; v < rig_.views().size(); ++v) {
+      const RecordedView& r = rig_.views()[v];
+      warn_lost(v, "ARM_STATUS", r.arm, log_.arm_statuses[r.arm.at_frame].msg.utime);
+      if (!log_.turntable_statuses.empty()) {
+        warn_lost(v, "TURNTABLE_STATUS", r.turntable, log_.turntable_statuses[r.turntable.at_frame].msg.utime);
+      }
+    }
     log_info("playing " + std::to_string(rig_.views().size()) + " recorded views (" +
              std::to_string(log_.arm_statuses.size()) + " arm statuses, " + std::to_string(log_.frames.size()) +
              " frames)");
@@ -65,6 +81,7 @@ class ReplayRigService {
     next_status_s_ = now + kStatusPeriodS;
     const ReplayRig::Statuses s = rig_.tick();
     arm_status_t a = log_.arm_statuses[s.arm].msg;
+    if (s.arm_utime) a.utime = *s.arm_utime;
     a.seq = seq_;
     a.scan_id = bus_.scope();
     a.command_seq = rig_.arm_command_seq();
@@ -72,6 +89,7 @@ class ReplayRigService {
     bus_.publish(channels::kArmStatus, a);
     if (s.turntable) {
       turntable_status_t t = log_.turntable_statuses[*s.turntable].msg;
+      if (s.turntable_utime) t.utime = *s.turntable_utime;
       t.seq = seq_;
       t.scan_id = bus_.scope();
       t.command_seq = rig_.turntable_command_seq();

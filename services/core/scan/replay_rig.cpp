@@ -11,8 +11,6 @@ namespace pbnbv {
 
 namespace {
 
-constexpr int64_t kNoOrder = std::numeric_limits<int64_t>::max();
-
 // The last status logged before `order` (0 when none is).
 std::size_t last_before(const std::vector<RecordedStatus>& s, int64_t order) {
   std::size_t at = 0;
@@ -20,39 +18,48 @@ std::size_t last_before(const std::vector<RecordedStatus>& s, int64_t order) {
   return at;
 }
 
-// The statuses played for a frame exposed at `utime` and logged at `order`, commanded at
-// `command_order`, before the command logged at `next_order`: the still ones from the rig's
-// settling (at most kReplayBeforeFrameUs before the exposure) to kReplayAfterFrameUs after it.
-StatusSpan span_of(const std::vector<RecordedStatus>& s, int64_t utime, int64_t order, int64_t command_order,
-                   int64_t next_order) {
+// The statuses played for a frame exposed at `utime` and logged at `order`, the rig following
+// command `seq`: the still ones from the rig's settling (at most kReplayBeforeFrameUs before the
+// exposure) to kReplayAfterFrameUs after it, while the rig followed that command.
+StatusSpan span_of(const std::vector<RecordedStatus>& s, int64_t utime, int64_t order, int64_t seq) {
   StatusSpan span;
   span.at_frame = span.begin = last_before(s, order);
-  while (span.begin > 0 && s[span.at_frame].still && s[span.begin - 1].still && s[span.begin - 1].order > command_order &&
+  while (span.begin > 0 && s[span.at_frame].still && s[span.begin - 1].still && s[span.begin - 1].command_seq == seq &&
          s[span.begin - 1].utime >= utime - kReplayBeforeFrameUs) {
     --span.begin;
   }
+  if (!s[span.at_frame].still || s[span.at_frame].command_seq != seq) {
+    // The still readings before the exposure were lost: the first still one after it stands for them.
+    for (std::size_t j = span.at_frame + 1; j < s.size() && s[j].utime <= utime + kReplayAfterFrameUs; ++j) {
+      if (s[j].still && s[j].command_seq == seq && s[j].order > order) {
+        span.begin = span.at_frame = j;
+        span.restamp_utime = utime;
+        break;
+      }
+    }
+  }
   std::size_t end = span.at_frame + 1;
-  while (end < s.size() && s[end].order < next_order && s[end].utime <= utime + kReplayAfterFrameUs) ++end;
+  while (end < s.size() && s[end].command_seq == seq && s[end].utime <= utime + kReplayAfterFrameUs) ++end;
   span.end = end;
   return span;
 }
 
 // The statuses before the first command: the rig as the scan found it.
-StatusSpan initial_span(const std::vector<RecordedStatus>& s, int64_t first_command_order) {
+StatusSpan initial_span(const std::vector<RecordedStatus>& s) {
   StatusSpan span;
-  span.at_frame = span.begin = last_before(s, first_command_order);
+  while (span.at_frame + 1 < s.size() && s[span.at_frame + 1].command_seq == s[0].command_seq) ++span.at_frame;
+  span.begin = span.at_frame;
   while (span.begin > 0 && s[span.begin - 1].utime >= s[span.at_frame].utime - kReplayBeforeFrameUs) --span.begin;
   span.end = span.at_frame + 1;
   return span;
 }
 
-// The last command logged before `order` (nullptr when none).
-const RecordedCommand* command_before(const std::vector<RecordedCommand>& c, int64_t order) {
-  const RecordedCommand* last = nullptr;
+// The command `seq` of a list (nullptr when the log lost it).
+const RecordedCommand* command_of(const std::vector<RecordedCommand>& c, int64_t seq) {
   for (const RecordedCommand& x : c) {
-    if (x.order < order) last = &x;
+    if (x.seq == seq) return &x;
   }
-  return last;
+  return nullptr;
 }
 
 }  // namespace
@@ -63,38 +70,35 @@ std::vector<RecordedView> recorded_views(const RigTimeline& t) {
   std::vector<RecordedView> views;
   for (std::size_t f = 0; f < t.frames.size(); ++f) {
     const RecordedFrame& frame = t.frames[f];
-    const RecordedCommand* arm = command_before(t.arm_commands, frame.order);
-    if (!arm) {
-      throw std::invalid_argument(fmt::format("the recording's DEPTH_FRAME at rig time {} us has no ARM_COMMAND before it",
-                                              frame.utime));
+    const RecordedStatus& arm = t.arm[last_before(t.arm, frame.order)];
+    if (arm.command_seq < 0) {
+      throw std::invalid_argument(fmt::format(
+          "the recording's DEPTH_FRAME at rig time {} us was taken before the arm acknowledged any command", frame.utime));
     }
-    // A later frame after the same command (the camera triggered again) replaces the earlier one.
-    if (!views.empty() && views.back().arm_command_seq == arm->seq) views.pop_back();
+    // A later frame while the rig followed the same command (the camera triggered again) replaces
+    // the earlier one.
+    if (!views.empty() && views.back().arm_command_seq == arm.command_seq) views.pop_back();
     RecordedView v;
     v.frame = f;
-    v.arm_command_seq = arm->seq;
-    v.arm_target_rad = arm->target_rad;
-    if (const RecordedCommand* tt = command_before(t.turntable_commands, frame.order)) v.turntable_target_rad = tt->target_rad[0];
-    int64_t next = kNoOrder;
-    for (const RecordedCommand& c : t.arm_commands) {
-      if (c.order > frame.order && c.seq != arm->seq) {
-        next = c.order;
-        break;
-      }
+    v.arm_command_seq = arm.command_seq;
+    const RecordedCommand* a = command_of(t.arm_commands, arm.command_seq);
+    v.arm_target_rad = a ? a->target_rad : arm.commanded_rad;
+    v.arm = span_of(t.arm, frame.utime, frame.order, arm.command_seq);
+    if (t.has_turntable()) {
+      const RecordedStatus& tt = t.turntable[last_before(t.turntable, frame.order)];
+      if (const RecordedCommand* c = command_of(t.turntable_commands, tt.command_seq)) v.turntable_target_rad = c->target_rad[0];
+      v.turntable = span_of(t.turntable, frame.utime, frame.order, tt.command_seq);
     }
-    v.arm = span_of(t.arm, frame.utime, frame.order, arm->order, next);
-    if (t.has_turntable()) v.turntable = span_of(t.turntable, frame.utime, frame.order, arm->order, next);
     views.push_back(v);
   }
   return views;
 }
 
 ReplayRig::ReplayRig(const RigTimeline& timeline) : views_(recorded_views(timeline)), has_turntable_(timeline.has_turntable()) {
-  const int64_t first = timeline.arm_commands.empty() ? kNoOrder : timeline.arm_commands.front().order;
-  arm_span_ = initial_span(timeline.arm, first);
+  arm_span_ = initial_span(timeline.arm);
   arm_at_ = arm_span_.begin;
   if (has_turntable_) {
-    turntable_span_ = initial_span(timeline.turntable, first);
+    turntable_span_ = initial_span(timeline.turntable);
     turntable_at_ = turntable_span_.begin;
   }
 }
@@ -103,6 +107,11 @@ ReplayRig::Statuses ReplayRig::tick() {
   Statuses s;
   s.arm = arm_at_;
   if (has_turntable_) s.turntable = turntable_at_;
+  const auto restamped = [&](const StatusSpan& span, std::size_t at) {
+    return !triggered_ && at == span.at_frame ? span.restamp_utime : std::nullopt;
+  };
+  s.arm_utime = restamped(arm_span_, arm_at_);
+  if (has_turntable_) s.turntable_utime = restamped(turntable_span_, turntable_at_);
   // Up to the frame until the trigger, then on to the span's end; the last one is held.
   const auto advance = [&](const StatusSpan& span, std::size_t& at) {
     const std::size_t limit = triggered_ ? span.end - 1 : span.at_frame;

@@ -27,11 +27,13 @@ inline constexpr int64_t kReplayBeforeFrameUs = 300000;
 inline constexpr int64_t kReplayAfterFrameUs = 200000;
 
 // What the player needs of one recorded status: its rig time, where it was in the log, whether
-// the device was still (mode settled or idle).
+// the device was still (mode settled or idle), the command it was following.
 struct RecordedStatus {
   int64_t utime = 0;
   int64_t order = 0;  // event number in the log (over every file, in order)
   bool still = false;
+  int64_t command_seq = -1;                    // the command acknowledged (-1: none yet)
+  Vector6d commanded_rad = Vector6d::Zero();   // its target as the status reports it (turntable: [0])
 };
 
 // A recorded position command (the arm's joints, or the turntable's angle in joint 0).
@@ -56,13 +58,19 @@ struct RigTimeline {
 };
 
 // The statuses played for one view: [begin, end) of a device's list; at_frame is the last one
-// logged before the frame (the rig holds there until the trigger).
+// logged before the frame (the rig holds there until the trigger). When the log lost the still
+// readings before the exposure (lcm-logger drops messages under load), at_frame is the first still
+// one after it, played before the trigger with the exposure's time (`restamp_utime`): the rig was
+// still then, the frame was taken after it settled.
 struct StatusSpan {
   std::size_t begin = 0, at_frame = 0, end = 1;
+  std::optional<int64_t> restamp_utime;
 };
 
-// One recorded view: the frame the scan used (the last frame after the view's command), the
-// targets it was commanded to, and the statuses played for it.
+// One recorded view: the frame the scan used (the last frame the rig took while following the
+// view's command), the targets it was commanded to, and the statuses played for it. The command is
+// the one the arm's status acknowledged at the frame (the log may have lost the command itself:
+// the target is then the one the status reports).
 struct RecordedView {
   std::size_t frame = 0;
   int64_t arm_command_seq = -1;
@@ -72,15 +80,17 @@ struct RecordedView {
 };
 
 // The views of a recording, in order. Throws std::invalid_argument when it has no arm status, no
-// frame, or a frame without an arm command before it.
+// frame, or a frame taken before the arm acknowledged any command.
 std::vector<RecordedView> recorded_views(const RigTimeline& t);
 
 class ReplayRig {
  public:
   // Statuses to publish on a tick: indices into the timeline's arm and turntable lists.
+  // `*_utime`: publish the status with this time instead of its own (StatusSpan::restamp_utime).
   struct Statuses {
     std::size_t arm = 0;
     std::optional<std::size_t> turntable;
+    std::optional<int64_t> arm_utime, turntable_utime;
   };
 
   // Throws std::invalid_argument as recorded_views does.

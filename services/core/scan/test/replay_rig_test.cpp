@@ -13,11 +13,15 @@ namespace {
 
 constexpr int64_t kPeriodUs = 10000;  // the recording's status period
 
-// Appends `n` statuses of both devices from rig time `utime` on (10 ms apart), still or moving.
-void statuses(RigTimeline& t, int64_t& order, int64_t& utime, int n, bool still) {
+// Appends `n` statuses of both devices from rig time `utime` on (10 ms apart), still or moving,
+// following command `seq` to joints `joint0` (all six) and turntable angle `turntable`.
+void statuses(RigTimeline& t, int64_t& order, int64_t& utime, int n, bool still, int64_t seq = -1, double joint0 = 0,
+              double turntable = 0) {
   for (int k = 0; k < n; ++k, utime += kPeriodUs) {
-    t.arm.push_back({utime, ++order, still});
-    t.turntable.push_back({utime, ++order, still});
+    t.arm.push_back({utime, ++order, still, seq, Vector6d::Constant(joint0)});
+    RecordedStatus tt{utime, ++order, still, seq, Vector6d::Zero()};
+    tt.commanded_rad[0] = turntable;
+    t.turntable.push_back(tt);
   }
 }
 
@@ -44,10 +48,10 @@ RigTimeline two_views() {
   const double joints[] = {0.5, -0.25}, turntable[] = {1.0, 2.0};
   for (int v = 0; v < 2; ++v) {
     command(t, order, 100 + v, joints[v], turntable[v]);
-    statuses(t, order, utime, 20, false);
-    statuses(t, order, utime, 40, true);
+    statuses(t, order, utime, 20, false, 100 + v, joints[v], turntable[v]);
+    statuses(t, order, utime, 40, true, 100 + v, joints[v], turntable[v]);
     t.frames.push_back({utime - kPeriodUs, ++order});
-    statuses(t, order, utime, 30, true);
+    statuses(t, order, utime, 30, true, 100 + v, joints[v], turntable[v]);
   }
   return t;
 }
@@ -93,6 +97,45 @@ TEST(RecordedViews, ALaterFrameAfterTheSameCommandReplacesTheEarlierOne) {
   EXPECT_EQ(views[1].frame, 2u);
 }
 
+TEST(RecordedViews, ACommandTheLogLostIsTheOneTheStatusesAcknowledged) {
+  // lcm-logger under load lost view 2's commands: the statuses at its frame follow seq 101 to
+  // joints -0.25, and that is its command.
+  RigTimeline t = two_views();
+  t.arm_commands.pop_back();
+  t.turntable_commands.pop_back();
+  const std::vector<RecordedView> views = recorded_views(t);
+  ASSERT_EQ(views.size(), 2u);
+  EXPECT_EQ(views[1].arm_command_seq, 101);
+  EXPECT_EQ(views[1].arm_target_rad, Vector6d::Constant(-0.25));
+  EXPECT_EQ(views[1].turntable_target_rad, std::nullopt);  // not checked
+  EXPECT_EQ(views[1].arm.begin, 124u);
+  EXPECT_EQ(views[1].arm.end, 175u);
+}
+
+TEST(RecordedViews, StillReadingsTheLogLostBeforeTheExposureAreStoodForByTheFirstOneAfterIt) {
+  // lcm-logger lost view 1's statuses from the moment the rig was still up to the exposure (25..64):
+  // the last one logged before the frame is a moving one (24).
+  RigTimeline t = two_views();
+  t.arm.erase(t.arm.begin() + 25, t.arm.begin() + 65);
+  const std::vector<RecordedView> views = recorded_views(t);
+  // The first still status after the frame (index 25 now, rig time 650 ms) is played before the
+  // trigger with the exposure's time, 640 ms; after it, on to 840 ms (index 44).
+  EXPECT_EQ(t.arm[25].utime, 650000);
+  EXPECT_EQ(views[0].arm.begin, 25u);
+  EXPECT_EQ(views[0].arm.at_frame, 25u);
+  EXPECT_EQ(views[0].arm.end, 45u);
+  EXPECT_EQ(views[0].arm.restamp_utime, std::optional<int64_t>(640000));
+  EXPECT_EQ(views[0].turntable.restamp_utime, std::nullopt);  // its readings are all there
+  ReplayRig rig(t);
+  rig.on_arm_command(1, Vector6d::Constant(0.5));
+  const ReplayRig::Statuses before = rig.tick();
+  EXPECT_EQ(before.arm, 25u);
+  EXPECT_EQ(before.arm_utime, std::optional<int64_t>(640000));
+  rig.on_trigger();
+  EXPECT_EQ(rig.tick().arm_utime, std::nullopt);  // its own time once the frame is taken
+  EXPECT_EQ(rig.tick().arm, 26u);
+}
+
 TEST(RecordedViews, ARecordingWithoutFramesOrStatusesIsNamed) {
   RigTimeline t = two_views();
   t.frames.clear();
@@ -100,6 +143,10 @@ TEST(RecordedViews, ARecordingWithoutFramesOrStatusesIsNamed) {
   t = two_views();
   t.arm.clear();
   EXPECT_EQ(pbnbv::testing::error_message([&] { recorded_views(t); }), "the recording holds no ARM_STATUS");
+  t = two_views();
+  for (RecordedStatus& s : t.arm) s.command_seq = -1;
+  EXPECT_EQ(pbnbv::testing::error_message([&] { recorded_views(t); }),
+            "the recording's DEPTH_FRAME at rig time 640000 us was taken before the arm acknowledged any command");
 }
 
 TEST(ReplayRig, PlaysTheCommandedViewUpToItsFrameThenOnAfterTheTrigger) {
