@@ -25,8 +25,9 @@ using nlohmann::json;
 namespace {
 
 // A 3-view PB-NBV scan of a 0.2 m bunny on the arm rig at 320 x 180 (small images, the same
-// geometry), recorded; then its replay (extra options: `replay_options`). Both in private network
-// namespaces.
+// geometry), recorded at the default rig speed (4x: 800 statuses/s, which lcm-logger keeps up with
+// on a loaded machine; at 20x it lost some), then its replay (extra options: `replay_options`).
+// Both in private network namespaces.
 struct Replayed {
   fs::path original, replay;
   json comparison, replay_scan;
@@ -36,7 +37,7 @@ fs::path record(const std::string& name) {
   const fs::path out = fresh_dir(name) / "original";
   const std::string cmd = netns_run() + " " + bin_dir() +
                           "/pbnbv scan --object bunny --size 0.2 --rig arm --views 3 --width 320 --height 180 --fx 174 "
-                          "--fy 174 --sim-speed 20 --out " + out.string();
+                          "--fy 174 --out " + out.string();
   const CommandResult r = run_command(cmd);
   EXPECT_EQ(r.exit_code, 0) << cmd << "\n" << r.output;
   return out;
@@ -108,7 +109,12 @@ TEST(Replay, ARecordedScanReplayedMakesTheSameDecisions) {
   EXPECT_EQ(s.replay_scan["stop"]["rule"], "replay");
   EXPECT_EQ(s.replay_scan["replay_of"], (original / "scan.json").string());
   ASSERT_EQ(s.replay_scan["views"].size(), 3u);
-  EXPECT_TRUE(s.comparison["same_decisions"].get<bool>()) << s.comparison["differences"].dump(2);
+  // A recording whose log lost the readings at an exposure cannot be replayed exactly (README,
+  // Replay): this one must be complete.
+  EXPECT_EQ(s.comparison["readings_lost_in_recording"], json::array());
+  EXPECT_TRUE(s.comparison["same_decisions"].get<bool>())
+      << s.comparison["differences"].dump(2) << "\nviews whose readings the recording lost: "
+      << s.comparison["readings_lost_in_recording"].dump();
   ASSERT_EQ(s.comparison["views"].size(), 3u);
   for (int i = 0; i < 3; ++i) {
     const json& v = s.comparison["views"][i];

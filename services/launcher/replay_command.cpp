@@ -52,7 +52,14 @@ int run_replay(const ReplayOptions& o, const fs::path& bin) {
   // frame in the log for every view that was captured.
   const std::vector<std::vector<Pose>> attempts = recorded_attempts(recorded, scan_json);
   const bus::RigLog log = bus::read_rig_log(logs, recorded_id);
-  const std::size_t played = recorded_views(bus::timeline_of(log)).size();
+  const std::vector<RecordedView> views = recorded_views(bus::timeline_of(log));
+  const std::size_t played = views.size();
+  // Views whose readings at the exposure lcm-logger lost: their camera pose cannot be the recording's.
+  nlohmann::json readings_lost = nlohmann::json::array();
+  for (std::size_t v = 0; v < views.size(); ++v) {
+    const auto lost = [](const StatusSpan& s) { return s.nearest_reading_lost || s.restamp_utime.has_value(); };
+    if (lost(views[v].arm) || (!log.turntable_statuses.empty() && lost(views[v].turntable))) readings_lost.push_back(v + 1);
+  }
   std::size_t captured = 0;
   for (const auto& v : recorded.value("views", nlohmann::json::array())) {
     if (v.contains("capture") && v["capture"].value("status", "") == "ok") ++captured;
@@ -72,6 +79,11 @@ int run_replay(const ReplayOptions& o, const fs::path& bin) {
             << logs.size() << " log file" << (logs.size() > 1 ? "s" : "") << ") with the " << name_of(s.planner)
             << " planner -> " << out.string() << " (scan " << s.scan_id << ")" << std::endl;
 
+  if (!readings_lost.empty()) {
+    std::cerr << "warning: " << logs.front() << " lacks the rig's readings nearest the exposure of view(s) "
+              << readings_lost.dump() << " (lost by lcm-logger): their camera pose will differ slightly from the "
+              << "recording's, and the decisions after them may too" << std::endl;
+  }
   std::vector<process::Child> children;
   children.push_back(scan_process(
       "lcm-logger", {"/usr/bin/lcm-logger", "-q", "--lcm-url=" + bus::lcm_url(), "-f", (out / "scan.lcmlog").string()}, s,
@@ -88,6 +100,7 @@ int run_replay(const ReplayOptions& o, const fs::path& bin) {
   nlohmann::json comparison = compare_scans(recorded, read_json((out / "scan.json").string()));
   comparison["original"] = dir.string();
   comparison["replay"] = out.string();
+  comparison["readings_lost_in_recording"] = readings_lost;
   comparison["planner"] = {{"original", recorded["settings"].value("planner", "")}, {"replay", name_of(s.planner)}};
   write_json_atomic(comparison, (out / "replay.json").string());
   std::cout << "\n" << comparison_table(comparison) << "-> " << (out / "replay.json").string() << std::endl;

@@ -52,20 +52,14 @@ class ReplayRigService {
       frame.scan_id = t.scan_id;
       bus_.publish(channels::kDepthFrame, frame);
     });
-    // Views whose still readings before the exposure the log lost (ReplayRig's StatusSpan).
-    const auto warn_lost = [](std::size_t view, const char* what, const StatusSpan& span, int64_t played_utime) {
-      if (!span.restamp_utime) return;
-      log_warn("recorded view " + std::to_string(view + 1) + ": the log lacks the still " + what +
-               " before the frame's exposure; the first one after it (" +
-               std::to_string((played_utime - *span.restamp_utime) / 1000) +
-               " ms later) stands for them, so the camera pose may differ from the recording's by what the rig moved "
-               "in between");
-    };
+    // Views whose readings at the exposure the log lost (StatusSpan): their pose cannot be the recording's.
     for (std::size_t v = 0; v < rig_.views().size(); ++v) {
       const RecordedView& r = rig_.views()[v];
-      warn_lost(v, "ARM_STATUS", r.arm, log_.arm_statuses[r.arm.at_frame].msg.utime);
-      if (!log_.turntable_statuses.empty()) {
-        warn_lost(v, "TURNTABLE_STATUS", r.turntable, log_.turntable_statuses[r.turntable.at_frame].msg.utime);
+      for (const auto& [what, span] : {std::pair{"ARM_STATUS", r.arm}, std::pair{"TURNTABLE_STATUS", r.turntable}}) {
+        if (!span.nearest_reading_lost && !span.restamp_utime) continue;
+        log_warn("recorded view " + std::to_string(v + 1) + ": the log lacks the " + what +
+                 " nearest the frame's exposure (lost by lcm-logger); the camera pose will differ from the "
+                 "recording's by what the rig moved between it and the nearest one logged");
       }
     }
     log_info("playing " + std::to_string(rig_.views().size()) + " recorded views (" +

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 
@@ -16,6 +17,17 @@ std::size_t last_before(const std::vector<RecordedStatus>& s, int64_t order) {
   std::size_t at = 0;
   for (std::size_t i = 0; i < s.size() && s[i].order < order; ++i) at = i;
   return at;
+}
+
+// The recording's status period: the median interval between consecutive readings (rig time).
+int64_t status_period_us(const std::vector<RecordedStatus>& s) {
+  std::vector<int64_t> d;
+  for (std::size_t i = 1; i < s.size(); ++i) {
+    if (s[i].utime > s[i - 1].utime) d.push_back(s[i].utime - s[i - 1].utime);
+  }
+  if (d.empty()) return std::numeric_limits<int64_t>::max();
+  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+  return d[d.size() / 2];
 }
 
 // The statuses played for a frame exposed at `utime` and logged at `order`, the rig following
@@ -41,6 +53,9 @@ StatusSpan span_of(const std::vector<RecordedStatus>& s, int64_t utime, int64_t 
   std::size_t end = span.at_frame + 1;
   while (end < s.size() && s[end].command_seq == seq && s[end].utime <= utime + kReplayAfterFrameUs) ++end;
   span.end = end;
+  int64_t nearest_us = std::numeric_limits<int64_t>::max();
+  for (std::size_t i = span.begin; i < span.end; ++i) nearest_us = std::min<int64_t>(nearest_us, std::llabs(s[i].utime - utime));
+  span.nearest_reading_lost = 2 * nearest_us > status_period_us(s);
   return span;
 }
 

@@ -65,6 +65,10 @@ struct RigTimeline {
 struct StatusSpan {
   std::size_t begin = 0, at_frame = 0, end = 1;
   std::optional<int64_t> restamp_utime;
+  // The log's reading nearest the exposure is further from it than half the recording's status
+  // period: the reading the scan's camera used is not in the log, and the replayed camera pose
+  // differs from the recorded one by what the rig moved in between.
+  bool nearest_reading_lost = false;
 };
 
 // One recorded view: the frame the scan used (the last frame the rig took while following the

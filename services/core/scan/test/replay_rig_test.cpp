@@ -126,6 +126,9 @@ TEST(RecordedViews, StillReadingsTheLogLostBeforeTheExposureAreStoodForByTheFirs
   EXPECT_EQ(views[0].arm.end, 45u);
   EXPECT_EQ(views[0].arm.restamp_utime, std::optional<int64_t>(640000));
   EXPECT_EQ(views[0].turntable.restamp_utime, std::nullopt);  // its readings are all there
+  EXPECT_TRUE(views[0].arm.nearest_reading_lost);   // the nearest logged is 10 ms away, the period 10 ms
+  EXPECT_FALSE(views[0].turntable.nearest_reading_lost);
+  EXPECT_FALSE(views[1].arm.nearest_reading_lost);
   ReplayRig rig(t);
   rig.on_arm_command(1, Vector6d::Constant(0.5));
   const ReplayRig::Statuses before = rig.tick();
