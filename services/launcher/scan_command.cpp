@@ -136,7 +136,7 @@ void continue_scan(process::Child& c) {
 // load it is seconds behind the bus (the twin's statuses at sim speed 20 are 4,000 messages/s),
 // so it is stopped once the others are and its file has stopped growing (0.3 s unchanged, at most
 // kLoggerDrainS); stopped with the rest, it lost the last view's frame, cloud and map.
-constexpr double kLoggerDrainS = 10.0;
+constexpr double kLoggerDrainS = 3.0;
 void stop_logger_last(std::vector<process::Child>& children, const fs::path& out) {
   const auto logger = std::find_if(children.begin(), children.end(), [](const process::Child& c) {
     return c.name == "lcm-logger" && c.running;
