@@ -1,4 +1,5 @@
 // `pbnbv replay` (commands.hpp).
+#include <algorithm>
 #include <iostream>
 
 #include "bus/bus.hpp"
