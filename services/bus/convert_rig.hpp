@@ -6,6 +6,8 @@
 #include <string>
 
 #include "bus/convert.hpp"
+#include "bus/rig_log.hpp"
+#include "core/scan/replay_rig.hpp"
 #include "core/scan/rig_readings.hpp"
 #include "pbnbv/arm_command_t.hpp"
 #include "pbnbv/arm_status_t.hpp"
@@ -97,6 +99,38 @@ inline DepthFrame from_msg(const depth_frame_t& m) {
   f.range = d.range;
   f.depth_m = std::move(d.depth_m);
   return f;
+}
+
+// The recorded rig (bus/rig_log.hpp) as the timeline the replay player plays: each message's rig
+// time, place in the log, stillness (mode settled or idle), the command followed, command targets.
+inline RigTimeline timeline_of(const RigLog& log) {
+  const auto still = [](int8_t mode) { return mode == arm_status_t::kModeSettled || mode == arm_status_t::kModeIdle; };
+  RigTimeline t;
+  for (const auto& s : log.arm_statuses) {
+    t.arm.push_back({s.msg.utime, s.order, still(s.msg.mode), s.msg.command_seq,
+                     to_vector6(s.msg.joint_position_commanded_rad, "ARM_STATUS joint_position_commanded_rad")});
+  }
+  for (const auto& s : log.turntable_statuses) {
+    RecordedStatus r{s.msg.utime, s.order, still(s.msg.mode), s.msg.command_seq, Vector6d::Zero()};
+    r.commanded_rad[0] = s.msg.angle_commanded_rad;
+    t.turntable.push_back(r);
+  }
+  for (const auto& f : log.frames) t.frames.push_back({f.msg.utime, f.order});
+  for (const auto& c : log.arm_commands) {
+    RecordedCommand r;
+    r.order = c.order;
+    r.seq = c.msg.seq;
+    r.target_rad = to_vector6(c.msg.joint_position_rad, "ARM_COMMAND joint_position_rad");
+    t.arm_commands.push_back(r);
+  }
+  for (const auto& c : log.turntable_commands) {
+    RecordedCommand r;
+    r.order = c.order;
+    r.seq = c.msg.seq;
+    r.target_rad[0] = c.msg.angle_rad;
+    t.turntable_commands.push_back(r);
+  }
+  return t;
 }
 
 }  // namespace pbnbv::bus

@@ -5,8 +5,10 @@
 // Wires the bus to the scan's sequence (core/scan/scan_sequencer.hpp: plan -> move -> capture ->
 // register -> map -> accumulate for each view, its deadlines and re-sends, the output folder):
 // converts what arrives, feeds it and the clock to the sequencer, publishes what it asks for and
-// prints its progress. Messages of another scan are ignored. Exit code: 0 scan done, 1 failed,
-// 130 stopped by SIGINT/SIGTERM (scan.json then says "stopped"), 2 bad options.
+// prints its progress. Messages of another scan are ignored. With --replay-of it replays a
+// recorded scan (`pbnbv replay`): the recorded views, with this scan's plans recorded beside them.
+// Exit code: 0 scan done, 1 failed, 130 stopped by SIGINT/SIGTERM (scan.json then says "stopped"),
+// 2 bad options.
 #include <unistd.h>
 
 #include <filesystem>
@@ -20,6 +22,7 @@
 #include "cli/options.hpp"
 #include "core/base/log.hpp"
 #include "core/io/json.hpp"
+#include "core/scan/scan_comparison.hpp"
 #include "core/scan/scan_sequencer.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "pbnbv/arm_status_t.hpp"
@@ -81,8 +84,9 @@ void take(bus::Bus& bus, const char* channel, std::vector<ScanEvent>& inbox) {
 }
 
 // Runs the scan to its end; returns the process exit code.
-int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out, bool resume) {
+int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out, bool resume, const std::string& replay_of) {
   ScanSequencer scan(settings, out);
+  if (!replay_of.empty()) scan.replay(recorded_attempts(read_json(replay_of), replay_of), replay_of);
   bus.serve_scan(settings.scan_id);
   // Handlers only check and convert (a bad message is rejected by the bus); the sequencer
   // takes the events after each spin, so its own errors are not mistaken for bad messages.
@@ -146,13 +150,17 @@ int main(int argc, char** argv) {
   cli::add_text(app, "settings", &settings_path, "the scan's settings [DIR/settings.json]", "PATH");
   bool resume = false;
   cli::add_flag(app, "resume", &resume, "continue the scan recorded in DIR (scan.json, cloud.ply) with its next view");
+  std::string replay_of;
+  cli::add_text(app, "replay-of", &replay_of,
+                "replay the scan recorded in this scan.json: move to its views (the plans are recorded, not followed)",
+                "PATH");
   if (const std::optional<int> code = cli::parse(app, argc, argv, std::cout, std::cerr)) return *code;
   install_stop_handlers();
   try {
     if (settings_path.empty()) settings_path = (fs::path(out) / "settings.json").string();
     const ScanSettings settings = scan_settings_from_json(read_json(settings_path));
     bus::Bus bus("coordinator");
-    return run(bus, settings, out, resume);
+    return run(bus, settings, out, resume, replay_of);
   } catch (const std::exception& e) {
     log_error(e.what());
     return 2;

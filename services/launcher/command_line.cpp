@@ -124,6 +124,14 @@ CommandLine::CommandLine()
     cli::add_text(c, "out", &calibrate_.out,
                   "folder for rig_calibrated.xml, calibration.json and report.md [out/calibration-<date-time>]", "DIR");
   }
+  replay_cmd_ = cli::add_command(app_, "replay",
+                                 "run a recorded scan's frames and poses through the pipeline again (no twin, no rig) "
+                                 "and compare its decisions with the recording's");
+  replay_cmd_->add_option("dir", replay_.dir, "the recorded scan's folder (scan.json, settings.json, scan.lcmlog)")
+      ->type_name("DIR");
+  cli::add_text(*replay_cmd_, "out", &replay_.out, "the replay's folder [DIR-replay-<date-time>]", "DIR");
+  cli::add(*replay_cmd_, kPlanner, &replay_.planner);
+  cli::add_flag(*replay_cmd_, "overwrite", &replay_.overwrite, "delete what --out holds first");
 
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");
@@ -247,14 +255,15 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
         return 0;
       }
       for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, stop_cmd_, rig_check_cmd_, rig_host_cmd_,
-                                import_urdf_cmd_, calibrate_cmd_, help_cmd_}) {
+                                import_urdf_cmd_, calibrate_cmd_, replay_cmd_, help_cmd_}) {
         if (c->get_name() == help_topic_) {
           out << c->help("pbnbv");
           return 0;
         }
       }
       throw std::invalid_argument("unknown command '" + help_topic_ +
-                                  "' (expected scan, bench, ablate, spy, stop, rig-check, rig-host, import-urdf, calibrate or help)");
+                                  "' (expected scan, bench, ablate, spy, stop, rig-check, rig-host, import-urdf, calibrate, "
+                                  "replay or help)");
     }
     if (given == scan_cmd_) {
       command_ = Command::kScan;
@@ -289,6 +298,9 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
         throw std::invalid_argument("--sphere-radius " + std::to_string(calibrate_.sphere.radius_m) + " m at --sphere-offset " +
                                     std::to_string(calibrate_.sphere.offset_m) + " m reaches beyond the platter's 0.2 m radius");
       }
+    } else if (given == replay_cmd_) {
+      command_ = Command::kReplay;
+      if (replay_.dir.empty()) throw std::invalid_argument("name the recorded scan's folder: pbnbv replay DIR");
     } else {
       command_ = Command::kSpy;
     }

@@ -1,6 +1,6 @@
 #pragma once
-// The command line of `pbnbv` (CLI11, cli/options.hpp): the commands scan, bench, ablate, spy and
-// help, each with its options from the table of scan options (defaults, ranges and help text
+// The command line of `pbnbv` (CLI11, cli/options.hpp): the commands scan, bench, ablate, spy, stop,
+// replay and help, each with its options from the table of scan options (defaults, ranges and help text
 // written once, in core/*/..._options.hpp and eval/bench.hpp), per-command --help, --version,
 // and settings files (--config FILE, TOML; the command line overrides the file). Parsing only:
 // running a command is scan_command.hpp / commands.hpp.
@@ -20,7 +20,7 @@
 
 namespace pbnbv::launcher {
 
-enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigCheck, kRigHost, kImportUrdf, kCalibrate };
+enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigCheck, kRigHost, kImportUrdf, kCalibrate, kReplay };
 
 // What `pbnbv calibrate` was asked for (core/rig/calibration.hpp).
 struct CalibrateOptions {
@@ -57,6 +57,14 @@ struct RigCheckOptions {
   std::string rig_model;  // the rig file the drivers are held to
   double deadline_s = 5;  // per driver answer
   bool passive = false;   // --passive: the preflight only, nothing commanded to move
+};
+
+// What `pbnbv replay` was asked for.
+struct ReplayOptions {
+  std::string dir;                     // the recorded scan's folder
+  std::string out;                     // empty: DIR-replay-<date-time> beside it
+  std::optional<PlannerKind> planner;  // none: the recording's
+  bool overwrite = false;
 };
 
 // What `pbnbv scan` was asked for: the object, the scan's settings (ScanSettings, before the
@@ -120,6 +128,7 @@ class CommandLine {
   const ImportUrdfOptions& import_urdf() const { return import_urdf_; }
   const RigCheckOptions& rig_check() const { return rig_check_; }
   const CalibrateOptions& calibrate() const { return calibrate_; }
+  const ReplayOptions& replay() const { return replay_; }
   const ScanOptions& scan() const { return scan_; }
   const eval::BenchSpec& bench() const { return bench_; }
   const AblateOptions& ablate() const { return ablate_; }
@@ -167,6 +176,8 @@ class CommandLine {
   RigCheckOptions rig_check_;
   CLI::App* calibrate_cmd_ = nullptr;
   CalibrateOptions calibrate_;
+  CLI::App* replay_cmd_ = nullptr;
+  ReplayOptions replay_;
   CLI::App* help_cmd_ = nullptr;
   Command command_ = Command::kHelp;
   ScanOptions scan_;

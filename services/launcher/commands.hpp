@@ -28,6 +28,12 @@ int run_spy();
 // the real rig): rig_calibrated.xml, calibration.json and report.md in the output folder. 0: done.
 // Throws naming what is missing (a silent driver, too few views with the sphere).
 int run_calibrate(const CalibrateOptions& o);
+// `pbnbv replay`: the recorded scan in o.dir run through the pipeline again with its own frames and
+// poses (pbnbv-replay-rig plays its scan.lcmlog instead of the twin; the coordinator follows its
+// views and records this planner's plans), then replay.json and a table: per view, the recording's
+// decisions against the replay's. Throws std::invalid_argument naming what is missing or wrong in
+// the folder before anything starts. 0: the replay completed (see replay.json for differences).
+int run_replay(const ReplayOptions& o, const std::filesystem::path& bin);
 
 // `pbnbv stop`: STOP on the bus (three times over 0.2 s: UDP may lose one).
 int run_stop(const StopOptions& o);

@@ -7,6 +7,8 @@
 //   pbnbv rig-host [options] the motion executor and camera service on the rig's computer
 //   pbnbv rig-check [--rig-model FILE] [--deadline S] [--passive]   the drivers against the contract
 //   pbnbv calibrate --rig-model FILE --sphere-radius R   hand-eye and turntable calibration
+//   pbnbv stop [--scan ID]   halt the rig and end the scan
+//   pbnbv replay DIR         run a recorded scan through the pipeline again and compare
 // The command line is launcher/command_line.hpp; running each command, launcher/commands.hpp.
 #include <filesystem>
 #include <iostream>
@@ -42,6 +44,8 @@ int main(int argc, char** argv) {
         return launcher::run_rig_host(line.rig_host(), self.parent_path());
       case launcher::Command::kRigCheck:
         return launcher::run_rig_check(line.rig_check());
+      case launcher::Command::kReplay:
+        return launcher::run_replay(line.replay(), self.parent_path());
       case launcher::Command::kHelp:
         std::cout << line.usage();
         return 0;

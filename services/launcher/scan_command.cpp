@@ -12,6 +12,7 @@
 
 #include "bus/bus.hpp"
 #include "bus/log_audit.hpp"
+#include "bus/rig_log.hpp"
 #include "pbnbv/heartbeat_t.hpp"
 #include "core/base/format.hpp"
 #include "core/base/signals.hpp"
@@ -23,6 +24,7 @@
 #include "launcher/commands.hpp"
 #include "launcher/external_rig.hpp"
 #include "pbnbv/stop_request_t.hpp"
+#include "launcher/supervise.hpp"
 #include "process/processes.hpp"
 
 namespace fs = std::filesystem;
@@ -30,37 +32,6 @@ namespace fs = std::filesystem;
 namespace pbnbv::launcher {
 
 namespace {
-
-// The local date and time as 20250131-142501 (folder names and scan ids).
-std::string timestamp() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  localtime_r(&t, &tm);
-  char b[32];
-  std::strftime(b, sizeof(b), "%Y%m%d-%H%M%S", &tm);
-  return b;
-}
-
-// A scan's folder: created if missing; one that holds anything is refused (a new scan would mix
-// its files with the old run's) unless `overwrite`, which empties it first.
-void prepare_out(const fs::path& out, bool overwrite) {
-  if (fs::exists(out) && !fs::is_directory(out)) {
-    throw std::invalid_argument("--out " + out.string() + " is a file, not a folder");
-  }
-  if (fs::exists(out) && !fs::is_empty(out)) {
-    if (!overwrite) {
-      std::string some;
-      int n = 0;
-      for (const auto& e : fs::directory_iterator(out)) {
-        if (n++ < 4) some += (some.empty() ? "" : ", ") + e.path().filename().string();
-      }
-      throw std::invalid_argument("--out " + out.string() + " is not empty (" + some + (n > 4 ? ", ..." : "") +
-                                  "): give a new folder, or --overwrite to delete what it holds");
-    }
-    for (const auto& e : fs::directory_iterator(out)) fs::remove_all(e.path());
-  }
-  fs::create_directories(out / "logs");
-}
 
 // processes.json: the launcher and every process it started, with PIDs and restarts (written at start, so
 // what runs can be found and stopped even if the launcher is gone) and, once stopped, how each
@@ -117,11 +88,7 @@ void finish_record(const fs::path& out, const std::string& state, const std::str
 // views scan.json recorded.
 void audit_log(const fs::path& out, const std::string& scan_id) {
   try {
-    std::vector<std::string> files;  // scan.lcmlog, and scan.lcmlog.NN after lcm-logger restarts
-    for (const auto& e : fs::directory_iterator(out)) {
-      if (e.path().filename().string().rfind("scan.lcmlog", 0) == 0) files.push_back(e.path().string());
-    }
-    std::sort(files.begin(), files.end());
+    const std::vector<std::string> files = bus::scan_log_files(out.string());  // scan.lcmlog, .NN after restarts
     const bus::LogContents log = bus::read_scan_logs(files, scan_id);
     const nlohmann::json scan = read_json((out / "scan.json").string());
     const nlohmann::json views = scan.value("views", nlohmann::json::array());
@@ -167,41 +134,73 @@ void continue_scan(process::Child& c) {
   c.append_log = true;
 }
 
-}  // namespace
-
-// Starts `children` (the coordinator last), keeps them running (restarts, hang detection) until
-// the coordinator ends or the user stops the scan, stops them all, and reports: scan.json's final
-// state, the log check, coverage. Returns the exit code.
-int supervise(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, bool record_log);
-
-int resume_scan(const fs::path& dir);
-
-int run_external_scan(const ScanOptions& o, const fs::path& bin);
-
-// The processes of a scan after the rig (the twin, or nothing on an external rig): motion,
-// camera, registration, mapping, the planner's services and the coordinator, last.
-void add_pipeline(const ScanOptions& o, const ScanSettings& s, const fs::path& out, const fs::path& bin,
-                  const std::function<void(const std::string&, std::vector<std::string>, bool)>& add) {
-  if (!o.rig_host) {  // else they run on the rig's computer (pbnbv rig-host)
-    add("motion", {(bin / "pbnbv-motion").string(), "--model", s.rig_model_path}, false);
-    add("camera", {(bin / "pbnbv-camera").string(), "--model", s.rig_model_path}, false);
+// Stops every process, lcm-logger last: it writes what it has queued only while it runs, and under
+// load it is seconds behind the bus (the twin's statuses at sim speed 20 are 4,000 messages/s),
+// so it is stopped once the others are and its file has stopped growing (0.3 s unchanged, at most
+// kLoggerDrainS); stopped with the rest, it lost the last view's frame, cloud and map.
+constexpr double kLoggerDrainS = 3.0;
+void stop_logger_last(std::vector<process::Child>& children, const fs::path& out) {
+  const auto logger = std::find_if(children.begin(), children.end(), [](const process::Child& c) {
+    return c.name == "lcm-logger" && c.running;
+  });
+  if (logger == children.end()) return process::stop_all(children, 5.0);
+  std::vector<process::Child> rest;
+  for (auto& c : children) {
+    if (&c != &*logger) rest.push_back(c);
   }
-  std::vector<std::string> registration = {(bin / "pbnbv-registration").string(), "--out", out.string()};
-  if (!o.registration) registration.push_back("--off");
-  add("registration", registration, false);
-  // The map's working volume: the cloud's crop box, above the turntable top.
-  Eigen::Vector3d volume_min = s.crop_min_m;
-  if (s.rig == RigKind::kArm) volume_min.z() = std::max(volume_min.z(), -s.object_z_m + s.ground_clearance_m);
-  auto vec = [&](const Eigen::Vector3d& v) { return exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z()); };
-  add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", exact(s.map_resolution_m), "--out", out.string(),
-                  "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m)}, false);
-  if (uses_ellipsoids(s.planner)) add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)}, false);
-  if (uses_view_scorer(s.planner)) add("scorer", {(bin / "pbnbv-scorer").string(), "--model", s.rig_model_path}, false);
-  add("coordinator", {(bin / "pbnbv-coordinator").string(), "--out", out.string()}, true);
+  process::stop_all(rest, 5.0);
+  const auto log_size = [&] {
+    const std::vector<std::string> files = bus::scan_log_files(out.string());
+    std::error_code ec;
+    return files.empty() ? std::uintmax_t{0} : fs::file_size(files.back(), ec);
+  };
+  std::uintmax_t size = log_size();
+  int unchanged = 0;
+  for (const double end = bus::now_s() + kLoggerDrainS; unchanged < 3 && bus::now_s() < end;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const std::uintmax_t now = log_size();
+    unchanged = now == size ? unchanged + 1 : 0;
+    size = now;
+  }
+  std::vector<process::Child> last = {*logger};
+  process::stop_all(last, 5.0);
+  std::size_t k = 0;
+  for (auto& c : children) c = &c == &*logger ? last.front() : rest[k++];
 }
 
-// A process of the scan: every one serves this scan only (--scan), other scans on the same bus
-// are ignored; its output goes to logs/NAME.log (and the terminal for the coordinator's progress).
+}  // namespace
+
+// The local date and time as 20250131-142501 (folder names and scan ids).
+std::string timestamp() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  localtime_r(&t, &tm);
+  char b[32];
+  std::strftime(b, sizeof(b), "%Y%m%d-%H%M%S", &tm);
+  return b;
+}
+
+// A scan's folder: created if missing; one that holds anything is refused (a new scan would mix
+// its files with the old run's) unless `overwrite`, which empties it first.
+void prepare_out(const fs::path& out, bool overwrite) {
+  if (fs::exists(out) && !fs::is_directory(out)) {
+    throw std::invalid_argument("--out " + out.string() + " is a file, not a folder");
+  }
+  if (fs::exists(out) && !fs::is_empty(out)) {
+    if (!overwrite) {
+      std::string some;
+      int n = 0;
+      for (const auto& e : fs::directory_iterator(out)) {
+        if (n++ < 4) some += (some.empty() ? "" : ", ") + e.path().filename().string();
+      }
+      throw std::invalid_argument("--out " + out.string() + " is not empty (" + some + (n > 4 ? ", ..." : "") +
+                                  "): give a new folder, or --overwrite to delete what it holds");
+    }
+    for (const auto& e : fs::directory_iterator(out)) fs::remove_all(e.path());
+  }
+  fs::create_directories(out / "logs");
+}
+
 process::Child scan_process(const std::string& name, std::vector<std::string> argv, const ScanSettings& s,
                             const fs::path& out, bool progress) {
   process::Child c;
@@ -213,6 +212,33 @@ process::Child scan_process(const std::string& name, std::vector<std::string> ar
   c.stdout_to_terminal = progress;
   return c;
 }
+
+void add_services(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, const fs::path& bin,
+                  bool registration, const std::vector<std::string>& coordinator_extra, bool on_rig_host) {
+  auto add = [&](const std::string& name, std::vector<std::string> argv, bool progress = false) {
+    children.push_back(scan_process(name, std::move(argv), s, out, progress));
+  };
+  if (!on_rig_host) {  // else they run on the rig's computer (pbnbv rig-host)
+    add("motion", {(bin / "pbnbv-motion").string(), "--model", s.rig_model_path});
+    add("camera", {(bin / "pbnbv-camera").string(), "--model", s.rig_model_path});
+  }
+  add("registration", {(bin / "pbnbv-registration").string(), "--out", out.string()});
+  if (!registration) children.back().argv.push_back("--off");
+  // The map's working volume: the cloud's crop box, above the turntable top.
+  Eigen::Vector3d volume_min = s.crop_min_m;
+  if (s.rig == RigKind::kArm) volume_min.z() = std::max(volume_min.z(), -s.object_z_m + s.ground_clearance_m);
+  auto vec = [&](const Eigen::Vector3d& v) { return exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z()); };
+  add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", exact(s.map_resolution_m), "--out", out.string(),
+                  "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m)});
+  if (uses_ellipsoids(s.planner)) add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
+  if (uses_view_scorer(s.planner)) add("scorer", {(bin / "pbnbv-scorer").string(), "--model", s.rig_model_path});
+  std::vector<std::string> coordinator = {(bin / "pbnbv-coordinator").string(), "--out", out.string()};
+  coordinator.insert(coordinator.end(), coordinator_extra.begin(), coordinator_extra.end());
+  add("coordinator", coordinator, true);
+}
+
+int resume_scan(const fs::path& dir);
+int run_external_scan(const ScanOptions& o, const fs::path& bin);
 
 int run_scan(const ScanOptions& o, const fs::path& bin) {
   if (!o.resume.empty()) return resume_scan(o.resume);
@@ -247,12 +273,13 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
   warn_small_receive_buffer();
 
   std::vector<process::Child> children;
-  auto add = [&](const std::string& name, std::vector<std::string> argv, bool progress) {
-    children.push_back(scan_process(name, std::move(argv), s, out, progress));
+  // Every process serves this scan only (--scan): other scans on the same bus are ignored.
+  auto add = [&](const std::string& name, std::vector<std::string> argv) {
+    children.push_back(scan_process(name, std::move(argv), s, out));
   };
   // The logger listens with the services' receive buffer (bus::lcm_url()).
   if (o.record_log) {
-    add("lcm-logger", {"/usr/bin/lcm-logger", "-q", "--lcm-url=" + bus::lcm_url(), "-f", (out / "scan.lcmlog").string()}, false);
+    add("lcm-logger", {"/usr/bin/lcm-logger", "-q", "--lcm-url=" + bus::lcm_url(), "-f", (out / "scan.lcmlog").string()});
   }
   add("twin", {(bin / "pbnbv-twin").string(), "--model", s.rig_model_path, "--mesh", stl,
                "--object-z", exact(s.object_z_m), "--model-out", (out / "twin_model.xml").string(),
@@ -262,8 +289,8 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
                "--noise-sigma", exact(o.noise_sigma), "--dropout", exact(o.dropout), "--speed", exact(s.sim_speed),
                "--hand-eye-error-mm", exact(o.hand_eye_error_mm), "--hand-eye-error-deg", exact(o.hand_eye_error_deg),
                "--turntable-error-deg", exact(o.turntable_error_deg), "--joint-error-deg", exact(o.joint_error_deg),
-               "--error-seed", std::to_string(o.error_seed), "--truth-out", (out / "twin_truth.jsonl").string()}, false);
-  add_pipeline(o, s, out, bin, add);
+               "--error-seed", std::to_string(o.error_seed), "--truth-out", (out / "twin_truth.jsonl").string()});
+  add_services(children, s, out, bin, o.registration);
 
   return supervise(children, s, out, o.record_log);
 }
@@ -303,17 +330,16 @@ int run_external_scan(const ScanOptions& o, const fs::path& bin) {
             << s.scan_id << ")" << std::endl;
   warn_small_receive_buffer();
   std::vector<process::Child> children;
-  auto add = [&](const std::string& name, std::vector<std::string> argv, bool progress) {
-    children.push_back(scan_process(name, std::move(argv), s, out, progress));
-  };
   if (o.record_log) {
-    add("lcm-logger", {"/usr/bin/lcm-logger", "-q", "--lcm-url=" + bus::lcm_url(), "-f", (out / "scan.lcmlog").string()}, false);
+    children.push_back(scan_process(
+        "lcm-logger", {"/usr/bin/lcm-logger", "-q", "--lcm-url=" + bus::lcm_url(), "-f", (out / "scan.lcmlog").string()}, s, out));
   }
-  add_pipeline(o, s, out, bin, add);
-  return supervise(children, s, out, o.record_log);
+  add_services(children, s, out, bin, o.registration, {}, o.rig_host);
+  return supervise(children, s, out, o.record_log, false);
 }
 
-int supervise(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, bool record_log) {
+int supervise(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, bool record_log,
+              bool evaluate) {
   install_stop_handlers();
 
   try {
@@ -410,9 +436,9 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
       bus.spin_once(100);
     }
     const auto motion = std::find_if(children.begin(), children.end(), [](const process::Child& c) { return c.name == "motion"; });
-    if (motion == children.end() || !motion->running) hold_rig(bus, s.scan_id);
+    if (s.external_rig && (motion == children.end() || !motion->running) && !s.scan_id.empty()) hold_rig(bus, s.scan_id);
   }
-  process::stop_all(children, 5.0);
+  stop_logger_last(children, out);
   // How every process ended (0 = clean exit), for the user and for the tests.
   write_json_atomic(processes_json(s.scan_id, children, watch), (out / "processes.json").string());
   if (!cause.empty()) {
@@ -426,12 +452,12 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
     }
   }
   if (record_log && fs::exists(out / "scan.json")) audit_log(out, s.scan_id);
-  if (code == 0 && s.external_rig) {
+  if (code == 0 && !evaluate) {
     std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
               << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
               << (out / "scan.json").string() << (record_log ? ", " + (out / "scan.lcmlog").string() : "")
-              << " (no coverage: the object is unknown)" << std::endl;
-  } else if (code == 0) {
+              << (s.external_rig ? " (no coverage: the object is unknown)" : "") << std::endl;
+  } else if (code == 0 && evaluate) {
     // Against the ground truth the twin rendered: coverage after every view.
     try {
       const CoverageParams cp;
@@ -454,17 +480,10 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
               << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
               << (out / "scan.json").string() << ", " << (out / "coverage.json").string()
               << (record_log ? ", " + (out / "scan.lcmlog").string() : "") << std::endl;
-  } else if (code != 130) {
+  } else if (code != 0 && code != 130) {
     std::cerr << "scan failed (exit " << code << "); logs in " << (out / "logs").string() << std::endl;
   }
   return code;
-}
-
-// Whether `pid` still runs a program of this scan (its command line names the scan's folder).
-bool still_running(int pid, const fs::path& out) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/cmdline");
-  const std::string cmdline((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return !cmdline.empty() && cmdline.find(out.string()) != std::string::npos;
 }
 
 int run_rig_host(const RigHostOptions& o, const fs::path& bin) {
@@ -500,6 +519,13 @@ int run_rig_host(const RigHostOptions& o, const fs::path& bin) {
   }
   process::stop_all(children, 5.0);
   return code;  // stopped by the user: the normal end of a host
+}
+
+// Whether `pid` still runs a program of this scan (its command line names the scan's folder).
+bool still_running(int pid, const fs::path& out) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/cmdline");
+  const std::string cmdline((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return !cmdline.empty() && cmdline.find(out.string()) != std::string::npos;
 }
 
 int resume_scan(const fs::path& dir) {
@@ -538,7 +564,7 @@ int resume_scan(const fs::path& dir) {
     throw std::invalid_argument("--resume " + out.string() + ": processes.json does not end with the coordinator");
   }
   std::cout << "pbnbv scan: resuming " << s.scan_id << " in " << out.string() << std::endl;
-  return supervise(children, s, out, record_log);
+  return supervise(children, s, out, record_log, !s.external_rig);
 }
 
 }  // namespace pbnbv::launcher

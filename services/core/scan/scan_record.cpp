@@ -116,6 +116,7 @@ json to_json(const PlanRecord& r) {
               {"excluded", p.num_excluded},
               {"scored", p.num_scored}}},
             {"alternative_quality_px", p.alternative_quality}};
+  if (p.outcome == PlanOutcome::kView) j["object_T_camera"] = to_json(p.object_T_camera);  // the chosen view
   if (r.ellipsoids) j["ellipsoids"] = ellipsoids_json(*r.ellipsoids);
   const double fit_s = r.ellipsoids ? r.ellipsoids->fit_s : 0.0;
   j["time_ms"] = {{"map_update", r.map_update_s * 1e3}, {"ellipsoid_fit", fit_s * 1e3},
@@ -239,6 +240,11 @@ void ScanRecord::continue_from_folder(const std::string& scan_id) {
 void ScanRecord::set_stop(const ScanStop& stop) { report_["stop"] = to_json(stop); }
 
 void ScanRecord::set_planning_stopped(const PlanRecord& p) { report_["planning_stopped"] = to_json(p); }
+
+void ScanRecord::set_replay_of(const std::string& recorded, int views) {
+  report_["replay_of"] = recorded;
+  views_planned_ = views;
+}
 
 void ScanRecord::write(const std::string& state, const std::string& message, int views_done, double elapsed_s) {
   report_["status"] = {{"state", state},           {"message", message},        {"views_done", views_done},

@@ -94,6 +94,8 @@ class ScanRecord {
   void add_view(const ViewRecord& v, int views_done, double elapsed_s);
   void set_stop(const ScanStop& stop);
   void set_planning_stopped(const PlanRecord& p);  // the plan that ended the scan
+  // A replay (`pbnbv replay`) of the scan recorded in `recorded` (its scan.json), `views` views.
+  void set_replay_of(const std::string& recorded, int views);
   // Writes scan.json with the status `state` ("running", "done", "stopped", "failed").
   void write(const std::string& state, const std::string& message, int views_done, double elapsed_s);
 

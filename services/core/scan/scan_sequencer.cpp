@@ -119,6 +119,18 @@ void ScanSequencer::resume(double now_s) {
   check_ready(now_s);
 }
 
+void ScanSequencer::replay(std::vector<std::vector<Pose>> attempts, const std::string& recorded) {
+  for (std::size_t i = 0; i < attempts.size(); ++i) {
+    if (attempts[i].empty()) {
+      throw std::invalid_argument(recorded + ": view " + std::to_string(i + 1) + " has no pose it moved to: cannot replay it");
+    }
+  }
+  if (attempts.empty()) throw std::invalid_argument(recorded + " records no view: nothing to replay");
+  s_.views = static_cast<int>(attempts.size());
+  replay_ = std::move(attempts);
+  record_.set_replay_of(recorded, s_.views);
+}
+
 void ScanSequencer::start(double now_s) {
   t_start_s_ = now_s;
   phase_ = Phase::kWaitingReady;
@@ -291,11 +303,11 @@ void ScanSequencer::begin_view(int i, double now_s) {
   registered_.reset();
   map_.reset();
   if (s_.planner == PlannerKind::kRing) {
-    options_ = {ring_[i]};
+    options_ = replay_ ? (*replay_)[i] : std::vector<Pose>{ring_[i]};
     return begin_move(now_s);
   }
   if (i == 0) {
-    options_ = {first_view_};
+    options_ = replay_ ? (*replay_)[0] : std::vector<Pose>{first_view_};
     view_.initial_view = true;
     return begin_move(now_s);
   }
@@ -352,6 +364,14 @@ void ScanSequencer::planned(const ViewPlan& p, double now_s) {
     plan.map_update_s = latest_map_summary_->update_s;
   }
   if (auto e = ellipsoids_.find(done_.latest_map); e != ellipsoids_.end()) plan.ellipsoids = e->second;
+  if (replay_) {  // the recorded view, whatever the plan
+    const std::string decision = p.outcome == PlanOutcome::kView ? "a view" : std::string(to_string(p.outcome)) + ": " + p.reason;
+    if (p.outcome == PlanOutcome::kView && !std::isfinite(done_.first_quality)) done_.first_quality = p.first_quality;
+    options_ = (*replay_)[iteration_];
+    progress("planned " + decision + "; replaying the recorded view");
+    view_.plan = std::move(plan);
+    return begin_move(now_s);
+  }
   if (p.outcome != PlanOutcome::kView) {
     const bool stop = p.outcome == PlanOutcome::kStop;
     stop_ = ScanStop{p.reason, done_.views_done, stop ? "planner" : "planner failed"};
@@ -500,6 +520,11 @@ void ScanSequencer::mapped(double now_s) {
 void ScanSequencer::next_view(double now_s) {
   if (iteration_ + 1 < s_.views) return begin_view(iteration_ + 1, now_s);
   if (done_.views_done == 0) return finish(ScanState::kFailed, "no view produced a cloud", now_s);
+  if (replay_) {
+    stop_ = ScanStop{"the recording's " + std::to_string(s_.views) + " views replayed", done_.views_done, "replay"};
+    record_.set_stop(*stop_);
+    return finish(ScanState::kDone, "replay complete: " + stop_->reason, now_s);
+  }
   stop_ = ScanStop{"view budget reached (--views " + std::to_string(s_.views) + ")", done_.views_done, "budget"};
   record_.set_stop(*stop_);
   finish(ScanState::kDone, "scan complete: " + stop_->reason, now_s);

@@ -113,6 +113,13 @@ class ScanSequencer {
   // planner it does not know.
   ScanSequencer(ScanSettings settings, std::filesystem::path out, ScanTimeouts timeouts = {});
 
+  // Replays a recorded scan (`pbnbv replay`): view i moves to the recorded view i's poses in
+  // `attempts[i]` (the options it tried, in order) instead of the plan's, so the recorded frames
+  // are used again; the plan is still asked for and recorded (the view this planner would
+  // choose), and a plan to stop does not end the scan. The scan ends after the recorded views.
+  // `recorded`: the recording's scan.json, named in the record. Call before start().
+  void replay(std::vector<std::vector<Pose>> attempts, const std::string& recorded);
+
   // Starts the readiness wait at now_s (SCAN_STATUS "starting").
   void start(double now_s);
   // Continues the scan recorded in the folder (scan.json, cloud.ply) instead: the views taken and
@@ -210,6 +217,7 @@ class ScanSequencer {
   std::optional<VoxelMapSummary> map_;
   Awaited awaited_;
 
+  std::optional<std::vector<std::vector<Pose>>> replay_;  // replaying: each recorded view's poses
   int next_view_after_ready_ = 0;           // the view after the readiness wait (resume: the next)
   bool paused_ = false;                     // the rig's drivers are silent: waiting for them
   std::set<std::string> seen_;

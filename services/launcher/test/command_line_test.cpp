@@ -207,6 +207,8 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
        "pbnbv calibrate: --sphere-radius 0.120000 m at --sphere-offset 0.100000 m reaches beyond the platter's 0.2 m radius"},
       {{"calibrate", "--rig-model", "r.xml", "--sphere-radius", "0.5"},
        "pbnbv calibrate: --sphere-radius: 0.5 is outside its range [0.01, 0.15] m"},
+      {{"replay"}, "pbnbv replay: name the recorded scan's folder: pbnbv replay DIR"},
+      {{"replay", "d", "--planner", "rign"}, "pbnbv replay: --planner"},
   };
   for (const auto& [words, message] : cases) {
     CommandLine line;

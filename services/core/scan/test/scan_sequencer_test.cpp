@@ -60,6 +60,7 @@ class ScanSequencerTest : public pbnbv::testing::TempDirTest {
   void start(const ScanSettings& s, bool hear_everyone = true) {
     settings_ = s;
     seq_ = std::make_unique<ScanSequencer>(s, dir_);
+    if (recorded_) seq_->replay(*recorded_, "recorded/scan.json");
     seq_->start(now_);
     collect();
     if (hear_everyone) {
@@ -250,6 +251,7 @@ class ScanSequencerTest : public pbnbv::testing::TempDirTest {
   }
 
   ScanSettings settings_;
+  std::optional<std::vector<std::vector<Pose>>> recorded_;  // replaying these views' poses
   std::unique_ptr<ScanSequencer> seq_;
   double now_ = 0;
   std::multimap<double, ScanEvent> due_;
@@ -559,6 +561,52 @@ TEST_F(ScanSequencerTest, APlannerStopEndsTheScanDoneWithItsReason) {
   EXPECT_EQ(scan["views"].size(), 1u);
   EXPECT_EQ(seq_->summary().rfind("scan complete: no frontier ellipsoid remains: 1 of 5 views, 10 points", 0), 0u)
       << seq_->summary();
+}
+
+TEST_F(ScanSequencerTest, AReplayMovesToTheRecordedViewsAndRecordsItsOwnPlans) {
+  // Recorded: view 1 at A; view 2 at B after B0 was unreachable; view 3 at C. This scan's planner
+  // chooses P for view 2 and stops at view 3; the replay moves to the recorded views anyway.
+  const Pose a = view_from(0.9, 0, 0.3), b0 = view_from(0, 0.9, 0.9), b = view_from(0, 0.9, 0.3),
+             c = view_from(-0.9, 0, 0.3), p = view_from(0.5, 0.5, 0.5);
+  recorded_ = std::vector<std::vector<Pose>>{{a}, {b0, b}, {c}};
+  motion = [inner = motion, b0](const MoveRequest& r) {
+    std::optional<MoveResult> m = inner(r);
+    if (r.object_T_camera.isApprox(b0)) m->status = MoveStatus::kUnreachable;
+    return m;
+  };
+  scorer = [p](const PlanRequest& r) {
+    ViewPlan plan = make_plan(r, p, {view_from(0.6, 0.4, 0.5)});
+    if (r.iteration == 2) {
+      plan.outcome = PlanOutcome::kStop;
+      plan.reason = "no frontier ellipsoid remains";
+    }
+    return plan;
+  };
+  start(test_settings("pbnbv", 10));
+  run();
+  ASSERT_TRUE(seq_->finished());
+  EXPECT_EQ(seq_->exit_code(), 0);
+  ASSERT_EQ(moves_.size(), 4u);
+  EXPECT_TRUE(moves_of(0).at(0).object_T_camera.isApprox(a));
+  ASSERT_EQ(moves_of(1).size(), 2u);
+  EXPECT_TRUE(moves_of(1)[0].object_T_camera.isApprox(b0));
+  EXPECT_TRUE(moves_of(1)[1].object_T_camera.isApprox(b));
+  EXPECT_TRUE(moves_of(2).at(0).object_T_camera.isApprox(c));
+  EXPECT_EQ(plans_.size(), 2u);
+  // The unreachable recorded pose is excluded from the next plan, as in the recording.
+  ASSERT_EQ(plans_[1].second.excluded.size(), 1u);
+  EXPECT_TRUE(plans_[1].second.excluded[0].isApprox(b0));
+  const json scan = scan_json();
+  EXPECT_EQ(scan["replay_of"], "recorded/scan.json");
+  EXPECT_EQ(scan["status"]["state"], "done");
+  EXPECT_EQ(scan["status"]["views_planned"], 3);
+  EXPECT_EQ(scan["stop"]["rule"], "replay");
+  ASSERT_EQ(scan["views"].size(), 3u);
+  EXPECT_TRUE(pose_from_json(scan["views"][1]["plan"]["object_T_camera"], "plan").isApprox(p));
+  EXPECT_EQ(scan["views"][1]["option"], 1);
+  EXPECT_EQ(scan["views"][2]["plan"]["outcome"], "stop");
+  EXPECT_FALSE(scan["views"][2]["plan"].contains("object_T_camera"));
+  EXPECT_TRUE(pose_from_json(scan["views"][2]["requested_object_T_camera"], "view 3").isApprox(c));
 }
 
 TEST_F(ScanSequencerTest, AFailedPlanFailsTheScan) {
