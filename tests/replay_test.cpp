@@ -160,7 +160,7 @@ TEST(Replay, AFolderThatCannotBeReplayedIsNamedBeforeAnythingStarts) {
 
   // A log of other channels only.
   dir = scan_folder("replay-no-rig", "bunny-00000000000000aa");
-  arm_command_t command;
+  arm_command_t command{};
   command.scan_id = "bunny-00000000000000aa";
   command.num_joints = 6;
   command.joint_position_rad.assign(6, 0.0);
@@ -171,13 +171,13 @@ TEST(Replay, AFolderThatCannotBeReplayedIsNamedBeforeAnythingStarts) {
 
   // The rig channels of another scan: the statuses name no scan, the command and the frame another.
   dir = scan_folder("replay-other-scan", "bunny-00000000000000aa");
-  arm_status_t status;
+  arm_status_t status{};
   status.num_joints = 6;
   status.joint_names.assign(6, "j");
   status.joint_position_rad = status.joint_velocity_rad_s = status.joint_position_commanded_rad =
       std::vector<double>(6, 0.0);
   command.scan_id = "teapot-00000000000000bb";
-  depth_frame_t frame;
+  depth_frame_t frame{};
   frame.scan_id = "teapot-00000000000000bb";
   write_log(dir / "scan.lcmlog", std::pair<std::string, arm_status_t>{"ARM_STATUS", status},
             std::pair<std::string, arm_command_t>{"ARM_COMMAND", command},

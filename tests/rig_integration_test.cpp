@@ -115,6 +115,12 @@ TEST(ExternalRig, AnUnknownObjectIsScannedAsWellAsWithTheTwinInTheLoop) {
   compare_with_twin_in_the_loop("kuka", "rig_arm.xml");
 }
 
+// The same on the UR5e (a non-spherical wrist: the general IK in the view scorer and the motion
+// executor).
+TEST(ExternalRig, AnUnknownObjectIsScannedAsWellOnTheUr5e) {
+  compare_with_twin_in_the_loop("ur5e", "rig_ur5e.xml");
+}
+
 // --dry-run checks the drivers, plans the first view and its reachability, prints the commands it
 // would send, and sends none: lcm-logger records the bus meanwhile and holds no ARM_COMMAND.
 TEST(ExternalRig, ADryRunCommandsNothing) {
@@ -203,4 +209,18 @@ TEST(TwoHosts, AScanAcrossALinkCoversWhatItDoesOnOneHost) {
   std::cout << "coverage after 5 views: one host " << one_host << " %, two hosts " << two_hosts << " %; the link carried "
             << log_mb << " MB in " << seconds << " s\n";
   EXPECT_NEAR(two_hosts, one_host, 1.0);
+}
+
+// The driver's frames are not the camera the rig file states (the twin renders 320 x 180, the
+// shipped rig file says 1280 x 720): the scan is refused before anything moves, naming the frame
+// size and the rig file's, and leaves no output folder.
+TEST(ExternalRig, AFrameWhoseSizeDisagreesWithTheRigFileIsNamed) {
+  const fs::path dir = fresh_dir("external-frame-size");
+  const CommandResult r = run_command(with_twin_as_hardware(
+      "--model-out " + (dir / "hw.xml").string(),
+      bin_dir() + "/pbnbv scan --external-rig --out " + (dir / "out").string()));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("frame size 320x180 disagrees with the rig file's camera 1280x720"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("nothing was commanded to move"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
 }

@@ -200,7 +200,7 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
       {{"bench"}, "pbnbv bench: --out DIR is required"},
       {{"ablate", "--out", "x"}, "pbnbv ablate: name the parameter: tmax, beta or initial-view"},
       {{"ablate", "beta", "--values", "2,400", "--out", "x"}, "pbnbv ablate: --values: --beta 400 is outside its range [1, 360]"},
-      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf, rig-check, calibrate, help)"},
+      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf, rig-check, calibrate, replay, help)"},
       {{"rig-check", "--deadline", "0"}, "pbnbv rig-check: --deadline: 0 is outside its range [0.5, 600] s"},
       {{"calibrate", "--sphere-radius", "0.05"}, "pbnbv calibrate: --rig-model is required"},
       {{"calibrate", "--rig-model", "r.xml", "--sphere-radius", "0.12", "--sphere-offset", "0.1"},
