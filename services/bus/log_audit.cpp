@@ -5,25 +5,13 @@
 #include <stdexcept>
 
 #include "bus/channels.hpp"
+#include "bus/rig_log.hpp"
 #include "pbnbv/depth_frame_t.hpp"
 #include "pbnbv/point_cloud_t.hpp"
 #include "pbnbv/registered_cloud_t.hpp"
 #include "pbnbv/voxel_set_t.hpp"
 
 namespace pbnbv::bus {
-
-namespace {
-
-template <class T>
-bool decode(const lcm::LogEvent& e, T* msg) {
-  try {
-    return msg->decode(e.data, 0, e.datalen) >= 0;
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
-}  // namespace
 
 LogContents read_scan_log(const std::string& path, const std::string& scan_id) {
   lcm::LogFile file(path, "r");
@@ -33,19 +21,19 @@ LogContents read_scan_log(const std::string& path, const std::string& scan_id) {
     ++c.events;
     if (e->channel == channels::kDepthFrame) {
       depth_frame_t m;
-      if (!decode(*e, &m)) ++c.undecodable;
+      if (!decode_logged(*e, &m)) ++c.undecodable;
       else if (m.scan_id == scan_id || m.scan_id.empty()) c.depth_frames.insert(m.seq);
     } else if (e->channel == channels::kCloud) {
       point_cloud_t m;
-      if (!decode(*e, &m)) ++c.undecodable;
+      if (!decode_logged(*e, &m)) ++c.undecodable;
       else if (m.scan_id == scan_id) c.clouds.insert(m.iteration);
     } else if (e->channel == channels::kRegisteredCloud) {
       registered_cloud_t m;
-      if (!decode(*e, &m)) ++c.undecodable;
+      if (!decode_logged(*e, &m)) ++c.undecodable;
       else if (m.scan_id == scan_id) c.registered_clouds.insert(m.iteration);
     } else if (e->channel == channels::kVoxelMap) {
       voxel_set_t m;
-      if (!decode(*e, &m)) ++c.undecodable;
+      if (!decode_logged(*e, &m)) ++c.undecodable;
       else if (m.scan_id == scan_id) c.voxel_maps.insert(m.iteration);
     }
   }

@@ -14,15 +14,6 @@ namespace pbnbv::bus {
 
 namespace {
 
-template <class T>
-bool decode(const lcm::LogEvent& e, T* msg) {
-  try {
-    return msg->decode(e.data, 0, e.datalen) >= 0;
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
 std::string joined(const std::vector<std::string>& v) {
   std::string s;
   for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
@@ -48,27 +39,27 @@ RigLog read_rig_log(const std::vector<std::string>& paths, const std::string& sc
       };
       if (e->channel == channels::kArmStatus) {
         arm_status_t m;
-        if (!decode(*e, &m) || m.num_joints != 6) continue;
+        if (!decode_logged(*e, &m) || m.num_joints != 6) continue;
         any_arm = true;
         if (!mine(m.scan_id, true)) continue;
         log.arm_statuses.push_back({order, std::move(m)});
       } else if (e->channel == channels::kTurntableStatus) {
         turntable_status_t m;
-        if (!decode(*e, &m) || !mine(m.scan_id, true)) continue;
+        if (!decode_logged(*e, &m) || !mine(m.scan_id, true)) continue;
         log.turntable_statuses.push_back({order, std::move(m)});
       } else if (e->channel == channels::kDepthFrame) {
         depth_frame_t m;
-        if (!decode(*e, &m)) continue;
+        if (!decode_logged(*e, &m)) continue;
         any_frame = true;
         if (!mine(m.scan_id, true)) continue;
         log.frames.push_back({order, std::move(m)});
       } else if (e->channel == channels::kArmCommand) {
         arm_command_t m;
-        if (!decode(*e, &m) || !mine(m.scan_id, false) || m.mode != arm_command_t::kModePosition || m.num_joints != 6) continue;
+        if (!decode_logged(*e, &m) || !mine(m.scan_id, false) || m.mode != arm_command_t::kModePosition || m.num_joints != 6) continue;
         log.arm_commands.push_back({order, std::move(m)});
       } else if (e->channel == channels::kTurntableCommand) {
         turntable_command_t m;
-        if (!decode(*e, &m) || !mine(m.scan_id, false)) continue;
+        if (!decode_logged(*e, &m) || !mine(m.scan_id, false)) continue;
         log.turntable_commands.push_back({order, std::move(m)});
       }
     }

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <lcm/lcm-cpp.hpp>
+
 #include "pbnbv/arm_command_t.hpp"
 #include "pbnbv/arm_status_t.hpp"
 #include "pbnbv/depth_frame_t.hpp"
@@ -16,6 +18,17 @@
 #include "pbnbv/turntable_status_t.hpp"
 
 namespace pbnbv::bus {
+
+// Decodes a log event as T; false (not a throw) for an event that does not decode: a log may hold
+// a truncated last event or another program's messages on a channel.
+template <class T>
+bool decode_logged(const lcm::LogEvent& e, T* msg) {
+  try {
+    return msg->decode(e.data, 0, e.datalen) >= 0;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
 
 // A message and its event number in the log (over every file, in order).
 template <class T>

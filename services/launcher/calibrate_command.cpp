@@ -20,6 +20,7 @@
 
 #include "bus/bus.hpp"
 #include "bus/convert_rig.hpp"
+#include "bus/rig_commands.hpp"
 #include "core/base/format.hpp"
 #include "core/base/signals.hpp"
 #include "core/base/units.hpp"
@@ -157,18 +158,7 @@ class CalibrationRun {
 
   void apply(const MotionStep& step) {
     for (const std::string& w : step.warnings) std::cerr << "pbnbv calibrate: " << w << std::endl;
-    if (step.arm_command) {
-      arm_command_t a = bus::to_msg(*step.arm_command);
-      a.utime = bus::now_utime();
-      a.scan_id = kCalibrationScan;
-      bus_.publish(channels::kArmCommand, a);
-    }
-    if (step.turntable_command) {
-      turntable_command_t t = bus::to_msg(*step.turntable_command);
-      t.utime = bus::now_utime();
-      t.scan_id = kCalibrationScan;
-      bus_.publish(channels::kTurntableCommand, t);
-    }
+    bus::publish_rig_commands(bus_, step.arm_command, step.turntable_command, kCalibrationScan);
     if (step.result) move_result_ = step.result;
   }
 

@@ -15,6 +15,7 @@
 #include "bus/convert_rig.hpp"
 #include "bus/convert_scan.hpp"
 #include "bus/reply_cache.hpp"
+#include "bus/rig_commands.hpp"
 #include "bus/rig_options.hpp"
 #include "bus/service.hpp"
 #include "core/base/format.hpp"
@@ -72,18 +73,7 @@ class MotionService {
   // Publishes what a step of the sequencer asks for.
   void apply(const MotionStep& step) {
     for (const std::string& w : step.warnings) log_warn(w);
-    if (step.arm_command) {
-      arm_command_t a = bus::to_msg(*step.arm_command);
-      a.utime = bus::now_utime();
-      a.scan_id = scan_;
-      bus_.publish(channels::kArmCommand, a);
-    }
-    if (step.turntable_command) {
-      turntable_command_t t = bus::to_msg(*step.turntable_command);
-      t.utime = bus::now_utime();
-      t.scan_id = scan_;
-      bus_.publish(channels::kTurntableCommand, t);
-    }
+    bus::publish_rig_commands(bus_, step.arm_command, step.turntable_command, scan_);
     if (step.result) {
       const MoveResult& r = *step.result;
       if (r.status == MoveStatus::kUnreachable || r.status == MoveStatus::kReached || r.status == MoveStatus::kTimedOut) {
