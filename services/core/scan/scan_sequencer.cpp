@@ -34,6 +34,25 @@ std::vector<Pose> views_known_at_start(const ScanSettings& s) {
   return ring_views(1, radius, elevation_rad, start_azimuth_rad, Eigen::Vector3d::Zero());
 }
 
+std::vector<Pose> first_view_options(const ScanSettings& s) {
+  const Pose first = views_known_at_start(s).front();
+  const Eigen::Vector3d eye = first.translation();
+  const double radius = eye.norm();
+  const double azimuth = std::atan2(eye.y(), eye.x());
+  const double elevation = std::asin(std::clamp(eye.z() / radius, -1.0, 1.0));
+  std::vector<Pose> options = {first};
+  for (const double up_deg : {0.0, 20.0, -20.0}) {
+    const double e = std::clamp(elevation + deg_to_rad(up_deg), deg_to_rad(-80.0), deg_to_rad(80.0));
+    for (const double round_deg : {0.0, 45.0, -45.0, 90.0, -90.0, 135.0, -135.0, 180.0}) {
+      if (up_deg == 0.0 && round_deg == 0.0) continue;  // the first view itself
+      const double a = azimuth + deg_to_rad(round_deg);
+      const Eigen::Vector3d p = radius * Eigen::Vector3d(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
+      options.push_back(look_at_z_up(p, Eigen::Vector3d::Zero()));
+    }
+  }
+  return options;
+}
+
 ScanSequencer::ScanSequencer(ScanSettings settings, fs::path out, ScanTimeouts timeouts)
     : s_(std::move(settings)), t_(timeouts), record_(std::move(out), s_) {
   const std::vector<Pose> start = views_known_at_start(s_);
@@ -307,7 +326,7 @@ void ScanSequencer::begin_view(int i, double now_s) {
     return begin_move(now_s);
   }
   if (i == 0) {
-    options_ = replay_ ? (*replay_)[0] : std::vector<Pose>{first_view_};
+    options_ = replay_ ? (*replay_)[0] : first_view_options(s_);
     view_.initial_view = true;
     return begin_move(now_s);
   }

@@ -107,6 +107,13 @@ struct ScanSoFar {
 // a sphere of radius d_c plus half the diagonal of the expected extent.
 std::vector<Pose> views_known_at_start(const ScanSettings& s);
 
+// The first view of a next-best-view scan and what the rig tries when it cannot reach it, in
+// order: the first view, then the same distance and elevation 45, 90, 135 and 180 deg round the
+// vertical axis (each way), then each azimuth again 20 deg higher and 20 deg lower (elevations
+// kept within +-80 deg), all looking at the object centre. A scan fails at view 1 only when the
+// rig reaches none of them.
+std::vector<Pose> first_view_options(const ScanSettings& s);
+
 class ScanSequencer {
  public:
   // A sequencer for the scan `settings` writing to `out`. Throws std::invalid_argument for a

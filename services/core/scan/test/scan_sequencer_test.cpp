@@ -414,6 +414,39 @@ TEST_F(ScanSequencerTest, AnUnreachableBestViewIsReplacedByTheNextAlternative) {
   EXPECT_EQ(plan["alternative_quality_px"], json::array({1000.0}));
 }
 
+// The first view out of reach: the rig tries the same view 45 deg round the vertical axis, then
+// -45 deg, ... (first_view_options), and the scan goes on from the first it reaches instead of
+// failing.
+TEST_F(ScanSequencerTest, AnUnreachableFirstViewFallsBackToTheNextOption) {
+  ScanSettings s = test_settings("pbnbv", 2);
+  const std::vector<Pose> options = first_view_options(s);
+  ASSERT_EQ(options.size(), 24u);  // 8 azimuths x 3 elevations
+  // Same distance from the centre, 45 deg apart in azimuth at the same height.
+  const Eigen::Vector3d a = options[0].translation(), b = options[1].translation();
+  EXPECT_NEAR(a.norm(), b.norm(), 1e-12);
+  EXPECT_NEAR(a.z(), b.z(), 1e-12);
+  EXPECT_NEAR(std::acos(a.head<2>().normalized().dot(b.head<2>().normalized())), kPi / 4, 1e-9);
+  motion = [inner = motion, first = options[0]](const MoveRequest& r) {
+    std::optional<MoveResult> m = inner(r);
+    if (r.object_T_camera.isApprox(first)) {
+      m->status = MoveStatus::kUnreachable;
+      m->reason = "the turntable's housing is in the way";
+    }
+    return m;
+  };
+  start(s);
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  const std::vector<MoveRequest> tries = moves_of(0);
+  ASSERT_EQ(tries.size(), 2u);
+  EXPECT_TRUE(tries[0].object_T_camera.isApprox(options[0]));
+  EXPECT_TRUE(tries[1].object_T_camera.isApprox(options[1]));
+  const json v0 = scan_json()["views"][0];
+  EXPECT_EQ(v0["option"], 1);
+  EXPECT_EQ(v0["failed_moves"][0]["reason"], "the turntable's housing is in the way");
+  EXPECT_EQ(scan_json()["status"]["views_done"], 2);
+}
+
 TEST_F(ScanSequencerTest, MoreThanAHundredAlternativesKeepRequestIdsUnique) {
   // View 1's plan has 120 alternatives; only the last is reachable. The motion executor answers
   // a request id it has seen with the answer it gave (idempotent requests), so an id reused by
