@@ -22,7 +22,7 @@
 #include "core/planning/planner.hpp"
 #include "core/rig/rig.hpp"
 #include "core/scan/scan_settings.hpp"
-#include "eval/visibility.hpp"
+#include "core/geometry/visibility.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/objects.hpp"
 #include "process/processes.hpp"

@@ -12,7 +12,8 @@ namespace pbnbv {
 inline constexpr ChoiceSetting<PlannerKind> kPlanner{
     "planner", PlannerKind::kPbnbv,
     "pbnbv: next-best-view planning (PB-NBV); ring: a fixed turntable ring; the benchmark's "
-    "baselines on PB-NBV's candidates: raycast (ray-casting information gain), random (a random candidate)"};
+    "baselines on PB-NBV's candidates: raycast (ray-casting information gain), random (a random candidate), "
+    "oracle (the most true surface not yet seen: the yardstick, twin scans only)"};
 inline constexpr ChoiceSetting<CandidateArea> kArea{
     "area", CandidateArea::kHemisphere,
     "candidate views on the hemisphere above the object, or on the full sphere (the paper's comparison: "
