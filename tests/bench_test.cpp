@@ -68,6 +68,30 @@ TEST(BenchRules, SummaryMeansMediansAndFailures) {
   EXPECT_EQ(s.views_to_95_of_mean, 3);  // the mean curve reaches 95 % at view 3
 }
 
+// Gap to the oracle: per view, the oracle's coverage minus the planner's, mean over the objects
+// both completed (an object only one of them completed does not count).
+TEST(BenchRules, GapToTheOracleMeansOverObjectsBothCompleted) {
+  auto run = [](const std::string& name, std::vector<double> c) {
+    eval::ObjectRun r;
+    r.object = name;
+    r.complete = !c.empty();
+    r.coverage_by_view = std::move(c);
+    return r;
+  };
+  std::vector<eval::PlannerSummary> planners = {
+      eval::summarise(PlannerKind::kPbnbv, {run("a", {40, 70, 90}), run("b", {50, 80}), run("c", {10, 20, 30})}, 3),
+      eval::summarise(PlannerKind::kOracle, {run("a", {50, 80, 95}), run("b", {60, 90, 99}), run("c", {})}, 3)};
+  eval::add_gaps_to_oracle(planners, 3);
+  EXPECT_EQ(planners[0].gap_objects, 2);  // c: the oracle did not complete it
+  // a: 10, 10, 5; b (80 holds for view 3): 10, 10, 19.
+  EXPECT_EQ(planners[0].gap_to_oracle_by_view, (std::vector<double>{10, 10, 12}));
+  EXPECT_EQ(planners[1].gap_to_oracle_by_view, (std::vector<double>{0, 0, 0}));
+  std::vector<eval::PlannerSummary> without = {planners[0]};
+  without[0].gap_to_oracle_by_view.clear();
+  eval::add_gaps_to_oracle(without, 3);
+  EXPECT_TRUE(without[0].gap_to_oracle_by_view.empty());
+}
+
 TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
   const fs::path out = fresh_dir("bench");
   const std::string cmd = netns_run() + " " + bin_dir() +

@@ -86,6 +86,10 @@ struct PlannerSummary {
   std::optional<int> views_to_95_of_mean;  // first view at which the mean coverage reaches 95 %
   int reached_95 = 0, complete = 0, failed = 0;
   std::vector<ObjectRun> objects;
+  // Percentage points of coverage the oracle has above this planner after views 1..N, mean over
+  // the objects complete for both (gap_objects of them); empty when the oracle was not run.
+  std::vector<double> gap_to_oracle_by_view;
+  int gap_objects = 0;
 };
 
 // Pure helpers (tested): the first view (1-based) whose coverage reaches `percent`; a curve
@@ -93,6 +97,9 @@ struct PlannerSummary {
 std::optional<int> views_to_reach(const std::vector<double>& coverage_by_view, double percent);
 std::vector<double> pad_views(std::vector<double> v, int n);
 PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs, int views);
+// Fills every planner's gap_to_oracle_by_view (the oracle's own: zeros) when `planners` holds
+// the oracle; otherwise leaves them empty.
+void add_gaps_to_oracle(std::vector<PlannerSummary>& planners, int views);
 
 struct BenchResult {
   BenchSpec spec;
