@@ -110,7 +110,8 @@ struct BenchResult {
 nlohmann::json to_json(const BenchResult& r);
 
 // Runs the scans that are not complete in spec.out, evaluates every scan, writes
-// spec.out/summary.json, report.md, coverage.png, time.png (and observable.png on the arm rig).
+// spec.out/summary.json, report.md, coverage.png, time.png (and observable.png on the arm rig,
+// gap.png when the oracle ran).
 // `self` is the pbnbv executable that runs each scan. Progress goes to `log`.
 BenchResult run_bench(const BenchSpec& spec, const std::filesystem::path& self, std::ostream& log);
 
