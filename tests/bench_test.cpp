@@ -68,6 +68,30 @@ TEST(BenchRules, SummaryMeansMediansAndFailures) {
   EXPECT_EQ(s.views_to_95_of_mean, 3);  // the mean curve reaches 95 % at view 3
 }
 
+// Gap to the oracle: per view, the oracle's coverage minus the planner's, mean over the objects
+// both completed (an object only one of them completed does not count).
+TEST(BenchRules, GapToTheOracleMeansOverObjectsBothCompleted) {
+  auto run = [](const std::string& name, std::vector<double> c) {
+    eval::ObjectRun r;
+    r.object = name;
+    r.complete = !c.empty();
+    r.coverage_by_view = std::move(c);
+    return r;
+  };
+  std::vector<eval::PlannerSummary> planners = {
+      eval::summarise(PlannerKind::kPbnbv, {run("a", {40, 70, 90}), run("b", {50, 80}), run("c", {10, 20, 30})}, 3),
+      eval::summarise(PlannerKind::kOracle, {run("a", {50, 80, 95}), run("b", {60, 90, 99}), run("c", {})}, 3)};
+  eval::add_gaps_to_oracle(planners, 3);
+  EXPECT_EQ(planners[0].gap_objects, 2);  // c: the oracle did not complete it
+  // a: 10, 10, 5; b (80 holds for view 3): 10, 10, 19.
+  EXPECT_EQ(planners[0].gap_to_oracle_by_view, (std::vector<double>{10, 10, 12}));
+  EXPECT_EQ(planners[1].gap_to_oracle_by_view, (std::vector<double>{0, 0, 0}));
+  std::vector<eval::PlannerSummary> without = {planners[0]};
+  without[0].gap_to_oracle_by_view.clear();
+  eval::add_gaps_to_oracle(without, 3);
+  EXPECT_TRUE(without[0].gap_to_oracle_by_view.empty());
+}
+
 TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
   const fs::path out = fresh_dir("bench");
   const std::string cmd = netns_run() + " " + bin_dir() +
@@ -154,6 +178,39 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
                                           "--views 4 --out " + out.string());
   EXPECT_NE(other.exit_code, 0);
   EXPECT_NE(other.output.find("views"), std::string::npos) << other.output;
+}
+
+// The oracle (pbnbv-scorer --truth-mesh, passed by pbnbv scan --planner oracle) on a box: from
+// the same first view, its second view adds at least as much surface as a random one, and the
+// summary, report and plot carry the random planner's gap to it.
+TEST(Bench, OracleIsTheYardstick) {
+  const fs::path out = fresh_dir("bench-oracle");
+  const std::string cmd = netns_run() + " " + bin_dir() +
+                          "/pbnbv bench --objects box --planners random,oracle --rig free --area full --views 2 --jobs 2 "
+                          "--out " + out.string();
+  const CommandResult r = run_command(cmd);
+  ASSERT_EQ(r.exit_code, 0) << cmd << "\n" << r.output;
+  const json s = read_json_file(out / "summary.json");
+  const json& oracle = s.at("oracle")["objects"].at("box")["coverage_by_view"];
+  const json& random = s.at("random")["objects"].at("box")["coverage_by_view"];
+  ASSERT_EQ(oracle.size(), 2u);
+  ASSERT_EQ(random.size(), 2u);
+  EXPECT_NEAR(oracle[0].get<double>(), random[0].get<double>(), 0.5);  // the same first view
+  EXPECT_GE(oracle[1].get<double>(), random[1].get<double>() - 0.5);
+  EXPECT_GT(oracle[1].get<double>(), oracle[0].get<double>() + 10.0);  // a box: at least one new face
+  const json& gap = s.at("random")["gap_to_oracle_by_view"];
+  ASSERT_EQ(gap.size(), 2u);
+  EXPECT_NEAR(gap[1].get<double>(), oracle[1].get<double>() - random[1].get<double>(), 1e-9);
+  EXPECT_EQ(s.at("random")["gap_to_oracle_objects"], 1);
+  // The scorer chose by the true surface.
+  std::ifstream log(out / "oracle" / "box" / "logs" / "scorer.log");
+  const std::string scorer((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(scorer.find("new true surface samples"), std::string::npos) << scorer;
+  std::ifstream md(out / "report.md");
+  const std::string report((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+  EXPECT_NE(report.find("## Gap to the oracle"), std::string::npos);
+  const cv::Mat img = cv::imread((out / "gap.png").string());
+  EXPECT_EQ(img.cols, 960);
 }
 
 }  // namespace

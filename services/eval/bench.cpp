@@ -22,7 +22,7 @@
 #include "core/planning/planner.hpp"
 #include "core/rig/rig.hpp"
 #include "core/scan/scan_settings.hpp"
-#include "eval/visibility.hpp"
+#include "core/geometry/visibility.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/objects.hpp"
 #include "process/processes.hpp"
@@ -270,6 +270,32 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
   return p;
 }
 
+void add_gaps_to_oracle(std::vector<PlannerSummary>& planners, int views) {
+  const auto oracle = std::find_if(planners.begin(), planners.end(),
+                                   [](const PlannerSummary& p) { return p.planner == PlannerKind::kOracle; });
+  if (oracle == planners.end()) return;
+  std::map<std::string, std::vector<double>> truth;  // the oracle's curve per complete object
+  for (const auto& o : oracle->objects) {
+    if (o.complete && !o.coverage_by_view.empty()) truth[o.object] = pad_views(o.coverage_by_view, views);
+  }
+  for (auto& p : planners) {
+    p.gap_to_oracle_by_view.assign(views, 0.0);
+    p.gap_objects = 0;
+    for (const auto& o : p.objects) {
+      const auto t = truth.find(o.object);
+      if (!o.complete || o.coverage_by_view.empty() || t == truth.end()) continue;
+      const std::vector<double> c = pad_views(o.coverage_by_view, views);
+      for (int i = 0; i < views; ++i) p.gap_to_oracle_by_view[i] += t->second[i] - c[i];
+      ++p.gap_objects;
+    }
+    if (p.gap_objects == 0) {
+      p.gap_to_oracle_by_view.clear();
+    } else {
+      for (double& g : p.gap_to_oracle_by_view) g /= p.gap_objects;
+    }
+  }
+}
+
 json to_json(const BenchResult& r) {
   json j;
   std::vector<std::string> order;
@@ -290,6 +316,10 @@ json to_json(const BenchResult& r) {
                {"views_to_95_of_mean_curve", p.views_to_95_of_mean ? json(*p.views_to_95_of_mean) : json(nullptr)}, {"objects_complete", p.complete}, {"objects_failed", p.failed},
                {"objects", objects}};
     if (!p.observable_by_view.empty()) pj["observable_coverage_by_view"] = p.observable_by_view;
+    if (!p.gap_to_oracle_by_view.empty()) {
+      pj["gap_to_oracle_by_view"] = p.gap_to_oracle_by_view;
+      pj["gap_to_oracle_objects"] = p.gap_objects;
+    }
     j[std::string(name_of(p.planner))] = pj;
   }
   j["planners"] = order;
@@ -472,6 +502,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
     runs[j.planner].push_back(r);
   }
   for (const auto& p : spec.planners) result.planners.push_back(summarise(p, runs[p], spec.views));
+  add_gaps_to_oracle(result.planners, spec.views);
   result.machine = machine_info();
   result.machine["scans_at_once"] = spec.jobs;
   write_json_atomic(to_json(result), (spec.out / "summary.json").string());

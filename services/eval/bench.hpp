@@ -86,6 +86,10 @@ struct PlannerSummary {
   std::optional<int> views_to_95_of_mean;  // first view at which the mean coverage reaches 95 %
   int reached_95 = 0, complete = 0, failed = 0;
   std::vector<ObjectRun> objects;
+  // Percentage points of coverage the oracle has above this planner after views 1..N, mean over
+  // the objects complete for both (gap_objects of them); empty when the oracle was not run.
+  std::vector<double> gap_to_oracle_by_view;
+  int gap_objects = 0;
 };
 
 // Pure helpers (tested): the first view (1-based) whose coverage reaches `percent`; a curve
@@ -93,6 +97,9 @@ struct PlannerSummary {
 std::optional<int> views_to_reach(const std::vector<double>& coverage_by_view, double percent);
 std::vector<double> pad_views(std::vector<double> v, int n);
 PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs, int views);
+// Fills every planner's gap_to_oracle_by_view (the oracle's own: zeros) when `planners` holds
+// the oracle; otherwise leaves them empty.
+void add_gaps_to_oracle(std::vector<PlannerSummary>& planners, int views);
 
 struct BenchResult {
   BenchSpec spec;
@@ -103,7 +110,8 @@ struct BenchResult {
 nlohmann::json to_json(const BenchResult& r);
 
 // Runs the scans that are not complete in spec.out, evaluates every scan, writes
-// spec.out/summary.json, report.md, coverage.png, time.png (and observable.png on the arm rig).
+// spec.out/summary.json, report.md, coverage.png, time.png (and observable.png on the arm rig,
+// gap.png when the oracle ran).
 // `self` is the pbnbv executable that runs each scan. Progress goes to `log`.
 BenchResult run_bench(const BenchSpec& spec, const std::filesystem::path& self, std::ostream& log);
 

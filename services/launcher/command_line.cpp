@@ -358,6 +358,10 @@ void CommandLine::resolve_scan() {
                                     "range are the driver's (checked against the rig file)");
       }
     }
+    if (uses_truth(s.planner)) {
+      throw std::invalid_argument("--planner oracle does not apply to --external-rig: the oracle chooses by the "
+                                  "object's true mesh, which only a twin scan has (it is the benchmark's yardstick)");
+    }
     s.external_rig = true;
     s.working_volume = scan_.working_volume.empty() ? working_volume_of(load_rig(s.rig_model_path))
                                                     : parse_working_volume(scan_.working_volume);

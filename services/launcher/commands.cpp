@@ -1,6 +1,7 @@
 // `pbnbv bench`, `ablate` and `spy` (commands.hpp).
 #include <unistd.h>
 
+#include <algorithm>
 #include <iostream>
 #include <stdexcept>
 #include <string>
@@ -26,7 +27,11 @@ int run_bench(const eval::BenchSpec& spec, const fs::path& self) {
   int failed = 0;
   for (const auto& p : r.planners) failed += p.failed;
   std::cout << "outputs: " << (spec.out / "summary.json").string() << ", " << (spec.out / "report.md").string()
-            << ", coverage.png, time.png; scans in " << spec.out.string() << "/<planner>/<object>/" << std::endl;
+            << ", coverage.png, time.png"
+            << (std::find(spec.planners.begin(), spec.planners.end(), PlannerKind::kOracle) != spec.planners.end()
+                    ? ", gap.png"
+                    : "")
+            << "; scans in " << spec.out.string() << "/<planner>/<object>/" << std::endl;
   if (failed > 0) {
     std::cerr << "pbnbv bench: " << failed << " scans did not complete (see summary.json and logs/); run the command "
               << "again to retry them" << std::endl;

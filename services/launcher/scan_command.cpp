@@ -232,6 +232,16 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
                   "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m)});
   if (uses_ellipsoids(s.planner)) add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
   if (uses_view_scorer(s.planner)) add("scorer", {(bin / "pbnbv-scorer").string(), "--model", s.rig_model_path});
+  if (uses_truth(s.planner)) {
+    // The oracle chooses by the true surface: the twin's object, written to the scan folder.
+    const fs::path truth = out / "object.stl";
+    if (!fs::exists(truth)) {
+      throw std::invalid_argument("--planner oracle needs the object's true mesh (" + truth.string() +
+                                  ", written for a twin scan): it is the benchmark's yardstick, not a planner for an "
+                                  "unknown object");
+    }
+    children.back().argv.insert(children.back().argv.end(), {"--truth-mesh", truth.string()});
+  }
   std::vector<std::string> coordinator = {(bin / "pbnbv-coordinator").string(), "--out", out.string()};
   coordinator.insert(coordinator.end(), coordinator_extra.begin(), coordinator_extra.end());
   add("coordinator", coordinator, true);

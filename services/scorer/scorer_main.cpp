@@ -7,6 +7,8 @@
 // projection, global partitioning, termination (core plan_pbnbv). The request's planner may also
 // be a baseline on the same candidates and map: "raycast" (ray-casting information gain over the
 // VOXEL_MAP's cells, core plan_raycast) or "random" (core plan_random); those need no ELLIPSOIDS.
+// "oracle" (core plan_oracle, the benchmark's yardstick) chooses by the object's true surface:
+// only when started with --truth-mesh (the launcher passes it for a twin scan with --planner oracle).
 // The request carries the scan's
 // history, so the scorer keeps no scan state: restarted, it answers the next request the same.
 // Reachability runs as soon as B is known, while the ellipsoid fitter is still working.
@@ -24,6 +26,7 @@
 #include "bus/service.hpp"
 #include "core/base/log.hpp"
 #include "core/base/parallel.hpp"
+#include "core/io/mesh_file.hpp"
 #include "core/planning/planner.hpp"
 #include "report/plan_figure.hpp"
 #include "core/rig/rig.hpp"
@@ -40,9 +43,16 @@ constexpr double kInputWaitS = 60.0;   // give up on a map / ellipsoids that nev
 constexpr std::size_t kAnswersKept = 64;
 constexpr std::size_t kCandidatesPerWorker = 16;  // reachability: below this another worker does not pay
 
+// The object's true surface, for the oracle.
+struct Truth {
+  TriangleMesh mesh;
+  SurfaceSamples samples;
+};
+
 class ScorerService {
  public:
-  ScorerService(bus::Bus& bus, const RigModel& rig) : bus_(bus), rig_(rig) {
+  ScorerService(bus::Bus& bus, const RigModel& rig, std::optional<Truth> truth)
+      : bus_(bus), rig_(rig), truth_(std::move(truth)) {
     bus_.subscribe<voxel_set_t>(channels::kVoxelMap, [this](const voxel_set_t& m) { maps_.offer(m); });
     bus_.subscribe<ellipsoid_set_t>(channels::kEllipsoids, [this](const ellipsoid_set_t& e) { ellipsoids_.offer(e); });
     bus_.subscribe<plan_request_t>(channels::kPlanRequest, [this](const plan_request_t& r) { on_request(r); });
@@ -95,6 +105,7 @@ class ScorerService {
     std::optional<std::vector<bool>> reachable;
     double reachability_s = 0;
     RaycastParams raycast;  // planner "raycast"
+    VisibilityParams visibility;  // planner "oracle"
   };
 
   void on_request(const plan_request_t& r) {
@@ -113,7 +124,15 @@ class ScorerService {
     if (!planner || !uses_view_scorer(*planner)) {
       view_plan_t out = bus::empty_answer(r);
       out.outcome = view_plan_t::kFailed;
-      out.reason = "planner '" + r.planner + "' is not served by pbnbv-scorer (pbnbv, raycast, random)";
+      out.reason = "planner '" + r.planner + "' is not served by pbnbv-scorer (pbnbv, raycast, random, oracle)";
+      publish(out);
+      return;
+    }
+    if (uses_truth(*planner) && !truth_) {
+      view_plan_t out = bus::empty_answer(r);
+      out.outcome = view_plan_t::kFailed;
+      out.reason = "planner 'oracle' needs the object's true mesh: this pbnbv-scorer was started without --truth-mesh "
+                   "(twin scans only)";
       publish(out);
       return;
     }
@@ -127,14 +146,15 @@ class ScorerService {
         bus::require_range(r.turntable_angle_rad, -1e3, 1e3, "PLAN_REQUEST turntable_angle_rad");
         bus::require_range(r.object_z_m, -10, 10, "PLAN_REQUEST object_z_m");
       }
-      if (p.planner == PlannerKind::kRaycast) {
-        p.raycast.camera = p.input.camera;
-        p.raycast.range = DepthRange{r.depth_min_m, r.depth_max_m};
+      if (p.planner == PlannerKind::kRaycast || p.planner == PlannerKind::kOracle) {
+        const DepthRange range{r.depth_min_m, r.depth_max_m};
         try {
-          p.raycast.range.validate();
+          range.validate();
         } catch (const std::exception& e) {
           throw std::invalid_argument(std::string("PLAN_REQUEST depth_min_m / depth_max_m: ") + e.what());
         }
+        p.raycast.camera = p.visibility.camera = p.input.camera;
+        p.raycast.range = p.visibility.range = range;
       }
     } catch (const std::exception& e) {
       view_plan_t out = bus::empty_answer(r);
@@ -213,6 +233,8 @@ class ScorerService {
         result = plan_raycast(p.input, bus::grid_from_msg(map), p.raycast);
       } else if (p.planner == PlannerKind::kRandom) {
         result = plan_random(p.input, static_cast<uint64_t>(r.seed));
+      } else if (p.planner == PlannerKind::kOracle) {
+        result = plan_oracle(p.input, truth_->mesh, truth_->samples, p.visibility);
       } else {
         result = plan_pbnbv(p.input);
       }
@@ -233,6 +255,7 @@ class ScorerService {
         PlanFigure figure = plan_figure(p.input, result, title.str());
         if (p.planner == PlannerKind::kRaycast) figure.quality_label = "unobserved voxels each scored candidate's rays reach";
         if (p.planner == PlannerKind::kRandom) figure.quality_label = "random choice (no score)";
+        if (p.planner == PlannerKind::kOracle) figure.quality_label = "true surface samples each candidate sees that no view taken saw";
         write_plan_figure(figure, r.figure_path);
       } catch (const std::exception& e) {
         bus_.note_error(std::string("figure not written: ") + e.what());
@@ -264,6 +287,7 @@ class ScorerService {
 
   bus::Bus& bus_;
   RigModel rig_;
+  std::optional<Truth> truth_;  // --truth-mesh: the oracle's
   std::vector<std::unique_ptr<ReachabilityChecker>> checkers_;  // one per worker, made on first use
   bus::LatestPerScan<voxel_set_t> maps_;
   bus::LatestPerScan<ellipsoid_set_t> ellipsoids_;
@@ -282,9 +306,24 @@ int main(int argc, char** argv) {
   cli::init(app);
   bus::RigOptions rig_options;
   bus::add_rig_options(app, &rig_options);
+  std::string truth_mesh;
+  cli::add_text(app, "truth-mesh", &truth_mesh,
+                "the object's true mesh in the object frame (a twin scan's object.stl), for --planner oracle only: "
+                "the benchmark's yardstick, never a real scan",
+                "PATH");
+  int truth_samples = kOracleSamples.value;
+  cli::add(app, kOracleSamples, &truth_samples);
   return bus::run_service("scorer", app, argc, argv, 5, [&](bus::Bus& bus) -> std::function<void()> {
     const RigModel rig = bus::load_rig(rig_options);
-    auto service = std::make_shared<ScorerService>(bus, rig);
+    std::optional<Truth> truth;
+    if (!truth_mesh.empty()) {
+      truth.emplace();
+      truth->mesh = load_mesh(truth_mesh);
+      truth->samples = sample_surface_with_normals(truth->mesh, static_cast<std::size_t>(truth_samples), kOracleSeed);
+      log_info("true mesh " + truth_mesh + ": " + std::to_string(truth->mesh.triangles.size()) + " triangles, " +
+               std::to_string(truth->samples.points.size()) + " surface samples (the oracle's)");
+    }
+    auto service = std::make_shared<ScorerService>(bus, rig, std::move(truth));
     log_info("ready");
     return [service] { service->tick(); };
   });

@@ -14,6 +14,8 @@ enum class PlannerKind : uint8_t {
   kRaycast,  // baseline: the candidate whose rays reveal the most unobserved voxels
   kRandom,   // baseline: a uniformly random candidate
   kRing,     // fixed views on a turntable ring (no planning step)
+  kOracle,   // the benchmark's yardstick: the candidate that sees the most true surface not yet
+             // seen (needs the object's true mesh: twin scans only)
 };
 
 // Candidate views on the whole sphere around B, or on the hemisphere above its centre.
@@ -26,10 +28,11 @@ enum class WhenDone : uint8_t { kStop, kSpread };
 template <>
 struct EnumNames<PlannerKind> {
   static constexpr std::string_view what = "planner";
-  static constexpr std::array<NamedValue<PlannerKind>, 4> names{{{PlannerKind::kPbnbv, "pbnbv"},
+  static constexpr std::array<NamedValue<PlannerKind>, 5> names{{{PlannerKind::kPbnbv, "pbnbv"},
                                                                  {PlannerKind::kRaycast, "raycast"},
                                                                  {PlannerKind::kRandom, "random"},
-                                                                 {PlannerKind::kRing, "ring"}}};
+                                                                 {PlannerKind::kRing, "ring"},
+                                                                 {PlannerKind::kOracle, "oracle"}}};
 };
 
 template <>
@@ -49,5 +52,7 @@ struct EnumNames<WhenDone> {
 constexpr bool uses_view_scorer(PlannerKind k) { return k != PlannerKind::kRing; }
 // The planners that need the ellipsoid fitter (PB-NBV only).
 constexpr bool uses_ellipsoids(PlannerKind k) { return k == PlannerKind::kPbnbv; }
+// The planners that need the object's true mesh (the oracle: a twin scan only).
+constexpr bool uses_truth(PlannerKind k) { return k == PlannerKind::kOracle; }
 
 }  // namespace pbnbv

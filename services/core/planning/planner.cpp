@@ -301,4 +301,48 @@ PlanResult plan_random(const PlanInput& in, uint64_t seed) {
   return r;
 }
 
+PlanResult plan_oracle(const PlanInput& in, const TriangleMesh& truth, const SurfaceSamples& samples,
+                       const VisibilityParams& visibility) {
+  PlanResult r;
+  if (!check_bbox(in, r)) return r;
+  prepare_candidates(in, r);
+  const int n = static_cast<int>(r.candidates.size());
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<uint8_t> seen = visible_from_any(truth, samples.points, samples.normals, in.views_done, visibility);
+  std::vector<int> pool;
+  std::vector<Pose> active;
+  for (int i = 0; i < n; ++i) {
+    if (r.status[i] != CandidateStatus::kScored) continue;
+    pool.push_back(i);
+    active.push_back(r.candidates[i]);
+  }
+  const std::vector<int> gains = count_newly_visible(truth, samples.points, samples.normals, active, seen, visibility);
+  for (std::size_t k = 0; k < pool.size(); ++k) {
+    r.scores[pool[k]].quality = gains[k];
+    r.scores[pool[k]].frontier_sum = gains[k];
+  }
+  r.num_scored = static_cast<int>(pool.size());
+  r.scoring_s = seconds_since(t0);
+  if (pool.empty()) {
+    r.reason = nothing_to_score(r);
+    return r;
+  }
+  rank_pool(in, r, std::move(pool));
+  const double best = r.scores[r.chosen].quality;
+  r.first_quality = std::isfinite(in.first_quality) ? in.first_quality : best;
+  const std::size_t seen_count = static_cast<std::size_t>(std::count(seen.begin(), seen.end(), uint8_t{1}));
+  std::ostringstream os;
+  os << seen_count << " of " << samples.points.size() << " true surface samples seen by the views taken";
+  if (best <= 0 && in.when_done == WhenDone::kSpread) return plan_spread(in, std::move(r), "no candidate sees a new true surface sample (" + os.str() + ")");
+  if (best <= 0) {
+    r.outcome = PlanResult::Outcome::kStop;
+    r.reason = "no candidate sees a new true surface sample (" + os.str() + ")";
+    return r;
+  }
+  r.outcome = PlanResult::Outcome::kView;
+  r.reason = "sees " + std::to_string(static_cast<int>(best)) + " new true surface samples (" + os.str() + ", " +
+             std::to_string(r.num_scored) + " candidates scored)";
+  return r;
+}
+
 }  // namespace pbnbv

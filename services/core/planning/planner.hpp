@@ -12,6 +12,8 @@
 #include <vector>
 
 #include "core/geometry/camera_model.hpp"
+#include "core/geometry/mesh.hpp"
+#include "core/geometry/visibility.hpp"
 #include "core/planning/mvee.hpp"
 #include "core/base/pose.hpp"
 #include "core/planning/raycast.hpp"
@@ -118,5 +120,14 @@ PlanResult plan_pbnbv(const PlanInput& in);
 //  - random: a uniformly random candidate (and random alternatives), reproducible from `seed`.
 PlanResult plan_raycast(const PlanInput& in, const VoxelGrid& grid, const RaycastParams& params);
 PlanResult plan_random(const PlanInput& in, uint64_t seed);
+
+// The benchmark's yardstick, not a planner for an unknown object: it knows the true surface.
+// On the same candidates, reachability filter and exclusions, greedily the candidate that sees
+// the most of `truth`'s samples not seen by any view taken (in.views_done; seen as
+// visible_from_any counts, core/geometry/visibility.hpp, with the camera and depth range of
+// `visibility`); quality = that count. No partitioning. Nothing new to see: kStop, or kSpread's
+// farthest view. Throws as visible_from_any for a bad mesh, samples or parameters.
+PlanResult plan_oracle(const PlanInput& in, const TriangleMesh& truth, const SurfaceSamples& samples,
+                       const VisibilityParams& visibility);
 
 }  // namespace pbnbv

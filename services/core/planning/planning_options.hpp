@@ -12,7 +12,8 @@ namespace pbnbv {
 inline constexpr ChoiceSetting<PlannerKind> kPlanner{
     "planner", PlannerKind::kPbnbv,
     "pbnbv: next-best-view planning (PB-NBV); ring: a fixed turntable ring; the benchmark's "
-    "baselines on PB-NBV's candidates: raycast (ray-casting information gain), random (a random candidate)"};
+    "baselines on PB-NBV's candidates: raycast (ray-casting information gain), random (a random candidate), "
+    "oracle (the most true surface not yet seen: the yardstick, twin scans only)"};
 inline constexpr ChoiceSetting<CandidateArea> kArea{
     "area", CandidateArea::kHemisphere,
     "candidate views on the hemisphere above the object, or on the full sphere (the paper's comparison: "
@@ -36,6 +37,11 @@ inline constexpr Setting<int> kAlternatives{"alternatives", 5, 0, 100, "",
                                             "next-best views tried when the rig cannot reach the best"};
 inline constexpr Setting<int64_t> kMixtureSeed{"seed", 1, 0, int64_t{1} << 30, "",
                                               "the Gaussian mixture's seed (k-means++ starts)"};
+// The oracle's true surface samples: as many, and drawn as, the benchmark's coverage samples
+// (eval/coverage.hpp CoverageParams: 10,000, seed 1).
+inline constexpr Setting<int> kOracleSamples{"truth-samples", 10000, 100, 1000000, "",
+                                             "surface samples on the true mesh the oracle counts (--truth-mesh)"};
+inline constexpr uint64_t kOracleSeed = 1;
 inline constexpr Setting<int64_t> kPlannerSeed{"seed", 1, 0, int64_t{1} << 62, "", "the random planner's seed"};
 
 }  // namespace pbnbv

@@ -146,7 +146,7 @@ struct PlanRequest {
   std::string scan_id;
   int iteration = 0;                       // the view to plan, 0-based
   int64_t request_id = 0;
-  PlannerKind planner = PlannerKind::kPbnbv;  // pbnbv, raycast or random (not ring)
+  PlannerKind planner = PlannerKind::kPbnbv;  // pbnbv, raycast, random or oracle (not ring)
   int64_t seed = 0;                        // the random planner's seed for this request
   int map_iteration = -1;                  // plan from the map of this view
   std::vector<Pose> views_done;            // registered camera poses of the mapped views

@@ -404,6 +404,7 @@ void ScanSequencer::planned(const ViewPlan& p, double now_s) {
   options_.insert(options_.end(), p.alternatives.begin(), p.alternatives.end());
   const std::string quality = s_.planner == PlannerKind::kPbnbv     ? "F " + fixed(p.view_quality, 2) + " px, "
                               : s_.planner == PlannerKind::kRaycast ? "gain " + fixed(p.view_quality, 2) + " voxels, "
+                              : s_.planner == PlannerKind::kOracle  ? fixed(p.view_quality, 0) + " new true surface samples, "
                                                         : "";
   progress("planned: " + quality + std::to_string(p.num_scored) + " candidates scored");
   view_.plan = std::move(plan);

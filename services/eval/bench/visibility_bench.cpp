@@ -7,7 +7,7 @@
 
 #include "core/geometry/mesh.hpp"
 #include "core/geometry/views.hpp"
-#include "eval/visibility.hpp"
+#include "core/geometry/visibility.hpp"
 #include "core/base/units.hpp"
 
 namespace {

@@ -1,4 +1,4 @@
-#include "eval/visibility.hpp"
+#include "core/geometry/visibility.hpp"
 
 #include <gtest/gtest.h>
 

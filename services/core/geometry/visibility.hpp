@@ -1,6 +1,6 @@
 #pragma once
-// Observable coverage: which ground-truth surface samples at least one camera view can see, so
-// the benchmark can report coverage of the observable part of an object.
+// Which ground-truth surface samples a camera view sees: the benchmark's observable coverage
+// (eval/bench.cpp) and the oracle planner's gain (core/planning/planner.hpp plan_oracle).
 #include <Eigen/Core>
 #include <cstdint>
 #include <vector>
@@ -49,5 +49,16 @@ std::vector<uint8_t> visible_from_any(const TriangleMesh& mesh,
                                       const std::vector<Eigen::Vector3d>& samples,
                                       const std::vector<Eigen::Vector3d>& normals,
                                       const std::vector<Pose>& views, const VisibilityParams& p);
+
+// counts[j] = the samples view j sees (the rules of visible_from_any) that already_seen does not
+// flag (already_seen[i] != 0: not counted; empty: none seen yet). The mesh's tree is built once;
+// the views are shared out over the workers. Throws as visible_from_any, and for an
+// already_seen whose size is neither 0 nor the number of samples.
+std::vector<int> count_newly_visible(const TriangleMesh& mesh,
+                                     const std::vector<Eigen::Vector3d>& samples,
+                                     const std::vector<Eigen::Vector3d>& normals,
+                                     const std::vector<Pose>& views,
+                                     const std::vector<uint8_t>& already_seen,
+                                     const VisibilityParams& p);
 
 }  // namespace pbnbv
