@@ -11,7 +11,10 @@
 // 2 bad options.
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <thread>
 #include <optional>
 #include <iostream>
 #include <variant>
@@ -34,6 +37,21 @@ using namespace pbnbv;
 namespace fs = std::filesystem;
 
 namespace {
+
+// Whether the process that started this one has died: this process was handed to another parent,
+// or the launcher is a zombie or gone. Asked when a stop signal arrives, which may be the death
+// signal of a launcher killed outright (PR_SET_PDEATHSIG); looks for up to 0.3 s, so that it does
+// not depend on when the kernel hands this process on.
+bool launcher_died(pid_t launcher) {
+  for (int i = 0; i < 30; ++i) {
+    if (::getppid() != launcher) return true;
+    std::ifstream stat("/proc/" + std::to_string(launcher) + "/stat");
+    std::string pid, name, state;
+    if (!(stat >> pid >> name >> state) || state == "Z" || state == "X") return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
+}
 
 constexpr int kSpinMs = 20;  // longest wait for a message before the sequencer's tick
 constexpr double kStopLingerS = 0.3;  // after STOP, before the scan's processes are stopped
@@ -115,7 +133,7 @@ int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out, bool r
     send(bus, scan.take_outputs());
     if (stop_requested()) {
       // SIGTERM from the kernel when the launcher died (PR_SET_PDEATHSIG): say so.
-      const bool orphaned = ::getppid() != parent;
+      const bool orphaned = launcher_died(parent);
       scan.stop(bus::now_s(), orphaned ? "stopped: the launcher (pid " + std::to_string(parent) + ") died"
                                        : "stopped by the user");
       break;

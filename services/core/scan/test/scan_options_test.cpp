@@ -146,7 +146,7 @@ void expect_names_round_trip(const std::string& what, const std::string& choices
 }
 
 TEST(ScanKinds, EveryNameRoundTripsAndAnUnknownOneIsNamedWithTheChoices) {
-  expect_names_round_trip<PlannerKind>("planner", "pbnbv, raycast, random or ring");
+  expect_names_round_trip<PlannerKind>("planner", "pbnbv, raycast, random, ring or oracle");
   expect_names_round_trip<CandidateArea>("candidate area", "hemi or full");
   expect_names_round_trip<WhenDone>("when-done rule", "stop or spread");
   expect_names_round_trip<RigKind>("rig kind", "arm or free");
@@ -186,7 +186,7 @@ TEST(ScanSettingsJson, KindsAreWrittenAsTheSameTextAndReadBack) {
   nlohmann::json bad = j;
   bad["planner"] = "greedy";
   EXPECT_EQ(error_message([&] { scan_settings_from_json(bad); }),
-            "scan settings: unknown planner 'greedy' (expected pbnbv, raycast, random or ring)");
+            "scan settings: unknown planner 'greedy' (expected pbnbv, raycast, random, ring or oracle)");
   bad = j;
   bad["planning"]["candidates"] = 0;
   EXPECT_EQ(error_message([&] { scan_settings_from_json(bad); }),
