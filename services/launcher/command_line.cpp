@@ -320,20 +320,20 @@ std::string CommandLine::usage() const {
 void CommandLine::resolve_scan() {
   ScanSettings& s = scan_.settings;
   const ScanPending& p = scan_pending_;
+  std::optional<RigModel> rig;  // read once, when something needs it
   if (!p.rig_model.empty()) {
     // The file decides the kind of rig: --rig may only agree with it.
-    RigModel rig;
     try {
       rig = load_rig(fs::absolute(p.rig_model).string());
     } catch (const std::runtime_error& e) {
       throw std::invalid_argument(std::string("--rig-model: ") + e.what());
     }
-    if (scan_cmd_->get_option("--rig")->count() > 0 && s.rig != rig.kind) {
-      throw std::invalid_argument("--rig " + to_string(s.rig) + " disagrees with --rig-model " + rig.model_path +
-                                  ", which describes a rig of kind " + to_string(rig.kind));
+    if (scan_cmd_->get_option("--rig")->count() > 0 && s.rig != rig->kind) {
+      throw std::invalid_argument("--rig " + to_string(s.rig) + " disagrees with --rig-model " + rig->model_path +
+                                  ", which describes a rig of kind " + to_string(rig->kind));
     }
-    s.rig = rig.kind;
-    s.rig_model_path = rig.model_path;
+    s.rig = rig->kind;
+    s.rig_model_path = rig->model_path;
   } else {
     s.rig_model_path = default_rig_path(s.rig);
   }
@@ -363,7 +363,8 @@ void CommandLine::resolve_scan() {
                                   "object's true mesh, which only a twin scan has (it is the benchmark's yardstick)");
     }
     s.external_rig = true;
-    s.working_volume = scan_.working_volume.empty() ? working_volume_of(load_rig(s.rig_model_path))
+    if (scan_.working_volume.empty() && !rig) rig = load_rig(s.rig_model_path);
+    s.working_volume = scan_.working_volume.empty() ? working_volume_of(*rig)
                                                     : parse_working_volume(scan_.working_volume);
   } else {
     for (const char* external_only : {"--working-volume", "--driver-timeout", "--dry-run", "--rig-host"}) {

@@ -7,14 +7,12 @@
 #include <string>
 #include <vector>
 
-#include <chrono>
-#include <thread>
 
 #include "bus/bus.hpp"
 #include "core/io/json.hpp"
 #include "core/rig/urdf_import.hpp"
 #include "launcher/commands.hpp"
-#include "pbnbv/stop_request_t.hpp"
+#include "launcher/supervise.hpp"
 #include "rigcheck/rig_check.hpp"
 
 namespace fs = std::filesystem;
@@ -62,14 +60,7 @@ int run_spy() {
 
 int run_stop(const StopOptions& o) {
   bus::Bus bus("stop");
-  stop_request_t m;
-  m.scan_id = o.scan_id;
-  m.reason = o.reason;
-  for (int i = 0; i < 3; ++i) {
-    m.utime = bus::now_utime();
-    bus.publish(channels::kStop, m);
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
+  send_stop(bus, o.scan_id, o.reason);
   std::cout << "pbnbv stop: STOP sent to " << (o.scan_id.empty() ? std::string("every scan") : "scan " + o.scan_id)
             << " on " << bus::lcm_url() << std::endl;
   return 0;

@@ -8,13 +8,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "bus/convert_rig.hpp"
+#include "bus/rig_commands.hpp"
 #include "core/base/format.hpp"
 #include "core/base/units.hpp"
 #include "core/planning/planner.hpp"
 #include "core/scan/scan_sequencer.hpp"
-#include "pbnbv/arm_command_t.hpp"
-#include "pbnbv/turntable_command_t.hpp"
 
 namespace pbnbv::launcher {
 
@@ -111,22 +109,13 @@ void hold_rig(bus::Bus& bus, const std::string& scan_id) {
     if (std::isfinite(m.angle_rad)) angle = m.angle_rad;
   });
   for (const double t0 = bus::now_s(); !angle && bus::now_s() - t0 < 0.5;) bus.spin_once(20);
-  arm_command_t a{};
-  a.seq = bus::now_utime();
-  a.scan_id = scan_id;
-  a.num_joints = 6;
-  a.joint_position_rad.assign(6, 0.0);
-  a.speed_scale = 1.0;
-  a.mode = arm_command_t::kModeHold;
-  turntable_command_t t{};
-  t.seq = a.seq;
-  t.scan_id = scan_id;
-  t.speed_scale = 1.0;
-  t.angle_rad = angle.value_or(0.0);
+  ArmCommand hold;
+  hold.seq = bus::now_utime();
+  hold.hold = true;
+  std::optional<TurntableCommand> turntable;
+  if (angle) turntable = TurntableCommand{hold.seq, *angle, 1.0};
   for (int i = 0; i < 3; ++i) {
-    a.utime = t.utime = bus::now_utime();
-    bus.publish(channels::kArmCommand, a);
-    if (angle) bus.publish(channels::kTurntableCommand, t);
+    bus::publish_rig_commands(bus, hold, turntable, scan_id);
     bus.spin_once(50);
   }
 }

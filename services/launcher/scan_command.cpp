@@ -170,6 +170,17 @@ void stop_logger_last(std::vector<process::Child>& children, const fs::path& out
 
 }  // namespace
 
+void send_stop(bus::Bus& bus, const std::string& scan_id, const std::string& reason) {
+  stop_request_t stop;
+  stop.scan_id = scan_id;
+  stop.reason = reason;
+  for (int i = 0; i < 3; ++i) {
+    stop.utime = bus::now_utime();
+    bus.publish(channels::kStop, stop);
+    bus.spin_once(100);
+  }
+}
+
 // The local date and time as 20250131-142501 (folder names and scan ids).
 std::string timestamp() {
   const std::time_t t = std::time(nullptr);
@@ -437,14 +448,7 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
   if (code != 0) {
     // Leave the rig stopped where it is: the motion executor halts it on STOP (three times: UDP may
     // lose one); a rig whose motion executor is gone is held by the launcher itself.
-    stop_request_t stop;
-    stop.scan_id = s.scan_id;
-    stop.reason = cause.empty() ? (code == 130 ? "interrupted" : "the scan failed") : cause;
-    for (int i = 0; i < 3; ++i) {
-      stop.utime = bus::now_utime();
-      bus.publish(channels::kStop, stop);
-      bus.spin_once(100);
-    }
+    send_stop(bus, s.scan_id, cause.empty() ? (code == 130 ? "interrupted" : "the scan failed") : cause);
     const auto motion = std::find_if(children.begin(), children.end(), [](const process::Child& c) { return c.name == "motion"; });
     if (s.external_rig && (motion == children.end() || !motion->running) && !s.scan_id.empty()) hold_rig(bus, s.scan_id);
   }

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "bus/bus.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "process/processes.hpp"
 
@@ -34,6 +35,10 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
 // exit code.
 int supervise(std::vector<process::Child>& children, const ScanSettings& s, const std::filesystem::path& out,
               bool record_log, bool evaluate = true);
+
+// STOP for `scan_id` ("" : every scan) with `reason`, sent three times 0.1 s apart (UDP may lose
+// one): `pbnbv stop`, and the launcher when a scan ends failed or interrupted.
+void send_stop(bus::Bus& bus, const std::string& scan_id, const std::string& reason);
 
 // The local date and time as 20250131-142501 (folder names).
 std::string timestamp();
