@@ -116,6 +116,10 @@ RigSim::RigSim(const RigModel& rig, const ObjectPlacement& object,
     m_->body_quat[4 * cam + 2] = q.y();
     m_->body_quat[4 * cam + 3] = q.z();
   }
+  // The free rig is the paper's idealised comparison setup: a virtual gantry whose camera goes
+  // straight to any pose, through the object if the line crosses it (nothing stalls a move and
+  // no view is lost to the rig). Only the arm rig has contacts.
+  if (rig.kind == RigKind::kFree) m_->opt.disableflags |= mjDSBL_CONTACT;
   std::vector<double> speeds(rig.qd_max.data(), rig.qd_max.data() + 6);
   arm_ = make_group(rig.joint_names, speeds);
   if (rig.has_turntable) turntable_ = make_group({"turntable"}, {rig.turntable_qd_max});
