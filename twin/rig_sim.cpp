@@ -120,6 +120,7 @@ RigSim::RigSim(const RigModel& rig, const ObjectPlacement& object,
   // straight to any pose, through the object if the line crosses it (nothing stalls a move and
   // no view is lost to the rig). Only the arm rig has contacts.
   if (rig.kind == RigKind::kFree) m_->opt.disableflags |= mjDSBL_CONTACT;
+  teleport_ = rig.kind == RigKind::kFree;
   std::vector<double> speeds(rig.qd_max.data(), rig.qd_max.data() + 6);
   arm_ = make_group(rig.joint_names, speeds);
   if (rig.has_turntable) turntable_ = make_group({"turntable"}, {rig.turntable_qd_max});
@@ -184,9 +185,9 @@ void RigSim::start_ramp(JointGroup& g, const std::vector<double>& target, double
       throw OutOfLimits(os.str());
     }
   }
-  // Synchronised smoothstep ramp: the slowest joint sets the duration.
+  // Synchronised smoothstep ramp: the slowest joint sets the duration (none when teleporting).
   double duration = 0;
-  for (std::size_t i = 0; i < target.size(); ++i) {
+  for (std::size_t i = 0; i < target.size() && !teleport_; ++i) {
     const double v = g.speed_limit[i] * speed_scale;
     duration = std::max(duration, ramp_duration_s(std::abs(target[i] - g.setpoint[i]), v,
                                                   kAccelerationPerSpeed * v));
@@ -280,6 +281,12 @@ void RigSim::step() {
   for (int i = 0; i < m_->nv; ++i) d_->qfrc_applied[i] += inertial[i];
   const double t = d_->time;
   mj_step(m_, d_);
+  if (teleport_) {
+    for (std::size_t i = 0; i < arm_.qpos_adr.size(); ++i) {
+      d_->qpos[arm_.qpos_adr[i]] = arm_.setpoint[i];
+      d_->qvel[arm_.dof_adr[i]] = 0.0;
+    }
+  }
   // MuJoCo resets the state (and the clock) when the physics diverges: never carry on silently.
   if (d_->warning[mjWARN_BADQACC].number > 0) {
     throw std::runtime_error("the physics diverged at rig time " + std::to_string(t) +

@@ -141,6 +141,10 @@ class RigSim {
   std::mt19937_64 rng_;
   JointGroup arm_;
   std::optional<JointGroup> turntable_;
+  // The free rig teleports (the paper's comparison setup): a command's ramp takes no time and
+  // the gantry's joints sit exactly at their setpoints, so a view's camera pose is the commanded
+  // one to the bit and a benchmark scan's plans do not depend on the machine's timing.
+  bool teleport_ = false;
   bool ignore_limits_ = false;
 };
 
