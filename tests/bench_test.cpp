@@ -92,6 +92,33 @@ TEST(BenchRules, GapToTheOracleMeansOverObjectsBothCompleted) {
   EXPECT_TRUE(without[0].gap_to_oracle_by_view.empty());
 }
 
+// Where the stop rule would have stopped: per object the stop view (the budget when never), the
+// coverage there against the budget's; mean views saved, worst shortfall.
+TEST(BenchRules, StopRuleSummaryViewsSavedAndWorstShortfall) {
+  auto run = [](const std::string& name, std::vector<double> c, std::optional<int> stop) {
+    eval::ObjectRun r;
+    r.object = name;
+    r.complete = true;
+    r.coverage_by_view = std::move(c);
+    r.stop_view = stop;
+    return r;
+  };
+  const std::vector<eval::ObjectRun> runs = {
+      run("a", {40, 80, 95, 95.2, 95.3}, 3),    // stops after 3: 95 against 95.3, 2 views saved
+      run("b", {50, 90, 99, 99.9, 99.9}, 4),    // after 4: no shortfall, 1 saved
+      run("c", {30, 60, 70, 80, 90}, std::nullopt)};  // never: the budget, nothing saved
+  EXPECT_EQ(eval::stop_view_or_budget(runs[2], 5), 5);
+  EXPECT_DOUBLE_EQ(eval::coverage_at_view(runs[0], 3), 95.0);
+  const eval::StopRuleSummary s = eval::summarise_stop_rule(runs, 5);
+  EXPECT_EQ(s.objects, 3);
+  EXPECT_EQ(s.stopped, 2);
+  EXPECT_DOUBLE_EQ(s.mean_stop_view, 4.0);                       // (3 + 4 + 5) / 3
+  EXPECT_DOUBLE_EQ(s.mean_views_saved_percent, 100.0 * 3 / 15);  // (2 + 1 + 0) of 3 x 5 views
+  EXPECT_NEAR(s.worst_shortfall, 0.3, 1e-9);
+  EXPECT_EQ(s.worst_object, "a");
+  EXPECT_EQ(s.within_half_point, 3);
+}
+
 TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
   const fs::path out = fresh_dir("bench");
   const std::string cmd = netns_run() + " " + bin_dir() +
@@ -145,6 +172,13 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
       }
       // And the scan's own outputs are there.
       EXPECT_TRUE(fs::exists(out / planner / object / "cloud.ply"));
+      // The scans ran the whole budget (the stop rule off); the summary says where the rule
+      // would have stopped each, from the per-view figures the scan recorded.
+      const json scan = read_json_file(out / planner / object / "scan.json");
+      EXPECT_EQ(scan["settings"]["stop_rule"]["rule"], "off");
+      EXPECT_EQ(scan["views"][0]["new_surface"]["percent_of_model"], 100.0);
+      ASSERT_EQ(o["stop_rule"]["new_surface_by_view"].size(), 3u);
+      EXPECT_EQ(o["stop_rule"]["coverage_at_budget"], o["coverage_by_view"][2]);
     }
     for (int i = 0; i < 3; ++i) EXPECT_NEAR(p["coverage_by_view"][i].get<double>(), mean[i], 1e-9);
   }
@@ -158,6 +192,7 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
   EXPECT_NE(report.find("| pbnbv |"), std::string::npos);
   EXPECT_NE(report.find("| raycast |"), std::string::npos);
   EXPECT_NE(report.find("resolution 0.03 m"), std::string::npos);
+  EXPECT_NE(report.find("## Stop rule"), std::string::npos);
   for (const char* png : {"coverage.png", "time.png"}) {
     const cv::Mat img = cv::imread((out / png).string());
     EXPECT_EQ(img.cols, 960) << png;

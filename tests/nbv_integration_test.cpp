@@ -34,7 +34,7 @@ NbvScan nbv_scan(const std::string& name, const std::string& options, int views)
   NbvScan s;
   s.out = fresh_dir(name);
   const std::string cmd = netns_run() + " " + bin_dir() + "/pbnbv scan " + options + " --views " + std::to_string(views) +
-                          " --stop-fraction 0 --sim-speed 20 --no-log --out " + s.out.string();
+                          " --stop-fraction 0 --stop-rule off --sim-speed 20 --no-log --out " + s.out.string();
   const CommandResult r = run_command(cmd);
   EXPECT_EQ(r.exit_code, 0) << cmd << "\n" << r.output;
   std::cout << r.output.substr(r.output.find("coverage after") == std::string::npos ? 0 : r.output.find("coverage after"));

@@ -32,7 +32,7 @@ namespace {
 fs::path scan_and_check(const std::string& name, const std::string& options, int views) {
   const fs::path out = fresh_dir(name);
   const std::string cmd = netns_run() + " " + bin_dir() + "/pbnbv scan " + options + " --views " +
-                          std::to_string(views) + " --sim-speed 20 --out " + out.string();
+                          std::to_string(views) + " --stop-rule off --sim-speed 20 --out " + out.string();
   const CommandResult r = run_command(cmd);
   EXPECT_EQ(r.exit_code, 0) << cmd << "\n" << r.output;
   // Outputs.

@@ -64,7 +64,7 @@ std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, con
                      "--views", std::to_string(s.views), "--resolution", exact(s.resolution_m), "--candidates",
                      std::to_string(s.candidates), "--tmax", std::to_string(s.tmax), "--beta", std::to_string(s.beta),
                      "--size", exact(s.size_m), "--seed", std::to_string(s.seed), "--when-done",
-                     std::string(name_of(s.when_done)), "--no-log", "--out", out.string()});
+                     std::string(name_of(s.when_done)), "--stop-rule", "off", "--no-log", "--out", out.string()});
   if (s.initial_view) {
     const Eigen::Vector3d& v = *s.initial_view;
     a.insert(a.end(), {"--initial-view", exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z())});
@@ -205,7 +205,7 @@ json to_json(const BenchSpec& s) {
             {"area", std::string(name_of(s.area))}, {"views", s.views},
             {"resolution_m", s.resolution_m}, {"candidates", s.candidates}, {"tmax", s.tmax}, {"beta", s.beta},
             {"size_m", s.size_m}, {"up", s.up ? std::string(name_of(*s.up)) : std::string("per object")}, {"seed", s.seed},
-            {"when_done", std::string(name_of(s.when_done))},
+            {"when_done", std::string(name_of(s.when_done))}, {"stop_rule", to_json(s.stop_rule)},
             {"coverage", {{"samples", s.coverage.num_samples}, {"seed", s.coverage.seed}, {"radius_m", s.coverage.radius_m}}}};
   j["initial_view"] = s.initial_view ? json{s.initial_view->x(), s.initial_view->y(), s.initial_view->z()} : json(nullptr);
   return j;
@@ -264,10 +264,41 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
     p.planner_ms_median = n % 2 ? times[n / 2] : 0.5 * (times[n / 2 - 1] + times[n / 2]);
     p.planner_ms_mean = std::accumulate(times.begin(), times.end(), 0.0) / n;
   }
+  p.stop_rule = summarise_stop_rule(runs, views);
   p.reached_95 = static_cast<int>(reached.size());
   p.views_to_95_of_mean = views_to_reach(p.coverage_by_view, 95.0);
   if (!reached.empty()) p.views_to_95 = std::accumulate(reached.begin(), reached.end(), 0.0) / reached.size();
   return p;
+}
+
+int stop_view_or_budget(const ObjectRun& r, int views) { return r.stop_view ? std::min(*r.stop_view, views) : views; }
+
+double coverage_at_view(const ObjectRun& r, int view) {
+  const std::vector<double> c = pad_views(r.coverage_by_view, std::max(view, 1));
+  return c.empty() ? NAN : c[view - 1];
+}
+
+StopRuleSummary summarise_stop_rule(const std::vector<ObjectRun>& runs, int views) {
+  StopRuleSummary s;
+  for (const auto& r : runs) {
+    if (!r.complete || r.coverage_by_view.empty()) continue;
+    const int stop = stop_view_or_budget(r, views);
+    const double shortfall = coverage_at_view(r, views) - coverage_at_view(r, stop);
+    ++s.objects;
+    if (stop < views) ++s.stopped;
+    s.mean_stop_view += stop;
+    s.mean_views_saved_percent += 100.0 * (views - stop) / views;
+    if (s.worst_object.empty() || shortfall > s.worst_shortfall) {
+      s.worst_shortfall = shortfall;
+      s.worst_object = r.object;
+    }
+    if (shortfall <= 0.5) ++s.within_half_point;
+  }
+  if (s.objects > 0) {
+    s.mean_stop_view /= s.objects;
+    s.mean_views_saved_percent /= s.objects;
+  }
+  return s;
 }
 
 void add_gaps_to_oracle(std::vector<PlannerSummary>& planners, int views) {
@@ -308,6 +339,15 @@ json to_json(const BenchResult& r) {
                  {"complete", o.complete}, {"stop_reason", o.stop_reason}, {"wall_s", o.wall_s}};
       if (!o.observable_by_view.empty()) oj["observable_coverage_by_view"] = o.observable_by_view;
       if (!o.error.empty()) oj["error"] = o.error;
+      if (o.complete && !o.coverage_by_view.empty()) {
+        const int stop = stop_view_or_budget(o, r.spec.views);
+        oj["stop_rule"] = {{"stop_view", o.stop_view ? json(*o.stop_view) : json(nullptr)},
+                           {"reason", o.stop_view ? o.stop_rule_reason : "never stops before the budget"},
+                           {"coverage_at_stop", coverage_at_view(o, stop)},
+                           {"coverage_at_budget", coverage_at_view(o, r.spec.views)},
+                           {"shortfall_points", coverage_at_view(o, r.spec.views) - coverage_at_view(o, stop)},
+                           {"new_surface_by_view", o.new_surface_by_view}};
+      }
       objects[o.object] = oj;
     }
     json pj = {{"coverage_by_view", p.coverage_by_view}, {"planner_ms_median", p.planner_ms_median},
@@ -316,6 +356,15 @@ json to_json(const BenchResult& r) {
                {"views_to_95_of_mean_curve", p.views_to_95_of_mean ? json(*p.views_to_95_of_mean) : json(nullptr)}, {"objects_complete", p.complete}, {"objects_failed", p.failed},
                {"objects", objects}};
     if (!p.observable_by_view.empty()) pj["observable_coverage_by_view"] = p.observable_by_view;
+    const StopRuleSummary& st = p.stop_rule;
+    pj["stop_rule"] = {{"rule", to_json(r.spec.stop_rule)},
+                       {"objects", st.objects},
+                       {"objects_stopped_before_budget", st.stopped},
+                       {"mean_stop_view", st.mean_stop_view},
+                       {"mean_views_saved_percent", st.mean_views_saved_percent},
+                       {"worst_shortfall_points", st.worst_shortfall},
+                       {"worst_object", st.worst_object},
+                       {"objects_within_0_5_points", st.within_half_point}};
     if (!p.gap_to_oracle_by_view.empty()) {
       pj["gap_to_oracle_by_view"] = p.gap_to_oracle_by_view;
       pj["gap_to_oracle_objects"] = p.gap_objects;
@@ -343,6 +392,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
   json settings = to_json(spec);
   settings.erase("objects");  // objects may be added to a folder's benchmark
   settings.erase("planners");
+  settings.erase("stop_rule");  // evaluated from the recorded figures, not run: it may change
   if (fs::exists(spec_path)) {
     const json before = read_json(spec_path.string());
     for (auto it = settings.begin(); it != settings.end(); ++it) {
@@ -494,6 +544,11 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       r.views_to_95 = views_to_reach(r.coverage_by_view, 95.0);
       r.views_done = e.views_done;
       r.stop_reason = e.stop_reason;
+      r.new_surface_by_view = e.new_surface_by_view;
+      if (const auto d = first_surface_stop(e.new_surface_by_view, spec.stop_rule); d && d->after_views < spec.views) {
+        r.stop_view = d->after_views;
+        r.stop_rule_reason = d->reason;
+      }
       r.complete = true;
       if (fs::exists(j.dir / "bench_run.json")) r.wall_s = read_json((j.dir / "bench_run.json").string()).value("wall_s", 0.0);
     } catch (const std::exception& x) {

@@ -21,6 +21,7 @@
 #include "core/planning/planning_options.hpp"
 #include "core/rig/rig.hpp"
 #include "core/scan/scan_options.hpp"
+#include "core/scan/stop_rule.hpp"
 #include "eval/coverage.hpp"
 
 namespace pbnbv::eval {
@@ -50,6 +51,9 @@ struct BenchSpec {
   std::optional<UpAxis> up;                     // none: each object's natural up axis
   int64_t seed = kPlannerSeed.value;            // the random planner's seed
   WhenDone when_done = kBenchWhenDone.value;
+  // The scans spend the whole budget (stop rule off); the summary says where this rule would
+  // have stopped each from its recorded per-view figures (it may change in a folder's reruns).
+  SurfaceStopRule stop_rule;
   int jobs = kJobs.value;            // scans run at once (each in its own network namespace)
   bool netns = true;                 // false: every scan on the current LCM bus, one at a time
   std::filesystem::path out;
@@ -75,7 +79,27 @@ struct ObjectRun {
   int views_done = 0;
   std::string stop_reason;
   double wall_s = 0;                      // the scan's wall time (as recorded when it ran)
+  // The surface stop rule on the scan's recorded figures (scan.json's new_surface per view).
+  std::vector<double> new_surface_by_view;  // percent of the model, NaN for a view not merged
+  std::optional<int> stop_view;             // the view after which the rule would stop (none: never)
+  std::string stop_rule_reason;
 };
+
+// Where the stop rule would have stopped a planner's scans: per complete object the stop view
+// (the budget when it never stops), the coverage there and at the budget.
+struct StopRuleSummary {
+  int objects = 0;                    // complete objects
+  int stopped = 0;                    // of them, stopped before the budget
+  double mean_stop_view = 0;          // mean over the objects of the stop view (budget if never)
+  double mean_views_saved_percent = 0;  // 100 * (budget - stop view) / budget, mean
+  double worst_shortfall = 0;         // largest coverage at the budget minus at the stop view, points
+  std::string worst_object;
+  int within_half_point = 0;          // objects whose shortfall is at most 0.5 points
+};
+// The stop view of a run (its budget `views` when the rule never stops it), its coverage there and the shortfall.
+int stop_view_or_budget(const ObjectRun& r, int views);
+double coverage_at_view(const ObjectRun& r, int view);
+StopRuleSummary summarise_stop_rule(const std::vector<ObjectRun>& runs, int views);
 
 struct PlannerSummary {
   PlannerKind planner = PlannerKind::kPbnbv;
@@ -90,6 +114,7 @@ struct PlannerSummary {
   // the objects complete for both (gap_objects of them); empty when the oracle was not run.
   std::vector<double> gap_to_oracle_by_view;
   int gap_objects = 0;
+  StopRuleSummary stop_rule;
 };
 
 // Pure helpers (tested): the first view (1-based) whose coverage reaches `percent`; a curve

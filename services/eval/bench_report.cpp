@@ -48,6 +48,9 @@ std::string command_of(const BenchSpec& s) {
   if (s.size_m != kObjectSize.value) os << " --size " << s.size_m;
   if (s.up) os << " --up " << name_of(*s.up);
   if (s.when_done != kBenchWhenDone.value) os << " --when-done " << name_of(s.when_done);
+  if (s.stop_rule.window != kStopWindow.value) os << " --stop-window " << s.stop_rule.window;
+  if (s.stop_rule.max_new_percent != kStopNewSurface.value) os << " --stop-new-surface " << s.stop_rule.max_new_percent;
+  if (s.stop_rule.min_views != kStopMinViews.value) os << " --stop-min-views " << s.stop_rule.min_views;
   os << " --jobs " << s.jobs << " --out " << s.out.string();
   return os.str();
 }
@@ -216,6 +219,33 @@ void write_report(const BenchResult& r) {
     }
     md << "\n![gap to the oracle](gap.png)\n\n";
   }
+
+  const SurfaceStopRule& rule = s.stop_rule;
+  md << "## Stop rule\n\nThe scans spent the whole budget; the surface rule (`pbnbv scan`'s default) would have stopped "
+        "each after the first view at which the last "
+     << rule.window << " views each added less than " << fixed(rule.max_new_percent, 2)
+     << " % new surface (points farther than 5 mm from the model before them, relative to the model), from view "
+     << rule.min_views << " on (`--stop-window " << rule.window << " --stop-new-surface " << fixed(rule.max_new_percent, 2)
+     << " --stop-min-views " << rule.min_views << "`). Coverage in %, shortfall in points.\n\n"
+     << "| object | planner | stop view | coverage there | coverage after view " << n << " | shortfall |\n|---|---|---|---|---|---|\n";
+  for (const auto& p : r.planners) {
+    for (const auto& o : p.objects) {
+      if (!o.complete || o.coverage_by_view.empty()) continue;
+      const int stop = stop_view_or_budget(o, n);
+      md << "| " << o.object << " | " << name_of(p.planner) << " | " << (o.stop_view ? std::to_string(stop) : "never (" + std::to_string(n) + ")")
+         << " | " << fixed(coverage_at_view(o, stop), 2) << " | " << fixed(coverage_at_view(o, n), 2) << " | "
+         << fixed(coverage_at_view(o, n) - coverage_at_view(o, stop), 2) << " |\n";
+    }
+  }
+  md << "\n| planner | objects | stopped before " << n << " | mean stop view | mean views saved | worst shortfall | within 0.5 points |\n"
+     << "|---|---|---|---|---|---|---|\n";
+  for (const auto& p : r.planners) {
+    const StopRuleSummary& st = p.stop_rule;
+    md << "| " << name_of(p.planner) << " | " << st.objects << " | " << st.stopped << " | " << fixed(st.mean_stop_view, 2) << " | "
+       << fixed(st.mean_views_saved_percent, 1) << " % | " << fixed(st.worst_shortfall, 2) << " (" << st.worst_object << ") | "
+       << st.within_half_point << " of " << st.objects << " |\n";
+  }
+  md << "\n";
 
   md << "## Per object: coverage after view " << n << " (%), views to 95 % in brackets\n\n| object |";
   for (const auto& p : r.planners) md << " " << name_of(p.planner) << " |";

@@ -9,6 +9,7 @@
 #include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
 #include "core/scan/scan_settings.hpp"
+#include "core/scan/stop_rule.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -45,6 +46,7 @@ ScanEvaluation evaluate_scan(const fs::path& out, const CoverageParams& params, 
       if (observable) e.observable_by_view.push_back(coverage.coverage_percent(*observable));
       e.points_by_view.push_back(points);
     }
+    e.new_surface_by_view = new_surface_figures(scan.at("views"));
   } catch (const json::exception& x) {
     throw std::runtime_error((out / "scan.json").string() + ": " + x.what());
   }
@@ -55,6 +57,7 @@ json to_json(const ScanEvaluation& e, const CoverageParams& params) {
   return {{"coverage_by_view", e.coverage_by_view},
           {"planner_ms", e.planner_ms},
           {"points_by_view", e.points_by_view},
+          {"new_surface_by_view", e.new_surface_by_view},
           {"state", e.state},
           {"stop_reason", e.stop_reason},
           {"views_done", e.views_done},

@@ -20,6 +20,8 @@ struct ScanEvaluation {
   std::vector<double> planner_ms;        // per planning iteration: map update + ellipsoid fit +
                                          // view selection (views 2..n; empty for a ring scan)
   std::vector<int> points_by_view;       // points in the model after each view
+  std::vector<double> new_surface_by_view;  // what each view added, % of the model before it
+                                            // (the stop rule's figure; NaN: not merged or not recorded)
   std::string state;                     // scan.json status.state
   std::string stop_reason;               // why the scan stopped
   int views_done = 0;

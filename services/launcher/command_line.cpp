@@ -154,6 +154,11 @@ void CommandLine::declare_scan() {
   cli::add(c, kSectors, &s.sectors)->group(kGroupPlanning);
   cli::add(c, kTMax, &s.t_max)->group(kGroupPlanning);
   cli::add(c, kStopFraction, &s.stop_fraction)->group(kGroupPlanning);
+  cli::add(c, kStopRule, &s.stop_rule)->group(kGroupPlanning);
+  cli::add(c, kStopWindow, &s.surface_rule.window)->group(kGroupPlanning);
+  cli::add(c, kStopNewSurface, &s.surface_rule.max_new_percent)->group(kGroupPlanning);
+  cli::add(c, kStopMinViews, &s.surface_rule.min_views)->group(kGroupPlanning);
+  cli::add(c, kStopRadius, &s.stop_radius_m)->group(kGroupPlanning);
   cli::add(c, kWhenDone, &s.when_done)->group(kGroupPlanning);
   cli::add_point(c, "initial-view", &p.initial_view,
                  "first camera position, object frame, m; looks at the origin [the ring's view at --ring-elevation, "
@@ -238,6 +243,10 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
                  "first camera position, object frame, m [the scan's default first view]");
   cli::add(c, kPlannerSeed, &spec->seed);
   cli::add(c, eval::kBenchWhenDone, &spec->when_done);
+  // The scans run without a stop rule; the report says where the surface rule would have stopped each.
+  cli::add(c, kStopWindow, &spec->stop_rule.window);
+  cli::add(c, kStopNewSurface, &spec->stop_rule.max_new_percent);
+  cli::add(c, kStopMinViews, &spec->stop_rule.min_views);
   cli::add(c, eval::kJobs, &spec->jobs);
   cli::add_flag(c, "no-netns", &pending->no_netns, "run the scans on the current LCM bus (one at a time)");
   cli::add_text(c, "out", &pending->out, "results (required); a rerun skips the scans already complete there and resumes interrupted ones", "DIR");

@@ -177,16 +177,22 @@ json to_json(const ViewRecord& v) {
   if (!v.frame_file.empty()) {
     view["frame_file"] = v.frame_file;
     view["merged"] = v.merged;
+    if (v.new_surface) view["new_surface"] = to_json(*v.new_surface);
     view["time_s"]["accumulate"] = v.accumulate_s;
     view["time_s"]["view_total"] = v.view_total_s;
   }
   return view;
 }
 
-json to_json(const ScanStop& s) { return {{"reason", s.reason}, {"after_views", s.after_views}, {"rule", s.rule}}; }
+json to_json(const ScanStop& s) {
+  json j = {{"reason", s.reason}, {"after_views", s.after_views}, {"rule", s.rule}};
+  if (!s.figures.is_null()) j["figures"] = s.figures;
+  return j;
+}
 
 ScanRecord::ScanRecord(fs::path out, const ScanSettings& settings)
-    : out_(std::move(out)), views_planned_(settings.views), voxel_m_(settings.voxel_m) {
+    : out_(std::move(out)), views_planned_(settings.views), voxel_m_(settings.voxel_m),
+      stop_radius_m_(settings.stop_radius_m) {
   fs::create_directories(out_ / "frames");
   report_["settings"] = to_json(settings);
   report_["views"] = json::array();
@@ -212,6 +218,7 @@ double ScanRecord::accumulate(const RegisteredCloud& r, ViewRecord& v) {
   v.frame_file = "frames/" + name;
   v.merged = r.accepted;
   if (r.accepted) {
+    v.new_surface = new_surface(r.cloud.points, accumulated_, stop_radius_m_);
     accumulated_.insert(accumulated_.end(), r.cloud.points.begin(), r.cloud.points.end());
     accumulated_ = voxel_downsample(accumulated_, voxel_m_);
     write_ply(accumulated_, (out_ / "cloud.ply").string());

@@ -15,6 +15,7 @@
 #include "core/geometry/point_cloud.hpp"
 #include "core/scan/messages.hpp"
 #include "core/scan/scan_settings.hpp"
+#include "core/scan/stop_rule.hpp"
 
 namespace pbnbv {
 
@@ -56,6 +57,7 @@ struct ViewRecord {
   std::optional<VoxelMapSummary> map;
   std::string frame_file;                    // "frames/view_NNN.ply" once written
   bool merged = false;                       // merged into cloud.ply
+  std::optional<NewSurface> new_surface;     // what it added to the model (merged views)
   double move_round_trip_s = kUnset, capture_round_trip_s = kUnset, register_round_trip_s = kUnset,
          map_round_trip_s = kUnset, accumulate_s = kUnset, view_total_s = kUnset;
 };
@@ -64,7 +66,8 @@ struct ViewRecord {
 struct ScanStop {
   std::string reason;
   int after_views = 0;
-  std::string rule;  // "planner", "planner failed", "budget"
+  std::string rule;  // "planner", "planner failed", "budget", "surface"
+  nlohmann::json figures;  // what the rule read (surface: its parameters and the window's figures)
 };
 
 // scan.json's entries for a view, a plan and a stop.
@@ -87,7 +90,9 @@ class ScanRecord {
 
   // Writes the view's cloud (registered when accepted) to frames/view_NNN.ply and, when the
   // registration accepted it, merges it into cloud.ply (voxel-downsampled at the settings'
-  // voxel_m). Sets v.frame_file and v.merged; returns the wall time this took, s.
+  // voxel_m). Sets v.frame_file, v.merged and, when merged, v.new_surface (the view's points
+  // farther than the settings' stop_radius_m from the model before it); returns the wall time
+  // this took, s.
   double accumulate(const RegisteredCloud& r, ViewRecord& v);
 
   // Appends a view to "views" and writes scan.json with state "running".
@@ -113,6 +118,7 @@ class ScanRecord {
   std::filesystem::path out_;
   int views_planned_;
   double voxel_m_;
+  double stop_radius_m_;
   nlohmann::json report_;
   PointCloud accumulated_;
   int64_t next_request_id_ = 1;

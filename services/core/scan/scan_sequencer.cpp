@@ -393,7 +393,7 @@ void ScanSequencer::planned(const ViewPlan& p, double now_s) {
   }
   if (p.outcome != PlanOutcome::kView) {
     const bool stop = p.outcome == PlanOutcome::kStop;
-    stop_ = ScanStop{p.reason, done_.views_done, stop ? "planner" : "planner failed"};
+    stop_ = ScanStop{p.reason, done_.views_done, stop ? "planner" : "planner failed", {}};
     record_.set_stop(*stop_);
     record_.set_planning_stopped(plan);
     if (stop) return finish(ScanState::kDone, "scan complete: " + p.reason, now_s);
@@ -533,19 +533,36 @@ void ScanSequencer::mapped(double now_s) {
                      fixed(moved_.move_s + moved_.settle_s, 2) + " s, capture " + fixed(view_.capture->capture_s, 2) +
                      " s, register " + fixed(reg.register_s, 2) + " s, map " + fixed(m.update_s * 1e3, 2) + " ms";
   if (view_.plan) line += ", plan " + fixed(planner_step_ms(*view_.plan), 2) + " ms";
+  if (view_.new_surface) line += "; " + fixed(view_.new_surface->percent_of_model(), 2) + " % new surface";
   progress(line, true);
+  if (stopped_by_surface(now_s)) return;
   next_view(now_s);
+}
+
+bool ScanSequencer::stopped_by_surface(double now_s) {
+  if (s_.stop_rule != StopRule::kSurface || replay_ || iteration_ + 1 >= s_.views) return false;
+  const std::vector<double> figures = new_surface_figures(record_.report().at("views"));
+  const std::optional<SurfaceStopDecision> d = surface_stop(figures, s_.surface_rule);
+  if (!d) return false;
+  nlohmann::json used = to_json(s_.surface_rule);
+  used["radius_m"] = s_.stop_radius_m;
+  used["last_percent_of_model"] = d->last_percent;
+  used["percent_of_model_by_view"] = figures;
+  stop_ = ScanStop{d->reason, done_.views_done, "surface", used};
+  record_.set_stop(*stop_);
+  finish(ScanState::kDone, "scan complete: " + d->reason, now_s);
+  return true;
 }
 
 void ScanSequencer::next_view(double now_s) {
   if (iteration_ + 1 < s_.views) return begin_view(iteration_ + 1, now_s);
   if (done_.views_done == 0) return finish(ScanState::kFailed, "no view produced a cloud", now_s);
   if (replay_) {
-    stop_ = ScanStop{"the recording's " + std::to_string(s_.views) + " views replayed", done_.views_done, "replay"};
+    stop_ = ScanStop{"the recording's " + std::to_string(s_.views) + " views replayed", done_.views_done, "replay", {}};
     record_.set_stop(*stop_);
     return finish(ScanState::kDone, "replay complete: " + stop_->reason, now_s);
   }
-  stop_ = ScanStop{"view budget reached (--views " + std::to_string(s_.views) + ")", done_.views_done, "budget"};
+  stop_ = ScanStop{"view budget reached (--views " + std::to_string(s_.views) + ")", done_.views_done, "budget", {}};
   record_.set_stop(*stop_);
   finish(ScanState::kDone, "scan complete: " + stop_->reason, now_s);
 }

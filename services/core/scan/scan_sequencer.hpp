@@ -16,7 +16,8 @@
 // - wait for the registration's and the mapping service's answers to the view; a view the map
 //   did not take (e.g. registration rejected it) is excluded from later plans;
 // - write its frame, merge it into cloud.ply when accepted;
-// - stop on the planner's decision, the view budget, or no view produced.
+// - stop on the planner's decision, the surface rule (core/scan/stop_rule.hpp), the view
+//   budget, or no view produced.
 // Every request is re-sent with the same request_id while unanswered and has a deadline
 // (ScanTimeouts); request ids are unique within the scan.
 #include <cstdint>
@@ -180,6 +181,9 @@ class ScanSequencer {
   void registered(double now_s);
   void mapped(double now_s);
   void end_view(double now_s);
+  // The surface rule (settings' stop_rule) on the views so far: ends the scan "done" when it says
+  // stop (not at the budget's last view, nor in a replay).
+  bool stopped_by_surface(double now_s);
   void next_view(double now_s);
   void fail_view(const std::string& message, double now_s);  // records the view so far, fails the scan
   void finish(ScanState state, const std::string& message, double now_s);

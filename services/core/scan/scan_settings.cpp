@@ -33,6 +33,9 @@ nlohmann::json to_json(const ScanSettings& s) {
       {"rig_model_path", s.rig_model_path},
       {"planner", std::string(name_of(s.planner))},
       {"views", s.views},
+      {"stop_rule", {{"rule", std::string(name_of(s.stop_rule))}, {"window", s.surface_rule.window},
+                     {"max_new_percent", s.surface_rule.max_new_percent}, {"min_views", s.surface_rule.min_views},
+                     {"radius_m", s.stop_radius_m}}},
       {"external_rig", s.external_rig},
       {"object", s.working_volume ? nlohmann::json{{"name", s.object_name}, {"working_volume", s.working_volume->to_text()}}
                                   : nlohmann::json{{"name", s.object_name}, {"normalisation", to_json(s.normalisation)}}},
@@ -68,6 +71,16 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.rig_model_path = j.at("rig_model_path").get<std::string>();
     s.planner = parse_name<PlannerKind>(j.at("planner").get<std::string>());
     s.views = j.at("views").get<int>();
+    if (j.contains("stop_rule")) {
+      const auto& r = j["stop_rule"];
+      s.stop_rule = parse_name<StopRule>(r.at("rule").get<std::string>());
+      s.surface_rule.window = r.at("window").get<int>();
+      s.surface_rule.max_new_percent = r.at("max_new_percent").get<double>();
+      s.surface_rule.min_views = r.at("min_views").get<int>();
+      s.stop_radius_m = r.at("radius_m").get<double>();
+    } else {
+      s.stop_rule = StopRule::kOff;  // a scan recorded before the rule existed ran without it
+    }
     s.external_rig = j.value("external_rig", false);
     s.object_name = j.at("object").at("name").get<std::string>();
     if (j.at("object").contains("working_volume")) {
@@ -143,6 +156,10 @@ void ScanSettings::validate() const {
   kTMax.checked(t_max);
   kMapResolution.checked(map_resolution_m);
   kStopFraction.checked(stop_fraction);
+  kStopWindow.checked(surface_rule.window);
+  kStopNewSurface.checked(surface_rule.max_new_percent);
+  kStopMinViews.checked(surface_rule.min_views);
+  kStopRadius.checked(stop_radius_m);
   kAlternatives.checked(alternatives);
   kPlannerSeed.checked(seed);
   kCloudVoxel.checked(voxel_m);

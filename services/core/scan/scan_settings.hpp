@@ -17,6 +17,7 @@
 #include "core/planning/planning_options.hpp"
 #include "core/rig/rig.hpp"
 #include "core/scan/scan_options.hpp"
+#include "core/scan/stop_rule.hpp"
 
 namespace pbnbv {
 
@@ -26,6 +27,10 @@ struct ScanSettings {
   std::string rig_model_path;
   PlannerKind planner = kPlanner.value;  // next best view, fixed ring views, or a baseline
   int views = kViews.value;              // at most this many views
+  // Stop before the budget when the last views added (almost) no new surface (stop_rule.hpp).
+  StopRule stop_rule = kStopRule.value;
+  SurfaceStopRule surface_rule;
+  double stop_radius_m = kStopRadius.value;  // a point farther than this from the model is new surface
 
   // The rig's drivers run outside (a physical rig, or a twin started as one): the launcher
   // starts no twin and the object is unknown.

@@ -65,6 +65,10 @@ TEST(ScanOptions, EveryDefaultLiesInItsOwnRange) {
   expect_default_in_range(kTMax);
   expect_default_in_range(kWorkingDistance);
   expect_default_in_range(kStopFraction);
+  expect_default_in_range(kStopWindow);
+  expect_default_in_range(kStopNewSurface);
+  expect_default_in_range(kStopMinViews);
+  expect_default_in_range(kStopRadius);
   expect_default_in_range(kAlternatives);
   expect_default_in_range(kPlannerSeed);
   expect_default_in_range(kMixtureSeed);
@@ -152,6 +156,7 @@ TEST(ScanKinds, EveryNameRoundTripsAndAnUnknownOneIsNamedWithTheChoices) {
   expect_names_round_trip<RigKind>("rig kind", "arm or free");
   expect_names_round_trip<UpAxis>("up axis", "z or y");
   expect_names_round_trip<OnOff>("switch", "on or off");
+  expect_names_round_trip<StopRule>("stop rule", "surface or off");
   EXPECT_EQ(to_string(RigKind::kFree), "free");
   EXPECT_EQ(parse_rig_kind("arm"), RigKind::kArm);
   EXPECT_THROW(parse_name<PlannerKind>("Ring"), std::invalid_argument);  // exact names only
@@ -182,8 +187,16 @@ TEST(ScanSettingsJson, KindsAreWrittenAsTheSameTextAndReadBack) {
   EXPECT_EQ(back.rig, RigKind::kFree);
   EXPECT_EQ(back.normalisation.up, UpAxis::kY);
   EXPECT_EQ(to_json(back), j);
+  EXPECT_EQ(j["stop_rule"]["rule"], "surface");  // the default
+  EXPECT_EQ(back.surface_rule.window, kStopWindow.value);
 
   nlohmann::json bad = j;
+  bad.erase("stop_rule");  // a scan recorded before the rule existed ran without it
+  EXPECT_EQ(scan_settings_from_json(bad).stop_rule, StopRule::kOff);
+  bad = j;
+  bad["stop_rule"]["window"] = 0;
+  EXPECT_EQ(error_message([&] { scan_settings_from_json(bad); }), "scan settings: --stop-window 0 is outside its range [1, 100]");
+  bad = j;
   bad["planner"] = "greedy";
   EXPECT_EQ(error_message([&] { scan_settings_from_json(bad); }),
             "scan settings: unknown planner 'greedy' (expected pbnbv, raycast, random, ring or oracle)");

@@ -342,7 +342,7 @@ TEST_F(ScanSequencerTest, ThreeViewRingScanEndToEnd) {
   ASSERT_GE(lines_.size(), 5u);
   EXPECT_EQ(std::vector<std::string>(lines_.begin(), lines_.begin() + 4), first);
   EXPECT_EQ(lines_[4], "[view 1/3] done: 10 points, 10 in the model; kinematic pose kept, 5 frontier voxels; "
-                       "move 1.50 s, capture 0.75 s, register 0.25 s, map 2.00 ms");
+                       "move 1.50 s, capture 0.75 s, register 0.25 s, map 2.00 ms; 100.00 % new surface");
   EXPECT_EQ(seq_->summary(), "scan complete: view budget reached (--views 3): 3 of 3 views, 30 points, 11.25 s -> " +
                                  (dir_ / "scan.json").string());
 }
@@ -594,6 +594,54 @@ TEST_F(ScanSequencerTest, APlannerStopEndsTheScanDoneWithItsReason) {
   EXPECT_EQ(scan["views"].size(), 1u);
   EXPECT_EQ(seq_->summary().rfind("scan complete: no frontier ellipsoid remains: 1 of 5 views, 10 points", 0), 0u)
       << seq_->summary();
+}
+
+TEST_F(ScanSequencerTest, TheSurfaceRuleStopsWhenTheLastViewsAddNothingNew) {
+  // Every view after the first sees the first view's ten points again (within 5 mm of the model):
+  // views 2 and 3 add 0 % new surface, so a window of 2 from view 3 on stops after view 3 of 6.
+  camera = [base = camera](const CaptureRequest& r) {
+    std::optional<CaptureResult> c = base(r);
+    c->points = view_points(0);
+    if (r.iteration > 0) {
+      for (auto& p : c->points) p.z() += 0.003f;  // 3 mm off: not new
+    }
+    return c;
+  };
+  ScanSettings s = test_settings("pbnbv", 6);
+  s.surface_rule.window = 2;
+  s.surface_rule.max_new_percent = 0.5;
+  s.surface_rule.min_views = 3;
+  start(s);
+  run();
+  ASSERT_TRUE(seq_->finished());
+  EXPECT_EQ(seq_->exit_code(), 0);
+  const json scan = scan_json();
+  EXPECT_EQ(scan["status"]["views_done"], 3);
+  EXPECT_EQ(scan["stop"]["rule"], "surface");
+  EXPECT_EQ(scan["stop"]["after_views"], 3);
+  EXPECT_EQ(scan["stop"]["reason"], "views 2-3 each added less than 0.50 % new surface (0.00, 0.00 % of the model)");
+  EXPECT_EQ(scan["stop"]["figures"]["window"], 2);
+  EXPECT_EQ(scan["stop"]["figures"]["percent_of_model_by_view"], json({100.0, 0.0, 0.0}));
+  EXPECT_EQ(scan["views"][0]["new_surface"]["new_points"], 10);
+  EXPECT_EQ(scan["views"][1]["new_surface"]["model_points"], 10);
+  EXPECT_EQ(scan["views"][1]["new_surface"]["new_points"], 0);
+
+}
+
+TEST_F(ScanSequencerTest, WithTheStopRuleOffViewsThatAddNothingStillUseTheBudget) {
+  camera = [base = camera](const CaptureRequest& r) {
+    std::optional<CaptureResult> c = base(r);
+    c->points = view_points(0);
+    return c;
+  };
+  ScanSettings s = test_settings("pbnbv", 6);
+  s.stop_rule = StopRule::kOff;
+  start(s);
+  run();
+  const json scan = scan_json();
+  EXPECT_EQ(scan["status"]["views_done"], 6);
+  EXPECT_EQ(scan["stop"]["rule"], "budget");
+  EXPECT_EQ(scan["views"][5]["new_surface"]["percent_of_model"], 0.0);
 }
 
 TEST_F(ScanSequencerTest, AReplayMovesToTheRecordedViewsAndRecordsItsOwnPlans) {

@@ -1,0 +1,101 @@
+#include "core/scan/stop_rule.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "core/base/format.hpp"
+#include "core/perception/neighbours.hpp"
+
+namespace pbnbv {
+
+double NewSurface::percent_of_model() const {
+  if (model_points == 0) return new_points > 0 ? 100.0 : 0.0;
+  return 100.0 * new_points / model_points;
+}
+
+double NewSurface::percent_of_frame() const { return frame_points == 0 ? 0.0 : 100.0 * new_points / frame_points; }
+
+NewSurface new_surface(const PointCloud& frame, const PointCloud& model, double radius_m) {
+  if (!(radius_m > 0)) throw std::invalid_argument("new surface: the radius must be positive, not " + std::to_string(radius_m));
+  NewSurface n;
+  n.radius_m = radius_m;
+  std::optional<NeighbourIndex> index;
+  if (!model.empty()) index.emplace(model);
+  n.model_points = index ? static_cast<int>(index->size()) : 0;
+  const float r2 = static_cast<float>(radius_m * radius_m);
+  for (const Eigen::Vector3f& p : frame) {
+    if (!p.allFinite()) continue;
+    ++n.frame_points;
+    float d2 = 0;
+    if (n.model_points == 0 || index->nearest(p, r2, d2) < 0) ++n.new_points;
+  }
+  return n;
+}
+
+nlohmann::json to_json(const NewSurface& n) {
+  return {{"percent_of_model", n.percent_of_model()}, {"percent_of_frame", n.percent_of_frame()},
+          {"new_points", n.new_points}, {"frame_points", n.frame_points}, {"model_points", n.model_points},
+          {"radius_m", n.radius_m}};
+}
+
+namespace {
+
+void check(const SurfaceStopRule& r) {
+  kStopWindow.checked(r.window);
+  kStopNewSurface.checked(r.max_new_percent);
+  kStopMinViews.checked(r.min_views);
+}
+
+}  // namespace
+
+std::optional<SurfaceStopDecision> surface_stop(const std::vector<double>& figures, const SurfaceStopRule& rule) {
+  check(rule);
+  const int views = static_cast<int>(figures.size());
+  if (views < rule.min_views) return std::nullopt;
+  std::vector<int> window;  // the last rule.window views with a figure, newest first
+  for (int i = views - 1; i >= 0 && static_cast<int>(window.size()) < rule.window; --i) {
+    if (std::isfinite(figures[i])) window.push_back(i);
+  }
+  if (static_cast<int>(window.size()) < rule.window) return std::nullopt;
+  for (const int i : window) {
+    if (figures[i] >= rule.max_new_percent) return std::nullopt;
+  }
+  SurfaceStopDecision d;
+  d.after_views = views;
+  std::string values;
+  for (auto i = window.rbegin(); i != window.rend(); ++i) {
+    d.last_percent.push_back(figures[*i]);
+    values += (values.empty() ? "" : ", ") + fixed(figures[*i], 2);
+  }
+  const std::string which = rule.window == 1 ? "view " + std::to_string(window.front() + 1)
+                                             : "views " + std::to_string(window.back() + 1) + "-" + std::to_string(window.front() + 1);
+  d.reason = which + (rule.window == 1 ? " added" : " each added") + " less than " + fixed(rule.max_new_percent, 2) +
+             " % new surface (" + values + " % of the model)";
+  return d;
+}
+
+std::optional<SurfaceStopDecision> first_surface_stop(const std::vector<double>& figures, const SurfaceStopRule& rule) {
+  check(rule);
+  for (std::size_t n = 1; n <= figures.size(); ++n) {
+    auto d = surface_stop(std::vector<double>(figures.begin(), figures.begin() + n), rule);
+    if (d) return d;
+  }
+  return std::nullopt;
+}
+
+std::vector<double> new_surface_figures(const nlohmann::json& views) {
+  std::vector<double> out;
+  for (const nlohmann::json& v : views) {
+    if (!v.contains("frame_file")) continue;  // never captured or mapped
+    const bool figure = v.value("merged", false) && v.contains("new_surface") && v["new_surface"].contains("percent_of_model");
+    out.push_back(figure ? v["new_surface"]["percent_of_model"].get<double>() : std::numeric_limits<double>::quiet_NaN());
+  }
+  return out;
+}
+
+nlohmann::json to_json(const SurfaceStopRule& r) {
+  return {{"window", r.window}, {"max_new_percent", r.max_new_percent}, {"min_views", r.min_views}};
+}
+
+}  // namespace pbnbv
