@@ -13,6 +13,7 @@
 // compares the resolutions on the same views.
 #include <benchmark/benchmark.h>
 #include <mujoco/mujoco.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -38,6 +39,14 @@ using namespace pbnbv;
 using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+// Process CPU time (every thread), ms: unlike the wall time it does not depend on what else runs
+// on the machine; on 2 idle cores the wall time lies between cpu / 2 and cpu.
+double cpu_ms() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
 
 constexpr int kSteps = 6;
 
@@ -179,19 +188,25 @@ void BM_PlannerStep(benchmark::State& state) {
   const Step* step = step_of(state);
   if (!step) return;
   const Step& s = *step;
-  std::vector<double> map_ms, fit_ms, select_ms, total_ms;
+  std::vector<double> map_ms, fit_ms, select_ms, total_ms, map_cpu, fit_cpu, select_cpu;
   std::size_t occupied = 0, frontier = 0, ellipsoids = 0;
   for (auto _ : state) {
     VoxelMap map = s.before;  // copy outside the timing
+    const double c0 = cpu_ms();
     const double t_map = integrate_step(s, map);
+    const double c1 = cpu_ms();
     const auto t1 = Clock::now();
     std::vector<Ellipsoid> e = fit_both(map);
     const double t_fit = ms_since(t1);
+    const double c2 = cpu_ms();
     const auto t2 = Clock::now();
     ellipsoids = e.size();
     const PlanResult r = plan_pbnbv(plan_input(s, map, std::move(e)));
     benchmark::DoNotOptimize(r.chosen);
     const double t_select = ms_since(t2);
+    map_cpu.push_back(c1 - c0);
+    fit_cpu.push_back(c2 - c1);
+    select_cpu.push_back(cpu_ms() - c2);
     map_ms.push_back(t_map);
     fit_ms.push_back(t_fit);
     select_ms.push_back(t_select);
@@ -204,6 +219,15 @@ void BM_PlannerStep(benchmark::State& state) {
   state.counters["fit_ms"] = median(fit_ms);
   state.counters["select_ms"] = median(select_ms);
   state.counters["total_ms"] = median(total_ms);
+  {
+    VoxelMap map = s.before;
+    integrate_step(s, map);
+    state.counters["stride_px"] = map.last_ray_stride_px() + (map.last_blocks_alternate() ? 0.5 : 0.0);
+    state.counters["voxels"] = static_cast<double>(map.dims().prod());
+  }
+  state.counters["map_cpu"] = median(map_cpu);
+  state.counters["fit_cpu"] = median(fit_cpu);
+  state.counters["select_cpu"] = median(select_cpu);
   state.counters["occupied"] = static_cast<double>(occupied);
   state.counters["frontier"] = static_cast<double>(frontier);
   state.counters["ellipsoids"] = static_cast<double>(ellipsoids);
