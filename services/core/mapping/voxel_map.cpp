@@ -53,11 +53,14 @@
 // per pixel cannot promise this; s is then 1, the reference itself. Tested against a wall that
 // fills the image, with a rolled camera, at 0.005-0.03 m (SubsampledRaysCoverTheFrustum).
 // Half-pixel strides (mixed_blocks): the floor above can nearly halve the spacing the bound
-// allows (s = 1.8 gives blocks of 1 pixel, 2.2x the rays that s needs). When the unfloored s is
-// at least a + 0.5 with a = floor(s) <= 4 (0.005 and 0.01 m voxels at about 1 m), blocks of a
-// and a + 1 pixels alternate along u and along v: neighbouring block centres are then a + 0.5
-// <= s apart, so every point of the image is still within s/sqrt(2) of a ray and the argument
-// above holds unchanged. Coarser voxels (a > 4: 0.02 and 0.03 m) keep the uniform blocks.
+// allows (s = 1.8 gives blocks of 1 pixel, 3.2x the rays that s needs). Blocks of a and a + 1
+// pixels (a = floor(s)) alternating along an axis put neighbouring block centres a + 0.5 apart
+// along it. The lattice of block rays is then rectangular with spacings g_u, g_v (a or a + 0.5
+// each), every point of the image lies within sqrt(g_u^2 + g_v^2) / 2 of a ray, and the argument
+// above holds as long as that is <= s / sqrt(2), i.e. g_u^2 + g_v^2 <= 2 s^2: u alternates when
+// (a + 0.5)^2 + a^2 <= 2 s^2, v too when s >= a + 0.5. Only for a <= 4 (0.005 and 0.01 m voxels
+// at about 1 m), where the floor costs most rays; coarser voxels (0.02, 0.03 m) keep the uniform
+// blocks they always had.
 // What each block casts:
 //  - all pixels valid and depth spread (max - min) <= resolution: one ray through the block
 //    centre whose return depth is the block's MINIMUM depth, so free space is never claimed
@@ -140,9 +143,9 @@ inline void none_to_unknown(uint8_t* c) {
   __atomic_compare_exchange_n(c, &expected, kUnkB, false, __ATOMIC_RELAXED, __ATOMIC_RELAXED);
 }
 
-// The automatic ray set alternates blocks of a and a + 1 pixels when the ideal stride s (step 4)
-// is at least a + 0.5 and a is at most this: there the floor to a whole stride costs most rays
-// ((a + 0.5)^2 / a^2 >= 1.23), at coarser voxels it keeps the ray set it always had.
+// The automatic ray set alternates blocks of a and a + 1 pixels (see "Half-pixel strides") only
+// when a is at most this: there the floor to a whole stride costs most rays ((a + 0.5)^2 / a^2
+// >= 1.23); coarser voxels keep the ray set they always had.
 constexpr int kMaxMixedStride = 4;
 
 // The pixel edges of the blocks along one image axis of n pixels: [0, a, 2a, ..., n], or with
@@ -620,7 +623,7 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
 
   // 4. Ray stride and traversal.
   int stride = params_.ray_stride_px;
-  bool alternate = false;  // blocks of stride and stride + 1 pixels alternate
+  bool alt_u = false, alt_v = false;  // blocks of stride and stride + 1 pixels alternate along u, v
   if (stride <= 0) {
     double d_max = 0;
     const Eigen::AlignedBox3d b = bounds();
@@ -630,12 +633,16 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
     }
     const double s = std::min(k.fx, k.fy) * res / (std::sqrt(2.0) * d_max);
     stride = std::max(1, static_cast<int>(std::floor(s)));
-    alternate = params_.mixed_blocks && stride <= kMaxMixedStride && s >= stride + 0.5;
+    if (params_.mixed_blocks && stride <= kMaxMixedStride) {  // see "Half-pixel strides"
+      const double a = stride, wide = a + 0.5;
+      alt_u = wide * wide + a * a <= 2.0 * s * s;
+      alt_v = s >= wide;
+    }
   }
   last_stride_px_ = stride;
-  last_alternate_ = alternate;
-  const std::vector<int> ub = block_edges(W, stride, alternate), vb = block_edges(H, stride, alternate);
-  const bool wide_blocks = stride > 1 || alternate;
+  last_alternate_ = alt_u;
+  const std::vector<int> ub = block_edges(W, stride, alt_u), vb = block_edges(H, stride, alt_v);
+  const bool wide_blocks = stride > 1 || alt_u;
   const bool free_no_return = params_.no_return_is_free;
   const Eigen::Vector3d o = cam - origin_;
   const int n_bu = static_cast<int>(ub.size()) - 1, n_bv = static_cast<int>(vb.size()) - 1;
@@ -782,7 +789,8 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
   std::ostringstream os;
   const Eigen::Vector3d size = dims_.cast<double>() * res;
   os << (first ? "first frame: " : "") << n_valid << " valid pixels, " << result.rays
-     << " rays (stride " << stride << (alternate ? "/" + std::to_string(stride + 1) : std::string()) << " px); B " << size.x() << " x " << size.y() << " x "
+     << " rays (stride " << stride << (alt_u ? "/" + std::to_string(stride + 1) : std::string())
+     << (alt_v ? " both axes" : alt_u ? " along u" : "") << " px); B " << size.x() << " x " << size.y() << " x "
      << size.z() << " m (" << dims_.x() << " x " << dims_.y() << " x " << dims_.z()
      << " voxels); occupied " << c.occupied << ", empty " << c.empty << ", unknown "
      << c.unknown << ", frontier " << c.frontier;

@@ -110,7 +110,8 @@ class VoxelMap {
   void reserve_bounds(const Eigen::AlignedBox3d& box_m);
   // Pixel stride of the free/occluded ray set used by the last integrated frame (diagnostics).
   int last_ray_stride_px() const { return last_stride_px_; }
-  // Whether that frame's blocks alternated stride and stride + 1 pixels (mixed_blocks).
+  // Whether that frame's blocks alternated stride and stride + 1 pixels along u (mixed_blocks;
+  // along v too when the stride allowed it).
   bool last_blocks_alternate() const { return last_alternate_; }
 
   // Writes the map as an OctoMap ColorOcTree (.ot, viewable in octovis): Occupied, Unknown and
