@@ -79,11 +79,16 @@ PlanInput plan_input(const Step& s, const VoxelMap& map, std::vector<Ellipsoid> 
   return in;
 }
 
-std::vector<Ellipsoid> fit_both(const VoxelMap& map) {
+// Both classes fitted side by side (fit_both_classes, as the ellipsoids service does), or one
+// after the other (side_by_side false: as it did before; the benchmark compares both).
+std::vector<Ellipsoid> fit_both(const VoxelMap& map, bool side_by_side = true) {
   EllipsoidParams p;
   p.voxel_m = map.params().resolution_m;
-  std::vector<Ellipsoid> all = fit_ellipsoids(map.centres(VoxelState::kOccupied), EllipsoidClass::kOccupied, p);
-  const std::vector<Ellipsoid> f = fit_ellipsoids(map.centres(VoxelState::kFrontier), EllipsoidClass::kFrontier, p);
+  const std::vector<Eigen::Vector3d> occupied = map.centres(VoxelState::kOccupied);
+  const std::vector<Eigen::Vector3d> frontier = map.centres(VoxelState::kFrontier);
+  if (side_by_side) return fit_both_classes(occupied, frontier, p);
+  std::vector<Ellipsoid> all = fit_ellipsoids(occupied, EllipsoidClass::kOccupied, p);
+  const std::vector<Ellipsoid> f = fit_ellipsoids(frontier, EllipsoidClass::kFrontier, p);
   all.insert(all.end(), f.begin(), f.end());
   return all;
 }
@@ -196,7 +201,7 @@ void BM_PlannerStep(benchmark::State& state) {
     const double t_map = integrate_step(s, map);
     const double c1 = cpu_ms();
     const auto t1 = Clock::now();
-    std::vector<Ellipsoid> e = fit_both(map);
+    std::vector<Ellipsoid> e = fit_both(map, state.range(2) != 0);
     const double t_fit = ms_since(t1);
     const double c2 = cpu_ms();
     const auto t2 = Clock::now();
@@ -239,7 +244,18 @@ void step_args(benchmark::internal::Benchmark* b) {
   for (int r : {200, 100, 50})
     for (int k = 1; k < kSteps; k += 2) b->Args({k, r});
 }
-BENCHMARK(BM_PlannerStep)->Apply(step_args)->Iterations(9)->UseManualTime()->Unit(benchmark::kMillisecond);
+// The same with a third argument: 1 the two ellipsoid classes fitted side by side
+// (fit_both_classes, the service's way), 0 one after the other (before); both at every
+// resolution but 0.03 m views 1, 3, 5 (same maps, same run).
+void planner_args(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"view", "res_0.1mm", "both_at_once"});
+  for (int k = 0; k < kSteps; ++k) b->Args({k, 300, 1});
+  for (int k = 0; k < kSteps; k += 2) b->Args({k, 300, 0});
+  for (int r : {200, 100, 50})
+    for (int k = 1; k < kSteps; k += 2)
+      for (int both : {1, 0}) b->Args({k, r, both});
+}
+BENCHMARK(BM_PlannerStep)->Apply(planner_args)->Iterations(9)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // The ray-casting baseline on the same maps and the same 800 candidates: map update + one ray
 // per voxel footprint through the map from every candidate (all cores), side by side with
