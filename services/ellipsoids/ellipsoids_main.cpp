@@ -64,9 +64,7 @@ class EllipsoidService {
     p.voxel_m = m.resolution_m;
     const auto t0 = std::chrono::steady_clock::now();
     int t_occ = 0, t_front = 0;
-    std::vector<Ellipsoid> all = fit_ellipsoids(occupied, EllipsoidClass::kOccupied, p, &t_occ);
-    const std::vector<Ellipsoid> front = fit_ellipsoids(frontier, EllipsoidClass::kFrontier, p, &t_front);
-    all.insert(all.end(), front.begin(), front.end());
+    const std::vector<Ellipsoid> all = fit_both_classes(occupied, frontier, p, &t_occ, &t_front);
     const double fit_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     ellipsoid_set_t out;

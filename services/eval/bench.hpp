@@ -149,8 +149,14 @@ std::vector<std::pair<std::string, BenchResult>> run_ablation(const std::string&
 
 // Writes report.md and the plots for a finished benchmark (report.cpp).
 void write_report(const BenchResult& r);
-// Writes out/ablation.json, ablation.md, ablation.png (coverage per view, one curve per value)
-// and ablation_time.png for an ablation's benchmarks (value, result), in the order run.
+// Writes out/ablation.json, ablation.md, ablation.png (coverage per view, one curve per value and
+// planner) for an ablation's benchmarks (value, result), in the order run; when every value is a
+// number also ablation_time.png (planner time per iteration, median, against the value, log
+// scale, one curve per planner); when pbnbv and raycast both ran, a table of their times and
+// time_ratio_raycast_to_pbnbv per value (ablation.md, and "time_ratios" in ablation.json).
+// Ray casting's planner time median over PB-NBV's in one benchmark; none unless both completed
+// at least one scan with a positive PB-NBV time.
+std::optional<double> time_ratio_raycast_to_pbnbv(const BenchResult& r);
 void write_ablation(const std::string& param, const std::vector<std::pair<std::string, BenchResult>>& runs,
                     const std::filesystem::path& out);
 

@@ -279,12 +279,26 @@ void write_report(const BenchResult& r) {
   if (any_gap) gap_chart(r, s.out / "gap.png");
 }
 
+std::optional<double> time_ratio_raycast_to_pbnbv(const BenchResult& r) {
+  const auto find = [&](PlannerKind k) -> const PlannerSummary* {
+    for (const auto& p : r.planners)
+      if (p.planner == k && p.complete > 0) return &p;
+    return nullptr;
+  };
+  const PlannerSummary* pb = find(PlannerKind::kPbnbv);
+  const PlannerSummary* rc = find(PlannerKind::kRaycast);
+  if (!pb || !rc || !(pb->planner_ms_median > 0)) return std::nullopt;
+  return rc->planner_ms_median / pb->planner_ms_median;
+}
+
 void write_ablation(const std::string& param, const std::vector<std::pair<std::string, BenchResult>>& runs,
                     const fs::path& out) {
   fs::create_directories(out);
-  json j = {{"parameter", param}, {"values", json::array()}};
+  json j = {{"parameter", param}, {"values", json::array()}, {"time_ratios", json::array()}};
+  bool several = false;
+  for (const auto& run : runs) several = several || run.second.planners.size() > 1;
   LineChart c;
-  c.title = "Ablation: " + param + " (PB-NBV, mean coverage over objects)";
+  c.title = "Ablation: " + param + (several ? " (mean coverage over objects)" : " (PB-NBV, mean coverage over objects)");
   c.x_label = "views";
   c.y_label = "surface covered (%, mean)";
   c.integer_x = true;
@@ -299,7 +313,20 @@ void write_ablation(const std::string& param, const std::vector<std::pair<std::s
   md << " views to 95 % | planner time, median (mean) |\n|---|";
   for (int i = 0; i < n + 2; ++i) md << "---|";
   md << "\n";
+  // Planner time per iteration against the value, one curve per planner, when every value is a
+  // number (tmax, beta, resolution).
+  LineChart t;
+  t.title = "Planner time per iteration (median over objects and iterations) against " + param;
+  t.x_label = param;
+  t.y_label = "ms (log scale)";
+  t.log_y = true;
+  std::map<PlannerKind, ChartSeries> time_series;
+  bool numeric = true;
   for (const auto& [value, r] : runs) {
+    double x = 0;
+    std::istringstream in(value);
+    const bool is_number = static_cast<bool>(in >> x) && in.peek() == std::char_traits<char>::eof();
+    numeric = numeric && is_number;
     for (const auto& p : r.planners) {
       const std::string planner(name_of(p.planner));
       const std::string label = param + " " + value + (r.planners.size() > 1 ? " " + planner : "");
@@ -311,14 +338,41 @@ void write_ablation(const std::string& param, const std::vector<std::pair<std::s
       for (int i = 0; i < n; ++i) md << " " << (i < static_cast<int>(p.coverage_by_view.size()) ? f1(p.coverage_by_view[i]) : "-") << " |";
       md << " " << opt(p.views_to_95) << " | " << ms(p.planner_ms_median) << " ms (" << ms(p.planner_ms_mean) << ") |\n";
       if (!p.coverage_by_view.empty()) c.series.push_back({label, view_numbers(static_cast<int>(p.coverage_by_view.size())), p.coverage_by_view});
+      if (is_number && p.complete > 0 && p.planner_ms_median > 0 && p.planner != PlannerKind::kRing) {
+        ChartSeries& s = time_series[p.planner];
+        s.label = planner;
+        s.x.push_back(x);
+        s.y.push_back(p.planner_ms_median);
+      }
     }
   }
+  bool any_ratio = false;
+  for (const auto& run : runs) any_ratio = any_ratio || time_ratio_raycast_to_pbnbv(run.second).has_value();
+  if (any_ratio) {
+    md << "\nPlanner time per iteration, median over every iteration of every object, and the ratio (same run):\n\n"
+       << "| " << param << " | pbnbv | raycast | raycast / pbnbv |\n|---|---|---|---|\n";
+    for (const auto& [value, r] : runs) {
+      const std::optional<double> ratio = time_ratio_raycast_to_pbnbv(r);
+      double pb = NAN, rc = NAN;
+      for (const auto& p : r.planners) {
+        if (p.planner == PlannerKind::kPbnbv) pb = p.planner_ms_median;
+        if (p.planner == PlannerKind::kRaycast) rc = p.planner_ms_median;
+      }
+      md << "| " << value << " | " << (std::isfinite(pb) ? ms(pb) + " ms" : "-") << " | "
+         << (std::isfinite(rc) ? ms(rc) + " ms" : "-") << " | " << (ratio ? fixed(*ratio, 1) + "x" : "-") << " |\n";
+      j["time_ratios"].push_back({{"value", value}, {"raycast_to_pbnbv", ratio ? json(*ratio) : json(nullptr)}});
+    }
+  }
+  for (auto& [planner, s] : time_series) t.series.push_back(s);
+  const bool time_plot = numeric && !t.series.empty();
   if (!runs.empty()) md << "\nEach value's benchmark (report.md, summary.json, scans) is in its folder; the command:\n\n```\n"
                         << command_of(runs.front().second.spec) << "\n```\n(with the value changed).\n";
   md << "\n![ablation](ablation.png)\n";
+  if (time_plot) md << "\n![planner time](ablation_time.png)\n";
   write_json_atomic(j, (out / "ablation.json").string());
   write_text_atomic(md.str(), (out / "ablation.md").string());
   if (!c.series.empty()) write_line_chart(c, (out / "ablation.png").string());
+  if (time_plot) write_line_chart(t, (out / "ablation_time.png").string());
 }
 
 }  // namespace pbnbv::eval

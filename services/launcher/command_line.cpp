@@ -37,6 +37,17 @@ int ablation_number(const Setting<int>& s, const std::string& text) {
   return static_cast<int>(v);
 }
 
+// A number from --values, in the setting's range; throws as ablation_number.
+double ablation_real(const Setting<double>& s, const std::string& text) {
+  double v = 0;
+  if (!cli::detail::parse_number(text, &v)) throw std::invalid_argument("--values: '" + text + "' is not a number");
+  if (!(v >= s.min && v <= s.max)) {
+    throw std::invalid_argument("--values: --" + std::string(s.name) + " " + text + " is outside its range " +
+                                s.range_text());
+  }
+  return v;
+}
+
 }  // namespace
 
 std::vector<std::string> default_ablation_values(AblatedParameter p) {
@@ -47,6 +58,8 @@ std::vector<std::string> default_ablation_values(AblatedParameter p) {
       return {"1", "2", "4", "8"};
     case AblatedParameter::kInitialView:
       return {"0.9,0,0", "0,0.9,0", "0,0,0.9", "0,0.63,0.63"};
+    case AblatedParameter::kResolution:
+      return {"0.03", "0.02", "0.01", "0.005"};
   }
   return {};
 }
@@ -67,14 +80,14 @@ CommandLine::CommandLine()
   declare_bench_options(bench_cmd_, &bench_, &bench_pending_);
 
   ablate_cmd_ = cli::add_command(app_, "ablate",
-                                 "the paper's ablations: one benchmark per value of tmax, beta or initial-view, "
-                                 "one plot");
-  ablate_cmd_->add_option("parameter", ablate_parameter_, "the PB-NBV parameter to vary")
-      ->type_name("tmax|beta|initial-view")
+                                 "the paper's ablations: one benchmark per value of tmax, beta, initial-view or the map "
+                                 "resolution, one plot");
+  ablate_cmd_->add_option("parameter", ablate_parameter_, "the parameter to vary")
+      ->type_name("tmax|beta|initial-view|resolution")
       ->check(CLI::Validator([](std::string& text) { return cli::detail::check_choice<AblatedParameter>(text); }, ""));
   cli::add_text(*ablate_cmd_, "values", &ablate_values_,
                 "the values, comma-separated (initial views x,y,z separated by /) [tmax 5,10,20,40; beta 1,2,4,8; "
-                "initial-view 0.9,0,0/0,0.9,0/0,0,0.9/0,0.63,0.63]",
+                "initial-view 0.9,0,0/0,0.9,0/0,0,0.9/0,0.63,0.63; resolution 0.03,0.02,0.01,0.005]",
                 "V,V,...");
   ablate_base_.planners = {PlannerKind::kPbnbv};
   declare_bench_options(ablate_cmd_, &ablate_base_, &ablate_pending_);
@@ -409,7 +422,7 @@ void CommandLine::resolve_bench(const CLI::App* command, eval::BenchSpec* spec, 
 
 void CommandLine::resolve_ablate() {
   if (ablate_parameter_.empty()) {
-    throw std::invalid_argument("name the parameter: tmax, beta or initial-view (pbnbv ablate tmax [options])");
+    throw std::invalid_argument("name the parameter: tmax, beta, initial-view or resolution (pbnbv ablate tmax [options])");
   }
   const AblatedParameter param = parse_name<AblatedParameter>(ablate_parameter_);
   resolve_bench(ablate_cmd_, &ablate_base_, ablate_pending_);
@@ -424,6 +437,7 @@ void CommandLine::resolve_ablate() {
     eval::BenchSpec s = ablate_base_;
     if (param == AblatedParameter::kTMax) s.tmax = ablation_number(kTMax, v);
     if (param == AblatedParameter::kBeta) s.beta = ablation_number(kSectors, v);
+    if (param == AblatedParameter::kResolution) s.resolution_m = ablation_real(kMapResolution, v);
     if (param == AblatedParameter::kInitialView) {
       s.initial_view = cli::detail::parse_point(v);
       if (!s.initial_view) throw std::invalid_argument("--values: initial view '" + v + "' is not x,y,z");

@@ -95,8 +95,8 @@ struct ScanOptions {
   std::string resume;            // --resume DIR: continue the interrupted scan there
 };
 
-// The paper's three ablations: which PB-NBV parameter varies.
-enum class AblatedParameter { kTMax, kBeta, kInitialView };
+// The paper's three ablations and the map resolution: which parameter varies.
+enum class AblatedParameter { kTMax, kBeta, kInitialView, kResolution };
 
 // What `pbnbv ablate` was asked for: one benchmark per value (the value as given, its spec).
 struct AblateOptions {
@@ -201,9 +201,10 @@ namespace pbnbv {
 template <>
 struct EnumNames<launcher::AblatedParameter> {
   static constexpr std::string_view what = "ablation parameter";
-  static constexpr std::array<NamedValue<launcher::AblatedParameter>, 3> names{
+  static constexpr std::array<NamedValue<launcher::AblatedParameter>, 4> names{
       {{launcher::AblatedParameter::kTMax, "tmax"},
        {launcher::AblatedParameter::kBeta, "beta"},
-       {launcher::AblatedParameter::kInitialView, "initial-view"}}};
+       {launcher::AblatedParameter::kInitialView, "initial-view"},
+       {launcher::AblatedParameter::kResolution, "resolution"}}};
 };
 }  // namespace pbnbv

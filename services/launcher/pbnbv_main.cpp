@@ -1,7 +1,7 @@
 // pbnbv: the command a user runs (pbnbv help: every command and option).
 //   pbnbv scan [options]     twin-in-the-loop scan of an object
 //   pbnbv bench [options]    every planner on every object in the twin
-//   pbnbv ablate tmax|beta|initial-view [options]
+//   pbnbv ablate tmax|beta|initial-view|resolution [options]
 //   pbnbv spy                lcm-spy with every pbnbv channel decoded
 //   pbnbv stop [options]     halt the rig and end a scan
 //   pbnbv rig-host [options] the motion executor and camera service on the rig's computer

@@ -52,6 +52,15 @@
 // f*res/(sqrt(2) d_max) < 1 (voxels smaller than ~1.4 pixels at the far side of B) even one ray
 // per pixel cannot promise this; s is then 1, the reference itself. Tested against a wall that
 // fills the image, with a rolled camera, at 0.005-0.03 m (SubsampledRaysCoverTheFrustum).
+// Half-pixel strides (mixed_blocks): the floor above can nearly halve the spacing the bound
+// allows (s = 1.8 gives blocks of 1 pixel, 3.2x the rays that s needs). Blocks of a and a + 1
+// pixels (a = floor(s)) alternating along an axis put neighbouring block centres a + 0.5 apart
+// along it. The lattice of block rays is then rectangular with spacings g_u, g_v (a or a + 0.5
+// each), every point of the image lies within sqrt(g_u^2 + g_v^2) / 2 of a ray, and the argument
+// above holds as long as that is <= s / sqrt(2), i.e. g_u^2 + g_v^2 <= 2 s^2: u alternates when
+// (a + 0.5)^2 + a^2 <= 2 s^2, v too when s >= a + 0.5. Only for a <= 4 (0.005 and 0.01 m voxels
+// at about 1 m), where the floor costs most rays; coarser voxels (0.02, 0.03 m) keep the uniform
+// blocks they always had.
 // What each block casts:
 //  - all pixels valid and depth spread (max - min) <= resolution: one ray through the block
 //    centre whose return depth is the block's MINIMUM depth, so free space is never claimed
@@ -132,6 +141,20 @@ inline void store_relaxed(uint8_t* c, uint8_t v) { __atomic_store_n(c, v, __ATOM
 inline void none_to_unknown(uint8_t* c) {
   uint8_t expected = kNoneB;
   __atomic_compare_exchange_n(c, &expected, kUnkB, false, __ATOMIC_RELAXED, __ATOMIC_RELAXED);
+}
+
+// The automatic ray set alternates blocks of a and a + 1 pixels (see "Half-pixel strides") only
+// when a is at most this: there the floor to a whole stride costs most rays ((a + 0.5)^2 / a^2
+// >= 1.23); coarser voxels keep the ray set they always had.
+constexpr int kMaxMixedStride = 4;
+
+// The pixel edges of the blocks along one image axis of n pixels: [0, a, 2a, ..., n], or with
+// `alternate` widths a, a + 1, a, a + 1, ... (the last block is cut at n). Neighbouring block
+// centres are then a + 0.5 apart at most (a when not alternating).
+std::vector<int> block_edges(int n, int a, bool alternate) {
+  std::vector<int> e{0};
+  for (int i = 0; e.back() < n; ++i) e.push_back(std::min(n, e.back() + a + (alternate && i % 2 == 1 ? 1 : 0)));
+  return e;
 }
 
 inline int floor_index(double x_m, double res) { return static_cast<int>(std::floor(x_m / res)); }
@@ -600,6 +623,7 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
 
   // 4. Ray stride and traversal.
   int stride = params_.ray_stride_px;
+  bool alt_u = false, alt_v = false;  // blocks of stride and stride + 1 pixels alternate along u, v
   if (stride <= 0) {
     double d_max = 0;
     const Eigen::AlignedBox3d b = bounds();
@@ -609,11 +633,19 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
     }
     const double s = std::min(k.fx, k.fy) * res / (std::sqrt(2.0) * d_max);
     stride = std::max(1, static_cast<int>(std::floor(s)));
+    if (params_.mixed_blocks && stride <= kMaxMixedStride) {  // see "Half-pixel strides"
+      const double a = stride, wide = a + 0.5;
+      alt_u = wide * wide + a * a <= 2.0 * s * s;
+      alt_v = s >= wide;
+    }
   }
   last_stride_px_ = stride;
+  last_alternate_ = alt_u;
+  const std::vector<int> ub = block_edges(W, stride, alt_u), vb = block_edges(H, stride, alt_v);
+  const bool wide_blocks = stride > 1 || alt_u;
   const bool free_no_return = params_.no_return_is_free;
   const Eigen::Vector3d o = cam - origin_;
-  const int n_bu = (W + stride - 1) / stride, n_bv = (H + stride - 1) / stride;
+  const int n_bu = static_cast<int>(ub.size()) - 1, n_bv = static_cast<int>(vb.size()) - 1;
   // Block kinds, then the rays.
   enum : uint8_t { kBlockNothing = 0, kBlockSurface = 1, kBlockFree = 2, kBlockMixed = 3 };
   block_kind_.assign(static_cast<size_t>(n_bu) * n_bv, kBlockNothing);
@@ -623,15 +655,17 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
     // these would be reloaded after every block.
     const float lo_z = zlo_f, hi_z = zhi_f;
     const float res_f = static_cast<float>(res);
-    const int W_l = W, H_l = H, stride_l = stride, n_bu_l = n_bu, n_bv_l = n_bv;
+    const int W_l = W, n_bu_l = n_bu, n_bv_l = n_bv;
+    const int* ub_l = ub.data();
+    const int* vb_l = vb.data();
     const bool free_nr = free_no_return;
     const float* depth_l = depth;
     uint8_t* kinds = block_kind_.data();
     float* zmins = block_depth_.data();
     for (int bv = tid; bv < n_bv_l; bv += n_threads) {
-      const int v0 = bv * stride_l, v1 = std::min(H_l, v0 + stride_l);
+      const int v0 = vb_l[bv], v1 = vb_l[bv + 1];
       for (int bu = 0; bu < n_bu_l; ++bu) {
-        const int u0 = bu * stride_l, u1 = std::min(W_l, u0 + stride_l);
+        const int u0 = ub_l[bu], u1 = ub_l[bu + 1];
         int n_val = 0, n_nr = 0;
         float z_min = std::numeric_limits<float>::infinity(), z_max = 0.0f;
         for (int v = v0; v < v1; ++v) {
@@ -672,12 +706,12 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
       if (cast_ray(grid, o, d, t_free, has_return)) ++n_rays;
     };
     for (int bv = tid; bv < n_bv; bv += n_threads) {
-      const int v0 = bv * stride, v1 = std::min(H, v0 + stride);
+      const int v0 = vb[bv], v1 = vb[bv + 1];
       for (int bu = 0; bu < n_bu; ++bu) {
-        const int u0 = bu * stride, u1 = std::min(W, u0 + stride);
+        const int u0 = ub[bu], u1 = ub[bu + 1];
         const int64_t b = int64_t(bv) * n_bu + bu;
         const uint8_t kind = block_kind_[b];
-        if (kind != kBlockMixed && stride > 1 &&
+        if (kind != kBlockMixed && wide_blocks &&
             (bu == 0 || bv == 0 || bu == n_bu - 1 || bv == n_bv - 1)) {
           // Image border: also one ray per pixel of the outermost pixel row/column, so the
           // voxels the frustum boundary cuts are sampled out to the last pixel, like the
@@ -755,7 +789,8 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
   std::ostringstream os;
   const Eigen::Vector3d size = dims_.cast<double>() * res;
   os << (first ? "first frame: " : "") << n_valid << " valid pixels, " << result.rays
-     << " rays (stride " << stride << " px); B " << size.x() << " x " << size.y() << " x "
+     << " rays (stride " << stride << (alt_u ? "/" + std::to_string(stride + 1) : std::string())
+     << (alt_v ? " both axes" : alt_u ? " along u" : "") << " px); B " << size.x() << " x " << size.y() << " x "
      << size.z() << " m (" << dims_.x() << " x " << dims_.y() << " x " << dims_.z()
      << " voxels); occupied " << c.occupied << ", empty " << c.empty << ", unknown "
      << c.unknown << ", frontier " << c.frontier;

@@ -24,6 +24,10 @@ struct VoxelMapParams {
   // voxel footprint at the far side of B (every voxel in the frustum is crossed), never coarser
   // than needed. Occupied voxels always come from every valid pixel.
   int ray_stride_px = 0;
+  // With the automatic stride: blocks of a and a + 1 pixels alternate where the unfloored
+  // stride allows it and a is small (0.005 / 0.01 m voxels; see voxel_map.cpp): fewer rays, the
+  // same guarantee. false: whole-pixel strides only (as before; the benchmark compares both).
+  bool mixed_blocks = true;
 };
 
 // One depth frame as the map needs it: planar depth (0 or non-finite = no return), the camera
@@ -106,6 +110,9 @@ class VoxelMap {
   void reserve_bounds(const Eigen::AlignedBox3d& box_m);
   // Pixel stride of the free/occluded ray set used by the last integrated frame (diagnostics).
   int last_ray_stride_px() const { return last_stride_px_; }
+  // Whether that frame's blocks alternated stride and stride + 1 pixels along u (mixed_blocks;
+  // along v too when the stride allowed it).
+  bool last_blocks_alternate() const { return last_alternate_; }
 
   // Writes the map as an OctoMap ColorOcTree (.ot, viewable in octovis): Occupied, Unknown and
   // Frontier voxels as occupied nodes, Empty voxels as free nodes, each coloured by its state
@@ -130,6 +137,7 @@ class VoxelMap {
                                                   // lo_ * resolution)
   bool initialised_ = false;                      // a frame with valid points has been integrated
   int last_stride_px_ = 0;
+  bool last_alternate_ = false;
   std::vector<std::vector<Eigen::Vector3i>> points_;  // scratch per worker: lattice index of
                                                       // each valid pixel
   std::vector<uint8_t> scratch_;                  // frontier pass scratch (one byte per voxel)

@@ -179,5 +179,20 @@ std::vector<Ellipsoid> fit_ellipsoids(const std::vector<Eigen::Vector3d>& voxel_
   return out;
 }
 
-}  // namespace pbnbv
+std::vector<Ellipsoid> fit_both_classes(const std::vector<Eigen::Vector3d>& occupied,
+                                        const std::vector<Eigen::Vector3d>& frontier,
+                                        const EllipsoidParams& params, int* occupied_components,
+                                        int* frontier_components) {
+  std::vector<Ellipsoid> fits[2];
+  int t[2] = {0, 0};
+  parallel_run(2, [&](int worker, int) {
+    fits[worker] = worker == 0 ? fit_ellipsoids(occupied, EllipsoidClass::kOccupied, params, &t[0])
+                               : fit_ellipsoids(frontier, EllipsoidClass::kFrontier, params, &t[1]);
+  });
+  if (occupied_components) *occupied_components = t[0];
+  if (frontier_components) *frontier_components = t[1];
+  fits[0].insert(fits[0].end(), fits[1].begin(), fits[1].end());
+  return fits[0];
+}
 
+}  // namespace pbnbv

@@ -161,6 +161,18 @@ TEST(LauncherCommandLine, BenchDefaultsAndAblationRuns) {
   ASSERT_EQ(views.ablate().runs.size(), 4u);
   EXPECT_EQ(views.ablate().runs[3].second.initial_view, Eigen::Vector3d(0, 0.63, 0.63));
   EXPECT_EQ(views.ablate().runs[3].second.out, fs::path("/tmp/pbnbv-abl/initial-view=0_0.63_0.63"));
+
+  // The map resolution: default values, several planners kept for each value.
+  CommandLine res;
+  const Parsed r = parse(res, {"ablate", "resolution", "--planners", "pbnbv,raycast", "--out", "/tmp/pbnbv-abl"});
+  ASSERT_EQ(r.code, std::nullopt) << r.err;
+  EXPECT_EQ(res.ablate().parameter, AblatedParameter::kResolution);
+  ASSERT_EQ(res.ablate().runs.size(), 4u);
+  EXPECT_EQ(res.ablate().runs[0].second.resolution_m, 0.03);
+  EXPECT_EQ(res.ablate().runs[3].first, "0.005");
+  EXPECT_EQ(res.ablate().runs[3].second.resolution_m, 0.005);
+  EXPECT_EQ(res.ablate().runs[3].second.out, fs::path("/tmp/pbnbv-abl/resolution=0.005"));
+  EXPECT_EQ(res.ablate().runs[3].second.planners, (std::vector<PlannerKind>{PlannerKind::kPbnbv, PlannerKind::kRaycast}));
 }
 
 // Each kind of bad option, on scan and on bench: exit 2, the message names the option (and the
@@ -200,7 +212,10 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
       {{"bench", "--objets", "sphere"}, "pbnbv bench: unknown option --objets (did you mean --objects?)"},
       {{"bench", "--planners", "pbnbv,ring,pbnbv", "--out", "x"}, "pbnbv bench: --planners: 'pbnbv' is listed twice"},
       {{"bench"}, "pbnbv bench: --out DIR is required"},
-      {{"ablate", "--out", "x"}, "pbnbv ablate: name the parameter: tmax, beta or initial-view"},
+      {{"ablate", "--out", "x"}, "pbnbv ablate: name the parameter: tmax, beta, initial-view or resolution"},
+      {{"ablate", "resolution", "--values", "0.01,0.001", "--out", "x"},
+       "pbnbv ablate: --values: --resolution 0.001 is outside its range [0.002, 0.2] m"},
+      {{"ablate", "resolution", "--values", "0.01,fine", "--out", "x"}, "pbnbv ablate: --values: 'fine' is not a number"},
       {{"ablate", "beta", "--values", "2,400", "--out", "x"}, "pbnbv ablate: --values: --beta 400 is outside its range [1, 360]"},
       {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf, rig-check, calibrate, replay, help)"},
       {{"rig-check", "--deadline", "0"}, "pbnbv rig-check: --deadline: 0 is outside its range [0.5, 600] s"},

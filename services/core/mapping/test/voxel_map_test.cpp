@@ -503,7 +503,9 @@ TEST(VoxelMap, FrontierNearBoundaryGrowsBoxByGamma) {
 // The subsampled ray set crosses every voxel in the frustum: a wall filling the image (rays
 // with a return) then free rays from behind it, with a rolled camera so the voxel lattice is
 // at an angle to the pixel lattice.
+// The free frames at 0.005 and 0.01 m have blocks of 1/2 and 3/4 pixels alternating (mixed_blocks).
 TEST(VoxelMap, SubsampledRaysCoverTheFrustum) {
+  int alternating = 0;
   for (double res : {0.005, 0.01, 0.02, 0.03}) {
     VoxelMapParams p;
     p.resolution_m = res;
@@ -517,6 +519,7 @@ TEST(VoxelMap, SubsampledRaysCoverTheFrustum) {
     // The wall x = 0.001 (inside voxel layer 0 for every res here).
     const MapUpdateResult r1 = integrate(map, k, T1, plane(Vector3d::UnitX(), 0.001));
     ASSERT_TRUE(r1.updated);
+    alternating += map.last_blocks_alternate();
     if (res >= 0.01) {
       EXPECT_GT(map.last_ray_stride_px(), 1) << res;
     }
@@ -541,8 +544,9 @@ TEST(VoxelMap, SubsampledRaysCoverTheFrustum) {
       }
     });
     EXPECT_GT(checked, 1000);
-    std::printf("res %.3f: wall frame stride %d px, %lld voxels inside the frustum checked, ",
-                res, map.last_ray_stride_px(), (long long)checked);
+    std::printf("res %.3f: wall frame stride %d px%s, %lld voxels inside the frustum checked, ",
+                res, map.last_ray_stride_px(), map.last_blocks_alternate() ? " (alternating with +1)" : "",
+                (long long)checked);
     // Free rays from behind B: every pixel without return except the centre one, which lands
     // on the wall (an Occupied voxel already).
     const Eigen::AlignedBox3d b = map.bounds();
@@ -563,9 +567,11 @@ TEST(VoxelMap, SubsampledRaysCoverTheFrustum) {
       EXPECT_EQ(map.state(l), VoxelState::kEmpty) << res << " " << g.transpose();
     });
     EXPECT_GT(checked, 1000);
-    std::printf("free frame stride %d px, %lld checked\n", map.last_ray_stride_px(),
-                (long long)checked);
+    std::printf("free frame stride %d px%s, %lld checked\n", map.last_ray_stride_px(),
+                map.last_blocks_alternate() ? " (alternating with +1)" : "", (long long)checked);
+    alternating += map.last_blocks_alternate();
   }
+  EXPECT_GE(alternating, 1);  // the mixed blocks were among the ray sets checked
 }
 
 // The automatic ray subsampling against one ray per pixel (ray_stride_px = 1). gamma = 0 and a
@@ -629,12 +635,12 @@ TEST(VoxelMap, SubsampledRaysMatchPerPixelReference) {
             if (!interface) ++off_interface;
           });
           EXPECT_EQ(rf.counts.occupied, rr.counts.occupied);
-          std::printf("%4dx%-4d %-6s res %.2f eye (%5.2f %5.2f %5.2f) stride %d: rays %6d vs %6d;"
+          std::printf("%4dx%-4d %-6s res %.2f eye (%5.2f %5.2f %5.2f) stride %d%s: rays %6d vs %6d;"
                       " E/U/F fast %lld/%lld/%lld ref %lld/%lld/%lld; differ %lld of %lld"
                       " (None in fast %lld, ref Empty fast Unknown/Frontier %lld, ref"
                       " Unknown/Frontier fast Empty %lld, Unknown<->Frontier %lld); ref %.0f ms\n",
                       k.width, k.height, c.name, res, e.x(), e.y(), e.z(),
-                      fast.last_ray_stride_px(), rf.rays, rr.rays, (long long)rf.counts.empty,
+                      fast.last_ray_stride_px(), fast.last_blocks_alternate() ? "/+1" : "", rf.rays, rr.rays, (long long)rf.counts.empty,
                       (long long)rf.counts.unknown, (long long)rf.counts.frontier,
                       (long long)rr.counts.empty, (long long)rr.counts.unknown,
                       (long long)rr.counts.frontier, (long long)differ, (long long)classified,

@@ -209,3 +209,37 @@ TEST(FitEllipsoids, RepeatedCallsGiveBitIdenticalResults) {
     }
   }
 }
+
+// Both classes side by side give exactly what the two fits give one after the other: the
+// Occupied ellipsoids first (the three blobs), then the Frontier ones (a one-voxel-thin plate).
+TEST(FitEllipsoids, BothClassesSideBySideEqualOneAfterTheOther) {
+  const double voxel = 0.01;
+  std::vector<Vector3d> truth;
+  std::set<std::tuple<long, long, long>> cells;
+  for (const auto& q : three_blobs(&truth))
+    cells.insert({std::lround(q.x() / voxel), std::lround(q.y() / voxel), std::lround(q.z() / voxel)});
+  std::vector<Vector3d> occupied, frontier;
+  for (const auto& [i, j, k] : cells) occupied.push_back(voxel * Vector3d(i, j, k));
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 20; ++j) frontier.push_back(voxel * Vector3d(i, j, 40));
+  EllipsoidParams p;
+  p.voxel_m = voxel;
+  int t_occ = 0, t_front = 0, t_occ_seq = 0, t_front_seq = 0;
+  const auto both = fit_both_classes(occupied, frontier, p, &t_occ, &t_front);
+  auto seq = fit_ellipsoids(occupied, EllipsoidClass::kOccupied, p, &t_occ_seq);
+  const auto f = fit_ellipsoids(frontier, EllipsoidClass::kFrontier, p, &t_front_seq);
+  seq.insert(seq.end(), f.begin(), f.end());
+  EXPECT_EQ(t_occ, 3);
+  EXPECT_EQ(t_occ, t_occ_seq);
+  EXPECT_EQ(t_front, t_front_seq);
+  EXPECT_GE(t_front, 1);
+  ASSERT_EQ(both.size(), seq.size());
+  for (size_t i = 0; i < both.size(); ++i) {
+    EXPECT_EQ(both[i].cls, seq[i].cls);
+    EXPECT_EQ(both[i].num_points, seq[i].num_points);
+    EXPECT_EQ(both[i].centre, seq[i].centre);
+    EXPECT_EQ(both[i].semi_axes, seq[i].semi_axes);
+  }
+  EXPECT_EQ(both.front().cls, EllipsoidClass::kOccupied);
+  EXPECT_EQ(both.back().cls, EllipsoidClass::kFrontier);
+}
