@@ -31,9 +31,8 @@ namespace pbnbv::eval {
 // paper's evaluation, every planner but the ring, one scan at a time.
 inline constexpr ChoiceSetting<RigKind> kBenchRig = kRig.with_default(RigKind::kFree);
 inline constexpr ChoiceSetting<CandidateArea> kBenchArea = kArea.with_default(CandidateArea::kFullSphere);
-inline constexpr ChoiceSetting<WhenDone> kBenchWhenDone = kWhenDone.with_default(WhenDone::kSpread);
-inline constexpr std::array<PlannerKind, 3> kBenchPlanners{PlannerKind::kPbnbv, PlannerKind::kRaycast,
-                                                            PlannerKind::kRandom};
+inline constexpr std::array<PlannerKind, 4> kBenchPlanners{PlannerKind::kPbnbv, PlannerKind::kPbnbvPaper,
+                                                            PlannerKind::kRaycast, PlannerKind::kRandom};
 inline constexpr Setting<int> kJobs{"jobs", 1, 1, 64, "", "scans at once, each in its own network namespace"};
 
 struct BenchSpec {
@@ -50,7 +49,7 @@ struct BenchSpec {
   double size_m = kObjectSize.value;
   std::optional<UpAxis> up;                     // none: each object's natural up axis
   int64_t seed = kPlannerSeed.value;            // the random planner's seed
-  WhenDone when_done = kBenchWhenDone.value;
+  WhenDone when_done = kWhenDone.value;
   // The scans spend the whole budget (stop rule off); the summary says where this rule would
   // have stopped each from its recorded per-view figures (it may change in a folder's reruns).
   SurfaceStopRule stop_rule;

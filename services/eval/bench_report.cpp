@@ -47,7 +47,7 @@ std::string command_of(const BenchSpec& s) {
   if (s.initial_view) os << " --initial-view " << s.initial_view->x() << "," << s.initial_view->y() << "," << s.initial_view->z();
   if (s.size_m != kObjectSize.value) os << " --size " << s.size_m;
   if (s.up) os << " --up " << name_of(*s.up);
-  if (s.when_done != kBenchWhenDone.value) os << " --when-done " << name_of(s.when_done);
+  if (s.when_done != kWhenDone.value) os << " --when-done " << name_of(s.when_done);
   if (s.stop_rule.window != kStopWindow.value) os << " --stop-window " << s.stop_rule.window;
   if (s.stop_rule.max_new_percent != kStopNewSurface.value) os << " --stop-new-surface " << s.stop_rule.max_new_percent;
   if (s.stop_rule.min_views != kStopMinViews.value) os << " --stop-min-views " << s.stop_rule.min_views;

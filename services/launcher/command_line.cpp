@@ -255,7 +255,7 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add_point(c, "initial-view", &spec->initial_view,
                  "first camera position, object frame, m [the scan's default first view]");
   cli::add(c, kPlannerSeed, &spec->seed);
-  cli::add(c, eval::kBenchWhenDone, &spec->when_done);
+  cli::add(c, kWhenDone, &spec->when_done);
   // The scans run without a stop rule; the report says where the surface rule would have stopped each.
   cli::add(c, kStopWindow, &spec->stop_rule.window);
   cli::add(c, kStopNewSurface, &spec->stop_rule.max_new_percent);

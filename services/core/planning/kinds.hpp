@@ -10,12 +10,15 @@
 namespace pbnbv {
 
 enum class PlannerKind : uint8_t {
-  kPbnbv,    // next-best-view planning (PB-NBV): ellipsoids, view quality F, partitions
+  kPbnbv,    // next-best-view planning: PB-NBV with our departures (docs/method.md "Beyond the
+             // paper"): a weak best view counts as nothing left to aim at, and the partition
+             // applies only to registered views
   kRaycast,  // baseline: the candidate whose rays reveal the most unobserved voxels
   kRandom,   // baseline: a uniformly random candidate
   kRing,     // fixed views on a turntable ring (no planning step)
   kOracle,   // the benchmark's yardstick: the candidate that sees the most true surface not yet
              // seen (needs the object's true mesh: twin scans only)
+  kPbnbvPaper,  // PB-NBV exactly as the paper describes it (its table and ablations)
 };
 
 // Candidate views on the whole sphere around B, or on the hemisphere above its centre.
@@ -28,7 +31,8 @@ enum class WhenDone : uint8_t { kStop, kSpread };
 template <>
 struct EnumNames<PlannerKind> {
   static constexpr std::string_view what = "planner";
-  static constexpr std::array<NamedValue<PlannerKind>, 5> names{{{PlannerKind::kPbnbv, "pbnbv"},
+  static constexpr std::array<NamedValue<PlannerKind>, 6> names{{{PlannerKind::kPbnbv, "pbnbv"},
+                                                                 {PlannerKind::kPbnbvPaper, "pbnbv-paper"},
                                                                  {PlannerKind::kRaycast, "raycast"},
                                                                  {PlannerKind::kRandom, "random"},
                                                                  {PlannerKind::kRing, "ring"},
@@ -50,8 +54,10 @@ struct EnumNames<WhenDone> {
 
 // The planners that ask the view scorer for each view (all but the ring).
 constexpr bool uses_view_scorer(PlannerKind k) { return k != PlannerKind::kRing; }
+// The PB-NBV planners (ours and the paper's): ellipsoids, view quality F, partitions.
+constexpr bool is_pbnbv(PlannerKind k) { return k == PlannerKind::kPbnbv || k == PlannerKind::kPbnbvPaper; }
 // The planners that need the ellipsoid fitter (PB-NBV only).
-constexpr bool uses_ellipsoids(PlannerKind k) { return k == PlannerKind::kPbnbv; }
+constexpr bool uses_ellipsoids(PlannerKind k) { return is_pbnbv(k); }
 // The planners that need the object's true mesh (the oracle: a twin scan only).
 constexpr bool uses_truth(PlannerKind k) { return k == PlannerKind::kOracle; }
 

@@ -209,6 +209,19 @@ PlanResult plan_pbnbv(const PlanInput& in) {
 
   const double best = r.scores[r.chosen].quality;
   r.first_quality = std::isfinite(in.first_quality) ? in.first_quality : best;
+  if (std::isfinite(in.first_quality) && in.weak_fraction > 0 && best <= in.weak_fraction * in.first_quality) {
+    std::ostringstream os;
+    os << "best view quality F = " << best << " px is weak (at most " << in.weak_fraction
+       << " of the first planned view's F, " << in.first_quality << " px)";
+    if (in.when_done == WhenDone::kSpread) {
+      PlanResult spread = plan_spread(in, r, os.str());
+      spread.first_quality = r.first_quality;
+      return spread;
+    }
+    r.outcome = PlanResult::Outcome::kStop;
+    r.reason = os.str();
+    return r;
+  }
   if (std::isfinite(in.first_quality) && in.stop_fraction > 0 && best < in.stop_fraction * in.first_quality) {
     std::ostringstream os;
     os << "best view quality F = " << best << " px is below " << in.stop_fraction << " of the first planned view's F ("

@@ -73,6 +73,11 @@ struct PlanInput {
   // unobserved voxel in view) it stops (kStop), or (kSpread: a fixed view budget, as in the
   // paper's evaluation) chooses the candidate farthest in angle from every view taken.
   WhenDone when_done = kWhenDone.value;
+  // Our departure (planner pbnbv; 0 for pbnbv-paper): a best F at or below weak_fraction *
+  // first_quality also counts as nothing left to aim at, and when_done applies. Once no candidate
+  // sees more frontier than occupied area, the paper's F prefers the views that see the least of
+  // the object, while the views farthest from every view taken still add surface.
+  double weak_fraction = 0.0;
   // Reachability of each candidate (the motion executor's check), called once with every
   // candidate (candidate_views(bbox, candidates), so a caller may compute it ahead), or empty:
   // all reachable.
@@ -105,8 +110,9 @@ struct PlanResult {
   const ViewScore* chosen_score() const { return chosen >= 0 ? &scores[chosen] : nullptr; }
 };
 
-// One planning step. Stops (kStop) when no Frontier ellipsoid remains, or when the best F is
-// below stop_fraction * first_quality. Fails (kFailed) when B is empty or no candidate is
+// One planning step. Stops (kStop) when no Frontier ellipsoid remains or the best F is weak
+// (weak_fraction), or chooses the farthest view instead (when_done kSpread); stops when the best
+// F is below stop_fraction * first_quality. Fails (kFailed) when B is empty or no candidate is
 // reachable. The sectors already scanned are those of views_done about the current centre of
 // B; while some sector is unscanned the choice is limited to unscanned sectors adjacent to
 // scanned ones (falling back to every sector, and saying so, when none of those holds a

@@ -347,7 +347,10 @@ void ScanSequencer::begin_plan(double now_s) {
   r.excluded = done_.excluded;
   r.num_candidates = s_.candidates;
   r.num_parallels = s_.parallels;
-  r.num_sectors = s_.sectors;
+  // Ours (planner pbnbv): the partition keeps each view next to one already taken, which the
+  // arm's registration and travel need; the free rig (exact poses, no registration, no travel)
+  // goes where the map says (docs/method.md "Beyond the paper").
+  r.num_sectors = s_.planner == PlannerKind::kPbnbv && s_.rig == RigKind::kFree ? 1 : s_.sectors;
   r.area = s_.area;
   r.working_distance_m = s_.working_distance_m;
   r.num_alternatives = s_.alternatives;
@@ -402,7 +405,7 @@ void ScanSequencer::planned(const ViewPlan& p, double now_s) {
   if (!std::isfinite(done_.first_quality)) done_.first_quality = p.first_quality;
   options_ = {p.object_T_camera};
   options_.insert(options_.end(), p.alternatives.begin(), p.alternatives.end());
-  const std::string quality = s_.planner == PlannerKind::kPbnbv     ? "F " + fixed(p.view_quality, 2) + " px, "
+  const std::string quality = is_pbnbv(s_.planner)                  ? "F " + fixed(p.view_quality, 2) + " px, "
                               : s_.planner == PlannerKind::kRaycast ? "gain " + fixed(p.view_quality, 2) + " voxels, "
                               : s_.planner == PlannerKind::kOracle  ? fixed(p.view_quality, 0) + " new true surface samples, "
                                                         : "";

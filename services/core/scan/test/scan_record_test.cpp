@@ -135,7 +135,7 @@ TEST_F(ScanRecordTest, TheStatusAndStopAreWrittenWithTheViews) {
   EXPECT_EQ(j["views"].size(), 1u);
   EXPECT_EQ(j["plan"]["planner"], "ring");
   EXPECT_FALSE(j.contains("stop"));
-  record.set_stop({"view budget reached (--views 4)", 1, "budget"});
+  record.set_stop({"view budget reached (--views 4)", 1, "budget", {}});
   record.write("done", "scan complete", 1, 3.0);
   j = read_json((dir_ / "scan.json").string());
   EXPECT_EQ(j["status"]["state"], "done");
