@@ -41,7 +41,7 @@ std::vector<std::string> names_of() {
   return out;
 }
 
-// The names as a sentence: "pbnbv, raycast, random, ring or oracle".
+// The names as a sentence: "pbnbv, pbnbv-paper, raycast, random, ring or oracle".
 template <typename E>
 std::string choices_of() {
   std::string out;
@@ -54,7 +54,7 @@ std::string choices_of() {
 }
 
 // The value named `text` (exact match). Throws std::invalid_argument naming the text and the
-// choices: "unknown planner 'rnadom' (expected pbnbv, raycast, random, ring or oracle)".
+// choices: "unknown planner 'rnadom' (expected pbnbv, pbnbv-paper, raycast, random, ring or oracle)".
 template <typename E>
 E parse_name(std::string_view text) {
   for (const auto& n : EnumNames<E>::names) {

@@ -57,7 +57,7 @@ TEST(LauncherCommandLine, ScanDefaultsAreTheTables) {
   EXPECT_EQ(s.sectors, 4);
   EXPECT_EQ(s.t_max, 10);
   EXPECT_EQ(s.area, CandidateArea::kHemisphere);
-  EXPECT_EQ(s.when_done, WhenDone::kStop);
+  EXPECT_EQ(s.when_done, WhenDone::kSpread);
   EXPECT_DOUBLE_EQ(s.map_resolution_m, 0.03);
   EXPECT_DOUBLE_EQ(s.voxel_m, 0.002);
   EXPECT_DOUBLE_EQ(s.working_distance_m, 0.6);
@@ -135,7 +135,8 @@ TEST(LauncherCommandLine, BenchDefaultsAndAblationRuns) {
   const Parsed p = parse(line, {"bench", "--objects", "sphere,box", "--out", "/tmp/pbnbv-bench"});
   ASSERT_EQ(p.code, std::nullopt) << p.err;
   const eval::BenchSpec& b = line.bench();
-  EXPECT_EQ(b.planners, (std::vector<PlannerKind>{PlannerKind::kPbnbv, PlannerKind::kRaycast, PlannerKind::kRandom}));
+  EXPECT_EQ(b.planners, (std::vector<PlannerKind>{PlannerKind::kPbnbv, PlannerKind::kPbnbvPaper, PlannerKind::kRaycast,
+                                                  PlannerKind::kRandom}));
   EXPECT_EQ(b.rig, RigKind::kFree);
   EXPECT_EQ(b.area, CandidateArea::kFullSphere);
   EXPECT_EQ(b.when_done, WhenDone::kSpread);
@@ -200,7 +201,7 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
       {{"scan", "--views", "2000"}, "pbnbv scan: --views: 2000 is outside its range [1, 1000]"},
       {{"scan", "--resolution", "0.5"}, "pbnbv scan: --resolution: 0.5 is outside its range [0.002, 0.2] m"},
       {{"scan", "--veiws", "3"}, "pbnbv scan: unknown option --veiws (did you mean --views?)"},
-      {{"scan", "--planner", "best"}, "pbnbv scan: --planner: unknown planner 'best' (expected pbnbv, raycast, random, ring or oracle)"},
+      {{"scan", "--planner", "best"}, "pbnbv scan: --planner: unknown planner 'best' (expected pbnbv, pbnbv-paper, raycast, random, ring or oracle)"},
       {{"scan", "--external-rig", "--planner", "oracle"},
        "pbnbv scan: --planner oracle does not apply to --external-rig: the oracle chooses by the object's true mesh"},
       {{"scan", "--parallels", "30", "--candidates", "20"}, "pbnbv scan: --parallels 30 must not exceed --candidates 20"},

@@ -137,6 +137,7 @@ TEST(Planner, ExcludedViewsAreSkipped) {
 TEST(Planner, StopsWhenNoFrontierRemainsOrTheBestViewIsWorthTooLittle) {
   PlanInput in = scene(0.0, 4);
   in.ellipsoids.pop_back();  // only the occupied ball
+  in.when_done = WhenDone::kStop;
   const PlanResult done = plan_pbnbv(in);
   EXPECT_EQ(done.outcome, PlanResult::Outcome::kStop);
   EXPECT_EQ(done.reason, "no frontier ellipsoid remains");
@@ -185,4 +186,38 @@ TEST(Planner, EmptyBoundingBoxFails) {
 }
 
 }  // namespace
+// Ours (planner pbnbv, weak_fraction): a best F at most weak_fraction of the first planned view's F
+// is weak. With when_done spread the choice is the candidate farthest from every view taken (one
+// view at +x: the farthest is on the -x side); with stop the plan stops; the paper's planner
+// (weak_fraction 0) chooses by F as ever.
+TEST(Planner, AWeakBestViewFillsTheLargestGapOrStops) {
+  PlanInput in = scene(0.0, 1);
+  in.views_done = {look_at_z_up(Eigen::Vector3d(1.0, 0, 0.15), Eigen::Vector3d(0, 0, 0.15))};
+  in.skip_revisits = false;
+  const PlanResult paper = plan_pbnbv(in);  // weak_fraction 0
+  ASSERT_EQ(paper.outcome, PlanResult::Outcome::kView);
+  const double best_f = paper.scores[paper.chosen].quality;
+  ASSERT_GT(best_f, 0.0);
+  EXPECT_LT(azimuth_deg(paper.candidates[paper.chosen], paper.centre), 90.0);  // towards the frontier at +x
+
+  in.weak_fraction = 0.1;
+  in.first_quality = 10.0 * best_f;  // best F = 0.1 of the first: weak (at most)
+  in.when_done = WhenDone::kSpread;
+  const PlanResult spread = plan_pbnbv(in);
+  ASSERT_EQ(spread.outcome, PlanResult::Outcome::kView);
+  EXPECT_NE(spread.reason.find("weak"), std::string::npos) << spread.reason;
+  EXPECT_NEAR(azimuth_deg(spread.candidates[spread.chosen], spread.centre), 180.0, 15.0);
+  EXPECT_DOUBLE_EQ(spread.first_quality, 10.0 * best_f);
+
+  in.when_done = WhenDone::kStop;
+  const PlanResult stop = plan_pbnbv(in);
+  EXPECT_EQ(stop.outcome, PlanResult::Outcome::kStop);
+  EXPECT_NE(stop.reason.find("weak"), std::string::npos) << stop.reason;
+
+  in.first_quality = 9.9 * best_f;  // now above 0.1 of the first: F decides
+  in.when_done = WhenDone::kSpread;
+  const PlanResult strong = plan_pbnbv(in);
+  EXPECT_EQ(strong.chosen, paper.chosen);
+}
+
 }  // namespace pbnbv

@@ -169,7 +169,9 @@ TEST(RaycastPlanner, ChoosesTheSideWithUnobservedVoxels) {
 TEST(RaycastPlanner, StopsWhenNothingIsUnobserved) {
   const VoxelGrid g = cube_grid(10, VoxelState::kEmpty);
   RaycastParams p;
-  const PlanResult r = plan_raycast(plan_input(g), g, p);
+  PlanInput in = plan_input(g);
+  in.when_done = WhenDone::kStop;
+  const PlanResult r = plan_raycast(in, g, p);
   EXPECT_EQ(r.outcome, PlanResult::Outcome::kStop);
   EXPECT_NE(r.reason.find("unobserved"), std::string::npos);
 }

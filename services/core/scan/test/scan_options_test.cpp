@@ -54,7 +54,7 @@ TEST(ScanOptions, TheDefaultsAreThePapersFigures) {
   EXPECT_DOUBLE_EQ(kRingElevation.value, 30.0);
   EXPECT_EQ(kPlanner.value, PlannerKind::kPbnbv);
   EXPECT_EQ(kArea.value, CandidateArea::kHemisphere);
-  EXPECT_EQ(kWhenDone.value, WhenDone::kStop);
+  EXPECT_EQ(kWhenDone.value, WhenDone::kSpread);  // ours: the stop rule ends a scan, not the map
   EXPECT_EQ(kRig.value, RigKind::kArm);
 }
 
@@ -150,7 +150,7 @@ void expect_names_round_trip(const std::string& what, const std::string& choices
 }
 
 TEST(ScanKinds, EveryNameRoundTripsAndAnUnknownOneIsNamedWithTheChoices) {
-  expect_names_round_trip<PlannerKind>("planner", "pbnbv, raycast, random, ring or oracle");
+  expect_names_round_trip<PlannerKind>("planner", "pbnbv, pbnbv-paper, raycast, random, ring or oracle");
   expect_names_round_trip<CandidateArea>("candidate area", "hemi or full");
   expect_names_round_trip<WhenDone>("when-done rule", "stop or spread");
   expect_names_round_trip<RigKind>("rig kind", "arm or free");
@@ -163,6 +163,7 @@ TEST(ScanKinds, EveryNameRoundTripsAndAnUnknownOneIsNamedWithTheChoices) {
   EXPECT_TRUE(uses_view_scorer(PlannerKind::kRaycast));
   EXPECT_FALSE(uses_view_scorer(PlannerKind::kRing));
   EXPECT_TRUE(uses_ellipsoids(PlannerKind::kPbnbv));
+  EXPECT_TRUE(uses_ellipsoids(PlannerKind::kPbnbvPaper));
   EXPECT_FALSE(uses_ellipsoids(PlannerKind::kRandom));
 }
 
@@ -199,7 +200,7 @@ TEST(ScanSettingsJson, KindsAreWrittenAsTheSameTextAndReadBack) {
   bad = j;
   bad["planner"] = "greedy";
   EXPECT_EQ(error_message([&] { scan_settings_from_json(bad); }),
-            "scan settings: unknown planner 'greedy' (expected pbnbv, raycast, random, ring or oracle)");
+            "scan settings: unknown planner 'greedy' (expected pbnbv, pbnbv-paper, raycast, random, ring or oracle)");
   bad = j;
   bad["planning"]["candidates"] = 0;
   EXPECT_EQ(error_message([&] { scan_settings_from_json(bad); }),
