@@ -122,6 +122,9 @@ class Bus {
     iteration_ = iteration;
   }
   void note_error(const std::string& what);  // logs and remembers as last_error
+  // Sends the heartbeat when one is due (at most once a second): for a handler that computes
+  // for long (the oracle's plan), so the launcher does not take the service for hung.
+  void keep_alive() { heartbeat(); }
   int64_t handled() const { return handled_; }
   int64_t rejected() const { return rejected_; }
   int64_t ignored() const { return ignored_; }

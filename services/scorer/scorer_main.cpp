@@ -235,6 +235,7 @@ class ScorerService {
       } else if (p.planner == PlannerKind::kRandom) {
         result = plan_random(p.input, static_cast<uint64_t>(r.seed));
       } else if (p.planner == PlannerKind::kOracle) {
+        p.input.progress = [this] { bus_.keep_alive(); };
         result = plan_oracle(p.input, truth_->mesh, truth_->samples, p.visibility);
       } else {
         result = plan_pbnbv(p.input);

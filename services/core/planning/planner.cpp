@@ -329,7 +329,15 @@ PlanResult plan_oracle(const PlanInput& in, const TriangleMesh& truth, const Sur
     pool.push_back(i);
     active.push_back(r.candidates[i]);
   }
-  const std::vector<int> gains = count_newly_visible(truth, samples.points, samples.normals, active, seen, visibility);
+  // In chunks, reporting progress between them: a large mesh takes seconds.
+  std::vector<int> gains;
+  constexpr std::size_t kChunk = 50;
+  for (std::size_t b = 0; b < active.size(); b += kChunk) {
+    const std::vector<Pose> chunk(active.begin() + b, active.begin() + std::min(active.size(), b + kChunk));
+    const std::vector<int> g = count_newly_visible(truth, samples.points, samples.normals, chunk, seen, visibility);
+    gains.insert(gains.end(), g.begin(), g.end());
+    if (in.progress) in.progress();
+  }
   for (std::size_t k = 0; k < pool.size(); ++k) {
     r.scores[pool[k]].quality = gains[k];
     r.scores[pool[k]].frontier_sum = gains[k];
