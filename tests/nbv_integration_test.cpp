@@ -62,8 +62,13 @@ void check_views(const NbvScan& s, int views) {
   for (int i = 1; i < views; ++i) {
     const auto& plan = s.scan["views"][i]["plan"];
     EXPECT_EQ(plan["outcome"], "view") << plan.dump(2);
-    // F may be negative (more occupied than frontier area in view) yet the best there is.
-    EXPECT_GT(plan["frontier_area_px"].get<double>(), 0.0);
+    // F may be negative (more occupied than frontier area in view) yet the best there is; a weak
+    // best F (planner pbnbv) gives the view farthest from every view taken, which has no area.
+    if (plan["reason"].get<std::string>().find("farthest from every view taken") == std::string::npos) {
+      EXPECT_GT(plan["frontier_area_px"].get<double>(), 0.0) << plan["reason"];
+    } else {
+      EXPECT_NE(plan["reason"].get<std::string>().find("weak"), std::string::npos) << plan["reason"];
+    }
     EXPECT_EQ(plan["candidates"]["generated"], 800);
     EXPECT_GT(plan["candidates"]["scored"].get<int>(), 100);
     EXPECT_GE(plan["ellipsoids"]["frontier_components"].get<int>(), 1);

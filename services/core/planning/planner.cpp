@@ -214,8 +214,9 @@ PlanResult plan_pbnbv(const PlanInput& in) {
     os << "best view quality F = " << best << " px is weak (at most " << in.weak_fraction
        << " of the first planned view's F, " << in.first_quality << " px)";
     if (in.when_done == WhenDone::kSpread) {
-      PlanResult spread = plan_spread(in, r, os.str());
+      PlanResult spread = plan_spread(in, r, os.str());  // within the allowed sectors
       spread.first_quality = r.first_quality;
+      spread.num_scored = r.num_scored;  // every candidate was scored by F
       return spread;
     }
     r.outcome = PlanResult::Outcome::kStop;

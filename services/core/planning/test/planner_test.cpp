@@ -208,6 +208,7 @@ TEST(Planner, AWeakBestViewFillsTheLargestGapOrStops) {
   EXPECT_NE(spread.reason.find("weak"), std::string::npos) << spread.reason;
   EXPECT_NEAR(azimuth_deg(spread.candidates[spread.chosen], spread.centre), 180.0, 15.0);
   EXPECT_DOUBLE_EQ(spread.first_quality, 10.0 * best_f);
+  EXPECT_EQ(spread.num_scored, paper.num_scored);  // every candidate was scored by F first
 
   in.when_done = WhenDone::kStop;
   const PlanResult stop = plan_pbnbv(in);
