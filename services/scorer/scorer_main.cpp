@@ -124,7 +124,7 @@ class ScorerService {
     if (!planner || !uses_view_scorer(*planner)) {
       view_plan_t out = bus::empty_answer(r);
       out.outcome = view_plan_t::kFailed;
-      out.reason = "planner '" + r.planner + "' is not served by pbnbv-scorer (pbnbv, raycast, random, oracle)";
+      out.reason = "planner '" + r.planner + "' is not served by pbnbv-scorer (pbnbv, pbnbv-paper, raycast, random, oracle)";
       publish(out);
       return;
     }

@@ -117,11 +117,9 @@ TEST(RigSim, TargetOutsideAJointLimitIsRefusedAndTheArmHolds) {
   EXPECT_LT((sim.arm_position() - rig.q_home).cwiseAbs().maxCoeff(), 1e-4) << "the arm must hold at home";
 }
 
-// The free rig's virtual gantry goes straight through the object (the paper's setup teleports the
-// camera): from 0.8 m on -x to 0.8 m on +x through a 0.4 m cube floating at the origin, the move
-// arrives on target and settles instead of stalling against the cube.
-// The free rig teleports through the object: one step after a command its joints are exactly the
-// target (the camera pose is the commanded one to the bit), however far the move.
+// The free rig teleports through the object (the paper's setup teleports the camera): from 0.8 m
+// on -x to 0.8 m on +x through a 0.4 m cube floating at the origin, one step after the command
+// its joints are exactly the target (the camera pose is the commanded one to the bit).
 TEST(RigSim, TheFreeRigsCameraTeleportsThroughTheObject) {
   const auto dir = std::filesystem::temp_directory_path() / ("rig_sim_free_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);

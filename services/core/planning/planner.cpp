@@ -215,7 +215,6 @@ PlanResult plan_pbnbv(const PlanInput& in) {
        << " of the first planned view's F, " << in.first_quality << " px)";
     if (in.when_done == WhenDone::kSpread) {
       PlanResult spread = plan_spread(in, r, os.str());  // within the allowed sectors
-      spread.first_quality = r.first_quality;
       spread.num_scored = r.num_scored;  // every candidate was scored by F
       return spread;
     }
