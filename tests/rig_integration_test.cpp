@@ -146,6 +146,22 @@ TEST(ExternalRig, ADryRunCommandsNothing) {
   EXPECT_EQ(bytes.find("TURNTABLE_COMMAND"), std::string::npos);
 }
 
+// A first view the arm cannot reach (below the table's edge: elevation atan(-0.35 / 0.7) =
+// -26.6 deg) is not refused when a fallback of first_view_options is reachable: the dry run
+// shows the view the scan will start from, the first option 20 deg higher (-6.6 deg, so
+// z = 0.783 sin(-6.6 deg) = -0.089 m at the same distance).
+TEST(ExternalRig, ADryRunShowsTheFallbackForAnUnreachableFirstView) {
+  const fs::path dir = fresh_dir("external-dry-run-fallback");
+  const CommandResult r = run_command(with_twin_as_hardware(
+      "--model-out " + (dir / "hw.xml").string(),
+      bin_dir() + "/pbnbv scan --external-rig --rig-model " + rig_model("rig_arm.xml") +
+          " --dry-run --initial-view 0.7,0,-0.35"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("the first view is unreachable ("), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the scan starts from fallback 8 of first_view_options"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("view 1 at (0.777, 0.000, -0.089) m: ARM_COMMAND ["), std::string::npos) << r.output;
+}
+
 // No driver on the bus: the scan names each missing one after --driver-timeout, creates no output
 // folder and starts nothing.
 TEST(ExternalRig, ADriverThatNeverAnswersIsNamed) {

@@ -54,6 +54,19 @@ FirstViews plan_first_views(const ScanSettings& s, const RigModel& rig, const ri
       turntable = f.solutions.back().turntable_rad;
     }
   }
+  if (s.planner != PlannerKind::kRing && !f.solutions.front().reachable) {
+    // The scan falls back through first_view_options: show the view it will start from.
+    const std::vector<Pose> options = first_view_options(s);
+    for (std::size_t i = 1; i < options.size(); ++i) {
+      const ViewSolution v = checker.solve(options[i], seen.q, seen.turntable_rad, keepout, s.object_z_m);
+      if (!v.reachable) continue;
+      f.first_unreachable_reason = f.solutions.front().reason;
+      f.first_option = static_cast<int>(i);
+      f.views.front() = options[i];
+      f.solutions.front() = v;
+      break;
+    }
+  }
   CandidateSpec spec;
   spec.num_views = s.candidates;
   spec.num_parallels = s.parallels;
@@ -73,7 +86,9 @@ void require_reachable(const FirstViews& f, const ScanSettings& s) {
   const std::string where = "the arm of " + s.rig_model_path + " around the working volume " +
                             (s.working_volume ? s.working_volume->to_text() : std::string("of the object"));
   if (!f.solutions.empty() && !f.solutions.front().reachable) {
-    throw std::invalid_argument(where + " cannot reach the first view: " + f.solutions.front().reason +
+    throw std::invalid_argument(where + " cannot reach the first view" +
+                                (s.planner == PlannerKind::kRing ? std::string() : " nor any of its " + std::to_string(first_view_options(s).size() - 1) + " fallbacks") +
+                                ": " + f.solutions.front().reason +
                                 " (try --working-volume, --working-distance or --ring-elevation)");
   }
   if (f.reachable_candidates == 0) {
@@ -86,6 +101,10 @@ std::string describe(const FirstViews& f, const RigModel& rig, const rigcheck::P
   os << "rig now: joints [" << joints_text(seen.q) << "] deg";
   if (rig.has_turntable) os << ", turntable " << fixed(rad_to_deg(seen.turntable_rad), 1) << " deg";
   os << "\n";
+  if (f.first_option > 0) {
+    os << "the first view is unreachable (" << f.first_unreachable_reason << "); the scan starts from fallback "
+       << f.first_option << " of first_view_options\n";
+  }
   for (std::size_t i = 0; i < f.views.size(); ++i) {
     const ViewSolution& v = f.solutions[i];
     const Eigen::Vector3d p = f.views[i].translation();

@@ -25,12 +25,16 @@ rigcheck::PreflightResult check_drivers(bus::Bus& bus, const RigModel& rig, doub
 struct FirstViews {
   std::vector<Pose> views;                 // object_T_camera: the first view, or every ring view
   std::vector<ViewSolution> solutions;     // per view
+  // A next-best-view scan whose first view is unreachable starts from the first reachable of
+  // first_view_options (as the scan itself does): that option's index, and why the first failed.
+  int first_option = 0;
+  std::string first_unreachable_reason;
   int candidates = 0, reachable_candidates = 0;
 };
 FirstViews plan_first_views(const ScanSettings& s, const RigModel& rig, const rigcheck::PreflightResult& seen);
 
 // Throws std::invalid_argument naming the rig file and the working volume when the arm cannot
-// reach the first view (with the reason) or any of the candidates.
+// reach the first view nor any of its fallbacks (with the reason), or any of the candidates.
 void require_reachable(const FirstViews& f, const ScanSettings& s);
 
 // The dry run's account: for each first view, the joint targets and the turntable angle that
