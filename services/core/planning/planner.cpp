@@ -144,6 +144,14 @@ static PlanResult plan_spread(const PlanInput& in, PlanResult r, const std::stri
   return r;
 }
 
+// Nothing left to aim at (`why`): --when-done decides: fill the largest gap, or stop.
+static PlanResult nothing_left(const PlanInput& in, PlanResult r, const std::string& why) {
+  if (in.when_done == WhenDone::kSpread) return plan_spread(in, std::move(r), why);
+  r.outcome = PlanResult::Outcome::kStop;
+  r.reason = why;
+  return r;
+}
+
 PlanResult plan_pbnbv(const PlanInput& in) {
   PlanResult r;
   for (const auto& e : in.ellipsoids) {
@@ -152,13 +160,8 @@ PlanResult plan_pbnbv(const PlanInput& in) {
   if (in.beta < 1) throw std::invalid_argument("beta (partition sectors) must be >= 1, got " + std::to_string(in.beta));
   if (!check_bbox(in, r)) return r;
   if (r.num_frontier_ellipsoids == 0) {
-    if (in.when_done == WhenDone::kSpread) {
-      prepare_candidates(in, r);
-      return plan_spread(in, std::move(r), "no frontier ellipsoid remains");
-    }
-    r.outcome = PlanResult::Outcome::kStop;
-    r.reason = "no frontier ellipsoid remains";
-    return r;
+    if (in.when_done == WhenDone::kSpread) prepare_candidates(in, r);
+    return nothing_left(in, std::move(r), "no frontier ellipsoid remains");
   }
 
   prepare_candidates(in, r);
@@ -213,14 +216,10 @@ PlanResult plan_pbnbv(const PlanInput& in) {
     std::ostringstream os;
     os << "best view quality F = " << best << " px is weak (at most " << in.weak_fraction
        << " of the first planned view's F, " << in.first_quality << " px)";
-    if (in.when_done == WhenDone::kSpread) {
-      PlanResult spread = plan_spread(in, r, os.str());  // within the allowed sectors
-      spread.num_scored = r.num_scored;  // every candidate was scored by F
-      return spread;
-    }
-    r.outcome = PlanResult::Outcome::kStop;
-    r.reason = os.str();
-    return r;
+    const int scored = r.num_scored;
+    PlanResult done = nothing_left(in, std::move(r), os.str());  // a spread stays within the allowed sectors
+    done.num_scored = scored;  // every candidate was scored by F
+    return done;
   }
   if (std::isfinite(in.first_quality) && in.stop_fraction > 0 && best < in.stop_fraction * in.first_quality) {
     std::ostringstream os;
@@ -269,11 +268,9 @@ PlanResult plan_raycast(const PlanInput& in, const VoxelGrid& grid, const Raycas
   const double best = r.scores[r.chosen].quality;
   r.first_quality = std::isfinite(in.first_quality) ? in.first_quality : best;
   std::ostringstream os;
-  if (best <= 0 && in.when_done == WhenDone::kSpread) {
-    return plan_spread(in, std::move(r), "no candidate sees an unobserved voxel");
-  } else if (best <= 0) {
-    r.outcome = PlanResult::Outcome::kStop;
+  if (best <= 0) {
     os << "no candidate sees an unobserved voxel (" << r.num_scored << " scored, " << rays << " rays)";
+    return nothing_left(in, std::move(r), os.str());
   } else if (std::isfinite(in.first_quality) && in.stop_fraction > 0 && best < in.stop_fraction * in.first_quality) {
     r.outcome = PlanResult::Outcome::kStop;
     os << "best gain " << best << " voxels is below " << in.stop_fraction << " of the first planned view's ("
@@ -354,12 +351,7 @@ PlanResult plan_oracle(const PlanInput& in, const TriangleMesh& truth, const Sur
   const std::size_t seen_count = static_cast<std::size_t>(std::count(seen.begin(), seen.end(), uint8_t{1}));
   std::ostringstream os;
   os << seen_count << " of " << samples.points.size() << " true surface samples seen by the views taken";
-  if (best <= 0 && in.when_done == WhenDone::kSpread) return plan_spread(in, std::move(r), "no candidate sees a new true surface sample (" + os.str() + ")");
-  if (best <= 0) {
-    r.outcome = PlanResult::Outcome::kStop;
-    r.reason = "no candidate sees a new true surface sample (" + os.str() + ")";
-    return r;
-  }
+  if (best <= 0) return nothing_left(in, std::move(r), "no candidate sees a new true surface sample (" + os.str() + ")");
   r.outcome = PlanResult::Outcome::kView;
   r.reason = "sees " + std::to_string(static_cast<int>(best)) + " new true surface samples (" + os.str() + ", " +
              std::to_string(r.num_scored) + " candidates scored)";
