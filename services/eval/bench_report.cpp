@@ -183,6 +183,7 @@ void write_report(const BenchResult& r) {
     }
     md << "\n";
   }
+  md << surface_metrics_markdown(r.planners, s.metrics);
   bool any_observable = false;
   for (const auto& p : r.planners) any_observable = any_observable || !p.observable_by_view.empty();
   if (any_observable) {
