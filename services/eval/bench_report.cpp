@@ -51,6 +51,7 @@ std::string command_of(const BenchSpec& s) {
   if (s.stop_rule.window != kStopWindow.value) os << " --stop-window " << s.stop_rule.window;
   if (s.stop_rule.max_new_percent != kStopNewSurface.value) os << " --stop-new-surface " << s.stop_rule.max_new_percent;
   if (s.stop_rule.min_views != kStopMinViews.value) os << " --stop-min-views " << s.stop_rule.min_views;
+  if (s.metrics.threshold_m != kMetricThreshold.value) os << " --threshold " << s.metrics.threshold_m;
   os << " --jobs " << s.jobs << " --out " << s.out.string();
   return os.str();
 }

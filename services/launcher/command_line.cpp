@@ -276,6 +276,7 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add(c, kStopWindow, &spec->stop_rule.window);
   cli::add(c, kStopNewSurface, &spec->stop_rule.max_new_percent);
   cli::add(c, kStopMinViews, &spec->stop_rule.min_views);
+  cli::add(c, kMetricThreshold, &spec->metrics.threshold_m);  // the surface metrics' precision / recall
   cli::add(c, eval::kJobs, &spec->jobs);
   cli::add_flag(c, "no-netns", &pending->no_netns, "run the scans on the current LCM bus (one at a time)");
   cli::add_text(c, "out", &pending->out, "results (required); a rerun skips the scans already complete there and resumes interrupted ones", "DIR");
