@@ -75,8 +75,10 @@ ScanEvaluation evaluate_scan(const fs::path& out, const CoverageParams& params, 
     if (has_mesh) {
       try {
         e.mesh_metrics = reference.compare_mesh(load_mesh((out / "mesh.ply").string()));
-      } catch (const std::invalid_argument& x) {
-        throw std::runtime_error((out / "mesh.ply").string() + ": " + x.what());
+      } catch (const std::exception& x) {  // the mesh's failure is reported, coverage and the cloud stand
+        e.mesh_error = std::string(x.what()).find("mesh.ply") == std::string::npos
+                           ? (out / "mesh.ply").string() + ": " + x.what()
+                           : x.what();
       }
     }
   }
@@ -103,6 +105,7 @@ json to_json(const ScanEvaluation& e, const CoverageParams& params) {
   if (e.cloud_metrics || e.mesh_metrics) metrics["reference"] = "object.stl";
   if (e.cloud_metrics) metrics["cloud"] = to_json(*e.cloud_metrics);
   if (e.mesh_metrics) metrics["mesh"] = to_json(*e.mesh_metrics);
+  if (!e.mesh_error.empty()) metrics["mesh"] = {{"error", e.mesh_error}};
   return {{"coverage_by_view", e.coverage_by_view},
           {"surface_metrics", metrics},
           {"planner_ms", e.planner_ms},

@@ -33,6 +33,7 @@ struct ScanEvaluation {
   // After the last view, against object.stl: the cloud (cloud.ply, else the merged frames) and,
   // when the folder has mesh.ply, the mesh. None when there was no point to evaluate.
   std::optional<SurfaceMetrics> cloud_metrics, mesh_metrics;
+  std::string mesh_error;  // why mesh.ply could not be evaluated (unreadable, no faces); the rest stands
 };
 
 // Evaluates the scan in `out` (scan.json, frames/, object.stl, cloud.ply, mesh.ply when

@@ -40,7 +40,8 @@ int run_replay(const ReplayOptions& o, const std::filesystem::path& bin);
 // printed to `out` and, with o.json, the figures written there. A scan folder without --reference
 // is evaluated as `pbnbv scan` does (coverage and the metrics against its object.stl). Throws
 // std::runtime_error naming the file and what is wrong with it (missing, unreadable, a cloud
-// without points, a mesh without faces, a folder without a model or a reference). 0: evaluated.
+// without points, a mesh without faces, a folder without a model or a reference). 0: evaluated;
+// 1: a twin scan folder's mesh.ply could not be (said, with why; the rest is evaluated).
 int run_evaluate(const EvaluateOptions& o, std::ostream& out);
 
 // `pbnbv stop`: STOP on the bus (three times over 0.2 s: UDP may lose one).

@@ -43,6 +43,7 @@ int run_evaluate(const EvaluateOptions& o, std::ostream& out) {
   const fs::path target = o.target;
   if (!fs::exists(target)) throw std::runtime_error(o.target + ": no such file or folder");
   json result = {{"settings", eval::to_json(o.metrics)}, {"models", json::array()}};
+  int code = 0;  // 1: a scan folder's mesh.ply could not be evaluated
 
   // A twin scan's folder without --reference: what `pbnbv scan` evaluates (coverage as well).
   if (fs::is_directory(target) && o.reference.empty()) {
@@ -66,6 +67,11 @@ int run_evaluate(const EvaluateOptions& o, std::ostream& out) {
       print_metrics(out, "mesh.ply", *e.mesh_metrics);
       result["models"].push_back(eval::to_json(*e.mesh_metrics));
       result["models"].back()["file"] = (target / "mesh.ply").string();
+    }
+    if (!e.mesh_error.empty()) {
+      out << "mesh.ply: not evaluated: " << e.mesh_error << "\n";
+      result["models"].push_back({{"file", (target / "mesh.ply").string()}, {"error", e.mesh_error}});
+      code = 1;
     }
   } else {
     if (o.reference.empty()) throw std::runtime_error("--reference MESH is required to evaluate a file: " + o.target);
@@ -105,7 +111,7 @@ int run_evaluate(const EvaluateOptions& o, std::ostream& out) {
     out << "figures: " << o.json << "\n";
   }
   out << std::flush;
-  return 0;
+  return code;
 }
 
 }  // namespace pbnbv::launcher

@@ -487,6 +487,7 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
                   << fixed((*m)->threshold_m * 1e3, 1) << " mm (precision " << fixed((*m)->precision, 3) << ", recall "
                   << fixed((*m)->recall, 3) << ")" << std::endl;
       }
+      if (!e.mesh_error.empty()) std::cerr << "warning: mesh.ply not evaluated: " << e.mesh_error << std::endl;
       if (!e.planner_ms.empty()) {
         std::vector<double> t = e.planner_ms;
         std::sort(t.begin(), t.end());

@@ -169,6 +169,22 @@ TEST_F(EvaluateCommand, TwinScanFolderAgainstItsObjectStl) {
   // 112 of 280 cm^2, in percent.
   EXPECT_NEAR(j.at("scan").at("coverage_by_view").at(0).get<double>(), 100 * kRecall5mm, 2.0);
   expect_above_the_top(j["scan"]["surface_metrics"]["cloud"]);
+
+  // A mesh.ply without faces: said, with why, and exit code 1; the cloud and coverage stand.
+  write("scan/mesh.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                         "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n"
+                         "0 0 0\n1 0 0\n0 1 0\n");
+  EvaluateOptions o;
+  o.target = scan.string();
+  o.json = path("broken.json");
+  std::ostringstream table;
+  EXPECT_EQ(run_evaluate(o, table), 1);
+  EXPECT_NE(table.str().find("mesh.ply: not evaluated:"), std::string::npos) << table.str();
+  const json b = read_json(o.json);
+  ASSERT_EQ(b["models"].size(), 2u);
+  expect_above_the_top(b["models"][0]);
+  EXPECT_NE(b["models"][1]["error"].get<std::string>().find("mesh.ply"), std::string::npos) << b;
+  EXPECT_NE(b["scan"]["surface_metrics"]["mesh"]["error"].get<std::string>().find("no triangles"), std::string::npos) << b;
 }
 
 TEST_F(EvaluateCommand, BadInputIsNamed) {
