@@ -144,6 +144,7 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
     EXPECT_GT(p["planner_ms_mean"].get<double>(), 0.0);
     ASSERT_TRUE(p["views_to_95"].is_null() || p["views_to_95"].is_number());
     std::vector<double> mean(3, 0.0);
+    double mean_f = 0;  // F-score at 5 mm, mean over the objects
     for (const std::string object : {"sphere", "box"}) {
       SCOPED_TRACE(object);
       const json& o = p["objects"].at(object);
@@ -179,7 +180,17 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
       EXPECT_EQ(scan["views"][0]["new_surface"]["percent_of_model"], 100.0);
       ASSERT_EQ(o["stop_rule"]["new_surface_by_view"].size(), 3u);
       EXPECT_EQ(o["stop_rule"]["coverage_at_budget"], o["coverage_by_view"][2]);
+      // The final cloud against the true mesh: the free rig's poses are exact and its depth
+      // noiseless, so the points lie on the surface but for the 2 mm voxel's centroids; recall
+      // at 5 mm is the coverage's fraction (other samples, cloud.ply instead of the frames).
+      const json& m = o.at("surface_metrics").at("cloud");
+      EXPECT_LT(m["accuracy"]["mean_mm"].get<double>(), 1.0);
+      EXPECT_GT(m["precision"].get<double>(), 0.99);
+      EXPECT_NEAR(m["recall"].get<double>() * 100, o["coverage_by_view"][2].get<double>(), 2.0);
+      mean_f += m["f_score"].get<double>() / 2;
     }
+    EXPECT_NEAR(p["surface_metrics"]["cloud"]["f_score"].get<double>(), mean_f, 1e-9);
+    EXPECT_EQ(p["surface_metrics"]["cloud"]["objects"], 2);
     for (int i = 0; i < 3; ++i) EXPECT_NEAR(p["coverage_by_view"][i].get<double>(), mean[i], 1e-9);
   }
   // Two planned views of a sphere add surface for a planner that looks for it.
@@ -193,6 +204,8 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
   EXPECT_NE(report.find("| raycast |"), std::string::npos);
   EXPECT_NE(report.find("resolution 0.03 m"), std::string::npos);
   EXPECT_NE(report.find("## Stop rule"), std::string::npos);
+  EXPECT_NE(report.find("## Surface metrics after the last view"), std::string::npos);
+  EXPECT_NE(report.find("| pbnbv | cloud | 2 |"), std::string::npos);
   for (const char* png : {"coverage.png", "time.png"}) {
     const cv::Mat img = cv::imread((out / png).string());
     EXPECT_EQ(img.cols, 960) << png;

@@ -180,6 +180,7 @@ void BenchSpec::validate() const {
   if (objects.empty()) throw std::invalid_argument("--objects: no object to benchmark");
   if (planners.empty()) throw std::invalid_argument("--planners: no planner to benchmark");
   kViews.checked(views);
+  metrics.validate();
   kMapResolution.checked(resolution_m);
   kCandidates.checked(candidates);
   // The scans place the candidates on the default number of parallels.
@@ -206,7 +207,8 @@ json to_json(const BenchSpec& s) {
             {"resolution_m", s.resolution_m}, {"candidates", s.candidates}, {"tmax", s.tmax}, {"beta", s.beta},
             {"size_m", s.size_m}, {"up", s.up ? std::string(name_of(*s.up)) : std::string("per object")}, {"seed", s.seed},
             {"when_done", std::string(name_of(s.when_done))}, {"stop_rule", to_json(s.stop_rule)},
-            {"coverage", {{"samples", s.coverage.num_samples}, {"seed", s.coverage.seed}, {"radius_m", s.coverage.radius_m}}}};
+            {"coverage", {{"samples", s.coverage.num_samples}, {"seed", s.coverage.seed}, {"radius_m", s.coverage.radius_m}}},
+            {"surface_metrics", to_json(s.metrics)}};
   j["initial_view"] = s.initial_view ? json{s.initial_view->x(), s.initial_view->y(), s.initial_view->z()} : json(nullptr);
   return j;
 }
@@ -223,6 +225,31 @@ std::vector<double> pad_views(std::vector<double> v, int n) {
   if (static_cast<int>(v.size()) > n) v.resize(n);
   while (static_cast<int>(v.size()) < n) v.push_back(v.back());
   return v;
+}
+
+MeanSurfaceMetrics mean_surface_metrics(const std::vector<ObjectRun>& runs,
+                                        std::optional<SurfaceMetrics> ObjectRun::*which) {
+  MeanSurfaceMetrics m;
+  for (const auto& r : runs) {
+    if (!r.complete || !(r.*which)) continue;
+    const SurfaceMetrics& s = *(r.*which);
+    ++m.objects;
+    m.accuracy_mean_mm += s.accuracy.mean_m * 1e3;
+    m.accuracy_median_mm += s.accuracy.median_m * 1e3;
+    m.accuracy_rmse_mm += s.accuracy.rmse_m * 1e3;
+    m.accuracy_p95_mm += s.accuracy.p95_m * 1e3;
+    m.completeness_mean_mm += s.completeness.mean_m * 1e3;
+    m.precision += s.precision;
+    m.recall += s.recall;
+    m.f_score += s.f_score;
+  }
+  if (m.objects > 0) {
+    for (double* v : {&m.accuracy_mean_mm, &m.accuracy_median_mm, &m.accuracy_rmse_mm, &m.accuracy_p95_mm,
+                      &m.completeness_mean_mm, &m.precision, &m.recall, &m.f_score}) {
+      *v /= m.objects;
+    }
+  }
+  return m;
 }
 
 PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs, int views) {
@@ -265,6 +292,8 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
     p.planner_ms_mean = std::accumulate(times.begin(), times.end(), 0.0) / n;
   }
   p.stop_rule = summarise_stop_rule(runs, views);
+  p.cloud_metrics = mean_surface_metrics(runs, &ObjectRun::cloud_metrics);
+  p.mesh_metrics = mean_surface_metrics(runs, &ObjectRun::mesh_metrics);
   p.reached_95 = static_cast<int>(reached.size());
   p.views_to_95_of_mean = views_to_reach(p.coverage_by_view, 95.0);
   if (!reached.empty()) p.views_to_95 = std::accumulate(reached.begin(), reached.end(), 0.0) / reached.size();
@@ -327,6 +356,27 @@ void add_gaps_to_oracle(std::vector<PlannerSummary>& planners, int views) {
   }
 }
 
+std::string surface_metrics_markdown(const std::vector<PlannerSummary>& planners, const MetricParams& params) {
+  std::ostringstream md;
+  for (const auto& p : planners) {
+    for (const auto& [model, m] : {std::pair{"cloud", &p.cloud_metrics}, std::pair{"mesh", &p.mesh_metrics}}) {
+      if (m->objects == 0) continue;
+      md << "| " << name_of(p.planner) << " | " << model << " | " << m->objects << " | " << fixed(m->accuracy_mean_mm, 2)
+         << " | " << fixed(m->accuracy_median_mm, 2) << " | " << fixed(m->accuracy_rmse_mm, 2) << " | "
+         << fixed(m->accuracy_p95_mm, 2) << " | " << fixed(m->completeness_mean_mm, 2) << " | " << fixed(m->precision, 3)
+         << " | " << fixed(m->recall, 3) << " | " << fixed(m->f_score, 3) << " |\n";
+    }
+  }
+  if (md.str().empty()) return "";
+  const std::string t = fixed(params.threshold_m * 1e3, 1);
+  return "## Surface metrics after the last view (mean over objects)\n\nAgainst the true mesh: accuracy is the distance "
+         "from each model point (a mesh: samples on it) to the true surface, completeness the distance from true-surface "
+         "samples (" + fixed(params.samples_per_cm2, 0) + " per cm^2) to the model; precision and recall are the "
+         "fractions within " + t + " mm, F = 2PR / (P + R) (Knapitsch et al., Tanks and Temples). Distances in mm.\n\n"
+         "| planner | model | objects | accuracy mean | median | RMSE | p95 | completeness mean | precision @" + t +
+         " mm | recall | F-score |\n|---|---|---|---|---|---|---|---|---|---|---|\n" + md.str() + "\n";
+}
+
 json to_json(const BenchResult& r) {
   json j;
   std::vector<std::string> order;
@@ -339,6 +389,8 @@ json to_json(const BenchResult& r) {
                  {"complete", o.complete}, {"stop_reason", o.stop_reason}, {"wall_s", o.wall_s}};
       if (!o.observable_by_view.empty()) oj["observable_coverage_by_view"] = o.observable_by_view;
       if (!o.error.empty()) oj["error"] = o.error;
+      if (o.cloud_metrics) oj["surface_metrics"]["cloud"] = to_json(*o.cloud_metrics);
+      if (o.mesh_metrics) oj["surface_metrics"]["mesh"] = to_json(*o.mesh_metrics);
       if (o.complete && !o.coverage_by_view.empty()) {
         const int stop = stop_view_or_budget(o, r.spec.views);
         oj["stop_rule"] = {{"stop_view", o.stop_view ? json(*o.stop_view) : json(nullptr)},
@@ -356,6 +408,18 @@ json to_json(const BenchResult& r) {
                {"views_to_95_of_mean_curve", p.views_to_95_of_mean ? json(*p.views_to_95_of_mean) : json(nullptr)}, {"objects_complete", p.complete}, {"objects_failed", p.failed},
                {"objects", objects}};
     if (!p.observable_by_view.empty()) pj["observable_coverage_by_view"] = p.observable_by_view;
+    for (const auto& [name, m] : {std::pair{"cloud", &p.cloud_metrics}, std::pair{"mesh", &p.mesh_metrics}}) {
+      if (m->objects == 0) continue;
+      pj["surface_metrics"][name] = {{"objects", m->objects},
+                                     {"accuracy_mean_mm", m->accuracy_mean_mm},
+                                     {"accuracy_median_mm", m->accuracy_median_mm},
+                                     {"accuracy_rmse_mm", m->accuracy_rmse_mm},
+                                     {"accuracy_p95_mm", m->accuracy_p95_mm},
+                                     {"completeness_mean_mm", m->completeness_mean_mm},
+                                     {"precision", m->precision},
+                                     {"recall", m->recall},
+                                     {"f_score", m->f_score}};
+    }
     const StopRuleSummary& st = p.stop_rule;
     pj["stop_rule"] = {{"rule", to_json(r.spec.stop_rule)},
                        {"objects", st.objects},
@@ -537,7 +601,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
         masks[j.name] = observable_mask(spec, j.dir, &what);
         log << j.name << ": observable surface: " << what << std::endl;
       }
-      const ScanEvaluation e = evaluate_scan(j.dir, spec.coverage, &masks[j.name]);
+      const ScanEvaluation e = evaluate_scan(j.dir, spec.coverage, &masks[j.name], spec.metrics);
       r.coverage_by_view = pad_views(e.coverage_by_view, spec.views);
       r.observable_by_view = pad_views(e.observable_by_view, spec.views);
       r.planner_ms = e.planner_ms;
@@ -545,6 +609,8 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       r.views_done = e.views_done;
       r.stop_reason = e.stop_reason;
       r.new_surface_by_view = e.new_surface_by_view;
+      r.cloud_metrics = e.cloud_metrics;
+      r.mesh_metrics = e.mesh_metrics;
       if (const auto d = first_surface_stop(e.new_surface_by_view, spec.stop_rule); d && d->after_views < spec.views) {
         r.stop_view = d->after_views;
         r.stop_rule_reason = d->reason;

@@ -22,6 +22,7 @@
 #include "core/rig/rig.hpp"
 #include "core/scan/scan_options.hpp"
 #include "core/scan/stop_rule.hpp"
+#include "core/metrics/surface_metrics.hpp"
 #include "eval/coverage.hpp"
 
 namespace pbnbv::eval {
@@ -57,6 +58,7 @@ struct BenchSpec {
   bool netns = true;                 // false: every scan on the current LCM bus, one at a time
   std::filesystem::path out;
   CoverageParams coverage;
+  MetricParams metrics;  // the surface metrics' threshold and sample density
 
   // Throws std::invalid_argument naming the option that is out of range (the ranges of the
   // table of scan options; the candidates must not be fewer than the parallels they lie on).
@@ -82,7 +84,20 @@ struct ObjectRun {
   std::vector<double> new_surface_by_view;  // percent of the model, NaN for a view not merged
   std::optional<int> stop_view;             // the view after which the rule would stop (none: never)
   std::string stop_rule_reason;
+  // After the last view, against the true mesh (evaluate_scan): the cloud's and mesh.ply's.
+  std::optional<SurfaceMetrics> cloud_metrics, mesh_metrics;
 };
+
+// A planner's surface metrics after the last view, mean over the complete objects that have them.
+struct MeanSurfaceMetrics {
+  int objects = 0;
+  double accuracy_mean_mm = 0, accuracy_median_mm = 0, accuracy_rmse_mm = 0, accuracy_p95_mm = 0;
+  double completeness_mean_mm = 0;
+  double precision = 0, recall = 0, f_score = 0;
+};
+// The mean of `metrics` over the runs where `which` has a value (objects = 0: none has).
+MeanSurfaceMetrics mean_surface_metrics(const std::vector<ObjectRun>& runs,
+                                        std::optional<SurfaceMetrics> ObjectRun::*which);
 
 // Where the stop rule would have stopped a planner's scans: per complete object the stop view
 // (the budget when it never stops), the coverage there and at the budget.
@@ -114,6 +129,7 @@ struct PlannerSummary {
   std::vector<double> gap_to_oracle_by_view;
   int gap_objects = 0;
   StopRuleSummary stop_rule;
+  MeanSurfaceMetrics cloud_metrics, mesh_metrics;  // after the last view
 };
 
 // Pure helpers (tested): the first view (1-based) whose coverage reaches `percent`; a curve
@@ -132,6 +148,11 @@ struct BenchResult {
 };
 
 nlohmann::json to_json(const BenchResult& r);
+
+// report.md's section of surface metrics after the last view: one row per planner and model
+// (cloud, mesh) with objects evaluated, mean accuracy (mean, median, RMSE, p95, mm), mean
+// completeness (mm) and precision / recall / F-score at the threshold; "" when no planner has any.
+std::string surface_metrics_markdown(const std::vector<PlannerSummary>& planners, const MetricParams& params);
 
 // Runs the scans that are not complete in spec.out, evaluates every scan, writes
 // spec.out/summary.json, report.md, coverage.png, time.png (and observable.png on the arm rig,

@@ -51,6 +51,7 @@ std::string command_of(const BenchSpec& s) {
   if (s.stop_rule.window != kStopWindow.value) os << " --stop-window " << s.stop_rule.window;
   if (s.stop_rule.max_new_percent != kStopNewSurface.value) os << " --stop-new-surface " << s.stop_rule.max_new_percent;
   if (s.stop_rule.min_views != kStopMinViews.value) os << " --stop-min-views " << s.stop_rule.min_views;
+  if (s.metrics.threshold_m != kMetricThreshold.value) os << " --threshold " << s.metrics.threshold_m;
   os << " --jobs " << s.jobs << " --out " << s.out.string();
   return os.str();
 }
@@ -183,6 +184,7 @@ void write_report(const BenchResult& r) {
     }
     md << "\n";
   }
+  md << surface_metrics_markdown(r.planners, s.metrics);
   bool any_observable = false;
   for (const auto& p : r.planners) any_observable = any_observable || !p.observable_by_view.empty();
   if (any_observable) {

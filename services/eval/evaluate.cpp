@@ -1,11 +1,15 @@
 #include "eval/evaluate.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <fstream>
 #include <stdexcept>
 
 #include "core/geometry/point_cloud.hpp"
 #include "core/geometry/mesh.hpp"
 #include "core/io/cloud_file.hpp"
+#include "core/io/file_checks.hpp"
+#include "core/io/pcd_file.hpp"
 #include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
 #include "core/scan/scan_settings.hpp"
@@ -16,11 +20,23 @@ using nlohmann::json;
 
 namespace pbnbv::eval {
 
-ScanEvaluation evaluate_scan(const fs::path& out, const CoverageParams& params, const std::vector<uint8_t>* observable) {
+namespace {
+
+json stats_mm(const DistanceStats& s) {
+  return {{"count", s.count},         {"mean_mm", s.mean_m * 1e3}, {"median_mm", s.median_m * 1e3},
+          {"rmse_mm", s.rmse_m * 1e3}, {"p95_mm", s.p95_m * 1e3},  {"max_mm", s.max_m * 1e3}};
+}
+
+}  // namespace
+
+ScanEvaluation evaluate_scan(const fs::path& out, const CoverageParams& params, const std::vector<uint8_t>* observable,
+                             const MetricParams& metrics) {
   const json scan = read_json((out / "scan.json").string());
   const fs::path mesh_path = out / "object.stl";
   if (!fs::exists(mesh_path)) throw std::runtime_error(mesh_path.string() + " is missing: not a twin scan's output folder");
-  CoverageEvaluator coverage(load_mesh(mesh_path.string()), params);
+  const TriangleMesh truth = load_mesh(mesh_path.string());
+  CoverageEvaluator coverage(truth, params);
+  PointCloud merged;  // the model's points when there is no cloud.ply
   if (observable && observable->size() != coverage.samples().size()) {
     throw std::invalid_argument("observable mask has " + std::to_string(observable->size()) + " flags for " +
                                 std::to_string(coverage.samples().size()) + " coverage samples of " + mesh_path.string());
@@ -40,6 +56,7 @@ ScanEvaluation evaluate_scan(const fs::path& out, const CoverageParams& params, 
         const PointCloud frame = read_ply((out / v.at("frame_file").get<std::string>()).string());
         coverage.add_cloud(frame);
         points += static_cast<int>(frame.size());
+        merged.insert(merged.end(), frame.begin(), frame.end());
       }
       if (!v.contains("frame_file")) continue;  // the rig never captured this view
       e.coverage_by_view.push_back(coverage.coverage_percent());
@@ -50,11 +67,47 @@ ScanEvaluation evaluate_scan(const fs::path& out, const CoverageParams& params, 
   } catch (const json::exception& x) {
     throw std::runtime_error((out / "scan.json").string() + ": " + x.what());
   }
+  const PointCloud cloud = fs::exists(out / "cloud.ply") ? read_ply((out / "cloud.ply").string()) : merged;
+  const bool has_mesh = fs::exists(out / "mesh.ply");
+  if (!cloud.empty() || has_mesh) {
+    const ReferenceSurface reference(truth, metrics);
+    if (!cloud.empty()) e.cloud_metrics = reference.compare_cloud(cloud);
+    if (has_mesh) {
+      try {
+        e.mesh_metrics = reference.compare_mesh(load_mesh((out / "mesh.ply").string()));
+      } catch (const std::exception& x) {  // the mesh's failure is reported, coverage and the cloud stand
+        e.mesh_error = std::string(x.what()).find("mesh.ply") == std::string::npos
+                           ? (out / "mesh.ply").string() + ": " + x.what()
+                           : x.what();
+      }
+    }
+  }
   return e;
 }
 
+json to_json(const SurfaceMetrics& m) {
+  return {{"model", m.model},
+          {"threshold_mm", m.threshold_m * 1e3},
+          {"accuracy", stats_mm(m.accuracy)},
+          {"completeness", stats_mm(m.completeness)},
+          {"precision", m.precision},
+          {"recall", m.recall},
+          {"f_score", m.f_score},
+          {"skipped_points", m.skipped_points}};
+}
+
+json to_json(const MetricParams& p) {
+  return {{"threshold_mm", p.threshold_m * 1e3}, {"samples_per_cm2", p.samples_per_cm2}, {"seed", p.seed}};
+}
+
 json to_json(const ScanEvaluation& e, const CoverageParams& params) {
+  json metrics = json::object();
+  if (e.cloud_metrics || e.mesh_metrics) metrics["reference"] = "object.stl";
+  if (e.cloud_metrics) metrics["cloud"] = to_json(*e.cloud_metrics);
+  if (e.mesh_metrics) metrics["mesh"] = to_json(*e.mesh_metrics);
+  if (!e.mesh_error.empty()) metrics["mesh"] = {{"error", e.mesh_error}};
   return {{"coverage_by_view", e.coverage_by_view},
+          {"surface_metrics", metrics},
           {"planner_ms", e.planner_ms},
           {"points_by_view", e.points_by_view},
           {"new_surface_by_view", e.new_surface_by_view},
@@ -63,6 +116,27 @@ json to_json(const ScanEvaluation& e, const CoverageParams& params) {
           {"views_done", e.views_done},
           {"coverage_rule", {{"samples", params.num_samples}, {"seed", params.seed}, {"radius_m", params.radius_m},
                              {"mesh", "object.stl (normalised, as rendered by the twin)"}}}};
+}
+
+ModelFile load_model(const fs::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  const std::string p = path.string();
+  ModelFile m;
+  if (ext == ".pcd") {
+    m.cloud = read_pcd(p);
+  } else if (ext == ".ply") {
+    check_input_file(p, "pbnbv evaluate");
+    std::ifstream in(p, std::ios::binary);
+    if (check_ply_header(in, p, "pbnbv evaluate", true).faces > 0) m.mesh = load_mesh(p);
+    else m.cloud = read_ply(p);
+  } else if (ext == ".obj" || ext == ".stl" || ext == ".off") {
+    m.mesh = load_mesh(p);
+  } else {
+    throw std::runtime_error(p + ": not a cloud (.ply .pcd) or a mesh (.ply .obj .stl .off)");
+  }
+  if (m.cloud && m.cloud->empty()) throw std::runtime_error(p + ": the cloud has no points");
+  return m;
 }
 
 }  // namespace pbnbv::eval

@@ -1,13 +1,18 @@
 #pragma once
 // What a finished twin scan achieved, measured against the ground truth the twin rendered
 // (object.stl in the output folder, the normalised mesh): coverage after every view, as the
-// paper measures it, and the planner time per iteration. Reads only the output folder.
+// paper measures it, the planner time per iteration, and the surface metrics of the final cloud
+// (and of mesh.ply when the folder has one: accuracy, completeness, F-score;
+// core/metrics/surface_metrics.hpp). Reads only the output folder.
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "core/geometry/point_cloud.hpp"
+#include "core/metrics/surface_metrics.hpp"
 #include "eval/coverage.hpp"
 
 namespace pbnbv::eval {
@@ -25,15 +30,35 @@ struct ScanEvaluation {
   std::string state;                     // scan.json status.state
   std::string stop_reason;               // why the scan stopped
   int views_done = 0;
+  // After the last view, against object.stl: the cloud (cloud.ply, else the merged frames) and,
+  // when the folder has mesh.ply, the mesh. None when there was no point to evaluate.
+  std::optional<SurfaceMetrics> cloud_metrics, mesh_metrics;
+  std::string mesh_error;  // why mesh.ply could not be evaluated (unreadable, no faces); the rest stands
 };
 
-// Evaluates the scan in `out` (scan.json, frames/, object.stl). `observable` (optional): one
-// flag per coverage sample (CoverageEvaluator(object.stl, params).samples()), 1 = some reachable
-// candidate view can see it. Throws std::runtime_error naming the file that is missing or
-// malformed, std::invalid_argument when the mask's size is not the number of samples.
+// Evaluates the scan in `out` (scan.json, frames/, object.stl, cloud.ply, mesh.ply when
+// present). `observable` (optional): one flag per coverage sample
+// (CoverageEvaluator(object.stl, params).samples()), 1 = some reachable candidate view can see
+// it. Throws std::runtime_error naming the file that is missing or malformed,
+// std::invalid_argument when the mask's size is not the number of samples.
 ScanEvaluation evaluate_scan(const std::filesystem::path& out, const CoverageParams& params = {},
-                             const std::vector<uint8_t>* observable = nullptr);
+                             const std::vector<uint8_t>* observable = nullptr, const MetricParams& metrics = {});
 
 nlohmann::json to_json(const ScanEvaluation& e, const CoverageParams& params);
+
+// The surface metrics as coverage.json, summary.json and `pbnbv evaluate --json` write them
+// (distances in mm, fractions in [0, 1]).
+nlohmann::json to_json(const SurfaceMetrics& m);
+nlohmann::json to_json(const MetricParams& p);
+
+// A model file for `pbnbv evaluate`: a cloud (.pcd, or .ply without faces) or a triangle mesh
+// (.ply with faces, .obj, .stl, .off); exactly one of the two is set.
+struct ModelFile {
+  std::optional<PointCloud> cloud;
+  std::optional<TriangleMesh> mesh;
+};
+// Throws std::runtime_error naming the file and what is wrong: missing, an extension it does not
+// read, unreadable, a cloud with no points, a mesh with no faces (load_mesh's errors).
+ModelFile load_model(const std::filesystem::path& path);
 
 }  // namespace pbnbv::eval

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "core/geometry/camera_options.hpp"
+#include "core/metrics/metrics_options.hpp"
 #include "core/perception/perception_options.hpp"
 #include "eval/objects.hpp"
 #include "rigcheck/rigcheck_options.hpp"
@@ -146,6 +147,21 @@ CommandLine::CommandLine()
   cli::add(*replay_cmd_, kPlanner, &replay_.planner);
   cli::add_flag(*replay_cmd_, "overwrite", &replay_.overwrite, "delete what --out holds first");
 
+  evaluate_cmd_ = cli::add_command(app_, "evaluate",
+                                   "accuracy, completeness and precision / recall / F-score of a scan folder, a cloud or "
+                                   "a mesh against a reference mesh (the scan's true mesh, or a CAD model)");
+  evaluate_cmd_->add_option("model", evaluate_.target,
+                            "a scan folder (its cloud.ply and mesh.ply), a cloud (.ply .pcd) or a mesh (.ply .obj .stl .off)")
+      ->type_name("DIR|FILE");
+  cli::add_text(*evaluate_cmd_, "reference", &evaluate_.reference,
+                "the reference mesh (.obj .stl .off .ply), in the model's frame [a twin scan folder's object.stl]", "FILE");
+  cli::add(*evaluate_cmd_,
+           Setting<double>{"reference-scale", 1.0, 1e-6, 1e6, "", "multiply the reference's coordinates by this (0.001: a file in mm)"},
+           &evaluate_.reference_scale);
+  cli::add(*evaluate_cmd_, kMetricThreshold, &evaluate_.metrics.threshold_m);
+  cli::add(*evaluate_cmd_, kMetricSampleDensity, &evaluate_.metrics.samples_per_cm2);
+  cli::add_text(*evaluate_cmd_, "json", &evaluate_.json, "also write the figures to FILE (JSON)", "FILE");
+
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");
 }
@@ -260,6 +276,7 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add(c, kStopWindow, &spec->stop_rule.window);
   cli::add(c, kStopNewSurface, &spec->stop_rule.max_new_percent);
   cli::add(c, kStopMinViews, &spec->stop_rule.min_views);
+  cli::add(c, kMetricThreshold, &spec->metrics.threshold_m);  // the surface metrics' precision / recall
   cli::add(c, eval::kJobs, &spec->jobs);
   cli::add_flag(c, "no-netns", &pending->no_netns, "run the scans on the current LCM bus (one at a time)");
   cli::add_text(c, "out", &pending->out, "results (required); a rerun skips the scans already complete there and resumes interrupted ones", "DIR");
@@ -277,7 +294,7 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
         return 0;
       }
       for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, stop_cmd_, rig_check_cmd_, rig_host_cmd_,
-                                import_urdf_cmd_, calibrate_cmd_, replay_cmd_, help_cmd_}) {
+                                import_urdf_cmd_, calibrate_cmd_, replay_cmd_, evaluate_cmd_, help_cmd_}) {
         if (c->get_name() == help_topic_) {
           out << c->help("pbnbv");
           return 0;
@@ -285,7 +302,7 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
       }
       throw std::invalid_argument("unknown command '" + help_topic_ +
                                   "' (expected scan, bench, ablate, spy, stop, rig-check, rig-host, import-urdf, calibrate, "
-                                  "replay or help)");
+                                  "replay, evaluate or help)");
     }
     if (given == scan_cmd_) {
       command_ = Command::kScan;
@@ -323,6 +340,11 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
     } else if (given == replay_cmd_) {
       command_ = Command::kReplay;
       if (replay_.dir.empty()) throw std::invalid_argument("name the recorded scan's folder: pbnbv replay DIR");
+    } else if (given == evaluate_cmd_) {
+      command_ = Command::kEvaluate;
+      if (evaluate_.target.empty()) {
+        throw std::invalid_argument("name what to evaluate: pbnbv evaluate DIR|FILE [--reference MESH]");
+      }
     } else {
       command_ = Command::kSpy;
     }

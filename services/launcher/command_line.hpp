@@ -1,6 +1,6 @@
 #pragma once
 // The command line of `pbnbv` (CLI11, cli/options.hpp): the commands scan, bench, ablate, spy, stop,
-// replay and help, each with its options from the table of scan options (defaults, ranges and help text
+// replay, evaluate and help, each with its options from the table of scan options (defaults, ranges and help text
 // written once, in core/*/..._options.hpp and eval/bench.hpp), per-command --help, --version,
 // and settings files (--config FILE, TOML; the command line overrides the file). Parsing only:
 // running a command is scan_command.hpp / commands.hpp.
@@ -14,13 +14,14 @@
 #include <vector>
 
 #include "cli/options.hpp"
+#include "core/metrics/surface_metrics.hpp"
 #include "core/rig/calibration.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "eval/bench.hpp"
 
 namespace pbnbv::launcher {
 
-enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigCheck, kRigHost, kImportUrdf, kCalibrate, kReplay };
+enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigCheck, kRigHost, kImportUrdf, kCalibrate, kReplay, kEvaluate };
 
 // What `pbnbv calibrate` was asked for (core/rig/calibration.hpp).
 struct CalibrateOptions {
@@ -57,6 +58,15 @@ struct RigCheckOptions {
   std::string rig_model;  // the rig file the drivers are held to
   double deadline_s = 5;  // per driver answer
   bool passive = false;   // --passive: the preflight only, nothing commanded to move
+};
+
+// What `pbnbv evaluate` was asked for: a scan folder, cloud or mesh against a reference mesh.
+struct EvaluateOptions {
+  std::string target;            // a scan folder, a cloud (.ply .pcd) or a mesh (.ply .obj .stl .off)
+  std::string reference;         // the reference mesh ("": the scan folder's object.stl)
+  double reference_scale = 1.0;  // the reference's coordinates times this (0.001: a file in mm)
+  MetricParams metrics;          // threshold, sample density
+  std::string json;              // write the figures here too ("": no file)
 };
 
 // What `pbnbv replay` was asked for.
@@ -129,6 +139,7 @@ class CommandLine {
   const RigCheckOptions& rig_check() const { return rig_check_; }
   const CalibrateOptions& calibrate() const { return calibrate_; }
   const ReplayOptions& replay() const { return replay_; }
+  const EvaluateOptions& evaluate() const { return evaluate_; }
   const ScanOptions& scan() const { return scan_; }
   const eval::BenchSpec& bench() const { return bench_; }
   const AblateOptions& ablate() const { return ablate_; }
@@ -178,6 +189,8 @@ class CommandLine {
   CalibrateOptions calibrate_;
   CLI::App* replay_cmd_ = nullptr;
   ReplayOptions replay_;
+  CLI::App* evaluate_cmd_ = nullptr;
+  EvaluateOptions evaluate_;
   CLI::App* help_cmd_ = nullptr;
   Command command_ = Command::kHelp;
   ScanOptions scan_;

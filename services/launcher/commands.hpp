@@ -2,6 +2,7 @@
 // Running the commands of `pbnbv` once the command line is parsed (command_line.hpp). Each
 // returns the process exit code.
 #include <filesystem>
+#include <ostream>
 
 #include "eval/bench.hpp"
 #include "launcher/command_line.hpp"
@@ -34,6 +35,14 @@ int run_calibrate(const CalibrateOptions& o);
 // decisions against the replay's. Throws std::invalid_argument naming what is missing or wrong in
 // the folder before anything starts. 0: the replay completed (see replay.json for differences).
 int run_replay(const ReplayOptions& o, const std::filesystem::path& bin);
+
+// `pbnbv evaluate`: o.target against the reference mesh (core/metrics/surface_metrics.hpp), a table
+// printed to `out` and, with o.json, the figures written there. A scan folder without --reference
+// is evaluated as `pbnbv scan` does (coverage and the metrics against its object.stl). Throws
+// std::runtime_error naming the file and what is wrong with it (missing, unreadable, a cloud
+// without points, a mesh without faces, a folder without a model or a reference). 0: evaluated;
+// 1: a twin scan folder's mesh.ply could not be (said, with why; the rest is evaluated).
+int run_evaluate(const EvaluateOptions& o, std::ostream& out);
 
 // `pbnbv stop`: STOP on the bus (three times over 0.2 s: UDP may lose one).
 int run_stop(const StopOptions& o);

@@ -472,7 +472,7 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
               << (out / "scan.json").string() << (record_log ? ", " + (out / "scan.lcmlog").string() : "")
               << (s.external_rig ? " (no coverage: the object is unknown)" : "") << std::endl;
   } else if (code == 0 && evaluate) {
-    // Against the ground truth the twin rendered: coverage after every view.
+    // Against the ground truth the twin rendered: coverage after every view, the surface metrics.
     try {
       const CoverageParams cp;
       const eval::ScanEvaluation e = eval::evaluate_scan(out, cp);
@@ -480,6 +480,14 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
       std::string line;
       for (double c : e.coverage_by_view) line += " " + fixed(c, 1);
       std::cout << "coverage after each view (%, ground truth):" << line << std::endl;
+      for (const auto& [name, m] : {std::pair{"cloud.ply", &e.cloud_metrics}, std::pair{"mesh.ply", &e.mesh_metrics}}) {
+        if (!*m) continue;
+        std::cout << name << " against the true mesh: accuracy mean " << fixed((*m)->accuracy.mean_m * 1e3, 2) << " mm, median "
+                  << fixed((*m)->accuracy.median_m * 1e3, 2) << " mm; F-score " << fixed((*m)->f_score, 3) << " within "
+                  << fixed((*m)->threshold_m * 1e3, 1) << " mm (precision " << fixed((*m)->precision, 3) << ", recall "
+                  << fixed((*m)->recall, 3) << ")" << std::endl;
+      }
+      if (!e.mesh_error.empty()) std::cerr << "warning: mesh.ply not evaluated: " << e.mesh_error << std::endl;
       if (!e.planner_ms.empty()) {
         std::vector<double> t = e.planner_ms;
         std::sort(t.begin(), t.end());

@@ -218,7 +218,7 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
        "pbnbv ablate: --values: --resolution 0.001 is outside its range [0.002, 0.2] m"},
       {{"ablate", "resolution", "--values", "0.01,fine", "--out", "x"}, "pbnbv ablate: --values: 'fine' is not a number"},
       {{"ablate", "beta", "--values", "2,400", "--out", "x"}, "pbnbv ablate: --values: --beta 400 is outside its range [1, 360]"},
-      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf, rig-check, calibrate, replay, help)"},
+      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf, rig-check, calibrate, replay, evaluate, help)"},
       {{"rig-check", "--deadline", "0"}, "pbnbv rig-check: --deadline: 0 is outside its range [0.5, 600] s"},
       {{"calibrate", "--sphere-radius", "0.05"}, "pbnbv calibrate: --rig-model is required"},
       {{"calibrate", "--rig-model", "r.xml", "--sphere-radius", "0.12", "--sphere-offset", "0.1"},
@@ -242,7 +242,7 @@ TEST(LauncherCommandLine, HelpPrintsTheUsage) {
     const Parsed p = parse(line, words);
     EXPECT_EQ(p.code, std::optional<int>(0));
     // Every command and its options, with the defaults of the table.
-    for (const char* part : {"scan", "bench", "ablate", "spy", "rig-check", "--views N", "at most this many views [10] (range [1, 1000])",
+    for (const char* part : {"scan", "bench", "ablate", "spy", "rig-check", "evaluate", "--reference FILE", "--threshold M", "--views N", "at most this many views [10] (range [1, 1000])",
                              "--candidates N", "[800]", "--when-done stop|spread", "[spread]", "--config FILE"}) {
       EXPECT_NE(p.out.find(part), std::string::npos) << part;
     }
