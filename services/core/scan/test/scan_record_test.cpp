@@ -46,11 +46,11 @@ TEST_F(ScanRecordTest, AcceptedViewsAreMergedAndDownsampledRejectedOnesOnlyKeptI
   ViewRecord v2;
   v2.view = 2;
   record.accumulate(registered(false, {Eigen::Vector3f(-0.3f, 0, 0), Eigen::Vector3f(-0.2f, 0, 0)}), v2);
-  EXPECT_EQ(v0.frame_file, "frames/view_000.ply");
-  EXPECT_EQ(v2.frame_file, "frames/view_002.ply");
+  EXPECT_EQ(v0.frame_file, "frames/view_001.ply");  // files count views from 1
+  EXPECT_EQ(v2.frame_file, "frames/view_003.ply");
   EXPECT_TRUE(v1.merged);
   EXPECT_FALSE(v2.merged);
-  EXPECT_EQ(read_ply((dir_ / "frames/view_002.ply").string()).size(), 2u);
+  EXPECT_EQ(read_ply((dir_ / "frames/view_003.ply").string()).size(), 2u);
   const PointCloud cloud = read_ply((dir_ / "cloud.ply").string());
   ASSERT_EQ(cloud.size(), 2u);
   EXPECT_EQ(record.num_points(), 2u);
@@ -117,7 +117,7 @@ TEST_F(ScanRecordTest, APlanEntryTimesThePlannerStepAsThePaperDoes) {
   const json j = to_json(p);
   EXPECT_EQ(j["planner_step_ms"], 875.0);
   EXPECT_EQ(j["time_ms"]["ellipsoid_fit"], 125.0);
-  EXPECT_EQ(j["figure"], "plans/view_004.png");
+  EXPECT_EQ(j["figure"], "plans/view_005.png");  // iteration 4 is the fifth view
   EXPECT_EQ(j["outcome"], "view");
   EXPECT_EQ(j["map_of_view"], 3);
   EXPECT_NE(j.dump().find("\"first_quality_px\":null"), std::string::npos) << "NaN is written as null";
