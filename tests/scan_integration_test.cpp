@@ -41,7 +41,7 @@ fs::path scan_and_check(const std::string& name, const std::string& options, int
   EXPECT_GT(fs::file_size(out / "scan.lcmlog"), 1000000u) << "the log should hold the depth frames";
   for (int i = 0; i < views; ++i) {
     char frame[64];
-    std::snprintf(frame, sizeof(frame), "frames/view_%03d.ply", i);
+    std::snprintf(frame, sizeof(frame), "frames/view_%03d.ply", i + 1);  // files count views from 1
     EXPECT_TRUE(fs::exists(out / frame)) << frame;
   }
   // scan.json: every view reached, with the per-view record.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -88,14 +89,27 @@ PoseErrorModel make_pose_error(double hand_eye_m, double hand_eye_rad, double tu
 RigSim::RigSim(const RigModel& rig, const ObjectPlacement& object,
                const std::string& model_out_path, const PoseErrorModel& errors)
     : errors_(errors), rng_(errors.seed) {
-  const std::string xml = compose_model_xml(rig.model_path, object);
+  // The model names the object's mesh by a path relative to its own folder (MuJoCo resolves it
+  // from there), so a scan folder copied or moved elsewhere still loads: a mesh in that folder
+  // (the launcher's object.stl) is named as it is, one elsewhere is copied beside the model first.
+  ObjectPlacement placed = object;
+  if (!object.mesh_path.empty()) {
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::absolute(model_out_path).parent_path();
+    fs::path rel = fs::absolute(object.mesh_path).lexically_normal().lexically_relative(dir);
+    if (rel.empty() || *rel.begin() == "..") {
+      rel = fs::path(fs::path(model_out_path).stem().string() + "_object" + fs::path(object.mesh_path).extension().string());
+      fs::copy_file(object.mesh_path, dir / rel, fs::copy_options::overwrite_existing);
+    }
+    placed.mesh_path = rel.string();
+  }
+  const std::string xml = compose_model_xml(rig.model_path, placed);
   {
     std::ofstream out(model_out_path);
     if (!out) throw std::runtime_error("cannot write the composed twin model " + model_out_path);
     out << xml;
   }
-  // The rig file uses no relative asset paths and the object mesh path is absolute, so the
-  // composed copy loads from anywhere.
+  // The rig file uses no asset files besides the object's mesh, named relative to the model.
   char error[1000] = "";
   m_ = mj_loadXML(model_out_path.c_str(), nullptr, error, sizeof(error));
   if (!m_) {

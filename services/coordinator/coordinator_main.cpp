@@ -1,6 +1,6 @@
 // pbnbv-coordinator: the scan coordinator.
 //   in:  MOVE_RESULT, CLOUD, REGISTERED_CLOUD, VOXEL_MAP, ELLIPSOIDS, VIEW_PLAN, ARM_STATUS,
-//        TURNTABLE_STATUS, HEARTBEAT
+//        TURNTABLE_STATUS, HEARTBEAT, DEPTH_FRAME (the frames' normals, DIR/depth/)
 //   out: MOVE_REQUEST, CAPTURE_REQUEST, PLAN_REQUEST, SCAN_STATUS, HEARTBEAT
 // Wires the bus to the scan's sequence (core/scan/scan_sequencer.hpp: plan -> move -> capture ->
 // register -> map -> accumulate for each view, its deadlines and re-sends, the output folder):
@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "bus/bus.hpp"
+#include "bus/convert_rig.hpp"
 #include "bus/convert_scan.hpp"
 #include "cli/options.hpp"
 #include "core/base/log.hpp"
@@ -29,6 +30,8 @@
 #include "core/scan/scan_sequencer.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "pbnbv/arm_status_t.hpp"
+#include "pbnbv/depth_frame_t.hpp"
+#include "report/depth_png.hpp"
 #include "pbnbv/heartbeat_t.hpp"
 #include "pbnbv/stop_request_t.hpp"
 #include "pbnbv/turntable_status_t.hpp"
@@ -118,6 +121,10 @@ int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out, bool r
   bus.subscribe<arm_status_t>(channels::kArmStatus, [&](const arm_status_t&) { inbox.emplace_back(Heard{"ARM_STATUS"}); });
   bus.subscribe<turntable_status_t>(channels::kTurntableStatus,
                                     [&](const turntable_status_t&) { inbox.emplace_back(Heard{"TURNTABLE_STATUS"}); });
+  // The depth frames: each view's normals come from its frame's neighbourhood and the frame is
+  // written to DIR/depth/ (a frame that cannot be decoded is rejected by the bus, named).
+  scan.set_depth_image_writer(write_depth_png);
+  bus.subscribe<depth_frame_t>(channels::kDepthFrame, [&scan](const depth_frame_t& f) { scan.keep_depth_frame(bus::from_msg(f)); });
   std::optional<std::string> stop_reason;  // STOP heard (the motion executor holds the rig)
   bus.subscribe<stop_request_t>(channels::kStop, [&](const stop_request_t& s) { stop_reason = s.reason; });
   bus.subscribe<heartbeat_t>(channels::kHeartbeat,

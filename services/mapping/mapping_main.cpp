@@ -1,6 +1,7 @@
 // pbnbv-mapping: the mapping service.
 //   in:  REGISTERED_CLOUD (which frame, and its registered camera pose), DEPTH_FRAME (the rays)
-//   out: VOXEL_MAP, HEARTBEAT; DIR/maps/view_NNN.ot (OctoMap, viewable in octovis) per view
+//   out: VOXEL_MAP, HEARTBEAT; per view DIR/maps/view_NNN.ot (OctoMap, viewable in octovis:
+//        Occupied and Empty only) and DIR/maps/view_NNN.states.ply (every cell with its state)
 // Keeps the five-state voxel map of each scan (core VoxelMap: None, Empty, Occupied, Unknown,
 // Frontier; 3-D DDA rays inside the bounding box B) and publishes, per view, the Occupied and
 // Frontier voxel centres, the count of every state, B, the resolution and the update time.
@@ -116,6 +117,7 @@ class MappingService {
     if (!out_.empty() && !map_->empty()) {
       fs::create_directories(out_ / "maps");
       map_->write_octomap((out_ / "maps" / view_file(r.iteration, "ot")).string());
+      map_->write_states_ply((out_ / "maps" / view_file(r.iteration, "states.ply")).string());
     }
     out.utime = bus::now_utime();
     bus_.publish(channels::kVoxelMap, out);
@@ -196,7 +198,7 @@ int main(int argc, char** argv) {
   std::optional<Eigen::Vector3d> volume_min, volume_max;
   cli::add(app, kMapResolution, &p.resolution_m);
   cli::add(app, kFrontierMargin, &p.gamma_m);
-  cli::add_text(app, "out", &out, "write DIR/maps/view_NNN.ot (OctoMap) per view; empty: none", "DIR");
+  cli::add_text(app, "out", &out, "write DIR/maps/view_NNN.ot (OctoMap) and view_NNN.states.ply per view; empty: none", "DIR");
   cli::add_point(app, "volume-min", &volume_min, "working volume's lower corner, object frame, m [unlimited]");
   cli::add_point(app, "volume-max", &volume_max, "working volume's upper corner, object frame, m [unlimited]");
   return bus::run_service("mapping", app, argc, argv, 10, [&](bus::Bus& bus) -> std::function<void()> {

@@ -173,6 +173,42 @@ TEST(RigSim, ObjectIsInsertedAtTheMarkersAndAMissingMarkerIsNamed) {
   }
 }
 
+// The composed model names the object's mesh relative to itself: a scan folder copied elsewhere
+// (and the original removed) loads in MuJoCo with the object's 12 triangles; a mesh from outside
+// the model's folder is copied beside it first.
+TEST(RigSim, TheModelLoadsFromACopiedFolder) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / ("rig_sim_copy_" + std::to_string(::getpid()));
+  const fs::path scan = root / "scan", moved = root / "elsewhere" / "moved";
+  fs::create_directories(scan);
+  write_stl_binary(make_box(Eigen::Vector3d(0.2, 0.2, 0.2)), (scan / "object.stl").string());
+  const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
+  { twin::RigSim sim(rig, twin::ObjectPlacement{(scan / "object.stl").string(), 0.1}, (scan / "twin_model.xml").string()); }
+  std::ifstream in(scan / "twin_model.xml");
+  const std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(xml.find("file=\"object.stl\""), std::string::npos) << "the mesh is named relative to the model";
+  EXPECT_EQ(xml.find(root.string()), std::string::npos) << "no absolute path in the model";
+  fs::create_directories(moved.parent_path());
+  fs::copy(scan, moved, fs::copy_options::recursive);
+  fs::remove_all(scan);
+  char error[1000] = "";
+  mjModel* m = mj_loadXML((moved / "twin_model.xml").c_str(), nullptr, error, sizeof(error));
+  ASSERT_NE(m, nullptr) << error;
+  const int mesh = mj_name2id(m, mjOBJ_MESH, "pbnbv_object");
+  ASSERT_GE(mesh, 0);
+  EXPECT_EQ(m->mesh_facenum[mesh], 12);  // a box: 6 faces of 2 triangles
+  mj_deleteModel(m);
+  // A mesh from elsewhere: copied beside the model as <model>_object.stl.
+  const fs::path other = root / "other";
+  fs::create_directories(other);
+  { twin::RigSim sim(rig, twin::ObjectPlacement{(moved / "object.stl").string(), 0.1}, (other / "rig.xml").string()); }
+  EXPECT_TRUE(fs::exists(other / "rig_object.stl"));
+  m = mj_loadXML((other / "rig.xml").c_str(), nullptr, error, sizeof(error));
+  EXPECT_NE(m, nullptr) << error;
+  if (m) mj_deleteModel(m);
+  fs::remove_all(root);
+}
+
 TEST(RigSim, TheCalibrationSphereRestsOnTheMarkAndTurnsWithThePlatter) {
   const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
   twin::ObjectPlacement placement;

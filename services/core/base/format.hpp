@@ -15,10 +15,11 @@ inline std::string exact(double x) { return fmt::format("{}", x); }
 // x with `digits` decimals: fixed(2.345, 1) -> "2.3".
 inline std::string fixed(double x, int digits = 1) { return fmt::format("{:.{}f}", x, digits); }
 
-// A per-view file name of a scan's folder: view_file(3, "ply") -> "view_003.ply". Views are
-// counted from 0 in file names, as in scan.json's "view" field.
+// A per-view file name of a scan's folder for the view with scan.json's "view" (counted from 0)
+// `view`: files count views from 1, as the titles and progress lines do, so view_file(0, "ply")
+// -> "view_001.ply" is the first view's file and view_file(3, "png") -> "view_004.png" the fourth's.
 inline std::string view_file(int view, const char* extension) {
-  return fmt::format("view_{:03d}.{}", view, extension);
+  return fmt::format("view_{:03d}.{}", view + 1, extension);
 }
 
 }  // namespace pbnbv

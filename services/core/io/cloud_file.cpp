@@ -12,6 +12,8 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <sstream>
+#include <utility>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -43,23 +45,44 @@ bool host_little_endian() {
 // and the coordinator writes every view's frame and the grown cloud.ply in its "accumulate"
 // stage (0.010 s per view in the README). PCL's writer would also bring pcl_io and VTK into the
 // coordinator: 76 shared libraries instead of 15, and 29 ms more per process start.
-void write_ply(const PointCloud& cloud, const std::string& path) {
+void write_ply(const PointCloud& cloud, const std::string& path, const CloudExtras& extras) {
   const char* ctx = "write_ply";
-  std::string out = "ply\nformat binary_little_endian 1.0\ncomment written by pbnbv\nelement vertex " +
-                    std::to_string(cloud.size()) +
-                    "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  const bool normals = !extras.normals.empty();
+  if (normals && extras.normals.size() != cloud.size()) {
+    throw std::invalid_argument(fmt::format("{}: {}: {} normals for {} points", ctx, path, extras.normals.size(), cloud.size()));
+  }
+  std::string out =
+      "ply\nformat binary_little_endian 1.0\ncomment written by pbnbv\ncomment units metres\n"
+      "comment frame object (the scan's object frame: object.obj's normalised mesh frame, z up; on the arm rig it "
+      "turns with the turntable)\n"
+      "comment camera_pose_format x y z qw qx qy qz (camera optical frame, x right y down z forward, in the object "
+      "frame; m, unit quaternion)\n";
+  for (const Pose& pose : extras.camera_poses) {
+    double position[3], quat[4];
+    pose_to_arrays(pose, position, quat);
+    out += fmt::format("comment camera_pose {} {} {} {} {} {} {}\n", position[0], position[1], position[2], quat[0],
+                       quat[1], quat[2], quat[3]);
+  }
+  out += "element vertex " + std::to_string(cloud.size()) + "\nproperty float x\nproperty float y\nproperty float z\n";
+  if (normals) out += "property float nx\nproperty float ny\nproperty float nz\n";
+  out += "end_header\n";
   const std::size_t header = out.size();
-  out.resize(header + 12 * cloud.size());
+  const std::size_t stride = normals ? 24 : 12;
+  out.resize(header + stride * cloud.size());
   char* dst = &out[header];
-  for (const auto& p : cloud) {
+  auto put = [&dst](const Eigen::Vector3f& v) {
     for (int k = 0; k < 3; ++k) {
-      const float f = p[k];
+      const float f = v[k];
       unsigned char b[4];
       std::memcpy(b, &f, 4);
       if (!host_little_endian()) std::reverse(b, b + 4);
       std::memcpy(dst, b, 4);
       dst += 4;
     }
+  };
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    put(cloud[i]);
+    if (normals) put(extras.normals[i]);
   }
   // Atomically (temporary file + rename): a reader, or a process restarted after a crash, never
   // sees half a cloud.
@@ -71,24 +94,55 @@ void write_ply(const PointCloud& cloud, const std::string& path) {
 }
 
 PointCloud read_ply(const std::string& path) {
+  CloudExtras ignored;
+  return read_ply(path, ignored);
+}
+
+PointCloud read_ply(const std::string& path, CloudExtras& extras) {
   const char* ctx = "read_ply";
-  using Point = CGAL::Simple_cartesian<double>::Point_3;
+  using Kernel = CGAL::Simple_cartesian<double>;
+  using Point = Kernel::Point_3;
+  using Vector = Kernel::Vector_3;
+  using PointNormal = std::pair<Point, Vector>;
   check_input_file(path, ctx);
   std::ifstream in(path, std::ios::binary);
   const PlyHeader header = check_ply_header(in, path, ctx, false);
+  // The header's lines again: normals and camera poses.
+  in.clear();
+  in.seekg(0);
+  extras = CloudExtras{};
+  bool has_normals = false;
+  for (std::string line; std::getline(in, line) && line.rfind("end_header", 0) != 0;) {
+    if (line == "property float nx" || line == "property double nx") has_normals = true;
+    if (line.rfind("comment camera_pose ", 0) == 0) {
+      std::istringstream words(line.substr(20));
+      double position[3], quat[4];
+      if (!(words >> position[0] >> position[1] >> position[2] >> quat[0] >> quat[1] >> quat[2] >> quat[3])) {
+        fail(ctx, path, "a camera_pose comment is not 'x y z qw qx qy qz': " + line);
+      }
+      extras.camera_poses.push_back(pose_from_arrays(position, quat, path + " camera_pose"));
+    }
+  }
   in.clear();
   in.seekg(0);
   CGAL::IO::set_mode(in, CGAL::IO::BINARY);
-  std::vector<Point> points;
+  std::vector<PointNormal> points;
   points.reserve(header.vertices);
-  if (!CGAL::IO::read_PLY_with_properties(in, std::back_inserter(points),
-                                          CGAL::IO::make_ply_point_reader(CGAL::Identity_property_map<Point>()))) {
-    fail(ctx, path, ply_failure(header, path, in));
-  }
+  const bool ok =
+      has_normals
+          ? CGAL::IO::read_PLY_with_properties(
+                in, std::back_inserter(points),
+                CGAL::IO::make_ply_point_reader(CGAL::First_of_pair_property_map<PointNormal>()),
+                CGAL::IO::make_ply_normal_reader(CGAL::Second_of_pair_property_map<PointNormal>()))
+          : CGAL::IO::read_PLY_with_properties(
+                in, std::back_inserter(points),
+                CGAL::IO::make_ply_point_reader(CGAL::First_of_pair_property_map<PointNormal>()));
+  if (!ok) fail(ctx, path, ply_failure(header, path, in));
   PointCloud cloud;
   cloud.reserve(points.size());
-  for (const auto& p : points) {
+  for (const auto& [p, n] : points) {
     cloud.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+    if (has_normals) extras.normals.emplace_back(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
   }
   return cloud;
 }

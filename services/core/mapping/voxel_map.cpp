@@ -93,6 +93,7 @@
 
 #include <octomap/ColorOcTree.h>
 
+#include "core/base/format.hpp"
 #include "core/base/parallel.hpp"
 #include "core/geometry/voxel_traversal.hpp"
 
@@ -100,7 +101,9 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <limits>
 #include <numeric>
 #include <sstream>
@@ -806,12 +809,14 @@ void VoxelMap::write_octomap(const std::string& path) const {
     for (int y = 0; y < ny; ++y) {
       for (int x = 0; x < nx; ++x, ++lin) {
         const VoxelState s = cells_[lin];
-        if (s == VoxelState::kNone) continue;
+        // Only what was observed: Unknown and Frontier (and None) cells stay out of the tree, so
+        // that OctoMap's consumers (isNodeOccupied, MoveIt, octomap_server) read them as unknown.
+        if (s != VoxelState::kOccupied && s != VoxelState::kEmpty) continue;
         const Eigen::Vector3d c = centre(Eigen::Vector3i(x, y, z));
         octomap::OcTreeKey key;
         if (!tree.coordToKeyChecked(octomap::point3d(c.x(), c.y(), c.z()), key)) continue;
         // lazy_eval: no pruning while inserting, so every voxel is its own leaf.
-        tree.updateNode(key, s != VoxelState::kEmpty, true);
+        tree.updateNode(key, s == VoxelState::kOccupied, true);
         const Rgb colour = state_colour(s);  // the one palette (state_colour.hpp)
         tree.setNodeColor(key, colour.r, colour.g, colour.b);
       }
@@ -820,6 +825,53 @@ void VoxelMap::write_octomap(const std::string& path) const {
   tree.updateInnerOccupancy();
   if (!tree.write(path)) {
     throw std::runtime_error("VoxelMap::write_octomap: cannot write " + path);
+  }
+}
+
+void VoxelMap::write_states_ply(const std::string& path) const {
+  const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
+  const int64_t n = int64_t(nx) * ny * nz;
+  std::string out = "ply\nformat binary_little_endian 1.0\ncomment written by pbnbv: voxel map cell centres\n"
+                    "comment units metres, frame object (the normalised object frame)\n"
+                    "comment resolution_m " + exact(params_.resolution_m) +
+                    "\ncomment state 0 none, 1 empty, 2 occupied, 3 unknown, 4 frontier\nelement vertex " +
+                    std::to_string(n) +
+                    "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar state\n"
+                    "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
+  const std::size_t header = out.size();
+  out.resize(header + 16 * static_cast<std::size_t>(n));
+  char* dst = &out[header];
+  const uint16_t one = 1;
+  unsigned char first_byte;
+  std::memcpy(&first_byte, &one, 1);
+  const bool little = first_byte == 1;
+  int64_t lin = 0;
+  for (int z = 0; z < nz; ++z) {
+    for (int y = 0; y < ny; ++y) {
+      for (int x = 0; x < nx; ++x, ++lin) {
+        const VoxelState s = cells_[lin];
+        const Eigen::Vector3d c = centre(Eigen::Vector3i(x, y, z));
+        for (int k = 0; k < 3; ++k) {
+          const float f = static_cast<float>(c[k]);
+          unsigned char b[4];
+          std::memcpy(b, &f, 4);
+          if (!little) std::reverse(b, b + 4);
+          std::memcpy(dst, b, 4);
+          dst += 4;
+        }
+        const Rgb colour = state_colour(s);
+        *dst++ = static_cast<char>(s);
+        *dst++ = static_cast<char>(colour.r);
+        *dst++ = static_cast<char>(colour.g);
+        *dst++ = static_cast<char>(colour.b);
+      }
+    }
+  }
+  std::ofstream f(path + ".tmp", std::ios::binary);
+  f.write(out.data(), static_cast<std::streamsize>(out.size()));
+  f.close();
+  if (!f || std::rename((path + ".tmp").c_str(), path.c_str()) != 0) {
+    throw std::runtime_error("VoxelMap::write_states_ply: cannot write " + path);
   }
 }
 

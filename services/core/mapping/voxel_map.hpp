@@ -114,10 +114,15 @@ class VoxelMap {
   // along v too when the stride allowed it).
   bool last_blocks_alternate() const { return last_alternate_; }
 
-  // Writes the map as an OctoMap ColorOcTree (.ot, viewable in octovis): Occupied, Unknown and
-  // Frontier voxels as occupied nodes, Empty voxels as free nodes, each coloured by its state
-  // (state_colour.hpp: the palette the plan figures use too).
+  // Writes the map as an OctoMap ColorOcTree (.ot, viewable in octovis) that OctoMap's consumers
+  // read right: Occupied voxels as occupied nodes, Empty voxels as free nodes, each coloured by
+  // its state (state_colour.hpp: the palette the plan figures use too); Unknown, Frontier and
+  // None voxels are not in the tree (unknown space: search() returns null).
   void write_octomap(const std::string& path) const;
+  // Writes every cell of B with its state, the five states kept: a binary little-endian PLY of
+  // cell centres (float x y z, object frame, m), `uchar state` (0 None, 1 Empty, 2 Occupied,
+  // 3 Unknown, 4 Frontier) and `uchar red green blue` (state_colour.hpp), written atomically.
+  void write_states_ply(const std::string& path) const;
 
   // The map's whole state as bytes (B's place and size, every cell), so that a restarted mapping
   // service continues the same map: restore(serialise()) is the same map, and integrating the

@@ -1,7 +1,9 @@
 #include "core/perception/cloud_filter.hpp"
 #include "core/perception/depth_cloud.hpp"
+#include "core/perception/neighbours.hpp"
 
 #include <cmath>
+#include <unordered_map>
 #include <stdexcept>
 
 namespace pbnbv {
@@ -36,6 +38,96 @@ PointCloud depth_to_object_cloud(const std::vector<float>& depth_m, const Camera
   }
   if (stats) *stats = s;
   return voxel_downsample(cloud, voxel_m);
+}
+
+std::vector<Eigen::Vector3f> depth_normals(const PointCloud& points, const std::vector<float>& depth_m,
+                                           const CameraIntrinsics& k, const Pose& object_T_camera, int step_px) {
+  std::vector<Eigen::Vector3f> normals(points.size(), Eigen::Vector3f::Zero());
+  if (depth_m.size() != static_cast<std::size_t>(k.width) * k.height) {
+    throw std::invalid_argument("depth_normals: the depth image has " + std::to_string(depth_m.size()) +
+                                " pixels, the intrinsics " + std::to_string(k.width) + " x " + std::to_string(k.height));
+  }
+  const Pose camera_T_object = object_T_camera.inverse();
+  const Eigen::Matrix3d R = object_T_camera.linear();
+  auto depth_at = [&](int u, int v) -> double {
+    if (u < 0 || v < 0 || u >= k.width || v >= k.height) return 0.0;
+    const float z = depth_m[static_cast<std::size_t>(v) * k.width + u];
+    return (std::isfinite(z) && z > 0.0f) ? z : 0.0;
+  };
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d q = camera_T_object * points[i].cast<double>();
+    if (!(q.z() > 0.0)) continue;
+    const int u = static_cast<int>(std::lround(k.fx * q.x() / q.z() + k.cx));
+    const int v = static_cast<int>(std::lround(k.fy * q.y() / q.z() + k.cy));
+    double zc = depth_at(u, v);
+    if (zc == 0.0) zc = q.z();
+    const Eigen::Vector3d c = back_project(k, u, v, zc);
+    // A neighbour's point, or nothing when it has no reading or lies across a depth jump.
+    auto near = [&](int du, int dv, Eigen::Vector3d& p) {
+      const double z = depth_at(u + du, v + dv);
+      if (z == 0.0 || std::abs(z - zc) > 0.05 * zc) return false;
+      p = back_project(k, u + du, v + dv, z);
+      return true;
+    };
+    auto difference = [&](int du, int dv, Eigen::Vector3d& d) {
+      Eigen::Vector3d a, b;
+      const bool fa = near(du, dv, a), fb = near(-du, -dv, b);
+      if (fa && fb) d = a - b;
+      else if (fa) d = a - c;
+      else if (fb) d = c - b;
+      else return false;
+      return true;
+    };
+    Eigen::Vector3d dx, dy;
+    if (!difference(step_px, 0, dx) || !difference(0, step_px, dy)) continue;
+    Eigen::Vector3d n = dx.cross(dy);
+    if (!(n.norm() > 0.0)) continue;
+    n.normalize();
+    if (n.dot(-c) < 0.0) n = -n;  // towards the camera (its centre is the optical frame's origin)
+    normals[i] = (R * n).cast<float>();
+  }
+  return normals;
+}
+
+std::vector<Eigen::Vector3f> neighbour_normals(const PointCloud& points, const Eigen::Vector3d& camera_m, int neighbours) {
+  SurfaceNormals s = estimate_normals(points, neighbours);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!s.valid[i]) {
+      s.normals[i] = Eigen::Vector3f::Zero();
+      continue;
+    }
+    if (s.normals[i].dot(camera_m.cast<float>() - points[i]) < 0.0f) s.normals[i] = -s.normals[i];
+  }
+  return s.normals;
+}
+
+std::vector<Eigen::Vector3f> voxel_normals(const PointCloud& points, const std::vector<Eigen::Vector3f>& normals,
+                                           const PointCloud& downsampled, double voxel_m) {
+  struct Key {
+    int64_t x, y, z;
+    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
+  };
+  struct Hash {
+    std::size_t operator()(const Key& k) const {
+      return std::hash<int64_t>()(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL);
+    }
+  };
+  auto key_of = [voxel_m](const Eigen::Vector3f& p) {
+    return Key{static_cast<int64_t>(std::floor(p.x() / voxel_m)), static_cast<int64_t>(std::floor(p.y() / voxel_m)),
+                static_cast<int64_t>(std::floor(p.z() / voxel_m))};
+  };
+  std::unordered_map<Key, Eigen::Vector3f, Hash> sums;
+  for (std::size_t i = 0; i < points.size() && i < normals.size(); ++i) {
+    if (!points[i].allFinite() || normals[i].isZero()) continue;
+    auto [it, added] = sums.try_emplace(key_of(points[i]), Eigen::Vector3f::Zero());
+    it->second += normals[i];
+  }
+  std::vector<Eigen::Vector3f> out(downsampled.size(), Eigen::Vector3f::Zero());
+  for (std::size_t i = 0; i < downsampled.size(); ++i) {
+    const auto it = sums.find(key_of(downsampled[i]));
+    if (it != sums.end() && it->second.norm() > 0.0f) out[i] = it->second.normalized();
+  }
+  return out;
 }
 
 }  // namespace pbnbv

@@ -30,4 +30,24 @@ PointCloud depth_to_object_cloud(const std::vector<float>& depth_m, const Camera
                                  const DepthRange& range, const Pose& object_T_camera,
                                  const CloudCrop& crop, double voxel_m, CloudStats* stats);
 
+// A unit normal per object-frame point from the depth image it came from: the point is projected
+// into the image with object_T_camera (the registered pose maps the registered points to the
+// pixels they came from), its normal is the cross product of the depth image's central
+// differences `step_px` pixels either side (one side where the other has no reading or lies
+// across a depth jump of more than 5 % of the depth), turned to face the camera and rotated into
+// the object frame. Zero where the point falls outside the image or its neighbourhood has no
+// readings.
+std::vector<Eigen::Vector3f> depth_normals(const PointCloud& points, const std::vector<float>& depth_m,
+                                           const CameraIntrinsics& k, const Pose& object_T_camera, int step_px = 2);
+
+// Where the depth image is gone: the plane fitted to each point's `neighbours` nearest points
+// (estimate_normals), turned to face `camera_m` (object frame). Zero where no plane was fitted.
+std::vector<Eigen::Vector3f> neighbour_normals(const PointCloud& points, const Eigen::Vector3d& camera_m,
+                                               int neighbours = 12);
+
+// The normals of `points` averaged into the voxels of voxel_downsample(points, voxel_m) =
+// `downsampled` (zero normals are left out; a voxel without any gets a zero normal).
+std::vector<Eigen::Vector3f> voxel_normals(const PointCloud& points, const std::vector<Eigen::Vector3f>& normals,
+                                           const PointCloud& downsampled, double voxel_m);
+
 }  // namespace pbnbv

@@ -7,6 +7,7 @@
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
 #include "core/perception/cloud_filter.hpp"
+#include "core/perception/depth_cloud.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -176,6 +177,15 @@ json to_json(const ViewRecord& v) {
   }
   if (!v.frame_file.empty()) {
     view["frame_file"] = v.frame_file;
+    if (v.registration) {
+      // The pose the frame's points were placed with (the registered one when accepted): the
+      // camera_pose comment of the frame's PLY header.
+      view["camera_pose"] = to_json(v.registration->cloud.object_T_camera);
+      view["camera_pose"]["frame"] = "object";
+      view["camera_pose"]["of"] = "the camera's optical frame (x right, y down, z forward)";
+    }
+    if (!v.normals.empty()) view["normals"] = v.normals;
+    if (!v.depth_file.empty()) view["depth_file"] = v.depth_file;
     view["merged"] = v.merged;
     if (v.new_surface) view["new_surface"] = to_json(*v.new_surface);
     view["time_s"]["accumulate"] = v.accumulate_s;
@@ -211,17 +221,66 @@ std::string ScanRecord::plan_figure_path(int view) const {
   return (out_ / "plans" / view_file(view, "png")).string();
 }
 
+void ScanRecord::keep_depth_frame(DepthFrame frame) {
+  constexpr std::size_t kKept = 4;  // the frames of the last views (a view's arrives before its cloud)
+  depth_frames_.push_back(std::move(frame));
+  if (depth_frames_.size() > kKept) depth_frames_.pop_front();
+}
+
 double ScanRecord::accumulate(const RegisteredCloud& r, ViewRecord& v) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::string name = view_file(v.view, "ply");
-  write_ply(r.cloud.points, (out_ / "frames" / name).string());
+  const Pose& pose = r.cloud.object_T_camera;
+  const DepthFrame* frame = nullptr;
+  for (const auto& f : depth_frames_) {
+    if (f.seq == r.cloud.depth_frame_seq) frame = &f;
+  }
+  CloudExtras extras;
+  if (frame) {
+    extras.normals = depth_normals(r.cloud.points, frame->depth_m, frame->intrinsics, pose);
+    v.normals = "depth image";
+  } else {
+    extras.normals = neighbour_normals(r.cloud.points, pose.translation());
+    v.normals = "neighbours";
+  }
+  extras.camera_poses = {pose};
+  write_ply(r.cloud.points, (out_ / "frames" / name).string(), extras);
   v.frame_file = "frames/" + name;
+  if (frame && depth_writer_) {
+    fs::create_directories(out_ / "depth");
+    const std::string png = view_file(v.view, "png");
+    depth_writer_(frame->depth_m, frame->intrinsics.width, frame->intrinsics.height, (out_ / "depth" / png).string());
+    const CameraIntrinsics& k = frame->intrinsics;
+    json intrinsics = {{"image", png},
+                       {"width", k.width},
+                       {"height", k.height},
+                       {"fx", k.fx},
+                       {"fy", k.fy},
+                       {"cx", k.cx},
+                       {"cy", k.cy},
+                       {"depth_scale", 1000},
+                       {"depth_units", "value / depth_scale = planar depth along the optical axis, m; 0 = no reading"},
+                       {"depth_min_m", frame->range.min_m},
+                       {"depth_max_m", frame->range.max_m},
+                       {"depth_frame_seq", frame->seq},
+                       {"object_T_camera", to_json(pose)},
+                       {"pose_frame", "object"},
+                       {"registered", r.accepted}};
+    write_json_atomic(intrinsics, (out_ / "depth" / view_file(v.view, "json")).string());
+    v.depth_file = "depth/" + png;
+  }
   v.merged = r.accepted;
   if (r.accepted) {
     v.new_surface = new_surface(r.cloud.points, accumulated_, stop_radius_m_);
-    accumulated_.insert(accumulated_.end(), r.cloud.points.begin(), r.cloud.points.end());
-    accumulated_ = voxel_downsample(accumulated_, voxel_m_);
-    write_ply(accumulated_, (out_ / "cloud.ply").string());
+    PointCloud grown = accumulated_;
+    grown.insert(grown.end(), r.cloud.points.begin(), r.cloud.points.end());
+    std::vector<Eigen::Vector3f> grown_normals = accumulated_normals_;
+    grown_normals.resize(accumulated_.size(), Eigen::Vector3f::Zero());
+    grown_normals.insert(grown_normals.end(), extras.normals.begin(), extras.normals.end());
+    accumulated_ = voxel_downsample(grown, voxel_m_);
+    accumulated_normals_ = voxel_normals(grown, grown_normals, accumulated_, voxel_m_);
+    merged_poses_.push_back(pose);
+    write_ply(accumulated_, (out_ / "cloud.ply").string(), CloudExtras{accumulated_normals_, merged_poses_});
   }
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -241,7 +300,21 @@ void ScanRecord::continue_from_folder(const std::string& scan_id) {
   report_["views"] = before.value("views", json::array());
   if (before.contains("plan")) report_["plan"] = before["plan"];
   if (before.contains("status")) report_["status"] = before["status"];
-  if (fs::exists(out_ / "cloud.ply")) accumulated_ = read_ply((out_ / "cloud.ply").string());
+  if (fs::exists(out_ / "cloud.ply")) {
+    CloudExtras extras;
+    accumulated_ = read_ply((out_ / "cloud.ply").string(), extras);
+    merged_poses_ = extras.camera_poses;
+    accumulated_normals_ = extras.normals;
+    if (accumulated_normals_.size() != accumulated_.size()) {
+      // A cloud.ply written before normals were: fit them to the neighbours, facing away from
+      // the cloud's centre (the cameras look at the object from outside).
+      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+      for (const auto& p : accumulated_) centre += p.cast<double>();
+      if (!accumulated_.empty()) centre /= static_cast<double>(accumulated_.size());
+      accumulated_normals_ = neighbour_normals(accumulated_, centre);
+      for (auto& n : accumulated_normals_) n = -n;
+    }
+  }
 }
 
 void ScanRecord::set_stop(const ScanStop& stop) { report_["stop"] = to_json(stop); }

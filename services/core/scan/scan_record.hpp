@@ -5,7 +5,9 @@
 // cloud.ply (the accepted views merged and downsampled). The keys and their meaning are the ones
 // services/eval/evaluate.cpp, the tests and the README read; everything written is plain data
 // from the sequence (core/scan/messages.hpp), so a record can be checked without a bus.
+#include <deque>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -14,6 +16,7 @@
 
 #include "core/geometry/point_cloud.hpp"
 #include "core/scan/messages.hpp"
+#include "core/scan/rig_readings.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "core/scan/stop_rule.hpp"
 
@@ -56,6 +59,8 @@ struct ViewRecord {
   std::optional<RegisteredCloud> registration;
   std::optional<VoxelMapSummary> map;
   std::string frame_file;                    // "frames/view_NNN.ply" once written
+  std::string normals;                       // how the frame's normals were found: "depth image", "neighbours"
+  std::string depth_file;                    // "depth/view_NNN.png" once written (its intrinsics: view_NNN.json)
   bool merged = false;                       // merged into cloud.ply
   std::optional<NewSurface> new_surface;     // what it added to the model (merged views)
   double move_round_trip_s = kUnset, capture_round_trip_s = kUnset, register_round_trip_s = kUnset,
@@ -88,9 +93,20 @@ class ScanRecord {
   // Where the view scorer draws the picture of planning view `view` (plans/ is created).
   std::string plan_figure_path(int view) const;
 
+  // A depth frame the camera sent: accumulate finds a view's frame among the last few by its
+  // depth_frame_seq (normals from its neighbourhood; depth/view_NNN.png with the writer below).
+  void keep_depth_frame(DepthFrame frame);
+  // Writes a depth image (m, row-major, 0 = no reading) as a 16-bit PNG of millimetres; set by
+  // the coordinator (OpenCV lives in report/). Unset: no depth/ folder.
+  using DepthImageWriter = std::function<void(const std::vector<float>& depth_m, int width, int height, const std::string& path)>;
+  void set_depth_image_writer(DepthImageWriter writer) { depth_writer_ = std::move(writer); }
+
   // Writes the view's cloud (registered when accepted) to frames/view_NNN.ply and, when the
   // registration accepted it, merges it into cloud.ply (voxel-downsampled at the settings'
-  // voxel_m). Sets v.frame_file, v.merged and, when merged, v.new_surface (the view's points
+  // voxel_m), both with normals facing the camera (from the view's depth frame when it was kept,
+  // else from each point's nearest neighbours) and the camera poses in the header; writes the
+  // depth frame to depth/ when it was kept and a writer is set.
+  // Sets v.frame_file, v.normals, v.depth_file, v.merged and, when merged, v.new_surface (the view's points
   // farther than the settings' stop_radius_m from the model before it); returns the wall time
   // this took, s.
   double accumulate(const RegisteredCloud& r, ViewRecord& v);
@@ -121,6 +137,10 @@ class ScanRecord {
   double stop_radius_m_;
   nlohmann::json report_;
   PointCloud accumulated_;
+  std::vector<Eigen::Vector3f> accumulated_normals_;  // one per accumulated point (zero: none)
+  std::vector<Pose> merged_poses_;                    // the merged views' camera poses, in order
+  std::deque<DepthFrame> depth_frames_;
+  DepthImageWriter depth_writer_;
   int64_t next_request_id_ = 1;
 };
 

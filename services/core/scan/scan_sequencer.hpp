@@ -156,6 +156,9 @@ class ScanSequencer {
   const std::string& summary() const { return summary_; }
   const ScanRecord& record() const { return record_; }
   const ScanSoFar& so_far() const { return done_; }
+  // The camera's depth frames and how to write them as images (ScanRecord's, which uses them).
+  void keep_depth_frame(DepthFrame frame) { record_.keep_depth_frame(std::move(frame)); }
+  void set_depth_image_writer(ScanRecord::DepthImageWriter writer) { record_.set_depth_image_writer(std::move(writer)); }
 
  private:
   enum class Phase { kIdle, kWaitingReady, kPlanning, kMoving, kCapturing, kRegistering, kMapping, kFinished };

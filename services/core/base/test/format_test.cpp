@@ -25,6 +25,7 @@ TEST(Format, FixedAndViewFiles) {
   EXPECT_EQ(fixed(1.0 / 3.0, 3), "0.333");
   EXPECT_EQ(fixed(99.96, 1), "100.0");
   EXPECT_EQ(fixed(2.5, 0), "2");  // the binary value is exact: round half to even
-  EXPECT_EQ(view_file(3, "ply"), "view_003.ply");
-  EXPECT_EQ(view_file(12, "png"), "view_012.png");
+  EXPECT_EQ(view_file(0, "ply"), "view_001.ply");  // files count views from 1
+  EXPECT_EQ(view_file(3, "ply"), "view_004.ply");
+  EXPECT_EQ(view_file(12, "png"), "view_013.png");
 }

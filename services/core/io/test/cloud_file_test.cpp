@@ -34,11 +34,13 @@ TEST_F(CloudFiles, PlyRoundTripIsExact) {
   c.emplace_back(-0.0f, 1e-30f, 3.4e38f);
   const std::string p = path("c.ply");
   write_ply(c, p);
-  EXPECT_EQ(fs::file_size(p) - 12 * c.size(),
-            std::string("ply\nformat binary_little_endian 1.0\ncomment written by pbnbv\n"
-                        "element vertex 1001\nproperty float x\nproperty float y\n"
-                        "property float z\nend_header\n")
-                .size());
+  // The body is 12 bytes a point (float x y z, no normals) after the header.
+  std::ifstream in(p, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t body = text.find("property float z\nend_header\n");
+  ASSERT_NE(body, std::string::npos);
+  EXPECT_EQ(fs::file_size(p) - 12 * c.size(), body + std::string("property float z\nend_header\n").size());
+  EXPECT_EQ(text.find("property float nx"), std::string::npos);
   const PointCloud r = read_ply(p);
   EXPECT_EQ(r, c);
 
@@ -118,6 +120,39 @@ TEST_F(CloudFiles, Errors) {
   expect_error([&] { read_ply(p); }, {p, "truncated"});
   const std::string unwritable = path("no/dir/c.ply");
   expect_error([&] { write_ply(c, unwritable); }, {unwritable});
+}
+
+// Normals and camera poses go into the file and come back; a file without them reads as before.
+TEST(CloudFile, NormalsAndCameraPosesRoundTrip) {
+  const fs::path path = fs::temp_directory_path() / ("pbnbv_cloud_normals_" + std::to_string(::getpid()) + ".ply");
+  const PointCloud points = {Eigen::Vector3f(0.1f, 0.2f, 0.3f), Eigen::Vector3f(-0.1f, 0, 0.05f)};
+  CloudExtras extras;
+  extras.normals = {Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(1, 0, 0)};
+  Pose a = Pose::Identity();
+  a.translation() = Eigen::Vector3d(0.5, -0.25, 0.125);
+  a.linear() = Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  extras.camera_poses = {a, Pose::Identity()};
+  write_ply(points, path.string(), extras);
+  std::ifstream in(path);
+  std::string header((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  header = header.substr(0, header.find("end_header"));
+  EXPECT_NE(header.find("comment units metres\n"), std::string::npos) << header;
+  EXPECT_NE(header.find("comment camera_pose 0.5 -0.25 0.125 "), std::string::npos) << header;
+  EXPECT_NE(header.find("property float nx\nproperty float ny\nproperty float nz\n"), std::string::npos) << header;
+  CloudExtras back;
+  const PointCloud read = read_ply(path.string(), back);
+  ASSERT_EQ(read.size(), 2u);
+  EXPECT_EQ(read[1], points[1]);
+  ASSERT_EQ(back.normals.size(), 2u);
+  EXPECT_EQ(back.normals[1], extras.normals[1]);
+  ASSERT_EQ(back.camera_poses.size(), 2u);
+  EXPECT_TRUE(back.camera_poses[0].isApprox(a, 1e-12));
+  write_ply(points, path.string());  // no extras: x y z only
+  EXPECT_EQ(read_ply(path.string(), back).size(), 2u);
+  EXPECT_TRUE(back.normals.empty());
+  EXPECT_TRUE(back.camera_poses.empty());
+  EXPECT_THROW(write_ply(points, path.string(), CloudExtras{{Eigen::Vector3f(0, 0, 1)}, {}}), std::invalid_argument);
+  fs::remove(path);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -667,65 +668,127 @@ TEST(VoxelMap, Deterministic) {
   EXPECT_EQ(all_states(a), all_states(b));
 }
 
-TEST(VoxelMap, WriteOctomapRoundTrip) {
+// A square patch of the plane x = 1/64 m (|y|, |z| < 0.0624 m) seen head-on from x = 0.5 m,
+// in a working volume (= B) of x -0.125..0.3125, y and z -0.125..0.125 m at 1/32 m voxels
+// (binary fractions: the lattice is exact): 14 x 8 x 8 = 896 cells. By hand: Occupied is the
+// patch's 4 x 4 = 16 cells of layer x 0..1/32; the 9 layers in front of it (x 1/32..0.3125,
+// 9 x 64 = 576 cells) are all seen free; the cells straight behind the patch's centre are in its
+// shadow (Unknown or Frontier).
+TEST(VoxelMap, WriteOctomapHoldsOnlyWhatWasObserved) {
+  const double res = 1.0 / 32;
   VoxelMapParams p;
-  p.resolution_m = 0.03;
+  p.resolution_m = res;
   VoxelMap map(p);
-  const CameraIntrinsics k = small_camera();
-  integrate(map, k, from(Vector3d(0.9, 0, 0)), sphere(kHalf));
-  const MapUpdateResult r = integrate(map, k, from(Vector3d(0.3, 0.8, 0.3)), sphere(kHalf));
-  ASSERT_TRUE(r.updated);
-  const std::string path = (std::filesystem::temp_directory_path() /
-                            ("pbnbv_voxel_map_test_" + std::to_string(::getpid()) + ".ot"))
-                               .string();
-  map.write_octomap(path);
-  std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read(path));
-  std::filesystem::remove(path);
+  const Eigen::AlignedBox3d volume(Vector3d(-0.125, -0.125, -0.125), Vector3d(0.3125, 0.125, 0.125));
+  map.reserve_bounds(volume);
+  const CameraIntrinsics k = wide_camera();
+  const Pose T = from(Vector3d(0.5, 0, 0));
+  const HitFn flat = plane(Vector3d(1, 0, 0), 1.0 / 64);
+  const HitFn patch = [&](const Vector3d& o, const Vector3d& d) {
+    const double t = flat(o, d);
+    const Vector3d q = o + t * d;
+    return (std::abs(q.y()) < 0.0624 && std::abs(q.z()) < 0.0624) ? t : std::nan("");
+  };
+  const std::vector<float> depth = render(k, T, patch);
+  DepthView view;
+  view.depth_m = &depth;
+  view.intrinsics = k;
+  view.object_T_camera = T;
+  view.working_volume = volume;
+  const MapUpdateResult r = map.integrate(view);
+  ASSERT_TRUE(r.updated) << r.message;
+  ASSERT_EQ(map.dims(), Vector3i(14, 8, 8));
+  EXPECT_EQ(r.counts.occupied, 16);
+  ASSERT_GT(r.counts.unknown + r.counts.frontier, 0);
+
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("pbnbv_voxel_map_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  map.write_octomap((dir / "map.ot").string());
+  map.write_states_ply((dir / "map.states.ply").string());
+  std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read((dir / "map.ot").string()));
   ASSERT_TRUE(tree);
   auto* color = dynamic_cast<octomap::ColorOcTree*>(tree.get());
   ASSERT_NE(color, nullptr) << tree->getTreeType();
-  EXPECT_NEAR(color->getResolution(), 0.03, 1e-12);
+  EXPECT_NEAR(color->getResolution(), res, 1e-12);
+  // The tree holds exactly the Occupied cells (occupied) and the Empty ones (free).
   int64_t occupied = 0, free = 0;
   for (auto it = color->begin_leafs(); it != color->end_leafs(); ++it) {
-    // Count in voxels of the map's size in case a reader prunes equal siblings.
-    const double n = std::pow(it.getSize() / 0.03, 3);
-    if (color->isNodeOccupied(*it)) {
-      occupied += std::llround(n);
-    } else {
-      free += std::llround(n);
-    }
-  }
-  EXPECT_EQ(occupied, r.counts.occupied + r.counts.unknown + r.counts.frontier);
-  EXPECT_EQ(free, r.counts.empty);
-  // Every cell read back has its state's colour from the one palette (the plan figures use the
-  // same): Occupied blue, Frontier orange, Unknown grey, Empty green.
-  int64_t checked[5] = {0, 0, 0, 0, 0};
-  for (auto it = color->begin_leafs(); it != color->end_leafs(); ++it) {
+    const int64_t n = std::llround(std::pow(it.getSize() / res, 3));  // in case a reader prunes
+    (color->isNodeOccupied(*it) ? occupied : free) += n;
     const octomap::point3d c = it.getCoordinate();
     const VoxelState s = map.state_at(Vector3d(c.x(), c.y(), c.z()));
-    ASSERT_NE(s, VoxelState::kNone) << "a None cell was exported at " << c;
+    EXPECT_EQ(s, color->isNodeOccupied(*it) ? VoxelState::kOccupied : VoxelState::kEmpty) << c;
     const Rgb want = state_colour(s);
-    EXPECT_EQ(it->getColor(), octomap::ColorOcTreeNode::Color(want.r, want.g, want.b))
-        << to_string(s) << " cell at " << c;
-    checked[static_cast<int>(s)] += std::llround(std::pow(it.getSize() / 0.03, 3));
+    EXPECT_EQ(it->getColor(), octomap::ColorOcTreeNode::Color(want.r, want.g, want.b)) << c;
   }
-  EXPECT_EQ(checked[static_cast<int>(VoxelState::kOccupied)], r.counts.occupied);
-  EXPECT_EQ(checked[static_cast<int>(VoxelState::kFrontier)], r.counts.frontier);
-  EXPECT_EQ(checked[static_cast<int>(VoxelState::kUnknown)], r.counts.unknown);
-  EXPECT_EQ(checked[static_cast<int>(VoxelState::kEmpty)], r.counts.empty);
-  // The colours the README names, read at one voxel of each state.
-  const std::pair<VoxelState, octomap::ColorOcTreeNode::Color> named[] = {
-      {VoxelState::kOccupied, {40, 110, 230}},   // blue
-      {VoxelState::kFrontier, {255, 140, 40}},   // orange
-      {VoxelState::kUnknown, {150, 150, 150}},   // grey
-      {VoxelState::kEmpty, {60, 200, 80}}};      // green
-  for (const auto& [state, rgb] : named) {
-    const auto cells = map.centres(state);
-    ASSERT_FALSE(cells.empty()) << to_string(state);
-    const auto* node = color->search(cells[0].x(), cells[0].y(), cells[0].z());
-    ASSERT_NE(node, nullptr) << to_string(state);
-    EXPECT_EQ(node->getColor(), rgb) << to_string(state);
+  EXPECT_EQ(occupied, 16);
+  EXPECT_EQ(free, r.counts.empty);
+  // The patch: occupied. x 1/64, y and z -3/64 .. 3/64 in steps of 1/32.
+  for (int j = -2; j < 2; ++j) {
+    for (int l = -2; l < 2; ++l) {
+      const auto* node = color->search(1.0 / 64, (j + 0.5) * res, (l + 0.5) * res);
+      ASSERT_NE(node, nullptr) << j << " " << l;
+      EXPECT_TRUE(color->isNodeOccupied(node)) << j << " " << l;
+    }
   }
+  // In front of it: free, all 576 cells.
+  int front_free = 0;
+  for (int i = 1; i < 10; ++i) {
+    for (int j = -4; j < 4; ++j) {
+      for (int l = -4; l < 4; ++l) {
+        const auto* node = color->search((i + 0.5) * res, (j + 0.5) * res, (l + 0.5) * res);
+        front_free += node != nullptr && !color->isNodeOccupied(node);
+      }
+    }
+  }
+  EXPECT_EQ(front_free, 576);
+  // Straight behind the patch's centre (4 layers x 2 x 2 cells): in its shadow, not in the tree.
+  for (int i = -4; i < 0; ++i) {
+    for (int j = -1; j < 1; ++j) {
+      for (int l = -1; l < 1; ++l) {
+        const Vector3d c((i + 0.5) * res, (j + 0.5) * res, (l + 0.5) * res);
+        const VoxelState s = map.state_at(c);
+        EXPECT_TRUE(s == VoxelState::kUnknown || s == VoxelState::kFrontier) << to_string(s) << " at " << c.transpose();
+        EXPECT_EQ(color->search(c.x(), c.y(), c.z()), nullptr) << c.transpose();
+      }
+    }
+  }
+  // Every Unknown and Frontier cell is absent: a consumer reads it as unknown, never occupied.
+  for (const VoxelState s : {VoxelState::kUnknown, VoxelState::kFrontier}) {
+    for (const Vector3d& c : map.centres(s)) EXPECT_EQ(color->search(c.x(), c.y(), c.z()), nullptr) << to_string(s);
+  }
+
+  // The states file: every cell of B once, with its state and colour.
+  std::ifstream in(dir / "map.states.ply", std::ios::binary);
+  std::string line, header;
+  std::size_t vertices = 0;
+  while (std::getline(in, line) && line != "end_header") {
+    header += line + "\n";
+    if (line.rfind("element vertex ", 0) == 0) vertices = std::stoul(line.substr(15));
+  }
+  EXPECT_NE(header.find("property uchar state\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"),
+            std::string::npos) << header;
+  ASSERT_EQ(vertices, 896u);
+  int64_t per_state[5] = {0, 0, 0, 0, 0};
+  for (std::size_t i = 0; i < vertices; ++i) {
+    float xyz[3];
+    unsigned char srgb[4];
+    in.read(reinterpret_cast<char*>(xyz), 12);
+    in.read(reinterpret_cast<char*>(srgb), 4);
+    ASSERT_TRUE(in) << "cut short at cell " << i;
+    ASSERT_LE(srgb[0], 4);
+    const VoxelState s = static_cast<VoxelState>(srgb[0]);
+    EXPECT_EQ(map.state_at(Vector3d(xyz[0], xyz[1], xyz[2])), s);
+    EXPECT_EQ((Rgb{srgb[1], srgb[2], srgb[3]}), state_colour(s));
+    ++per_state[srgb[0]];
+  }
+  EXPECT_EQ(per_state[static_cast<int>(VoxelState::kOccupied)], 16);
+  EXPECT_EQ(per_state[static_cast<int>(VoxelState::kEmpty)], r.counts.empty);
+  EXPECT_EQ(per_state[static_cast<int>(VoxelState::kUnknown)], r.counts.unknown);
+  EXPECT_EQ(per_state[static_cast<int>(VoxelState::kFrontier)], r.counts.frontier);
+  EXPECT_EQ(per_state[static_cast<int>(VoxelState::kNone)], r.counts.none);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(VoxelMap, RejectsBadInput) {

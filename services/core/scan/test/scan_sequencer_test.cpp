@@ -315,7 +315,7 @@ TEST_F(ScanSequencerTest, ThreeViewRingScanEndToEnd) {
     EXPECT_EQ(v["capture"]["depth_frame_seq"], 100 + k);
     EXPECT_EQ(v["registration"]["accepted"], true);
     EXPECT_EQ(v["map"]["voxels"]["frontier"], 5);
-    EXPECT_EQ(v["frame_file"], "frames/view_00" + std::to_string(k) + ".ply");
+    EXPECT_EQ(v["frame_file"], "frames/view_00" + std::to_string(k + 1) + ".ply");
     EXPECT_EQ(v["merged"], true);
     EXPECT_EQ(v["time_s"]["move_round_trip"], 2.0);
     EXPECT_EQ(v["time_s"]["capture_round_trip"], 1.0);
@@ -379,7 +379,7 @@ TEST_F(ScanSequencerTest, AnUnreachableBestViewIsReplacedByTheNextAlternative) {
   EXPECT_EQ(next.views_done.size(), 2u);
   EXPECT_EQ(next.joint_position_rad, Vector6d::Constant(0.2));
   EXPECT_TRUE(next.check_reachability);
-  EXPECT_EQ(next.figure_path, (dir_ / "plans" / "view_002.png").string());
+  EXPECT_EQ(next.figure_path, (dir_ / "plans" / "view_003.png").string());
   EXPECT_TRUE(std::filesystem::is_directory(dir_ / "plans"));
   EXPECT_TRUE(std::isnan(plans_[0].second.first_quality)) << "unknown before the first plan";
   EXPECT_EQ(next.first_quality, 2000);
@@ -405,7 +405,7 @@ TEST_F(ScanSequencerTest, AnUnreachableBestViewIsReplacedByTheNextAlternative) {
   EXPECT_EQ(plan["outcome"], "view");
   EXPECT_EQ(plan["map_of_view"], 0);
   EXPECT_EQ(plan["candidates"], json({{"generated", 800}, {"unreachable", 40}, {"excluded", 0}, {"scored", 760}}));
-  EXPECT_EQ(plan["figure"], "plans/view_001.png");
+  EXPECT_EQ(plan["figure"], "plans/view_002.png");
   EXPECT_NEAR(plan["planner_step_ms"].get<double>(), 2.0 + 20.0 + 100.0, 1e-9);
   EXPECT_NEAR(plan["time_ms"]["ellipsoid_fit"].get<double>(), 20.0, 1e-12);
   ASSERT_EQ(plan["ellipsoids"]["list"].size(), 1u);
@@ -722,7 +722,7 @@ TEST_F(ScanSequencerTest, ARejectedRegistrationIsNotMergedAndItsViewIsExcludedFr
   EXPECT_EQ(v1["registration"]["accepted"], false);
   EXPECT_EQ(v1["map"]["updated"], false);
   EXPECT_EQ(v1["merged"], false);
-  EXPECT_EQ(read_ply((dir_ / "frames" / "view_001.ply").string()).size(), 10u);  // kept in frames/
+  EXPECT_EQ(read_ply((dir_ / "frames" / "view_002.ply").string()).size(), 10u);  // kept in frames/
   EXPECT_EQ(read_ply((dir_ / "cloud.ply").string()).size(), 20u);               // views 0 and 2 only
   EXPECT_EQ(scan["status"]["num_points"], 20);
   EXPECT_EQ(scan["status"]["views_done"], 3);

@@ -126,9 +126,9 @@ TEST(NewSurface, FiguresReadBackFromScanJsonViews) {
   n.model_points = 600;
   n.radius_m = 0.005;
   const nlohmann::json views = {
-      {{"view", 0}, {"frame_file", "frames/view_000.ply"}, {"merged", true}, {"new_surface", to_json(n)}},
+      {{"view", 0}, {"frame_file", "frames/view_001.ply"}, {"merged", true}, {"new_surface", to_json(n)}},
       {{"view", 1}, {"move", {{"status", "unreachable"}}}},                     // no frame: not counted
-      {{"view", 2}, {"frame_file", "frames/view_002.ply"}, {"merged", false}}};  // rejected: NaN
+      {{"view", 2}, {"frame_file", "frames/view_003.ply"}, {"merged", false}}};  // rejected: NaN
   const std::vector<double> f = new_surface_figures(views);
   ASSERT_EQ(f.size(), 2u);
   EXPECT_DOUBLE_EQ(f[0], 0.5);

@@ -1,0 +1,44 @@
+#include "report/depth_png.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
+
+namespace pbnbv {
+
+void write_depth_png(const std::vector<float>& depth_m, int width, int height, const std::string& path) {
+  if (width <= 0 || height <= 0 || depth_m.size() != static_cast<std::size_t>(width) * height) {
+    throw std::invalid_argument("write_depth_png: " + path + ": " + std::to_string(depth_m.size()) +
+                                " depths for a " + std::to_string(width) + " x " + std::to_string(height) + " image");
+  }
+  cv::Mat image(height, width, CV_16UC1);
+  for (int v = 0; v < height; ++v) {
+    auto* row = image.ptr<uint16_t>(v);
+    for (int u = 0; u < width; ++u) {
+      const double mm = std::round(static_cast<double>(depth_m[static_cast<std::size_t>(v) * width + u]) * 1000.0);
+      row[u] = (std::isfinite(mm) && mm > 0.0 && mm <= 65535.0) ? static_cast<uint16_t>(mm) : 0;
+    }
+  }
+  // Atomically: a reader never sees half an image.
+  const std::string tmp = path + ".tmp.png";
+  if (!cv::imwrite(tmp, image)) throw std::runtime_error("write_depth_png: cannot write " + path);
+  std::filesystem::rename(tmp, path);
+}
+
+std::vector<uint16_t> read_depth_png(const std::string& path, int& width, int& height) {
+  const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (image.empty()) throw std::runtime_error("read_depth_png: cannot read " + path);
+  if (image.type() != CV_16UC1) throw std::runtime_error("read_depth_png: " + path + " is not a 16-bit single-channel image");
+  width = image.cols;
+  height = image.rows;
+  std::vector<uint16_t> mm(static_cast<std::size_t>(width) * height);
+  for (int v = 0; v < height; ++v) {
+    const auto* row = image.ptr<uint16_t>(v);
+    for (int u = 0; u < width; ++u) mm[static_cast<std::size_t>(v) * width + u] = row[u];
+  }
+  return mm;
+}
+
+}  // namespace pbnbv
