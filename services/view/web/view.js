@@ -130,5 +130,6 @@ window.addEventListener('resize', () => {
   camera.updateProjectionMatrix();
   renderer.setSize(window.innerWidth, window.innerHeight);
 });
-controls.addEventListener('change', () => renderer.render(scene, camera));
+// Drawn every frame (a headless browser shows a WebGL canvas only as frames are presented).
+renderer.setAnimationLoop(() => renderer.render(scene, camera));
 refresh();
