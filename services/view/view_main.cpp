@@ -111,8 +111,12 @@ class LiveScene {
     }
     const int view = m.num_views_done;
     if (view != scene_.view) {
-      // The plan of the earlier view belongs to it; the new view starts without one.
+      // The plan made after the earlier view stays with its scene; the new view has none yet.
       scene_.view = view;
+      scene_.chosen.reset();
+      scene_.chosen_quality = 0;
+      scene_.candidates.clear();
+      scene_.plan_candidates = 0;
     }
     scene_.status = "view " + std::to_string(view) + ": " + state_name(m.state) + (m.message.empty() ? "" : " - " + m.message) +
                     " (" + std::to_string(m.num_points) + " points)";

@@ -15,7 +15,7 @@ document.body.appendChild(renderer.domElement);
 const scene = new THREE.Scene();
 const camera = new THREE.PerspectiveCamera(40, window.innerWidth / window.innerHeight, 0.01, 20);
 camera.up.set(0, 0, 1);  // the object frame's z is up
-camera.position.set(1.6, -2.0, 1.3);
+camera.position.set(1.75, -2.2, 1.4);
 const controls = new OrbitControls(camera, renderer.domElement);
 controls.target.set(0, 0, 0);
 controls.update();
@@ -26,6 +26,7 @@ scene.add(new THREE.AxesHelper(0.1));
 const params = new URLSearchParams(window.location.search);
 let chosenView = params.has('view') ? Number(params.get('view')) : -1;  // -1: the latest
 let shownKey = '';
+let shown = null;  // the scene drawn
 
 function points(flat, colour, size) {
   const g = new THREE.BufferGeometry();
@@ -84,7 +85,7 @@ function draw(s) {
   s.views_taken.forEach((p) => content.add(frustum(p, COLOURS.taken, 0.08)));
   if (s.chosen) {
     content.add(frustum(s.chosen, COLOURS.chosen, 0.12));
-    const ball = new THREE.Mesh(new THREE.SphereGeometry(0.035, 16, 12), new THREE.MeshBasicMaterial({ color: COLOURS.chosen }));
+    const ball = new THREE.Mesh(new THREE.SphereGeometry(0.05, 16, 12), new THREE.MeshBasicMaterial({ color: COLOURS.chosen }));
     ball.position.set(...s.chosen.position_m);
     content.add(ball);
   }
@@ -98,7 +99,7 @@ function draw(s) {
     `${s.ellipsoids.length} ellipsoids<br>` +
     (s.candidates.length ? `${s.candidates.length} candidates, F ${f(Math.min(...q))} .. ${f(Math.max(...q))} px` : 'no plan yet') +
     (s.chosen ? `; chosen view F ${f(s.chosen_quality_px)} px` : '');
-  renderer.render(scene, camera);
+  redraw();
 }
 
 async function refresh() {
@@ -115,7 +116,8 @@ async function refresh() {
       const text = await r.text();
       if (text !== shownKey) {
         shownKey = text;
-        draw(JSON.parse(text));
+        shown = JSON.parse(text);
+        draw(shown);
       }
     }
     if (views.live) setTimeout(refresh, 1000);
@@ -129,7 +131,19 @@ window.addEventListener('resize', () => {
   camera.aspect = window.innerWidth / window.innerHeight;
   camera.updateProjectionMatrix();
   renderer.setSize(window.innerWidth, window.innerHeight);
+  redraw();
 });
-// Drawn every frame (a headless browser shows a WebGL canvas only as frames are presented).
-renderer.setAnimationLoop(() => renderer.render(scene, camera));
+// Drawn in the next few animation frames after a change only (a headless browser shows the
+// canvas once a frame is presented; drawing every frame in software would be slow).
+let framesToDraw = 0;
+function redraw() { framesToDraw = 3; }
+renderer.setAnimationLoop(() => {
+  if (framesToDraw > 0) {
+    framesToDraw -= 1;
+    renderer.render(scene, camera);
+    // Tells a watcher (the browser test) that the scene of this view is on the canvas.
+    if (framesToDraw === 0 && shown) document.title = `pbnbv view ${shown.view} drawn`;
+  }
+});
+controls.addEventListener('change', redraw);
 refresh();
