@@ -80,7 +80,16 @@ print(f"live view {j['view']}: {j['cloud_points']} cloud points drawn of {j['clo
       f"{len(j['candidates'])} candidates (plan: {j['plan_candidates']}), {len(j['ellipsoids'])} ellipsoids, "
       f"{j['frontier_voxels']} frontier voxels, {len(j['views_taken'])} views taken")
 ok = j['cloud_points'] > 0 and len(j['cloud']) == 3 * j['cloud_points'] and len(j['candidates']) == n \
-     and j['plan_candidates'] == n and len(j['views_taken']) >= 1 and len(j['ellipsoids']) >= 1
+     and j['plan_candidates'] == n and len(j['views_taken']) == j['view'] and len(j['ellipsoids']) >= 1
+# The page's F, computed again from the plan's request, map and ellipsoids, is the plan's F at
+# the chosen view (one of the candidates).
+import math
+c = j['chosen']['position_m']
+near = min(j['candidates'], key=lambda k: math.dist(k['pose']['position_m'], c))
+print(f"chosen view: plan F {j['chosen_quality_px']:.3f} px, the page's F there {near['quality_px']:.3f} px "
+      f"({math.dist(near['pose']['position_m'], c):.2e} m away)")
+ok = ok and math.dist(near['pose']['position_m'], c) < 1e-6 and \
+     abs(near['quality_px'] - j['chosen_quality_px']) <= 1e-6 * max(1.0, abs(j['chosen_quality_px']))
 sys.exit(0 if ok else 1)
 PY
 # The scene of that view stays as it was once the scan moves on (the latest may have no plan yet).

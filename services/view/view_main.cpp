@@ -109,23 +109,22 @@ class LiveScene {
       requests_.clear();
       store_.clear();
     }
-    const int view = m.num_views_done;
-    if (view != scene_.view) {
-      // The plan made after the earlier view stays with its scene; the new view has none yet.
-      scene_.view = view;
-      scene_.chosen.reset();
-      scene_.chosen_quality = 0;
-      scene_.candidates.clear();
-      scene_.plan_candidates = 0;
-    }
-    scene_.status = "view " + std::to_string(view) + ": " + state_name(m.state) + (m.message.empty() ? "" : " - " + m.message) +
-                    " (" + std::to_string(m.num_points) + " points)";
+    scene_.status = std::string(state_name(m.state)) + (m.message.empty() ? "" : " - " + m.message) + " (" +
+                    std::to_string(m.num_views_done) + " views done, " + std::to_string(m.num_points) + " points)";
     publish();
   }
 
   void on_cloud(const registered_cloud_t& m) {
     if (!follows(m.scan_id) || taken_.count(m.iteration)) return;  // a repeat from a cache
     taken_[m.iteration] = bus::from_msg(m.cloud.object_T_camera, "REGISTERED_CLOUD cloud.object_T_camera");
+    // A new view: its scene is the one after it (the views taken so far counted), and its plan
+    // (the next view's) is still to come; the plan made after the earlier view stays with that
+    // view's scene.
+    scene_.view = static_cast<int>(taken_.size());
+    scene_.chosen.reset();
+    scene_.chosen_quality = 0;
+    scene_.candidates.clear();
+    scene_.plan_candidates = 0;
     scene_.views_taken.clear();
     for (const auto& [i, p] : taken_) scene_.views_taken.push_back(p);
     if (m.accepted) {

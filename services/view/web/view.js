@@ -27,6 +27,7 @@ const params = new URLSearchParams(window.location.search);
 let chosenView = params.has('view') ? Number(params.get('view')) : -1;  // -1: the latest
 let shownKey = '';
 let shown = null;  // the scene drawn
+const hidden = new Set();  // 'ellipsoids', 'candidates': hidden with the keys e and c
 
 function points(flat, colour, size) {
   const g = new THREE.BufferGeometry();
@@ -62,13 +63,18 @@ function draw(s) {
   content = new THREE.Group();
   if (s.cloud_points > 0) content.add(points(s.cloud, COLOURS.cloud, 3));
   if (s.frontier_voxels > 0) content.add(points(s.frontier, COLOURS.frontier, 5));
+  const ellipsoids = new THREE.Group();
+  ellipsoids.name = 'ellipsoids';
+  ellipsoids.visible = !hidden.has('ellipsoids');
+  content.add(ellipsoids);
   for (const e of s.ellipsoids) {
-    const m = new THREE.Mesh(new THREE.SphereGeometry(1, 16, 10),
-                             new THREE.MeshBasicMaterial({ color: e.frontier ? COLOURS.frontier : COLOURS.occupied, wireframe: true }));
+    const m = new THREE.Mesh(new THREE.SphereGeometry(1, 12, 8),
+                             new THREE.MeshBasicMaterial({ color: e.frontier ? COLOURS.frontier : COLOURS.occupied, wireframe: true,
+                                                           transparent: true, opacity: 0.5 }));
     m.position.set(...e.centre_m);
     m.quaternion.set(...e.quat_xyzw);
     m.scale.set(...e.scale_m);
-    content.add(m);
+    ellipsoids.add(m);
   }
   if (s.candidates.length > 0) {
     const pos = [], col = [];
@@ -80,7 +86,10 @@ function draw(s) {
     const g = new THREE.BufferGeometry();
     g.setAttribute('position', new THREE.Float32BufferAttribute(pos, 3));
     g.setAttribute('color', new THREE.Float32BufferAttribute(col, 3));
-    content.add(new THREE.Points(g, new THREE.PointsMaterial({ vertexColors: true, size: 5, sizeAttenuation: false })));
+    const c = new THREE.Points(g, new THREE.PointsMaterial({ vertexColors: true, size: 5, sizeAttenuation: false }));
+    c.name = 'candidates';
+    c.visible = !hidden.has('candidates');
+    content.add(c);
   }
   s.views_taken.forEach((p) => content.add(frustum(p, COLOURS.taken, 0.08)));
   if (s.chosen) {
@@ -98,7 +107,8 @@ function draw(s) {
     `cloud ${f(s.cloud_points_total)} points (${f(s.cloud_points)} drawn), ${s.frontier_voxels} frontier voxels, ` +
     `${s.ellipsoids.length} ellipsoids<br>` +
     (s.candidates.length ? `${s.candidates.length} candidates, F ${f(Math.min(...q))} .. ${f(Math.max(...q))} px` : 'no plan yet') +
-    (s.chosen ? `; chosen view F ${f(s.chosen_quality_px)} px` : '');
+    (s.chosen ? `; chosen view F ${f(s.chosen_quality_px)} px` : '') +
+    '<br><small>drag to turn, wheel to zoom; keys e, c: ellipsoids, candidates on or off</small>';
   redraw();
 }
 
@@ -146,4 +156,12 @@ renderer.setAnimationLoop(() => {
   }
 });
 controls.addEventListener('change', redraw);
+window.addEventListener('keydown', (ev) => {
+  const name = { e: 'ellipsoids', c: 'candidates' }[ev.key];
+  if (!name) return;
+  if (hidden.has(name)) hidden.delete(name); else hidden.add(name);
+  const o = content.getObjectByName(name);
+  if (o) o.visible = !hidden.has(name);
+  redraw();
+});
 refresh();
