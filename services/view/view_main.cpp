@@ -222,6 +222,12 @@ int main(int argc, char** argv) {
       for (const Scene& s : load_scan_folder(dir, voxel_m, static_cast<std::size_t>(max_points))) store.put(s);
     }
     httplib::Server server;
+    // SO_REUSEADDR only: httplib's default also sets SO_REUSEPORT, with which a second pbnbv view
+    // on the same port would bind too instead of being told the port is in use.
+    server.set_socket_options([](socket_t sock) {
+      int yes = 1;
+      ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+    });
     const auto file = [](httplib::Response& res, const fs::path& p, const char* type) {
       if (!fs::is_regular_file(p)) {
         res.status = 404;
