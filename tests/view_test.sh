@@ -64,12 +64,20 @@ wait_for 20 curl -sf --max-time 2 "http://127.0.0.1:$PORT/api/views" || fail "pb
   --sim-speed 20 --no-log --out "$tmp/scan" >"$tmp/scan.log" 2>&1 &
 scan_pid=$!
 pids+=($scan_pid)
-# The latest scene, kept in live.json when it has a cloud and a plan.
+# The newest scene with a cloud and a plan (the scan may be past it: a view's scene is kept as it
+# was, and the last view has no plan after it), saved as live.json.
 live_scene_with_plan() {
-  curl -sf --max-time 5 "http://127.0.0.1:$PORT/api/scene" >"$tmp/scene.json" &&
-    "$PY" -c "import json,sys; j=json.load(open('$tmp/scene.json'))
-sys.exit(0 if j['view'] >= 1 and j['chosen'] is not None and len(j['candidates']) > 0 and j['cloud_points'] > 0 else 1)" &&
-    mv "$tmp/scene.json" "$tmp/live.json"
+  "$PY" - "http://127.0.0.1:$PORT" "$tmp/live.json" <<'PY'
+import json, sys, urllib.request
+base, out = sys.argv[1], sys.argv[2]
+get = lambda path: json.load(urllib.request.urlopen(base + path, timeout=5))
+for v in reversed(get("/api/views")["views"]):
+    j = get(f"/api/scene?view={v}")
+    if j["view"] >= 1 and j["chosen"] is not None and len(j["candidates"]) > 0 and j["cloud_points"] > 0:
+        json.dump(j, open(out, "w"))
+        sys.exit(0)
+sys.exit(1)
+PY
 }
 wait_for 300 live_scene_with_plan || fail "no scene with a cloud and a plan within 300 s"
 view=$("$PY" -c "import json; print(json.load(open('$tmp/live.json'))['view'])")

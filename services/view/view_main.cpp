@@ -10,6 +10,7 @@
 #include <iostream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "bus/bus.hpp"
@@ -264,16 +265,23 @@ int main(int argc, char** argv) {
     if (!server.bind_to_port("127.0.0.1", port)) {
       throw std::runtime_error("cannot listen on 127.0.0.1:" + std::to_string(port) + " (in use? choose another with --port)");
     }
+    // Live: subscribed before the page answers, so nothing published after that is missed.
+    std::optional<bus::Bus> bus;
+    std::optional<LiveScene> live;
+    if (dir.empty()) {
+      bus.emplace("view");
+      bus->serve_scan(scan);
+      live.emplace(*bus, store, scan, voxel_m, static_cast<std::size_t>(max_points));
+    }
     std::thread http([&] { server.listen_after_bind(); });
     std::cout << "pbnbv view: http://127.0.0.1:" << port << "/  ("
               << (dir.empty() ? std::string("live from the bus") : "scan folder " + dir) << "; Ctrl-C stops)" << std::endl;
-    if (dir.empty()) {
-      bus::Bus bus("view");
-      bus.serve_scan(scan);
-      LiveScene live(bus, store, scan, voxel_m, static_cast<std::size_t>(max_points));
-      while (!stop_requested()) bus.spin_once(100);
-    } else {
-      while (!stop_requested()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    while (!stop_requested()) {
+      if (bus) {
+        bus->spin_once(100);
+      } else {
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      }
     }
     server.stop();
     http.join();
