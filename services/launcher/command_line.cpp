@@ -94,6 +94,10 @@ CommandLine::CommandLine()
   declare_bench_options(ablate_cmd_, &ablate_base_, &ablate_pending_);
 
   spy_cmd_ = cli::add_command(app_, "spy", "lcm-spy with every pbnbv channel decoded");
+  // Run by pbnbv-view (pbnbv_main.cpp passes the arguments on): listed here for `pbnbv help`.
+  view_cmd_ = cli::add_command(app_, "view",
+                               "the scan in 3-D in a browser: pbnbv view [DIR] [--port 8765] [--scan ID] (pbnbv view "
+                               "--help: every option)");
 
   stop_cmd_ = cli::add_command(app_, "stop", "halt the rig now and end the scan (STOP on the bus); what it has is kept");
   cli::add_text(*stop_cmd_, "scan", &stop_.scan_id, "the scan to stop (its id, in scan.json) [every scan on the bus]", "ID");
@@ -293,7 +297,7 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
         out << usage();
         return 0;
       }
-      for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, stop_cmd_, rig_check_cmd_, rig_host_cmd_,
+      for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, view_cmd_, stop_cmd_, rig_check_cmd_, rig_host_cmd_,
                                 import_urdf_cmd_, calibrate_cmd_, replay_cmd_, evaluate_cmd_, help_cmd_}) {
         if (c->get_name() == help_topic_) {
           out << c->help("pbnbv");
@@ -301,7 +305,7 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
         }
       }
       throw std::invalid_argument("unknown command '" + help_topic_ +
-                                  "' (expected scan, bench, ablate, spy, stop, rig-check, rig-host, import-urdf, calibrate, "
+                                  "' (expected scan, bench, ablate, spy, view, stop, rig-check, rig-host, import-urdf, calibrate, "
                                   "replay, evaluate or help)");
     }
     if (given == scan_cmd_) {

@@ -181,6 +181,7 @@ class CommandLine {
   CLI::App* bench_cmd_ = nullptr;
   CLI::App* ablate_cmd_ = nullptr;
   CLI::App* spy_cmd_ = nullptr;
+  CLI::App* view_cmd_ = nullptr;
   CLI::App* stop_cmd_ = nullptr;
   StopOptions stop_;
   CLI::App* rig_check_cmd_ = nullptr;

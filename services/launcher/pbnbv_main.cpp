@@ -3,6 +3,7 @@
 //   pbnbv bench [options]    every planner on every object in the twin
 //   pbnbv ablate tmax|beta|initial-view|resolution [options]
 //   pbnbv spy                lcm-spy with every pbnbv channel decoded
+//   pbnbv view [DIR] [--port P]  the scan (live, or a finished folder) in 3-D in a browser (pbnbv-view)
 //   pbnbv stop [options]     halt the rig and end a scan
 //   pbnbv rig-host [options] the motion executor and camera service on the rig's computer
 //   pbnbv rig-check [--rig-model FILE] [--deadline S] [--passive]   the drivers against the contract
@@ -11,8 +12,11 @@
 //   pbnbv replay DIR         run a recorded scan through the pipeline again and compare
 //   pbnbv evaluate DIR|FILE [--reference MESH]   accuracy and F-score against a reference mesh
 // The command line is launcher/command_line.hpp; running each command, launcher/commands.hpp.
+#include <unistd.h>
+
 #include <filesystem>
 #include <iostream>
+#include <vector>
 
 #include "launcher/command_line.hpp"
 #include "launcher/commands.hpp"
@@ -21,6 +25,15 @@ using namespace pbnbv;
 namespace fs = std::filesystem;
 
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "view") {  // pbnbv-view has its own command line
+    const std::string view = (fs::read_symlink("/proc/self/exe").parent_path() / "pbnbv-view").string();
+    std::vector<char*> args = {const_cast<char*>(view.c_str())};
+    for (int i = 2; i < argc; ++i) args.push_back(argv[i]);
+    args.push_back(nullptr);
+    ::execv(view.c_str(), args.data());
+    std::cerr << "pbnbv view: cannot run " << view << " (build it: ./scripts/setup)" << std::endl;
+    return 2;
+  }
   launcher::CommandLine line;
   if (const std::optional<int> code = line.parse(argc, argv, std::cout, std::cerr)) return *code;
   const fs::path self = fs::read_symlink("/proc/self/exe");
