@@ -8,7 +8,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <functional>
 #include <limits>
 #include <stdexcept>
@@ -300,6 +303,43 @@ TEST_F(LineChartFile, WritesPngOfTheRequestedSize) {
 
   write_line_chart(c, p, 640, 400);  // replaces the file
   EXPECT_EQ(cv::imread(p).size(), cv::Size(640, 400));
+}
+
+std::string read_all(const std::string& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The SVG beside the PNG draws the same primitives: the same size, the title, and each data
+// point's marker at the PNG's pixel centre (pixel i covers [i, i+1) in SVG units).
+TEST_F(LineChartFile, WritesSvgBesideThePngWithTheSamePrimitives) {
+  const LineChart c = diagonal();
+  const std::string p = path("chart.png");
+  write_line_chart(c, p, 640, 400);
+  const std::string svg = read_all(path("chart.svg"));
+  ASSERT_FALSE(svg.empty());
+  EXPECT_EQ(svg, line_chart_svg(c, 640, 400));
+  EXPECT_NE(svg.find("<svg "), std::string::npos);
+  EXPECT_NE(svg.find("width=\"640\" height=\"400\""), std::string::npos);
+  EXPECT_NE(svg.find(">diagonal</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">y = x</text>"), std::string::npos);  // legend
+  const ChartLayout l = chart_layout(c, 640, 400);
+  const cv::Vec3b col = chart_series_colour(0);
+  char fill[8];
+  std::snprintf(fill, sizeof(fill), "#%02x%02x%02x", col[2], col[1], col[0]);
+  for (int i = 0; i <= 10; ++i) {
+    const cv::Point2d q = l.to_pixel_exact(i, i);
+    char circle[160];
+    std::snprintf(circle, sizeof(circle), "<circle clip-path=\"url(#c0)\" cx=\"%.2f\" cy=\"%.2f\" r=\"3.50\" fill=\"%s\"/>",
+                  q.x + 0.5, q.y + 0.5, fill);
+    EXPECT_NE(svg.find(circle), std::string::npos) << "no marker " << circle;
+  }
+  // Escaped text.
+  LineChart d = diagonal();
+  d.title = "a < b & c";
+  EXPECT_NE(line_chart_svg(d).find(">a &lt; b &amp; c</text>"), std::string::npos);
 }
 
 TEST_F(LineChartFile, UnwritablePathThrowsNamingIt) {
