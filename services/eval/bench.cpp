@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -176,6 +177,49 @@ struct Job {
 
 }  // namespace
 
+std::string scan_failure_reason(const fs::path& dir, const fs::path& log) {
+  const std::string where = " (log: " + log.string() + ")";
+  try {
+    if (fs::exists(dir / "scan.json")) {
+      const json st = read_json((dir / "scan.json").string()).at("status");
+      const std::string state = st.value("state", std::string("?"));
+      std::string msg = "scan " + state + " after " + std::to_string(st.value("views_done", 0)) + " of " +
+                        std::to_string(st.value("views_planned", 0)) + " views";
+      const std::string m = st.value("message", std::string());
+      if (!m.empty()) msg += ": " + m;
+      return msg + where;
+    }
+  } catch (const std::exception& e) {
+    return "scan.json unreadable: " + std::string(e.what()) + where;
+  }
+  std::string last;
+  if (fs::exists(log)) {
+    std::istringstream in(tail_lines(log.string(), 20));
+    for (std::string line; std::getline(in, line);) {
+      const size_t a = line.find_first_not_of(" \t\r");  // tail_lines indents its lines
+      if (a != std::string::npos) last = line.substr(a);
+    }
+  }
+  if (!last.empty()) return "no scan.json; the log ends: " + last + where;
+  return fs::exists(log) ? "no scan.json and an empty log" + where : "no scan.json and no log" + where;
+}
+
+std::string objects_text(const BenchResult& r) {
+  const int total = static_cast<int>(r.spec.objects.size());
+  int lo = std::numeric_limits<int>::max(), hi = 0;
+  std::string failed;
+  for (const auto& p : r.planners) {
+    lo = std::min(lo, p.complete);
+    hi = std::max(hi, p.complete);
+    if (p.failed > 0) failed += (failed.empty() ? "" : ", ") + std::string(name_of(p.planner)) + " " + std::to_string(p.failed);
+  }
+  if (r.planners.empty()) return std::to_string(total) + " objects";
+  auto objects = [](int n) { return std::to_string(n) + (n == 1 ? " object" : " objects"); };
+  if (failed.empty()) return objects(hi);
+  if (lo == hi) return objects(hi) + ", " + std::to_string(total - hi) + " of " + std::to_string(total) + " failed";
+  return std::to_string(lo) + "-" + objects(hi) + " (failed: " + failed + " of " + std::to_string(total) + ")";
+}
+
 void BenchSpec::validate() const {
   if (objects.empty()) throw std::invalid_argument("--objects: no object to benchmark");
   if (planners.empty()) throw std::invalid_argument("--planners: no planner to benchmark");
@@ -230,6 +274,8 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
   p.planner = planner;
   p.objects = runs;
   p.coverage_by_view.assign(views, 0.0);
+  p.coverage_min_by_view.assign(views, std::numeric_limits<double>::infinity());
+  p.coverage_max_by_view.assign(views, -std::numeric_limits<double>::infinity());
   std::vector<double> observable(views, 0.0);
   int with_observable = 0;
   std::vector<double> times, reached;
@@ -240,7 +286,11 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
     }
     ++p.complete;
     const std::vector<double> c = pad_views(r.coverage_by_view, views);
-    for (int i = 0; i < views; ++i) p.coverage_by_view[i] += c[i];
+    for (int i = 0; i < views; ++i) {
+      p.coverage_by_view[i] += c[i];
+      p.coverage_min_by_view[i] = std::min(p.coverage_min_by_view[i], c[i]);
+      p.coverage_max_by_view[i] = std::max(p.coverage_max_by_view[i], c[i]);
+    }
     if (!r.observable_by_view.empty()) {
       const std::vector<double> o = pad_views(r.observable_by_view, views);
       for (int i = 0; i < views; ++i) observable[i] += o[i];
@@ -251,6 +301,8 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
   }
   if (p.complete == 0) {
     p.coverage_by_view.clear();
+    p.coverage_min_by_view.clear();
+    p.coverage_max_by_view.clear();
   } else {
     for (double& c : p.coverage_by_view) c /= p.complete;
   }
@@ -356,6 +408,10 @@ json to_json(const BenchResult& r) {
                {"views_to_95_of_mean_curve", p.views_to_95_of_mean ? json(*p.views_to_95_of_mean) : json(nullptr)}, {"objects_complete", p.complete}, {"objects_failed", p.failed},
                {"objects", objects}};
     if (!p.observable_by_view.empty()) pj["observable_coverage_by_view"] = p.observable_by_view;
+    if (!p.coverage_min_by_view.empty()) {
+      pj["coverage_min_by_view"] = p.coverage_min_by_view;
+      pj["coverage_max_by_view"] = p.coverage_max_by_view;
+    }
     const StopRuleSummary& st = p.stop_rule;
     pj["stop_rule"] = {{"rule", to_json(r.spec.stop_rule)},
                        {"objects", st.objects},
@@ -372,6 +428,14 @@ json to_json(const BenchResult& r) {
     j[std::string(name_of(p.planner))] = pj;
   }
   j["planners"] = order;
+  json failed = json::array();
+  for (const auto& p : r.planners) {
+    for (const auto& o : p.objects) {
+      if (!o.complete) failed.push_back({{"object", o.object}, {"planner", std::string(name_of(p.planner))}, {"reason", o.error}});
+    }
+  }
+  j["failed_scans"] = failed;
+  j["objects_text"] = objects_text(r);
   j["settings"] = to_json(r.spec);
   j["machine"] = r.machine;
   j["coverage_rule"] = "mean over the complete objects of the percent of " + std::to_string(r.spec.coverage.num_samples) +
@@ -495,7 +559,8 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
         log << prefix(j) << "done in " << fixed(wall, 0) << " s" << line << " (" << finished << " of " << total
             << " scans complete)" << std::endl;
       } else {
-        log << prefix(j) << "FAILED (exit " << c->exit_code << "); the end of " << j->log.string() << ":\n"
+        log << prefix(j) << "FAILED (exit " << c->exit_code << "): " << scan_failure_reason(j->dir, j->log) << "; the end of "
+            << j->log.string() << ":\n"
             << tail_lines(j->log.string(), 6) << std::flush;
       }
     }
@@ -530,7 +595,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
     r.planner = j.planner;
     try {
       if (!scan_complete(j.dir)) {
-        throw std::runtime_error("the scan did not complete (log: " + j.log.string() + ")");
+        throw std::runtime_error(scan_failure_reason(j.dir, j.log));
       }
       if (!masks.count(j.name)) {
         std::string what;

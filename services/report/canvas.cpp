@@ -189,16 +189,23 @@ void Canvas::ellipse(const cv::Point2d& c, double a, double b, double angle_deg,
   }
 }
 
-void Canvas::polygon(const std::vector<cv::Point2d>& pts, const cv::Scalar& colour) {
+void Canvas::polygon(const std::vector<cv::Point2d>& pts, const cv::Scalar& colour, double alpha) {
   std::vector<cv::Point> q;
   q.reserve(pts.size());
   for (const auto& p : pts) q.push_back(fixed(p));
-  cv::fillPoly(img_, std::vector<std::vector<cv::Point>>{q}, colour, cv::LINE_AA, kShift);
+  if (alpha < 1.0) {
+    const cv::Mat before = img_.clone();
+    cv::fillPoly(img_, std::vector<std::vector<cv::Point>>{q}, colour, cv::LINE_AA, kShift);
+    cv::addWeighted(img_, alpha, before, 1.0 - alpha, 0.0, img_);
+  } else {
+    cv::fillPoly(img_, std::vector<std::vector<cv::Point>>{q}, colour, cv::LINE_AA, kShift);
+  }
   if (svg_ && !pts.empty()) {
     std::string list;
     for (const auto& p : pts) list += num(sx(p.x)) + "," + num(sy(p.y)) + " ";
     list.pop_back();
-    svg_->add("<polygon points=\"" + list + "\" " + paint("fill", colour) + "/>", clip_);
+    const std::string opacity = alpha < 1.0 ? fmt::format(" fill-opacity=\"{:.3f}\"", alpha) : "";
+    svg_->add("<polygon points=\"" + list + "\" " + paint("fill", colour) + opacity + "/>", clip_);
   }
 }
 

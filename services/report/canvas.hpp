@@ -79,7 +79,7 @@ class Canvas {
   // thickness cv::FILLED fills it, with opacity `alpha` (1: opaque).
   void ellipse(const cv::Point2d& c, double a, double b, double angle_deg, const cv::Scalar& colour, int thickness,
                double alpha = 1.0);
-  void polygon(const std::vector<cv::Point2d>& pts, const cv::Scalar& colour);
+  void polygon(const std::vector<cv::Point2d>& pts, const cv::Scalar& colour, double alpha = 1.0);
   // Whole pixels (no anti-aliasing), in whole-image pixel indices: a 1-px line from pixel a to
   // pixel b, a filled rectangle, a 1-px frame along the rectangle's outermost pixels.
   void pixel_line(const cv::Point& a, const cv::Point& b, const cv::Scalar& colour);

@@ -153,6 +153,10 @@ void validate(const LineChart& c, int w, int h) {
       throw std::invalid_argument(series_name(c, i) + " has " + std::to_string(s.x.size()) +
                                   " x values but " + std::to_string(s.y.size()) + " y values");
     }
+    if ((!s.lo.empty() || !s.hi.empty()) && (s.lo.size() != s.x.size() || s.hi.size() != s.x.size())) {
+      throw std::invalid_argument(series_name(c, i) + " has " + std::to_string(s.x.size()) + " x values but a band of " +
+                                  std::to_string(s.lo.size()) + " lo and " + std::to_string(s.hi.size()) + " hi values");
+    }
   }
   auto check_pair = [&](double lo, double hi, const char* lo_name, const char* hi_name) {
     if (std::isfinite(lo) && std::isfinite(hi) && !(lo < hi)) {
@@ -291,6 +295,33 @@ std::vector<std::vector<cv::Point2d>> pixel_runs(const ChartLayout& l, const Cha
   return runs;
 }
 
+bool has_band(const ChartSeries& s) { return s.lo.size() == s.x.size() && s.hi.size() == s.x.size() && !s.x.empty(); }
+
+// Polygons of a series' band (runs of x where x, lo and hi are usable), in image pixels.
+std::vector<std::vector<cv::Point2d>> band_polygons(const ChartLayout& l, const ChartSeries& s) {
+  std::vector<std::vector<cv::Point2d>> out;
+  if (!has_band(s)) return out;
+  std::vector<size_t> run;
+  auto flush = [&] {
+    if (run.size() >= 2) {
+      std::vector<cv::Point2d> poly;
+      for (size_t k : run) poly.push_back(l.to_pixel_exact(s.x[k], s.hi[k]));
+      for (auto it = run.rbegin(); it != run.rend(); ++it) poly.push_back(l.to_pixel_exact(s.x[*it], s.lo[*it]));
+      out.push_back(poly);
+    }
+    run.clear();
+  };
+  for (size_t k = 0; k < s.x.size(); ++k) {
+    if (usable(s.x[k], s.lo[k], l.log_y) && usable(s.x[k], s.hi[k], l.log_y)) {
+      run.push_back(k);
+    } else {
+      flush();
+    }
+  }
+  flush();
+  return out;
+}
+
 // Pixels of the plot (plot-local mask) that data or reference lines cover.
 cv::Mat data_mask(const LineChart& c, const ChartLayout& l) {
   cv::Mat mask(l.plot.size(), CV_8UC1, cv::Scalar(0));
@@ -300,6 +331,11 @@ cv::Mat data_mask(const LineChart& c, const ChartLayout& l) {
     return cv::Point(cvRound(p.x - tl.x), cvRound(p.y - tl.y));
   };
   for (const ChartSeries& s : c.series) {
+    for (const auto& poly : band_polygons(l, s)) {
+      std::vector<cv::Point> q;
+      for (const auto& p : poly) q.push_back(local(p));
+      cv::fillPoly(mask, std::vector<std::vector<cv::Point>>{q}, cv::Scalar(255));
+    }
     for (const auto& run : pixel_runs(l, s)) {
       for (size_t k = 0; k < run.size(); ++k) {
         if (cr.contains(run[k])) cv::circle(mask, local(run[k]), 5, cv::Scalar(255), cv::FILLED);
@@ -526,6 +562,13 @@ Plan plan_chart(const LineChart& c, int w, int h) {
       xhi = std::max(xhi, s.x[k]);
       ylo = std::min(ylo, s.y[k]);
       yhi = std::max(yhi, s.y[k]);
+      if (has_band(s)) {
+        for (double v : {s.lo[k], s.hi[k]}) {
+          if (!usable(s.x[k], v, c.log_y)) continue;
+          ylo = std::min(ylo, v);
+          yhi = std::max(yhi, v);
+        }
+      }
     }
   }
   if (!(xlo <= xhi)) {
@@ -767,6 +810,11 @@ cv::Mat draw_chart(const LineChart& chart, int width_px, int height_px, Svg* svg
     if (!usable(l.x0, y, l.log_y)) continue;
     const int py = l.to_pixel(l.x0, y).y;
     if (py >= r.y && py < r.br().y) all.pixel_line({r.x, py}, {r.br().x - 1, py}, kRefLine);
+  }
+  for (size_t i = 0; i < chart.series.size(); ++i) {
+    for (const auto& poly : band_polygons(l, chart.series[i])) {
+      plot.polygon(poly, scalar(chart_series_colour(i)), kBandAlpha);
+    }
   }
   for (size_t i = 0; i < chart.series.size(); ++i) draw_series(plot, l, chart.series[i], i);
   for (const auto& ref : p.ref_labels) {

@@ -18,6 +18,10 @@ struct ChartSeries {
   std::vector<double> x, y;     // same size; a non-finite x or y leaves a gap in the line
   bool markers = true;          // draw a dot at each point
   bool dashed = false;          // e.g. a reference curve such as the paper's figures
+  // Optional spread (e.g. min and max over objects): when both have x's size, a translucent band
+  // in the series colour from lo to hi at each x (non-finite: a gap), under every line; the
+  // axis range and the legend placement take it into account.
+  std::vector<double> lo, hi;
 };
 
 struct LineChart {
@@ -37,6 +41,7 @@ struct LineChart {
 // chart (its title) when no series has a finite point (positive on a log axis), and when an axis
 // range is empty or (log_y) not positive or the image is smaller than 240 x 160.
 cv::Mat draw_line_chart(const LineChart& chart, int width_px = 960, int height_px = 600);
+inline constexpr double kBandAlpha = 0.18;
 
 // The same chart as an SVG document (width_px x height_px user units, one per image pixel).
 std::string line_chart_svg(const LineChart& chart, int width_px = 960, int height_px = 600);

@@ -252,6 +252,38 @@ TEST(LineChart, LegendAvoidsDataOrGoesOutside) {
   EXPECT_TRUE(chart_layout(c, 960, 600).legend.empty());
 }
 
+// A band from lo to hi in the series colour at kBandAlpha over white: inside it the blend, outside
+// white; the axis range grows to hold it; a band of the wrong size throws naming the series.
+TEST(LineChart, BandShowsTheSpread) {
+  LineChart c = diagonal();
+  c.y_min = -5;
+  c.y_max = 15;
+  ChartSeries& s = c.series[0];
+  for (int i = 0; i <= 10; ++i) {
+    s.lo.push_back(i - 3.0);
+    s.hi.push_back(i + 3.0);
+  }
+  const ChartLayout l = chart_layout(c);
+  const cv::Mat img = draw_line_chart(c);
+  const cv::Vec3b col = chart_series_colour(0);
+  cv::Vec3b blend;
+  for (int k = 0; k < 3; ++k) blend[k] = cv::saturate_cast<uchar>(kBandAlpha * col[k] + (1 - kBandAlpha) * 255);
+  // (5, 7): 2 above the line, inside the band; (5, 9.5): outside it (grid lines at 10, not 9.5).
+  EXPECT_LE(distance(at(img, l.to_pixel(5.5, 7.5)), blend), 3);
+  EXPECT_EQ(at(img, l.to_pixel(5.5, 9.7)), cv::Vec3b(255, 255, 255));
+  EXPECT_LE(distance(at(img, l.to_pixel(5.5, 3.5)), blend), 3);
+  // Without fixed y limits, the range holds the band (lo -3 at x = 0, hi 13 at x = 10).
+  LineChart d = c;
+  d.y_min = d.y_max = kNaN;
+  const ChartLayout m = chart_layout(d);
+  EXPECT_LE(m.y0, -3.0);
+  EXPECT_GE(m.y1, 13.0);
+  LineChart bad = diagonal();
+  bad.series[0].lo = {1, 2};
+  bad.series[0].hi = {1, 2};
+  expect_throw<std::invalid_argument>([&] { draw_line_chart(bad); }, "series 0 'y = x'");
+}
+
 TEST(LineChart, PaletteColoursAreDistinct) {
   for (size_t i = 0; i < 7; ++i) {
     for (size_t j = i + 1; j < 7; ++j) {
