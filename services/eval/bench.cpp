@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -24,6 +25,7 @@
 #include "core/rig/rig.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "core/geometry/visibility.hpp"
+#include "eval/bench_progress.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/objects.hpp"
 #include "process/processes.hpp"
@@ -172,6 +174,7 @@ struct Job {
   fs::path dir;
   fs::path log;
   std::string last_progress;
+  int view = 0, views = 0;  // the scan's view in progress (its "[view k/N]" line), 0: none yet
   std::chrono::steady_clock::time_point started;
 };
 
@@ -447,7 +450,7 @@ json to_json(const BenchResult& r) {
   return j;
 }
 
-BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostream& log) {
+BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostream& log, bool terminal) {
   BenchSpec spec = spec_in;
   spec.validate();
   fs::create_directories(spec.out / "logs");
@@ -507,6 +510,8 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       << spec.jobs << " at a time" << std::endl;
 
   install_stop_handlers();
+  LiveLines live(log, terminal);
+  std::vector<double> walls;  // of the scans finished in this run
 
   // The scans running now: their processes and, at the same index, their jobs.
   std::vector<Child> children;
@@ -541,12 +546,13 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       start(c);
       children.push_back(std::move(c));
       running.push_back(j);
-      log << prefix(j) << "started" << std::endl;
+      live.event(prefix(j) + "started");
     }
     for (const Child* c : reap(children)) {
       Job* j = running[c - children.data()];
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - j->started).count();
       ++finished;
+      walls.push_back(wall);
       if (c->exit_code == 0 && scan_complete(j->dir)) {
         write_json_atomic({{"wall_s", wall}, {"command", c->argv}}, (j->dir / "bench_run.json").string());
         std::string line;
@@ -556,12 +562,13 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
           if (!cv.empty()) line = ", coverage after view " + std::to_string(cv.size()) + " " + fixed(cv.back().get<double>()) + " %";
         } catch (const std::exception&) {
         }
-        log << prefix(j) << "done in " << fixed(wall, 0) << " s" << line << " (" << finished << " of " << total
-            << " scans complete)" << std::endl;
+        live.event(prefix(j) + "done in " + fixed(wall, 0) + " s" + line + " (" + std::to_string(finished) + " of " +
+                   std::to_string(total) + " scans complete)");
       } else {
-        log << prefix(j) << "FAILED (exit " << c->exit_code << "): " << scan_failure_reason(j->dir, j->log) << "; the end of "
-            << j->log.string() << ":\n"
-            << tail_lines(j->log.string(), 6) << std::flush;
+        std::string tail = tail_lines(j->log.string(), 6);
+        while (!tail.empty() && tail.back() == '\n') tail.pop_back();
+        live.event(prefix(j) + "FAILED (exit " + std::to_string(c->exit_code) + "): " + scan_failure_reason(j->dir, j->log) +
+                   "; the end of " + j->log.string() + ":\n" + tail);
       }
     }
     for (std::size_t i = children.size(); i-- > 0;) {
@@ -570,15 +577,45 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       running.erase(running.begin() + i);
     }
     for (Job* j : running) {
-      // Progress: the scan's "[view k/N] ..." line, printed when the view changes.
+      // Progress: the scan's "[view k/N] ..." line; off a terminal printed when the view changes.
       const std::string last = tail_lines(j->log.string(), 1);
       const auto a = last.rfind("[view ");
       if (a == std::string::npos) continue;
       const std::string tag = last.substr(a, last.find(']', a) - a + 1);
       if (tag != j->last_progress) {
         j->last_progress = tag;
-        log << prefix(j) << tag.substr(1, tag.size() - 2) << std::endl;
+        std::sscanf(tag.c_str(), "[view %d/%d]", &j->view, &j->views);
+        if (!live.live()) live.event(prefix(j) + tag.substr(1, tag.size() - 2));
       }
+    }
+    if (live.live()) {
+      // One line per running scan, then the whole run's estimate: the scans to go at the mean
+      // wall time of those finished (else of the running ones' estimates), spread over the jobs.
+      const auto now = std::chrono::steady_clock::now();
+      std::vector<std::string> lines;
+      double left_running = 0, projected = 0;
+      int with_estimate = 0;
+      for (const Job* j : running) {
+        const double elapsed = std::chrono::duration<double>(now - j->started).count();
+        // prefix(j) ends in ": ", as the progress line of an empty name starts.
+        lines.push_back(prefix(j) + scan_progress_line("", j->view, j->views > 0 ? j->views : spec.views, elapsed).substr(2));
+        if (const auto left = scan_time_left_s(j->view, j->views > 0 ? j->views : spec.views, elapsed)) {
+          left_running += *left;
+          projected += elapsed + *left;
+          ++with_estimate;
+        }
+      }
+      std::string summary = "bench: " + std::to_string(finished) + " of " + std::to_string(total) + " scans done, " +
+                            std::to_string(running.size()) + " running";
+      const double per_scan = !walls.empty() ? std::accumulate(walls.begin(), walls.end(), 0.0) / walls.size()
+                              : with_estimate > 0 ? projected / with_estimate
+                                                  : NAN;
+      if (std::isfinite(per_scan)) {
+        const double waiting = static_cast<double>(todo.size() - next);
+        summary += ", about " + duration_text((left_running + waiting * per_scan) / std::max(1, spec.jobs)) + " left";
+      }
+      lines.push_back(summary);
+      live.update(lines);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
@@ -632,11 +669,12 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
 
 std::vector<std::pair<std::string, BenchResult>> run_ablation(const std::string& param,
                                                               const std::vector<std::pair<std::string, BenchSpec>>& runs,
-                                                              const fs::path& out, const fs::path& self, std::ostream& log) {
+                                                              const fs::path& out, const fs::path& self, std::ostream& log,
+                                                              bool terminal) {
   std::vector<std::pair<std::string, BenchResult>> results;
   for (const auto& [value, spec] : runs) {
     log << "=== " << param << " = " << value << " -> " << spec.out.string() << std::endl;
-    results.emplace_back(value, run_bench(spec, self, log));
+    results.emplace_back(value, run_bench(spec, self, log, terminal));
   }
   write_ablation(param, results, out);
   return results;

@@ -146,15 +146,19 @@ std::string objects_text(const BenchResult& r);
 // Runs the scans that are not complete in spec.out, evaluates every scan, writes
 // spec.out/summary.json, report.md, coverage.png, time.png (and observable.png on the arm rig,
 // gap.png when the oracle ran).
-// `self` is the pbnbv executable that runs each scan. Progress goes to `log`.
-BenchResult run_bench(const BenchSpec& spec, const std::filesystem::path& self, std::ostream& log);
+// `self` is the pbnbv executable that runs each scan. Progress goes to `log`: with `terminal`,
+// one line per running scan redrawn in place with an estimate of the time left (bench_progress.hpp),
+// else plain lines.
+BenchResult run_bench(const BenchSpec& spec, const std::filesystem::path& self, std::ostream& log,
+                      bool terminal = false);
 
 // An ablation: one benchmark per value of `param` (runs: the value as text, its benchmark), in
 // the order given, then write_ablation into `out`. Progress goes to `log`.
 std::vector<std::pair<std::string, BenchResult>> run_ablation(const std::string& param,
                                                               const std::vector<std::pair<std::string, BenchSpec>>& runs,
                                                               const std::filesystem::path& out,
-                                                              const std::filesystem::path& self, std::ostream& log);
+                                                              const std::filesystem::path& self, std::ostream& log,
+                                                              bool terminal = false);
 
 // Writes report.md and the plots for a finished benchmark (report.cpp).
 void write_report(const BenchResult& r);
