@@ -3,6 +3,7 @@
 # services (and no test), P/share/pbnbv the rig models, meshes and message jar; the installed
 # `pbnbv --help` works, and a one-view scan of the bunny finds its services beside it and its
 # rig model and mesh in P/share/pbnbv (settings.json names them), from a folder outside the tree.
+# KEEP_INSTALL=1 keeps P to look at.
 set -euo pipefail
 BIN=${PBNBV_BIN_DIR:?}
 BUILD=$(dirname "$BIN")

@@ -619,6 +619,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
+  live.update({});  // the live block ends before the evaluation's lines
 
   // Evaluation of every scan in the folder against the ground truth.
   BenchResult result;

@@ -34,7 +34,8 @@ struct PlanFigure {
   std::string quality_label = "view quality F of the scored candidates";  // the colour bar's
 };
 
-// Draws the figure (BGR 8-bit, 1500 px wide, 520 + 20 per text line high; 560 with two lines):
+// Draws the figure (BGR 8-bit, 1500 px wide, 520 + 20 per text line high, 560 with two lines;
+// taller when the legend needs more rows):
 // a header (title, then `lines`) above three panels
 //  1. top view (x right, y up, orthographic) and 2. side view (x right, z up), each a square
 //     world region centred on `centre` with half-width 1.1 x the largest distance of a candidate
