@@ -8,9 +8,11 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -23,6 +25,7 @@
 #include "core/rig/rig.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "core/geometry/visibility.hpp"
+#include "eval/bench_progress.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/objects.hpp"
 #include "process/processes.hpp"
@@ -171,10 +174,54 @@ struct Job {
   fs::path dir;
   fs::path log;
   std::string last_progress;
+  int view = 0, views = 0;  // the scan's view in progress (its "[view k/N]" line), 0: none yet
   std::chrono::steady_clock::time_point started;
 };
 
 }  // namespace
+
+std::string scan_failure_reason(const fs::path& dir, const fs::path& log) {
+  const std::string where = " (log: " + log.string() + ")";
+  try {
+    if (fs::exists(dir / "scan.json")) {
+      const json st = read_json((dir / "scan.json").string()).at("status");
+      const std::string state = st.value("state", std::string("?"));
+      std::string msg = "scan " + state + " after " + std::to_string(st.value("views_done", 0)) + " of " +
+                        std::to_string(st.value("views_planned", 0)) + " views";
+      const std::string m = st.value("message", std::string());
+      if (!m.empty()) msg += ": " + m;
+      return msg + where;
+    }
+  } catch (const std::exception& e) {
+    return "scan.json unreadable: " + std::string(e.what()) + where;
+  }
+  std::string last;
+  if (fs::exists(log)) {
+    std::istringstream in(tail_lines(log.string(), 20));
+    for (std::string line; std::getline(in, line);) {
+      const size_t a = line.find_first_not_of(" \t\r");  // tail_lines indents its lines
+      if (a != std::string::npos) last = line.substr(a);
+    }
+  }
+  if (!last.empty()) return "no scan.json; the log ends: " + last + where;
+  return fs::exists(log) ? "no scan.json and an empty log" + where : "no scan.json and no log" + where;
+}
+
+std::string objects_text(const BenchResult& r) {
+  const int total = static_cast<int>(r.spec.objects.size());
+  int lo = std::numeric_limits<int>::max(), hi = 0;
+  std::string failed;
+  for (const auto& p : r.planners) {
+    lo = std::min(lo, p.complete);
+    hi = std::max(hi, p.complete);
+    if (p.failed > 0) failed += (failed.empty() ? "" : ", ") + std::string(name_of(p.planner)) + " " + std::to_string(p.failed);
+  }
+  if (r.planners.empty()) return std::to_string(total) + " objects";
+  auto objects = [](int n) { return std::to_string(n) + (n == 1 ? " object" : " objects"); };
+  if (failed.empty()) return objects(hi);
+  if (lo == hi) return objects(hi) + ", " + std::to_string(total - hi) + " of " + std::to_string(total) + " failed";
+  return std::to_string(lo) + "-" + objects(hi) + " (failed: " + failed + " of " + std::to_string(total) + ")";
+}
 
 void BenchSpec::validate() const {
   if (objects.empty()) throw std::invalid_argument("--objects: no object to benchmark");
@@ -257,6 +304,8 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
   p.planner = planner;
   p.objects = runs;
   p.coverage_by_view.assign(views, 0.0);
+  p.coverage_min_by_view.assign(views, std::numeric_limits<double>::infinity());
+  p.coverage_max_by_view.assign(views, -std::numeric_limits<double>::infinity());
   std::vector<double> observable(views, 0.0);
   int with_observable = 0;
   std::vector<double> times, reached;
@@ -267,7 +316,11 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
     }
     ++p.complete;
     const std::vector<double> c = pad_views(r.coverage_by_view, views);
-    for (int i = 0; i < views; ++i) p.coverage_by_view[i] += c[i];
+    for (int i = 0; i < views; ++i) {
+      p.coverage_by_view[i] += c[i];
+      p.coverage_min_by_view[i] = std::min(p.coverage_min_by_view[i], c[i]);
+      p.coverage_max_by_view[i] = std::max(p.coverage_max_by_view[i], c[i]);
+    }
     if (!r.observable_by_view.empty()) {
       const std::vector<double> o = pad_views(r.observable_by_view, views);
       for (int i = 0; i < views; ++i) observable[i] += o[i];
@@ -278,6 +331,8 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
   }
   if (p.complete == 0) {
     p.coverage_by_view.clear();
+    p.coverage_min_by_view.clear();
+    p.coverage_max_by_view.clear();
   } else {
     for (double& c : p.coverage_by_view) c /= p.complete;
   }
@@ -420,6 +475,10 @@ json to_json(const BenchResult& r) {
                                      {"recall", m->recall},
                                      {"f_score", m->f_score}};
     }
+    if (!p.coverage_min_by_view.empty()) {
+      pj["coverage_min_by_view"] = p.coverage_min_by_view;
+      pj["coverage_max_by_view"] = p.coverage_max_by_view;
+    }
     const StopRuleSummary& st = p.stop_rule;
     pj["stop_rule"] = {{"rule", to_json(r.spec.stop_rule)},
                        {"objects", st.objects},
@@ -436,6 +495,14 @@ json to_json(const BenchResult& r) {
     j[std::string(name_of(p.planner))] = pj;
   }
   j["planners"] = order;
+  json failed = json::array();
+  for (const auto& p : r.planners) {
+    for (const auto& o : p.objects) {
+      if (!o.complete) failed.push_back({{"object", o.object}, {"planner", std::string(name_of(p.planner))}, {"reason", o.error}});
+    }
+  }
+  j["failed_scans"] = failed;
+  j["objects_text"] = objects_text(r);
   j["settings"] = to_json(r.spec);
   j["machine"] = r.machine;
   j["coverage_rule"] = "mean over the complete objects of the percent of " + std::to_string(r.spec.coverage.num_samples) +
@@ -447,7 +514,7 @@ json to_json(const BenchResult& r) {
   return j;
 }
 
-BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostream& log) {
+BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostream& log, bool terminal) {
   BenchSpec spec = spec_in;
   spec.validate();
   fs::create_directories(spec.out / "logs");
@@ -507,6 +574,8 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       << spec.jobs << " at a time" << std::endl;
 
   install_stop_handlers();
+  LiveLines live(log, terminal);
+  std::vector<double> walls;  // of the scans finished in this run
 
   // The scans running now: their processes and, at the same index, their jobs.
   std::vector<Child> children;
@@ -541,12 +610,13 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       start(c);
       children.push_back(std::move(c));
       running.push_back(j);
-      log << prefix(j) << "started" << std::endl;
+      live.event(prefix(j) + "started");
     }
     for (const Child* c : reap(children)) {
       Job* j = running[c - children.data()];
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - j->started).count();
       ++finished;
+      walls.push_back(wall);
       if (c->exit_code == 0 && scan_complete(j->dir)) {
         write_json_atomic({{"wall_s", wall}, {"command", c->argv}}, (j->dir / "bench_run.json").string());
         std::string line;
@@ -556,11 +626,13 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
           if (!cv.empty()) line = ", coverage after view " + std::to_string(cv.size()) + " " + fixed(cv.back().get<double>()) + " %";
         } catch (const std::exception&) {
         }
-        log << prefix(j) << "done in " << fixed(wall, 0) << " s" << line << " (" << finished << " of " << total
-            << " scans complete)" << std::endl;
+        live.event(prefix(j) + "done in " + fixed(wall, 0) + " s" + line + " (" + std::to_string(finished) + " of " +
+                   std::to_string(total) + " scans complete)");
       } else {
-        log << prefix(j) << "FAILED (exit " << c->exit_code << "); the end of " << j->log.string() << ":\n"
-            << tail_lines(j->log.string(), 6) << std::flush;
+        std::string tail = tail_lines(j->log.string(), 6);
+        while (!tail.empty() && tail.back() == '\n') tail.pop_back();
+        live.event(prefix(j) + "FAILED (exit " + std::to_string(c->exit_code) + "): " + scan_failure_reason(j->dir, j->log) +
+                   "; the end of " + j->log.string() + ":\n" + tail);
       }
     }
     for (std::size_t i = children.size(); i-- > 0;) {
@@ -569,18 +641,49 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       running.erase(running.begin() + i);
     }
     for (Job* j : running) {
-      // Progress: the scan's "[view k/N] ..." line, printed when the view changes.
+      // Progress: the scan's "[view k/N] ..." line; off a terminal printed when the view changes.
       const std::string last = tail_lines(j->log.string(), 1);
       const auto a = last.rfind("[view ");
       if (a == std::string::npos) continue;
       const std::string tag = last.substr(a, last.find(']', a) - a + 1);
       if (tag != j->last_progress) {
         j->last_progress = tag;
-        log << prefix(j) << tag.substr(1, tag.size() - 2) << std::endl;
+        std::sscanf(tag.c_str(), "[view %d/%d]", &j->view, &j->views);
+        if (!live.live()) live.event(prefix(j) + tag.substr(1, tag.size() - 2));
       }
+    }
+    if (live.live()) {
+      // One line per running scan, then the whole run's estimate: the scans to go at the mean
+      // wall time of those finished (else of the running ones' estimates), spread over the jobs.
+      const auto now = std::chrono::steady_clock::now();
+      std::vector<std::string> lines;
+      double left_running = 0, projected = 0;
+      int with_estimate = 0;
+      for (const Job* j : running) {
+        const double elapsed = std::chrono::duration<double>(now - j->started).count();
+        // prefix(j) ends in ": ", as the progress line of an empty name starts.
+        lines.push_back(prefix(j) + scan_progress_line("", j->view, j->views > 0 ? j->views : spec.views, elapsed).substr(2));
+        if (const auto left = scan_time_left_s(j->view, j->views > 0 ? j->views : spec.views, elapsed)) {
+          left_running += *left;
+          projected += elapsed + *left;
+          ++with_estimate;
+        }
+      }
+      std::string summary = "bench: " + std::to_string(finished) + " of " + std::to_string(total) + " scans done, " +
+                            std::to_string(running.size()) + " running";
+      const double per_scan = !walls.empty() ? std::accumulate(walls.begin(), walls.end(), 0.0) / walls.size()
+                              : with_estimate > 0 ? projected / with_estimate
+                                                  : NAN;
+      if (std::isfinite(per_scan)) {
+        const double waiting = static_cast<double>(todo.size() - next);
+        summary += ", about " + duration_text((left_running + waiting * per_scan) / std::max(1, spec.jobs)) + " left";
+      }
+      lines.push_back(summary);
+      live.update(lines);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
+  live.update({});  // the live block ends before the evaluation's lines
 
   // Evaluation of every scan in the folder against the ground truth.
   BenchResult result;
@@ -594,7 +697,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
     r.planner = j.planner;
     try {
       if (!scan_complete(j.dir)) {
-        throw std::runtime_error("the scan did not complete (log: " + j.log.string() + ")");
+        throw std::runtime_error(scan_failure_reason(j.dir, j.log));
       }
       if (!masks.count(j.name)) {
         std::string what;
@@ -633,11 +736,12 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
 
 std::vector<std::pair<std::string, BenchResult>> run_ablation(const std::string& param,
                                                               const std::vector<std::pair<std::string, BenchSpec>>& runs,
-                                                              const fs::path& out, const fs::path& self, std::ostream& log) {
+                                                              const fs::path& out, const fs::path& self, std::ostream& log,
+                                                              bool terminal) {
   std::vector<std::pair<std::string, BenchResult>> results;
   for (const auto& [value, spec] : runs) {
     log << "=== " << param << " = " << value << " -> " << spec.out.string() << std::endl;
-    results.emplace_back(value, run_bench(spec, self, log));
+    results.emplace_back(value, run_bench(spec, self, log, terminal));
   }
   write_ablation(param, results, out);
   return results;

@@ -72,7 +72,7 @@ struct ObjectRun {
   std::string object;
   PlannerKind planner = PlannerKind::kPbnbv;
   bool complete = false;                  // the scan finished (state "done") and was evaluated
-  std::string error;                      // why not
+  std::string error;                      // why not (scan_failure_reason)
   std::vector<double> coverage_by_view;   // views 1..N; after an early stop the last figure holds
   std::vector<double> observable_by_view; // the same over the observable samples
   std::vector<double> planner_ms;         // per planning iteration
@@ -118,6 +118,7 @@ StopRuleSummary summarise_stop_rule(const std::vector<ObjectRun>& runs, int view
 struct PlannerSummary {
   PlannerKind planner = PlannerKind::kPbnbv;
   std::vector<double> coverage_by_view;    // mean over the complete objects
+  std::vector<double> coverage_min_by_view, coverage_max_by_view;  // spread over the complete objects
   std::vector<double> observable_by_view;  // mean over the complete objects
   double planner_ms_median = 0, planner_ms_mean = 0;  // over every iteration of every object
   std::optional<double> views_to_95;       // mean over the objects that reach 95 %
@@ -131,6 +132,11 @@ struct PlannerSummary {
   StopRuleSummary stop_rule;
   MeanSurfaceMetrics cloud_metrics, mesh_metrics;  // after the last view
 };
+
+// Why a scan in `dir` did not complete, for the report: scan.json's state and message ("scan
+// failed after 3 of 10 views: ..."), else the last line of its log, else that neither exists;
+// each with the log's path.
+std::string scan_failure_reason(const std::filesystem::path& dir, const std::filesystem::path& log);
 
 // Pure helpers (tested): the first view (1-based) whose coverage reaches `percent`; a curve
 // padded to n views with its last value; the summary of a planner's runs.
@@ -154,18 +160,26 @@ nlohmann::json to_json(const BenchResult& r);
 // completeness (mm) and precision / recall / F-score at the threshold; "" when no planner has any.
 std::string surface_metrics_markdown(const std::vector<PlannerSummary>& planners, const MetricParams& params);
 
+// The objects a result's means are over, for titles: "12 objects, 1 of 13 failed" (every
+// planner the same), "11-12 objects (failed: pbnbv 1, random 2 of 13)", "13 objects".
+std::string objects_text(const BenchResult& r);
+
 // Runs the scans that are not complete in spec.out, evaluates every scan, writes
 // spec.out/summary.json, report.md, coverage.png, time.png (and observable.png on the arm rig,
 // gap.png when the oracle ran).
-// `self` is the pbnbv executable that runs each scan. Progress goes to `log`.
-BenchResult run_bench(const BenchSpec& spec, const std::filesystem::path& self, std::ostream& log);
+// `self` is the pbnbv executable that runs each scan. Progress goes to `log`: with `terminal`,
+// one line per running scan redrawn in place with an estimate of the time left (bench_progress.hpp),
+// else plain lines.
+BenchResult run_bench(const BenchSpec& spec, const std::filesystem::path& self, std::ostream& log,
+                      bool terminal = false);
 
 // An ablation: one benchmark per value of `param` (runs: the value as text, its benchmark), in
 // the order given, then write_ablation into `out`. Progress goes to `log`.
 std::vector<std::pair<std::string, BenchResult>> run_ablation(const std::string& param,
                                                               const std::vector<std::pair<std::string, BenchSpec>>& runs,
                                                               const std::filesystem::path& out,
-                                                              const std::filesystem::path& self, std::ostream& log);
+                                                              const std::filesystem::path& self, std::ostream& log,
+                                                              bool terminal = false);
 
 // Writes report.md and the plots for a finished benchmark (report.cpp).
 void write_report(const BenchResult& r);

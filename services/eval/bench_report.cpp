@@ -19,9 +19,14 @@ namespace {
 
 // The authors' release, run closed-loop on this machine kind (2 cores), optimised build, five
 // real meshes, free rig / full sphere, 0.03 m, 800 candidates (issue 5): coverage after views
-// 1-5 and 10; views 6-9 were not reported.
+// 1-5 and 10; views 6-9 were not reported. Its five meshes are not this benchmark's objects, and
+// which five they were is recorded nowhere in the project (issue 5's run kept only the curve).
 const std::vector<double> kReleaseCoverage = {31.3, 61.0, 80.2, 95.3, 98.1, NAN, NAN, NAN, NAN, 99.1};
 constexpr double kReleaseMedianMs = 25800.0;
+constexpr const char* kReleaseLabel = "authors' release (5 other meshes)";
+constexpr const char* kReleaseNote =
+    "The authors' release curve was measured in issue 5 on 5 other meshes, not on these objects (which 5 was not "
+    "recorded); it is a reference for the shape of the curve, not a comparison on the same objects.";
 
 std::string f1(double x) { return std::isfinite(x) ? fixed(x, 1) : "-"; }
 
@@ -80,11 +85,28 @@ std::vector<double> median_time_by_iteration(const PlannerSummary& p, int views)
   return out;
 }
 
+// Min and max over the complete objects of the observable coverage after each view.
+std::pair<std::vector<double>, std::vector<double>> observable_spread(const PlannerSummary& p, int n) {
+  std::vector<double> lo(n, INFINITY), hi(n, -INFINITY);
+  bool any = false;
+  for (const auto& o : p.objects) {
+    if (!o.complete || o.observable_by_view.empty()) continue;
+    const std::vector<double> v = pad_views(o.observable_by_view, n);
+    for (int i = 0; i < n; ++i) {
+      lo[i] = std::min(lo[i], v[i]);
+      hi[i] = std::max(hi[i], v[i]);
+    }
+    any = true;
+  }
+  if (!any) return {};
+  return {lo, hi};
+}
+
 void coverage_chart(const BenchResult& r, bool observable, const fs::path& path) {
   const BenchSpec& s = r.spec;
   LineChart c;
   c.title = std::string(observable ? "Observable coverage" : "Coverage") + " after each view - " + std::string(name_of(s.rig)) + " rig, " +
-            area_text(s, "hemisphere") + ", " + std::to_string(s.objects.size()) + " objects";
+            area_text(s, "hemisphere") + ", " + objects_text(r) + ", band: min-max over objects";
   c.x_label = "views";
   c.y_label = observable ? "observable surface covered (%, mean)" : "surface covered (%, mean)";
   c.integer_x = true;
@@ -93,12 +115,21 @@ void coverage_chart(const BenchResult& r, bool observable, const fs::path& path)
   for (const auto& p : r.planners) {
     const std::vector<double>& y = observable ? p.observable_by_view : p.coverage_by_view;
     if (y.empty()) continue;
-    c.series.push_back({std::string(name_of(p.planner)), view_numbers(static_cast<int>(y.size())), y});
+    ChartSeries cs{std::string(name_of(p.planner)), view_numbers(static_cast<int>(y.size())), y};
+    if (observable) {
+      const auto [lo, hi] = observable_spread(p, static_cast<int>(y.size()));
+      cs.lo = lo;
+      cs.hi = hi;
+    } else if (p.coverage_min_by_view.size() == y.size()) {
+      cs.lo = p.coverage_min_by_view;
+      cs.hi = p.coverage_max_by_view;
+    }
+    c.series.push_back(cs);
   }
   if (!observable && paper_setup(s)) {
     std::vector<double> y = kReleaseCoverage;
     y.resize(std::min<std::size_t>(y.size(), s.views), NAN);
-    c.series.push_back({"authors' release", view_numbers(static_cast<int>(y.size())), y, true, true});
+    c.series.push_back({kReleaseLabel, view_numbers(static_cast<int>(y.size())), y, true, true});
   }
   if (c.series.empty()) return;
   write_line_chart(c, path.string());
@@ -107,7 +138,7 @@ void coverage_chart(const BenchResult& r, bool observable, const fs::path& path)
 // Each planner's gap to the oracle (percentage points) after each view; false when there is none.
 bool gap_chart(const BenchResult& r, const fs::path& path) {
   LineChart c;
-  c.title = "Gap to the oracle after each view (coverage, mean over objects)";
+  c.title = "Gap to the oracle after each view (coverage, mean over " + objects_text(r) + ")";
   c.x_label = "views";
   c.y_label = "oracle - planner (percentage points)";
   c.integer_x = true;
@@ -123,7 +154,7 @@ bool gap_chart(const BenchResult& r, const fs::path& path) {
 
 void time_chart(const BenchResult& r, const fs::path& path) {
   LineChart c;
-  c.title = "Planner time per iteration (median over objects) - map update + view selection";
+  c.title = "Planner time per iteration (median over " + objects_text(r) + ") - map update + view selection";
   c.x_label = "planning for view";
   c.y_label = "ms (log scale)";
   c.integer_x = true;
@@ -146,7 +177,7 @@ void write_report(const BenchResult& r) {
   const int n = s.views;
   std::ostringstream md;
   md << "# Benchmark: " << name_of(s.rig) << " rig, " << area_text(s, "hemisphere") << ", "
-     << s.objects.size() << " objects, " << n << " views\n\n";
+     << objects_text(r) << ", " << n << " views\n\n";
   md << "```\n" << command_of(s) << "\n```\n\n";
   md << "Candidates " << s.candidates << " on the " << area_text(s, "upper hemisphere")
      << ", voxel map resolution " << s.resolution_m << " m, T_max " << s.tmax << ", beta " << s.beta << ", object size "
@@ -171,11 +202,30 @@ void write_report(const BenchResult& r) {
     md << " " << p.complete << (p.failed ? " (" + std::to_string(p.failed) + " failed)" : "") << " |\n";
   }
   if (paper_setup(s)) {
-    md << "| authors' release, 5 meshes, this machine kind |";
+    md << "| authors' release, 5 other meshes, this machine kind |";
     for (int i = 0; i < n; ++i) md << " " << (i < static_cast<int>(kReleaseCoverage.size()) ? f1(kReleaseCoverage[i]) : "-") << " |";
     md << " - | 25,800 ms | 5 |\n";
   }
-  md << "\n";
+  md << "\nMeans over each planner's completed scans; coverage.png shows each planner's min-max over objects as a band.";
+  if (paper_setup(s)) md << " " << kReleaseNote;
+  md << "\n\n";
+  bool any_failed = false;
+  for (const auto& p : r.planners) {
+    for (const auto& o : p.objects) any_failed = any_failed || !o.complete;
+  }
+  if (any_failed) {
+    md << "## Failed scans (left out of every mean)\n\n| object | planner | reason |\n|---|---|---|\n";
+    for (const auto& p : r.planners) {
+      for (const auto& o : p.objects) {
+        if (o.complete) continue;
+        std::string reason = o.error.empty() ? "-" : o.error;
+        std::replace(reason.begin(), reason.end(), '|', '/');
+        std::replace(reason.begin(), reason.end(), '\n', ' ');
+        md << "| " << o.object << " | " << name_of(p.planner) << " | " << reason << " |\n";
+      }
+    }
+    md << "\n";
+  }
   if (pbnbv && pbnbv->planner_ms_median > 0) {
     for (const auto& p : r.planners) {
       if (&p == pbnbv || p.planner == PlannerKind::kRing || p.planner_ms_median <= 0) continue;

@@ -1,4 +1,5 @@
 #include "eval/objects.hpp"
+#include "core/base/install_paths.hpp"
 #include "core/io/mesh_file.hpp"
 
 #include <filesystem>
@@ -42,7 +43,7 @@ ObjectSpec resolve_object(const std::string& object) {
   for (const auto& d : default_objects()) {
     if (object != d.name) continue;
     o.up = d.up;
-    o.source = std::string(PBNBV_DATA_DIR) + "/meshes/" + d.file;
+    o.source = resource_dir("PBNBV_DATA_DIR", "data", PBNBV_DATA_DIR) + "/meshes/" + d.file;
     if (!fs::exists(o.source)) {
       throw std::runtime_error("object '" + object + "' needs " + o.source + " (" + d.origin +
                                "), which ./scripts/setup fetches: run it first");

@@ -9,6 +9,7 @@
 
 
 #include "bus/bus.hpp"
+#include "core/base/install_paths.hpp"
 #include "core/io/json.hpp"
 #include "core/rig/urdf_import.hpp"
 #include "launcher/commands.hpp"
@@ -20,7 +21,7 @@ namespace fs = std::filesystem;
 namespace pbnbv::launcher {
 
 int run_bench(const eval::BenchSpec& spec, const fs::path& self) {
-  const eval::BenchResult r = eval::run_bench(spec, self, std::cout);
+  const eval::BenchResult r = eval::run_bench(spec, self, std::cout, ::isatty(STDOUT_FILENO) == 1);
   std::cout << "\n" << read_text((spec.out / "report.md").string()) << std::endl;
   int failed = 0;
   for (const auto& p : r.planners) failed += p.failed;
@@ -39,15 +40,17 @@ int run_bench(const eval::BenchSpec& spec, const fs::path& self) {
 }
 
 int run_ablate(const AblateOptions& o, const fs::path& self) {
-  eval::run_ablation(std::string(name_of(o.parameter)), o.runs, o.out, self, std::cout);
+  eval::run_ablation(std::string(name_of(o.parameter)), o.runs, o.out, self, std::cout, ::isatty(STDOUT_FILENO) == 1);
   std::cout << "\n" << read_text((o.out / "ablation.md").string()) << std::endl;
   return 0;
 }
 
 int run_spy() {
-  const std::string classpath = std::string(PBNBV_LCM_JAR) + ":/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar";
-  if (!fs::exists(PBNBV_LCM_JAR)) {
-    throw std::runtime_error(std::string("message jar ") + PBNBV_LCM_JAR + " is missing: build the project first (./scripts/setup)");
+  const std::string installed = installed_share_path("pbnbv_lcmtypes.jar");
+  const std::string jar = installed.empty() ? std::string(PBNBV_LCM_JAR) : installed;
+  const std::string classpath = jar + ":/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar";
+  if (!fs::exists(jar)) {
+    throw std::runtime_error("message jar " + jar + " is missing: build the project first (./scripts/setup)");
   }
   // Debian's lcm-spy script passes -Xincgc, which Java 17 rejects; start the class directly.
   std::vector<std::string> a = {"java", "-Djava.net.preferIPv4Stack=true", "-Xmx512m", "-cp", classpath, "lcm.spy.Spy"};

@@ -18,6 +18,9 @@ namespace pbnbv {
 namespace {
 
 using drawing::Canvas;
+using drawing::Svg;
+using drawing::svg_path_beside;
+using drawing::write_text_file;
 using drawing::kBlack;
 using drawing::kFont;
 using drawing::kFrame;
@@ -149,6 +152,10 @@ void validate(const LineChart& c, int w, int h) {
     if (s.x.size() != s.y.size()) {
       throw std::invalid_argument(series_name(c, i) + " has " + std::to_string(s.x.size()) +
                                   " x values but " + std::to_string(s.y.size()) + " y values");
+    }
+    if ((!s.lo.empty() || !s.hi.empty()) && (s.lo.size() != s.x.size() || s.hi.size() != s.x.size())) {
+      throw std::invalid_argument(series_name(c, i) + " has " + std::to_string(s.x.size()) + " x values but a band of " +
+                                  std::to_string(s.lo.size()) + " lo and " + std::to_string(s.hi.size()) + " hi values");
     }
   }
   auto check_pair = [&](double lo, double hi, const char* lo_name, const char* hi_name) {
@@ -288,6 +295,33 @@ std::vector<std::vector<cv::Point2d>> pixel_runs(const ChartLayout& l, const Cha
   return runs;
 }
 
+bool has_band(const ChartSeries& s) { return s.lo.size() == s.x.size() && s.hi.size() == s.x.size() && !s.x.empty(); }
+
+// Polygons of a series' band (runs of x where x, lo and hi are usable), in image pixels.
+std::vector<std::vector<cv::Point2d>> band_polygons(const ChartLayout& l, const ChartSeries& s) {
+  std::vector<std::vector<cv::Point2d>> out;
+  if (!has_band(s)) return out;
+  std::vector<size_t> run;
+  auto flush = [&] {
+    if (run.size() >= 2) {
+      std::vector<cv::Point2d> poly;
+      for (size_t k : run) poly.push_back(l.to_pixel_exact(s.x[k], s.hi[k]));
+      for (auto it = run.rbegin(); it != run.rend(); ++it) poly.push_back(l.to_pixel_exact(s.x[*it], s.lo[*it]));
+      out.push_back(poly);
+    }
+    run.clear();
+  };
+  for (size_t k = 0; k < s.x.size(); ++k) {
+    if (usable(s.x[k], s.lo[k], l.log_y) && usable(s.x[k], s.hi[k], l.log_y)) {
+      run.push_back(k);
+    } else {
+      flush();
+    }
+  }
+  flush();
+  return out;
+}
+
 // Pixels of the plot (plot-local mask) that data or reference lines cover.
 cv::Mat data_mask(const LineChart& c, const ChartLayout& l) {
   cv::Mat mask(l.plot.size(), CV_8UC1, cv::Scalar(0));
@@ -297,6 +331,11 @@ cv::Mat data_mask(const LineChart& c, const ChartLayout& l) {
     return cv::Point(cvRound(p.x - tl.x), cvRound(p.y - tl.y));
   };
   for (const ChartSeries& s : c.series) {
+    for (const auto& poly : band_polygons(l, s)) {
+      std::vector<cv::Point> q;
+      for (const auto& p : poly) q.push_back(local(p));
+      cv::fillPoly(mask, std::vector<std::vector<cv::Point>>{q}, cv::Scalar(255));
+    }
     for (const auto& run : pixel_runs(l, s)) {
       for (size_t k = 0; k < run.size(); ++k) {
         if (cr.contains(run[k])) cv::circle(mask, local(run[k]), 5, cv::Scalar(255), cv::FILLED);
@@ -523,6 +562,13 @@ Plan plan_chart(const LineChart& c, int w, int h) {
       xhi = std::max(xhi, s.x[k]);
       ylo = std::min(ylo, s.y[k]);
       yhi = std::max(yhi, s.y[k]);
+      if (has_band(s)) {
+        for (double v : {s.lo[k], s.hi[k]}) {
+          if (!usable(s.x[k], v, c.log_y)) continue;
+          ylo = std::min(ylo, v);
+          yhi = std::max(yhi, v);
+        }
+      }
     }
   }
   if (!(xlo <= xhi)) {
@@ -649,26 +695,6 @@ void pattern_line(Canvas& canvas, const std::vector<cv::Point2d>& pts, const cv:
   }
 }
 
-// Text turned 90 degrees counter-clockwise (reading upwards), centred on `centre`; drawn dark on
-// the white image by taking the darker of the two.
-void vertical_text(cv::Mat& img, const FittedText& t, const cv::Point& centre,
-                   const cv::Scalar& colour) {
-  if (t.text.empty()) return;
-  cv::Mat strip(t.size.height + t.baseline + 4, t.size.width + 4, CV_8UC3, kBackground);
-  cv::putText(strip, t.text, cv::Point(2, 2 + t.size.height), kFont, t.scale, colour, t.thickness,
-              cv::LINE_AA);
-  cv::Mat turned;
-  cv::rotate(strip, turned, cv::ROTATE_90_COUNTERCLOCKWISE);
-  const cv::Rect dst = cv::Rect(centre.x - turned.cols / 2, centre.y - turned.rows / 2,
-                                turned.cols, turned.rows) &
-                       cv::Rect(0, 0, img.cols, img.rows);
-  if (dst.empty()) return;
-  const cv::Rect src(dst.x - (centre.x - turned.cols / 2), dst.y - (centre.y - turned.rows / 2),
-                     dst.width, dst.height);
-  cv::Mat roi = img(dst);
-  cv::min(roi, turned(src), roi);
-}
-
 void draw_series(Canvas& c, const ChartLayout& l, const ChartSeries& s, size_t i) {
   const cv::Scalar colour = scalar(chart_series_colour(i));
   const Pattern pattern = series_pattern(s, i);
@@ -686,12 +712,12 @@ void draw_series(Canvas& c, const ChartLayout& l, const ChartSeries& s, size_t i
   }
 }
 
-void draw_legend(cv::Mat& img, const Plan& p, const LineChart& chart) {
+void draw_legend(Canvas& all, const Plan& p, const LineChart& chart) {
   const cv::Rect& r = p.l.legend;
   if (r.empty()) return;
-  cv::rectangle(img, r, kBackground, cv::FILLED);
-  cv::rectangle(img, r, kFrame, 1);
-  Canvas all(img, cv::Rect(0, 0, img.cols, img.rows), kPixelCentre);
+  all.fill_rect(r, kBackground);
+  all.frame_rect(r, kFrame);
+  const cv::Mat& img = all.mat();
   const int text_h = text_size("Ag", kLegendScale, 1).height;
   for (const auto& item : p.legend_items) {
     const ChartSeries& s = chart.series[item.series];
@@ -754,64 +780,72 @@ ChartLayout chart_layout(const LineChart& chart, int width_px, int height_px) {
   return plan_chart(chart, width_px, height_px).l;
 }
 
-cv::Mat draw_line_chart(const LineChart& chart, int width_px, int height_px) {
+namespace {
+
+// The chart into an image and, with `svg`, the same primitives into an SVG document.
+cv::Mat draw_chart(const LineChart& chart, int width_px, int height_px, Svg* svg) {
   const Plan p = plan_chart(chart, width_px, height_px);
   const ChartLayout& l = p.l;
   cv::Mat img(height_px, width_px, CV_8UC3, kBackground);
   const cv::Rect& r = l.plot;
+  Canvas all(img, cv::Rect(0, 0, img.cols, img.rows), kPixelCentre, svg);
 
   // Grid, minor lines first.
   for (double v : p.y_minor) {
     const int y = l.to_pixel(l.x0, v).y;
-    cv::line(img, {r.x, y}, {r.br().x - 1, y}, kMinorGrid, 1);
+    all.pixel_line({r.x, y}, {r.br().x - 1, y}, kMinorGrid);
   }
   for (double v : l.y_ticks) {
     const int y = l.to_pixel(l.x0, v).y;
-    cv::line(img, {r.x, y}, {r.br().x - 1, y}, kGrid, 1);
+    all.pixel_line({r.x, y}, {r.br().x - 1, y}, kGrid);
   }
   for (double v : l.x_ticks) {
     const int x = l.to_pixel(v, l.y1).x;
-    cv::line(img, {x, r.y}, {x, r.br().y - 1}, kGrid, 1);
+    all.pixel_line({x, r.y}, {x, r.br().y - 1}, kGrid);
   }
 
   // Reference lines, data, reference labels.
-  Canvas plot(img, r, kPixelCentre);
+  Canvas plot(img, r, kPixelCentre, svg);
   for (const auto& [y, text] : chart.y_lines) {
     if (!usable(l.x0, y, l.log_y)) continue;
     const int py = l.to_pixel(l.x0, y).y;
-    if (py >= r.y && py < r.br().y) cv::line(img, {r.x, py}, {r.br().x - 1, py}, kRefLine, 1);
+    if (py >= r.y && py < r.br().y) all.pixel_line({r.x, py}, {r.br().x - 1, py}, kRefLine);
+  }
+  for (size_t i = 0; i < chart.series.size(); ++i) {
+    for (const auto& poly : band_polygons(l, chart.series[i])) {
+      plot.polygon(poly, scalar(chart_series_colour(i)), kBandAlpha);
+    }
   }
   for (size_t i = 0; i < chart.series.size(); ++i) draw_series(plot, l, chart.series[i], i);
-  Canvas all(img, cv::Rect(0, 0, img.cols, img.rows), kPixelCentre);
   for (const auto& ref : p.ref_labels) {
-    cv::rectangle(img, ref.box, kBackground, cv::FILLED);
+    all.fill_rect(ref.box, kBackground);
     all.text(ref.text, ref.org, kRefScale, kSubText);
   }
 
   // Frame and tick marks around the plot, then their texts.
-  cv::rectangle(img, cv::Point(r.x - 1, r.y - 1), r.br(), kFrame, 1);
+  all.frame_rect(cv::Rect(cv::Point(r.x - 1, r.y - 1), r.br() + cv::Point(1, 1)), kFrame);
   for (size_t i = 0; i < l.x_ticks.size(); ++i) {
     const int x = l.to_pixel(l.x_ticks[i], l.y1).x;
-    cv::line(img, {x, r.br().y}, {x, r.br().y + kTickLen}, kFrame, 1);
+    all.pixel_line({x, r.br().y}, {x, r.br().y + kTickLen}, kFrame);
     all.text(p.x_texts[i], {double(x), double(r.br().y + kTickLen + kTickGap + p.tick_h)},
              kTickScale, kSubText, 1, 1);
   }
   for (size_t i = 0; i < l.y_ticks.size(); ++i) {
     const int y = l.to_pixel(l.x0, l.y_ticks[i]).y;
-    cv::line(img, {r.x - 1 - kTickLen, y}, {r.x - 1, y}, kFrame, 1);
+    all.pixel_line({r.x - 1 - kTickLen, y}, {r.x - 1, y}, kFrame);
     all.text(p.y_texts[i], {double(r.x - 1 - kTickLen - kTickGap), y + p.tick_h / 2.0},
              kTickScale, kSubText, 1, 2);
   }
 
   // Legend, axis labels, title.
-  draw_legend(img, p, chart);
+  draw_legend(all, p, chart);
   if (!p.x_label.text.empty()) {
     const double y = r.br().y + kTickLen + kTickGap + p.tick_h + kLabelGap + p.x_label.size.height;
     all.text(p.x_label.text, {r.x + r.width / 2.0, y}, p.x_label.scale, kText, 1, 1);
   }
   if (!p.y_label.text.empty()) {
     const int x = kEdge + (p.y_label.size.height + p.y_label.baseline + 4) / 2;
-    vertical_text(img, p.y_label, {x, r.y + r.height / 2}, kText);
+    all.text_up(p.y_label.text, {x, r.y + r.height / 2}, p.y_label.scale, kText, p.y_label.thickness);
   }
   if (!p.title.text.empty()) {
     const double cx = std::clamp(r.x + r.width / 2.0, kEdge + p.title.size.width / 2.0,
@@ -822,10 +856,23 @@ cv::Mat draw_line_chart(const LineChart& chart, int width_px, int height_px) {
   return img;
 }
 
+}  // namespace
+
+cv::Mat draw_line_chart(const LineChart& chart, int width_px, int height_px) {
+  return draw_chart(chart, width_px, height_px, nullptr);
+}
+
+std::string line_chart_svg(const LineChart& chart, int width_px, int height_px) {
+  Svg svg(width_px, height_px);
+  draw_chart(chart, width_px, height_px, &svg);
+  return svg.document();
+}
+
 void write_line_chart(const LineChart& chart, const std::string& path_png, int width_px,
                       int height_px) {
   namespace fs = std::filesystem;
-  const cv::Mat img = draw_line_chart(chart, width_px, height_px);
+  Svg svg(width_px, height_px);
+  const cv::Mat img = draw_chart(chart, width_px, height_px, &svg);
   if (path_png.empty()) throw std::runtime_error("cannot write " + chart_name(chart) + ": empty path");
   const fs::path path(path_png);
   const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
@@ -853,6 +900,7 @@ void write_line_chart(const LineChart& chart, const std::string& path_png, int w
     throw std::runtime_error("cannot write " + chart_name(chart) + " to '" + path_png +
                              "': " + ec.message());
   }
+  write_text_file(svg_path_beside(path_png), svg.document(), chart_name(chart) + " (SVG)");
 }
 
 }  // namespace pbnbv

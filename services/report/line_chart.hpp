@@ -1,7 +1,8 @@
 #pragma once
 // Line charts for benchmark reports (coverage against views, planning time, ...): axes with
 // round tick values, a light grey grid, title and axis labels, a legend, horizontal reference
-// lines. Drawn with OpenCV (core, imgproc, imgcodecs), written as PNG.
+// lines. Drawn with OpenCV (core, imgproc, imgcodecs), written as PNG and SVG (the same
+// primitives through report/canvas.hpp).
 #include <opencv2/core.hpp>
 
 #include <cmath>
@@ -17,6 +18,10 @@ struct ChartSeries {
   std::vector<double> x, y;     // same size; a non-finite x or y leaves a gap in the line
   bool markers = true;          // draw a dot at each point
   bool dashed = false;          // e.g. a reference curve such as the paper's figures
+  // Optional spread (e.g. min and max over objects): when both have x's size, a translucent band
+  // in the series colour from lo to hi at each x (non-finite: a gap), under every line; the
+  // axis range and the legend placement take it into account.
+  std::vector<double> lo, hi;
 };
 
 struct LineChart {
@@ -36,9 +41,13 @@ struct LineChart {
 // chart (its title) when no series has a finite point (positive on a log axis), and when an axis
 // range is empty or (log_y) not positive or the image is smaller than 240 x 160.
 cv::Mat draw_line_chart(const LineChart& chart, int width_px = 960, int height_px = 600);
+inline constexpr double kBandAlpha = 0.18;
 
-// Draws and writes the chart as PNG, atomically (to path_png + ".tmp.png", then renamed).
-// Throws std::invalid_argument as draw_line_chart, and std::runtime_error naming the path when
+// The same chart as an SVG document (width_px x height_px user units, one per image pixel).
+std::string line_chart_svg(const LineChart& chart, int width_px = 960, int height_px = 600);
+
+// Draws and writes the chart as PNG, atomically (to path_png + ".tmp.png", then renamed), and as
+// SVG beside it (path_png with the extension ".svg"). Throws std::invalid_argument as draw_line_chart, and std::runtime_error naming the path when
 // its folder does not exist or the file cannot be written.
 void write_line_chart(const LineChart& chart, const std::string& path_png, int width_px = 960,
                       int height_px = 600);

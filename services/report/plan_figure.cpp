@@ -22,6 +22,7 @@ namespace pbnbv {
 namespace {
 
 using drawing::Canvas;
+using drawing::Svg;
 using drawing::kBlack;
 using drawing::kFont;
 using drawing::kFrame;
@@ -30,6 +31,7 @@ using drawing::kShift;
 using drawing::kSubText;
 using drawing::kText;
 using drawing::scalar;
+using drawing::text_size;
 
 
 
@@ -41,6 +43,7 @@ constexpr int kLabelBlock = 26;   // panel labels above the panels
 constexpr int kPanel = 440;       // panels 1 and 2 are kPanel x kPanel
 constexpr int kBottom = 14;
 constexpr int kMapW = 480;        // panel 3: kMapW x kMapW / 2
+constexpr int kMapStrip = 18;     // above panel 3: the sector names
 
 // Figure coordinates: pixel i covers [i, i+1), so its centre is at i + 0.5.
 constexpr double kPixelCentre = 0.5;
@@ -137,6 +140,14 @@ bool is_scored(const PlanFigure& f, size_t i) {
   return f.status[i] == CandidateStatus::kScored && std::isfinite(f.quality[i]);
 }
 
+// Marker radii (px) as the panels draw them, for keeping labels clear of them.
+constexpr double kCandidateRadius = 3.6;
+constexpr double kPastRadius = 10.0;    // disc 9 and its ring
+constexpr double kChosenRadius = 16.0;  // ring 15, 2 px wide
+constexpr double kSectorLabelScale = 0.42;
+constexpr double kLegendScale = 0.42;
+constexpr int kEdge = 12;               // right edge of the figure kept free
+
 // --- Markers, shared by the three panels ---
 
 void candidate_marker(Canvas& c, const cv::Point2d& p, const PlanFigure& f, size_t i,
@@ -178,6 +189,19 @@ void chosen_marker(Canvas& c, const cv::Point2d& p) {
   c.ring(p, 15.0, col, 2);
   c.disc(p, 9.5, kBlack);
   c.disc(p, 8.0, col);
+}
+
+// --- Panel 3's wrap-around ---
+
+// The map pixels of a camera centre: its own and, within `radius` of the 0 or 360 deg edge, its
+// copy at the other edge, so a marker there shows whole on both sides.
+std::vector<cv::Point2d> map_pixels(const PlanFigureLayout& l, const Eigen::Vector3d& eye, double radius) {
+  const Eigen::Vector2d ap = azimuth_polar_deg(eye, l.centre);
+  const cv::Point2d p = sphere_map_pixel(l, ap(0), ap(1));
+  std::vector<cv::Point2d> out{p};
+  if (p.x - l.map.x < radius) out.push_back(p + cv::Point2d(l.map.width, 0));
+  if (l.map.x + l.map.width - p.x < radius) out.push_back(p - cv::Point2d(l.map.width, 0));
+  return out;
 }
 
 // --- Panels 1 and 2 ---
@@ -233,16 +257,9 @@ void draw_sectors_top(Canvas& c, const PlanFigureLayout& l, const OrthoView& v,
     }
     return;
   }
-  const double r_label = 0.92 * v.rect.width / 2.0;
   for (int s = 0; s < f.beta; ++s) {
     const double a = f.sector_start_rad + s * w;
     c.line(o, {o.x + big * std::cos(a), o.y - big * std::sin(a)}, kSectorLine);
-    const double m = a + w / 2;
-    // Label on the panel edge along the mid-angle (clamped into the square).
-    const double dx = std::cos(m), dy = -std::sin(m);
-    const double k = r_label / std::max(std::abs(dx), std::abs(dy));
-    c.label("s" + std::to_string(s), {o.x + k * dx, o.y + k * dy}, 0.45, kSectorLine,
-            sector_background(f, s));
   }
 }
 
@@ -277,9 +294,7 @@ void draw_ellipsoids(Canvas& c, const PlanFigureLayout& l, const OrthoView& v,
                                                                    : PlanFigureColours::occupied());
     for (const auto& sh : shadows) {
       if (sh.cls != cls) continue;
-      cv::Mat before = c.mat().clone();
-      c.ellipse(sh.centre, sh.a, sh.b, sh.angle, col, cv::FILLED);
-      cv::addWeighted(c.mat(), alpha, before, 1.0 - alpha, 0.0, c.mat());
+      c.ellipse(sh.centre, sh.a, sh.b, sh.angle, col, cv::FILLED, alpha);
     }
     for (const auto& sh : shadows) {
       if (sh.cls != cls) continue;
@@ -288,9 +303,9 @@ void draw_ellipsoids(Canvas& c, const PlanFigureLayout& l, const OrthoView& v,
   }
 }
 
-void draw_ortho_panel(cv::Mat& fig, const PlanFigureLayout& l, const OrthoView& v,
+void draw_ortho_panel(cv::Mat& fig, Svg* svg, const PlanFigureLayout& l, const OrthoView& v,
                       const PlanFigure& f, const FRange& range, bool top) {
-  Canvas c(fig, v.rect, kPixelCentre);
+  Canvas c(fig, v.rect, kPixelCentre, svg);
   const double step = nice_step(2.0 * l.half_width_m);
   if (top) draw_sectors_top(c, l, v, f, false);
   draw_grid(c, l, v, step);
@@ -327,17 +342,22 @@ void draw_ortho_panel(cv::Mat& fig, const PlanFigureLayout& l, const OrthoView& 
     past_marker(c, ortho_pixel(l, v, f.past_views[k].translation()), static_cast<int>(k) + 1);
   }
   if (f.chosen >= 0) chosen_marker(c, ortho_pixel(l, v, f.candidates[f.chosen].translation()));
+  if (top) {  // sector names over everything, where no marker is
+    for (const auto& sl : sector_labels(l, f)) {
+      if (sl.in_top) c.label(sl.text, sl.centre, kSectorLabelScale, kSectorLine, sector_background(f, sl.sector));
+    }
+  }
 }
 
 // --- Panel 3 ---
 
-void draw_map_panel(cv::Mat& fig, const PlanFigureLayout& l, const PlanFigure& f,
+void draw_map_panel(cv::Mat& fig, Svg* svg, const PlanFigureLayout& l, const PlanFigure& f,
                     const FRange& range) {
   const cv::Rect& r = l.map;
   const double start_deg = f.sector_start_rad * 180.0 / kPi;
   auto wrap_deg = [](double a) { return a - 360.0 * std::floor(a / 360.0); };
   {
-    Canvas c(fig, r, kPixelCentre);
+    Canvas c(fig, r, kPixelCentre, svg);
     // Allowed sectors and sector boundaries.
     if (f.beta > 1) {
       for (int s : f.allowed_sectors) {
@@ -370,24 +390,25 @@ void draw_map_panel(cv::Mat& fig, const PlanFigureLayout& l, const PlanFigure& f
         if (a0 > 1e-9) c.line(sphere_map_pixel(l, a0, 0), sphere_map_pixel(l, a0, 180), kSectorLine);
       }
     }
-    auto map_of = [&](const Eigen::Vector3d& eye) {
-      const Eigen::Vector2d ap = azimuth_polar_deg(eye, l.centre);
-      return sphere_map_pixel(l, ap(0), ap(1));
-    };
+    // Markers near the 0/360 deg edges are drawn at both edges (the map wraps around).
     for (size_t i = 0; i < f.candidates.size(); ++i) {
-      candidate_marker(c, map_of(f.candidates[i].translation()), f, i, range, false);
+      for (const auto& p : map_pixels(l, f.candidates[i].translation(), kCandidateRadius)) {
+        candidate_marker(c, p, f, i, range, false);
+      }
     }
     for (size_t k = 0; k < f.past_views.size(); ++k) {
-      past_marker(c, map_of(f.past_views[k].translation()), static_cast<int>(k) + 1);
+      for (const auto& p : map_pixels(l, f.past_views[k].translation(), kPastRadius)) {
+        past_marker(c, p, static_cast<int>(k) + 1);
+      }
     }
-    if (f.chosen >= 0) chosen_marker(c, map_of(f.candidates[f.chosen].translation()));
-    for (int s = 0; f.beta > 1 && s < f.beta; ++s) {  // sector names over the markers
-      c.label("s" + std::to_string(s), sphere_map_pixel(l, wrap_deg(start_deg + 360.0 * (s + 0.5) / f.beta), 0) +
-                                           cv::Point2d(0, 11),
-              0.42, kSectorLine, sector_background(f, s));
+    if (f.chosen >= 0) {
+      for (const auto& p : map_pixels(l, f.candidates[f.chosen].translation(), kChosenRadius)) chosen_marker(c, p);
     }
   }
-  Canvas all(fig, cv::Rect(0, 0, fig.cols, fig.rows), kPixelCentre);
+  Canvas all(fig, cv::Rect(0, 0, fig.cols, fig.rows), kPixelCentre, svg);
+  for (const auto& sl : sector_labels(l, f)) {  // sector names in the strip above the map
+    if (!sl.in_top) all.label(sl.text, sl.centre, kSectorLabelScale, kSectorLine, sector_background(f, sl.sector));
+  }
   all.rect({double(r.x), double(r.y)}, {double(r.br().x), double(r.br().y)}, kFrame);
   for (int az = 0; az <= 360; az += 90) {
     all.text(std::to_string(az), sphere_map_pixel(l, az, 180) + cv::Point2d(0, 16), 0.4, kSubText,
@@ -404,11 +425,11 @@ void draw_map_panel(cv::Mat& fig, const PlanFigureLayout& l, const PlanFigure& f
   const cv::Rect& b = l.colour_bar;
   if (range.any) {
     for (int x = 0; x < b.width; ++x) {
-      cv::line(fig, {b.x + x, b.y}, {b.x + x, b.y + b.height - 1},
-               colour_map(b.width > 1 ? x / double(b.width - 1) : 0.5));
+      all.pixel_line({b.x + x, b.y}, {b.x + x, b.y + b.height - 1},
+                     colour_map(b.width > 1 ? x / double(b.width - 1) : 0.5));
     }
   } else {
-    cv::rectangle(fig, b, cv::Scalar(240, 240, 240), cv::FILLED);
+    all.fill_rect(b, cv::Scalar(240, 240, 240));
     all.text("no scored candidates", {b.x + b.width / 2.0, b.y + b.height - 3.0}, 0.4, kSubText, 1,
              1);
   }
@@ -432,48 +453,173 @@ void draw_map_panel(cv::Mat& fig, const PlanFigureLayout& l, const PlanFigure& f
              x > b.x + b.width * 0.75 ? 2 : x < b.x + b.width * 0.25 ? 0 : 1);
   }
 
-  // Legend.
-  const double y1 = b.br().y + 44.0, y2 = y1 + 26.0;
-  double x = r.x;
-  auto item = [&](double y, double& xx, const std::string& label, auto&& marker,
-                  double half = 10.0) {
-    marker(cv::Point2d(xx + half, y - 4));
-    all.text(label, {xx + 2 * half + 5, y}, 0.42, kText);
-    int base = 0;
-    xx += 2 * half + 5 + cv::getTextSize(label, kFont, 0.42, 1, &base).width + 18;
+  // Legend, as laid out by legend_items.
+  auto swatch = [&all](const cv::Point2d& p, const cv::Vec3b& col) {
+    const cv::Scalar c = mix(scalar(PlanFigureColours::background()), scalar(col), PlanFigureColours::fill_alpha());
+    all.ellipse(p, 10, 6, 0, c, cv::FILLED);
+    all.ellipse(p, 10, 6, 0, darker(scalar(col), 0.25), 1);
   };
-  item(y1, x, "chosen", [&](cv::Point2d p) { chosen_marker(all, p); }, 15.0);
-  item(y1, x, "past view", [&](cv::Point2d p) { past_marker(all, p, 1); });
-  item(y1, x, "unreachable", [&](cv::Point2d p) { all.cross(p, 2.5, kBlack); });
-  item(y1, x, "outside partition",
-       [&](cv::Point2d p) { all.disc(p, 2.0, kOutsideColour); });
-  x = r.x;
-  auto swatch = [&](const cv::Vec3b& col) {
-    return [&all, col](cv::Point2d p) {
-      const cv::Scalar c = mix(scalar(PlanFigureColours::background()), scalar(col),
-                               PlanFigureColours::fill_alpha());
-      all.ellipse(p, 10, 6, 0, c, cv::FILLED);
-      all.ellipse(p, 10, 6, 0, darker(scalar(col), 0.25), 1);
-    };
-  };
-  item(y2, x, "occupied ellipsoid", swatch(PlanFigureColours::occupied()));
-  item(y2, x, "frontier ellipsoid", swatch(PlanFigureColours::frontier()));
-  if (f.beta > 1) {
-    item(y2, x, "allowed sectors", [&](cv::Point2d p) {
-      all.polygon({p + cv::Point2d(-10, -7), p + cv::Point2d(10, -7), p + cv::Point2d(10, 7),
-                   p + cv::Point2d(-10, 7)},
-                  kAllowedShade);
-      all.rect(p + cv::Point2d(-10, -7), p + cv::Point2d(10, 7), kFrame);
-    });
+  for (const LegendItem& it : legend_items(l, f)) {
+    const cv::Point2d p = it.marker;
+    switch (it.kind) {
+      case LegendKind::kChosen: chosen_marker(all, p); break;
+      case LegendKind::kPast: past_marker(all, p, 1); break;
+      case LegendKind::kUnreachable: all.cross(p, 2.5, kBlack); break;
+      case LegendKind::kOutside: all.disc(p, 2.0, kOutsideColour); break;
+      case LegendKind::kOccupied: swatch(p, PlanFigureColours::occupied()); break;
+      case LegendKind::kFrontier: swatch(p, PlanFigureColours::frontier()); break;
+      case LegendKind::kAllowed:
+        all.polygon({p + cv::Point2d(-10, -7), p + cv::Point2d(10, -7), p + cv::Point2d(10, 7),
+                     p + cv::Point2d(-10, 7)},
+                    kAllowedShade);
+        all.rect(p + cv::Point2d(-10, -7), p + cv::Point2d(10, 7), kFrame);
+        break;
+      case LegendKind::kExcluded: all.cross(p, 2.5, kExcludedColour); break;
+      case LegendKind::kNote: break;
+    }
+    all.text(it.text, it.text_org, it.kind == LegendKind::kNote ? 0.4 : kLegendScale,
+             it.kind == LegendKind::kNote ? kSubText : kText);
   }
-  if (std::find(f.status.begin(), f.status.end(), CandidateStatus::kExcluded) != f.status.end()) {
-    item(y2, x, "excluded", [&](cv::Point2d p) { all.cross(p, 2.5, kExcludedColour); });
-  }
-  all.text("paler markers: far side (below / behind the centre)", {double(r.x), y2 + 24.0}, 0.4,
-           kSubText);
 }
 
 }  // namespace
+
+namespace {
+
+struct Marker {
+  cv::Point2d p;
+  double r;
+};
+
+// Does a box (centre c, half extents h) come within r + 1 px of p?
+bool touches(const cv::Point2d& c, const cv::Point2d& h, const Marker& m) {
+  const double dx = std::max(std::abs(m.p.x - c.x) - h.x, 0.0), dy = std::max(std::abs(m.p.y - c.y) - h.y, 0.0);
+  return dx * dx + dy * dy < (m.r + 1.0) * (m.r + 1.0);
+}
+
+// The first spot whose box keeps clear of every marker (inside `panel`), else the one touching
+// fewest.
+cv::Point2d place(const std::vector<cv::Point2d>& spots, const cv::Point2d& h, const std::vector<Marker>& markers,
+                  const cv::Rect& panel) {
+  cv::Point2d best = spots.front();
+  size_t best_n = std::numeric_limits<size_t>::max();
+  for (cv::Point2d c : spots) {
+    c.x = std::clamp(c.x, panel.x + h.x + 1, panel.br().x - h.x - 1);
+    c.y = std::clamp(c.y, panel.y + h.y + 1, panel.br().y - h.y - 1);
+    size_t n = 0;
+    for (const Marker& m : markers) n += touches(c, h, m) ? 1 : 0;
+    if (n == 0) return c;
+    if (n < best_n) {
+      best_n = n;
+      best = c;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+std::vector<SectorLabel> sector_labels(const PlanFigureLayout& l, const PlanFigure& f) {
+  std::vector<SectorLabel> out;
+  if (f.beta <= 1) return out;
+  const double w = 2 * kPi / f.beta;
+  const OrthoView top{l.top, 0, 1, 2, 1.0};
+  std::vector<Marker> top_markers;
+  for (size_t i = 0; i < f.candidates.size(); ++i) {
+    top_markers.push_back({ortho_pixel(l, top, f.candidates[i].translation()), kCandidateRadius});
+  }
+  for (const auto& v : f.past_views) top_markers.push_back({ortho_pixel(l, top, v.translation()), kPastRadius});
+  if (f.chosen >= 0) top_markers.push_back({ortho_pixel(l, top, f.candidates[f.chosen].translation()), kChosenRadius});
+  const cv::Point2d o = ortho_pixel(l, top, l.centre);
+  // Candidates and past views lie within this radius of the centre in the top view.
+  const double ring = (l.top.width / 2.0) / 1.1;
+  for (int s = 0; s < f.beta; ++s) {
+    SectorLabel sl;
+    sl.sector = s;
+    sl.text = "s" + std::to_string(s);
+    const cv::Size sz = text_size(sl.text, kSectorLabelScale, 1);
+    const cv::Point2d h(sz.width / 2.0 + 3, sz.height / 2.0 + 3);
+    // Top view: just outside the ring of camera centres, across the sector from its middle
+    // outwards, then inwards along its middle.
+    std::vector<cv::Point2d> spots;
+    for (double t : {0.5, 0.4, 0.6, 0.3, 0.7, 0.2, 0.8, 0.1, 0.9}) {
+      const double a = f.sector_start_rad + (s + t) * w;
+      const cv::Point2d u(std::cos(a), -std::sin(a));
+      const double d = ring + kCandidateRadius + 2 + h.x * std::abs(u.x) + h.y * std::abs(u.y);
+      spots.push_back(o + u * d);
+    }
+    for (double k = 0.9; k > 0.2; k -= 0.05) {
+      const double a = f.sector_start_rad + (s + 0.5) * w;
+      spots.push_back(o + cv::Point2d(std::cos(a), -std::sin(a)) * (k * ring));
+    }
+    sl.in_top = true;
+    sl.centre = place(spots, h, top_markers, l.top);
+    sl.box = cv::Rect2d(sl.centre - h, sl.centre + h);
+    top_markers.push_back({sl.centre, std::hypot(h.x, h.y)});  // labels keep clear of each other
+    out.push_back(sl);
+    // Map: in the strip above it (no marker there), over the sector's middle azimuth.
+    double az = f.sector_start_rad * 180.0 / kPi + 360.0 * (s + 0.5) / f.beta;
+    az -= 360.0 * std::floor(az / 360.0);
+    sl.in_top = false;
+    sl.centre = cv::Point2d(std::clamp(sphere_map_pixel(l, az, 0).x, l.map.x + h.x, l.map.br().x - h.x),
+                            l.map.y - kMapStrip / 2.0);
+    sl.box = cv::Rect2d(sl.centre - h, sl.centre + h);
+    out.push_back(sl);
+  }
+  return out;
+}
+
+std::vector<LegendItem> legend_items(const PlanFigureLayout& l, const PlanFigure& f) {
+  std::vector<std::vector<std::pair<LegendKind, std::string>>> groups = {
+      {{LegendKind::kChosen, "chosen"},
+       {LegendKind::kPast, "past view"},
+       {LegendKind::kUnreachable, "unreachable"},
+       {LegendKind::kOutside, "outside partition"}},
+      {{LegendKind::kOccupied, "occupied ellipsoid"}, {LegendKind::kFrontier, "frontier ellipsoid"}}};
+  if (f.beta > 1) groups[1].push_back({LegendKind::kAllowed, "allowed sectors"});
+  if (std::find(f.status.begin(), f.status.end(), CandidateStatus::kExcluded) != f.status.end()) {
+    groups[1].push_back({LegendKind::kExcluded, "excluded"});
+  }
+  std::vector<LegendItem> out;
+  const double right = l.size.width - kEdge;
+  double y = l.colour_bar.br().y + 44.0;
+  int base = 0;
+  for (const auto& g : groups) {
+    double x = l.map.x;
+    for (const auto& [kind, text] : g) {
+      const double half = kind == LegendKind::kChosen ? 15.0 : 10.0;
+      const cv::Size ts = text_size(text, kLegendScale, 1, &base);
+      const double width = 2 * half + 5 + ts.width;
+      if (x > l.map.x && x + width > right) {  // wrap onto a new row
+        x = l.map.x;
+        y += 26.0;
+      }
+      LegendItem it;
+      it.kind = kind;
+      it.text = text;
+      it.marker = cv::Point2d(x + half, y - 4);
+      it.text_org = cv::Point2d(x + 2 * half + 5, y);
+      const double mh = kind == LegendKind::kChosen      ? 16.0
+                        : kind == LegendKind::kPast      ? 10.0
+                        : kind == LegendKind::kAllowed   ? 8.0
+                        : kind == LegendKind::kOccupied || kind == LegendKind::kFrontier ? 7.0
+                                                         : 3.5;
+      const double top = std::min(y - 4 - mh, y - ts.height), bottom = std::max(y - 4 + mh, y + base);
+      it.box = cv::Rect2d(x, top, width, bottom - top);
+      out.push_back(it);
+      x += width + 18;
+    }
+    y += 26.0;
+  }
+  LegendItem note;
+  note.kind = LegendKind::kNote;
+  note.text = "paler markers: far side (below / behind the centre)";
+  const cv::Size ns = text_size(note.text, 0.4, 1, &base);
+  note.text_org = note.marker = cv::Point2d(l.map.x, y - 2.0);
+  note.box = cv::Rect2d(l.map.x, y - 2.0 - ns.height, ns.width, ns.height + base);
+  out.push_back(note);
+  return out;
+}
 
 Eigen::Vector2d azimuth_polar_deg(const Eigen::Vector3d& eye, const Eigen::Vector3d& centre) {
   const Eigen::Vector3d d = eye - centre;
@@ -492,9 +638,14 @@ PlanFigureLayout plan_figure_layout(const PlanFigure& f) {
   l.size = cv::Size(kWidth, py + kPanel + kBottom);
   l.top = cv::Rect(20, py, kPanel, kPanel);
   l.side = cv::Rect(l.top.br().x + 30, py, kPanel, kPanel);
-  l.map = cv::Rect(l.side.br().x + 60, py, kMapW, kMapW / 2);
+  l.map = cv::Rect(l.side.br().x + 60, py + kMapStrip, kMapW, kMapW / 2);
   l.colour_bar = cv::Rect(l.map.x, l.map.br().y + 72, kMapW, 14);
   l.centre = f.centre;
+  cv::Rect2d legend;
+  for (const LegendItem& it : legend_items(l, f)) legend = legend.empty() ? it.box : (legend | it.box);
+  l.legend = cv::Rect(cv::Point(int(std::floor(legend.x)), int(std::floor(legend.y))),
+                      cv::Point(int(std::ceil(legend.br().x)), int(std::ceil(legend.br().y))));
+  l.size.height = std::max(l.size.height, l.legend.br().y + 4);
 
   double r = 0;
   for (const auto& c : f.candidates) r = std::max(r, (c.translation() - f.centre).norm());
@@ -526,13 +677,15 @@ cv::Point2d sphere_map_pixel(const PlanFigureLayout& l, double azimuth_deg, doub
                      l.map.y + polar_deg / 180.0 * l.map.height);
 }
 
-cv::Mat draw_plan_figure(const PlanFigure& f) {
+namespace {
+
+cv::Mat draw_figure(const PlanFigure& f, Svg* svg) {
   validate(f);
   const PlanFigureLayout l = plan_figure_layout(f);
   cv::Mat fig(l.size, CV_8UC3, scalar(PlanFigureColours::background()));
   const FRange range = f_range(f);
 
-  Canvas all(fig, cv::Rect(0, 0, fig.cols, fig.rows), kPixelCentre);
+  Canvas all(fig, cv::Rect(0, 0, fig.cols, fig.rows), kPixelCentre, svg);
   all.text(f.title, {20.0, 30.0}, 0.75, kBlack, 2);
   for (size_t i = 0; i < f.lines.size(); ++i) {
     all.text(f.lines[i], {22.0, 30.0 + kLineStep * (i + 1.0)}, 0.5, kText);
@@ -540,9 +693,9 @@ cv::Mat draw_plan_figure(const PlanFigure& f) {
 
   const OrthoView top{l.top, 0, 1, 2, 1.0};     // seen from above: larger z is nearer
   const OrthoView side{l.side, 0, 2, 1, -1.0};  // seen from -y: smaller y is nearer
-  draw_ortho_panel(fig, l, top, f, range, true);
-  draw_ortho_panel(fig, l, side, f, range, false);
-  draw_map_panel(fig, l, f, range);
+  draw_ortho_panel(fig, svg, l, top, f, range, true);
+  draw_ortho_panel(fig, svg, l, side, f, range, false);
+  draw_map_panel(fig, svg, l, f, range);
 
   const double step = nice_step(2.0 * l.half_width_m);
   for (const auto* v : {&top, &side}) {
@@ -553,15 +706,28 @@ cv::Mat draw_plan_figure(const PlanFigure& f) {
   all.text("top view (x right, y up)" + grid, {double(l.top.x), l.top.y - 8.0}, 0.5, kText);
   all.text("side view (x right, z up)" + grid, {double(l.side.x), l.side.y - 8.0}, 0.5, kText);
   all.text("candidate sphere: azimuth vs polar angle from +z (deg)",
-           {double(l.map.x) - 40.0, l.map.y - 8.0}, 0.5, kText);
+           {double(l.map.x) - 40.0, l.map.y - kMapStrip - 8.0}, 0.5, kText);
   if (f.chosen < 0) {
     all.text("no view chosen (stop)", {kWidth - 20.0, 30.0}, 0.75, cv::Scalar(0, 0, 200), 2, 2);
   }
   return fig;
 }
 
+}  // namespace
+
+cv::Mat draw_plan_figure(const PlanFigure& f) { return draw_figure(f, nullptr); }
+
+std::string plan_figure_svg(const PlanFigure& f) {
+  const PlanFigureLayout l = plan_figure_layout(f);
+  Svg svg(l.size.width, l.size.height);
+  draw_figure(f, &svg);
+  return svg.document();
+}
+
 void write_plan_figure(const PlanFigure& f, const std::string& path) {
-  const cv::Mat fig = draw_plan_figure(f);
+  const PlanFigureLayout l = plan_figure_layout(f);
+  Svg svg(l.size.width, l.size.height);
+  const cv::Mat fig = draw_figure(f, &svg);
   std::vector<uchar> png;
   if (!cv::imencode(".png", fig, png, {cv::IMWRITE_PNG_COMPRESSION, 6})) {
     throw std::runtime_error("cannot encode plan figure for '" + path + "'");
@@ -572,6 +738,7 @@ void write_plan_figure(const PlanFigure& f, const std::string& path) {
   }
   out.close();
   if (!out) throw std::runtime_error("cannot write plan figure to '" + path + "'");
+  drawing::write_text_file(drawing::svg_path_beside(path), svg.document(), "plan figure (SVG)");
 }
 
 PlanFigure plan_figure(const PlanInput& in, const PlanResult& r, const std::string& title) {

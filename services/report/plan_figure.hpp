@@ -34,7 +34,8 @@ struct PlanFigure {
   std::string quality_label = "view quality F of the scored candidates";  // the colour bar's
 };
 
-// Draws the figure (BGR 8-bit, 1500 px wide, 520 + 20 per text line high; 560 with two lines):
+// Draws the figure (BGR 8-bit, 1500 px wide, 520 + 20 per text line high, 560 with two lines;
+// taller when the legend needs more rows):
 // a header (title, then `lines`) above three panels
 //  1. top view (x right, y up, orthographic) and 2. side view (x right, z up), each a square
 //     world region centred on `centre` with half-width 1.1 x the largest distance of a candidate
@@ -46,13 +47,18 @@ struct PlanFigure {
 //     past views as numbered white circles, the chosen view as a large magenta marker with a
 //     line to `centre`; in the top view, the sector boundaries with the allowed sectors shaded;
 //  3. a map of the candidate sphere, azimuth about `centre` (0..360 deg, x) against the polar
-//     angle from +z (0..180 deg, y), with the same markers, and a colour bar of F over the
-//     scored candidates (min..max).
+//     angle from +z (0..180 deg, y), with the same markers (those at the 0/360 deg edges drawn
+//     at both edges), and a colour bar of F over the scored candidates (min..max);
+// sector names where no marker is (sector_labels) and a legend within the width (legend_items).
 // Throws std::invalid_argument naming the field when quality or status differ in size from
 // candidates or chosen is out of range.
 cv::Mat draw_plan_figure(const PlanFigure& f);
 
-// Draws and writes the figure as PNG. Throws std::invalid_argument as draw_plan_figure, and
+// The same figure as an SVG document (one user unit per figure pixel).
+std::string plan_figure_svg(const PlanFigure& f);
+
+// Draws and writes the figure as PNG, and as SVG beside it (path with the extension ".svg").
+// Throws std::invalid_argument as draw_plan_figure, and
 // std::runtime_error naming the path when the file cannot be written.
 void write_plan_figure(const PlanFigure& f, const std::string& path);
 
@@ -64,11 +70,36 @@ struct PlanFigureLayout {
   cv::Rect side;              // panel 2 (square, same size)
   cv::Rect map;               // panel 3 (2:1, azimuth 0..360 x polar 0..180)
   cv::Rect colour_bar;
+  cv::Rect legend;            // bounding box of the legend under the colour bar (wraps into rows
+                              // within the figure's width; the figure grows to hold them)
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   double half_width_m = 1.0;  // world half-width shown by panels 1 and 2
 };
 
 PlanFigureLayout plan_figure_layout(const PlanFigure& f);
+
+// A sector's name ("s0", ...) on a box centred on `centre`, drawn over everything: in panel 1
+// (in_top) where it covers no marker (candidates, past views, the chosen view) if such a spot
+// exists just outside the ring of camera centres or along the sector's middle, else where it
+// covers fewest; for panel 3, in an 18-px strip above the map over the sector's middle azimuth.
+struct SectorLabel {
+  int sector = 0;
+  bool in_top = true;
+  std::string text;
+  cv::Point2d centre;
+  cv::Rect2d box;
+};
+std::vector<SectorLabel> sector_labels(const PlanFigureLayout& l, const PlanFigure& f);
+
+// The legend's items under the colour bar, in rows that wrap within the figure's width.
+enum class LegendKind { kChosen, kPast, kUnreachable, kOutside, kOccupied, kFrontier, kAllowed, kExcluded, kNote };
+struct LegendItem {
+  LegendKind kind;
+  std::string text;
+  cv::Point2d marker, text_org;  // marker centre; text baseline start
+  cv::Rect2d box;                // marker and text
+};
+std::vector<LegendItem> legend_items(const PlanFigureLayout& l, const PlanFigure& f);
 
 // Figure pixel coordinates (x right, y down; pixel (i, j) covers [i, i+1) x [j, j+1), so a
 // point's pixel is (floor(x), floor(y))) of a world point in panel 1 (its x, y) and panel 2

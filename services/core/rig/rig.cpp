@@ -26,6 +26,7 @@
 // (in a batch the neighbouring candidate's solution; the current configuration and home; spread
 // seeds), each stage checked before the next is solved.
 #include "core/rig/rig.hpp"
+#include "core/base/install_paths.hpp"
 #include "core/base/format.hpp"
 #include "core/base/units.hpp"
 
@@ -855,9 +856,7 @@ std::string to_string(RigKind kind) { return std::string(name_of(kind)); }
 RigKind parse_rig_kind(const std::string& s) { return parse_name<RigKind>(s); }
 
 std::string model_file_path(const std::string& file_name) {
-  const char* env = std::getenv("PBNBV_MODELS_DIR");
-  const std::string dir = (env && *env) ? std::string(env) : std::string(PBNBV_MODELS_DIR);
-  return dir + "/" + file_name;
+  return resource_dir("PBNBV_MODELS_DIR", "models", PBNBV_MODELS_DIR) + "/" + file_name;
 }
 
 std::string default_rig_path(RigKind kind) { return model_file_path("rig_" + to_string(kind) + ".xml"); }

@@ -8,7 +8,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <functional>
 #include <limits>
 #include <stdexcept>
@@ -249,6 +252,38 @@ TEST(LineChart, LegendAvoidsDataOrGoesOutside) {
   EXPECT_TRUE(chart_layout(c, 960, 600).legend.empty());
 }
 
+// A band from lo to hi in the series colour at kBandAlpha over white: inside it the blend, outside
+// white; the axis range grows to hold it; a band of the wrong size throws naming the series.
+TEST(LineChart, BandShowsTheSpread) {
+  LineChart c = diagonal();
+  c.y_min = -5;
+  c.y_max = 15;
+  ChartSeries& s = c.series[0];
+  for (int i = 0; i <= 10; ++i) {
+    s.lo.push_back(i - 3.0);
+    s.hi.push_back(i + 3.0);
+  }
+  const ChartLayout l = chart_layout(c);
+  const cv::Mat img = draw_line_chart(c);
+  const cv::Vec3b col = chart_series_colour(0);
+  cv::Vec3b blend;
+  for (int k = 0; k < 3; ++k) blend[k] = cv::saturate_cast<uchar>(kBandAlpha * col[k] + (1 - kBandAlpha) * 255);
+  // (5, 7): 2 above the line, inside the band; (5, 9.5): outside it (grid lines at 10, not 9.5).
+  EXPECT_LE(distance(at(img, l.to_pixel(5.5, 7.5)), blend), 3);
+  EXPECT_EQ(at(img, l.to_pixel(5.5, 9.7)), cv::Vec3b(255, 255, 255));
+  EXPECT_LE(distance(at(img, l.to_pixel(5.5, 3.5)), blend), 3);
+  // Without fixed y limits, the range holds the band (lo -3 at x = 0, hi 13 at x = 10).
+  LineChart d = c;
+  d.y_min = d.y_max = kNaN;
+  const ChartLayout m = chart_layout(d);
+  EXPECT_LE(m.y0, -3.0);
+  EXPECT_GE(m.y1, 13.0);
+  LineChart bad = diagonal();
+  bad.series[0].lo = {1, 2};
+  bad.series[0].hi = {1, 2};
+  expect_throw<std::invalid_argument>([&] { draw_line_chart(bad); }, "series 0 'y = x'");
+}
+
 TEST(LineChart, PaletteColoursAreDistinct) {
   for (size_t i = 0; i < 7; ++i) {
     for (size_t j = i + 1; j < 7; ++j) {
@@ -300,6 +335,43 @@ TEST_F(LineChartFile, WritesPngOfTheRequestedSize) {
 
   write_line_chart(c, p, 640, 400);  // replaces the file
   EXPECT_EQ(cv::imread(p).size(), cv::Size(640, 400));
+}
+
+std::string read_all(const std::string& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The SVG beside the PNG draws the same primitives: the same size, the title, and each data
+// point's marker at the PNG's pixel centre (pixel i covers [i, i+1) in SVG units).
+TEST_F(LineChartFile, WritesSvgBesideThePngWithTheSamePrimitives) {
+  const LineChart c = diagonal();
+  const std::string p = path("chart.png");
+  write_line_chart(c, p, 640, 400);
+  const std::string svg = read_all(path("chart.svg"));
+  ASSERT_FALSE(svg.empty());
+  EXPECT_EQ(svg, line_chart_svg(c, 640, 400));
+  EXPECT_NE(svg.find("<svg "), std::string::npos);
+  EXPECT_NE(svg.find("width=\"640\" height=\"400\""), std::string::npos);
+  EXPECT_NE(svg.find(">diagonal</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">y = x</text>"), std::string::npos);  // legend
+  const ChartLayout l = chart_layout(c, 640, 400);
+  const cv::Vec3b col = chart_series_colour(0);
+  char fill[8];
+  std::snprintf(fill, sizeof(fill), "#%02x%02x%02x", col[2], col[1], col[0]);
+  for (int i = 0; i <= 10; ++i) {
+    const cv::Point2d q = l.to_pixel_exact(i, i);
+    char circle[160];
+    std::snprintf(circle, sizeof(circle), "<circle clip-path=\"url(#c0)\" cx=\"%.2f\" cy=\"%.2f\" r=\"3.50\" fill=\"%s\"/>",
+                  q.x + 0.5, q.y + 0.5, fill);
+    EXPECT_NE(svg.find(circle), std::string::npos) << "no marker " << circle;
+  }
+  // Escaped text.
+  LineChart d = diagonal();
+  d.title = "a < b & c";
+  EXPECT_NE(line_chart_svg(d).find(">a &lt; b &amp; c</text>"), std::string::npos);
 }
 
 TEST_F(LineChartFile, UnwritablePathThrowsNamingIt) {

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include "file_test_util.hpp"
@@ -249,6 +251,24 @@ TEST_F(PlanFigureFile, WritesPngThatReadsBack) {
   EXPECT_EQ(cv::imread(q, cv::IMREAD_COLOR).size(), back.size());
 }
 
+// The SVG beside the PNG: same size, the title, the chosen marker's disc at the chosen
+// candidate's top-view pixel in the chosen colour.
+TEST_F(PlanFigureFile, WritesSvgBesidePng) {
+  const PlanFigure f = one_candidate();
+  write_plan_figure(f, path("step.png"));
+  std::ifstream in(path("step.svg"));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  const std::string svg = ss.str();
+  EXPECT_EQ(svg, plan_figure_svg(f));
+  EXPECT_NE(svg.find("width=\"1500\" height=\"560\""), std::string::npos);
+  EXPECT_NE(svg.find(">test - view 1 of 1</text>"), std::string::npos);
+  const cv::Point2d p = top_view_pixel(plan_figure_layout(f), Eigen::Vector3d(1, 0, 0));
+  char disc[160];
+  std::snprintf(disc, sizeof(disc), "cx=\"%.2f\" cy=\"%.2f\" r=\"8.00\" fill=\"#dc1ec8\"/>", p.x, p.y);
+  EXPECT_NE(svg.find(disc), std::string::npos) << disc;
+}
+
 TEST_F(PlanFigureFile, UnwritablePathThrowsNamingIt) {
   const std::string p = path("no/such/dir/step.png");
   testing::expect_error([&] { write_plan_figure(one_candidate(), p); }, {p});
@@ -380,6 +400,82 @@ PlanFigure realistic_step() {
   f.lines = {buf, "800 candidates on a sphere of r = 0.6 m; beta = 4, allowed sectors " + allowed +
                       "; timings: ellipsoids 41 ms, scoring 18 ms"};
   return f;
+}
+
+// Every legend entry lies inside the figure (12 px clear of the right edge), none overlaps
+// another, and the last one is drawn: with a partition and an excluded candidate the second row
+// wraps.
+TEST(PlanFigure, LegendLiesInsideTheFigure) {
+  PlanFigure f = realistic_step();
+  f.status[0] = CandidateStatus::kExcluded;
+  const PlanFigureLayout l = plan_figure_layout(f);
+  const cv::Mat img = draw_plan_figure(f);
+  const std::vector<LegendItem> items = legend_items(l, f);
+  ASSERT_EQ(items.size(), 9u);  // 4 + 4 + the note
+  const cv::Rect2d inside(0, 0, img.cols - 12, img.rows);
+  for (size_t i = 0; i < items.size(); ++i) {
+    EXPECT_EQ(items[i].box & inside, items[i].box) << items[i].text;
+    EXPECT_EQ(cv::Rect2d(l.legend) & items[i].box, items[i].box) << items[i].text;
+    for (size_t j = 0; j < i; ++j) {
+      EXPECT_LE((items[i].box & items[j].box).area(), 0.0) << items[i].text << " / " << items[j].text;
+    }
+  }
+  EXPECT_EQ(l.legend & cv::Rect(0, 0, img.cols, img.rows), l.legend);
+  EXPECT_EQ(items[7].text, "excluded");
+  EXPECT_GT(items[7].box.y, items[4].box.y);  // wrapped onto its own row
+  // The excluded cross is drawn at its marker (red ink, not background).
+  expect_colour(at(img, items[7].marker), cv::Vec3b(30, 30, 210), 60, "excluded legend cross");
+}
+
+// A view at azimuth 0 is drawn at both edges of the sphere map, whole: the chosen marker's
+// magenta disc (radius 8) shows just inside the left edge and just inside the right edge, and a
+// past view's black ring (radius 9) likewise.
+TEST(PlanFigure, ViewAtAzimuthZeroIsDrawnAtBothEdges) {
+  PlanFigure f = one_candidate();  // chosen at (1, 0, 0): azimuth 0, polar 90
+  f.past_views = {look_at_z_up(Eigen::Vector3d(0.5, 0, 0.5 * std::sqrt(3.0)), Eigen::Vector3d::Zero())};  // polar 30
+  const PlanFigureLayout l = plan_figure_layout(f);
+  const cv::Mat img = draw_plan_figure(f);
+  const cv::Point2d left = sphere_map_pixel(l, 0, 90), right = sphere_map_pixel(l, 360, 90);
+  expect_colour(at(img, left + cv::Point2d(3, 0)), PlanFigureColours::chosen(), 0, "chosen, left edge");
+  expect_colour(at(img, right + cv::Point2d(-4, 0)), PlanFigureColours::chosen(), 0, "chosen, right edge");
+  const cv::Point2d pl = sphere_map_pixel(l, 0, 30), pr = sphere_map_pixel(l, 360, 30);
+  EXPECT_LT(int(at(img, pl + cv::Point2d(9, 0))[0]), 128) << "past view ring, left";
+  EXPECT_LT(int(at(img, pr + cv::Point2d(-9, 0))[0]), 128) << "past view ring, right";
+  EXPECT_EQ(at(img, pr + cv::Point2d(-5, 0)), PlanFigureColours::past_view()) << "past view disc, right";
+}
+
+// Sector names: one per sector in the top view and one over the map, inside their panel, clear of
+// every marker (candidates, past views, chosen), and drawn over everything (the box's corner
+// has the sector's background colour).
+TEST(PlanFigure, SectorLabelsKeepClearOfMarkers) {
+  const PlanFigure f = realistic_step();
+  const PlanFigureLayout l = plan_figure_layout(f);
+  const cv::Mat img = draw_plan_figure(f);
+  const std::vector<SectorLabel> labels = sector_labels(l, f);
+  ASSERT_EQ(labels.size(), 8u);
+  auto clear = [](const cv::Rect2d& b, const cv::Point2d& p, double r) {
+    const double dx = std::max({b.x - p.x, p.x - b.br().x, 0.0}), dy = std::max({b.y - p.y, p.y - b.br().y, 0.0});
+    return dx * dx + dy * dy >= r * r;
+  };
+  for (const SectorLabel& s : labels) {
+    // Panel 3's names sit in the 18-px strip above the map.
+    const cv::Rect2d panel = s.in_top ? cv::Rect2d(l.top) : cv::Rect2d(l.map.x, l.map.y - 18, l.map.width, 18);
+    EXPECT_EQ(s.box & panel, s.box) << s.text;
+    for (size_t i = 0; i < f.candidates.size(); ++i) {
+      const Eigen::Vector3d e = f.candidates[i].translation();
+      const Eigen::Vector2d ap = azimuth_polar_deg(e, f.centre);
+      const cv::Point2d p = s.in_top ? top_view_pixel(l, e) : sphere_map_pixel(l, ap(0), ap(1));
+      EXPECT_TRUE(clear(s.box, p, 3.6)) << s.text << (s.in_top ? " (top)" : " (map)") << " covers candidate " << i;
+    }
+    for (const Pose& v : f.past_views) {
+      const Eigen::Vector2d ap = azimuth_polar_deg(v.translation(), f.centre);
+      const cv::Point2d p = s.in_top ? top_view_pixel(l, v.translation()) : sphere_map_pixel(l, ap(0), ap(1));
+      EXPECT_TRUE(clear(s.box, p, 10.0)) << s.text << " covers a past view";
+    }
+    const bool allowed = std::count(f.allowed_sectors.begin(), f.allowed_sectors.end(), s.sector) > 0;
+    const cv::Vec3b bg = allowed ? cv::Vec3b(228, 246, 230) : PlanFigureColours::background();
+    expect_colour(at(img, s.box.tl() + cv::Point2d(1.5, 1.5)), bg, 0, "label box corner");
+  }
 }
 
 TEST(PlanFigure, RealisticStep) {

@@ -1,0 +1,141 @@
+// The benchmark's summary and report with a failed scan: the means, titles and spread count only
+// the completed scans, the failure's reason (from scan.json or the log) is in report.md and
+// summary.json, and the plots come as PNG and SVG.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/io/json.hpp"
+#include "eval/bench.hpp"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace pbnbv::eval {
+namespace {
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class BenchReport : public testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("pbnbv_bench_report_test_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+ObjectRun run(const std::string& object, PlannerKind k, std::vector<double> coverage) {
+  ObjectRun r;
+  r.object = object;
+  r.planner = k;
+  r.complete = true;
+  r.coverage_by_view = std::move(coverage);
+  r.planner_ms = {10.0};
+  r.views_done = 2;
+  return r;
+}
+
+ObjectRun failed(const std::string& object, PlannerKind k, const std::string& reason) {
+  ObjectRun r;
+  r.object = object;
+  r.planner = k;
+  r.error = reason;
+  return r;
+}
+
+TEST_F(BenchReport, FailureReasonFromScanJsonOrLog) {
+  const fs::path scan = dir_ / "scan", log = dir_ / "scan.log";
+  fs::create_directories(scan);
+  // Neither: says so.
+  EXPECT_EQ(scan_failure_reason(scan, log), "no scan.json and no log (log: " + log.string() + ")");
+  // The log's last non-empty line.
+  std::ofstream(log) << "pbnbv scan: starting\npbnbv scan: the twin did not start: EGL unavailable\n\n";
+  EXPECT_EQ(scan_failure_reason(scan, log),
+            "no scan.json; the log ends: pbnbv scan: the twin did not start: EGL unavailable (log: " + log.string() + ")");
+  // scan.json's state and message win.
+  write_json_atomic({{"status", {{"state", "failed"}, {"message", "registration lost track"}, {"views_done", 3},
+                                 {"views_planned", 10}}}},
+                    (scan / "scan.json").string());
+  EXPECT_EQ(scan_failure_reason(scan, log),
+            "scan failed after 3 of 10 views: registration lost track (log: " + log.string() + ")");
+}
+
+TEST_F(BenchReport, FailedScanIsCountedApartAndExplained) {
+  const std::string reason = "scan failed after 1 of 2 views: registration lost track (log: x.log)";
+  BenchResult r;
+  r.spec.objects = {"a", "b", "c"};
+  r.spec.planners = {PlannerKind::kPbnbv, PlannerKind::kRandom};
+  r.spec.views = 2;
+  r.spec.rig = RigKind::kFree;
+  r.spec.area = CandidateArea::kFullSphere;
+  r.spec.out = dir_;
+  r.machine = {{"cpu", "test"}, {"cores", 2}};
+  r.planners = {
+      summarise(PlannerKind::kPbnbv,
+                {run("a", PlannerKind::kPbnbv, {40, 90}), run("b", PlannerKind::kPbnbv, {20, 70}),
+                 failed("c", PlannerKind::kPbnbv, reason)},
+                2),
+      summarise(PlannerKind::kRandom,
+                {run("a", PlannerKind::kRandom, {30, 60}), run("b", PlannerKind::kRandom, {30, 50}),
+                 run("c", PlannerKind::kRandom, {30, 40})},
+                2)};
+  // Means and spread over the two complete scans only: (40 + 20) / 2, (90 + 70) / 2.
+  const PlannerSummary& pb = r.planners[0];
+  EXPECT_EQ(pb.complete, 2);
+  EXPECT_EQ(pb.failed, 1);
+  EXPECT_EQ(pb.coverage_by_view, (std::vector<double>{30, 80}));
+  EXPECT_EQ(pb.coverage_min_by_view, (std::vector<double>{20, 70}));
+  EXPECT_EQ(pb.coverage_max_by_view, (std::vector<double>{40, 90}));
+  EXPECT_EQ(r.planners[1].coverage_min_by_view, (std::vector<double>{30, 40}));
+  EXPECT_EQ(objects_text(r), "2-3 objects (failed: pbnbv 1 of 3)");
+
+  write_json_atomic(to_json(r), (dir_ / "summary.json").string());
+  write_report(r);
+  const std::string md = read(dir_ / "report.md");
+  EXPECT_NE(md.find("# Benchmark: free rig, full sphere, 2-3 objects (failed: pbnbv 1 of 3), 2 views"), std::string::npos)
+      << md;
+  EXPECT_NE(md.find("## Failed scans"), std::string::npos);
+  EXPECT_NE(md.find("| c | pbnbv | " + reason + " |"), std::string::npos);
+  EXPECT_NE(md.find("5 other meshes"), std::string::npos);
+  const json j = read_json((dir_ / "summary.json").string());
+  ASSERT_EQ(j.at("failed_scans").size(), 1u);
+  EXPECT_EQ(j["failed_scans"][0]["object"], "c");
+  EXPECT_EQ(j["failed_scans"][0]["planner"], "pbnbv");
+  EXPECT_EQ(j["failed_scans"][0]["reason"], reason);
+  EXPECT_EQ(j["pbnbv"]["objects"]["c"]["error"], reason);
+  EXPECT_EQ(j["pbnbv"]["coverage_min_by_view"], json({20, 70}));
+  EXPECT_EQ(j["pbnbv"]["objects_complete"], 2);
+
+  // The plots in both formats; the coverage plot's title counts the completed scans, each
+  // planner has its min-max band, the release's curve names where it comes from.
+  for (const char* f : {"coverage.png", "coverage.svg", "time.png", "time.svg"}) {
+    EXPECT_GT(fs::file_size(dir_ / f), 1000u) << f;
+  }
+  const std::string svg = read(dir_ / "coverage.svg");
+  EXPECT_NE(svg.find("2-3 objects (failed: pbnbv 1 of 3)"), std::string::npos);
+  EXPECT_NE(svg.find(">authors' release (5 other meshes)</text>"), std::string::npos);
+  size_t bands = 0;
+  for (size_t at = svg.find("fill-opacity="); at != std::string::npos; at = svg.find("fill-opacity=", at + 1)) ++bands;
+  EXPECT_EQ(bands, 2u);
+
+  // Every planner lost the same object: one count.
+  r.planners[1] = summarise(PlannerKind::kRandom,
+                            {run("a", PlannerKind::kRandom, {30, 60}), run("b", PlannerKind::kRandom, {30, 50}),
+                             failed("c", PlannerKind::kRandom, reason)},
+                            2);
+  EXPECT_EQ(objects_text(r), "2 objects, 1 of 3 failed");
+}
+
+}  // namespace
+}  // namespace pbnbv::eval
