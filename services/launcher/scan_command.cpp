@@ -240,7 +240,8 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
   if (s.rig == RigKind::kArm) volume_min.z() = std::max(volume_min.z(), -s.object_z_m + s.ground_clearance_m);
   auto vec = [&](const Eigen::Vector3d& v) { return exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z()); };
   add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", exact(s.map_resolution_m), "--out", out.string(),
-                  "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m)});
+                  "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m), "--frontier-empty",
+                  std::to_string(frontier_empty_neighbours(s.planner))});
   if (uses_ellipsoids(s.planner)) add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
   if (uses_view_scorer(s.planner)) add("scorer", {(bin / "pbnbv-scorer").string(), "--model", s.rig_model_path});
   if (uses_truth(s.planner)) {

@@ -141,7 +141,7 @@ class ScorerService {
     p.planner = *planner;
     try {
       p.input = bus::plan_input_from_msg(r);
-      if (p.planner == PlannerKind::kPbnbv) p.input.weak_fraction = kWeakViewFraction;  // ours; pbnbv-paper: 0
+      if (weak_view_is_done(p.planner)) p.input.weak_fraction = kWeakViewFraction;  // ours; pbnbv-paper: 0
       if (r.check_reachability) {
         bus::to_vector6(std::vector<double>(r.joint_position_rad, r.joint_position_rad + 6), "PLAN_REQUEST joint_position_rad");
         bus::require_range(r.turntable_angle_rad, -1e3, 1e3, "PLAN_REQUEST turntable_angle_rad");

@@ -256,6 +256,11 @@ VoxelMap::VoxelMap(const VoxelMapParams& params) : params_(params) {
     os << "VoxelMap: gamma_m = " << params.gamma_m << " must be finite and >= 0";
     throw std::invalid_argument(os.str());
   }
+  if (params.frontier_empty_neighbours != 6 && params.frontier_empty_neighbours != 26) {
+    std::ostringstream os;
+    os << "VoxelMap: frontier_empty_neighbours = " << params.frontier_empty_neighbours << " must be 6 or 26";
+    throw std::invalid_argument(os.str());
+  }
   if (params.ray_stride_px < 0) {
     std::ostringstream os;
     os << "VoxelMap: ray_stride_px = " << params.ray_stride_px << " must be >= 0 (0 = automatic)";
@@ -405,6 +410,7 @@ VoxelCounts VoxelMap::update_frontiers() {
   scratch_.resize(static_cast<size_t>(plane * nz));
   uint8_t* cells = reinterpret_cast<uint8_t*>(cells_.data());
   uint8_t* dil = scratch_.data();
+  const bool face_empty = params_.frontier_empty_neighbours == 6;
   // Several workers only for grids beyond about 200,000 voxels (each takes >= 100,000).
   const int nt = worker_count(static_cast<std::size_t>(nz),
                               static_cast<std::size_t>((kVoxelsPerWorker + plane - 1) / plane));
@@ -436,6 +442,21 @@ VoxelCounts VoxelMap::update_frontiers() {
         uint8_t* o = out + int64_t(y) * nx;
         for (int x = 0; x < nx; ++x) o[x] = a[x] | c[x] | b[x];
       }
+      if (face_empty) {
+        // Bit 0 becomes Empty among the in-plane face neighbours (x +- 1, y +- 1: the row's
+        // x-dilation mx at y, the raw mask at y +- 1); bit 2 keeps this plane's raw Empty for the
+        // z +- 1 neighbours of the planes above and below.
+        for (int y = 0; y < ny; ++y) {
+          const uint8_t* c = mx.data() + int64_t(y) * nx;
+          const uint8_t* r = m.data() + int64_t(y) * nx;
+          const uint8_t* a = y > 0 ? r - nx : r;
+          const uint8_t* b = y + 1 < ny ? r + nx : r;
+          uint8_t* o = out + int64_t(y) * nx;
+          for (int x = 0; x < nx; ++x) {
+            o[x] = static_cast<uint8_t>((o[x] & 2) | ((c[x] | a[x] | b[x]) & 1) | ((r[x] & 1) << 2));
+          }
+        }
+      }
     }
   });
 
@@ -450,7 +471,10 @@ VoxelCounts VoxelMap::update_frontiers() {
       for (int64_t i = 0; i < plane; ++i) {
         uint8_t v = s[i];
         if (v == kUnkB || v == kFrontB) {
-          v = ((a[i] | c[i] | b[i]) == 3) ? kFrontB : kUnkB;
+          const uint8_t near = face_empty ? static_cast<uint8_t>(((a[i] | b[i] | c[i]) & 2) |
+                                                                  (c[i] & 1) | (((a[i] | b[i]) >> 2) & 1))
+                                          : static_cast<uint8_t>(a[i] | c[i] | b[i]);
+          v = near == 3 ? kFrontB : kUnkB;
           s[i] = v;
         }
         ++cnt[v];

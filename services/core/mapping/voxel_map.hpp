@@ -28,6 +28,11 @@ struct VoxelMapParams {
   // stride allows it and a is small (0.005 / 0.01 m voxels; see voxel_map.cpp): fewer rays, the
   // same guarantee. false: whole-pixel strides only (as before; the benchmark compares both).
   bool mixed_blocks = true;
+  // Frontier: an Unknown voxel with an Occupied voxel among its 26 neighbours and an Empty one
+  // among its `frontier_empty_neighbours`: 26 (the paper's reading) or 6, the face neighbours
+  // only (planner pbnbv: an Unknown voxel that touches observed free space only along an edge or
+  // at a corner lies behind the surface, see docs/method.md "Beyond the paper").
+  int frontier_empty_neighbours = kFrontierEmptyNeighbours.value;
 };
 
 // One depth frame as the map needs it: planar depth (0 or non-finite = no return), the camera

@@ -61,4 +61,19 @@ constexpr bool uses_ellipsoids(PlannerKind k) { return is_pbnbv(k); }
 // The planners that need the object's true mesh (the oracle: a twin scan only).
 constexpr bool uses_truth(PlannerKind k) { return k == PlannerKind::kOracle; }
 
+// Our departures from the paper (planner pbnbv; docs/method.md "Beyond the paper"), decided here
+// and nowhere else; pbnbv-paper keeps the paper's rule in each.
+// 1. A weak best view (F at most kWeakViewFraction of the first planned view's F) counts as
+//    nothing left to aim at (the view scorer's PlanInput::weak_fraction).
+constexpr bool weak_view_is_done(PlannerKind k) { return k == PlannerKind::kPbnbv; }
+// 2. The partition keeps each view next to one already taken, which the arm's registration and
+//    travel need; the free rig (exact poses, no registration, no travel) does without it.
+constexpr int partition_sectors(PlannerKind k, bool free_rig, int beta) {
+  return k == PlannerKind::kPbnbv && free_rig ? 1 : beta;
+}
+// 3. Frontier: an Unknown voxel next to an Occupied one counts when an Empty voxel is among its 6
+//    face neighbours (ours) or among all 26 (the paper's "spatial neighbourhood" as we read it):
+//    the mapping service's --frontier-empty.
+constexpr int frontier_empty_neighbours(PlannerKind k) { return k == PlannerKind::kPbnbv ? 6 : 26; }
+
 }  // namespace pbnbv

@@ -347,10 +347,7 @@ void ScanSequencer::begin_plan(double now_s) {
   r.excluded = done_.excluded;
   r.num_candidates = s_.candidates;
   r.num_parallels = s_.parallels;
-  // Ours (planner pbnbv): the partition keeps each view next to one already taken, which the
-  // arm's registration and travel need; the free rig (exact poses, no registration, no travel)
-  // goes where the map says (docs/method.md "Beyond the paper").
-  r.num_sectors = s_.planner == PlannerKind::kPbnbv && s_.rig == RigKind::kFree ? 1 : s_.sectors;
+  r.num_sectors = partition_sectors(s_.planner, s_.rig == RigKind::kFree, s_.sectors);
   r.area = s_.area;
   r.working_distance_m = s_.working_distance_m;
   r.num_alternatives = s_.alternatives;

@@ -386,6 +386,58 @@ TEST(VoxelMap, SphereOneSide) {
   }
 }
 
+// The two frontier rules (VoxelMapParams::frontier_empty_neighbours) on the same sphere seen
+// from one side (obliquely, from (0.9, 0.3, 0.2) m: 126 and 56 frontier voxels), checked voxel by voxel against the definition: Frontier = Unknown-or-Frontier
+// with an Occupied voxel among the 26 neighbours and an Empty one among the 26 (paper) or the
+// 6 face neighbours (ours). Every other state is the same in both maps; the face rule keeps
+// only part of the paper's frontier (the rim beside the shadow), dropping the voxels behind the
+// visible surface that touch the free space in front of it only along an edge or at a corner.
+TEST(VoxelMap, FaceNeighbourFrontierFollowsItsDefinition) {
+  VoxelMapParams p26, p6;
+  p26.resolution_m = p6.resolution_m = 0.02;
+  p6.frontier_empty_neighbours = 6;
+  VoxelMap m26(p26), m6(p6);
+  const CameraIntrinsics k;
+  const MapUpdateResult r26 = integrate(m26, k, from(Vector3d(0.9, 0.3, 0.2)), sphere(kHalf));
+  const MapUpdateResult r6 = integrate(m6, k, from(Vector3d(0.9, 0.3, 0.2)), sphere(kHalf));
+  ASSERT_TRUE(r26.updated && r6.updated);
+  ASSERT_EQ(m26.dims(), m6.dims());
+  auto at = [](const VoxelMap& m, const Vector3i& l) { return m.state(l); };  // local index; outside B: None
+  auto has = [&](const VoxelMap& m, const Vector3i& l, VoxelState want, bool faces_only) {
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int manhattan = std::abs(dx) + std::abs(dy) + std::abs(dz);
+          if (manhattan == 0 || (faces_only && manhattan != 1)) continue;
+          if (at(m, l + Vector3i(dx, dy, dz)) == want) return true;
+        }
+    return false;
+  };
+  int64_t f26 = 0, f6 = 0;
+  for_each_voxel(m26, [&](const Vector3i& l) {
+    const VoxelState a = at(m26, l), b = at(m6, l);
+    const bool unknownish = a == VoxelState::kUnknown || a == VoxelState::kFrontier;
+    if (!unknownish) {
+      EXPECT_EQ(a, b) << l.transpose();
+      return;
+    }
+    ASSERT_TRUE(b == VoxelState::kUnknown || b == VoxelState::kFrontier) << l.transpose();
+    const bool occ = has(m26, l, VoxelState::kOccupied, false);
+    EXPECT_EQ(a == VoxelState::kFrontier, occ && has(m26, l, VoxelState::kEmpty, false)) << l.transpose();
+    EXPECT_EQ(b == VoxelState::kFrontier, occ && has(m26, l, VoxelState::kEmpty, true)) << l.transpose();
+    f26 += a == VoxelState::kFrontier;
+    f6 += b == VoxelState::kFrontier;
+  });
+  EXPECT_EQ(f26, r26.counts.frontier);
+  EXPECT_EQ(f6, r6.counts.frontier);
+  EXPECT_GT(f6, 0);
+  EXPECT_LT(f6, f26);
+  std::printf("frontier voxels: 26 neighbours %lld, 6 face neighbours %lld\n", (long long)f26, (long long)f6);
+  VoxelMapParams bad;
+  bad.frontier_empty_neighbours = 18;
+  EXPECT_THROW(VoxelMap{bad}, std::invalid_argument);
+}
+
 // Frames without a valid pixel change nothing (whatever no_return_is_free says: a frame
 // with no return at all carries no pose-checked evidence, see voxel_map.hpp).
 TEST(VoxelMap, EmptyAndNanFramesLeaveTheMapUnchanged) {
