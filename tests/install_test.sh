@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# `cmake --install` into a temporary prefix P, then run from there: P/bin holds pbnbv and its nine
-# services (and no test), P/share/pbnbv the rig models, meshes and message jar; the installed
+# `cmake --install` into a temporary prefix P, then run from there: P/bin holds pbnbv and its ten
+# services (and no test), P/share/pbnbv the rig models, meshes, message jar and pbnbv view's page; the installed
 # `pbnbv --help` works, and a one-view scan of the bunny finds its services beside it and its
 # rig model and mesh in P/share/pbnbv (settings.json names them), from a folder outside the tree.
 # KEEP_INSTALL=1 keeps P to look at.
@@ -13,11 +13,12 @@ fail() { echo "install test: $*" >&2; exit 1; }
 
 cmake --install "$BUILD" --prefix "$P" >/dev/null
 for f in pbnbv pbnbv-twin pbnbv-motion pbnbv-camera pbnbv-registration pbnbv-mapping pbnbv-coordinator \
-         pbnbv-ellipsoids pbnbv-scorer pbnbv-replay-rig; do
+         pbnbv-ellipsoids pbnbv-scorer pbnbv-replay-rig pbnbv-view; do
   [ -x "$P/bin/$f" ] || fail "$P/bin/$f is missing"
 done
-[ "$(ls "$P/bin" | wc -l)" = 10 ] || fail "P/bin holds more than pbnbv and its services: $(ls "$P/bin" | tr '\n' ' ')"
-for f in models/rig_free.xml models/rig_arm.xml data/meshes/bunny.obj pbnbv_lcmtypes.jar; do
+[ "$(ls "$P/bin" | wc -l)" = 11 ] || fail "P/bin holds more than pbnbv and its services: $(ls "$P/bin" | tr '\n' ' ')"
+for f in models/rig_free.xml models/rig_arm.xml data/meshes/bunny.obj pbnbv_lcmtypes.jar web/index.html \
+         web/three/three.module.js; do
   [ -f "$P/share/pbnbv/$f" ] || fail "$P/share/pbnbv/$f is missing"
 done
 

@@ -18,6 +18,7 @@
 #include "bus/convert.hpp"
 #include "bus/convert_planning.hpp"
 #include "cli/options.hpp"
+#include "core/base/install_paths.hpp"
 #include "core/base/log.hpp"
 #include "core/base/signals.hpp"
 #include "core/io/json.hpp"
@@ -212,7 +213,10 @@ int main(int argc, char** argv) {
   set_log_name("view");
   install_stop_handlers();
   try {
-    const fs::path web(PBNBV_VIEW_WEB_DIR), three(PBNBV_VIEW_THREE_DIR);
+    // Installed (cmake --install): P/share/pbnbv/web holds the page and three/; else the trees'.
+    const std::string installed = installed_share_path("web");
+    const fs::path web = installed.empty() ? fs::path(PBNBV_VIEW_WEB_DIR) : fs::path(installed);
+    const fs::path three = installed.empty() ? fs::path(PBNBV_VIEW_THREE_DIR) : fs::path(installed) / "three";
     if (!fs::exists(three / "three.module.js")) {
       throw std::runtime_error("three.js is missing (" + (three / "three.module.js").string() +
                                "): run ./scripts/setup, which fetches it from the npm registry");
