@@ -146,6 +146,13 @@ CommandLine::CommandLine()
   cli::add(*replay_cmd_, kPlanner, &replay_.planner);
   cli::add_flag(*replay_cmd_, "overwrite", &replay_.overwrite, "delete what --out holds first");
 
+  mesh_cmd_ = cli::add_command(app_, "mesh", "(re)build a finished scan folder's surface mesh (mesh.ply, mesh.obj, mesh.stl)");
+  mesh_cmd_->add_option("dir", mesh_.dir, "the scan's folder (scan.json, frames/)")->type_name("DIR");
+  cli::add(*mesh_cmd_, kMeshMethod, &mesh_.surface.method);
+  cli::add(*mesh_cmd_, kMeshVoxel, &mesh_.surface.voxel_m);
+  cli::add(*mesh_cmd_, kMeshTruncation, &mesh_.surface.truncation_voxels);
+  cli::add(*mesh_cmd_, kPoissonDepth, &mesh_.surface.poisson_depth);
+
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");
 }
@@ -277,7 +284,7 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
         return 0;
       }
       for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, stop_cmd_, rig_check_cmd_, rig_host_cmd_,
-                                import_urdf_cmd_, calibrate_cmd_, replay_cmd_, help_cmd_}) {
+                                import_urdf_cmd_, calibrate_cmd_, replay_cmd_, mesh_cmd_, help_cmd_}) {
         if (c->get_name() == help_topic_) {
           out << c->help("pbnbv");
           return 0;
@@ -285,7 +292,7 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
       }
       throw std::invalid_argument("unknown command '" + help_topic_ +
                                   "' (expected scan, bench, ablate, spy, stop, rig-check, rig-host, import-urdf, calibrate, "
-                                  "replay or help)");
+                                  "replay, mesh or help)");
     }
     if (given == scan_cmd_) {
       command_ = Command::kScan;
@@ -323,6 +330,9 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
     } else if (given == replay_cmd_) {
       command_ = Command::kReplay;
       if (replay_.dir.empty()) throw std::invalid_argument("name the recorded scan's folder: pbnbv replay DIR");
+    } else if (given == mesh_cmd_) {
+      command_ = Command::kMesh;
+      if (mesh_.dir.empty()) throw std::invalid_argument("name the scan's folder: pbnbv mesh DIR");
     } else {
       command_ = Command::kSpy;
     }

@@ -16,11 +16,12 @@
 #include "cli/options.hpp"
 #include "core/rig/calibration.hpp"
 #include "core/scan/scan_settings.hpp"
+#include "core/surface/surface.hpp"
 #include "eval/bench.hpp"
 
 namespace pbnbv::launcher {
 
-enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigCheck, kRigHost, kImportUrdf, kCalibrate, kReplay };
+enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigCheck, kRigHost, kImportUrdf, kCalibrate, kReplay, kMesh };
 
 // What `pbnbv calibrate` was asked for (core/rig/calibration.hpp).
 struct CalibrateOptions {
@@ -65,6 +66,12 @@ struct ReplayOptions {
   std::string out;                     // empty: DIR-replay-<date-time> beside it
   std::optional<PlannerKind> planner;  // none: the recording's
   bool overwrite = false;
+};
+
+// What `pbnbv mesh` was asked for: the scan folder and the surface settings.
+struct MeshOptions {
+  std::string dir;
+  SurfaceSettings surface;
 };
 
 // What `pbnbv scan` was asked for: the object, the scan's settings (ScanSettings, before the
@@ -129,6 +136,7 @@ class CommandLine {
   const RigCheckOptions& rig_check() const { return rig_check_; }
   const CalibrateOptions& calibrate() const { return calibrate_; }
   const ReplayOptions& replay() const { return replay_; }
+  const MeshOptions& mesh() const { return mesh_; }
   const ScanOptions& scan() const { return scan_; }
   const eval::BenchSpec& bench() const { return bench_; }
   const AblateOptions& ablate() const { return ablate_; }
@@ -178,6 +186,8 @@ class CommandLine {
   CalibrateOptions calibrate_;
   CLI::App* replay_cmd_ = nullptr;
   ReplayOptions replay_;
+  CLI::App* mesh_cmd_ = nullptr;
+  MeshOptions mesh_;
   CLI::App* help_cmd_ = nullptr;
   Command command_ = Command::kHelp;
   ScanOptions scan_;

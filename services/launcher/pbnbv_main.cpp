@@ -9,6 +9,7 @@
 //   pbnbv calibrate --rig-model FILE --sphere-radius R   hand-eye and turntable calibration
 //   pbnbv stop [--scan ID]   halt the rig and end the scan
 //   pbnbv replay DIR         run a recorded scan through the pipeline again and compare
+//   pbnbv mesh DIR           (re)build a finished scan's surface mesh
 // The command line is launcher/command_line.hpp; running each command, launcher/commands.hpp.
 #include <filesystem>
 #include <iostream>
@@ -46,6 +47,8 @@ int main(int argc, char** argv) {
         return launcher::run_rig_check(line.rig_check());
       case launcher::Command::kReplay:
         return launcher::run_replay(line.replay(), self.parent_path());
+      case launcher::Command::kMesh:
+        return launcher::run_mesh(line.mesh());
       case launcher::Command::kHelp:
         std::cout << line.usage();
         return 0;

@@ -7,6 +7,7 @@
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
 #include "core/perception/cloud_filter.hpp"
+#include "core/surface/scan_mesh.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -242,6 +243,15 @@ void ScanRecord::continue_from_folder(const std::string& scan_id) {
   if (before.contains("plan")) report_["plan"] = before["plan"];
   if (before.contains("status")) report_["status"] = before["status"];
   if (fs::exists(out_ / "cloud.ply")) accumulated_ = read_ply((out_ / "cloud.ply").string());
+}
+
+json ScanRecord::add_mesh(const SurfaceSettings& settings) {
+  try {
+    report_["mesh"] = mesh_scan(out_, report_, settings);
+  } catch (const std::exception& e) {
+    report_["mesh"] = {{"error", e.what()}};
+  }
+  return report_["mesh"];
 }
 
 void ScanRecord::set_stop(const ScanStop& stop) { report_["stop"] = to_json(stop); }

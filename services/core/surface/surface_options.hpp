@@ -17,7 +17,7 @@ struct EnumNames<MeshMethod> {
 inline constexpr ChoiceSetting<MeshMethod> kMeshMethod{
     "mesh-method", MeshMethod::kTsdf,
     "surface mesh: tsdf (fusion of the frames + marching cubes, holes left open) or poisson (closed)"};
-inline constexpr Setting<double> kMeshVoxel{"mesh-voxel", 0.0015, 0.0002, 0.05, "m", "TSDF voxel edge"};
+inline constexpr Setting<double> kMeshVoxel{"mesh-voxel", 0.002, 0.0002, 0.05, "m", "TSDF voxel edge"};
 inline constexpr Setting<double> kMeshTruncation{"mesh-truncation", 4.0, 1.5, 20.0, "voxels",
                                                  "TSDF truncation distance, in voxels"};
 inline constexpr Setting<int> kPoissonDepth{"poisson-depth", 9, 5, 12, "", "Poisson octree depth"};

@@ -8,7 +8,6 @@
 #include <unordered_map>
 
 #include "core/base/parallel.hpp"
-#include "core/perception/neighbours.hpp"
 #include "core/surface/surface.hpp"
 
 namespace pbnbv {
@@ -67,6 +66,40 @@ SplatImage splat(const SurfaceFrame& f, const CameraIntrinsics& k, int scale) {
   return im;
 }
 
+// A unit normal per point from its splat neighbours (the cross product of the differences to the
+// points left/right and above/below, either side when one is missing), turned to the camera;
+// zero where the neighbours are missing or farther than `max_step_m` (a depth edge).
+std::vector<Eigen::Vector3f> image_normals(const SurfaceFrame& f, const SplatImage& im, double max_step_m) {
+  std::vector<Eigen::Vector3f> n(f.points.size(), Eigen::Vector3f::Zero());
+  const float step2 = float(max_step_m * max_step_m);
+  const Eigen::Vector3f eye = f.object_T_camera.translation().cast<float>();
+  auto at = [&](int u, int v) {
+    return u < 0 || v < 0 || u >= im.width || v >= im.height ? -1 : im.index[std::size_t(v) * im.width + u];
+  };
+  // The difference across the pixel along (du, dv): both neighbours when there, else one side.
+  auto across = [&](int u, int v, int du, int dv, const Eigen::Vector3f& p, Eigen::Vector3f& d) {
+    const int a = at(u + du, v + dv), b = at(u - du, v - dv);
+    const bool ok_a = a >= 0 && (f.points[a] - p).squaredNorm() < step2;
+    const bool ok_b = b >= 0 && (f.points[b] - p).squaredNorm() < step2;
+    if (!ok_a && !ok_b) return false;
+    d = (ok_a ? f.points[a] : p) - (ok_b ? f.points[b] : p);
+    return true;
+  };
+  for (int v = 0; v < im.height; ++v)
+    for (int u = 0; u < im.width; ++u) {
+      const int i = at(u, v);
+      if (i < 0) continue;
+      Eigen::Vector3f du, dv;
+      if (!across(u, v, 1, 0, f.points[i], du) || !across(u, v, 0, 1, f.points[i], dv)) continue;
+      Eigen::Vector3f c = du.cross(dv);
+      const float l = c.norm();
+      if (!(l > 0)) continue;
+      c /= l;
+      n[i] = (eye - f.points[i]).dot(c) < 0 ? Eigen::Vector3f(-c) : c;
+    }
+  return n;
+}
+
 // Camera pixels per splat pixel: a splat pixel about as wide as the points' spacing at the
 // frame's median depth.
 int image_scale(const SurfaceFrame& f, const SurfaceSettings& s) {
@@ -98,12 +131,15 @@ TriangleMesh fuse_tsdf(const std::vector<SurfaceFrame>& frames, const SurfaceSet
   for (const auto& f : frames) num_points += f.points.size();
   if (num_points == 0) throw std::invalid_argument("TSDF fusion: the frames hold no points");
 
-  // Blocks within the truncation distance of any point.
+  // Blocks within the truncation distance of any point; each frame updates the ones near its
+  // own points (as its depth image would: farther free space is left alone).
   std::unordered_map<Key, int> block_of;
   std::vector<Block> blocks;
+  std::vector<std::vector<int>> frame_blocks(frames.size());
   block_of.reserve(num_points / 8);
-  for (const auto& f : frames) {
-    for (const auto& p : f.points) {
+  for (std::size_t fi = 0; fi < frames.size(); ++fi) {
+    std::vector<char> listed(blocks.size(), 0);
+    for (const auto& p : frames[fi].points) {
       if (!p.allFinite()) continue;
       const Eigen::Vector3d lo = (p.cast<double>().array() - trunc) / v, hi = (p.cast<double>().array() + trunc) / v;
       Eigen::Vector3i b0, b1;
@@ -121,6 +157,11 @@ TriangleMesh fuse_tsdf(const std::vector<SurfaceFrame>& frames, const SurfaceSet
               b.sdf.fill(1.0f);
               b.weight.fill(0.0f);
               blocks.push_back(b);
+              listed.push_back(0);
+            }
+            if (!listed[it->second]) {
+              listed[it->second] = 1;
+              frame_blocks[fi].push_back(it->second);
             }
           }
     }
@@ -128,20 +169,18 @@ TriangleMesh fuse_tsdf(const std::vector<SurfaceFrame>& frames, const SurfaceSet
 
   // Integration, frame by frame, blocks in parallel.
   std::vector<int> scales;
-  for (const auto& f : frames) {
+  for (std::size_t fi = 0; fi < frames.size(); ++fi) {
+    const SurfaceFrame& f = frames[fi];
     if (f.points.empty()) continue;
     const int scale = image_scale(f, s);
     scales.push_back(scale);
     const SplatImage im = splat(f, s.camera, scale);
-    SurfaceNormals normals = estimate_normals(f.points, s.normal_neighbours);
-    const Eigen::Vector3d eye = f.object_T_camera.translation();
-    for (std::size_t i = 0; i < f.points.size(); ++i) {
-      if ((eye - f.points[i].cast<double>()).dot(normals.normals[i].cast<double>()) < 0) normals.normals[i] = -normals.normals[i];
-    }
+    const std::vector<Eigen::Vector3f> normals = image_normals(f, im, 2.0 * trunc);
     const Pose camera_T_object = f.object_T_camera.inverse();
-    parallel_for(blocks.size(), [&](std::size_t begin, std::size_t end, int) {
+    const std::vector<int>& touched = frame_blocks[fi];
+    parallel_for(touched.size(), [&](std::size_t begin, std::size_t end, int) {
       for (std::size_t bi = begin; bi < end; ++bi) {
-        Block& b = blocks[bi];
+        Block& b = blocks[touched[bi]];
         for (int z = 0; z < kBlock; ++z)
           for (int y = 0; y < kBlock; ++y)
             for (int x = 0; x < kBlock; ++x) {
@@ -158,11 +197,12 @@ TriangleMesh fuse_tsdf(const std::vector<SurfaceFrame>& frames, const SurfaceSet
                 if (uu < 0 || vv < 0 || uu >= im.width || vv >= im.height) continue;
                 idx = im.index[std::size_t(vv) * im.width + uu];
               }
-              if (idx < 0 || !normals.valid[idx]) continue;
+              if (idx < 0) continue;
               const Eigen::Vector3d p = f.points[idx].cast<double>();
               const double along = (camera_T_object * p).z() - q.z();  // > 0: the voxel is in front
               if (along < -trunc) continue;                              // hidden behind the surface
-              double d = along > trunc ? trunc : normals.normals[idx].cast<double>().dot(pw - p);
+              // Point-to-plane where the point has a normal, else along the ray.
+              double d = along > trunc || normals[idx].isZero() ? along : normals[idx].cast<double>().dot(pw - p);
               d = std::clamp(d, -trunc, trunc) / trunc;
               const int li = local_index(x, y, z);
               const float wsum = b.weight[li] + 1.0f;
