@@ -152,6 +152,7 @@ CommandLine::CommandLine()
   cli::add(*mesh_cmd_, kMeshVoxel, &mesh_.surface.voxel_m);
   cli::add(*mesh_cmd_, kMeshTruncation, &mesh_.surface.truncation_voxels);
   cli::add(*mesh_cmd_, kPoissonDepth, &mesh_.surface.poisson_depth);
+  cli::add(*mesh_cmd_, kMeshFillHoles, &mesh_.surface.fill_holes_m);
 
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");

@@ -14,15 +14,13 @@ namespace {
 std::uint64_t edge_key(int a, int b) { return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b); }
 }  // namespace
 
-MeshTopology mesh_topology(const TriangleMesh& mesh) {
-  MeshTopology t;
-  // Each undirected edge: how many triangles use it, and the direction of its last use.
-  std::unordered_map<std::uint64_t, std::pair<int, bool>> uses;  // (min, max) -> (count, a < b)
+namespace {
+
+// Each undirected edge: how many triangles use it, and the direction of its last use.
+std::unordered_map<std::uint64_t, std::pair<int, bool>> edge_uses(const TriangleMesh& mesh) {
+  std::unordered_map<std::uint64_t, std::pair<int, bool>> uses;  // (min, max) -> (count, min -> max)
   uses.reserve(mesh.triangles.size() * 2);
   for (const auto& tri : mesh.triangles) {
-    const Eigen::Vector3d &a = mesh.vertices[tri[0]], &b = mesh.vertices[tri[1]], &c = mesh.vertices[tri[2]];
-    t.area_m2 += 0.5 * (b - a).cross(c - a).norm();
-    t.volume_m3 += a.dot(b.cross(c)) / 6.0;
     for (int k = 0; k < 3; ++k) {
       const int u = tri[k], w = tri[(k + 1) % 3];
       auto& e = uses[edge_key(std::min(u, w), std::max(u, w))];
@@ -30,27 +28,29 @@ MeshTopology mesh_topology(const TriangleMesh& mesh) {
       e.second = u < w;
     }
   }
-  t.edges = uses.size();
-  // Boundary edges, directed as their triangle runs them: from -> to.
+  return uses;
+}
+
+// The boundary loops as vertex chains, each vertex followed by the next along its triangle's
+// direction (the last joins the first).
+std::vector<std::vector<int>> loops_of(const std::unordered_map<std::uint64_t, std::pair<int, bool>>& uses) {
   std::unordered_multimap<int, int> next;
   std::map<std::pair<int, int>, bool> used;
   for (const auto& [key, e] : uses) {
-    if (e.first >= 3) ++t.non_manifold_edges;
     if (e.first != 1) continue;
-    ++t.boundary_edges;
     const int lo = int(key >> 32), hi = int(key & 0xffffffffu);
     const int from = e.second ? lo : hi, to = e.second ? hi : lo;
     next.emplace(from, to);
     used[{from, to}] = false;
-    t.boundary_length_m += (mesh.vertices[lo] - mesh.vertices[hi]).norm();
   }
-  // Loops: follow unused boundary edges until back at the start.
+  std::vector<std::vector<int>> loops;
   for (auto& [edge, done] : used) {
     if (done) continue;
-    ++t.boundary_loops;
+    std::vector<int> loop;
     std::pair<int, int> cur = edge;
     while (true) {
       used[cur] = true;
+      loop.push_back(cur.first);
       bool moved = false;
       const auto range = next.equal_range(cur.second);
       for (auto it = range.first; it != range.second; ++it) {
@@ -62,9 +62,52 @@ MeshTopology mesh_topology(const TriangleMesh& mesh) {
       }
       if (!moved) break;
     }
+    loops.push_back(std::move(loop));
   }
+  return loops;
+}
+
+double loop_length(const TriangleMesh& mesh, const std::vector<int>& loop) {
+  double l = 0;
+  for (std::size_t i = 0; i < loop.size(); ++i) l += (mesh.vertices[loop[(i + 1) % loop.size()]] - mesh.vertices[loop[i]]).norm();
+  return l;
+}
+
+}  // namespace
+
+MeshTopology mesh_topology(const TriangleMesh& mesh) {
+  MeshTopology t;
+  for (const auto& tri : mesh.triangles) {
+    const Eigen::Vector3d &a = mesh.vertices[tri[0]], &b = mesh.vertices[tri[1]], &c = mesh.vertices[tri[2]];
+    t.area_m2 += 0.5 * (b - a).cross(c - a).norm();
+    t.volume_m3 += a.dot(b.cross(c)) / 6.0;
+  }
+  const auto uses = edge_uses(mesh);
+  t.edges = uses.size();
+  for (const auto& [key, e] : uses) {
+    if (e.first >= 3) ++t.non_manifold_edges;
+    if (e.first != 1) continue;
+    ++t.boundary_edges;
+    t.boundary_length_m += (mesh.vertices[int(key >> 32)] - mesh.vertices[int(key & 0xffffffffu)]).norm();
+  }
+  t.boundary_loops = loops_of(uses).size();
   t.watertight = !mesh.triangles.empty() && t.boundary_edges == 0 && t.non_manifold_edges == 0;
   return t;
+}
+
+std::size_t fill_small_holes(TriangleMesh& mesh, double max_boundary_m) {
+  std::size_t filled = 0;
+  for (const auto& loop : loops_of(edge_uses(mesh))) {
+    if (loop.size() < 3 || loop_length(mesh, loop) > max_boundary_m) continue;
+    // A fan from the loop's centroid, each triangle running its boundary edge the other way.
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int v : loop) c += mesh.vertices[v];
+    const int ci = int(mesh.vertices.size());
+    mesh.vertices.push_back(c / double(loop.size()));
+    for (std::size_t i = 0; i < loop.size(); ++i) mesh.triangles.emplace_back(loop[(i + 1) % loop.size()], loop[i], ci);
+    ++filled;
+  }
+  return filled;
 }
 
 std::vector<Eigen::Vector3d> vertex_normals(const TriangleMesh& mesh) {

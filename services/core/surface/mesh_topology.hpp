@@ -21,6 +21,10 @@ struct MeshTopology {
 
 MeshTopology mesh_topology(const TriangleMesh& mesh);
 
+// Closes every boundary loop no longer than `max_boundary_m` with a fan of triangles from its
+// centroid (oriented like the surface around it). Returns the number of holes filled.
+std::size_t fill_small_holes(TriangleMesh& mesh, double max_boundary_m);
+
 // Unit normal per vertex: the area-weighted mean of its triangles' normals (zero when isolated).
 std::vector<Eigen::Vector3d> vertex_normals(const TriangleMesh& mesh);
 

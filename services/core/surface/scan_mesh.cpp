@@ -58,6 +58,7 @@ json mesh_scan(const fs::path& dir, const json& scan, SurfaceSettings settings) 
   SurfaceStats stats;
   TriangleMesh mesh = build_surface(frames, settings, &stats);
   const std::size_t removed = remove_small_components(mesh, kMinComponentTriangles);
+  const std::size_t filled = fill_small_holes(mesh, settings.fill_holes_m);
   if (mesh.triangles.empty()) throw std::runtime_error(dir.string() + ": the mesh has no triangles");
   const MeshTopology t = mesh_topology(mesh);
   write_mesh_ply(mesh, vertex_normals(mesh), (dir / "mesh.ply").string());
@@ -79,6 +80,8 @@ json mesh_scan(const fs::path& dir, const json& scan, SurfaceSettings settings) 
             {"area_m2", t.area_m2},
             {"volume_m3", t.watertight ? json(t.volume_m3) : json(nullptr)},
             {"small_fragments_removed_triangles", removed},
+            {"holes_filled", filled},
+            {"fill_holes_m", settings.fill_holes_m},
             {"seconds", seconds}};
   if (settings.method == MeshMethod::kTsdf) {
     j["settings"] = {{"voxel_m", settings.voxel_m},

@@ -18,7 +18,8 @@ std::vector<SurfaceFrame> read_scan_frames(const std::filesystem::path& dir, con
 
 // Meshes the scan in `dir` (scan.json as `scan`), writes mesh.ply, mesh.obj and mesh.stl there
 // and returns the "mesh" object: file, method, vertices, triangles, watertight, boundary_loops,
-// hole_boundary_length_m, area_m2, volume_m3 (when watertight), seconds, settings.
+// hole_boundary_length_m (the holes left after those with a rim up to settings.fill_holes_m were
+// closed: holes_filled), area_m2, volume_m3 (when watertight), seconds, settings.
 nlohmann::json mesh_scan(const std::filesystem::path& dir, const nlohmann::json& scan, SurfaceSettings settings);
 
 // mesh_scan on the folder's scan.json, then its "mesh" object written into scan.json.

@@ -29,6 +29,7 @@ struct SurfaceSettings {
   double truncation_voxels = kMeshTruncation.value;
   int poisson_depth = kPoissonDepth.value;
   int normal_neighbours = kMeshNormalNeighbours.value;
+  double fill_holes_m = kMeshFillHoles.value;  // holes with a shorter rim are closed (scan_mesh)
   CameraIntrinsics camera;
   double point_spacing_m = 0;  // the frames' downsampling voxel (0: one point per pixel)
   void validate() const;       // throws std::invalid_argument naming the bad setting

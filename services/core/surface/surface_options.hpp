@@ -21,6 +21,8 @@ inline constexpr Setting<double> kMeshVoxel{"mesh-voxel", 0.002, 0.0002, 0.05, "
 inline constexpr Setting<double> kMeshTruncation{"mesh-truncation", 4.0, 1.5, 20.0, "voxels",
                                                  "TSDF truncation distance, in voxels"};
 inline constexpr Setting<int> kPoissonDepth{"poisson-depth", 9, 5, 12, "", "Poisson octree depth"};
+inline constexpr Setting<double> kMeshFillHoles{"mesh-fill-holes", 0.02, 0.0, 1.0, "m",
+                                                "close the mesh's holes whose rim is at most this long (0: none)"};
 inline constexpr Setting<int> kMeshNormalNeighbours{"mesh-normal-neighbours", 12, 4, 64, "",
                                                     "points a frame's normals are fitted to"};
 

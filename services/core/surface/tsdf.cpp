@@ -119,6 +119,7 @@ void SurfaceSettings::validate() const {
   kMeshTruncation.checked(truncation_voxels);
   kPoissonDepth.checked(poisson_depth);
   kMeshNormalNeighbours.checked(normal_neighbours);
+  kMeshFillHoles.checked(fill_holes_m);
   camera.validate();
   if (!(point_spacing_m >= 0)) throw std::invalid_argument("point spacing " + std::to_string(point_spacing_m) + " m is negative");
 }

@@ -120,6 +120,12 @@ TEST(MeshTopology, ClosedBoxOpenBoxAndTwoHoles) {
   EXPECT_EQ(t.boundary_loops, 1u);
   EXPECT_EQ(t.boundary_edges, 4u);
   EXPECT_NEAR(t.boundary_length_m, 2 * (0.1 + 0.2), 1e-12);
+  // The hole filled (its rim 0.6 m): closed again, the same volume (the fan lies in the face).
+  EXPECT_EQ(fill_small_holes(open, 0.5), 0u);
+  EXPECT_EQ(fill_small_holes(open, 0.7), 1u);
+  t = mesh_topology(open);
+  EXPECT_TRUE(t.watertight);
+  EXPECT_NEAR(t.volume_m3, 0.1 * 0.2 * 0.3, 1e-12);
   // Two separate triangles: two loops of three edges.
   TriangleMesh two;
   two.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 0, 0}, {6, 0, 0}, {5, 1, 0}};
