@@ -146,13 +146,14 @@ CommandLine::CommandLine()
   cli::add(*replay_cmd_, kPlanner, &replay_.planner);
   cli::add_flag(*replay_cmd_, "overwrite", &replay_.overwrite, "delete what --out holds first");
 
-  mesh_cmd_ = cli::add_command(app_, "mesh", "(re)build a finished scan folder's surface mesh (mesh.ply, mesh.obj, mesh.stl)");
+  mesh_cmd_ = cli::add_command(app_, "mesh", "(re)build a finished scan folder's surface mesh (mesh.ply, mesh.obj)");
   mesh_cmd_->add_option("dir", mesh_.dir, "the scan's folder (scan.json, frames/)")->type_name("DIR");
   cli::add(*mesh_cmd_, kMeshMethod, &mesh_.surface.method);
   cli::add(*mesh_cmd_, kMeshVoxel, &mesh_.surface.voxel_m);
   cli::add(*mesh_cmd_, kMeshTruncation, &mesh_.surface.truncation_voxels);
   cli::add(*mesh_cmd_, kPoissonDepth, &mesh_.surface.poisson_depth);
   cli::add(*mesh_cmd_, kMeshFillHoles, &mesh_.surface.fill_holes_m);
+  cli::add_flag(*mesh_cmd_, "stl", &mesh_.stl, "also write mesh.stl (binary)");
 
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");

@@ -72,6 +72,7 @@ struct ReplayOptions {
 struct MeshOptions {
   std::string dir;
   SurfaceSettings surface;
+  bool stl = false;  // --stl: mesh.stl too
 };
 
 // What `pbnbv scan` was asked for: the object, the scan's settings (ScanSettings, before the

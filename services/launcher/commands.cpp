@@ -108,8 +108,8 @@ int run_rig_check(const RigCheckOptions& o) {
 
 int run_mesh(const MeshOptions& o) {
   const fs::path dir(o.dir);
-  const nlohmann::json m = mesh_scan_folder(dir, o.surface);
-  std::cout << "pbnbv mesh: " << (dir / "mesh.ply").string() << " (and mesh.obj, mesh.stl): " << m["method"].get<std::string>()
+  const nlohmann::json m = mesh_scan_folder(dir, o.surface, o.stl);
+  std::cout << "pbnbv mesh: " << (dir / "mesh.ply").string() << " (and mesh.obj" << (o.stl ? ", mesh.stl" : "") << "): " << m["method"].get<std::string>()
             << ", " << m["vertices"] << " vertices, " << m["triangles"] << " triangles, "
             << (m["watertight"].get<bool>() ? std::string("watertight")
                                             : std::to_string(m["boundary_loops"].get<std::size_t>()) + " boundary loops (" +

@@ -96,7 +96,7 @@ class ScanRecord {
   // this took, s.
   double accumulate(const RegisteredCloud& r, ViewRecord& v);
 
-  // Meshes the accepted frames (core/surface/scan_mesh.hpp: mesh.ply, mesh.obj and mesh.stl in
+  // Meshes the accepted frames (core/surface/scan_mesh.hpp: mesh.ply and mesh.obj in
   // the folder) and sets scan.json's "mesh" (written with the next write); when meshing fails,
   // "mesh" is {"error": why} and the scan stands. Returns the "mesh" object.
   nlohmann::json add_mesh(const SurfaceSettings& settings);

@@ -52,7 +52,7 @@ std::vector<SurfaceFrame> read_scan_frames(const fs::path& dir, const json& scan
   return frames;
 }
 
-json mesh_scan(const fs::path& dir, const json& scan, SurfaceSettings settings) {
+json mesh_scan(const fs::path& dir, const json& scan, SurfaceSettings settings, bool with_stl) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<SurfaceFrame> frames = read_scan_frames(dir, scan, settings);
   SurfaceStats stats;
@@ -63,10 +63,10 @@ json mesh_scan(const fs::path& dir, const json& scan, SurfaceSettings settings) 
   const MeshTopology t = mesh_topology(mesh);
   write_mesh_ply(mesh, vertex_normals(mesh), (dir / "mesh.ply").string());
   write_obj(mesh, (dir / "mesh.obj").string());
-  write_stl_binary(mesh, (dir / "mesh.stl").string());
+  if (with_stl) write_stl_binary(mesh, (dir / "mesh.stl").string());
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   json j = {{"file", "mesh.ply"},
-            {"also", {"mesh.obj", "mesh.stl"}},
+            {"also", with_stl ? json{"mesh.obj", "mesh.stl"} : json{"mesh.obj"}},
             {"method", std::string(name_of(settings.method))},
             {"frames", stats.frames},
             {"points", stats.points},
@@ -94,10 +94,10 @@ json mesh_scan(const fs::path& dir, const json& scan, SurfaceSettings settings) 
   return j;
 }
 
-json mesh_scan_folder(const fs::path& dir, const SurfaceSettings& settings) {
+json mesh_scan_folder(const fs::path& dir, const SurfaceSettings& settings, bool with_stl) {
   const std::string path = (dir / "scan.json").string();
   json scan = read_json(path);
-  const json m = mesh_scan(dir, scan, settings);
+  const json m = mesh_scan(dir, scan, settings, with_stl);
   scan["mesh"] = m;
   write_json_atomic(scan, path);
   return m;

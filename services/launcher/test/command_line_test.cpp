@@ -241,7 +241,7 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
 
 TEST(LauncherCommandLine, MeshTakesTheFolderAndTheSurfaceSettings) {
   CommandLine line;
-  const Parsed p = parse(line, {"mesh", "out/scan", "--mesh-method", "poisson", "--poisson-depth", "8", "--mesh-voxel", "0.003"});
+  const Parsed p = parse(line, {"mesh", "out/scan", "--mesh-method", "poisson", "--poisson-depth", "8", "--mesh-voxel", "0.003", "--stl"});
   ASSERT_EQ(p.code, std::nullopt) << p.err;
   EXPECT_EQ(line.command(), Command::kMesh);
   EXPECT_EQ(line.mesh().dir, "out/scan");
@@ -249,6 +249,7 @@ TEST(LauncherCommandLine, MeshTakesTheFolderAndTheSurfaceSettings) {
   EXPECT_EQ(line.mesh().surface.poisson_depth, 8);
   EXPECT_EQ(line.mesh().surface.voxel_m, 0.003);
   EXPECT_EQ(line.mesh().surface.truncation_voxels, kMeshTruncation.value);
+  EXPECT_TRUE(line.mesh().stl);
 }
 
 TEST(LauncherCommandLine, HelpPrintsTheUsage) {
