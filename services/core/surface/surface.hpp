@@ -2,10 +2,12 @@
 // A surface mesh from registered depth frames. Two methods:
 //   - TSDF fusion: each frame's points are splatted into a depth image of its camera (nearest
 //     point per pixel, a pixel about as wide as the frames' point spacing), every voxel near the
-//     points gets the point-to-plane distance to its pixel's point (normals fitted per frame,
-//     turned to the camera), truncated and averaged over the frames; marching cubes (PCL's tables)
-//     extracts the zero level where every corner was seen. Unseen surface stays open (holes).
-//   - Poisson (PCL) on all the frames' points with their camera-oriented normals: always closed.
+//     frame's points gets the point-to-plane distance to its pixel's point (the normal from the
+//     image neighbours' points, turned to the camera; along the ray where there is none),
+//     truncated and averaged over the frames; marching cubes (PCL's tables) extracts the zero
+//     level where every corner was seen. Unseen surface stays open (holes).
+//   - Poisson (PCL) on all the frames' points with their normals (k nearest neighbours, turned to
+//     the camera): always closed.
 // The mesh's topology (boundary loops, watertightness, volume) is in mesh_topology.hpp.
 #include <vector>
 

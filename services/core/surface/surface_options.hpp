@@ -24,6 +24,6 @@ inline constexpr Setting<int> kPoissonDepth{"poisson-depth", 9, 5, 12, "", "Pois
 inline constexpr Setting<double> kMeshFillHoles{"mesh-fill-holes", 0.02, 0.0, 1.0, "m",
                                                 "close the mesh's holes whose rim is at most this long (0: none)"};
 inline constexpr Setting<int> kMeshNormalNeighbours{"mesh-normal-neighbours", 12, 4, 64, "",
-                                                    "points a frame's normals are fitted to"};
+                                                    "Poisson: neighbours a point's normal is fitted to"};
 
 }  // namespace pbnbv
