@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The dependency direction between layers, beyond what the include directories already enforce
 # at compile time (see pbnbv_library in CMakeLists.txt): only the rig library and the twin see
-# MuJoCo, only the report library draws with OpenCV, and the processes that need neither do not
+# MuJoCo, only the report library draws with OpenCV, only the surface library meshes with PCL's
+# surface module, and the processes that need neither do not
 # load them (ldd).
 set -uo pipefail
 src=${PBNBV_SOURCE_DIR:?}
@@ -22,6 +23,7 @@ check_includes() {  # <pattern> <what> <allowed path regex>
 }
 check_includes 'mujoco/' "MuJoCo" '^(services/core/rig/|twin/)'
 check_includes 'opencv2/' "OpenCV" '^services/report/'
+check_includes 'pcl/surface/' "PCL's surface module (marching-cubes tables, Poisson)" '^services/core/surface/'
 
 # Processes that must not load a library.
 check_ldd() {  # <binary> <library pattern>...

@@ -97,6 +97,14 @@ TEST(ScanIntegration, SphereOnTheFreeRigLiesOnTheTrueSurface) {
   std::cout << "sphere, free rig: " << d.n << " points, median distance " << d.median * 1e3 << " mm\n";
   EXPECT_GT(d.n, 5000u);
   EXPECT_LE(d.median, 1e-3);
+  // The surface mesh the coordinator made at the end (core/surface): its vertices on the true
+  // surface too, and recorded in scan.json.
+  const auto scan = read_json_file(out / "scan.json");
+  EXPECT_GT(scan["mesh"].value("triangles", 0), 1000) << scan["mesh"].dump();
+  const Distances m = cloud_to_mesh(out / "mesh.ply", out / "object.obj");
+  std::cout << "sphere, free rig, mesh: " << m.n << " vertices, median distance " << m.median * 1e3 << " mm\n";
+  EXPECT_GT(m.n, 1000u);
+  EXPECT_LE(m.median, 1e-3);
 }
 
 namespace {

@@ -165,6 +165,14 @@ CommandLine::CommandLine()
   cli::add(*evaluate_cmd_, kMetricThreshold, &evaluate_.metrics.threshold_m);
   cli::add(*evaluate_cmd_, kMetricSampleDensity, &evaluate_.metrics.samples_per_cm2);
   cli::add_text(*evaluate_cmd_, "json", &evaluate_.json, "also write the figures to FILE (JSON)", "FILE");
+  mesh_cmd_ = cli::add_command(app_, "mesh", "(re)build a finished scan folder's surface mesh (mesh.ply, mesh.obj)");
+  mesh_cmd_->add_option("dir", mesh_.dir, "the scan's folder (scan.json, frames/)")->type_name("DIR");
+  cli::add(*mesh_cmd_, kMeshMethod, &mesh_.surface.method);
+  cli::add(*mesh_cmd_, kMeshVoxel, &mesh_.surface.voxel_m);
+  cli::add(*mesh_cmd_, kMeshTruncation, &mesh_.surface.truncation_voxels);
+  cli::add(*mesh_cmd_, kPoissonDepth, &mesh_.surface.poisson_depth);
+  cli::add(*mesh_cmd_, kMeshFillHoles, &mesh_.surface.fill_holes_m);
+  cli::add_flag(*mesh_cmd_, "stl", &mesh_.stl, "also write mesh.stl (binary)");
 
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");
@@ -298,7 +306,7 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
         return 0;
       }
       for (const CLI::App* c : {scan_cmd_, bench_cmd_, ablate_cmd_, spy_cmd_, view_cmd_, stop_cmd_, rig_check_cmd_, rig_host_cmd_,
-                                import_urdf_cmd_, calibrate_cmd_, replay_cmd_, evaluate_cmd_, help_cmd_}) {
+                                import_urdf_cmd_, calibrate_cmd_, replay_cmd_, evaluate_cmd_, mesh_cmd_, help_cmd_}) {
         if (c->get_name() == help_topic_) {
           out << c->help("pbnbv");
           return 0;
@@ -306,7 +314,7 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
       }
       throw std::invalid_argument("unknown command '" + help_topic_ +
                                   "' (expected scan, bench, ablate, spy, view, stop, rig-check, rig-host, import-urdf, calibrate, "
-                                  "replay, evaluate or help)");
+                                  "replay, evaluate, mesh or help)");
     }
     if (given == scan_cmd_) {
       command_ = Command::kScan;
@@ -349,6 +357,9 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
       if (evaluate_.target.empty()) {
         throw std::invalid_argument("name what to evaluate: pbnbv evaluate DIR|FILE [--reference MESH]");
       }
+    } else if (given == mesh_cmd_) {
+      command_ = Command::kMesh;
+      if (mesh_.dir.empty()) throw std::invalid_argument("name the scan's folder: pbnbv mesh DIR");
     } else {
       command_ = Command::kSpy;
     }

@@ -17,11 +17,12 @@
 #include "core/metrics/surface_metrics.hpp"
 #include "core/rig/calibration.hpp"
 #include "core/scan/scan_settings.hpp"
+#include "core/surface/surface.hpp"
 #include "eval/bench.hpp"
 
 namespace pbnbv::launcher {
 
-enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigCheck, kRigHost, kImportUrdf, kCalibrate, kReplay, kEvaluate };
+enum class Command { kHelp, kScan, kBench, kAblate, kSpy, kStop, kRigCheck, kRigHost, kImportUrdf, kCalibrate, kReplay, kEvaluate, kMesh };
 
 // What `pbnbv calibrate` was asked for (core/rig/calibration.hpp).
 struct CalibrateOptions {
@@ -75,6 +76,13 @@ struct ReplayOptions {
   std::string out;                     // empty: DIR-replay-<date-time> beside it
   std::optional<PlannerKind> planner;  // none: the recording's
   bool overwrite = false;
+};
+
+// What `pbnbv mesh` was asked for: the scan folder and the surface settings.
+struct MeshOptions {
+  std::string dir;
+  SurfaceSettings surface;
+  bool stl = false;  // --stl: mesh.stl too
 };
 
 // What `pbnbv scan` was asked for: the object, the scan's settings (ScanSettings, before the
@@ -140,6 +148,7 @@ class CommandLine {
   const CalibrateOptions& calibrate() const { return calibrate_; }
   const ReplayOptions& replay() const { return replay_; }
   const EvaluateOptions& evaluate() const { return evaluate_; }
+  const MeshOptions& mesh() const { return mesh_; }
   const ScanOptions& scan() const { return scan_; }
   const eval::BenchSpec& bench() const { return bench_; }
   const AblateOptions& ablate() const { return ablate_; }
@@ -192,6 +201,8 @@ class CommandLine {
   ReplayOptions replay_;
   CLI::App* evaluate_cmd_ = nullptr;
   EvaluateOptions evaluate_;
+  CLI::App* mesh_cmd_ = nullptr;
+  MeshOptions mesh_;
   CLI::App* help_cmd_ = nullptr;
   Command command_ = Command::kHelp;
   ScanOptions scan_;

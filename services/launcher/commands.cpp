@@ -12,6 +12,7 @@
 #include "core/base/install_paths.hpp"
 #include "core/io/json.hpp"
 #include "core/rig/urdf_import.hpp"
+#include "core/surface/scan_mesh.hpp"
 #include "launcher/commands.hpp"
 #include "launcher/supervise.hpp"
 #include "rigcheck/rig_check.hpp"
@@ -105,6 +106,19 @@ int run_rig_check(const RigCheckOptions& o) {
     return 1;
   }
   std::cout << "pbnbv rig-check: passed, " << r.lines.size() << " checks" << std::endl;
+  return 0;
+}
+
+int run_mesh(const MeshOptions& o) {
+  const fs::path dir(o.dir);
+  const nlohmann::json m = mesh_scan_folder(dir, o.surface, o.stl);
+  std::cout << "pbnbv mesh: " << (dir / "mesh.ply").string() << " (and mesh.obj" << (o.stl ? ", mesh.stl" : "") << "): " << m["method"].get<std::string>()
+            << ", " << m["vertices"] << " vertices, " << m["triangles"] << " triangles, "
+            << (m["watertight"].get<bool>() ? std::string("watertight")
+                                            : std::to_string(m["boundary_loops"].get<std::size_t>()) + " boundary loops (" +
+                                                  std::to_string(m["hole_boundary_length_m"].get<double>()) + " m)")
+            << ", " << m["seconds"].get<double>() << " s; recorded in " << (dir / "scan.json").string() << " (\"mesh\")"
+            << std::endl;
   return 0;
 }
 

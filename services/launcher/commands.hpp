@@ -35,6 +35,8 @@ int run_calibrate(const CalibrateOptions& o);
 // decisions against the replay's. Throws std::invalid_argument naming what is missing or wrong in
 // the folder before anything starts. 0: the replay completed (see replay.json for differences).
 int run_replay(const ReplayOptions& o, const std::filesystem::path& bin);
+// `pbnbv mesh DIR`: the scan's surface mesh again (core/surface), into DIR and its scan.json.
+int run_mesh(const MeshOptions& o);
 
 // `pbnbv evaluate`: o.target against the reference mesh (core/metrics/surface_metrics.hpp), a table
 // printed to `out` and, with o.json, the figures written there. A scan folder without --reference

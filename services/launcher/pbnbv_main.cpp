@@ -11,6 +11,7 @@
 //   pbnbv stop [--scan ID]   halt the rig and end the scan
 //   pbnbv replay DIR         run a recorded scan through the pipeline again and compare
 //   pbnbv evaluate DIR|FILE [--reference MESH]   accuracy and F-score against a reference mesh
+//   pbnbv mesh DIR           (re)build a finished scan's surface mesh
 // The command line is launcher/command_line.hpp; running each command, launcher/commands.hpp.
 #include <unistd.h>
 
@@ -62,6 +63,8 @@ int main(int argc, char** argv) {
         return launcher::run_replay(line.replay(), self.parent_path());
       case launcher::Command::kEvaluate:
         return launcher::run_evaluate(line.evaluate(), std::cout);
+      case launcher::Command::kMesh:
+        return launcher::run_mesh(line.mesh());
       case launcher::Command::kHelp:
         std::cout << line.usage();
         return 0;

@@ -469,6 +469,7 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
   if (record_log && fs::exists(out / "scan.json")) audit_log(out, s.scan_id);
   if (code == 0 && !evaluate) {
     std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
+              << (fs::exists(out / "mesh.ply") ? (out / "mesh.ply").string() + " (.obj), " : std::string())
               << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
               << (out / "scan.json").string() << (record_log ? ", " + (out / "scan.lcmlog").string() : "")
               << (s.external_rig ? " (no coverage: the object is unknown)" : "") << std::endl;
@@ -500,6 +501,7 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
       std::cerr << "warning: coverage not evaluated: " << x.what() << std::endl;
     }
     std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
+              << (fs::exists(out / "mesh.ply") ? (out / "mesh.ply").string() + " (.obj), " : std::string())
               << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
               << (out / "scan.json").string() << ", " << (out / "coverage.json").string()
               << (record_log ? ", " + (out / "scan.lcmlog").string() : "") << std::endl;

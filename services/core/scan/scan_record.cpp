@@ -8,6 +8,7 @@
 #include "core/io/json.hpp"
 #include "core/perception/cloud_filter.hpp"
 #include "core/perception/depth_cloud.hpp"
+#include "core/surface/scan_mesh.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -315,6 +316,15 @@ void ScanRecord::continue_from_folder(const std::string& scan_id) {
       for (auto& n : accumulated_normals_) n = -n;
     }
   }
+}
+
+json ScanRecord::add_mesh(const SurfaceSettings& settings) {
+  try {
+    report_["mesh"] = mesh_scan(out_, report_, settings);
+  } catch (const std::exception& e) {
+    report_["mesh"] = {{"error", e.what()}};
+  }
+  return report_["mesh"];
 }
 
 void ScanRecord::set_stop(const ScanStop& stop) { report_["stop"] = to_json(stop); }

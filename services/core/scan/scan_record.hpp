@@ -19,6 +19,7 @@
 #include "core/scan/rig_readings.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "core/scan/stop_rule.hpp"
+#include "core/surface/surface.hpp"
 
 namespace pbnbv {
 
@@ -110,6 +111,11 @@ class ScanRecord {
   // farther than the settings' stop_radius_m from the model before it); returns the wall time
   // this took, s.
   double accumulate(const RegisteredCloud& r, ViewRecord& v);
+
+  // Meshes the accepted frames (core/surface/scan_mesh.hpp: mesh.ply and mesh.obj in
+  // the folder) and sets scan.json's "mesh" (written with the next write); when meshing fails,
+  // "mesh" is {"error": why} and the scan stands. Returns the "mesh" object.
+  nlohmann::json add_mesh(const SurfaceSettings& settings);
 
   // Appends a view to "views" and writes scan.json with state "running".
   void add_view(const ViewRecord& v, int views_done, double elapsed_s);

@@ -577,6 +577,17 @@ void ScanSequencer::finish(ScanState state, const std::string& message, double n
   awaited_ = Awaited{};
   set_status(state, message, now_s);
   const char* name = state == ScanState::kDone ? "done" : state == ScanState::kStopped ? "stopped" : "failed";
+  // A finished scan's surface mesh (a resumed scan and an external rig's too: they end here).
+  if (state == ScanState::kDone) {
+    const nlohmann::json m = record_.add_mesh(SurfaceSettings{});
+    outputs_.push_back(ProgressLine{
+        m.contains("error") ? "no mesh: " + m["error"].get<std::string>()
+                            : "mesh.ply: " + std::to_string(m["triangles"].get<std::size_t>()) + " triangles, " +
+                                  (m["watertight"].get<bool>() ? std::string("watertight")
+                                                               : std::to_string(m["boundary_loops"].get<std::size_t>()) + " holes") +
+                                  ", " + fixed(m["seconds"].get<double>(), 2) + " s",
+        true});
+  }
   record_.write(name, message, done_.views_done, now_s - t_start_s_);
   summary_ = (state == ScanState::kDone ? "" : "scan ") + message + ": " + std::to_string(done_.views_done) + " of " +
              std::to_string(s_.views) + " views, " + std::to_string(record_.num_points()) + " points, " +

@@ -218,7 +218,7 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
        "pbnbv ablate: --values: --resolution 0.001 is outside its range [0.002, 0.2] m"},
       {{"ablate", "resolution", "--values", "0.01,fine", "--out", "x"}, "pbnbv ablate: --values: 'fine' is not a number"},
       {{"ablate", "beta", "--values", "2,400", "--out", "x"}, "pbnbv ablate: --values: --beta 400 is outside its range [1, 360]"},
-      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf, rig-check, calibrate, replay, evaluate, help)"},
+      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf, rig-check, calibrate, replay, evaluate, mesh, help)"},
       {{"rig-check", "--deadline", "0"}, "pbnbv rig-check: --deadline: 0 is outside its range [0.5, 600] s"},
       {{"calibrate", "--sphere-radius", "0.05"}, "pbnbv calibrate: --rig-model is required"},
       {{"calibrate", "--rig-model", "r.xml", "--sphere-radius", "0.12", "--sphere-offset", "0.1"},
@@ -227,6 +227,9 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
        "pbnbv calibrate: --sphere-radius: 0.5 is outside its range [0.01, 0.15] m"},
       {{"replay"}, "pbnbv replay: name the recorded scan's folder: pbnbv replay DIR"},
       {{"replay", "d", "--planner", "rign"}, "pbnbv replay: --planner"},
+      {{"mesh"}, "pbnbv mesh: name the scan's folder: pbnbv mesh DIR"},
+      {{"mesh", "d", "--mesh-voxel", "1"}, "pbnbv mesh: --mesh-voxel: 1 is outside its range [0.0002, 0.05] m"},
+      {{"mesh", "d", "--mesh-method", "marching"}, "pbnbv mesh: --mesh-method"},
   };
   for (const auto& [words, message] : cases) {
     CommandLine line;
@@ -234,6 +237,19 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
     EXPECT_EQ(p.code, std::optional<int>(2)) << words[0];
     EXPECT_EQ(p.err.rfind(message, 0), 0u) << "got: " << p.err << "want: " << message;
   }
+}
+
+TEST(LauncherCommandLine, MeshTakesTheFolderAndTheSurfaceSettings) {
+  CommandLine line;
+  const Parsed p = parse(line, {"mesh", "out/scan", "--mesh-method", "poisson", "--poisson-depth", "8", "--mesh-voxel", "0.003", "--stl"});
+  ASSERT_EQ(p.code, std::nullopt) << p.err;
+  EXPECT_EQ(line.command(), Command::kMesh);
+  EXPECT_EQ(line.mesh().dir, "out/scan");
+  EXPECT_EQ(line.mesh().surface.method, MeshMethod::kPoisson);
+  EXPECT_EQ(line.mesh().surface.poisson_depth, 8);
+  EXPECT_EQ(line.mesh().surface.voxel_m, 0.003);
+  EXPECT_EQ(line.mesh().surface.truncation_voxels, kMeshTruncation.value);
+  EXPECT_TRUE(line.mesh().stl);
 }
 
 TEST(LauncherCommandLine, HelpPrintsTheUsage) {

@@ -326,6 +326,11 @@ TEST_F(ScanSequencerTest, ThreeViewRingScanEndToEnd) {
     EXPECT_EQ(read_ply((dir_ / v["frame_file"].get<std::string>()).string()).size(), 10u);
   }
   EXPECT_EQ(read_ply((dir_ / "cloud.ply").string()).size(), 30u);
+  // The finished scan's mesh: the three merged frames' 30 points fused (core/surface tests its shape).
+  ASSERT_TRUE(scan.contains("mesh"));
+  EXPECT_EQ(scan["mesh"]["frames"], 3) << scan["mesh"];
+  EXPECT_EQ(scan["mesh"]["points"], 30);
+  for (const char* f : {"mesh.ply", "mesh.obj"}) EXPECT_TRUE(std::filesystem::exists(dir_ / f)) << f;
 
   // Status: starting, then per view moving, capturing, registering, adding; then done.
   ASSERT_FALSE(statuses_.empty());
