@@ -230,12 +230,14 @@ class ScorerService {
         };
       }
       const double t0 = bus::now_s();
+      // The heartbeat between chunks of a long plan (ray casting at fine resolutions, the
+      // oracle on a large mesh), so the launcher does not take the scorer for hung.
+      p.input.progress = [this] { bus_.keep_alive(); };
       if (p.planner == PlannerKind::kRaycast) {
         result = plan_raycast(p.input, bus::grid_from_msg(map), p.raycast);
       } else if (p.planner == PlannerKind::kRandom) {
         result = plan_random(p.input, static_cast<uint64_t>(r.seed));
       } else if (p.planner == PlannerKind::kOracle) {
-        p.input.progress = [this] { bus_.keep_alive(); };
         result = plan_oracle(p.input, truth_->mesh, truth_->samples, p.visibility);
       } else {
         result = plan_pbnbv(p.input);

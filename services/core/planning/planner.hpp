@@ -78,7 +78,7 @@ struct PlanInput {
   // sees more frontier than occupied area, the paper's F prefers the views that see the least of
   // the object, while the views farthest from every view taken still add surface.
   double weak_fraction = 0.0;
-  // Called between chunks of a long scoring (the oracle's), so that a service can show it is
+  // Called between chunks of a long scoring (ray casting's, the oracle's), so that a service can show it is
   // alive (its heartbeat) while it plans; empty: not called.
   std::function<void()> progress;
   // Reachability of each candidate (the motion executor's check), called once with every

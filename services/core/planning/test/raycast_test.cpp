@@ -155,9 +155,17 @@ TEST(RaycastPlanner, ChoosesTheSideWithUnobservedVoxels) {
   const PlanInput in = plan_input(g);
   RaycastParams p;
   p.camera = in.camera;
-  const PlanResult r = plan_raycast(in, g, p);
+  // Cast in chunks of 50 candidates with progress reported after each (the scorer's heartbeat);
+  // chunks change nothing: the gains equal those of one call over every candidate.
+  PlanInput chunked = in;
+  int calls = 0;
+  chunked.progress = [&] { ++calls; };
+  const PlanResult r = plan_raycast(chunked, g, p);
   ASSERT_EQ(r.outcome, PlanResult::Outcome::kView) << r.reason;
   EXPECT_EQ(r.num_scored, 200);
+  EXPECT_EQ(calls, 4);  // 200 / 50
+  const std::vector<RaycastGain> whole = raycast_gains(g, r.candidates, {}, p);
+  for (std::size_t i = 0; i < whole.size(); ++i) EXPECT_EQ(r.scores[i].quality, static_cast<double>(whole[i].unknown)) << i;
   const Eigen::Vector3d eye = r.candidates[r.chosen].translation();
   EXPECT_GT(eye.x(), 0.5 * eye.norm());  // well on the +x side
   for (int a : r.alternatives) EXPECT_LE(r.scores[a].quality, r.scores[r.chosen].quality);
