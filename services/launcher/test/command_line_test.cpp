@@ -218,7 +218,7 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
        "pbnbv ablate: --values: --resolution 0.001 is outside its range [0.002, 0.2] m"},
       {{"ablate", "resolution", "--values", "0.01,fine", "--out", "x"}, "pbnbv ablate: --values: 'fine' is not a number"},
       {{"ablate", "beta", "--values", "2,400", "--out", "x"}, "pbnbv ablate: --values: --beta 400 is outside its range [1, 360]"},
-      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, stop, rig-host, import-urdf, rig-check, calibrate, replay, evaluate, mesh, help)"},
+      {{"frobnicate"}, "pbnbv: unknown command 'frobnicate' (expected scan, bench, ablate, spy, view, stop, rig-host, import-urdf, rig-check, calibrate, replay, evaluate, mesh, help)"},
       {{"rig-check", "--deadline", "0"}, "pbnbv rig-check: --deadline: 0 is outside its range [0.5, 600] s"},
       {{"calibrate", "--sphere-radius", "0.05"}, "pbnbv calibrate: --rig-model is required"},
       {{"calibrate", "--rig-model", "r.xml", "--sphere-radius", "0.12", "--sphere-offset", "0.1"},
