@@ -73,7 +73,9 @@ constexpr int partition_sectors(PlannerKind k, bool free_rig, int beta) {
 }
 // 3. Frontier: an Unknown voxel next to an Occupied one counts when an Empty voxel is among its 6
 //    face neighbours (ours) or among all 26 (the paper's "spatial neighbourhood" as we read it):
-//    the mapping service's --frontier-empty.
-constexpr int frontier_empty_neighbours(PlannerKind k) { return k == PlannerKind::kPbnbv ? 6 : 26; }
+//    the mapping service's --frontier-empty. Only the PB-NBV planners read the frontier, so every
+//    other planner keeps pbnbv's map: a scan's map is then the same whichever of them plans it
+//    (pbnbv replay --planner random).
+constexpr int frontier_empty_neighbours(PlannerKind k) { return k == PlannerKind::kPbnbvPaper ? 26 : 6; }
 
 }  // namespace pbnbv
