@@ -55,9 +55,14 @@ void check_views(const NbvScan& s, int views) {
   ASSERT_EQ(s.scan["views"].size(), static_cast<std::size_t>(views));
   ASSERT_EQ(s.eval.coverage_by_view.size(), static_cast<std::size_t>(views));
   for (int i = 1; i < views; ++i) {
-    // At least 5 more of the 10,000 surface samples covered.
-    EXPECT_GE(s.eval.coverage_by_view[i], s.eval.coverage_by_view[i - 1] + 0.05)
-        << "view " << i + 1 << " added no new surface";
+    // A view aimed at the frontier covers at least 5 more of the 10,000 surface samples. A
+    // gap-filling view (planner pbnbv once the best F is weak: nothing left to aim at) may add
+    // none when what the candidates can see is covered (on the arm, about 88 % of the bunny from
+    // view 3-4 on), but never loses any.
+    const bool gap_filling =
+        s.scan["views"][i]["plan"]["reason"].get<std::string>().find("farthest from every view taken") != std::string::npos;
+    EXPECT_GE(s.eval.coverage_by_view[i], s.eval.coverage_by_view[i - 1] + (gap_filling ? 0.0 : 0.05))
+        << "view " << i + 1 << " added no new surface: " << s.scan["views"][i]["plan"]["reason"];
   }
   for (int i = 1; i < views; ++i) {
     const auto& plan = s.scan["views"][i]["plan"];
