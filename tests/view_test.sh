@@ -96,9 +96,11 @@ c = j['chosen']['position_m']
 near = min(j['candidates'], key=lambda k: math.dist(k['pose']['position_m'], c))
 print(f"chosen view: plan F {j['chosen_quality_px']:.3f} px, the page's F there {near['quality_px']:.3f} px "
       f"({math.dist(near['pose']['position_m'], c):.2e} m away)")
-# A gap-filling plan (pbnbv with a weak best F) ranks by the angle to the nearest view taken
-# (0-180 deg) instead of F: there the page's F is not the plan's figure, only the pose is checked.
-gap_filling = 0 <= j['chosen_quality_px'] <= 180 and abs(near['quality_px'] - j['chosen_quality_px']) > 1e-6
+# A gap-filling plan (pbnbv with a weak best F; VIEW_PLAN's ranking "gap_deg") ranks by the
+# angle to the nearest view taken instead of F: there the page's F is not the plan's figure, only
+# the pose is checked. Any other pbnbv plan ranks by F ("f_px").
+assert j['chosen_ranking'] in ('f_px', 'gap_deg'), j['chosen_ranking']
+gap_filling = j['chosen_ranking'] == 'gap_deg'
 ok = ok and math.dist(near['pose']['position_m'], c) < 1e-6 and (gap_filling or \
      abs(near['quality_px'] - j['chosen_quality_px']) <= 1e-6 * max(1.0, abs(j['chosen_quality_px'])))
 sys.exit(0 if ok else 1)

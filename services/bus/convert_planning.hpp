@@ -3,6 +3,7 @@
 // the mapping and planning libraries' types, with the validation the view scorer applies.
 #include <Eigen/Geometry>
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -120,6 +121,7 @@ inline void fill_answer(view_plan_t& out, const PlanResult& res) {
   out.outcome = res.outcome == PlanResult::Outcome::kView ? view_plan_t::kView
                 : res.outcome == PlanResult::Outcome::kStop ? view_plan_t::kStop : view_plan_t::kFailed;
   out.reason = res.reason;
+  out.ranking = std::string(name_of(res.ranking));
   if (const ViewScore* s = res.chosen_score()) {
     out.object_T_camera = to_msg(res.candidates[res.chosen]);
     out.view_quality = s->quality;
@@ -157,6 +159,15 @@ inline view_plan_t empty_answer(const plan_request_t& r) {
   out.request_id = r.request_id;
   out.planner = r.planner;
   out.object_T_camera = to_msg(Pose::Identity());
+  // No scores yet: what the planner asked for ranks by (a request naming no planner fails later).
+  const auto kind = [&]() -> std::optional<PlannerKind> {
+    try {
+      return parse_name<PlannerKind>(r.planner);
+    } catch (const std::invalid_argument&) {
+      return std::nullopt;
+    }
+  }();
+  out.ranking = std::string(name_of(kind ? ranking_of(*kind) : Ranking::kF));
   out.view_quality = 0;
   out.first_quality = r.first_quality;
   out.partition = -1;

@@ -362,6 +362,11 @@ inline ViewPlan from_msg(const view_plan_t& m) {
   }
   p.outcome = static_cast<PlanOutcome>(m.outcome);
   p.reason = m.reason;
+  try {
+    p.ranking = parse_name<Ranking>(m.ranking);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("VIEW_PLAN ranking: ") + e.what());
+  }
   if (p.outcome == PlanOutcome::kView) {  // the poses of a stop or a failure are not filled
     p.object_T_camera = from_msg(m.object_T_camera, "VIEW_PLAN object_T_camera");
     for (std::size_t a = 0; a < m.alternatives.size(); ++a) {

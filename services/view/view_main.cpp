@@ -168,6 +168,7 @@ class LiveScene {
     last_plan_ = m.request_id;
     scene_.chosen = bus::from_msg(m.object_T_camera, "VIEW_PLAN object_T_camera");
     scene_.chosen_quality = m.view_quality;
+    scene_.chosen_ranking = m.ranking;
     scene_.plan_candidates = m.num_candidates;
     if (map != maps_.end()) {
       const PlanInput in = bus::plan_input_from_msg(req->second);
@@ -213,13 +214,16 @@ int main(int argc, char** argv) {
   set_log_name("view");
   install_stop_handlers();
   try {
-    // Installed (cmake --install): P/share/pbnbv/web holds the page and three/; else the trees'.
-    const std::string installed = installed_share_path("web");
-    const fs::path web = installed.empty() ? fs::path(PBNBV_VIEW_WEB_DIR) : fs::path(installed);
-    const fs::path three = installed.empty() ? fs::path(PBNBV_VIEW_THREE_DIR) : fs::path(installed) / "three";
+    // The page and three/ (install_paths.hpp): $PBNBV_WEB_DIR, else the installed share/pbnbv/web,
+    // else the build tree's web folder.
+    const fs::path web = resource_dir("PBNBV_WEB_DIR", "web", PBNBV_WEB_DIR);
+    const fs::path three = web / "three";
     if (!fs::exists(three / "three.module.js")) {
       throw std::runtime_error("three.js is missing (" + (three / "three.module.js").string() +
                                "): run ./scripts/setup, which fetches it from the npm registry");
+    }
+    if (!fs::exists(web / "index.html")) {
+      throw std::runtime_error("the page is missing (" + (web / "index.html").string() + "): build the pbnbv-view target");
     }
     SceneStore store;
     store.live_ = dir.empty();

@@ -114,4 +114,8 @@ TEST(ConvertPlanning, AResultFillsItsAnswer) {
   EXPECT_NEAR(out.alternatives[0].position_m[1], 0.8, 1e-12);
   EXPECT_EQ(out.alternative_quality[0], 80);
   EXPECT_EQ(out.num_candidates, 2);
+  EXPECT_EQ(out.ranking, "f_px");
+  res.ranking = Ranking::kGapAngle;
+  bus::fill_answer(out, res);
+  EXPECT_EQ(out.ranking, "gap_deg");
 }

@@ -85,6 +85,7 @@ view_plan_t plan_message(int alternatives) {
   m.planner = "pbnbv";
   m.outcome = view_plan_t::kView;
   m.reason = "best F";
+  m.ranking = "f_px";
   m.object_T_camera = bus::to_msg(look_at_z_up(Eigen::Vector3d(0.6, 0, 0.3), Eigen::Vector3d::Zero()));
   m.view_quality = 1500;
   m.partition = 2;
@@ -113,6 +114,7 @@ TEST(ConvertScan, ViewPlanKeepsItsViewAlternativesAndFigures) {
   EXPECT_EQ(p.allowed_sectors, std::vector<int>({1, 2}));
   EXPECT_EQ(p.sphere_centre_m.z(), 0.05);
   EXPECT_EQ(p.num_scored, 700);
+  EXPECT_EQ(p.ranking, Ranking::kF);
 }
 
 TEST(ConvertScan, ViewPlanOutcomeAndPosesAreChecked) {
@@ -122,6 +124,11 @@ TEST(ConvertScan, ViewPlanOutcomeAndPosesAreChecked) {
   m = plan_message(2);
   m.alternatives[1].quat_wxyz[0] = 2;  // not a unit quaternion
   expect_error([&] { bus::from_msg(m); }, "VIEW_PLAN alternatives[1]");
+  m = plan_message(2);
+  m.ranking = "F";  // not one of the names
+  expect_error([&] { bus::from_msg(m); }, "VIEW_PLAN ranking: unknown plan ranking 'F'");
+  m.ranking = "gap_deg";
+  EXPECT_EQ(bus::from_msg(m).ranking, Ranking::kGapAngle);
   // A stop carries no view: its (unset) poses are not read.
   m = plan_message(0);
   m.outcome = view_plan_t::kStop;

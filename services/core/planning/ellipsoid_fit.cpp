@@ -185,6 +185,11 @@ std::vector<Ellipsoid> fit_both_classes(const std::vector<Eigen::Vector3d>& occu
                                         int* frontier_components) {
   std::vector<Ellipsoid> fits[2];
   int t[2] = {0, 0};
+  if (frontier.empty()) {  // nothing to aim at: the plan will not score F (see the header)
+    if (occupied_components) *occupied_components = 0;
+    if (frontier_components) *frontier_components = 0;
+    return {};
+  }
   parallel_run(2, [&](int worker, int) {
     fits[worker] = worker == 0 ? fit_ellipsoids(occupied, EllipsoidClass::kOccupied, params, &t[0])
                                : fit_ellipsoids(frontier, EllipsoidClass::kFrontier, params, &t[1]);

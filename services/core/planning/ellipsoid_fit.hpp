@@ -33,6 +33,9 @@ std::vector<Ellipsoid> fit_ellipsoids(const std::vector<Eigen::Vector3d>& voxel_
 // Both classes, as fit_ellipsoids on each (the Occupied ellipsoids first, then the Frontier
 // ones), the two fits running side by side: the same ellipsoids as one after the other, in less
 // wall time, since each fit has serial parts (the EM continued with the chosen T, the labels).
+// With no Frontier voxel nothing is fitted (no ellipsoid, both T 0): PB-NBV then has nothing to
+// aim at (no frontier ellipsoid: planner.hpp's nothing-left rule) and the Occupied ellipsoids,
+// which only take from F, would go unused.
 std::vector<Ellipsoid> fit_both_classes(const std::vector<Eigen::Vector3d>& occupied,
                                         const std::vector<Eigen::Vector3d>& frontier,
                                         const EllipsoidParams& params, int* occupied_components = nullptr,

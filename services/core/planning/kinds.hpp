@@ -28,6 +28,13 @@ enum class CandidateArea : uint8_t { kHemisphere, kFullSphere };
 // stop, or spend the remaining views on the candidates farthest from every view taken.
 enum class WhenDone : uint8_t { kStop, kSpread };
 
+// What a plan ranks its candidates by, i.e. what the quality of its chosen view and alternatives
+// means: PB-NBV's F in pixels, ray casting's unobserved voxels, the oracle's unseen true surface
+// samples, nothing (random), or - for a view that fills the largest gap once nothing is left to
+// aim at (WhenDone::kSpread) - the angle in degrees to the nearest view taken. VIEW_PLAN's
+// `ranking` and scan.json carry it, so a reader need not tell a gap-filling plan by its reason.
+enum class Ranking : uint8_t { kF, kUnobservedVoxels, kTrueSamples, kRandom, kGapAngle };
+
 template <>
 struct EnumNames<PlannerKind> {
   static constexpr std::string_view what = "planner";
@@ -47,6 +54,16 @@ struct EnumNames<CandidateArea> {
 };
 
 template <>
+struct EnumNames<Ranking> {
+  static constexpr std::string_view what = "plan ranking";
+  static constexpr std::array<NamedValue<Ranking>, 5> names{{{Ranking::kF, "f_px"},
+                                                             {Ranking::kUnobservedVoxels, "unobserved_voxels"},
+                                                             {Ranking::kTrueSamples, "true_samples"},
+                                                             {Ranking::kRandom, "random"},
+                                                             {Ranking::kGapAngle, "gap_deg"}}};
+};
+
+template <>
 struct EnumNames<WhenDone> {
   static constexpr std::string_view what = "when-done rule";
   static constexpr std::array<NamedValue<WhenDone>, 2> names{{{WhenDone::kStop, "stop"}, {WhenDone::kSpread, "spread"}}};
@@ -60,6 +77,15 @@ constexpr bool is_pbnbv(PlannerKind k) { return k == PlannerKind::kPbnbv || k ==
 constexpr bool uses_ellipsoids(PlannerKind k) { return is_pbnbv(k); }
 // The planners that need the object's true mesh (the oracle: a twin scan only).
 constexpr bool uses_truth(PlannerKind k) { return k == PlannerKind::kOracle; }
+
+// What a planner's plans rank by, unless it fills a gap (Ranking::kGapAngle); the ring plans
+// nothing and counts as random.
+constexpr Ranking ranking_of(PlannerKind k) {
+  return is_pbnbv(k) ? Ranking::kF
+         : k == PlannerKind::kRaycast ? Ranking::kUnobservedVoxels
+         : k == PlannerKind::kOracle  ? Ranking::kTrueSamples
+                                      : Ranking::kRandom;
+}
 
 // Our departures from the paper (planner pbnbv; docs/method.md "Beyond the paper"), decided here
 // and nowhere else; pbnbv-paper keeps the paper's rule in each.

@@ -116,6 +116,7 @@ static PlanResult plan_spread(const PlanInput& in, PlanResult r, const std::stri
   r.alternatives.clear();
   r.scores.assign(r.candidates.size(), ViewScore{});
   r.first_quality = in.first_quality;  // a gap-filling view has no quality of the planner's kind
+  r.ranking = Ranking::kGapAngle;
   std::vector<Eigen::Vector3d> taken;
   for (const auto& v : in.views_done) {
     const Eigen::Vector3d d = v.translation() - r.centre;
@@ -154,6 +155,7 @@ static PlanResult nothing_left(const PlanInput& in, PlanResult r, const std::str
 
 PlanResult plan_pbnbv(const PlanInput& in) {
   PlanResult r;
+  r.ranking = Ranking::kF;
   for (const auto& e : in.ellipsoids) {
     (e.cls == EllipsoidClass::kFrontier ? r.num_frontier_ellipsoids : r.num_occupied_ellipsoids)++;
   }
@@ -239,6 +241,7 @@ PlanResult plan_pbnbv(const PlanInput& in) {
 
 PlanResult plan_raycast(const PlanInput& in, const VoxelGrid& grid, const RaycastParams& params) {
   PlanResult r;
+  r.ranking = Ranking::kUnobservedVoxels;
   if (!check_bbox(in, r)) return r;
   prepare_candidates(in, r);
   const int n = static_cast<int>(r.candidates.size());
@@ -303,6 +306,7 @@ PlanResult plan_raycast(const PlanInput& in, const VoxelGrid& grid, const Raycas
 
 PlanResult plan_random(const PlanInput& in, uint64_t seed) {
   PlanResult r;
+  r.ranking = Ranking::kRandom;
   if (!check_bbox(in, r)) return r;
   prepare_candidates(in, r);
   std::vector<int> pool;
@@ -332,6 +336,7 @@ PlanResult plan_random(const PlanInput& in, uint64_t seed) {
 PlanResult plan_oracle(const PlanInput& in, const TriangleMesh& truth, const SurfaceSamples& samples,
                        const VisibilityParams& visibility) {
   PlanResult r;
+  r.ranking = Ranking::kTrueSamples;
   if (!check_bbox(in, r)) return r;
   prepare_candidates(in, r);
   const int n = static_cast<int>(r.candidates.size());

@@ -91,6 +91,7 @@ struct PlanResult {
   enum class Outcome { kView, kStop, kFailed };
   Outcome outcome = Outcome::kFailed;
   std::string reason;
+  Ranking ranking = Ranking::kF;  // what `scores[..].quality` means (kinds.hpp; set by every planner)
 
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // candidate sphere
   double radius_m = 0;

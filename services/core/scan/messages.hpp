@@ -183,7 +183,8 @@ struct ViewPlan {
   PlanOutcome outcome = PlanOutcome::kFailed;
   std::string reason;
   Pose object_T_camera = Pose::Identity(); // the next view (outcome kView)
-  double view_quality = 0;                 // F (pbnbv, pixels) or gain (raycast, voxels)
+  Ranking ranking = Ranking::kF;           // what view_quality and alternative_quality mean
+  double view_quality = 0;                 // in the unit of `ranking` (F: pixels)
   double first_quality = 0;
   double frontier_area_px = 0, occupied_area_px = 0;
   int partition = 0;

@@ -103,6 +103,7 @@ json to_json(const PlanRecord& r) {
   json j = {{"planner", name_of(p.planner)},
             {"outcome", to_string(p.outcome)},
             {"reason", p.reason},
+            {"ranking", name_of(p.ranking)},
             {"map_of_view", r.map_of_view},
             {"view_quality_px", p.view_quality},
             {"first_quality_px", p.first_quality},

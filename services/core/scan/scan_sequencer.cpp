@@ -402,10 +402,14 @@ void ScanSequencer::planned(const ViewPlan& p, double now_s) {
   if (!std::isfinite(done_.first_quality)) done_.first_quality = p.first_quality;
   options_ = {p.object_T_camera};
   options_.insert(options_.end(), p.alternatives.begin(), p.alternatives.end());
-  const std::string quality = is_pbnbv(s_.planner)                  ? "F " + fixed(p.view_quality, 2) + " px, "
-                              : s_.planner == PlannerKind::kRaycast ? "gain " + fixed(p.view_quality, 2) + " voxels, "
-                              : s_.planner == PlannerKind::kOracle  ? fixed(p.view_quality, 0) + " new true surface samples, "
-                                                        : "";
+  std::string quality;  // what the plan ranked by (a gap-filling view of any planner: degrees)
+  switch (p.ranking) {
+    case Ranking::kF: quality = "F " + fixed(p.view_quality, 2) + " px, "; break;
+    case Ranking::kUnobservedVoxels: quality = "gain " + fixed(p.view_quality, 2) + " voxels, "; break;
+    case Ranking::kTrueSamples: quality = fixed(p.view_quality, 0) + " new true surface samples, "; break;
+    case Ranking::kGapAngle: quality = "gap-filling, " + fixed(p.view_quality, 1) + " deg from the nearest view, "; break;
+    case Ranking::kRandom: break;
+  }
   progress("planned: " + quality + std::to_string(p.num_scored) + " candidates scored");
   view_.plan = std::move(plan);
   begin_move(now_s);

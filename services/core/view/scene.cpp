@@ -91,6 +91,7 @@ nlohmann::json scene_json(const Scene& s) {
   for (const Pose& p : s.views_taken) j["views_taken"].push_back(to_json(p));
   j["chosen"] = s.chosen ? to_json(*s.chosen) : nlohmann::json(nullptr);
   j["chosen_quality_px"] = s.chosen_quality;
+  j["chosen_ranking"] = s.chosen_ranking;
   return j;
 }
 
@@ -200,6 +201,7 @@ std::vector<Scene> load_scan_folder(const std::string& dir, double voxel_m, std:
         s.plan_candidates = plan.at("candidates").at("generated").get<int>();
         s.chosen = pose_from_json(plan.at("object_T_camera"), pw + " object_T_camera");
         s.chosen_quality = plan.value("view_quality_px", 0.0);
+        s.chosen_ranking = plan.value("ranking", std::string("f_px"));  // folders before the field: F
       }
       scenes.push_back(std::move(s));
     }

@@ -61,6 +61,7 @@ struct Scene {
   std::vector<Pose> views_taken;      // camera poses, object frame
   std::optional<Pose> chosen;         // the next view the plan chose
   double chosen_quality = 0;
+  std::string chosen_ranking = "f_px";  // what chosen_quality means (VIEW_PLAN's ranking)
 };
 
 // The scene as the page reads it: points as flat [x, y, z, ...] arrays in metres, poses as

@@ -107,9 +107,21 @@ function draw(s) {
     `cloud ${f(s.cloud_points_total)} points (${f(s.cloud_points)} drawn), ${s.frontier_voxels} frontier voxels, ` +
     `${s.ellipsoids.length} ellipsoids<br>` +
     (s.candidates.length ? `${s.candidates.length} candidates, F ${f(Math.min(...q))} .. ${f(Math.max(...q))} px` : 'no plan yet') +
-    (s.chosen ? `; chosen view F ${f(s.chosen_quality_px)} px` : '') +
+    (s.chosen ? `; chosen view ${chosen_text(s)}` : '') +
     '<br><small>drag to turn, wheel to zoom; keys e, c: ellipsoids, candidates on or off</small>';
   redraw();
+}
+
+// What the plan ranked its chosen view by (VIEW_PLAN's ranking).
+function chosen_text(s) {
+  const f = (x) => Math.round(x).toLocaleString('en');
+  switch (s.chosen_ranking) {
+    case 'gap_deg': return `fills a gap, ${s.chosen_quality_px.toFixed(1)}&deg; from the nearest view`;
+    case 'unobserved_voxels': return `sees ${f(s.chosen_quality_px)} unobserved voxels`;
+    case 'true_samples': return `sees ${f(s.chosen_quality_px)} new true surface samples`;
+    case 'random': return 'drawn at random';
+    default: return `F ${f(s.chosen_quality_px)} px`;
+  }
 }
 
 async function refresh() {

@@ -242,4 +242,11 @@ TEST(FitEllipsoids, BothClassesSideBySideEqualOneAfterTheOther) {
   }
   EXPECT_EQ(both.front().cls, EllipsoidClass::kOccupied);
   EXPECT_EQ(both.back().cls, EllipsoidClass::kFrontier);
+
+  // No Frontier voxel: nothing to aim at, so the Occupied voxels (three blobs, T 3 above) are not
+  // fitted either.
+  int t_occ_none = -1, t_front_none = -1;
+  EXPECT_TRUE(fit_both_classes(occupied, {}, p, &t_occ_none, &t_front_none).empty());
+  EXPECT_EQ(t_occ_none, 0);
+  EXPECT_EQ(t_front_none, 0);
 }

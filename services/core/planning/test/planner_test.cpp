@@ -173,6 +173,7 @@ TEST(Planner, WithABudgetLeftItFillsTheLargestGapInsteadOfStopping) {
   EXPECT_NE(r.reason.find("no frontier ellipsoid remains"), std::string::npos) << r.reason;
   EXPECT_NEAR(azimuth_deg(r.candidates[r.chosen], centre), 180.0, 8.0);
   EXPECT_NEAR(r.scores[r.chosen].quality, 135.0 - 1.9, 2.0);  // degrees to the view taken
+  EXPECT_EQ(r.ranking, Ranking::kGapAngle);
   for (int a : r.alternatives) EXPECT_LE(r.scores[a].quality, r.scores[r.chosen].quality);
   EXPECT_TRUE(std::isnan(r.first_quality));
 }
@@ -209,6 +210,8 @@ TEST(Planner, AWeakBestViewFillsTheLargestGapOrStops) {
   EXPECT_NEAR(azimuth_deg(spread.candidates[spread.chosen], spread.centre), 180.0, 15.0);
   EXPECT_DOUBLE_EQ(spread.first_quality, 10.0 * best_f);
   EXPECT_EQ(spread.num_scored, paper.num_scored);  // every candidate was scored by F first
+  EXPECT_EQ(paper.ranking, Ranking::kF);
+  EXPECT_EQ(spread.ranking, Ranking::kGapAngle);
 
   in.when_done = WhenDone::kStop;
   const PlanResult stop = plan_pbnbv(in);
