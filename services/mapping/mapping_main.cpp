@@ -120,9 +120,14 @@ class MappingService {
       map_->write_states_ply((out_ / "maps" / view_file(r.iteration, "states.ply")).string());
     }
     out.utime = bus::now_utime();
+    // The state first, then the answer: after a crash between the two, the restarted service
+    // answers the coordinator's repeated request from the saved answer. The other order could
+    // lose the view: the answer out, the state not saved, the restarted map would lack a view
+    // the coordinator counts as mapped. It also keeps the write off the cores while the
+    // ellipsoid fitter works on the answer.
+    save(out);
     bus_.publish(channels::kVoxelMap, out);
     answers_.put({r.scan_id, r.iteration}, out);
-    save(out);
     std::ostringstream os;
     os << "view " << r.iteration << ": " << out.message << " (" << out.update_s * 1e3 << " ms; occupied "
        << out.num_occupied << ", frontier " << out.num_frontier << ", unknown " << out.num_unknown << ")";
