@@ -17,18 +17,13 @@
 #include "core/mapping/state_colour.hpp"
 #include "core/planning/view_scoring.hpp"
 #include "core/base/units.hpp"
+#include "sphere_ellipsoid.hpp"
 
 namespace pbnbv {
 namespace {
 
+using testing::sphere_ellipsoid;
 
-Ellipsoid sphere(const Eigen::Vector3d& c, double r, EllipsoidClass cls) {
-  Ellipsoid e;
-  e.cls = cls;
-  e.centre = c;
-  e.semi_axes = Eigen::Vector3d::Constant(r);
-  return e;
-}
 
 // One candidate at (1, 0, 0) looking at the origin, chosen; B = [-0.1, 0.1]^3; one frontier
 // sphere of radius 0.1 at the origin; no partition.
@@ -36,7 +31,7 @@ PlanFigure one_candidate() {
   PlanFigure f;
   f.title = "test - view 1 of 1";
   f.lines = {"F = 1.0", "T = 1"};
-  f.ellipsoids = {sphere(Eigen::Vector3d::Zero(), 0.1, EllipsoidClass::kFrontier)};
+  f.ellipsoids = {sphere_ellipsoid(Eigen::Vector3d::Zero(), 0.1, EllipsoidClass::kFrontier)};
   f.candidates = {look_at_z_up(Eigen::Vector3d(1, 0, 0), Eigen::Vector3d::Zero())};
   f.quality = {1.0};
   f.status = {CandidateStatus::kScored};
@@ -164,8 +159,8 @@ TEST(PlanFigure, EllipsoidShadowFollowsOrientation) {
 // .ot file uses (core/mapping/state_colour.hpp): frontier orange, occupied blue.
 TEST(PlanFigure, EllipsoidsTakeTheMapPalette) {
   PlanFigure f = one_candidate();
-  f.ellipsoids = {sphere(Eigen::Vector3d(-0.3, 0.3, 0), 0.1, EllipsoidClass::kFrontier),
-                  sphere(Eigen::Vector3d(0.3, -0.3, 0), 0.1, EllipsoidClass::kOccupied)};
+  f.ellipsoids = {sphere_ellipsoid(Eigen::Vector3d(-0.3, 0.3, 0), 0.1, EllipsoidClass::kFrontier),
+                  sphere_ellipsoid(Eigen::Vector3d(0.3, -0.3, 0), 0.1, EllipsoidClass::kOccupied)};
   const cv::Mat img = draw_plan_figure(f);
   const PlanFigureLayout l = plan_figure_layout(f);
   // The palette's RGB as BGR: orange (255, 140, 40) and blue (40, 110, 230).

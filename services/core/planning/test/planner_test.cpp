@@ -2,6 +2,7 @@
 // reachability, exclusion and termination, on scenes whose answer is plain geometry.
 #include "core/planning/planner.hpp"
 #include "core/base/units.hpp"
+#include "sphere_ellipsoid.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,13 +11,7 @@
 namespace pbnbv {
 namespace {
 
-Ellipsoid sphere(EllipsoidClass cls, const Eigen::Vector3d& c, double r) {
-  Ellipsoid e;
-  e.cls = cls;
-  e.centre = c;
-  e.semi_axes = Eigen::Vector3d::Constant(r);
-  return e;
-}
+using testing::sphere_ellipsoid;
 
 // A 0.3 m object (occupied ball at the origin) with unexplored structure (a frontier ball) on
 // the side at azimuth `azimuth_deg`.
@@ -24,8 +19,8 @@ PlanInput scene(double azimuth_deg, int beta) {
   PlanInput in;
   in.bbox = Eigen::AlignedBox3d(Eigen::Vector3d(-0.15, -0.15, 0.0), Eigen::Vector3d(0.15, 0.15, 0.3));
   const double a = azimuth_deg * kPi / 180.0;
-  in.ellipsoids = {sphere(EllipsoidClass::kOccupied, Eigen::Vector3d(0, 0, 0.15), 0.1),
-                   sphere(EllipsoidClass::kFrontier, Eigen::Vector3d(0.18 * std::cos(a), 0.18 * std::sin(a), 0.15), 0.08)};
+  in.ellipsoids = {sphere_ellipsoid(Eigen::Vector3d(0, 0, 0.15), 0.1, EllipsoidClass::kOccupied),
+                   sphere_ellipsoid(Eigen::Vector3d(0.18 * std::cos(a), 0.18 * std::sin(a), 0.15), 0.08, EllipsoidClass::kFrontier)};
   in.beta = beta;
   in.candidates.area = CandidateArea::kHemisphere;
   return in;

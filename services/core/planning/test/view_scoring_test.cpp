@@ -2,6 +2,7 @@
 // (view_scoring.hpp).
 #include "core/planning/view_scoring.hpp"
 #include "core/base/units.hpp"
+#include "sphere_ellipsoid.hpp"
 
 #include <gtest/gtest.h>
 
@@ -15,16 +16,8 @@
 namespace pbnbv {
 namespace {
 
+using testing::sphere_ellipsoid;
 
-Ellipsoid sphere(const Eigen::Vector3d& c, double r,
-                 EllipsoidClass cls = EllipsoidClass::kOccupied) {
-  Ellipsoid e;
-  e.cls = cls;
-  e.centre = c;
-  e.axes = Eigen::Matrix3d::Identity();
-  e.semi_axes = Eigen::Vector3d::Constant(r);
-  return e;
-}
 
 CameraIntrinsics small_camera(double fy = 174.0) {
   CameraIntrinsics k;
@@ -106,7 +99,7 @@ TEST(ProjectEllipsoid, SphereOnTheOpticalAxis) {
   for (double d : {0.5, 1.0, 2.5}) {
     const double r = 0.1;
     const ProjectedEllipse pe =
-        project_ellipsoid(sphere(Eigen::Vector3d(0, 0, d), r), k, Pose::Identity());
+        project_ellipsoid(sphere_ellipsoid(Eigen::Vector3d(0, 0, d), r), k, Pose::Identity());
     ASSERT_TRUE(pe.valid);
     const double expected = 696.0 * r / std::sqrt(d * d - r * r);
     EXPECT_NEAR(pe.centre.x(), 640.0, 1e-9);
@@ -125,7 +118,7 @@ TEST(ProjectEllipsoid, SphereOnTheOpticalAxisOfALookAtCamera) {
   const Eigen::Vector3d c(0.1, -0.2, 0.05);
   const Eigen::Vector3d eye = c + Eigen::Vector3d(0.4, 0.5, 0.3);
   const double d = (eye - c).norm(), r = 0.07;
-  const ProjectedEllipse pe = project_ellipsoid(sphere(c, r), k, look_at_z_up(eye, c));
+  const ProjectedEllipse pe = project_ellipsoid(sphere_ellipsoid(c, r), k, look_at_z_up(eye, c));
   ASSERT_TRUE(pe.valid);
   const double expected = 696.0 * r / std::sqrt(d * d - r * r);
   EXPECT_NEAR(pe.centre.x(), 640.0, 1e-9);
@@ -138,7 +131,7 @@ TEST(ProjectEllipsoid, SphereOnTheOpticalAxisOfALookAtCamera) {
 TEST(ProjectEllipsoid, OffAxisSphereMatchesRayCastSilhouette) {
   const CameraIntrinsics k = small_camera();
   const Pose pose = look_at_z_up(Eigen::Vector3d(0.3, -0.5, 0.2), Eigen::Vector3d::Zero());
-  const Ellipsoid e = sphere(Eigen::Vector3d(0.12, 0.06, -0.05), 0.09);
+  const Ellipsoid e = sphere_ellipsoid(Eigen::Vector3d(0.12, 0.06, -0.05), 0.09);
   const ProjectedEllipse pe = project_ellipsoid(e, k, pose);
   ASSERT_TRUE(pe.valid);
   // Off-axis: centre away from the principal point and the circle stretched to an ellipse.
@@ -161,7 +154,7 @@ TEST(ProjectEllipsoid, RotatedEllipsoidMatchesRayCastSilhouette) {
 
 TEST(ProjectEllipsoid, BehindTheCameraContributesNothing) {
   const CameraIntrinsics k;
-  const Ellipsoid e = sphere(Eigen::Vector3d(0, 0, -1), 0.1, EllipsoidClass::kFrontier);
+  const Ellipsoid e = sphere_ellipsoid(Eigen::Vector3d(0, 0, -1), 0.1, EllipsoidClass::kFrontier);
   const ProjectedEllipse pe = project_ellipsoid(e, k, Pose::Identity());
   EXPECT_FALSE(pe.valid);
   EXPECT_EQ(clipped_ellipse_area(pe, k), 0.0);
@@ -175,10 +168,10 @@ TEST(ProjectEllipsoid, BehindTheCameraContributesNothing) {
 TEST(ProjectEllipsoid, CameraInsideOrStraddlingIsInvalid) {
   const CameraIntrinsics k;
   // Camera inside the ellipsoid.
-  EXPECT_FALSE(project_ellipsoid(sphere(Eigen::Vector3d(0, 0, 0.05), 0.1), k, Pose::Identity())
+  EXPECT_FALSE(project_ellipsoid(sphere_ellipsoid(Eigen::Vector3d(0, 0, 0.05), 0.1), k, Pose::Identity())
                    .valid);
   // Centre in front, but the ellipsoid reaches behind the camera plane (camera outside it).
-  Ellipsoid e = sphere(Eigen::Vector3d(0.3, 0, 0.05), 0.1);
+  Ellipsoid e = sphere_ellipsoid(Eigen::Vector3d(0.3, 0, 0.05), 0.1);
   e.semi_axes = Eigen::Vector3d(0.1, 0.1, 0.2);
   EXPECT_FALSE(project_ellipsoid(e, k, Pose::Identity()).valid);
   EXPECT_EQ(score_view({e}, k, Pose::Identity()).visible, 0);
@@ -315,7 +308,7 @@ TEST(ScoreView, RankWeightsFollowDepth) {
   const Pose pose = Pose::Identity();
   std::vector<double> area(3);
   for (int i = 0; i < 3; ++i) {
-    const ProjectedEllipse pe = project_ellipsoid(sphere(centres[i], 0.05), k, pose);
+    const ProjectedEllipse pe = project_ellipsoid(sphere_ellipsoid(centres[i], 0.05), k, pose);
     ASSERT_TRUE(pe.valid);
     area[i] = clipped_ellipse_area(pe, k);
     EXPECT_NEAR(area[i], pe.area_px, 1e-9 * pe.area_px);  // whole ellipse in the image
@@ -323,7 +316,7 @@ TEST(ScoreView, RankWeightsFollowDepth) {
   for (int f = 0; f < 3; ++f) {  // sphere f frontier, the others occupied
     std::vector<Ellipsoid> es;
     for (int i = 0; i < 3; ++i) {
-      es.push_back(sphere(centres[i], 0.05,
+      es.push_back(sphere_ellipsoid(centres[i], 0.05,
                           i == f ? EllipsoidClass::kFrontier : EllipsoidClass::kOccupied));
     }
     const ViewScore s = score_view(es, k, pose);
@@ -343,9 +336,9 @@ TEST(ScoreView, InvisibleEllipsoidsAreNotRankedAndAreaIsClipped) {
   const Pose pose = Pose::Identity();
   // A frontier sphere half out of the image at 1 m, an occupied one behind the camera.
   // Image x = 0 is at lateral offset -640/696 m at 1 m depth.
-  const Ellipsoid half = sphere({-640.0 / 696.0, 0.0, 1.0}, 0.05, EllipsoidClass::kFrontier);
-  const Ellipsoid behind = sphere({0.0, 0.0, -0.5}, 0.05, EllipsoidClass::kOccupied);
-  const Ellipsoid far = sphere({0.0, 0.0, 2.0}, 0.05, EllipsoidClass::kOccupied);
+  const Ellipsoid half = sphere_ellipsoid({-640.0 / 696.0, 0.0, 1.0}, 0.05, EllipsoidClass::kFrontier);
+  const Ellipsoid behind = sphere_ellipsoid({0.0, 0.0, -0.5}, 0.05, EllipsoidClass::kOccupied);
+  const Ellipsoid far = sphere_ellipsoid({0.0, 0.0, 2.0}, 0.05, EllipsoidClass::kOccupied);
   const ProjectedEllipse ph = project_ellipsoid(half, k, pose);
   const ProjectedEllipse pf = project_ellipsoid(far, k, pose);
   const ViewScore s = score_view({far, behind, half}, k, pose);
@@ -359,8 +352,8 @@ TEST(ScoreView, InvisibleEllipsoidsAreNotRankedAndAreaIsClipped) {
 TEST(ScoreView, FrontierViewBeatsOccupiedOnlyView) {
   const CameraIntrinsics k;
   const std::vector<Ellipsoid> scene = {
-      sphere({0, 0, 0}, 0.1, EllipsoidClass::kOccupied),
-      sphere({-3, 0, 0}, 0.1, EllipsoidClass::kFrontier)};
+      sphere_ellipsoid({0, 0, 0}, 0.1, EllipsoidClass::kOccupied),
+      sphere_ellipsoid({-3, 0, 0}, 0.1, EllipsoidClass::kFrontier)};
   // A at x = -1 looks along +x: the occupied sphere ahead, the frontier one behind.
   const ViewScore a = score_view(scene, k, look_at_z_up({-1, 0, 0}, {0, 0, 0}));
   // B at x = -2 looks along -x: the frontier sphere ahead, the occupied one behind.

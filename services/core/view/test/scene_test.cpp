@@ -11,9 +11,12 @@
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
 #include "file_test_util.hpp"
+#include "sphere_ellipsoid.hpp"
 
 namespace pbnbv {
 namespace {
+
+using testing::sphere_ellipsoid;
 
 // 10 x 10 x 10 points, 1 cm apart, at 0.5, 1.5, ... 9.5 cm.
 PointCloud grid_cloud() {
@@ -54,14 +57,6 @@ TEST(EllipsoidMesh, TheUnitSphereLandsOnTheEllipsoidsAxes) {
   }
 }
 
-Ellipsoid sphere(EllipsoidClass cls, const Eigen::Vector3d& centre, double r) {
-  Ellipsoid e;
-  e.cls = cls;
-  e.centre = centre;
-  e.semi_axes = Eigen::Vector3d::Constant(r);
-  return e;
-}
-
 TEST(ScoreCandidates, ASphereAtTheCentreScoresItsProjectedDiscEverywhere) {
   // B = +-5 cm: R = 0.6 + 0.0866 m. A frontier sphere r = 5 cm at B's centre, seen on axis from
   // distance R by every candidate: a disc of radius f r / sqrt(R^2 - r^2) = 50.82 px, 8114 px^2.
@@ -72,7 +67,7 @@ TEST(ScoreCandidates, ASphereAtTheCentreScoresItsProjectedDiscEverywhere) {
   spec.area = CandidateArea::kFullSphere;
   spec.working_distance_m = 0.6;
   const CameraIntrinsics camera;  // 1280 x 720, f = 696
-  const std::vector<ScoredCandidate> c = score_candidates({sphere(EllipsoidClass::kFrontier, {0, 0, 0}, 0.05)}, box, spec, camera);
+  const std::vector<ScoredCandidate> c = score_candidates({sphere_ellipsoid({0, 0, 0}, 0.05, EllipsoidClass::kFrontier)}, box, spec, camera);
   ASSERT_EQ(c.size(), 100u);
   const double d = 0.6 + 0.5 * std::sqrt(3 * 0.1 * 0.1);
   const double rho = camera.fx * 0.05 / std::sqrt(d * d - 0.05 * 0.05);
@@ -92,7 +87,7 @@ TEST(ScoreCandidates, ShadeRunsFromTheLowestToTheHighestF) {
   spec.num_parallels = 10;
   spec.area = CandidateArea::kFullSphere;
   const std::vector<ScoredCandidate> c =
-      score_candidates({sphere(EllipsoidClass::kFrontier, {0, 0, 0}, 0.05), sphere(EllipsoidClass::kOccupied, {0.08, 0, 0}, 0.03)},
+      score_candidates({sphere_ellipsoid({0, 0, 0}, 0.05, EllipsoidClass::kFrontier), sphere_ellipsoid({0.08, 0, 0}, 0.03, EllipsoidClass::kOccupied)},
                        box, spec, CameraIntrinsics{});
   ASSERT_EQ(c.size(), 200u);
   int lo = 0, hi = 0;
