@@ -160,13 +160,7 @@ inline view_plan_t empty_answer(const plan_request_t& r) {
   out.planner = r.planner;
   out.object_T_camera = to_msg(Pose::Identity());
   // No scores yet: what the planner asked for ranks by (a request naming no planner fails later).
-  const auto kind = [&]() -> std::optional<PlannerKind> {
-    try {
-      return parse_name<PlannerKind>(r.planner);
-    } catch (const std::invalid_argument&) {
-      return std::nullopt;
-    }
-  }();
+  const std::optional<PlannerKind> kind = find_name<PlannerKind>(r.planner);
   out.ranking = std::string(name_of(kind ? ranking_of(*kind) : Ranking::kF));
   out.view_quality = 0;
   out.first_quality = r.first_quality;

@@ -116,11 +116,7 @@ class ScorerService {
       return;
     }
     if (pending_ && pending_->request.scan_id == r.scan_id && pending_->request.request_id == r.request_id) return;
-    std::optional<PlannerKind> planner;
-    try {
-      planner = parse_name<PlannerKind>(r.planner);
-    } catch (const std::invalid_argument&) {
-    }
+    const std::optional<PlannerKind> planner = find_name<PlannerKind>(r.planner);
     if (!planner || !uses_view_scorer(*planner)) {
       view_plan_t out = bus::empty_answer(r);
       out.outcome = view_plan_t::kFailed;

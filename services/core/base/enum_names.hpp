@@ -7,6 +7,7 @@
 //     static constexpr std::array<NamedValue<PlannerKind>, 2> names{{{PlannerKind::kPbnbv, "pbnbv"}, ...}};
 //   };
 #include <array>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -53,13 +54,20 @@ std::string choices_of() {
   return out;
 }
 
+// The value named `text` (exact match), or none.
+template <typename E>
+std::optional<E> find_name(std::string_view text) {
+  for (const auto& n : EnumNames<E>::names) {
+    if (n.name == text) return n.value;
+  }
+  return std::nullopt;
+}
+
 // The value named `text` (exact match). Throws std::invalid_argument naming the text and the
 // choices: "unknown planner 'rnadom' (expected pbnbv, pbnbv-paper, raycast, random, ring or oracle)".
 template <typename E>
 E parse_name(std::string_view text) {
-  for (const auto& n : EnumNames<E>::names) {
-    if (n.name == text) return n.value;
-  }
+  if (const std::optional<E> v = find_name<E>(text)) return *v;
   throw std::invalid_argument("unknown " + std::string(EnumNames<E>::what) + " '" + std::string(text) + "' (expected " +
                               choices_of<E>() + ")");
 }
