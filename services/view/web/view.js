@@ -26,6 +26,7 @@ scene.add(new THREE.AxesHelper(0.1));
 const params = new URLSearchParams(window.location.search);
 let chosenView = params.has('view') ? Number(params.get('view')) : -1;  // -1: the latest
 let shownKey = '';
+const f = (x) => Math.round(x).toLocaleString('en');  // a count for the info line
 let shown = null;  // the scene drawn
 const hidden = new Set();  // 'ellipsoids', 'candidates': hidden with the keys e and c
 
@@ -99,7 +100,6 @@ function draw(s) {
     content.add(ball);
   }
   scene.add(content);
-  const f = (x) => Math.round(x).toLocaleString('en');
   const q = s.candidates.map((c) => c.quality_px);
   document.getElementById('info').innerHTML =
     `<b>${s.scan_id || 'waiting for a scan...'}</b> &mdash; view ${s.view}<br>${s.status}<br>` +
@@ -114,7 +114,6 @@ function draw(s) {
 
 // What the plan ranked its chosen view by (VIEW_PLAN's ranking).
 function chosen_text(s) {
-  const f = (x) => Math.round(x).toLocaleString('en');
   switch (s.chosen_ranking) {
     case 'gap_deg': return `fills a gap, ${s.chosen_quality_px.toFixed(1)}&deg; from the nearest view`;
     case 'unobserved_voxels': return `sees ${f(s.chosen_quality_px)} unobserved voxels`;
