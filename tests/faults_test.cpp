@@ -2,6 +2,8 @@
 // the same bus, a launcher killed without warning, a folder that already holds a scan, objects
 // no rig can scan, and the main job's log. Every scan runs the real processes on a real LCM bus;
 // the checks are figures (distances to the true surface, coverage, counts), not only exit codes.
+// Coverage comes from eval::evaluate_coverage: the figures of evaluate_scan without its surface
+// metrics, which no case here reads (they were most of each evaluation's time).
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <unistd.h>
@@ -86,8 +88,8 @@ TEST(Faults, TwoScansAtOnceOnOneBusEachKeepTheirOwnObject) {
     EXPECT_GT(ignored_lines(out), 0) << "the other scan's traffic never reached " << out << "'s services?";
   }
   EXPECT_NE(read_json_file(sphere / "scan.json")["settings"]["scan_id"], read_json_file(box / "scan.json")["settings"]["scan_id"]);
-  const double c_together = eval::evaluate_scan(sphere).coverage_by_view.back();
-  const double c_alone = eval::evaluate_scan(alone).coverage_by_view.back();
+  const double c_together = eval::evaluate_coverage(sphere).coverage_by_view.back();
+  const double c_alone = eval::evaluate_coverage(alone).coverage_by_view.back();
   std::cout << "sphere coverage after 4 views: " << c_together << " % with another scan on the bus, " << c_alone << " % alone\n";
   EXPECT_NEAR(c_together, c_alone, 1.0);
 }
@@ -121,7 +123,7 @@ TEST(Faults, AnotherScansTrafficChangesNothing) {
   EXPECT_LT(d.p95, 0.5e-3);
   EXPECT_NEAR(static_cast<double>(d.n), static_cast<double>(d_alone.n), 0.01 * d_alone.n);
   EXPECT_GT(ignored_lines(scan), 0);
-  EXPECT_NEAR(eval::evaluate_scan(scan).coverage_by_view.back(), eval::evaluate_scan(alone).coverage_by_view.back(), 1.0);
+  EXPECT_NEAR(eval::evaluate_coverage(scan).coverage_by_view.back(), eval::evaluate_coverage(alone).coverage_by_view.back(), 1.0);
 }
 
 // 1 % and 5 % of the LCM port's UDP packets dropped at random (nftables in the namespace): the
@@ -149,7 +151,7 @@ TEST(Faults, PacketLossOfOneAndFivePercentCostsNoViewAndNoCoverage) {
         run_command(netns_run() + " --loss " + std::to_string(run.loss) + " sh -c '" + scan_command(out, ring10) + "'");
     run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     ASSERT_EQ(r.exit_code, 0) << "at " << run.loss << " % loss: " << r.output << read_text(out.string() + ".stdout");
-    run.coverage = eval::evaluate_scan(out).coverage_by_view;
+    run.coverage = eval::evaluate_coverage(out).coverage_by_view;
     run.views = static_cast<int>(read_json_file(out / "scan.json")["status"]["views_done"].get<int>());
     std::cout << run.loss << " % packet loss: " << run.views << " views in " << run.wall_s << " s, coverage after view 10 "
               << (run.coverage.empty() ? 0.0 : run.coverage.back()) << " %\n";
@@ -193,13 +195,13 @@ TEST(Faults, EachKilledServiceIsRestartedAndTheScanCompletes) {
     return out;
   };
   const fs::path undisturbed = run_killing("");
-  const std::vector<double> reference = eval::evaluate_scan(undisturbed).coverage_by_view;
+  const std::vector<double> reference = eval::evaluate_coverage(undisturbed).coverage_by_view;
   ASSERT_EQ(reference.size(), 10u);
   for (const std::string victim :
        {"twin", "motion", "camera", "registration", "mapping", "ellipsoids", "scorer", "coordinator", "lcm-logger"}) {
     const fs::path out = run_killing(victim);
     const auto scan = read_json_file(out / "scan.json");
-    const std::vector<double> coverage = eval::evaluate_scan(out).coverage_by_view;
+    const std::vector<double> coverage = eval::evaluate_coverage(out).coverage_by_view;
     int restarts = -1;
     const nlohmann::json procs_json = read_json_file(out / "processes.json");
     for (const auto& p : procs_json["processes"]) {
@@ -219,7 +221,7 @@ TEST(Faults, EachKilledServiceIsRestartedAndTheScanCompletes) {
       // kills it and starts it again.
       const fs::path hung = run_killing(victim, SIGSTOP);
       const auto s2 = read_json_file(hung / "scan.json");
-      const std::vector<double> c2 = eval::evaluate_scan(hung).coverage_by_view;
+      const std::vector<double> c2 = eval::evaluate_coverage(hung).coverage_by_view;
       std::cout << "mapping stopped (SIGSTOP) at view 3: " << s2["status"]["views_done"] << " views in "
                 << s2["status"]["elapsed_s"].get<double>() << " s, coverage after view 10 " << (c2.empty() ? 0.0 : c2.back())
                 << " %\n";
@@ -297,8 +299,8 @@ TEST(Faults, AKilledLauncherLeavesNoProcessBehindAndTheScanResumes) {
   ASSERT_EQ(run_command(netns_run() + " " + scan_command(whole, "--object sphere --planner ring --views 8 --sim-speed 20"))
                 .exit_code,
             0);
-  const double c_resumed = eval::evaluate_scan(out).coverage_by_view.back();
-  const double c_whole = eval::evaluate_scan(whole).coverage_by_view.back();
+  const double c_resumed = eval::evaluate_coverage(out).coverage_by_view.back();
+  const double c_whole = eval::evaluate_coverage(whole).coverage_by_view.back();
   std::cout << "killed after " << before << " views, resumed: " << c_resumed << " % after 8 views (uninterrupted "
             << c_whole << " %)\n";
   EXPECT_NEAR(c_resumed, c_whole, 1.0);

@@ -49,7 +49,7 @@ double external_coverage(const fs::path& out, const fs::path& mesh_path, double 
   TriangleMesh mesh = load_mesh(mesh_path.string());
   for (auto& v : mesh.vertices) v.z() += twin_object_z - scan_object_z;
   write_stl_binary(mesh, (out / "object.stl").string());
-  const eval::ScanEvaluation e = eval::evaluate_scan(out);
+  const eval::ScanEvaluation e = eval::evaluate_coverage(out);  // the coverage only
   return e.coverage_by_view.empty() ? 0.0 : e.coverage_by_view.back();
 }
 

@@ -27,10 +27,9 @@ json stats_mm(const DistanceStats& s) {
           {"rmse_mm", s.rmse_m * 1e3}, {"p95_mm", s.p95_m * 1e3},  {"max_mm", s.max_m * 1e3}};
 }
 
-}  // namespace
-
-ScanEvaluation evaluate_scan(const fs::path& out, const CoverageParams& params, const std::vector<uint8_t>* observable,
-                             const MetricParams& metrics) {
+// evaluate_scan, and evaluate_coverage when `metrics` is null.
+ScanEvaluation evaluate(const fs::path& out, const CoverageParams& params, const std::vector<uint8_t>* observable,
+                        const MetricParams* metrics) {
   const json scan = read_json((out / "scan.json").string());
   const fs::path mesh_path = out / "object.stl";
   if (!fs::exists(mesh_path)) throw std::runtime_error(mesh_path.string() + " is missing: not a twin scan's output folder");
@@ -67,10 +66,11 @@ ScanEvaluation evaluate_scan(const fs::path& out, const CoverageParams& params, 
   } catch (const json::exception& x) {
     throw std::runtime_error((out / "scan.json").string() + ": " + x.what());
   }
+  if (!metrics) return e;
   const PointCloud cloud = fs::exists(out / "cloud.ply") ? read_ply((out / "cloud.ply").string()) : merged;
   const bool has_mesh = fs::exists(out / "mesh.ply");
   if (!cloud.empty() || has_mesh) {
-    const ReferenceSurface reference(truth, metrics);
+    const ReferenceSurface reference(truth, *metrics);
     if (!cloud.empty()) e.cloud_metrics = reference.compare_cloud(cloud);
     if (has_mesh) {
       try {
@@ -83,6 +83,17 @@ ScanEvaluation evaluate_scan(const fs::path& out, const CoverageParams& params, 
     }
   }
   return e;
+}
+
+}  // namespace
+
+ScanEvaluation evaluate_scan(const fs::path& out, const CoverageParams& params, const std::vector<uint8_t>* observable,
+                             const MetricParams& metrics) {
+  return evaluate(out, params, observable, &metrics);
+}
+
+ScanEvaluation evaluate_coverage(const fs::path& out, const CoverageParams& params, const std::vector<uint8_t>* observable) {
+  return evaluate(out, params, observable, nullptr);
 }
 
 json to_json(const SurfaceMetrics& m) {

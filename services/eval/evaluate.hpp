@@ -43,6 +43,11 @@ struct ScanEvaluation {
 // std::invalid_argument when the mask's size is not the number of samples.
 ScanEvaluation evaluate_scan(const std::filesystem::path& out, const CoverageParams& params = {},
                              const std::vector<uint8_t>* observable = nullptr, const MetricParams& metrics = {});
+// evaluate_scan without the surface metrics (cloud_metrics and mesh_metrics stay empty; every
+// other figure is the same), for a caller that reads only the coverage: the metrics' distance
+// queries against the true mesh are most of an evaluation's time.
+ScanEvaluation evaluate_coverage(const std::filesystem::path& out, const CoverageParams& params = {},
+                                 const std::vector<uint8_t>* observable = nullptr);
 
 nlohmann::json to_json(const ScanEvaluation& e, const CoverageParams& params);
 

@@ -14,6 +14,7 @@
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
+#include "eval/evaluate.hpp"
 #include "file_test_util.hpp"
 #include "launcher/command_line.hpp"
 #include "launcher/commands.hpp"
@@ -169,6 +170,17 @@ TEST_F(EvaluateCommand, TwinScanFolderAgainstItsObjectStl) {
   // 112 of 280 cm^2, in percent.
   EXPECT_NEAR(j.at("scan").at("coverage_by_view").at(0).get<double>(), 100 * kRecall5mm, 2.0);
   expect_above_the_top(j["scan"]["surface_metrics"]["cloud"]);
+  // The coverage alone (what tests that read only the coverage use): the same figures, no metrics.
+  const eval::ScanEvaluation full = eval::evaluate_scan(scan);
+  const eval::ScanEvaluation coverage = eval::evaluate_coverage(scan);
+  ASSERT_TRUE(full.cloud_metrics.has_value());
+  EXPECT_FALSE(coverage.cloud_metrics.has_value());
+  EXPECT_FALSE(coverage.mesh_metrics.has_value());
+  ASSERT_EQ(coverage.coverage_by_view.size(), 1u);
+  EXPECT_EQ(coverage.coverage_by_view, full.coverage_by_view);
+  EXPECT_EQ(coverage.points_by_view, full.points_by_view);
+  EXPECT_EQ(coverage.state, full.state);
+  EXPECT_EQ(coverage.views_done, full.views_done);
 
   // A mesh.ply without faces: said, with why, and exit code 1; the cloud and coverage stand.
   write("scan/mesh.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
