@@ -1,14 +1,17 @@
 // The benchmark command end to end: `pbnbv bench` runs three planners (PB-NBV and the two
 // baselines served by the same view scorer) on two objects for three views, every scan a full
 // pipeline of processes on a real LCM bus in its own private network namespace; summary.json
-// must be well formed and agree with the scans, the report and plots must be written, and a
-// rerun must resume (skip every complete scan). Also the summary's rules on hand-made curves.
+// must be well formed and agree with the scans, the report and plots must be written, a rerun
+// must resume (skip every complete scan), and first views may be added to the folder (drawn
+// ones beside the default's). Also the summary's rules on hand-made curves.
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <opencv2/imgcodecs.hpp>
 
 #include "eval/bench.hpp"
@@ -147,7 +150,10 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
     double mean_f = 0;  // F-score at 5 mm, mean over the objects
     for (const std::string object : {"sphere", "box"}) {
       SCOPED_TRACE(object);
-      const json& o = p["objects"].at(object);
+      const json& o = p["runs"].at(object);  // one first view: the run is named after the object
+      EXPECT_EQ(o["object"], object);
+      EXPECT_EQ(o["first_view"], 1);
+      EXPECT_EQ(p["objects"].at(object)["coverage_by_view"], o["coverage_by_view"]);  // its mean over one run
       ASSERT_EQ(o["coverage_by_view"].size(), 3u);
       EXPECT_EQ(o["planner_ms"].size(), 2u);  // views 2 and 3 were planned
       for (int i = 0; i < 3; ++i) {
@@ -190,12 +196,12 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
       mean_f += m["f_score"].get<double>() / 2;
     }
     EXPECT_NEAR(p["surface_metrics"]["cloud"]["f_score"].get<double>(), mean_f, 1e-9);
-    EXPECT_EQ(p["surface_metrics"]["cloud"]["objects"], 2);
+    EXPECT_EQ(p["surface_metrics"]["cloud"]["runs"], 2);
     for (int i = 0; i < 3; ++i) EXPECT_NEAR(p["coverage_by_view"][i].get<double>(), mean[i], 1e-9);
   }
   // Two planned views of a sphere add surface for a planner that looks for it.
-  EXPECT_GT(s["pbnbv"]["objects"]["sphere"]["coverage_by_view"][2].get<double>(),
-            s["pbnbv"]["objects"]["sphere"]["coverage_by_view"][0].get<double>() + 20.0);
+  EXPECT_GT(s["pbnbv"]["runs"]["sphere"]["coverage_by_view"][2].get<double>(),
+            s["pbnbv"]["runs"]["sphere"]["coverage_by_view"][0].get<double>() + 20.0);
 
   // The report in the paper's form, and the plots.
   std::ifstream md(out / "report.md");
@@ -221,6 +227,56 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
   for (const std::string planner : {"pbnbv", "raycast", "random"}) {
     EXPECT_EQ(s2[planner]["coverage_by_view"], s[planner]["coverage_by_view"]);
   }
+  // First views added to the folder's benchmark: the box from a second first view, drawn, for two
+  // of its planners. The default first view's scans are reused (<object>/, as with one); the drawn
+  // one lies at the same distance from the centre, the same for both planners, in <object>-fv2/;
+  // the means are over the runs, the interval over the objects (one: zero width).
+  const CommandResult fv = run_command(netns_run() + " " + bin_dir() +
+                                       "/pbnbv bench --objects box --planners pbnbv,random --rig free --area full "
+                                       "--views 3 --first-views 2 --jobs 2 --out " + out.string());
+  ASSERT_EQ(fv.exit_code, 0) << fv.output;
+  EXPECT_NE(fv.output.find("1 objects x 2 first views x 2 planners = 4 scans (2 already complete"), std::string::npos)
+      << fv.output;
+  const json f = read_json_file(out / "summary.json");
+  EXPECT_EQ(f["first_views"], 2);
+  ASSERT_EQ(f["first_view_directions"].size(), 1u);
+  auto point = [](const json& v) { return Eigen::Vector3d(v[0].get<double>(), v[1].get<double>(), v[2].get<double>()); };
+  const Eigen::Vector3d direction = point(f["first_view_directions"][0]);
+  EXPECT_NEAR(direction.norm(), 1.0, 1e-9);
+  std::optional<Eigen::Vector3d> drawn;  // where the first planner's drawn run started
+  for (const std::string planner : {"pbnbv", "random"}) {
+    SCOPED_TRACE(planner);
+    const json& p = f.at(planner);
+    EXPECT_EQ(p["runs_complete"], 2);
+    EXPECT_EQ(p["objects_complete"], 1);
+    const json& a = p["runs"].at("box");
+    const json& b = p["runs"].at("box-fv2");
+    EXPECT_EQ(a["coverage_by_view"], s[planner]["runs"]["box"]["coverage_by_view"]);  // the same scan, kept
+    EXPECT_EQ(b["first_view"], 2);
+    EXPECT_TRUE(fs::exists(out / planner / "box-fv2" / "cloud.ply"));
+    // The drawn first view as the scan recorded it: the default's distance, the drawn direction.
+    const Eigen::Vector3d pa = point(a["initial_view"]), pb = point(b["initial_view"]);
+    EXPECT_NEAR(pb.norm(), pa.norm(), 1e-9);
+    EXPECT_LT((pb - pa.norm() * direction).norm(), 1e-9) << pb.transpose();
+    if (drawn) {
+      EXPECT_LT((pb - *drawn).norm(), 1e-12);
+    }
+    drawn = pb;
+    for (int i = 0; i < 3; ++i) {
+      const double ca = a["coverage_by_view"][i].get<double>(), cb = b["coverage_by_view"][i].get<double>();
+      EXPECT_NEAR(p["coverage_by_view"][i].get<double>(), (ca + cb) / 2, 1e-9);
+      EXPECT_NEAR(p["objects"]["box"]["coverage_by_view"][i].get<double>(), (ca + cb) / 2, 1e-9);
+      EXPECT_NEAR(p["coverage_ci95_by_view"][i][0].get<double>(), (ca + cb) / 2, 1e-9);
+      EXPECT_NEAR(p["coverage_ci95_by_view"][i][1].get<double>(), (ca + cb) / 2, 1e-9);
+      EXPECT_EQ(p["coverage_min_by_view"][i].get<double>(), std::min(ca, cb));
+    }
+  }
+  EXPECT_NEAR(f["pbnbv"]["runs"]["box-fv2"]["coverage_by_view"][0].get<double>(),
+              f["random"]["runs"]["box-fv2"]["coverage_by_view"][0].get<double>(), 0.5);  // the same first view
+  std::ifstream fmd(out / "report.md");
+  const std::string freport((std::istreambuf_iterator<char>(fmd)), std::istreambuf_iterator<char>());
+  EXPECT_NE(freport.find("1 object x 2 first views (2 runs)"), std::string::npos) << freport;
+
   // Other settings in the same folder are refused, naming the setting.
   const CommandResult other = run_command(netns_run() + " " + bin_dir() + "/pbnbv bench --objects sphere --planners pbnbv "
                                           "--views 4 --out " + out.string());
@@ -239,8 +295,8 @@ TEST(Bench, OracleIsTheYardstick) {
   const CommandResult r = run_command(cmd);
   ASSERT_EQ(r.exit_code, 0) << cmd << "\n" << r.output;
   const json s = read_json_file(out / "summary.json");
-  const json& oracle = s.at("oracle")["objects"].at("box")["coverage_by_view"];
-  const json& random = s.at("random")["objects"].at("box")["coverage_by_view"];
+  const json& oracle = s.at("oracle")["runs"].at("box")["coverage_by_view"];
+  const json& random = s.at("random")["runs"].at("box")["coverage_by_view"];
   ASSERT_EQ(oracle.size(), 2u);
   ASSERT_EQ(random.size(), 2u);
   EXPECT_NEAR(oracle[0].get<double>(), random[0].get<double>(), 0.5);  // the same first view
@@ -249,7 +305,7 @@ TEST(Bench, OracleIsTheYardstick) {
   const json& gap = s.at("random")["gap_to_oracle_by_view"];
   ASSERT_EQ(gap.size(), 2u);
   EXPECT_NEAR(gap[1].get<double>(), oracle[1].get<double>() - random[1].get<double>(), 1e-9);
-  EXPECT_EQ(s.at("random")["gap_to_oracle_objects"], 1);
+  EXPECT_EQ(s.at("random")["gap_to_oracle_runs"], 1);
   // The scorer chose by the true surface.
   std::ifstream log(out / "oracle" / "box" / "logs" / "scorer.log");
   const std::string scorer((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());

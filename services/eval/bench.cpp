@@ -15,6 +15,7 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <random>
 #include <sstream>
 #include <thread>
 
@@ -23,7 +24,9 @@
 #include "core/io/mesh_file.hpp"
 #include "core/planning/planner.hpp"
 #include "core/rig/rig.hpp"
+#include "core/scan/scan_sequencer.hpp"
 #include "core/scan/scan_settings.hpp"
+#include "core/geometry/views.hpp"
 #include "core/geometry/visibility.hpp"
 #include "eval/bench_progress.hpp"
 #include "eval/evaluate.hpp"
@@ -46,8 +49,10 @@ namespace {
 
 // The command that runs one scan of the benchmark, in a private network namespace (as
 // scripts/netns-run does) when `netns`.
+// `initial_view`: the run's drawn first view (none: --initial-view, else the scan's default).
 std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, const std::string& object,
-                                   PlannerKind planner, const fs::path& out) {
+                                   PlannerKind planner, const std::optional<Eigen::Vector3d>& initial_view,
+                                   const fs::path& out) {
   std::vector<std::string> a;
   if (s.netns) {
     if (::geteuid() == 0) a = {"unshare", "-n"};
@@ -68,8 +73,8 @@ std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, con
                      std::to_string(s.candidates), "--tmax", std::to_string(s.tmax), "--beta", std::to_string(s.beta),
                      "--size", exact(s.size_m), "--seed", std::to_string(s.seed), "--when-done",
                      std::string(name_of(s.when_done)), "--stop-rule", "off", "--no-log", "--out", out.string()});
-  if (s.initial_view) {
-    const Eigen::Vector3d& v = *s.initial_view;
+  if (const std::optional<Eigen::Vector3d>& first = initial_view ? initial_view : s.initial_view) {
+    const Eigen::Vector3d& v = *first;
     a.insert(a.end(), {"--initial-view", exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z())});
   }
   if (s.up) a.insert(a.end(), {"--up", std::string(name_of(*s.up))});
@@ -169,7 +174,10 @@ std::vector<uint8_t> observable_mask(const BenchSpec& spec, const fs::path& scan
 
 struct Job {
   std::string object;   // as given
-  std::string name;     // folder name
+  std::string name;     // the object's name
+  int first_view = 1;   // 1: the scan's default; 2..N: initial_view, drawn
+  std::optional<Eigen::Vector3d> initial_view;
+  std::string run;      // run_folder(name, first_view)
   PlannerKind planner = PlannerKind::kPbnbv;
   fs::path dir;
   fs::path log;
@@ -208,7 +216,9 @@ std::string scan_failure_reason(const fs::path& dir, const fs::path& log) {
 }
 
 std::string objects_text(const BenchResult& r) {
-  const int total = static_cast<int>(r.spec.objects.size());
+  const int n_objects = static_cast<int>(r.spec.objects.size());
+  const int first_views = r.spec.first_views;
+  const int total = n_objects * first_views;
   int lo = std::numeric_limits<int>::max(), hi = 0;
   std::string failed;
   for (const auto& p : r.planners) {
@@ -216,8 +226,14 @@ std::string objects_text(const BenchResult& r) {
     hi = std::max(hi, p.complete);
     if (p.failed > 0) failed += (failed.empty() ? "" : ", ") + std::string(name_of(p.planner)) + " " + std::to_string(p.failed);
   }
-  if (r.planners.empty()) return std::to_string(total) + " objects";
   auto objects = [](int n) { return std::to_string(n) + (n == 1 ? " object" : " objects"); };
+  if (first_views > 1) {
+    const std::string grid = objects(n_objects) + " x " + std::to_string(first_views) + " first views";
+    if (r.planners.empty() || failed.empty()) return grid + " (" + std::to_string(total) + " runs)";
+    if (lo == hi) return std::to_string(hi) + " of " + std::to_string(total) + " runs (" + grid + "), " + std::to_string(total - hi) + " failed";
+    return std::to_string(lo) + "-" + std::to_string(hi) + " of " + std::to_string(total) + " runs (" + grid + "; failed: " + failed + ")";
+  }
+  if (r.planners.empty()) return objects(total);
   if (failed.empty()) return objects(hi);
   if (lo == hi) return objects(hi) + ", " + std::to_string(total - hi) + " of " + std::to_string(total) + " failed";
   return std::to_string(lo) + "-" + objects(hi) + " (failed: " + failed + " of " + std::to_string(total) + ")";
@@ -240,8 +256,14 @@ void BenchSpec::validate() const {
   kObjectSize.checked(size_m);
   kPlannerSeed.checked(seed);
   kJobs.checked(jobs);
+  kFirstViews.checked(first_views);
   if (initial_view && initial_view->norm() < 0.05) {
     throw std::invalid_argument("--initial-view must be away from the object centre (at least 0.05 m)");
+  }
+  if (initial_view && first_views > 1) {
+    throw std::invalid_argument(fmt::format("--first-views {} draws the first views 2..{} while --initial-view fixes "
+                                            "the first view of every scan: give one or the other",
+                                            first_views, first_views));
   }
   if (out.empty()) throw std::invalid_argument("--out: an output folder is needed");
 }
@@ -257,7 +279,90 @@ json to_json(const BenchSpec& s) {
             {"coverage", {{"samples", s.coverage.num_samples}, {"seed", s.coverage.seed}, {"radius_m", s.coverage.radius_m}}},
             {"surface_metrics", to_json(s.metrics)}};
   j["initial_view"] = s.initial_view ? json{s.initial_view->x(), s.initial_view->y(), s.initial_view->z()} : json(nullptr);
+  j["first_views"] = s.first_views;
+  j["first_view_seed"] = kFirstViewSeed;
   return j;
+}
+
+std::vector<Eigen::Vector3d> first_view_directions(const BenchSpec& s) {
+  return uniform_sphere_points(std::max(0, s.first_views - 1), 1.0, s.area == CandidateArea::kHemisphere, kFirstViewSeed);
+}
+
+double default_first_view_distance(const std::string& object, double size_m, std::optional<UpAxis> up) {
+  ObjectSpec o = resolve_object(object);
+  ScanSettings s;
+  s.normalisation = normalise_mesh(o.mesh, size_m, up.value_or(o.up));
+  return views_known_at_start(s).front().translation().norm();
+}
+
+std::string run_folder(const std::string& name, int first_view) {
+  return first_view <= 1 ? name : name + "-fv" + std::to_string(first_view);
+}
+
+std::vector<Interval> bootstrap_mean_ci95(const std::vector<std::vector<double>>& rows, int resamples, std::uint64_t seed) {
+  if (rows.empty()) return {};
+  if (resamples < 1) throw std::invalid_argument("bootstrap_mean_ci95: resamples must be >= 1, got " + std::to_string(resamples));
+  const std::size_t n = rows.size(), cols = rows.front().size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (rows[i].size() != cols) {
+      throw std::invalid_argument("bootstrap_mean_ci95: row " + std::to_string(i) + " has " + std::to_string(rows[i].size()) +
+                                  " values, row 0 " + std::to_string(cols));
+    }
+  }
+  std::mt19937_64 rng(seed);
+  std::vector<std::vector<double>> means(cols, std::vector<double>(resamples, 0.0));
+  std::vector<double> sum(cols);
+  for (int b = 0; b < resamples; ++b) {
+    std::fill(sum.begin(), sum.end(), 0.0);
+    for (std::size_t k = 0; k < n; ++k) {
+      // A uniform index from the 53 high bits (the same draws on any platform).
+      const double u = static_cast<double>(rng() >> 11) * 0x1.0p-53;
+      const std::size_t i = std::min(n - 1, static_cast<std::size_t>(u * static_cast<double>(n)));
+      for (std::size_t c = 0; c < cols; ++c) sum[c] += rows[i][c];
+    }
+    for (std::size_t c = 0; c < cols; ++c) means[c][b] = sum[c] / static_cast<double>(n);
+  }
+  const auto percentile = [](const std::vector<double>& sorted, double q) {
+    const double at = q * static_cast<double>(sorted.size() - 1);
+    const std::size_t i = static_cast<std::size_t>(std::floor(at));
+    if (i + 1 >= sorted.size()) return sorted.back();
+    return sorted[i] + (at - static_cast<double>(i)) * (sorted[i + 1] - sorted[i]);
+  };
+  std::vector<Interval> out;
+  for (auto& m : means) {
+    std::sort(m.begin(), m.end());
+    out.push_back({percentile(m, 0.025), percentile(m, 0.975)});
+  }
+  return out;
+}
+
+std::vector<ObjectMean> object_means(const std::vector<ObjectRun>& runs, int views) {
+  std::vector<ObjectMean> out;
+  for (const auto& r : runs) {
+    auto it = std::find_if(out.begin(), out.end(), [&](const ObjectMean& m) { return m.object == r.object; });
+    if (it == out.end()) {
+      out.emplace_back();
+      out.back().object = r.object;
+      it = out.end() - 1;
+    }
+    if (!r.complete || r.coverage_by_view.empty()) {
+      ++it->runs_failed;
+      continue;
+    }
+    const std::vector<double> c = pad_views(r.coverage_by_view, views);
+    if (it->coverage_by_view.empty()) it->coverage_by_view.assign(views, 0.0);
+    for (int i = 0; i < views; ++i) it->coverage_by_view[i] += c[i];
+    ++it->runs_complete;
+    if (r.views_to_95) {
+      it->views_to_95 = it->views_to_95.value_or(0.0) + *r.views_to_95;
+      ++it->runs_reaching_95;
+    }
+  }
+  for (auto& m : out) {
+    for (double& c : m.coverage_by_view) c /= m.runs_complete;
+    if (m.views_to_95) *m.views_to_95 /= m.runs_reaching_95;
+  }
+  return out;
 }
 
 std::optional<int> views_to_reach(const std::vector<double>& c, double percent) {
@@ -302,7 +407,7 @@ MeanSurfaceMetrics mean_surface_metrics(const std::vector<ObjectRun>& runs,
 PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs, int views) {
   PlannerSummary p;
   p.planner = planner;
-  p.objects = runs;
+  p.runs = runs;
   p.coverage_by_view.assign(views, 0.0);
   p.coverage_min_by_view.assign(views, std::numeric_limits<double>::infinity());
   p.coverage_max_by_view.assign(views, -std::numeric_limits<double>::infinity());
@@ -352,6 +457,17 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
   p.reached_95 = static_cast<int>(reached.size());
   p.views_to_95_of_mean = views_to_reach(p.coverage_by_view, 95.0);
   if (!reached.empty()) p.views_to_95 = std::accumulate(reached.begin(), reached.end(), 0.0) / reached.size();
+  // Per object, and the intervals by bootstrap over the objects.
+  p.per_object = object_means(runs, views);
+  std::vector<std::vector<double>> coverage_rows, views_rows;
+  for (const ObjectMean& m : p.per_object) {
+    if (m.runs_complete > 0) coverage_rows.push_back(m.coverage_by_view);
+    if (m.views_to_95) views_rows.push_back({*m.views_to_95});
+  }
+  p.objects_complete = static_cast<int>(coverage_rows.size());
+  p.objects_reaching_95 = static_cast<int>(views_rows.size());
+  p.coverage_ci95_by_view = bootstrap_mean_ci95(coverage_rows);
+  if (!views_rows.empty()) p.views_to_95_ci95 = bootstrap_mean_ci95(views_rows).front();
   return p;
 }
 
@@ -374,7 +490,7 @@ StopRuleSummary summarise_stop_rule(const std::vector<ObjectRun>& runs, int view
     s.mean_views_saved_percent += 100.0 * (views - stop) / views;
     if (s.worst_object.empty() || shortfall > s.worst_shortfall) {
       s.worst_shortfall = shortfall;
-      s.worst_object = r.object;
+      s.worst_object = run_folder(r.object, r.first_view);
     }
     if (shortfall <= 0.5) ++s.within_half_point;
   }
@@ -389,15 +505,16 @@ void add_gaps_to_oracle(std::vector<PlannerSummary>& planners, int views) {
   const auto oracle = std::find_if(planners.begin(), planners.end(),
                                    [](const PlannerSummary& p) { return p.planner == PlannerKind::kOracle; });
   if (oracle == planners.end()) return;
-  std::map<std::string, std::vector<double>> truth;  // the oracle's curve per complete object
-  for (const auto& o : oracle->objects) {
-    if (o.complete && !o.coverage_by_view.empty()) truth[o.object] = pad_views(o.coverage_by_view, views);
+  // The oracle's curve per complete run (object, first view).
+  std::map<std::pair<std::string, int>, std::vector<double>> truth;
+  for (const auto& o : oracle->runs) {
+    if (o.complete && !o.coverage_by_view.empty()) truth[{o.object, o.first_view}] = pad_views(o.coverage_by_view, views);
   }
   for (auto& p : planners) {
     p.gap_to_oracle_by_view.assign(views, 0.0);
     p.gap_objects = 0;
-    for (const auto& o : p.objects) {
-      const auto t = truth.find(o.object);
+    for (const auto& o : p.runs) {
+      const auto t = truth.find({o.object, o.first_view});
       if (!o.complete || o.coverage_by_view.empty() || t == truth.end()) continue;
       const std::vector<double> c = pad_views(o.coverage_by_view, views);
       for (int i = 0; i < views; ++i) p.gap_to_oracle_by_view[i] += t->second[i] - c[i];
@@ -424,12 +541,116 @@ std::string surface_metrics_markdown(const std::vector<PlannerSummary>& planners
   }
   if (md.str().empty()) return "";
   const std::string t = fixed(params.threshold_m * 1e3, 1);
-  return "## Surface metrics after the last view (mean over objects)\n\nAgainst the true mesh: accuracy is the distance "
+  return "## Surface metrics after the last view (mean over the runs)\n\nAgainst the true mesh: accuracy is the distance "
          "from each model point (a mesh: samples on it) to the true surface, completeness the distance from true-surface "
          "samples (" + fixed(params.samples_per_cm2, 0) + " per cm^2) to the model; precision and recall are the "
          "fractions within " + t + " mm, F = 2PR / (P + R) (Knapitsch et al., Tanks and Temples). Distances in mm.\n\n"
-         "| planner | model | objects | accuracy mean | median | RMSE | p95 | completeness mean | precision @" + t +
+         "| planner | model | runs | accuracy mean | median | RMSE | p95 | completeness mean | precision @" + t +
          " mm | recall | F-score |\n|---|---|---|---|---|---|---|---|---|---|---|\n" + md.str() + "\n";
+}
+
+namespace {
+
+json interval_json(const Interval& i) { return json{i.lo, i.hi}; }
+
+// A planner's means, spread and intervals over its runs: the summary's, and each half's.
+json planner_means_json(const PlannerSummary& p, const BenchSpec& spec) {
+  json ci = json::array();
+  for (const Interval& i : p.coverage_ci95_by_view) ci.push_back(interval_json(i));
+  json pj = {{"coverage_by_view", p.coverage_by_view},
+             {"coverage_ci95_by_view", ci},
+             {"planner_ms_median", p.planner_ms_median},
+             {"planner_ms_mean", p.planner_ms_mean},
+             {"views_to_95", p.views_to_95 ? json(*p.views_to_95) : json(nullptr)},
+             {"runs_reaching_95", p.reached_95},
+             {"views_to_95_ci95", p.views_to_95_ci95 ? interval_json(*p.views_to_95_ci95) : json(nullptr)},
+             {"views_to_95_ci95_objects", p.objects_reaching_95},
+             {"views_to_95_of_mean_curve", p.views_to_95_of_mean ? json(*p.views_to_95_of_mean) : json(nullptr)},
+             {"runs_complete", p.complete},
+             {"runs_failed", p.failed},
+             {"objects_complete", p.objects_complete}};
+  if (!p.observable_by_view.empty()) pj["observable_coverage_by_view"] = p.observable_by_view;
+  for (const auto& [name, m] : {std::pair{"cloud", &p.cloud_metrics}, std::pair{"mesh", &p.mesh_metrics}}) {
+    if (m->objects == 0) continue;
+    pj["surface_metrics"][name] = {{"runs", m->objects},
+                                   {"accuracy_mean_mm", m->accuracy_mean_mm},
+                                   {"accuracy_median_mm", m->accuracy_median_mm},
+                                   {"accuracy_rmse_mm", m->accuracy_rmse_mm},
+                                   {"accuracy_p95_mm", m->accuracy_p95_mm},
+                                   {"completeness_mean_mm", m->completeness_mean_mm},
+                                   {"precision", m->precision},
+                                   {"recall", m->recall},
+                                   {"f_score", m->f_score}};
+  }
+  if (!p.coverage_min_by_view.empty()) {
+    pj["coverage_min_by_view"] = p.coverage_min_by_view;
+    pj["coverage_max_by_view"] = p.coverage_max_by_view;
+  }
+  const StopRuleSummary& st = p.stop_rule;
+  pj["stop_rule"] = {{"rule", to_json(spec.stop_rule)},
+                     {"runs", st.objects},
+                     {"runs_stopped_before_budget", st.stopped},
+                     {"mean_stop_view", st.mean_stop_view},
+                     {"mean_views_saved_percent", st.mean_views_saved_percent},
+                     {"worst_shortfall_points", st.worst_shortfall},
+                     {"worst_run", st.worst_object},
+                     {"runs_within_0_5_points", st.within_half_point}};
+  if (!p.gap_to_oracle_by_view.empty()) {
+    pj["gap_to_oracle_by_view"] = p.gap_to_oracle_by_view;
+    pj["gap_to_oracle_runs"] = p.gap_objects;
+  }
+  return pj;
+}
+
+json run_json(const ObjectRun& o, int views) {
+  json oj = {{"object", o.object},
+             {"first_view", o.first_view},
+             {"initial_view", o.initial_view ? json{o.initial_view->x(), o.initial_view->y(), o.initial_view->z()} : json(nullptr)},
+             {"coverage_by_view", o.coverage_by_view},
+             {"planner_ms", o.planner_ms},
+             {"views_to_95", o.views_to_95 ? json(*o.views_to_95) : json(nullptr)},
+             {"views_done", o.views_done},
+             {"complete", o.complete},
+             {"stop_reason", o.stop_reason},
+             {"wall_s", o.wall_s}};
+  if (!o.observable_by_view.empty()) oj["observable_coverage_by_view"] = o.observable_by_view;
+  if (!o.error.empty()) oj["error"] = o.error;
+  if (o.cloud_metrics) oj["surface_metrics"]["cloud"] = to_json(*o.cloud_metrics);
+  if (o.mesh_metrics) oj["surface_metrics"]["mesh"] = to_json(*o.mesh_metrics);
+  if (o.complete && !o.coverage_by_view.empty()) {
+    const int stop = stop_view_or_budget(o, views);
+    oj["stop_rule"] = {{"stop_view", o.stop_view ? json(*o.stop_view) : json(nullptr)},
+                       {"reason", o.stop_view ? o.stop_rule_reason : "never stops before the budget"},
+                       {"coverage_at_stop", coverage_at_view(o, stop)},
+                       {"coverage_at_budget", coverage_at_view(o, views)},
+                       {"shortfall_points", coverage_at_view(o, views) - coverage_at_view(o, stop)},
+                       {"new_surface_by_view", o.new_surface_by_view}};
+  }
+  return oj;
+}
+
+}  // namespace
+
+std::vector<HalfSummary> summarise_halves(const BenchSpec& spec, const std::vector<PlannerSummary>& planners) {
+  std::vector<HalfSummary> halves;
+  for (const ObjectSet half : {ObjectSet::kTune, ObjectSet::kConfirm}) {
+    HalfSummary h;
+    h.half = half;
+    for (const std::string& o : spec.objects) {
+      if (tuning_half(o) == half) h.objects.push_back(o);
+    }
+    if (h.objects.empty()) return {};  // both halves or none
+    for (const PlannerSummary& p : planners) {
+      std::vector<ObjectRun> runs;
+      for (const ObjectRun& r : p.runs) {
+        if (std::find(h.objects.begin(), h.objects.end(), r.object) != h.objects.end()) runs.push_back(r);
+      }
+      h.planners.push_back(summarise(p.planner, runs, spec.views));
+    }
+    add_gaps_to_oracle(h.planners, spec.views);
+    halves.push_back(std::move(h));
+  }
+  return halves;
 }
 
 json to_json(const BenchResult& r) {
@@ -437,78 +658,62 @@ json to_json(const BenchResult& r) {
   std::vector<std::string> order;
   for (const auto& p : r.planners) {
     order.emplace_back(name_of(p.planner));
-    json objects = json::object();
-    for (const auto& o : p.objects) {
-      json oj = {{"coverage_by_view", o.coverage_by_view}, {"planner_ms", o.planner_ms},
-                 {"views_to_95", o.views_to_95 ? json(*o.views_to_95) : json(nullptr)}, {"views_done", o.views_done},
-                 {"complete", o.complete}, {"stop_reason", o.stop_reason}, {"wall_s", o.wall_s}};
-      if (!o.observable_by_view.empty()) oj["observable_coverage_by_view"] = o.observable_by_view;
-      if (!o.error.empty()) oj["error"] = o.error;
-      if (o.cloud_metrics) oj["surface_metrics"]["cloud"] = to_json(*o.cloud_metrics);
-      if (o.mesh_metrics) oj["surface_metrics"]["mesh"] = to_json(*o.mesh_metrics);
-      if (o.complete && !o.coverage_by_view.empty()) {
-        const int stop = stop_view_or_budget(o, r.spec.views);
-        oj["stop_rule"] = {{"stop_view", o.stop_view ? json(*o.stop_view) : json(nullptr)},
-                           {"reason", o.stop_view ? o.stop_rule_reason : "never stops before the budget"},
-                           {"coverage_at_stop", coverage_at_view(o, stop)},
-                           {"coverage_at_budget", coverage_at_view(o, r.spec.views)},
-                           {"shortfall_points", coverage_at_view(o, r.spec.views) - coverage_at_view(o, stop)},
-                           {"new_surface_by_view", o.new_surface_by_view}};
-      }
-      objects[o.object] = oj;
+    json runs = json::object(), objects = json::object();
+    for (const auto& o : p.runs) runs[run_folder(o.object, o.first_view)] = run_json(o, r.spec.views);
+    for (const ObjectMean& m : p.per_object) {
+      objects[m.object] = {{"coverage_by_view", m.coverage_by_view},
+                           {"views_to_95", m.views_to_95 ? json(*m.views_to_95) : json(nullptr)},
+                           {"runs_reaching_95", m.runs_reaching_95},
+                           {"runs_complete", m.runs_complete},
+                           {"runs_failed", m.runs_failed}};
     }
-    json pj = {{"coverage_by_view", p.coverage_by_view}, {"planner_ms_median", p.planner_ms_median},
-               {"planner_ms_mean", p.planner_ms_mean}, {"views_to_95", p.views_to_95 ? json(*p.views_to_95) : json(nullptr)},
-               {"objects_reaching_95", p.reached_95},
-               {"views_to_95_of_mean_curve", p.views_to_95_of_mean ? json(*p.views_to_95_of_mean) : json(nullptr)}, {"objects_complete", p.complete}, {"objects_failed", p.failed},
-               {"objects", objects}};
-    if (!p.observable_by_view.empty()) pj["observable_coverage_by_view"] = p.observable_by_view;
-    for (const auto& [name, m] : {std::pair{"cloud", &p.cloud_metrics}, std::pair{"mesh", &p.mesh_metrics}}) {
-      if (m->objects == 0) continue;
-      pj["surface_metrics"][name] = {{"objects", m->objects},
-                                     {"accuracy_mean_mm", m->accuracy_mean_mm},
-                                     {"accuracy_median_mm", m->accuracy_median_mm},
-                                     {"accuracy_rmse_mm", m->accuracy_rmse_mm},
-                                     {"accuracy_p95_mm", m->accuracy_p95_mm},
-                                     {"completeness_mean_mm", m->completeness_mean_mm},
-                                     {"precision", m->precision},
-                                     {"recall", m->recall},
-                                     {"f_score", m->f_score}};
-    }
-    if (!p.coverage_min_by_view.empty()) {
-      pj["coverage_min_by_view"] = p.coverage_min_by_view;
-      pj["coverage_max_by_view"] = p.coverage_max_by_view;
-    }
-    const StopRuleSummary& st = p.stop_rule;
-    pj["stop_rule"] = {{"rule", to_json(r.spec.stop_rule)},
-                       {"objects", st.objects},
-                       {"objects_stopped_before_budget", st.stopped},
-                       {"mean_stop_view", st.mean_stop_view},
-                       {"mean_views_saved_percent", st.mean_views_saved_percent},
-                       {"worst_shortfall_points", st.worst_shortfall},
-                       {"worst_object", st.worst_object},
-                       {"objects_within_0_5_points", st.within_half_point}};
-    if (!p.gap_to_oracle_by_view.empty()) {
-      pj["gap_to_oracle_by_view"] = p.gap_to_oracle_by_view;
-      pj["gap_to_oracle_objects"] = p.gap_objects;
-    }
+    json pj = planner_means_json(p, r.spec);
+    pj["objects"] = objects;
+    pj["runs"] = runs;
     j[std::string(name_of(p.planner))] = pj;
   }
   j["planners"] = order;
+  if (!r.halves.empty()) {
+    json halves = json::object();
+    for (const HalfSummary& h : r.halves) {
+      json hj = {{"objects", h.objects}};
+      for (const PlannerSummary& p : h.planners) hj[std::string(name_of(p.planner))] = planner_means_json(p, r.spec);
+      halves[std::string(name_of(h.half))] = hj;
+    }
+    j["halves"] = halves;
+  }
   json failed = json::array();
   for (const auto& p : r.planners) {
-    for (const auto& o : p.objects) {
-      if (!o.complete) failed.push_back({{"object", o.object}, {"planner", std::string(name_of(p.planner))}, {"reason", o.error}});
+    for (const auto& o : p.runs) {
+      if (!o.complete) {
+        failed.push_back({{"object", o.object}, {"first_view", o.first_view}, {"run", run_folder(o.object, o.first_view)},
+                          {"planner", std::string(name_of(p.planner))}, {"reason", o.error}});
+      }
     }
   }
   j["failed_scans"] = failed;
   j["objects_text"] = objects_text(r);
+  j["first_views"] = r.spec.first_views;
+  json directions = json::array();
+  for (const Eigen::Vector3d& d : first_view_directions(r.spec)) directions.push_back({d.x(), d.y(), d.z()});
+  j["first_view_directions"] = directions;
   j["settings"] = to_json(r.spec);
   j["machine"] = r.machine;
-  j["coverage_rule"] = "mean over the complete objects of the percent of " + std::to_string(r.spec.coverage.num_samples) +
-                       " surface samples (seed " + std::to_string(r.spec.coverage.seed) + ") with a captured point within " +
+  j["coverage_rule"] = "mean over the complete runs (objects x first views) of the percent of " +
+                       std::to_string(r.spec.coverage.num_samples) + " surface samples (seed " +
+                       std::to_string(r.spec.coverage.seed) + ") with a captured point within " +
                        fixed(r.spec.coverage.radius_m * 1000, 0) +
-                       " mm; a scan that stopped early keeps its last figure; views_to_95: mean over the objects that reach 95 %";
+                       " mm; a scan that stopped early keeps its last figure; views_to_95: mean over the runs that reach 95 %";
+  j["first_view_rule"] = "first view 1 is the scan's default; first view k >= 2 is first_view_directions[k - 2] (drawn "
+                         "uniformly on the " + std::string(r.spec.area == CandidateArea::kHemisphere ? "upper half of the " : "") +
+                         "sphere, seed " + std::to_string(kFirstViewSeed) +
+                         ") times the distance of the object's default first view from its centre";
+  j["interval_rule"] = "95 % interval of the mean, percentile bootstrap over the objects (" +
+                       std::to_string(kBootstrapResamples) + " resamples with replacement, seed " +
+                       std::to_string(kBootstrapSeed) +
+                       "): each object's value is its mean over its complete first views; views_to_95_ci95 over the "
+                       "objects with a run reaching 95 % (views_to_95_ci95_objects; each its mean over those runs), an "
+                       "object that never reaches 95 % is left out as in views_to_95";
   j["planner_ms_rule"] = "per planning iteration: map update + view selection (+ ellipsoid fitting for pbnbv; "
                          "view selection includes the reachability check and waiting for it)";
   return j;
@@ -524,6 +729,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
   settings.erase("objects");  // objects may be added to a folder's benchmark
   settings.erase("planners");
   settings.erase("stop_rule");  // evaluated from the recorded figures, not run: it may change
+  settings.erase("first_views");  // first views may be added (the draws for N are the first of those for N + 1)
   if (fs::exists(spec_path)) {
     const json before = read_json(spec_path.string());
     for (auto it = settings.begin(); it != settings.end(); ++it) {
@@ -544,23 +750,39 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
   }
   if (!spec.netns) spec.jobs = 1;
 
-  // The jobs, object by object so that a partial run has every planner on the first objects.
+  // The jobs, object by object (and first view by first view) so that a partial run has every
+  // planner on the first objects.
   std::vector<Job> jobs;
-  std::map<std::string, std::string> names;  // object as given -> folder name
+  std::map<std::string, std::string> names;  // object as given -> its name
+  const std::vector<Eigen::Vector3d> directions = first_view_directions(spec);
   for (const auto& object : spec.objects) {
     const std::string name = fs::path(object).stem().string();
     for (const auto& [given, n] : names) {
       if (n == name && given != object) throw std::invalid_argument("--objects: '" + given + "' and '" + object + "' have the same name " + name);
     }
     names[object] = name;
-    for (const auto& planner : spec.planners) {
-      Job j;
-      j.object = object;
-      j.name = name;
-      j.planner = planner;
-      j.dir = spec.out / std::string(name_of(planner)) / name;
-      j.log = spec.out / "logs" / (std::string(name_of(planner)) + "-" + name + ".log");
-      jobs.push_back(std::move(j));
+    double distance = 0;  // of the object's default first view, for the drawn ones
+    if (!directions.empty()) {
+      try {
+        distance = default_first_view_distance(object, spec.size_m, spec.up);
+      } catch (const std::exception& e) {
+        throw std::invalid_argument("--first-views " + std::to_string(spec.first_views) + ": the first views of '" + object +
+                                    "' lie at its default first view's distance, which needs the object: " + e.what());
+      }
+    }
+    for (int k = 1; k <= spec.first_views; ++k) {
+      for (const auto& planner : spec.planners) {
+        Job j;
+        j.object = object;
+        j.name = name;
+        j.first_view = k;
+        if (k > 1) j.initial_view = distance * directions[k - 2];
+        j.run = run_folder(name, k);
+        j.planner = planner;
+        j.dir = spec.out / std::string(name_of(planner)) / j.run;
+        j.log = spec.out / "logs" / (std::string(name_of(planner)) + "-" + j.run + ".log");
+        jobs.push_back(std::move(j));
+      }
     }
   }
   const int total = static_cast<int>(jobs.size());
@@ -569,7 +791,9 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
     if (scan_complete(j.dir)) continue;
     todo.push_back(&j);
   }
-  log << "pbnbv bench: " << spec.objects.size() << " objects x " << spec.planners.size() << " planners = " << total
+  log << "pbnbv bench: " << spec.objects.size() << " objects x "
+      << (spec.first_views > 1 ? std::to_string(spec.first_views) + " first views x " : std::string())
+      << spec.planners.size() << " planners = " << total
       << " scans (" << total - static_cast<int>(todo.size()) << " already complete in " << spec.out.string() << "), "
       << spec.jobs << " at a time" << std::endl;
 
@@ -583,7 +807,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
   std::size_t next = 0;
   int finished = total - static_cast<int>(todo.size());
   auto prefix = [&](const Job* j) {
-    return "[" + std::to_string(j - jobs.data() + 1) + "/" + std::to_string(total) + "] " + j->name + " - " + std::string(name_of(j->planner)) + ": ";
+    return "[" + std::to_string(j - jobs.data() + 1) + "/" + std::to_string(total) + "] " + j->run + " - " + std::string(name_of(j->planner)) + ": ";
   };
   while (next < todo.size() || !running.empty()) {
     if (stop_requested()) {
@@ -603,8 +827,8 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       if (fs::exists(j->dir) && !fs::exists(j->dir / "processes.json")) fs::remove_all(j->dir);
       fs::create_directories(j->dir.parent_path());
       Child c;
-      c.name = std::string(name_of(j->planner)) + "-" + j->name;
-      c.argv = scan_argv(spec, self, j->object, j->planner, j->dir);
+      c.name = std::string(name_of(j->planner)) + "-" + j->run;
+      c.argv = scan_argv(spec, self, j->object, j->planner, j->initial_view, j->dir);
       c.log_path = j->log.string();
       j->started = std::chrono::steady_clock::now();
       start(c);
@@ -694,6 +918,8 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
   for (auto& j : jobs) {
     ObjectRun r;
     r.object = j.name;
+    r.first_view = j.first_view;
+    r.initial_view = j.initial_view;  // until the scan's record says where it started
     r.planner = j.planner;
     try {
       if (!scan_complete(j.dir)) {
@@ -719,6 +945,8 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
         r.stop_rule_reason = d->reason;
       }
       r.complete = true;
+      const json plan = read_json((j.dir / "scan.json").string()).value("plan", json::object());
+      if (plan.contains("initial_view")) r.initial_view = pose_from_json(plan["initial_view"], "scan.json plan.initial_view").translation();
       if (fs::exists(j.dir / "bench_run.json")) r.wall_s = read_json((j.dir / "bench_run.json").string()).value("wall_s", 0.0);
     } catch (const std::exception& x) {
       r.error = x.what();
@@ -727,6 +955,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
   }
   for (const auto& p : spec.planners) result.planners.push_back(summarise(p, runs[p], spec.views));
   add_gaps_to_oracle(result.planners, spec.views);
+  result.halves = summarise_halves(spec, result.planners);
   result.machine = machine_info();
   result.machine["scans_at_once"] = spec.jobs;
   write_json_atomic(to_json(result), (spec.out / "summary.json").string());

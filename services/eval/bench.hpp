@@ -24,6 +24,7 @@
 #include "core/scan/stop_rule.hpp"
 #include "core/metrics/surface_metrics.hpp"
 #include "eval/coverage.hpp"
+#include "eval/objects.hpp"
 
 namespace pbnbv::eval {
 
@@ -35,6 +36,16 @@ inline constexpr ChoiceSetting<CandidateArea> kBenchArea = kArea.with_default(Ca
 inline constexpr std::array<PlannerKind, 4> kBenchPlanners{PlannerKind::kPbnbv, PlannerKind::kPbnbvPaper,
                                                             PlannerKind::kRaycast, PlannerKind::kRandom};
 inline constexpr Setting<int> kJobs{"jobs", 1, 1, 64, "", "scans at once, each in its own network namespace"};
+// Each object is scanned from N first views: the scan's default one, and N-1 drawn uniformly on
+// the candidate area (the sphere, or its half above the object centre for --area hemi) with a
+// fixed seed, at the default first view's distance from the object centre.
+inline constexpr Setting<int> kFirstViews{"first-views", 1, 1, 10, "",
+                                          "first views per object: the scan's default and N-1 drawn uniformly on the "
+                                          "candidate area (fixed seed) at its distance"};
+inline constexpr std::uint64_t kFirstViewSeed = 1;  // the draws of the first views 2..N
+// The 95 % intervals of the means: a percentile bootstrap over the objects.
+inline constexpr int kBootstrapResamples = 2000;
+inline constexpr std::uint64_t kBootstrapSeed = 1;
 
 struct BenchSpec {
   std::vector<std::string> objects;  // names (default set, built-ins) or mesh paths
@@ -47,6 +58,7 @@ struct BenchSpec {
   int tmax = kTMax.value;
   int beta = kSectors.value;
   std::optional<Eigen::Vector3d> initial_view;  // none: the scan's default first view
+  int first_views = kFirstViews.value;          // first views per object (1: the default one only)
   double size_m = kObjectSize.value;
   std::optional<UpAxis> up;                     // none: each object's natural up axis
   int64_t seed = kPlannerSeed.value;            // the random planner's seed
@@ -61,15 +73,29 @@ struct BenchSpec {
   MetricParams metrics;  // the surface metrics' threshold and sample density
 
   // Throws std::invalid_argument naming the option that is out of range (the ranges of the
-  // table of scan options; the candidates must not be fewer than the parallels they lie on).
+  // table of scan options; the candidates must not be fewer than the parallels they lie on;
+  // --first-views above 1 with --initial-view).
   void validate() const;
 };
 
 nlohmann::json to_json(const BenchSpec& s);
 
-// One scan's evaluation as the summary keeps it.
+// The directions (unit vectors) of the first views 2..s.first_views, view k at index k - 2:
+// drawn uniformly (uniform_sphere_points, seed kFirstViewSeed) on the sphere, or on its upper
+// half for --area hemi; the same for every object and planner, so runs compare across planners.
+std::vector<Eigen::Vector3d> first_view_directions(const BenchSpec& s);
+// The distance from the object centre of the scan's default first view of `object` (loaded and
+// normalised as its scans are: --size, --up or its own up axis): views_known_at_start's.
+double default_first_view_distance(const std::string& object, double size_m, std::optional<UpAxis> up);
+// A run's folder below DIR/<planner>/ (and its name in summary.json and the report): the
+// object's name for the default first view, <name>-fv<k> for the first view k >= 2.
+std::string run_folder(const std::string& name, int first_view);
+
+// One scan's evaluation as the summary keeps it: a run, one object from one first view.
 struct ObjectRun {
   std::string object;
+  int first_view = 1;                           // 1: the scan's default first view; 2..N: drawn
+  std::optional<Eigen::Vector3d> initial_view;  // the first camera position (object frame), as the scan recorded it
   PlannerKind planner = PlannerKind::kPbnbv;
   bool complete = false;                  // the scan finished (state "done") and was evaluated
   std::string error;                      // why not (scan_failure_reason)
@@ -88,9 +114,9 @@ struct ObjectRun {
   std::optional<SurfaceMetrics> cloud_metrics, mesh_metrics;
 };
 
-// A planner's surface metrics after the last view, mean over the complete objects that have them.
+// A planner's surface metrics after the last view, mean over the complete runs that have them.
 struct MeanSurfaceMetrics {
-  int objects = 0;
+  int objects = 0;  // runs (objects x first views) with the metrics
   double accuracy_mean_mm = 0, accuracy_median_mm = 0, accuracy_rmse_mm = 0, accuracy_p95_mm = 0;
   double completeness_mean_mm = 0;
   double precision = 0, recall = 0, f_score = 0;
@@ -99,34 +125,69 @@ struct MeanSurfaceMetrics {
 MeanSurfaceMetrics mean_surface_metrics(const std::vector<ObjectRun>& runs,
                                         std::optional<SurfaceMetrics> ObjectRun::*which);
 
-// Where the stop rule would have stopped a planner's scans: per complete object the stop view
+// Where the stop rule would have stopped a planner's scans: per complete run the stop view
 // (the budget when it never stops), the coverage there and at the budget.
 struct StopRuleSummary {
-  int objects = 0;                    // complete objects
+  int objects = 0;                    // complete runs (objects x first views)
   int stopped = 0;                    // of them, stopped before the budget
-  double mean_stop_view = 0;          // mean over the objects of the stop view (budget if never)
+  double mean_stop_view = 0;          // mean over the runs of the stop view (budget if never)
   double mean_views_saved_percent = 0;  // 100 * (budget - stop view) / budget, mean
   double worst_shortfall = 0;         // largest coverage at the budget minus at the stop view, points
-  std::string worst_object;
-  int within_half_point = 0;          // objects whose shortfall is at most 0.5 points
+  std::string worst_object;           // that run's run_folder name
+  int within_half_point = 0;          // runs whose shortfall is at most 0.5 points
 };
 // The stop view of a run (its budget `views` when the rule never stops it), its coverage there and the shortfall.
 int stop_view_or_budget(const ObjectRun& r, int views);
 double coverage_at_view(const ObjectRun& r, int view);
 StopRuleSummary summarise_stop_rule(const std::vector<ObjectRun>& runs, int views);
 
+// A 95 % interval [lo, hi].
+struct Interval {
+  double lo = 0, hi = 0;
+};
+
+// The percentile bootstrap of a mean: `rows` (one per object, every row as long as the first)
+// resampled with replacement `resamples` times (mt19937_64(seed), the same resamples for every
+// column), and per column the 2.5th and 97.5th percentiles (linear between order statistics) of
+// the resampled rows' means. No rows: empty. Throws std::invalid_argument for rows of unequal
+// length or resamples < 1.
+std::vector<Interval> bootstrap_mean_ci95(const std::vector<std::vector<double>>& rows,
+                                          int resamples = kBootstrapResamples, std::uint64_t seed = kBootstrapSeed);
+
+// One object's figures, mean over its complete runs (its first views).
+struct ObjectMean {
+  std::string object;
+  int runs_complete = 0, runs_failed = 0;
+  std::vector<double> coverage_by_view;  // mean over the complete runs (padded to the budget); empty if none
+  std::optional<double> views_to_95;     // mean over the complete runs that reach 95 %; none if none does
+  int runs_reaching_95 = 0;
+};
+// Per object, in the order the runs first name them.
+std::vector<ObjectMean> object_means(const std::vector<ObjectRun>& runs, int views);
+
 struct PlannerSummary {
   PlannerKind planner = PlannerKind::kPbnbv;
-  std::vector<double> coverage_by_view;    // mean over the complete objects
-  std::vector<double> coverage_min_by_view, coverage_max_by_view;  // spread over the complete objects
-  std::vector<double> observable_by_view;  // mean over the complete objects
-  double planner_ms_median = 0, planner_ms_mean = 0;  // over every iteration of every object
-  std::optional<double> views_to_95;       // mean over the objects that reach 95 %
+  // Means and spread over the complete runs (objects x first views).
+  std::vector<double> coverage_by_view;    // mean over the complete runs
+  std::vector<double> coverage_min_by_view, coverage_max_by_view;  // spread over the complete runs
+  std::vector<double> observable_by_view;  // mean over the complete runs
+  double planner_ms_median = 0, planner_ms_mean = 0;  // over every iteration of every run
+  std::optional<double> views_to_95;       // mean over the runs that reach 95 %
   std::optional<int> views_to_95_of_mean;  // first view at which the mean coverage reaches 95 %
-  int reached_95 = 0, complete = 0, failed = 0;
-  std::vector<ObjectRun> objects;
+  int reached_95 = 0, complete = 0, failed = 0;  // runs
+  std::vector<ObjectRun> runs;
+  // Per object (mean over its first views), and the 95 % intervals by bootstrap over the objects
+  // (each object's value its mean over its complete first views): of the mean coverage after
+  // each view (over the objects_complete objects with a complete run), and of views to 95 %
+  // (over the objects_reaching_95 objects with a run reaching 95 %, each its mean over those
+  // runs; an object that never reaches 95 % is left out, as in views_to_95).
+  std::vector<ObjectMean> per_object;
+  int objects_complete = 0, objects_reaching_95 = 0;
+  std::vector<Interval> coverage_ci95_by_view;
+  std::optional<Interval> views_to_95_ci95;
   // Percentage points of coverage the oracle has above this planner after views 1..N, mean over
-  // the objects complete for both (gap_objects of them); empty when the oracle was not run.
+  // the runs (object and first view) complete for both (gap_objects of them); empty when the
+  // oracle was not run.
   std::vector<double> gap_to_oracle_by_view;
   int gap_objects = 0;
   StopRuleSummary stop_rule;
@@ -139,17 +200,30 @@ struct PlannerSummary {
 std::string scan_failure_reason(const std::filesystem::path& dir, const std::filesystem::path& log);
 
 // Pure helpers (tested): the first view (1-based) whose coverage reaches `percent`; a curve
-// padded to n views with its last value; the summary of a planner's runs.
+// padded to n views with its last value; the summary of a planner's runs (every object from
+// every first view).
 std::optional<int> views_to_reach(const std::vector<double>& coverage_by_view, double percent);
 std::vector<double> pad_views(std::vector<double> v, int n);
 PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs, int views);
 // Fills every planner's gap_to_oracle_by_view (the oracle's own: zeros) when `planners` holds
-// the oracle; otherwise leaves them empty.
+// the oracle; otherwise leaves them empty. Runs pair by object and first view.
 void add_gaps_to_oracle(std::vector<PlannerSummary>& planners, int views);
+
+// One half of the tuning set (tuning_half): each planner summarised over the runs of the
+// benchmark's objects in that half.
+struct HalfSummary {
+  ObjectSet half = ObjectSet::kTune;
+  std::vector<std::string> objects;  // the benchmark's objects in this half, in its order
+  std::vector<PlannerSummary> planners;
+};
+// Both halves when `spec.objects` names members of both (a member given by its name; a path is
+// no member), else none.
+std::vector<HalfSummary> summarise_halves(const BenchSpec& spec, const std::vector<PlannerSummary>& planners);
 
 struct BenchResult {
   BenchSpec spec;
   std::vector<PlannerSummary> planners;
+  std::vector<HalfSummary> halves;  // summarise_halves
   nlohmann::json machine;
 };
 
@@ -161,10 +235,14 @@ nlohmann::json to_json(const BenchResult& r);
 std::string surface_metrics_markdown(const std::vector<PlannerSummary>& planners, const MetricParams& params);
 
 // The objects a result's means are over, for titles: "12 objects, 1 of 13 failed" (every
-// planner the same), "11-12 objects (failed: pbnbv 1, random 2 of 13)", "13 objects".
+// planner the same), "11-12 objects (failed: pbnbv 1, random 2 of 13)", "13 objects"; with
+// several first views the runs: "12 objects x 3 first views (36 runs)", "35 of 36 runs (12
+// objects x 3 first views), 1 failed", "34-35 of 36 runs (12 objects x 3 first views; failed:
+// pbnbv 1, random 2)".
 std::string objects_text(const BenchResult& r);
 
-// Runs the scans that are not complete in spec.out, evaluates every scan, writes
+// Runs the scans that are not complete in spec.out (every object from every first view, in
+// DIR/<planner>/<run_folder>), evaluates every scan, writes
 // spec.out/summary.json, report.md, coverage.png, time.png (and observable.png on the arm rig,
 // gap.png when the oracle ran).
 // `self` is the pbnbv executable that runs each scan. Progress goes to `log`: with `terminal`,

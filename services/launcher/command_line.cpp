@@ -17,7 +17,8 @@ namespace pbnbv::launcher {
 namespace {
 
 const char* const kObjectHelp =
-    "mesh file (.obj .stl .off .ply) or a built-in object: bunny, teapot (fetched by ./scripts/setup), sphere, box";
+    "mesh file (.obj .stl .off .ply) or a known object: any of the tuning set's 30 (bunny, teapot, armadillo, ...; "
+    "README, fetched by ./scripts/setup), sphere, box";
 
 // Option groups of `pbnbv scan --help`.
 const char* const kGroupObject = "Object";
@@ -268,7 +269,8 @@ void CommandLine::declare_scan() {
 
 void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec, BenchPending* pending) {
   CLI::App& c = *command;
-  cli::add_words(c, "objects", &spec->objects, "object names or mesh paths [the default set, README]");
+  cli::add_words(c, "objects", &spec->objects,
+                 "object sets (default, tuning, tune, confirm), object names or mesh paths, mixed [default]");
   cli::add_text(c, "object-dir", &pending->object_dir, "every .obj/.stl/.off/.ply in DIR instead", "DIR");
   cli::add_list(c, "planners", &spec->planners, "planners to compare");
   cli::add(c, eval::kBenchRig, &spec->rig);
@@ -282,6 +284,7 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add(c, kUp, &spec->up);
   cli::add_point(c, "initial-view", &spec->initial_view,
                  "first camera position, object frame, m [the scan's default first view]");
+  cli::add(c, eval::kFirstViews, &spec->first_views);
   cli::add(c, kPlannerSeed, &spec->seed);
   cli::add(c, kWhenDone, &spec->when_done);
   // The scans run without a stop rule; the report says where the surface rule would have stopped each.
@@ -449,7 +452,9 @@ void CommandLine::resolve_bench(const CLI::App* command, eval::BenchSpec* spec, 
     std::sort(spec->objects.begin(), spec->objects.end());
     if (spec->objects.empty()) throw std::invalid_argument("--object-dir " + dir.string() + ": no .obj, .stl, .off or .ply file");
   } else if (!objects_given) {
-    for (const auto& d : eval::default_objects()) spec->objects.push_back(d.name);
+    spec->objects = eval::object_set(eval::ObjectSet::kDefault);
+  } else {
+    spec->objects = eval::expand_objects(spec->objects);
   }
   spec->netns = !pending.no_netns;
   if (pending.out.empty()) throw std::invalid_argument("--out DIR is required");

@@ -31,7 +31,8 @@ int run_bench(const eval::BenchSpec& spec, const fs::path& self) {
             << (std::find(spec.planners.begin(), spec.planners.end(), PlannerKind::kOracle) != spec.planners.end()
                     ? ", gap.png"
                     : "")
-            << "; scans in " << spec.out.string() << "/<planner>/<object>/" << std::endl;
+            << "; scans in " << spec.out.string() << "/<planner>/<object>/"
+            << (spec.first_views > 1 ? " and <object>-fv<k>/ (first view k)" : "") << std::endl;
   if (failed > 0) {
     std::cerr << "pbnbv bench: " << failed << " scans did not complete (see summary.json and logs/); run the command "
               << "again to retry them" << std::endl;

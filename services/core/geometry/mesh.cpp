@@ -49,6 +49,11 @@ MeshNormalisation normalise_mesh(TriangleMesh& mesh, double shortest_edge_m, UpA
     n.up_rotation << 1, 0, 0,
                      0, 0, -1,
                      0, 1, 0;
+  } else if (up == UpAxis::kX) {
+    // (x, y, z) -> (-z, y, x): file +x becomes +z, a proper rotation about y by -90 degrees.
+    n.up_rotation << 0, 0, -1,
+                     0, 1, 0,
+                     1, 0, 0;
   }
   for (auto& v : mesh.vertices) v = n.up_rotation * v;
   Eigen::Vector3d lo, hi;

@@ -16,11 +16,11 @@ struct TriangleMesh {
 };
 
 // Which axis of the mesh file points up in the world.
-enum class UpAxis { kZ, kY };
+enum class UpAxis { kZ, kY, kX };
 template <>
 struct EnumNames<UpAxis> {
   static constexpr std::string_view what = "up axis";
-  static constexpr std::array<NamedValue<UpAxis>, 2> names{{{UpAxis::kZ, "z"}, {UpAxis::kY, "y"}}};
+  static constexpr std::array<NamedValue<UpAxis>, 3> names{{{UpAxis::kZ, "z"}, {UpAxis::kY, "y"}, {UpAxis::kX, "x"}}};
 };
 
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <random>
 #include <stdexcept>
 #include <string>
 
@@ -105,6 +106,24 @@ std::vector<Pose> sphere_band_views(int n, int alpha, double radius_m,
     }
   }
   return views;
+}
+
+std::vector<Eigen::Vector3d> uniform_sphere_points(int n, double radius_m, bool upper_half, std::uint64_t seed) {
+  if (n < 0) throw std::invalid_argument("uniform_sphere_points: n must be >= 0, got " + std::to_string(n));
+  if (!(radius_m > 0) || !std::isfinite(radius_m)) {
+    throw std::invalid_argument("uniform_sphere_points: radius must be positive and finite, got " + std::to_string(radius_m));
+  }
+  std::mt19937_64 rng(seed);
+  const auto uniform = [&rng] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };  // [0, 1)
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(n);
+  for (int i = 0; i < n; ++i) {
+    const double z = upper_half ? uniform() : 2.0 * uniform() - 1.0;
+    const double azimuth = 2.0 * M_PI * uniform();
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    points.push_back(radius_m * Eigen::Vector3d(r * std::cos(azimuth), r * std::sin(azimuth), z));
+  }
+  return points;
 }
 
 }  // namespace pbnbv

@@ -1,5 +1,6 @@
 #pragma once
 // Candidate and fixed view sets, as optical-frame camera poses in the object frame.
+#include <cstdint>
 #include <vector>
 
 #include "core/base/pose.hpp"
@@ -21,5 +22,14 @@ std::vector<Pose> ring_views(int n, double radius_m, double elevation_rad,
 std::vector<Pose> sphere_band_views(int n, int alpha, double radius_m,
                                     const Eigen::Vector3d& centre, double polar_min_rad,
                                     double polar_max_rad);
+
+// `n` points drawn uniformly on the sphere of radius `radius_m` around the origin, or on its
+// upper half (z >= 0) with `upper_half`: z uniform on [-r, r] (or [0, r]) and the azimuth
+// uniform on [0, 2 pi) (Archimedes: uniform z is uniform area). Deterministic for a seed on any
+// platform (mt19937_64, its 53 high bits as the uniform number; no standard-library
+// distribution); the draws for n are the first n of those for n + 1, and the same seed gives the
+// same directions at any radius. Throws std::invalid_argument for n < 0 or a radius that is not
+// positive and finite.
+std::vector<Eigen::Vector3d> uniform_sphere_points(int n, double radius_m, bool upper_half, std::uint64_t seed);
 
 }  // namespace pbnbv

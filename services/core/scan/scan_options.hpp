@@ -26,7 +26,7 @@ inline constexpr Setting<double> kObjectSize{"size", 0.3, 0.01, 2.0, "m",
                                              "shortest bounding-box edge after normalisation"};
 inline constexpr ChoiceSetting<UpAxis> kUp{"up", UpAxis::kZ,
                                            "which axis of the mesh file points up (default: the object's own: "
-                                           "y for bunny and teapot, z for a mesh file)"};
+                                           "each known object's, README; z for a mesh file)"};
 
 // The views.
 inline constexpr Setting<int> kViews{"views", 10, 1, 1000, "", "at most this many views"};

@@ -107,27 +107,34 @@ TEST_F(BenchReport, FailedScanIsCountedApartAndExplained) {
       << md;
   EXPECT_NE(md.find("## Failed scans"), std::string::npos);
   EXPECT_NE(md.find("| c | pbnbv | " + reason + " |"), std::string::npos);
-  EXPECT_NE(md.find("5 other meshes"), std::string::npos);
+  EXPECT_EQ(md.find("5 other meshes"), std::string::npos);  // not the default set: no foreign reference
   const json j = read_json((dir_ / "summary.json").string());
   ASSERT_EQ(j.at("failed_scans").size(), 1u);
   EXPECT_EQ(j["failed_scans"][0]["object"], "c");
   EXPECT_EQ(j["failed_scans"][0]["planner"], "pbnbv");
   EXPECT_EQ(j["failed_scans"][0]["reason"], reason);
-  EXPECT_EQ(j["pbnbv"]["objects"]["c"]["error"], reason);
+  EXPECT_EQ(j["pbnbv"]["runs"]["c"]["error"], reason);
   EXPECT_EQ(j["pbnbv"]["coverage_min_by_view"], json({20, 70}));
   EXPECT_EQ(j["pbnbv"]["objects_complete"], 2);
 
   // The plots in both formats; the coverage plot's title counts the completed scans, each
-  // planner has its min-max band, the release's curve names where it comes from.
+  // planner has its min-max band; the release's curve (other meshes) is not drawn for these objects.
   for (const char* f : {"coverage.png", "coverage.svg", "time.png", "time.svg"}) {
     EXPECT_GT(fs::file_size(dir_ / f), 1000u) << f;
   }
-  const std::string svg = read(dir_ / "coverage.svg");
+  std::string svg = read(dir_ / "coverage.svg");
   EXPECT_NE(svg.find("2-3 objects (failed: pbnbv 1 of 3)"), std::string::npos);
-  EXPECT_NE(svg.find(">authors' release (5 other meshes)</text>"), std::string::npos);
+  EXPECT_EQ(svg.find("authors' release"), std::string::npos);
   size_t bands = 0;
   for (size_t at = svg.find("fill-opacity="); at != std::string::npos; at = svg.find("fill-opacity=", at + 1)) ++bands;
   EXPECT_EQ(bands, 2u);
+  // The default set (the objects named as its): the release's curve and row, saying where they come from.
+  BenchResult d = r;
+  d.spec.objects = object_set(ObjectSet::kDefault);
+  write_report(d);
+  svg = read(dir_ / "coverage.svg");
+  EXPECT_NE(svg.find(">authors' release (5 other meshes)</text>"), std::string::npos);
+  EXPECT_NE(read(dir_ / "report.md").find("| authors' release, 5 other meshes, this machine kind |"), std::string::npos);
 
   // Every planner lost the same object: one count.
   r.planners[1] = summarise(PlannerKind::kRandom,

@@ -1,4 +1,4 @@
-// The benchmark's surface metrics: a planner's means over its complete objects (summary.json)
+// The benchmark's surface metrics: a planner's means over its complete runs (summary.json)
 // and report.md's table, on hand-made figures.
 #include <gtest/gtest.h>
 
@@ -55,7 +55,7 @@ TEST(SurfaceSummary, MeansOverTheCompleteObjectsThatHaveThem) {
   const nlohmann::json j = to_json(r);
   EXPECT_DOUBLE_EQ(j["pbnbv"]["surface_metrics"]["cloud"]["f_score"].get<double>(), 0.8);
   EXPECT_FALSE(j["pbnbv"]["surface_metrics"].contains("mesh"));
-  EXPECT_DOUBLE_EQ(j["pbnbv"]["objects"]["a"]["surface_metrics"]["cloud"]["accuracy"]["mean_mm"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(j["pbnbv"]["runs"]["a"]["surface_metrics"]["cloud"]["accuracy"]["mean_mm"].get<double>(), 1.0);
 
   const std::string md = surface_metrics_markdown(r.planners, MetricParams{});
   EXPECT_NE(md.find("| pbnbv | cloud | 2 | 2.00 | 1.00 | 4.00 | 6.00 | 1.00 | 0.800 | 0.800 | 0.800 |"), std::string::npos)

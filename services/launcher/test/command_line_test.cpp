@@ -91,6 +91,9 @@ TEST(LauncherCommandLine, FreeRigDefaultsAndDependentDefaults) {
   EXPECT_EQ(o.settings.initial_view_m, Eigen::Vector3d(0, 0.9, 0));
   EXPECT_FALSE(o.record_log);
   EXPECT_EQ(o.up, UpAxis::kY);
+  CommandLine x;
+  ASSERT_EQ(parse(x, {"scan", "--up", "x"}).code, std::nullopt);
+  EXPECT_EQ(x.scan().up, UpAxis::kX);
 }
 
 TEST(LauncherCommandLine, TheRigFileDecidesTheKindOfRig) {
@@ -144,6 +147,22 @@ TEST(LauncherCommandLine, BenchDefaultsAndAblationRuns) {
   EXPECT_EQ(b.views, 10);
   EXPECT_EQ(b.objects, (std::vector<std::string>{"sphere", "box"}));
   EXPECT_TRUE(b.netns);
+  EXPECT_EQ(b.first_views, 1);
+  EXPECT_FALSE(b.up.has_value());
+
+  // No --objects: the default set; sets mix with names (a name listed twice is kept once).
+  CommandLine defaults;
+  ASSERT_EQ(parse(defaults, {"bench", "--out", "/tmp/pbnbv-bench"}).code, std::nullopt);
+  EXPECT_EQ(defaults.bench().objects, eval::object_set(eval::ObjectSet::kDefault));
+  CommandLine sets;
+  const Parsed ps = parse(sets, {"bench", "--objects", "tune,sphere,bunny", "--first-views", "3", "--up", "x", "--out",
+                                 "/tmp/pbnbv-bench"});
+  ASSERT_EQ(ps.code, std::nullopt) << ps.err;
+  std::vector<std::string> tune_and_sphere = eval::object_set(eval::ObjectSet::kTune);
+  tune_and_sphere.push_back("sphere");
+  EXPECT_EQ(sets.bench().objects, tune_and_sphere);
+  EXPECT_EQ(sets.bench().first_views, 3);
+  EXPECT_EQ(sets.bench().up, UpAxis::kX);
 
   CommandLine ablate;
   const Parsed a = parse(ablate, {"ablate", "tmax", "--values", "5,20", "--objects", "sphere", "--out", "/tmp/pbnbv-abl"});
@@ -211,6 +230,14 @@ TEST(LauncherCommandLine, BadOptionsAreNamed) {
       {{"bench", "--out", "x", "--candidates", "10"},
        "pbnbv bench: --candidates 10: the candidates lie on 24 parallels, so at least 24 are needed"},
       {{"bench", "--objets", "sphere"}, "pbnbv bench: unknown option --objets (did you mean --objects?)"},
+      {{"bench", "--objects", "tune,tunning", "--out", "x"},
+       "pbnbv bench: --objects: 'tunning' is neither an object set (default, tuning, tune or confirm), a known object"},
+      {{"bench", "--out", "x", "--first-views", "11"}, "pbnbv bench: --first-views: 11 is outside its range [1, 10]"},
+      {{"bench", "--out", "x", "--first-views", "3", "--initial-view", "0.9,0,0"},
+       "pbnbv bench: --first-views 3 draws the first views 2..3 while --initial-view fixes the first view of every scan"},
+      {{"ablate", "initial-view", "--first-views", "2", "--out", "x"},
+       "pbnbv ablate: --values 0.9,0,0: --first-views 2 draws the first views"},
+      {{"scan", "--up", "w"}, "pbnbv scan: --up: unknown up axis 'w' (expected z, y or x)"},
       {{"bench", "--planners", "pbnbv,ring,pbnbv", "--out", "x"}, "pbnbv bench: --planners: 'pbnbv' is listed twice"},
       {{"bench"}, "pbnbv bench: --out DIR is required"},
       {{"ablate", "--out", "x"}, "pbnbv ablate: name the parameter: tmax, beta, initial-view or resolution"},

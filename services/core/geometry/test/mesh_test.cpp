@@ -73,6 +73,29 @@ TEST(Normalise, OffsetBoxUpYMapsFileCoordinates) {
   for (const auto& t : m.triangles) EXPECT_GT(normal(m, t).dot(centroid(m, t)), 0.0);
 }
 
+TEST(Normalise, BoxUpXTurnsFileXUp) {
+  TriangleMesh file = make_box(Eigen::Vector3d(2, 4, 6));
+  for (auto& v : file.vertices) v += Eigen::Vector3d(10, -20, 30);
+  TriangleMesh m = file;
+  const MeshNormalisation n = normalise_mesh(m, 0.3, UpAxis::kX);
+  EXPECT_EQ(n.up, UpAxis::kX);
+  // File x edge (2) becomes z, file z edge (6) becomes x, y (4) stays: 0.15 * (6, 4, 2).
+  EXPECT_NEAR((n.extent_m - Eigen::Vector3d(0.9, 0.6, 0.3)).norm(), 0.0, 1e-12);
+  EXPECT_DOUBLE_EQ(n.scale, 0.15);
+  // The rotation takes file +x to +z, file +z to -x, keeps y.
+  EXPECT_TRUE((n.up_rotation * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitZ()));
+  EXPECT_TRUE((n.up_rotation * Eigen::Vector3d::UnitZ()).isApprox(-Eigen::Vector3d::UnitX()));
+  EXPECT_TRUE((n.up_rotation * Eigen::Vector3d::UnitY()).isApprox(Eigen::Vector3d::UnitY()));
+  EXPECT_NEAR(n.up_rotation.determinant(), 1.0, 1e-15);
+  // centre_m: the scaled, rotated bbox centre, 0.15 * (-30, -20, 10).
+  EXPECT_NEAR((n.centre_m - Eigen::Vector3d(-4.5, -3.0, 1.5)).norm(), 0.0, 1e-12);
+  for (size_t i = 0; i < m.vertices.size(); ++i) {
+    const Eigen::Vector3d mapped = n.scale * (n.up_rotation * file.vertices[i]) - n.centre_m;
+    EXPECT_NEAR((mapped - m.vertices[i]).norm(), 0.0, 1e-12);
+  }
+  for (const auto& t : m.triangles) EXPECT_GT(normal(m, t).dot(centroid(m, t)), 0.0);  // still outward
+}
+
 TEST(Normalise, RejectsBadArguments) {
   TriangleMesh m = make_box(Eigen::Vector3d(1, 1, 1));
   EXPECT_ANY_THROW(normalise_mesh(m, 0.0, UpAxis::kZ));

@@ -130,5 +130,47 @@ TEST(SphereBandViews, AtLeastOnePerParallelAndBadArguments) {
                std::invalid_argument);
 }
 
+// The benchmark's drawn first views: on the sphere (or its upper half) of the given radius,
+// deterministic for a seed, uniform (the mean of a few hundred unit directions is near the
+// centre: 0 for the sphere, (0, 0, 1/2) for the upper half, whose mean height is 1/2).
+TEST(UniformSpherePoints, RadiusHalfSeedAndUniformity) {
+  const std::vector<Eigen::Vector3d> full = uniform_sphere_points(400, 0.8, false, 42);
+  ASSERT_EQ(full.size(), 400u);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  int below = 0;
+  for (const auto& p : full) {
+    EXPECT_NEAR(p.norm(), 0.8, 1e-12);
+    mean += p / 0.8 / 400.0;
+    below += p.z() < 0;
+  }
+  // Each coordinate of a uniform unit direction has variance 1/3: the mean of 400 has a
+  // standard deviation of 0.029, so 0.1 is over 3 of them.
+  EXPECT_LT(mean.norm(), 0.1) << mean.transpose();
+  EXPECT_GT(below, 150);  // the lower half is drawn too
+  EXPECT_LT(below, 250);
+
+  const std::vector<Eigen::Vector3d> half = uniform_sphere_points(400, 0.8, true, 42);
+  Eigen::Vector3d half_mean = Eigen::Vector3d::Zero();
+  for (const auto& p : half) {
+    EXPECT_NEAR(p.norm(), 0.8, 1e-12);
+    EXPECT_GE(p.z(), 0.0);
+    half_mean += p / 0.8 / 400.0;
+  }
+  EXPECT_LT(std::hypot(half_mean.x(), half_mean.y()), 0.1) << half_mean.transpose();
+  EXPECT_NEAR(half_mean.z(), 0.5, 0.05);  // z uniform on [0, 1]: sd of the mean 0.014
+
+  // The same seed: the same draws; fewer draws: the first ones; another radius: the same directions.
+  EXPECT_EQ(uniform_sphere_points(400, 0.8, false, 42), full);
+  const std::vector<Eigen::Vector3d> first3 = uniform_sphere_points(3, 0.8, false, 42);
+  EXPECT_EQ(first3, std::vector<Eigen::Vector3d>(full.begin(), full.begin() + 3));
+  const std::vector<Eigen::Vector3d> far = uniform_sphere_points(3, 1.6, false, 42);
+  for (int i = 0; i < 3; ++i) EXPECT_LT((far[i] - 2.0 * full[i]).norm(), 1e-12);
+  EXPECT_NE(uniform_sphere_points(3, 0.8, false, 43), first3);  // another seed, other draws
+  EXPECT_TRUE(uniform_sphere_points(0, 0.8, false, 42).empty());
+  EXPECT_THROW(uniform_sphere_points(-1, 0.8, false, 42), std::invalid_argument);
+  EXPECT_THROW(uniform_sphere_points(3, 0.0, false, 42), std::invalid_argument);
+  EXPECT_THROW(uniform_sphere_points(3, NAN, false, 42), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace pbnbv

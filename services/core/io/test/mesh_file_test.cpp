@@ -411,7 +411,8 @@ TEST_F(MeshFiles, Errors) {
   const std::string planar = write("planar.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   expect_error([&] { load_mesh(planar); }, {planar, "zero-size bounding box"});
 
-  EXPECT_THROW(parse_name<UpAxis>("x"), std::invalid_argument);
+  EXPECT_THROW(parse_name<UpAxis>("w"), std::invalid_argument);
+  EXPECT_EQ(parse_name<UpAxis>("x"), UpAxis::kX);
   EXPECT_EQ(parse_name<UpAxis>("y"), UpAxis::kY);
   EXPECT_EQ(parse_name<UpAxis>("z"), UpAxis::kZ);
 }

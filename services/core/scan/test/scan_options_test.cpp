@@ -154,7 +154,7 @@ TEST(ScanKinds, EveryNameRoundTripsAndAnUnknownOneIsNamedWithTheChoices) {
   expect_names_round_trip<CandidateArea>("candidate area", "hemi or full");
   expect_names_round_trip<WhenDone>("when-done rule", "stop or spread");
   expect_names_round_trip<RigKind>("rig kind", "arm or free");
-  expect_names_round_trip<UpAxis>("up axis", "z or y");
+  expect_names_round_trip<UpAxis>("up axis", "z, y or x");
   expect_names_round_trip<OnOff>("switch", "on or off");
   expect_names_round_trip<StopRule>("stop rule", "surface or off");
   EXPECT_EQ(to_string(RigKind::kFree), "free");
