@@ -227,7 +227,7 @@ void BM_PlannerStep(benchmark::State& state) {
   {
     VoxelMap map = s.before;
     integrate_step(s, map);
-    state.counters["stride_px"] = map.last_ray_stride_px() + (map.last_blocks_alternate() ? 0.5 : 0.0);
+    state.counters["stride_px"] = map.last_ray_stride_px();
     state.counters["voxels"] = static_cast<double>(map.dims().prod());
   }
   state.counters["map_cpu"] = median(map_cpu);
