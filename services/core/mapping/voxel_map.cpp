@@ -295,23 +295,26 @@ void VoxelMap::reserve_bounds(const Eigen::AlignedBox3d& box_m) {
   grow_to_cover(lo, hi);
 }
 
-VoxelCounts VoxelMap::update_frontiers() {
+VoxelCounts VoxelMap::update_frontiers(Eigen::Vector3i* frontier_lo, Eigen::Vector3i* frontier_hi) {
   // 26-neighbourhood test with a separable 3x3x3 dilation of two bits per voxel
   // (bit 0 = Empty, bit 1 = Occupied): plane by plane, mask + dilation along x then y into
   // scratch_; then along z on the fly while deciding each Unknown/Frontier voxel. The voxel
   // itself is in its own 3x3x3 block, but it is Unknown/Frontier (neither bit), so the result is
   // exactly "some 26-neighbour is Empty and some is Occupied". Outside B counts as None.
-  const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
-  const int64_t plane = int64_t(nx) * ny;
-  scratch_.resize(static_cast<size_t>(plane * nz));
-  uint8_t* cells = reinterpret_cast<uint8_t*>(cells_.data());
-  uint8_t* dil = scratch_.data();
-  const bool face_empty = params_.frontier_empty_neighbours == 6;
+  scratch_.resize(static_cast<size_t>(dims_.prod()));
   // Several workers only for grids beyond about 200,000 voxels (each takes >= 100,000).
-  const int nt = worker_count(static_cast<std::size_t>(nz),
-                              static_cast<std::size_t>((kVoxelsPerWorker + plane - 1) / plane));
+  const int64_t plane_cells = int64_t(dims_.x()) * dims_.y();
+  const int nt = worker_count(static_cast<std::size_t>(dims_.z()),
+                              static_cast<std::size_t>((kVoxelsPerWorker + plane_cells - 1) / plane_cells));
 
+  // Each pass copies the sizes into locals: the byte stores could alias the lambda's captures,
+  // and loop bounds read through them would keep the compiler from vectorising the loops.
   parallel_run(nt, [&](int tid, int n_threads) {
+    const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
+    const int64_t plane = int64_t(nx) * ny;
+    const bool face_empty = params_.frontier_empty_neighbours == 6;
+    uint8_t* const cells = reinterpret_cast<uint8_t*>(cells_.data());
+    uint8_t* const dil = scratch_.data();
     std::vector<uint8_t> m(static_cast<size_t>(plane)), mx(static_cast<size_t>(plane));
     for (int z = tid; z < nz; z += n_threads) {
       const uint8_t* src = cells + plane * z;
@@ -357,8 +360,16 @@ VoxelCounts VoxelMap::update_frontiers() {
   });
 
   std::vector<std::array<int64_t, 5>> n(static_cast<std::size_t>(nt), std::array<int64_t, 5>{});
+  std::vector<Eigen::Vector3i> f_lo(static_cast<std::size_t>(nt), Eigen::Vector3i::Constant(std::numeric_limits<int>::max()));
+  std::vector<Eigen::Vector3i> f_hi(static_cast<std::size_t>(nt), Eigen::Vector3i::Constant(std::numeric_limits<int>::min()));
   parallel_run(nt, [&](int tid, int n_threads) {
+    const int nx = dims_.x(), nz = dims_.z();
+    const int64_t plane = int64_t(nx) * dims_.y();
+    const bool face_empty = params_.frontier_empty_neighbours == 6;
+    uint8_t* const cells = reinterpret_cast<uint8_t*>(cells_.data());
+    const uint8_t* const dil = scratch_.data();
     int64_t cnt[5] = {0, 0, 0, 0, 0};  // local: the cell stores below cannot alias it
+    Eigen::Vector3i lo = f_lo[tid], hi = f_hi[tid];
     for (int z = tid; z < nz; z += n_threads) {
       const uint8_t* c = dil + plane * z;
       const uint8_t* a = z > 0 ? c - plane : c;
@@ -372,12 +383,25 @@ VoxelCounts VoxelMap::update_frontiers() {
                                           : static_cast<uint8_t>(a[i] | c[i] | b[i]);
           v = near == 3 ? kFrontier : kUnknown;
           s[i] = v;
+          if (v == kFrontier) {
+            const Eigen::Vector3i l(static_cast<int>(i % nx), static_cast<int>(i / nx), z);
+            lo = lo.cwiseMin(l);
+            hi = hi.cwiseMax(l);
+          }
         }
         ++cnt[v];
       }
     }
     std::copy(cnt, cnt + 5, n[tid].begin());
+    f_lo[tid] = lo;
+    f_hi[tid] = hi;
   });
+  *frontier_lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max());
+  *frontier_hi = Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
+  for (int t = 0; t < nt; ++t) {
+    *frontier_lo = frontier_lo->cwiseMin(f_lo[t]);
+    *frontier_hi = frontier_hi->cwiseMax(f_hi[t]);
+  }
   VoxelCounts out;
   for (const auto& c : n) {
     out.none += c[0];
@@ -521,22 +545,9 @@ void VoxelMap::mark_occupied(const FramePoints& points) {
   }
 }
 
-int64_t VoxelMap::grow_around_frontiers(const VoxelCounts& c) {
-  if (c.frontier == 0) return 0;
+int64_t VoxelMap::grow_around_frontiers(const Eigen::Vector3i& f_lo, const Eigen::Vector3i& f_hi) {
+  if ((f_hi.array() < f_lo.array()).any()) return 0;  // no Frontier voxel
   const int kk = static_cast<int>(std::floor(params_.gamma_m / params_.resolution_m + 0.5));
-  Eigen::Vector3i f_lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max());
-  Eigen::Vector3i f_hi = Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
-  const uint8_t* cells = reinterpret_cast<const uint8_t*>(cells_.data());
-  const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
-  int64_t lin = 0;
-  for (int z = 0; z < nz; ++z)
-    for (int y = 0; y < ny; ++y)
-      for (int x = 0; x < nx; ++x, ++lin)
-        if (cells[lin] == kFrontier) {
-          const Eigen::Vector3i l(x, y, z);
-          f_lo = f_lo.cwiseMin(l);
-          f_hi = f_hi.cwiseMax(l);
-        }
   // Voxel g's centre is (g + 1/2) res; the voxels g-kk..g+kk reach (kk + 1/2) res > gamma
   // from it on each side, so they cover the cube [c - gamma, c + gamma] around the centre.
   const int64_t before = dims_.prod();
@@ -587,8 +598,9 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
   } else {
     result.projected = project_voxels(f);
   }
-  VoxelCounts c = update_frontiers();                            // 5.
-  if (!first) c.none += grow_around_frontiers(c);                // 6.
+  Eigen::Vector3i f_lo, f_hi;                                    // 5.
+  VoxelCounts c = update_frontiers(&f_lo, &f_hi);
+  if (!first) c.none += grow_around_frontiers(f_lo, f_hi);       // 6.
   initialised_ = true;
 
   result.updated = true;

@@ -162,8 +162,9 @@ class VoxelMap {
   // The working volume of the frame being integrated, as a lattice index box (B is clamped to it).
   bool limited_ = false;
   Eigen::Vector3i limit_lo_ = Eigen::Vector3i::Zero(), limit_hi_ = Eigen::Vector3i::Zero();
-  // Re-evaluates Frontier/Unknown over the whole grid; returns the state counts.
-  VoxelCounts update_frontiers();
+  // Re-evaluates Frontier/Unknown over the whole grid; returns the state counts and the box of
+  // the Frontier voxels (local indices; empty, lo > hi, when there is none).
+  VoxelCounts update_frontiers(Eigen::Vector3i* frontier_lo, Eigen::Vector3i* frontier_hi);
 
   // The phases of integrate(), in order (voxel_map_frame.hpp: what they share about the frame).
   MapFrame prepare_frame(const DepthView& view);                   // checks; the working volume
@@ -172,7 +173,8 @@ class VoxelMap {
   void mark_occupied(const FramePoints& points);                   // 3. Occupied (sticky)
   int64_t project_voxels(const MapFrame& f);                       // 4. free / hidden space
   int64_t walk_rays(const MapFrame& f);                            // 4'. the reference_rays way
-  int64_t grow_around_frontiers(const VoxelCounts& c);             // 6. B around Frontier voxels
+  int64_t grow_around_frontiers(const Eigen::Vector3i& f_lo,       // 6. B around Frontier voxels
+                                const Eigen::Vector3i& f_hi);
 
 };
 

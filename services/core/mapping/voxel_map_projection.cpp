@@ -70,8 +70,13 @@ using namespace voxel_cell;
 using Eigen::Vector3d;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// Voxels per worker below which another worker does not pay for its start.
+// Work per worker below which another worker does not pay for its start (a thread start costs
+// about as much as projecting a few thousand voxels): voxels projected, cells scanned, sample
+// rays read, and sample rays intersected with an Occupied voxel.
 constexpr int64_t kVoxelsPerWorker = 100000;
+constexpr int64_t kCellsPerWorker = 1000000;
+constexpr int64_t kSamplesPerWorker = 400000;
+constexpr int64_t kCrossingsPerWorker = 100000;
 
 // The sample pixels along one image axis of n pixels: 0, s, 2s, ... and n - 1.
 struct SampleAxis {
@@ -100,8 +105,8 @@ struct Sample {
   float occ;
 };
 
-// Over a tile of samples: the farthest any of their rays can be free (max |limit|), whether any
-// has a return.
+// Over a tile of samples: the farthest any of their rays is free (max of min(|limit|, occ)),
+// whether any has a return.
 struct TileBound {
   float limit = 0.0f;
   uint8_t any_return = 0;
@@ -160,6 +165,17 @@ struct VoxelView {
     m[4] = -half_depth - 1e-9;
   }
   Vector3d centre(int x, int y, int z) const { return q0 + x * ex + y * ey + z * ez; }
+  // How far (px, along u and v) the projection of the voxel centred at q (camera frame), whose
+  // nearest point lies at planar depth near, reaches from that of q. A corner q + d projects
+  // f (d_x - t d_z) / (q_z + d_z) px from it along u (t = q_x / q_z), d = (+-ex +- ey +- ez) / 2:
+  // at most f |ex_x - t ex_z| + |ey_x - t ey_z| + |ez_x - t ez_z| / (2 near); likewise along v.
+  Eigen::Vector2d reach_px(const Vector3d& q, double near, const CameraIntrinsics& k) const {
+    const double tu = q.x() / q.z(), tv = q.y() / q.z(), half = 0.5 / near;
+    return Eigen::Vector2d(k.fx * half * (std::abs(ex.x() - tu * ex.z()) + std::abs(ey.x() - tu * ey.z()) +
+                                          std::abs(ez.x() - tu * ez.z())),
+                           k.fy * half * (std::abs(ex.y() - tv * ex.z()) + std::abs(ey.y() - tv * ey.z()) +
+                                          std::abs(ez.y() - tv * ez.z())));
+  }
   // The voxels x0..x1 (inclusive) of row (y, z) that may be in view; false when none.
   bool clip_row(int y, int z, int nx, int* x0, int* x1) const {
     const Vector3d q = centre(0, y, z);
@@ -181,20 +197,24 @@ struct VoxelView {
   }
 };
 
-// The sample rays of the frame (step a), with bounds over tiles of `tile` x `tile` samples, each
-// widened to its 3 x 3 neighbour tiles (step c uses them to skip voxels that no sample ray
-// around them can decide otherwise than the nearest one).
+// The sample rays of the frame (step a) and, once their t_occ is known (bound_tiles), bounds
+// over tiles of `tile` x `tile` samples, each widened to its 3 x 3 neighbour tiles: step c uses
+// them to skip the voxels that no sample ray around the nearest one can decide otherwise.
 struct SampleRays {
   SampleAxis u, v;
   std::vector<Vector3d> a, b;  // ray (i, j) = a[i] + b[j]: voxel units per metre of planar depth
   Sample* at;                  // [j * u.count + i]
   bool crosses_nearest = false;  // the nearest sample ray crosses every voxel projected inside
+  double d_max = 1.0;            // the largest distance from the camera centre to B, m
+  int wi0 = 0, wi1 = -1, wj0 = 0, wj1 = -1;  // the samples read from the image
   int tile = 1, tiles_u = 1, tiles_v = 1;
   std::vector<TileBound> near_tiles;  // [tj * tiles_u + ti]: over the tile and its neighbours
 
   // `store`: the map's scratch (kept between frames, so that a frame does not fault its pages in).
-  SampleRays(const MapFrame& f, int stride, int tile_samples, double res, std::vector<float>& store)
-      : u(f.k.width, stride), v(f.k.height, stride), tile(tile_samples) {
+  // Only the samples in the pixel window (where B projects) are read from the image; the others
+  // are set to cast no ray (no voxel of B projects there).
+  SampleRays(const MapFrame& f, int stride, double res, const Eigen::AlignedBox2d& window, std::vector<float>& store)
+      : u(f.k.width, stride), v(f.k.height, stride) {
     a.resize(u.count);
     b.resize(v.count);
     for (int i = 0; i < u.count; ++i) a[i] = f.R.col(0) * ((u.pixel(i) - f.k.cx) / f.k.fx / res);
@@ -202,35 +222,53 @@ struct SampleRays {
     static_assert(sizeof(Sample) == 2 * sizeof(float), "a sample is two floats");
     store.resize(2 * static_cast<size_t>(u.count) * v.count);
     at = reinterpret_cast<Sample*>(store.data());
-    tiles_u = (u.count + tile - 1) / tile;
-    tiles_v = (v.count + tile - 1) / tile;
-    std::vector<TileBound> own(static_cast<size_t>(tiles_u) * tiles_v);
+    // The window in samples, one more on each side (a centre projected at its edge may round
+    // outward).
+    if (u.within(window.min().x(), window.max().x(), &wi0, &wi1) && v.within(window.min().y(), window.max().y(), &wj0, &wj1)) {
+      wi0 = std::max(0, wi0 - 1);
+      wi1 = std::min(u.count - 1, wi1 + 1);
+      wj0 = std::max(0, wj0 - 1);
+      wj1 = std::min(v.count - 1, wj1 + 1);
+    }
     const float no_return = f.free_no_return ? -f.zhi_f : 0.0f;
-    parallel_run(worker_count(static_cast<size_t>(v.count), kRowsPerWorker), [&](int tid, int n_threads) {
-      for (int tj = tid; tj < tiles_v; tj += n_threads) {
-        TileBound* t_row = own.data() + int64_t(tj) * tiles_u;
-        for (int j = tj * tile; j < std::min(v.count, (tj + 1) * tile); ++j) {
-          const float* row = f.depth + int64_t(v.pixel(j)) * f.k.width;
-          Sample* out = at + int64_t(j) * u.count;
-          for (int ti = 0; ti < tiles_u; ++ti) {
-            float t_limit = t_row[ti].limit;
-            uint8_t t_return = t_row[ti].any_return;
-            for (int i = ti * tile; i < std::min(u.count, (ti + 1) * tile); ++i) {
-              const float z = row[u.pixel(i)];
-              const bool valid = f.valid(z);
-              const float limit = valid ? z : pixel_no_return(z) ? no_return : 0.0f;
-              out[i].limit = limit;
-              out[i].occ = std::numeric_limits<float>::infinity();
-              t_limit = std::max(t_limit, std::abs(limit));
-              t_return |= valid;
-            }
-            t_row[ti].limit = t_limit;
-            t_row[ti].any_return = t_return;
-          }
+    const size_t n_samples = static_cast<size_t>(u.count) * v.count;
+    parallel_run(worker_count(n_samples, kSamplesPerWorker, v.count), [&](int tid, int n_threads) {
+      for (int j = tid; j < v.count; j += n_threads) {
+        Sample* out = at + int64_t(j) * u.count;
+        const bool in_rows = j >= wj0 && j <= wj1;
+        if (!in_rows || wi0 > 0 || wi1 < u.count - 1) std::memset(out, 0, sizeof(Sample) * u.count);
+        if (!in_rows) continue;
+        const float* row = f.depth + int64_t(v.pixel(j)) * f.k.width;
+        for (int i = wi0; i <= wi1; ++i) {
+          const float z = row[u.pixel(i)];
+          out[i].limit = f.valid(z) ? z : pixel_no_return(z) ? no_return : 0.0f;
+          out[i].occ = std::numeric_limits<float>::infinity();
         }
       }
     });
-    near_tiles.resize(own.size());
+  }
+
+  // The tile bounds, for tiles of `tile_samples` samples: over a tile, the farthest any of its
+  // rays is free (min(|limit|, occ)) and whether any has a return; then over its neighbours.
+  void bound_tiles(int tile_samples) {
+    tile = tile_samples;
+    tiles_u = (u.count + tile - 1) / tile;
+    tiles_v = (v.count + tile - 1) / tile;
+    std::vector<TileBound> own(static_cast<size_t>(tiles_u) * tiles_v);
+    for (int j = std::max(0, wj0); j <= wj1; ++j) {
+      const Sample* row = at + int64_t(j) * u.count;
+      TileBound* t_row = own.data() + int64_t(j / tile) * tiles_u;
+      for (int ti = wi0 / tile; ti <= wi1 / tile && wi0 <= wi1; ++ti) {
+        float reach = t_row[ti].limit;
+        uint8_t any_return = t_row[ti].any_return;
+        for (int i = std::max(wi0, ti * tile); i <= std::min(wi1, (ti + 1) * tile - 1); ++i) {
+          reach = std::max(reach, std::min(std::abs(row[i].limit), row[i].occ));
+          any_return |= row[i].limit > 0.0f;
+        }
+        t_row[ti] = TileBound{reach, any_return};
+      }
+    }
+    near_tiles.assign(own.size(), TileBound{});
     for (int tj = 0; tj < tiles_v; ++tj) {
       for (int ti = 0; ti < tiles_u; ++ti) {
         TileBound& nb = near_tiles[int64_t(tj) * tiles_u + ti];
@@ -262,10 +300,22 @@ double nearest_depth(const Eigen::AlignedBox3d& b, const MapFrame& f) {
   return z;
 }
 
+// The pixels where B projects (the box of its corners' projections, which holds the projection
+// of every point of B when all corners lie in front of the camera), or the whole image.
+Eigen::AlignedBox2d image_window(const Eigen::AlignedBox3d& b, const MapFrame& f) {
+  Eigen::AlignedBox2d w;
+  for (int c = 0; c < 8; ++c) {
+    const Vector3d q = f.R.transpose() * (b.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)) - f.cam);
+    if (q.z() <= 1e-9) return Eigen::AlignedBox2d(Eigen::Vector2d::Zero(), Eigen::Vector2d(f.k.width - 1, f.k.height - 1));
+    w.extend(Eigen::Vector2d(f.k.fx * q.x() / q.z() + f.k.cx, f.k.fy * q.y() / q.z() + f.k.cy));
+  }
+  return w;
+}
+
 // The Occupied voxels of B in view (lattice indices relative to B).
 std::vector<Eigen::Vector3i> occupied_in_view(const VoxelView& vv, const uint8_t* cells, const Eigen::Vector3i& dims) {
   const int nx = dims.x(), ny = dims.y(), nz = dims.z();
-  const int nt = worker_count(static_cast<size_t>(nz), static_cast<size_t>(kVoxelsPerWorker / std::max(1, nx * ny) + 1));
+  const int nt = worker_count(static_cast<size_t>(dims.prod()), kCellsPerWorker, nz);
   std::vector<std::vector<Eigen::Vector3i>> found(static_cast<size_t>(nt));
   parallel_run(nt, [&](int tid, int n_threads) {
     for (int z = tid; z < nz; z += n_threads) {
@@ -287,28 +337,20 @@ std::vector<Eigen::Vector3i> occupied_in_view(const VoxelView& vv, const uint8_t
 // to B). Workers take bands of sample rows, so each sample is written by one worker.
 void occluders(const MapFrame& f, const VoxelView& vv, const std::vector<Eigen::Vector3i>& occupied,
                SampleRays& rays) {
-  Vector3d corner[8];  // camera-frame offsets of a voxel's corners from its centre
-  for (int c = 0; c < 8; ++c) {
-    corner[c] = 0.5 * ((c & 1 ? 1 : -1) * vv.ex + (c & 2 ? 1 : -1) * vv.ey + (c & 4 ? 1 : -1) * vv.ez);
-  }
-  const int nt = worker_count(occupied.size() * static_cast<size_t>(rays.v.count), 200000);
+  // About (f res / (z s))^2 sample rays in the projection of a voxel at depth z; z >= d_max / 2
+  // for most of them.
+  const double per_voxel = std::pow(2.0 * f.k.fx * vv.rho / (rays.u.s * rays.d_max) + 1.0, 2.0);
+  const int nt = worker_count(static_cast<size_t>(occupied.size() * per_voxel), kCrossingsPerWorker, rays.v.count);
   parallel_run(nt, [&](int tid, int n_threads) {
     const int band0 = rays.v.count * tid / n_threads, band1 = rays.v.count * (tid + 1) / n_threads - 1;
     for (const Eigen::Vector3i& w : occupied) {
       const Vector3d q = vv.centre(w.x(), w.y(), w.z());
       const double near = q.z() - vv.half_depth;
       if (near <= 1e-9) continue;  // reaches behind the camera plane: no footprint to project
-      double u_lo = kInf, u_hi = -kInf, v_lo = kInf, v_hi = -kInf;
-      for (const Vector3d& c : corner) {
-        const Vector3d p = q + c;
-        const double pu = f.k.fx * p.x() / p.z() + f.k.cx, pv = f.k.fy * p.y() / p.z() + f.k.cy;
-        u_lo = std::min(u_lo, pu);
-        u_hi = std::max(u_hi, pu);
-        v_lo = std::min(v_lo, pv);
-        v_hi = std::max(v_hi, pv);
-      }
+      const double inv = 1.0 / q.z(), pu = f.k.fx * q.x() * inv + f.k.cx, pv = f.k.fy * q.y() * inv + f.k.cy;
+      const Eigen::Vector2d r = vv.reach_px(q, near, f.k);
       int i0, i1, j0, j1;
-      if (!rays.u.within(u_lo, u_hi, &i0, &i1) || !rays.v.within(v_lo, v_hi, &j0, &j1)) continue;
+      if (!rays.u.within(pu - r.x(), pu + r.x(), &i0, &i1) || !rays.v.within(pv - r.y(), pv + r.y(), &j0, &j1)) continue;
       j0 = std::max(j0, band0);
       j1 = std::min(j1, band1);
       const Vector3d c = w.cast<double>();
@@ -385,19 +427,10 @@ struct Projector {
                                const Vector3d& c) const {
     int v = exact ? exact_verdict(rays(i, j), rays, i, j, vv.o, c) : v0;
     if (v == kFree) return v;
-    // A corner q + d projects f (d_x - t d_z) / (q_z + d_z) px from the centre along u (t = q_x /
-    // q_z): at most f res/2 |row_x - t row_z|_1 / (near depth), row_x, row_z the rows of R^T
-    // (the corner offsets are R^T (+-res/2, +-res/2, +-res/2)); likewise along v.
-    const double near = q.z() - vv.half_depth, half = 0.5 / near;
-    const double tu = q.x() / q.z(), tv = q.y() / q.z();
-    const double r_u = f.k.fx * half *
-                       (std::abs(vv.ex.x() - tu * vv.ex.z()) + std::abs(vv.ey.x() - tu * vv.ey.z()) +
-                        std::abs(vv.ez.x() - tu * vv.ez.z()));
-    const double r_v = f.k.fy * half *
-                       (std::abs(vv.ex.y() - tv * vv.ex.z()) + std::abs(vv.ey.y() - tv * vv.ey.z()) +
-                        std::abs(vv.ez.y() - tv * vv.ez.z()));
+    const double near = q.z() - vv.half_depth;
+    const Eigen::Vector2d r = vv.reach_px(q, near, f.k);
     int i0, i1, j0, j1;
-    if (!rays.u.within(pu - r_u, pu + r_u, &i0, &i1) || !rays.v.within(pv - r_v, pv + r_v, &j0, &j1)) return v;
+    if (!rays.u.within(pu - r.x(), pu + r.x(), &i0, &i1) || !rays.v.within(pv - r.y(), pv + r.y(), &j0, &j1)) return v;
     return refine(v, i, j, i0, i1, j0, j1, c, near);
   }
 
@@ -473,7 +506,8 @@ int sample_stride(double bound) {
 int64_t VoxelMap::project_voxels(const MapFrame& f) {
   const double res = params_.resolution_m;
   const Eigen::AlignedBox3d box = bounds();
-  const double bound = std::min(f.k.fx, f.k.fy) * res / (std::sqrt(2.0) * farthest_corner(box, f.cam));
+  const double d_max = farthest_corner(box, f.cam);
+  const double bound = std::min(f.k.fx, f.k.fy) * res / (std::sqrt(2.0) * d_max);
   const int stride = sample_stride(bound);
   last_stride_px_ = stride;
   const VoxelView vv(f, origin_, res);
@@ -484,15 +518,17 @@ int64_t VoxelMap::project_voxels(const MapFrame& f) {
   // Tiles wide enough for the projection of B's nearest voxels, within reason.
   const double z_near = std::max(nearest_depth(box, f), 0.05);
   const int tile = std::clamp(static_cast<int>(std::ceil(footprint / z_near / stride + 0.5)), 4, 32);
-  SampleRays rays(f, stride, tile, res, samples_);
+  SampleRays rays(f, stride, res, image_window(box, f), samples_);
   rays.crosses_nearest = bound >= 1.0;
+  rays.d_max = d_max;
   uint8_t* cells = reinterpret_cast<uint8_t*>(cells_.data());
   occluders(f, vv, occupied_in_view(vv, cells, dims_), rays);
+  rays.bound_tiles(tile);
   // The neighbour tiles hold every sample within (tile - 1/2) s px of the nearest one's.
   const Projector p{f, vv, rays, footprint, footprint / ((tile - 0.5) * stride)};
 
   const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
-  const int nt = worker_count(static_cast<size_t>(nz), static_cast<size_t>(kVoxelsPerWorker / std::max(1, nx * ny) + 1));
+  const int nt = worker_count(static_cast<size_t>(dims_.prod()), kVoxelsPerWorker, nz);
   std::vector<int64_t> projected(static_cast<size_t>(nt), 0);
   parallel_run(nt, [&](int tid, int n_threads) {
     for (int z = tid; z < nz; z += n_threads) {
