@@ -494,11 +494,15 @@ struct Projector {
   }
 };
 
-// The sample spacing (see the top of the file): the bound itself up to 3 px, half of it for
-// coarser voxels (at least 3 px), so that the projection of a voxel holds a few sample rays.
-int sample_stride(double bound) {
-  const int whole = static_cast<int>(std::min(std::floor(bound), 1e6));
-  return whole <= 3 ? std::max(1, whole) : std::max(3, whole / 2);
+// The sample spacing (see the top of the file): half the bound (the more sample rays a voxel's
+// projection holds, the closer the refinement comes to one ray per pixel), but not so fine that
+// the image has more than kSampleBudget of them (their t_occ is the costly part), and never
+// coarser than the bound, which every voxel's crossing by its nearest sample ray needs.
+constexpr double kSampleBudget = 102400;  // one per 3 x 3 pixels of a 1280 x 720 image
+int sample_stride(double bound, const CameraIntrinsics& k) {
+  const int whole = std::max(1, static_cast<int>(std::min(std::floor(bound), 1e6)));
+  const int budget = static_cast<int>(std::ceil(std::sqrt(double(k.width) * k.height / kSampleBudget)));
+  return std::min(whole, std::max({1, whole / 2, budget}));
 }
 
 }  // namespace
@@ -508,7 +512,7 @@ int64_t VoxelMap::project_voxels(const MapFrame& f) {
   const Eigen::AlignedBox3d box = bounds();
   const double d_max = farthest_corner(box, f.cam);
   const double bound = std::min(f.k.fx, f.k.fy) * res / (std::sqrt(2.0) * d_max);
-  const int stride = sample_stride(bound);
+  const int stride = sample_stride(bound, f.k);
   last_stride_px_ = stride;
   const VoxelView vv(f, origin_, res);
   // A voxel's projection reaches at most f rho sqrt(1 + t^2) / (its near depth) px from its
