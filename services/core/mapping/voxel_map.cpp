@@ -27,9 +27,10 @@
 //       Frontier -> Empty along it inside B, up to the first Occupied voxel it meets (nothing
 //       behind it is marked) and up to max range (a voxel straddling max range is not marked).
 //     - ignored pixels cast no ray.
-//     Each voxel of B in view is projected into the image and decided along one ray: that of
-//     the sample pixel nearest to its projected centre. (walk_rays, voxel_map_rays.cpp: the
-//     same rules by walking rays through B; the reference the tests and benchmarks compare with.)
+//     Each voxel of B in view that can still change is projected into the image and decided
+//     along the rays of the sample pixels (one every few pixels) that cross it, the one nearest
+//     to its projected centre first. (walk_rays, voxel_map_rays.cpp: the same rules by walking
+//     rays through B; the reference the tests and benchmarks compare with.)
 //  5. update_frontiers: over ALL Unknown and Frontier voxels: an Unknown voxel with >= 1 Empty
 //     and >= 1 Occupied voxel among its 26 neighbours (Empty among the 6 face neighbours with
 //     frontier_empty_neighbours = 6) is Frontier, a Frontier voxel without that goes back to

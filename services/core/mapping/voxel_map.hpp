@@ -1,7 +1,7 @@
 #pragma once
 // The five-state voxel map of PB-NBV (docs/method.md "Voxel map", paper section III-B) with its
 // bounding box B. Dense grid over B; free and hidden space by projecting B's voxels into the depth
-// image (voxel_map_projection.cpp), each voxel judged along one pixel's ray.
+// image (voxel_map_projection.cpp), each voxel judged along the sample rays that cross it.
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
@@ -94,8 +94,8 @@ class VoxelMap {
   //  - a voxel holding a point of the frame becomes Occupied (Occupied is kept);
   //  - along a pixel's ray from the camera centre, None, Unknown and Frontier voxels that the ray
   //    leaves before its return and before the first Occupied voxel become Empty; None voxels
-  //    behind that become Unknown (each voxel judged along the ray of the sample pixel nearest
-  //    to its projected centre, see voxel_map_projection.cpp);
+  //    behind that become Unknown (each voxel judged along the rays of the sample pixels, one
+  //    every few pixels, that cross it: voxel_map_projection.cpp);
   //  - then every Unknown voxel with at least one Empty and at least one Occupied voxel among
   //    its 26 neighbours is Frontier, every other Frontier voxel goes back to Unknown;
   //  - B: the first frame sets B to the AABB of its Occupied voxels enlarged along the viewing
@@ -175,7 +175,6 @@ class VoxelMap {
   int64_t walk_rays(const MapFrame& f);                            // 4'. the reference_rays way
   int64_t grow_around_frontiers(const Eigen::Vector3i& f_lo,       // 6. B around Frontier voxels
                                 const Eigen::Vector3i& f_hi);
-
 };
 
 }  // namespace pbnbv

@@ -10,47 +10,55 @@
 //    or behind the first Occupied voxel, or holds the return, up to where the ray leaves B).
 // A walk along the ray visits the voxels in order and stops where the rules say; the decision for
 // V needs only z_p, t_occ(p) and V's [t_in, t_out], so it can be taken voxel by voxel:
-//  a. Sample rays: the pixels 0, s, 2s, ... (and the last one) along u and along v, with
-//       s = max(1, floor(min(fx, fy) * resolution / (sqrt(2) * d_max))),
-//     d_max the largest distance from the camera centre to a corner of B. Each keeps its depth
-//     class and z_p.
-//  b. t_occ of every sample ray: each Occupied voxel in the view frustum is projected (its 8
-//     corners) and intersected (slab test) with the sample rays inside its projection whose
-//     free part could reach it.
+//  a. Sample rays: the pixels 0, s, 2s, ... (and the last one) along u and along v (only where B
+//     projects), each with its depth class and z_p. The spacing: the bound
+//       b = min(fx, fy) * resolution / (sqrt(2) * d_max),
+//     d_max the largest distance from the camera centre to a corner of B, floored, halved, raised
+//     to keep the image within kSampleBudget sample rays, never above floor(b) (sample_stride).
+//  b. t_occ of every sample ray: each Occupied voxel in the view frustum is intersected (slab
+//     test) with the sample rays inside its projection whose free part could reach it.
 //  c. Every voxel of B in the view frustum (a row of voxels is clipped against the frustum's
-//     planes) is projected (its centre) and decided along the sample ray nearest to that
+//     planes) that a rule can still change (None, Unknown, Frontier: Empty and Occupied are final
+//     here) is projected (its centre) and decided along the sample ray nearest to that
 //     projection. Its planar depth lies in centre +- h, h = res/2 * |R e_z|_1 (R e_z the optical
 //     axis in the object frame), so when min(z_p, t_occ) >= centre + h it is free and when
-//     min(z_p, t_occ) <= centre - h it is not, without intersecting it; only voxels near a
-//     surface or an occluder, and those whose centre projects outside the image (the nearest
-//     sample ray then may miss them), are intersected exactly.
+//     min(z_p, t_occ) <= centre - h it is not, without intersecting it; voxels near that depth,
+//     and those whose centre projects outside the image (the nearest sample ray then may miss
+//     them), are intersected exactly. Where the nearest ray does not make the voxel Empty, the
+//     other sample rays inside its projection decide as the walk along all of them would: Empty
+//     when any of them sees it free, else Unknown when any with a return crosses it. Tiles of
+//     sample rays bound how far any of their rays is free, so that a voxel that none of the rays
+//     around it can decide otherwise skips this (most of them).
 // Why the nearest sample ray crosses V when V's centre projects inside the image: V contains a
 // ball of radius res/2; seen from distance d <= d_max, the rays that hit it fill a disk of radius
 // >= f * (res/2) / d pixels around the projection of its centre (a ray at angle a from the
 // ball's axis meets the image plane >= a f pixels from the axis' image point, the plane being
 // >= f from the camera centre). The nearest sample is within s/2 along u and along v, so within
-// s / sqrt(2) <= f res / (2 d_max) of the centre's projection: inside that disk. When
-// f res / (sqrt(2) d_max) < 1 (voxels under ~1.4 pixels at the far side of B) not even the
-// nearest pixel promises it; every voxel is then intersected exactly (a voxel its ray misses is
-// left as it was).
-// Cost: one projection per voxel of B in view and, for the few near a surface, one slab test;
-// the walk it replaces visited every voxel once per ray crossing it (several rays per voxel on the
-// side of B near the camera, since the ray spacing is set by the far side).
-// Differences to one ray per pixel, all on the border between two states (measured in
-// voxel_map_test ProjectionMatchesPerPixelRays): each voxel is judged along one ray, the walk
-// along all the pixels' rays that cross it (Empty when any of them finds it free). They differ
-// where those rays disagree: (a) at the edge of a shadow (behind a silhouette or a depth jump),
-// where the reference has Empty for a voxel partly outside the shadow and we may have Unknown or
-// None; (b) in front of a surface, where a voxel that some rays leave before reaching an Occupied
-// voxel (the voxelised surface is a staircase) and others do not; (c) at the border of the view
-// (a voxel whose centre projects outside the image is judged along the nearest sample ray on the
-// border, which may miss it while other border pixels' rays cross it); (d) voxels in the
-// partial shadow of an Occupied voxel from an earlier frame that this frame's rays pass.
+// s / sqrt(2) <= f res / (2 d_max) of the centre's projection: inside that disk. When b < 1
+// (voxels under ~1.4 pixels at the far side of B) not even the nearest pixel promises it; every
+// voxel is then intersected exactly (a voxel its ray misses is left to the other sample rays).
+// Why half of b: the more sample rays a voxel's projection holds, the closer step c comes to
+// one ray per pixel (in ProjectionMatchesPerPixelRays up to 1.7 % of the classified voxels
+// differed with floor(b), 0.61 % with half of it).
+// Cost: one projection per voxel of B in view that can still change and, for the few near a
+// surface or a shadow's edge, some slab tests; the walk it replaces visited every voxel once per
+// ray crossing it (several rays per voxel on the side of B near the camera, since the ray spacing
+// is set by the far side), Empty ones included.
+// Differences to one ray per pixel, all on an interface between two states (measured in
+// voxel_map_test ProjectionMatchesPerPixelRays): a voxel is judged along the sample rays that
+// cross it, the walk along all the pixels' rays that cross it. They differ where those rays
+// disagree: (a) at the edge of a shadow (behind a silhouette or a depth jump), where a sliver of
+// the voxel narrower than the sample spacing is seen free (or hidden) by some pixels' rays only;
+// (b) likewise behind an Occupied voxel, of this frame or an earlier one, that some pixels' rays
+// pass beside; (c) in front of a surface, where a voxel in a step of the voxelised surface is
+// left before an Occupied voxel by some rays only; (d) at the border of the view (a voxel whose
+// centre projects outside the image is judged by the sample rays on the image border); (e) a
+// voxel reaching behind the camera plane is not projected at all (the walk starts at the camera).
 //
-// Threads (core/base/parallel.hpp): the sample rays by image rows, t_occ by bands of sample
-// rows, the voxels by interleaved z-slices; each voxel is written by one worker only, and every
-// decision depends on the frame and the map before this phase only, so the result does not
-// depend on the number of workers.
+// Threads (core/base/parallel.hpp), only where the work pays for another one's start: the sample
+// rays by rows, t_occ by bands of sample rows, the voxels by interleaved z-slices; each voxel is
+// written by one worker only, and every decision depends on the frame and the map before this
+// phase only, so the result does not depend on the number of workers.
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -399,8 +407,7 @@ struct Projector {
   const MapFrame& f;
   const VoxelView& vv;
   const SampleRays& rays;
-  double footprint = 0;   // a voxel's projection reaches at most footprint / (its near depth) px
-  double tile_depth = 0;  // from this near depth on, the neighbour tiles hold its projection
+  double tile_depth = 0;  // from this near depth on, a voxel's neighbour tiles hold its projection
 
   // The verdict of the sample rays [i0, i1] x [j0, j1] other than (i, j) on the voxel, given v0,
   // that of (i, j): Empty when any of them frees it, else Unknown when any with a return crosses
@@ -421,8 +428,9 @@ struct Projector {
     return best;
   }
 
-  // The rare cases, out of line: the nearest ray's verdict when the depth interval does not
-  // decide it (exact = true), then the other sample rays in the voxel's projection.
+  // The rare cases, out of line: the verdict of the nearest ray (i, j), given (v0) or, when the
+  // depth interval does not decide it (exact), by intersection; then that of the other sample
+  // rays in the projection of the voxel (min corner c, centre q, projected at (pu, pv)).
   [[gnu::noinline]] int settle(int v0, bool exact, int i, int j, double pu, double pv, const Vector3d& q,
                                const Vector3d& c) const {
     int v = exact ? exact_verdict(rays(i, j), rays, i, j, vv.o, c) : v0;
@@ -489,7 +497,6 @@ struct Projector {
         row[x] = kUnknown;
       }
     }
-    (void)nv;
     return projected;
   }
 };
@@ -516,7 +523,8 @@ int64_t VoxelMap::project_voxels(const MapFrame& f) {
   last_stride_px_ = stride;
   const VoxelView vv(f, origin_, res);
   // A voxel's projection reaches at most f rho sqrt(1 + t^2) / (its near depth) px from its
-  // centre's (t: the tangent of the angle off the optical axis, at most t_max in the image).
+  // centre's (t: the tangent of the angle off the optical axis, within the image at most
+  // sqrt(tu^2 + tv^2); VoxelView::reach_px is the tighter bound per voxel).
   const double tu = std::max(f.k.cx, f.k.width - 1 - f.k.cx) / f.k.fx, tv = std::max(f.k.cy, f.k.height - 1 - f.k.cy) / f.k.fy;
   const double footprint = std::max(f.k.fx, f.k.fy) * vv.rho * std::sqrt(1.0 + tu * tu + tv * tv);
   // Tiles wide enough for the projection of B's nearest voxels, within reason.
@@ -529,7 +537,7 @@ int64_t VoxelMap::project_voxels(const MapFrame& f) {
   occluders(f, vv, occupied_in_view(vv, cells, dims_), rays);
   rays.bound_tiles(tile);
   // The neighbour tiles hold every sample within (tile - 1/2) s px of the nearest one's.
-  const Projector p{f, vv, rays, footprint, footprint / ((tile - 0.5) * stride)};
+  const Projector p{f, vv, rays, footprint / ((tile - 0.5) * stride)};
 
   const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
   const int nt = worker_count(static_cast<size_t>(dims_.prod()), kVoxelsPerWorker, nz);
