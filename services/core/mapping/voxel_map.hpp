@@ -152,10 +152,21 @@ class VoxelMap {
                                                   // lo_ * resolution)
   bool initialised_ = false;                      // a frame with valid points has been integrated
   int last_stride_px_ = 0;
-  std::vector<std::vector<Eigen::Vector3i>> points_;  // scratch per worker: lattice index of
-                                                      // each valid pixel
-  std::vector<uint8_t> scratch_;                  // frontier pass scratch (one byte per voxel)
-  std::vector<float> samples_;                    // projection scratch (two floats per sample ray)
+  // Working memory, kept from frame to frame so that a frame does not fault its pages in. Not
+  // part of the map's state: a copy of the map starts without it, an assignment keeps the
+  // target's (the buffers grow to what a frame needs).
+  template <class Buffer>
+  struct Scratch : Buffer {
+    Scratch() = default;
+    Scratch(const Scratch&) : Buffer() {}
+    Scratch& operator=(const Scratch&) { return *this; }
+    Scratch(Scratch&&) = default;
+    Scratch& operator=(Scratch&&) = default;
+  };
+  Scratch<std::vector<std::vector<Eigen::Vector3i>>> points_;  // per worker: each valid pixel's
+                                                               // lattice index
+  Scratch<std::vector<uint8_t>> scratch_;         // frontier pass (one byte per voxel)
+  Scratch<std::vector<float>> samples_;           // projection (two floats per sample ray)
 
   // Grows B to cover the lattice indices [lo, hi] (inclusive); copies states, new cells None.
   void grow_to_cover(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi);

@@ -11,7 +11,7 @@
 //   seventh - one more frame into a map that has seen six views around the object (B is at
 //            its full size, the common case during a scan)
 // Time is the wall time of VoxelMap::integrate (manual time); the map is updated in place of a
-// copy of the input map that keeps its scratch buffers (as the mapping service's map does), the
+// copy of the input map that keeps its working memory (as the mapping service's map does), the
 // copy excluded; median_ms its median. cpu_ms is the median process CPU time of one update (both threads), a
 // measure that does not depend on what else runs on the machine: on 2 idle cores the wall time
 // lies between cpu_ms / 2 and cpu_ms.
@@ -107,7 +107,7 @@ void BM_VoxelMapUpdate(benchmark::State& state) {
   const Vector3d eye = mode == 0 ? kFirst : mode == 1 ? kSecond : kSeventh;
   frame(eye);  // render outside the timing
   VoxelMap m = before;
-  integrate(m, eye);  // warm the scratch buffers
+  integrate(m, eye);  // the map's working memory
   std::vector<double> ms, cpu_ms;
   pbnbv::MapUpdateResult r;
   auto cpu_now = [] {
@@ -119,7 +119,7 @@ void BM_VoxelMapUpdate(benchmark::State& state) {
   Eigen::Vector3i dims = Eigen::Vector3i::Zero();
   Eigen::AlignedBox3d b;
   for (auto _ : state) {
-    m = before;  // copy assignment: the buffers keep their capacity
+    m = before;  // the working memory stays
     const double c0 = cpu_now();
     r = integrate(m, eye);
     cpu_ms.push_back(cpu_now() - c0);
