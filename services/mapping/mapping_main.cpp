@@ -3,8 +3,9 @@
 //   out: VOXEL_MAP, HEARTBEAT; per view DIR/maps/view_NNN.ot (OctoMap, viewable in octovis:
 //        Occupied and Empty only) and DIR/maps/view_NNN.states.ply (every cell with its state)
 // Keeps the five-state voxel map of each scan (core VoxelMap: None, Empty, Occupied, Unknown,
-// Frontier; 3-D DDA rays inside the bounding box B) and publishes, per view, the Occupied and
-// Frontier voxel centres, the count of every state, B, the resolution and the update time.
+// Frontier; the voxels of the bounding box B projected into each depth frame) and publishes, per
+// view, the Occupied and Frontier voxel centres, the count of every state, B, the resolution and
+// the update time.
 // A view the registration rejected is not integrated (its pose is implausible).
 #include <cstdio>
 #include <deque>

@@ -1,7 +1,7 @@
 #pragma once
 // The five-state voxel map of PB-NBV (docs/method.md "Voxel map", paper section III-B) with its
-// bounding box B. Dense grid over B; rays traversed with the one voxel traversal (3-D DDA,
-// core/geometry/voxel_traversal.hpp).
+// bounding box B. Dense grid over B; free and hidden space by projecting B's voxels into the depth
+// image (voxel_map_projection.cpp), each voxel judged along the sample rays that cross it.
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
@@ -20,14 +20,14 @@ struct VoxelMapParams {
   double resolution_m = kMapResolution.value;  // voxel edge
   double gamma_m = kFrontierMargin.value;      // B grows to cover a sphere of this radius around each Frontier voxel
   bool no_return_is_free = true;   // a pixel without a return (0) means free space up to max range
-  // The ray set: one ray per `ray_stride_px` pixels in u and v; 0 = automatic: about one ray per
-  // voxel footprint at the far side of B (every voxel in the frustum is crossed), never coarser
-  // than needed. Occupied voxels always come from every valid pixel.
+  // Free and hidden space from rays walked voxel by voxel through B (the 3-D DDA of
+  // core/geometry/voxel_traversal.hpp; voxel_map_rays.cpp), the way this map worked before it
+  // projected voxels. Kept as the reference that the tests (one ray per pixel) and the
+  // benchmarks (the subsampled ray set, as it ran) compare the projection with; no service sets it.
+  bool reference_rays = false;
+  // With reference_rays only, the ray set: one ray per `ray_stride_px` pixels in u and v; 0 =
+  // automatic (about one ray per voxel footprint at the far side of B), 1 = one ray per pixel.
   int ray_stride_px = 0;
-  // With the automatic stride: blocks of a and a + 1 pixels alternate where the unfloored
-  // stride allows it and a is small (0.005 / 0.01 m voxels; see voxel_map.cpp): fewer rays, the
-  // same guarantee. false: whole-pixel strides only (as before; the benchmark compares both).
-  bool mixed_blocks = true;
   // Frontier: an Unknown voxel with an Occupied voxel among its 26 neighbours and an Empty one
   // among its `frontier_empty_neighbours`: 26 (the paper's reading) or 6, the face neighbours
   // only (planner pbnbv: an Unknown voxel that touches observed free space only along an edge or
@@ -69,6 +69,10 @@ struct VoxelGrid {
   void validate(const std::string& what) const;
 };
 
+// What integrate()'s phases share about a frame (voxel_map_frame.hpp; internal to core/mapping).
+struct MapFrame;
+struct FramePoints;
+
 struct VoxelCounts {
   int64_t none = 0, empty = 0, occupied = 0, unknown = 0, frontier = 0;
 };
@@ -78,7 +82,8 @@ struct MapUpdateResult {
   std::string message;           // why not, or a summary
   VoxelCounts counts;
   double time_s = 0;             // wall time of the update
-  int rays = 0;                  // rays traversed
+  int64_t projected = 0;         // voxels of B judged along a pixel's ray (the projection)
+  int64_t rays = 0;              // rays traversed (reference_rays only)
 };
 
 class VoxelMap {
@@ -87,8 +92,10 @@ class VoxelMap {
 
   // Integrates one frame with the paper's rules:
   //  - a voxel holding a point of the frame becomes Occupied (Occupied is kept);
-  //  - along each ray from the camera centre, None, Unknown and Frontier voxels before the
-  //    first Occupied voxel become Empty; None voxels behind it become Unknown;
+  //  - along a pixel's ray from the camera centre, None, Unknown and Frontier voxels that the ray
+  //    leaves before its return and before the first Occupied voxel become Empty; None voxels
+  //    behind that become Unknown (each voxel judged along the rays of the sample pixels, one
+  //    every few pixels, that cross it: voxel_map_projection.cpp);
   //  - then every Unknown voxel with at least one Empty and at least one Occupied voxel among
   //    its 26 neighbours is Frontier, every other Frontier voxel goes back to Unknown;
   //  - B: the first frame sets B to the AABB of its Occupied voxels enlarged along the viewing
@@ -113,11 +120,9 @@ class VoxelMap {
   // a larger B. Called before the first frame, the first frame's rule still applies and B
   // becomes the union of this box and the first frame's enlarged AABB.
   void reserve_bounds(const Eigen::AlignedBox3d& box_m);
-  // Pixel stride of the free/occluded ray set used by the last integrated frame (diagnostics).
+  // Pixel spacing of the rays the last integrated frame judged free and hidden space along: the
+  // sample lattice of the projection (or the reference's ray stride). Diagnostics.
   int last_ray_stride_px() const { return last_stride_px_; }
-  // Whether that frame's blocks alternated stride and stride + 1 pixels along u (mixed_blocks;
-  // along v too when the stride allowed it).
-  bool last_blocks_alternate() const { return last_alternate_; }
 
   // Writes the map as an OctoMap ColorOcTree (.ot, viewable in octovis) that OctoMap's consumers
   // read right: Occupied voxels as occupied nodes, Empty voxels as free nodes, each coloured by
@@ -147,21 +152,40 @@ class VoxelMap {
                                                   // lo_ * resolution)
   bool initialised_ = false;                      // a frame with valid points has been integrated
   int last_stride_px_ = 0;
-  bool last_alternate_ = false;
-  std::vector<std::vector<Eigen::Vector3i>> points_;  // scratch per worker: lattice index of
-                                                      // each valid pixel
-  std::vector<uint8_t> scratch_;                  // frontier pass scratch (one byte per voxel)
-  std::vector<uint8_t> block_kind_;               // per-frame scratch (one byte per ray block)
-  std::vector<float> block_depth_;                // per-frame scratch (nearest depth per block)
+  // Working memory, kept from frame to frame so that a frame does not fault its pages in. Not
+  // part of the map's state: a copy of the map starts without it, an assignment keeps the
+  // target's (the buffers grow to what a frame needs).
+  template <class Buffer>
+  struct Scratch : Buffer {
+    Scratch() = default;
+    Scratch(const Scratch&) : Buffer() {}
+    Scratch& operator=(const Scratch&) { return *this; }
+    Scratch(Scratch&&) = default;
+    Scratch& operator=(Scratch&&) = default;
+  };
+  Scratch<std::vector<std::vector<Eigen::Vector3i>>> points_;  // per worker: each valid pixel's
+                                                               // lattice index
+  Scratch<std::vector<uint8_t>> scratch_;         // frontier pass (one byte per voxel)
+  Scratch<std::vector<float>> samples_;           // projection (two floats per sample ray)
 
   // Grows B to cover the lattice indices [lo, hi] (inclusive); copies states, new cells None.
   void grow_to_cover(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi);
   // The working volume of the frame being integrated, as a lattice index box (B is clamped to it).
   bool limited_ = false;
   Eigen::Vector3i limit_lo_ = Eigen::Vector3i::Zero(), limit_hi_ = Eigen::Vector3i::Zero();
-  // Re-evaluates Frontier/Unknown over the whole grid; returns the state counts.
-  VoxelCounts update_frontiers();
-  friend struct VoxelMapAccess;
+  // Re-evaluates Frontier/Unknown over the whole grid; returns the state counts and the box of
+  // the Frontier voxels (local indices; empty, lo > hi, when there is none).
+  VoxelCounts update_frontiers(Eigen::Vector3i* frontier_lo, Eigen::Vector3i* frontier_hi);
+
+  // The phases of integrate(), in order (voxel_map_frame.hpp: what they share about the frame).
+  MapFrame prepare_frame(const DepthView& view);                   // checks; the working volume
+  FramePoints collect_points(const MapFrame& f);                   // 1. pixels -> point voxels
+  void place_bounds(const MapFrame& f, const FramePoints& points); // 2. B before the free space
+  void mark_occupied(const FramePoints& points);                   // 3. Occupied (sticky)
+  int64_t project_voxels(const MapFrame& f);                       // 4. free / hidden space
+  int64_t walk_rays(const MapFrame& f);                            // 4'. the reference_rays way
+  int64_t grow_around_frontiers(const Eigen::Vector3i& f_lo,       // 6. B around Frontier voxels
+                                const Eigen::Vector3i& f_hi);
 };
 
 }  // namespace pbnbv
