@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
+#include "core/mapping/voxel_map.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -221,6 +223,24 @@ inline voxel_set_t synthetic_map(const std::string& scan_id, int iteration) {
       }
   m.num_occupied = static_cast<int32_t>(m.occupied_centres_m.size());
   m.num_frontier = static_cast<int32_t>(m.frontier_centres_m.size());
+  // The cells as the mapping service sends them (ray casting and pbnbv's combined ranking read
+  // them): the ball's shell Occupied, the slab Frontier, the ball's inside Unknown, the rest Empty.
+  for (int k = 0; k < 3; ++k) m.dims[k] = 14;  // 0.42 m / 0.03 m
+  m.cells.assign(14 * 14 * 14, static_cast<int8_t>(VoxelState::kEmpty));
+  auto cell = [&](float x, float y, float z) -> int8_t& {
+    auto i = [&](float v) { return std::clamp(static_cast<int>((v + 0.21f) / 0.03f), 0, 13); };
+    return m.cells[i(x) + 14 * (i(y) + 14 * i(z))];
+  };
+  for (int i = -4; i <= 4; ++i)
+    for (int j = -4; j <= 4; ++j)
+      for (int k = -4; k <= 4; ++k) {
+        if (Eigen::Vector3f(0.03f * i, 0.03f * j, 0.03f * k).norm() <= 0.08f) {
+          cell(0.03f * i, 0.03f * j, 0.03f * k) = static_cast<int8_t>(VoxelState::kUnknown);
+        }
+      }
+  for (const auto& c : m.occupied_centres_m) cell(c[0], c[1], c[2]) = static_cast<int8_t>(VoxelState::kOccupied);
+  for (const auto& c : m.frontier_centres_m) cell(c[0], c[1], c[2]) = static_cast<int8_t>(VoxelState::kFrontier);
+  m.num_cells = static_cast<int32_t>(m.cells.size());
   return m;
 }
 
@@ -246,6 +266,8 @@ inline plan_request_t plan_request(const std::string& scan_id, int64_t id, int m
   r.fx = r.fy = 696;
   r.cx = 640;
   r.cy = 360;
+  r.depth_min_m = 0.1;
+  r.depth_max_m = 3.0;
   r.check_reachability = true;
   r.object_z_m = kObjectZ;
   for (int k = 0; k < 3; ++k) {

@@ -96,13 +96,16 @@ c = j['chosen']['position_m']
 near = min(j['candidates'], key=lambda k: math.dist(k['pose']['position_m'], c))
 print(f"chosen view: plan F {j['chosen_quality_px']:.3f} px, the page's F there {near['quality_px']:.3f} px "
       f"({math.dist(near['pose']['position_m'], c):.2e} m away)")
-# A gap-filling plan (pbnbv with a weak best F; VIEW_PLAN's ranking "gap_deg") ranks by the
-# angle to the nearest view taken instead of F: there the page's F is not the plan's figure, only
-# the pose is checked. Any other pbnbv plan ranks by F ("f_px").
-assert j['chosen_ranking'] in ('f_px', 'gap_deg'), j['chosen_ranking']
-gap_filling = j['chosen_ranking'] == 'gap_deg'
-ok = ok and math.dist(near['pose']['position_m'], c) < 1e-6 and (gap_filling or \
-     abs(near['quality_px'] - j['chosen_quality_px']) <= 1e-6 * max(1.0, abs(j['chosen_quality_px'])))
+# pbnbv ranks by its combined score (VIEW_PLAN's ranking "combined": F, the gap to the views taken
+# and rays through the map, each scaled to [0, 1], so 0 to 3) or, with nothing left to aim at, by
+# the angle to the nearest view taken ("gap_deg"): there the page's F is not the plan's figure,
+# and the pose and the score's range are checked. pbnbv-paper's plans rank by F ("f_px").
+assert j['chosen_ranking'] in ('f_px', 'gap_deg', 'combined'), j['chosen_ranking']
+if j['chosen_ranking'] == 'f_px':
+    ok = ok and abs(near['quality_px'] - j['chosen_quality_px']) <= 1e-6 * max(1.0, abs(j['chosen_quality_px']))
+elif j['chosen_ranking'] == 'combined':
+    ok = ok and 0 <= j['chosen_quality_px'] <= 3
+ok = ok and math.dist(near['pose']['position_m'], c) < 1e-6
 sys.exit(0 if ok else 1)
 PY
 # The scene of that view stays as it was once the scan moves on (the latest may have no plan yet).

@@ -98,6 +98,12 @@ inline PlanInput plan_input_from_msg(const plan_request_t& r) {
   in.first_quality = r.first_quality;
   in.camera = CameraIntrinsics{r.width_px, r.height_px, r.fx, r.fy, r.cx, r.cy};
   in.camera.validate();
+  in.depth_range = DepthRange{r.depth_min_m, r.depth_max_m};
+  try {
+    in.depth_range.validate();
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(std::string("PLAN_REQUEST depth_min_m / depth_max_m: ") + e.what());
+  }
   return in;
 }
 

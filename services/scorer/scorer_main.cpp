@@ -137,22 +137,13 @@ class ScorerService {
     p.planner = *planner;
     try {
       p.input = bus::plan_input_from_msg(r);
-      if (weak_view_is_done(p.planner)) p.input.weak_fraction = kWeakViewFraction;  // ours; pbnbv-paper: 0
       if (r.check_reachability) {
         bus::to_vector6(std::vector<double>(r.joint_position_rad, r.joint_position_rad + 6), "PLAN_REQUEST joint_position_rad");
         bus::require_range(r.turntable_angle_rad, -1e3, 1e3, "PLAN_REQUEST turntable_angle_rad");
         bus::require_range(r.object_z_m, -10, 10, "PLAN_REQUEST object_z_m");
       }
-      if (p.planner == PlannerKind::kRaycast || p.planner == PlannerKind::kOracle) {
-        const DepthRange range{r.depth_min_m, r.depth_max_m};
-        try {
-          range.validate();
-        } catch (const std::exception& e) {
-          throw std::invalid_argument(std::string("PLAN_REQUEST depth_min_m / depth_max_m: ") + e.what());
-        }
-        p.raycast.camera = p.visibility.camera = p.input.camera;
-        p.raycast.range = p.visibility.range = range;
-      }
+      p.raycast.camera = p.visibility.camera = p.input.camera;
+      p.raycast.range = p.visibility.range = p.input.depth_range;
     } catch (const std::exception& e) {
       view_plan_t out = bus::empty_answer(r);
       out.outcome = view_plan_t::kFailed;
@@ -213,6 +204,7 @@ class ScorerService {
     const double wait_s = bus::now_s() - p.received_s;
     view_plan_t out = bus::empty_answer(r);
     PlanResult result;
+    std::optional<VoxelGrid> grid;  // ours (pbnbv): the combined ranking's rays go through the map
     try {
       p.input.bbox = bus::bbox_of(map);
       for (std::size_t i = 0; ell && i < ell->ellipsoids.size(); ++i) {
@@ -236,6 +228,7 @@ class ScorerService {
       } else if (p.planner == PlannerKind::kOracle) {
         result = plan_oracle(p.input, truth_->mesh, truth_->samples, p.visibility);
       } else {
+        if (combined_ranking(p.planner)) p.input.grid = &grid.emplace(bus::grid_from_msg(map));
         result = plan_pbnbv(p.input);
       }
       bus::fill_answer(out, result);

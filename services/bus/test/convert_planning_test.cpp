@@ -32,6 +32,8 @@ plan_request_t request() {
   r.fx = r.fy = 696;
   r.cx = 640;
   r.cy = 360;
+  r.depth_min_m = 0.1;
+  r.depth_max_m = 3.0;
   return r;
 }
 
@@ -51,6 +53,8 @@ TEST(ConvertPlanning, ARequestBecomesThePlannersInput) {
   ASSERT_EQ(in.views_done.size(), 1u);
   EXPECT_EQ(in.views_done[0].translation().x(), 0.7);
   EXPECT_TRUE(std::isnan(in.first_quality));
+  EXPECT_EQ(in.depth_range.min_m, 0.1);  // the combined ranking's rays stop at the depth range
+  EXPECT_EQ(in.depth_range.max_m, 3.0);
 }
 
 TEST(ConvertPlanning, BadRequestFieldsAreNamed) {
@@ -68,6 +72,9 @@ TEST(ConvertPlanning, BadRequestFieldsAreNamed) {
   r = request();
   r.fx = -1;
   expect_error([&] { bus::plan_input_from_msg(r); }, "fx");
+  r = request();
+  r.depth_max_m = 0.05;  // below the minimum
+  expect_error([&] { bus::plan_input_from_msg(r); }, "PLAN_REQUEST depth_min_m / depth_max_m");
 }
 
 TEST(ConvertPlanning, VoxelMapCellsBecomeTheGridAndABadStateIsNamed) {

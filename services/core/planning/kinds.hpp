@@ -11,8 +11,8 @@ namespace pbnbv {
 
 enum class PlannerKind : uint8_t {
   kPbnbv,    // next-best-view planning: PB-NBV with our departures (docs/method.md "Beyond the
-             // paper"): a weak best view counts as nothing left to aim at, and the partition
-             // applies only to registered views
+             // paper"): F, the gap to the views taken and rays through the map rank a shortlist,
+             // the partition applies only to registered views, the face-neighbour frontier
   kRaycast,  // baseline: the candidate whose rays reveal the most unobserved voxels
   kRandom,   // baseline: a uniformly random candidate
   kRing,     // fixed views on a turntable ring (no planning step)
@@ -33,7 +33,9 @@ enum class WhenDone : uint8_t { kStop, kSpread };
 // samples, nothing (random), or - for a view that fills the largest gap once nothing is left to
 // aim at (WhenDone::kSpread) - the angle in degrees to the nearest view taken. VIEW_PLAN's
 // `ranking` and scan.json carry it, so a reader need not tell a gap-filling plan by its reason.
-enum class Ranking : uint8_t { kF, kUnobservedVoxels, kTrueSamples, kRandom, kGapAngle };
+// kCombined: pbnbv's combined ranking (planner.hpp CombinedRanking), the sum of three terms each
+// scaled to [0, 1] over the shortlist (0 to 3).
+enum class Ranking : uint8_t { kF, kUnobservedVoxels, kTrueSamples, kRandom, kGapAngle, kCombined };
 
 template <>
 struct EnumNames<PlannerKind> {
@@ -56,11 +58,12 @@ struct EnumNames<CandidateArea> {
 template <>
 struct EnumNames<Ranking> {
   static constexpr std::string_view what = "plan ranking";
-  static constexpr std::array<NamedValue<Ranking>, 5> names{{{Ranking::kF, "f_px"},
+  static constexpr std::array<NamedValue<Ranking>, 6> names{{{Ranking::kF, "f_px"},
                                                              {Ranking::kUnobservedVoxels, "unobserved_voxels"},
                                                              {Ranking::kTrueSamples, "true_samples"},
                                                              {Ranking::kRandom, "random"},
-                                                             {Ranking::kGapAngle, "gap_deg"}}};
+                                                             {Ranking::kGapAngle, "gap_deg"},
+                                                             {Ranking::kCombined, "combined"}}};
 };
 
 template <>
@@ -81,7 +84,8 @@ constexpr bool uses_truth(PlannerKind k) { return k == PlannerKind::kOracle; }
 // What a planner's plans rank by, unless it fills a gap (Ranking::kGapAngle); the ring plans
 // nothing and counts as random.
 constexpr Ranking ranking_of(PlannerKind k) {
-  return is_pbnbv(k) ? Ranking::kF
+  return k == PlannerKind::kPbnbv ? Ranking::kCombined
+         : is_pbnbv(k)             ? Ranking::kF
          : k == PlannerKind::kRaycast ? Ranking::kUnobservedVoxels
          : k == PlannerKind::kOracle  ? Ranking::kTrueSamples
                                       : Ranking::kRandom;
@@ -89,9 +93,10 @@ constexpr Ranking ranking_of(PlannerKind k) {
 
 // Our departures from the paper (planner pbnbv; docs/method.md "Beyond the paper"), decided here
 // and nowhere else; pbnbv-paper keeps the paper's rule in each.
-// 1. A weak best view (F at most kWeakViewFraction of the first planned view's F) counts as
-//    nothing left to aim at (the view scorer's PlanInput::weak_fraction).
-constexpr bool weak_view_is_done(PlannerKind k) { return k == PlannerKind::kPbnbv; }
+// 4. The combined ranking (planner.hpp CombinedRanking): F, the gap to the views taken and the rays
+//    through the map rank a shortlist (the view scorer's PlanInput::grid). It replaced departure 1
+//    (a weak best F counted as nothing left to aim at), which it makes unnecessary.
+constexpr bool combined_ranking(PlannerKind k) { return k == PlannerKind::kPbnbv; }
 // 2. The partition keeps each view next to one already taken, which the arm's registration and
 //    travel need; the free rig (exact poses, no registration, no travel) does without it.
 constexpr int partition_sectors(PlannerKind k, bool free_rig, int beta) {

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/geometry/views.hpp"
+#include <limits>
 #include "core/base/units.hpp"
 
 namespace pbnbv {
@@ -108,6 +109,24 @@ static void rank_pool(const PlanInput& in, PlanResult& r, std::vector<int> pool)
   }
 }
 
+// Per candidate, the angle in degrees (seen from the centre) to the nearest view taken; 180 with
+// no view taken.
+static std::vector<double> gap_to_views_deg(const PlanResult& r, const std::vector<Pose>& views_done) {
+  std::vector<Eigen::Vector3d> taken;
+  for (const auto& v : views_done) {
+    const Eigen::Vector3d d = v.translation() - r.centre;
+    if (d.norm() > 0) taken.push_back(d.normalized());
+  }
+  std::vector<double> gap(r.candidates.size(), 180.0);
+  for (std::size_t i = 0; i < gap.size(); ++i) {
+    const Eigen::Vector3d d = (r.candidates[i].translation() - r.centre).normalized();
+    double nearest = kPi;
+    for (const auto& t : taken) nearest = std::min(nearest, std::acos(std::clamp(d.dot(t), -1.0, 1.0)));
+    gap[i] = nearest * 180.0 / kPi;
+  }
+  return gap;
+}
+
 // The planner has nothing left to aim at but views remain in the budget: the scorable candidate
 // farthest (in angle, seen from the centre of B) from every view taken, filling the largest gap.
 // `r` has its candidates prepared (prepare_candidates); any scores it holds are replaced.
@@ -117,18 +136,11 @@ static PlanResult plan_spread(const PlanInput& in, PlanResult r, const std::stri
   r.scores.assign(r.candidates.size(), ViewScore{});
   r.first_quality = in.first_quality;  // a gap-filling view has no quality of the planner's kind
   r.ranking = Ranking::kGapAngle;
-  std::vector<Eigen::Vector3d> taken;
-  for (const auto& v : in.views_done) {
-    const Eigen::Vector3d d = v.translation() - r.centre;
-    if (d.norm() > 0) taken.push_back(d.normalized());
-  }
+  const std::vector<double> gap = gap_to_views_deg(r, in.views_done);
   std::vector<int> pool;
   for (int i = 0; i < static_cast<int>(r.candidates.size()); ++i) {
     if (r.status[i] != CandidateStatus::kScored) continue;
-    const Eigen::Vector3d d = (r.candidates[i].translation() - r.centre).normalized();
-    double nearest = kPi;
-    for (const auto& t : taken) nearest = std::min(nearest, std::acos(std::clamp(d.dot(t), -1.0, 1.0)));
-    r.scores[i].quality = nearest * 180.0 / kPi;  // degrees to the nearest view taken
+    r.scores[i].quality = gap[i];  // degrees to the nearest view taken
     pool.push_back(i);
   }
   r.num_scored = static_cast<int>(pool.size());
@@ -153,6 +165,100 @@ static PlanResult nothing_left(const PlanInput& in, PlanResult r, const std::str
   return r;
 }
 
+// --stop-fraction: true (and r a stop with the reason) when the best F is below stop_fraction
+// times the first planned view's F.
+static bool below_stop_fraction(const PlanInput& in, double best_f, PlanResult& r) {
+  if (!(std::isfinite(in.first_quality) && in.stop_fraction > 0 && best_f < in.stop_fraction * in.first_quality)) {
+    return false;
+  }
+  std::ostringstream os;
+  os << "best view quality F = " << best_f << " px is below " << in.stop_fraction << " of the first planned view's F ("
+     << in.first_quality << " px)";
+  r.outcome = PlanResult::Outcome::kStop;
+  r.reason = os.str();
+  return true;
+}
+
+// `v` scaled to [0, 1] over the candidates of `pool` (0 where they are all equal).
+static std::vector<double> scaled_over(const std::vector<double>& v, const std::vector<int>& pool) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int i : pool) {
+    lo = std::min(lo, v[i]);
+    hi = std::max(hi, v[i]);
+  }
+  std::vector<double> out(v.size(), 0.0);
+  if (hi > lo) {
+    for (int i : pool) out[i] = (v[i] - lo) / (hi - lo);
+  }
+  return out;
+}
+
+// The top `k` of `pool` by `v` (ties to the earlier candidate).
+static std::vector<int> top_by(const std::vector<double>& v, std::vector<int> pool, int k) {
+  std::stable_sort(pool.begin(), pool.end(), [&](int a, int b) { return v[a] > v[b]; });
+  if (static_cast<int>(pool.size()) > k) pool.resize(static_cast<std::size_t>(k));
+  return pool;
+}
+
+// pbnbv's combined ranking (planner.hpp CombinedRanking) over `pool` (the scored candidates of the
+// allowed sectors); r.scores hold F where a Frontier ellipsoid exists.
+static PlanResult rank_combined(const PlanInput& in, PlanResult r, const std::vector<int>& pool) {
+  const CombinedRanking& c = in.combined;
+  if (c.shortlist < 1) throw std::invalid_argument("combined ranking: shortlist " + std::to_string(c.shortlist) + " must be >= 1");
+  if (!(c.saturation_m > 0) || !(c.ray_cell_m > 0)) {
+    throw std::invalid_argument("combined ranking: saturation_m and ray_cell_m must be positive");
+  }
+  const std::size_t n = r.candidates.size();
+  const bool has_f = r.num_frontier_ellipsoids > 0;
+  r.f_px.assign(n, 0.0);
+  if (has_f) {
+    for (int i : pool) r.f_px[i] = r.scores[i].quality;
+  }
+  r.gap_deg = gap_to_views_deg(r, in.views_done);
+  std::vector<int> shortlist = top_by(r.gap_deg, pool, c.shortlist);
+  if (has_f) {
+    const std::vector<int> by_f = top_by(r.f_px, pool, c.shortlist);
+    shortlist.insert(shortlist.end(), by_f.begin(), by_f.end());
+    std::sort(shortlist.begin(), shortlist.end());
+    shortlist.erase(std::unique(shortlist.begin(), shortlist.end()), shortlist.end());
+  }
+  std::vector<uint8_t> cast(n, 0);
+  for (int i : shortlist) cast[i] = 1;
+  const auto t0 = std::chrono::steady_clock::now();
+  const int factor = std::max(1, static_cast<int>(std::lround(c.ray_cell_m / in.grid->resolution_m)));
+  const VoxelGrid grid = coarsened(*in.grid, factor);
+  UnobservedRayParams rp;
+  rp.camera = in.camera;
+  rp.range = in.depth_range;
+  rp.saturation_voxels = c.saturation_m / grid.resolution_m;
+  r.rays = unobserved_ray_scores(grid, r.candidates, cast, rp);
+  r.scoring_s += seconds_since(t0);
+  const double rays_max = *std::max_element(r.rays.begin(), r.rays.end());
+  if (!has_f && !(rays_max > 0)) {
+    std::ostringstream os;
+    os << "no frontier ellipsoid remains and no shortlisted candidate's rays reach an unobserved voxel ("
+       << shortlist.size() << " cast)";
+    const int scored = r.num_scored;
+    PlanResult done = nothing_left(in, std::move(r), os.str());
+    done.num_scored = scored;
+    return done;
+  }
+  const std::vector<double> f = scaled_over(r.f_px, shortlist), g = scaled_over(r.gap_deg, shortlist),
+                            ray = scaled_over(r.rays, shortlist);
+  for (int i : pool) r.scores[i].quality = 0;
+  for (int i : shortlist) r.scores[i].quality = f[i] + g[i] + ray[i];
+  r.ranking = Ranking::kCombined;
+  rank_pool(in, r, shortlist);
+  const int k = r.chosen;
+  std::ostringstream os;
+  os << "combined " << r.scores[k].quality << " of 3 (F " << r.f_px[k] << " px" << (has_f ? "" : ": no frontier ellipsoid")
+     << ", gap " << r.gap_deg[k] << " deg, rays " << r.rays[k] << ") over a shortlist of " << shortlist.size() << " of "
+     << r.num_scored << " scored";
+  r.reason = os.str();
+  r.outcome = PlanResult::Outcome::kView;
+  return r;
+}
+
 PlanResult plan_pbnbv(const PlanInput& in) {
   PlanResult r;
   r.ranking = Ranking::kF;
@@ -161,7 +267,7 @@ PlanResult plan_pbnbv(const PlanInput& in) {
   }
   if (in.beta < 1) throw std::invalid_argument("beta (partition sectors) must be >= 1, got " + std::to_string(in.beta));
   if (!check_bbox(in, r)) return r;
-  if (r.num_frontier_ellipsoids == 0) {
+  if (r.num_frontier_ellipsoids == 0 && !in.grid) {
     if (in.when_done == WhenDone::kSpread) prepare_candidates(in, r);
     return nothing_left(in, std::move(r), "no frontier ellipsoid remains");
   }
@@ -172,7 +278,7 @@ PlanResult plan_pbnbv(const PlanInput& in) {
   auto t0 = std::chrono::steady_clock::now();
   for (int i = 0; i < n; ++i) {
     if (r.status[i] != CandidateStatus::kScored) continue;
-    r.scores[i] = score_view(in.ellipsoids, in.camera, r.candidates[i]);
+    if (r.num_frontier_ellipsoids > 0) r.scores[i] = score_view(in.ellipsoids, in.camera, r.candidates[i]);
     ++r.num_scored;
   }
   r.scoring_s = seconds_since(t0);
@@ -209,28 +315,23 @@ PlanResult plan_pbnbv(const PlanInput& in) {
       if (r.status[i] == CandidateStatus::kScored && !allowed[sector[i]]) r.status[i] = CandidateStatus::kOutsidePartition;
     }
   }
+  if (in.grid) {
+    // The first F and the stop fraction stay F's (the best F over the pool).
+    double best_f = -std::numeric_limits<double>::infinity();
+    for (int i : pool) best_f = std::max(best_f, r.scores[i].quality);
+    if (r.num_frontier_ellipsoids > 0) r.first_quality = std::isfinite(in.first_quality) ? in.first_quality : best_f;
+    else r.first_quality = in.first_quality;
+    if (r.num_frontier_ellipsoids > 0 && below_stop_fraction(in, best_f, r)) return r;
+    PlanResult out = rank_combined(in, std::move(r), pool);
+    if (out.chosen >= 0) out.partition = in.beta > 1 ? sector[out.chosen] : -1;
+    return out;
+  }
   rank_pool(in, r, std::move(pool));
   r.partition = in.beta > 1 ? sector[r.chosen] : -1;
 
   const double best = r.scores[r.chosen].quality;
   r.first_quality = std::isfinite(in.first_quality) ? in.first_quality : best;
-  if (std::isfinite(in.first_quality) && in.weak_fraction > 0 && best <= in.weak_fraction * in.first_quality) {
-    std::ostringstream os;
-    os << "best view quality F = " << best << " px is weak (at most " << in.weak_fraction
-       << " of the first planned view's F, " << in.first_quality << " px)";
-    const int scored = r.num_scored;
-    PlanResult done = nothing_left(in, std::move(r), os.str());  // a spread stays within the allowed sectors
-    done.num_scored = scored;  // every candidate was scored by F
-    return done;
-  }
-  if (std::isfinite(in.first_quality) && in.stop_fraction > 0 && best < in.stop_fraction * in.first_quality) {
-    std::ostringstream os;
-    os << "best view quality F = " << best << " px is below " << in.stop_fraction << " of the first planned view's F ("
-       << in.first_quality << " px)";
-    r.outcome = PlanResult::Outcome::kStop;
-    r.reason = os.str();
-    return r;
-  }
+  if (below_stop_fraction(in, best, r)) return r;
   r.outcome = PlanResult::Outcome::kView;
   std::ostringstream os;
   os << "F = " << best << " px (frontier " << r.scores[r.chosen].frontier_sum << ", occupied "

@@ -47,6 +47,22 @@ void candidate_sphere(const Eigen::AlignedBox3d& bbox, double working_distance_m
 // The candidate views for B (sphere_band_views over [0, pi/2] or [0, pi]).
 std::vector<Pose> candidate_views(const Eigen::AlignedBox3d& bbox, const CandidateSpec& spec);
 
+// pbnbv's combined ranking (docs/method.md "Beyond the paper", departure 4). F alone is a weak
+// guide on objects it was not tuned on: after the first view it aims at the rim of the seen
+// surface rather than the unseen back, and it has no memory of where the views are. Three terms,
+// each scaled to [0, 1] over a shortlist and summed with equal weights, rank the candidates:
+//  - F, the paper's projection score (from the ellipsoids; absent with no Frontier ellipsoid);
+//  - the gap: the angle, seen from the centre of B, to the nearest view taken;
+//  - the rays: unobserved_ray_scores through the map coarsened to cells of at least ray_cell_m,
+//    saturating at saturation_m (raycast.hpp).
+// The shortlist is the top `shortlist` candidates by F and the top `shortlist` by the gap (within
+// the partition's allowed sectors), so the rays are cast for at most 2 x shortlist candidates.
+struct CombinedRanking {
+  int shortlist = kShortlistPerTerm;
+  double saturation_m = kRaySaturationM;
+  double ray_cell_m = kRayCellM;
+};
+
 struct PlanInput {
   std::vector<Ellipsoid> ellipsoids;
   Eigen::AlignedBox3d bbox;          // B
@@ -66,6 +82,7 @@ struct PlanInput {
   // changing.
   bool skip_revisits = true;
   CameraIntrinsics camera;
+  DepthRange depth_range;  // the camera's (the combined ranking's rays stop at its ends)
   double stop_fraction = kStopFraction.value;  // stop when best F < stop_fraction * first_quality
   double first_quality = std::numeric_limits<double>::quiet_NaN();  // NaN: this is the first
   int num_alternatives = kAlternatives.value;
@@ -73,11 +90,10 @@ struct PlanInput {
   // unobserved voxel in view) it stops (kStop), or (kSpread: a fixed view budget, as in the
   // paper's evaluation) chooses the candidate farthest in angle from every view taken.
   WhenDone when_done = kWhenDone.value;
-  // Our departure (planner pbnbv; 0 for pbnbv-paper): a best F at or below weak_fraction *
-  // first_quality also counts as nothing left to aim at, and when_done applies. Once no candidate
-  // sees more frontier than occupied area, the paper's F prefers the views that see the least of
-  // the object, while the views farthest from every view taken still add surface.
-  double weak_fraction = 0.0;
+  // Our departure (planner pbnbv; null for pbnbv-paper, which ranks by F alone): the combined
+  // ranking (CombinedRanking below) casts its rays through this map, B's cells.
+  const VoxelGrid* grid = nullptr;
+  CombinedRanking combined;
   // Called between chunks of a long scoring (ray casting's, the oracle's), so that a service can show it is
   // alive (its heartbeat) while it plans; empty: not called.
   std::function<void()> progress;
@@ -109,14 +125,18 @@ struct PlanResult {
 
   int num_unreachable = 0, num_excluded = 0, num_scored = 0;
   int num_frontier_ellipsoids = 0, num_occupied_ellipsoids = 0;
+  // The combined ranking's terms per candidate (empty otherwise): F in pixels (0 without a Frontier
+  // ellipsoid), the gap in degrees, the ray term (0 off the shortlist).
+  std::vector<double> f_px, gap_deg, rays;
   double candidates_s = 0, reachability_s = 0, scoring_s = 0;  // wall time per stage
 
   const ViewScore* chosen_score() const { return chosen >= 0 ? &scores[chosen] : nullptr; }
 };
 
-// One planning step. Stops (kStop) when no Frontier ellipsoid remains or the best F is weak
-// (weak_fraction), or chooses the farthest view instead (when_done kSpread); stops when the best
-// F is below stop_fraction * first_quality. Fails (kFailed) when B is empty or no candidate is
+// One planning step. By F (the paper's) or, with in.grid, by the combined ranking (pbnbv). Has
+// nothing left to aim at when no Frontier ellipsoid remains (combined: and no shortlisted candidate's
+// rays reach an unobserved voxel): stops (kStop) or chooses the farthest view instead (when_done
+// kSpread); stops when the best F is below stop_fraction * first_quality. Fails (kFailed) when B is empty or no candidate is
 // reachable. The sectors already scanned are those of views_done about the current centre of
 // B; while some sector is unscanned the choice is limited to unscanned sectors adjacent to
 // scanned ones (falling back to every sector, and saying so, when none of those holds a

@@ -24,10 +24,12 @@ inline constexpr ChoiceSetting<WhenDone> kWhenDone{
     "when the map has nothing left to aim at (no frontier ellipsoid; raycast: no unobserved voxel in view): "
     "stop, or spend the remaining views filling the largest gaps between the views taken"};
 
-// pbnbv (not pbnbv-paper): a best view whose F is at or below this fraction of the first planned
-// view's F is weak: the map has nothing left worth aiming at, and --when-done decides (measured on
-// half the default set, docs/method.md "Beyond the paper").
-inline constexpr double kWeakViewFraction = 0.1;
+// pbnbv's combined ranking (docs/method.md "Beyond the paper", departure 4; chosen on the tune half of
+// the tuning set, planner.hpp CombinedRanking): the shortlist's size per term, the ray term's
+// saturation length and the coarsest cell it casts through.
+inline constexpr int kShortlistPerTerm = 40;
+inline constexpr double kRaySaturationM = 0.24;
+inline constexpr double kRayCellM = 0.03;
 
 inline constexpr Setting<int> kCandidates{"candidates", 800, 1, 100000, "", "candidate views per plan (N)"};
 inline constexpr Setting<int> kParallels{"parallels", 24, 1, 1000, "",

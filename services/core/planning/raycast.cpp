@@ -52,6 +52,49 @@ PixelRect projected_box(const Eigen::AlignedBox3d& box, const CameraIntrinsics& 
 
 namespace {
 
+// The rays of one view (raycast.hpp): one per `spacing_voxels` voxel footprints at the distance from
+// the camera to B's centre, never finer than a pixel, over the image rectangle B projects to.
+// visit(ray) is called for each, with the ray's direction d (o + t d, t the planar depth) and the
+// camera centre o relative to the grid's min corner. Returns the spacing in pixels (0: no ray).
+template <typename Visit>
+double for_each_ray(const VoxelGrid& grid, const CameraIntrinsics& camera, const DepthRange& range,
+                    double spacing_voxels, const Pose& object_T_camera, Visit&& visit) {
+  const Eigen::AlignedBox3d box = grid.bounds();
+  const PixelRect rect = projected_box(box, camera, object_T_camera);
+  if (rect.empty()) return 0;
+  const Eigen::Vector3d o = object_T_camera.translation();
+  const Eigen::Matrix3d R = object_T_camera.linear();
+  const double dist = std::max((box.center() - o).norm(), range.min_m);
+  const double su = std::max(1.0, camera.fx * grid.resolution_m * spacing_voxels / dist);
+  const double sv = std::max(1.0, camera.fy * grid.resolution_m * spacing_voxels / dist);
+  const Eigen::Vector3d o_grid = o - grid.origin_m;  // relative to the grid's min corner
+  for (double v = rect.v0 + 0.5 * sv; v < rect.v1; v += sv) {
+    for (double u = rect.u0 + 0.5 * su; u < rect.u1; u += su) {
+      // Pixel centre (u - 0.5, v - 0.5) in the image convention of back_project; t is the
+      // planar depth, so the depth range bounds it directly.
+      visit(o_grid, Eigen::Vector3d(R * Eigen::Vector3d((u - 0.5 - camera.cx) / camera.fx,
+                                                         (v - 0.5 - camera.cy) / camera.fy, 1.0)));
+    }
+  }
+  return su;
+}
+
+// Walks one ray through the unobserved voxels (None, Unknown, Frontier) up to the first Occupied
+// voxel, where it leaves the grid or the depth range: unobserved(linear index) for each.
+template <typename Unobserved>
+void walk_unobserved(const VoxelGrid& grid, const VoxelLattice& lattice, const DepthRange& range,
+                     const Eigen::Vector3d& o_grid, const Eigen::Vector3d& d, Unobserved&& unobserved) {
+  const VoxelState* cells = grid.cells.data();
+  const double t_far = range.max_m;
+  traverse_voxels(lattice, o_grid, d, range.min_m, t_far, [&](int64_t lin, double t_in, double) {
+    if (t_in >= t_far) return false;
+    const VoxelState s = cells[lin];
+    if (s == VoxelState::kOccupied) return false;
+    if (s != VoxelState::kEmpty) unobserved(lin);
+    return true;
+  });
+}
+
 struct Caster {
   const VoxelGrid& grid;
   const RaycastParams& p;
@@ -59,47 +102,37 @@ struct Caster {
 
   RaycastGain view(const Pose& object_T_camera, uint32_t tag) {
     RaycastGain g;
-    const Eigen::AlignedBox3d box = grid.bounds();
-    const PixelRect rect = projected_box(box, p.camera, object_T_camera);
-    if (rect.empty()) return g;
-    const Eigen::Vector3d o = object_T_camera.translation();
-    const Eigen::Matrix3d R = object_T_camera.linear();
-    const double res = grid.resolution_m;
-    const double dist = std::max((box.center() - o).norm(), p.range.min_m);
-    const double su = std::max(1.0, p.camera.fx * res * p.ray_spacing_voxels / dist);
-    const double sv = std::max(1.0, p.camera.fy * res * p.ray_spacing_voxels / dist);
-    g.spacing_px = su;
-    const VoxelLattice lattice{grid.dims, res};
-    const Eigen::Vector3d o_grid = o - grid.origin_m;  // relative to the grid's min corner
-    const double t_near = p.range.min_m, t_far = p.range.max_m;
+    const VoxelLattice lattice{grid.dims, grid.resolution_m};
     int64_t unknown = 0;
-    const VoxelState* cells = grid.cells.data();
     uint32_t* st = stamp.data();
-    for (double v = rect.v0 + 0.5 * sv; v < rect.v1; v += sv) {
-      for (double u = rect.u0 + 0.5 * su; u < rect.u1; u += su) {
-        // Pixel centre (u - 0.5, v - 0.5) in the image convention of back_project; t is the
-        // planar depth, so the depth range bounds it directly.
-        const Eigen::Vector3d d = R * Eigen::Vector3d((u - 0.5 - p.camera.cx) / p.camera.fx,
-                                                      (v - 0.5 - p.camera.cy) / p.camera.fy, 1.0);
-        ++g.rays;
-        // The unobserved voxels (None, Unknown, Frontier) along the ray, each once per view, up
-        // to the first Occupied voxel, where the ray leaves the grid or the depth range.
-        traverse_voxels(lattice, o_grid, d, t_near, t_far, [&](int64_t lin, double t_in, double) {
-          if (t_in >= t_far) return false;
-          const VoxelState s = cells[lin];
-          if (s == VoxelState::kOccupied) return false;
-          if (s != VoxelState::kEmpty && st[lin] != tag) {
-            st[lin] = tag;
-            ++unknown;
-          }
-          return true;
-        });
-      }
-    }
+    // Each unobserved voxel once per view, however many of its rays cross it.
+    g.spacing_px = for_each_ray(grid, p.camera, p.range, p.ray_spacing_voxels, object_T_camera,
+                                [&](const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
+                                  ++g.rays;
+                                  walk_unobserved(grid, lattice, p.range, o, d, [&](int64_t lin) {
+                                    if (st[lin] != tag) {
+                                      st[lin] = tag;
+                                      ++unknown;
+                                    }
+                                  });
+                                });
     g.unknown = unknown;
     return g;
   }
 };
+
+// The views of `views` that `active` selects (all when empty), checking its size.
+std::vector<int> active_views(const std::vector<Pose>& views, const std::vector<uint8_t>& active, const char* what) {
+  if (!active.empty() && active.size() != views.size()) {
+    throw std::invalid_argument(std::string(what) + ": active has " + std::to_string(active.size()) + " entries for " +
+                                std::to_string(views.size()) + " views");
+  }
+  std::vector<int> todo;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    if (active.empty() || active[i]) todo.push_back(static_cast<int>(i));
+  }
+  return todo;
+}
 
 }  // namespace
 
@@ -107,16 +140,9 @@ std::vector<RaycastGain> raycast_gains(const VoxelGrid& grid, const std::vector<
                                        const std::vector<uint8_t>& active, const RaycastParams& params) {
   grid.validate("raycast: voxel grid");
   params.validate();
-  if (!active.empty() && active.size() != views.size()) {
-    throw std::invalid_argument("raycast: active has " + std::to_string(active.size()) + " entries for " +
-                                std::to_string(views.size()) + " views");
-  }
+  const std::vector<int> todo = active_views(views, active, "raycast");
   std::vector<RaycastGain> out(views.size());
   if (grid.empty() || views.empty()) return out;
-  std::vector<int> todo;
-  for (std::size_t i = 0; i < views.size(); ++i) {
-    if (active.empty() || active[i]) todo.push_back(static_cast<int>(i));
-  }
   // Views handed out in chunks to the workers (core/base/parallel.hpp), each worker with its own
   // stamps, made on its first chunk; a view's tag is its place in `todo`, so the gains do not
   // depend on which worker cast them.
@@ -130,6 +156,67 @@ std::vector<RaycastGain> raycast_gains(const VoxelGrid& grid, const std::vector<
     }
   }, 1, workers);
   return out;
+}
+
+void UnobservedRayParams::validate() const {
+  camera.validate();
+  range.validate();
+  if (!(std::isfinite(saturation_voxels) && saturation_voxels > 0)) {
+    throw std::invalid_argument("unobserved rays: saturation_voxels = " + std::to_string(saturation_voxels) +
+                                " must be a positive number");
+  }
+  if (!(std::isfinite(ray_spacing_voxels) && ray_spacing_voxels > 0)) {
+    throw std::invalid_argument("unobserved rays: ray_spacing_voxels = " + std::to_string(ray_spacing_voxels) +
+                                " must be a positive number");
+  }
+  if (threads < 0) throw std::invalid_argument("unobserved rays: threads = " + std::to_string(threads) + " must be >= 0");
+}
+
+std::vector<double> unobserved_ray_scores(const VoxelGrid& grid, const std::vector<Pose>& views,
+                                          const std::vector<uint8_t>& active, const UnobservedRayParams& params) {
+  grid.validate("unobserved rays: voxel grid");
+  params.validate();
+  const std::vector<int> todo = active_views(views, active, "unobserved rays");
+  std::vector<double> out(views.size(), 0.0);
+  if (grid.empty() || views.empty()) return out;
+  const VoxelLattice lattice{grid.dims, grid.resolution_m};
+  parallel_for(todo.size(), [&](std::size_t begin, std::size_t end, int) {
+    for (std::size_t k = begin; k < end; ++k) {
+      double sum = 0;
+      for_each_ray(grid, params.camera, params.range, params.ray_spacing_voxels, views[todo[k]],
+                   [&](const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
+                     int n = 0;
+                     walk_unobserved(grid, lattice, params.range, o, d, [&](int64_t) { ++n; });
+                     sum += 1.0 - std::exp(-n / params.saturation_voxels);
+                   });
+      out[todo[k]] = sum;
+    }
+  }, 1, worker_count(todo.size(), 1, params.threads));
+  return out;
+}
+
+VoxelGrid coarsened(const VoxelGrid& grid, int factor) {
+  if (factor < 1) throw std::invalid_argument("coarsened: factor " + std::to_string(factor) + " must be >= 1");
+  if (factor == 1 || grid.empty()) return grid;
+  VoxelGrid c;
+  c.origin_m = grid.origin_m;
+  c.resolution_m = grid.resolution_m * factor;
+  c.dims = (grid.dims + Eigen::Vector3i::Constant(factor - 1)) / factor;
+  c.cells.assign(static_cast<std::size_t>(c.dims.prod()), VoxelState::kEmpty);
+  for (int z = 0; z < grid.dims.z(); ++z) {
+    for (int y = 0; y < grid.dims.y(); ++y) {
+      for (int x = 0; x < grid.dims.x(); ++x) {
+        const VoxelState s = grid.at(x, y, z);
+        VoxelState& t = c.cells[x / factor + int64_t(c.dims.x()) * (y / factor + int64_t(c.dims.y()) * (z / factor))];
+        if (s == VoxelState::kOccupied) {
+          t = s;
+        } else if (s != VoxelState::kEmpty && t == VoxelState::kEmpty) {
+          t = VoxelState::kUnknown;
+        }
+      }
+    }
+  }
+  return c;
 }
 
 }  // namespace pbnbv

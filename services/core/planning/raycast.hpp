@@ -48,4 +48,26 @@ struct PixelRect {
 };
 PixelRect projected_box(const Eigen::AlignedBox3d& box, const CameraIntrinsics& k, const Pose& object_T_camera);
 
+// The visibility term of pbnbv's combined ranking (planner.hpp, docs/method.md "Beyond the paper"):
+// for each view, over the same rays as raycast_gains (one per ray_spacing_voxels voxel footprints),
+// the sum of 1 - exp(-n / saturation_voxels), n the unobserved voxels (None, Unknown, Frontier) a
+// ray crosses before the first Occupied voxel. A ray that enters unobserved space is likely to meet
+// surface there, the more so the longer it stays in it; unlike the count of distinct voxels, a long
+// stretch does not outweigh many rays that each reach some unobserved space.
+struct UnobservedRayParams {
+  CameraIntrinsics camera;
+  DepthRange range;
+  double saturation_voxels = 8.0;
+  double ray_spacing_voxels = 1.0;
+  int threads = 0;  // at most this many workers; 0: one per core
+  void validate() const;  // throws std::invalid_argument naming the field
+};
+std::vector<double> unobserved_ray_scores(const VoxelGrid& grid, const std::vector<Pose>& views,
+                                          const std::vector<uint8_t>& active, const UnobservedRayParams& params);
+
+// The grid with `factor` x `factor` x `factor` voxels merged into one (the last ones partial): Occupied
+// if any is, else unobserved (Unknown) if any is, else Empty. Throws std::invalid_argument for
+// factor < 1.
+VoxelGrid coarsened(const VoxelGrid& grid, int factor);
+
 }  // namespace pbnbv

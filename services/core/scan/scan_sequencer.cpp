@@ -408,6 +408,7 @@ void ScanSequencer::planned(const ViewPlan& p, double now_s) {
     case Ranking::kUnobservedVoxels: quality = "gain " + fixed(p.view_quality, 2) + " voxels, "; break;
     case Ranking::kTrueSamples: quality = fixed(p.view_quality, 0) + " new true surface samples, "; break;
     case Ranking::kGapAngle: quality = "gap-filling, " + fixed(p.view_quality, 1) + " deg from the nearest view, "; break;
+    case Ranking::kCombined: quality = "combined " + fixed(p.view_quality, 2) + " of 3, "; break;
     case Ranking::kRandom: break;
   }
   progress("planned: " + quality + std::to_string(p.num_scored) + " candidates scored");

@@ -119,6 +119,7 @@ function chosen_text(s) {
     case 'unobserved_voxels': return `sees ${f(s.chosen_quality_px)} unobserved voxels`;
     case 'true_samples': return `sees ${f(s.chosen_quality_px)} new true surface samples`;
     case 'random': return 'drawn at random';
+    case 'combined': return `combined score ${s.chosen_quality_px.toFixed(2)} of 3 (F, gap, rays)`;
     default: return `F ${f(s.chosen_quality_px)} px`;
   }
 }

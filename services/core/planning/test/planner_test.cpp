@@ -182,41 +182,104 @@ TEST(Planner, EmptyBoundingBoxFails) {
 }
 
 }  // namespace
-// Ours (planner pbnbv, weak_fraction): a best F at most weak_fraction of the first planned view's F
-// is weak. With when_done spread the choice is the candidate farthest from every view taken (one
-// view at +x: the farthest is on the -x side); with stop the plan stops; the paper's planner
-// (weak_fraction 0) chooses by F as ever.
-TEST(Planner, AWeakBestViewFillsTheLargestGapOrStops) {
-  PlanInput in = scene(0.0, 1);
-  in.views_done = {look_at_z_up(Eigen::Vector3d(1.0, 0, 0.15), Eigen::Vector3d(0, 0, 0.15))};
-  in.skip_revisits = false;
-  const PlanResult paper = plan_pbnbv(in);  // weak_fraction 0
-  ASSERT_EQ(paper.outcome, PlanResult::Outcome::kView);
-  const double best_f = paper.scores[paper.chosen].quality;
-  ASSERT_GT(best_f, 0.0);
-  EXPECT_LT(azimuth_deg(paper.candidates[paper.chosen], paper.centre), 90.0);  // towards the frontier at +x
+// Ours (planner pbnbv, docs/method.md departure 4): the combined ranking. B as a grid of 0.03 m
+// voxels in state `s`.
+VoxelGrid grid_of(const Eigen::AlignedBox3d& box, VoxelState s) {
+  VoxelGrid g;
+  g.resolution_m = 0.03;
+  g.origin_m = box.min();
+  g.dims = (box.sizes() / g.resolution_m).array().round().cast<int>();
+  g.cells.assign(static_cast<std::size_t>(g.dims.prod()), s);
+  return g;
+}
 
-  in.weak_fraction = 0.1;
-  in.first_quality = 10.0 * best_f;  // best F = 0.1 of the first: weak (at most)
+std::vector<double> scaled(const std::vector<double>& v, const std::vector<int>& over) {
+  double lo = 1e300, hi = -1e300;
+  for (int i : over) lo = std::min(lo, v[i]), hi = std::max(hi, v[i]);
+  std::vector<double> out(v.size(), 0.0);
+  for (int i : over) out[i] = hi > lo ? (v[i] - lo) / (hi - lo) : 0.0;
+  return out;
+}
+
+std::vector<int> top(const std::vector<double>& v, const std::vector<int>& over, int k) {
+  std::vector<int> o = over;
+  std::stable_sort(o.begin(), o.end(), [&](int a, int b) { return v[a] > v[b]; });
+  o.resize(std::min<std::size_t>(o.size(), k));
+  return o;
+}
+
+// One view taken at +x; the frontier ball at +x; B all Unknown, so every candidate's rays reach
+// unobserved space. The shortlist is the top 10 by F and the top 10 by the gap; each of them is
+// scored F + gap + rays, each scaled to [0, 1] over the shortlist; the best of them is chosen.
+TEST(Planner, CombinedRankingSumsThreeScaledTermsOverAShortlist) {
+  PlanInput in = scene(0.0, 1);
+  Eigen::Vector3d centre;
+  double radius = 0;
+  candidate_sphere(in.bbox, in.candidates.working_distance_m, &centre, &radius);
+  const Eigen::Vector3d taken = centre + radius * Eigen::Vector3d::UnitX();
+  in.views_done = {look_at_z_up(taken, centre)};
+  const VoxelGrid grid = grid_of(in.bbox, VoxelState::kUnknown);
+  in.grid = &grid;
+  in.combined.shortlist = 10;
+  const PlanResult r = plan_pbnbv(in);
+  ASSERT_EQ(r.outcome, PlanResult::Outcome::kView) << r.reason;
+  EXPECT_EQ(r.ranking, Ranking::kCombined);
+  std::vector<int> scored, shortlist;
+  for (int i = 0; i < static_cast<int>(r.candidates.size()); ++i) {
+    if (r.status[i] != CandidateStatus::kScored) continue;
+    scored.push_back(i);
+    // The gap by hand: the angle at the centre between the candidate and the view taken.
+    const double gap = std::acos((r.candidates[i].translation() - centre).normalized().dot(Eigen::Vector3d::UnitX()));
+    EXPECT_NEAR(r.gap_deg[i], gap * 180.0 / kPi, 1e-9);
+    if (r.rays[i] > 0) shortlist.push_back(i);
+  }
+  EXPECT_EQ(r.num_excluded, static_cast<int>(r.candidates.size() - scored.size()));  // near the view taken
+  ASSERT_GE(shortlist.size(), 10u);
+  ASSERT_LE(shortlist.size(), 20u);
+  for (const auto& by : {r.f_px, r.gap_deg}) {
+    for (int i : top(by, scored, 10)) EXPECT_GT(r.rays[i], 0.0) << "candidate " << i << " is in the top 10";
+  }
+  const auto f = scaled(r.f_px, shortlist), g = scaled(r.gap_deg, shortlist), ray = scaled(r.rays, shortlist);
+  int best = shortlist.front();
+  for (int i : shortlist) {
+    EXPECT_NEAR(r.scores[i].quality, f[i] + g[i] + ray[i], 1e-12);
+    if (r.scores[i].quality > r.scores[best].quality) best = i;
+  }
+  EXPECT_EQ(r.chosen, best);
+  EXPECT_LE(r.scores[r.chosen].quality, 3.0);
+  for (std::size_t k = 0; k < r.alternatives.size(); ++k) {
+    EXPECT_LE(r.scores[r.alternatives[k]].quality, k ? r.scores[r.alternatives[k - 1]].quality : r.scores[r.chosen].quality);
+  }
+  EXPECT_NE(r.reason.find("shortlist"), std::string::npos) << r.reason;
+
+  // The paper's planner (no grid) ranks by F alone, as ever.
+  in.grid = nullptr;
+  EXPECT_EQ(plan_pbnbv(in).ranking, Ranking::kF);
+}
+
+// No Frontier ellipsoid: while rays still reach unobserved space the combined ranking goes on
+// (gap and rays); once they reach none there is nothing left to aim at: the largest gap, or a stop.
+TEST(Planner, CombinedRankingGoesOnWithoutAFrontierUntilNoRayReachesUnobservedSpace) {
+  PlanInput in = scene(0.0, 1);
+  in.ellipsoids.pop_back();
+  in.views_done = {look_at_z_up(Eigen::Vector3d(1.0, 0, 0.15), Eigen::Vector3d(0, 0, 0.15))};
   in.when_done = WhenDone::kSpread;
+  VoxelGrid grid = grid_of(in.bbox, VoxelState::kUnknown);
+  in.grid = &grid;
+  const PlanResult on = plan_pbnbv(in);
+  ASSERT_EQ(on.outcome, PlanResult::Outcome::kView) << on.reason;
+  EXPECT_EQ(on.ranking, Ranking::kCombined);
+  EXPECT_NE(on.reason.find("no frontier ellipsoid"), std::string::npos) << on.reason;
+
+  grid = grid_of(in.bbox, VoxelState::kEmpty);
   const PlanResult spread = plan_pbnbv(in);
-  ASSERT_EQ(spread.outcome, PlanResult::Outcome::kView);
-  EXPECT_NE(spread.reason.find("weak"), std::string::npos) << spread.reason;
-  EXPECT_NEAR(azimuth_deg(spread.candidates[spread.chosen], spread.centre), 180.0, 15.0);
-  EXPECT_DOUBLE_EQ(spread.first_quality, 10.0 * best_f);
-  EXPECT_EQ(spread.num_scored, paper.num_scored);  // every candidate was scored by F first
-  EXPECT_EQ(paper.ranking, Ranking::kF);
+  ASSERT_EQ(spread.outcome, PlanResult::Outcome::kView) << spread.reason;
   EXPECT_EQ(spread.ranking, Ranking::kGapAngle);
+  EXPECT_NE(spread.reason.find("no shortlisted candidate's rays reach an unobserved voxel"), std::string::npos) << spread.reason;
+  EXPECT_NEAR(azimuth_deg(spread.candidates[spread.chosen], spread.centre), 180.0, 15.0);  // across from +x
 
   in.when_done = WhenDone::kStop;
-  const PlanResult stop = plan_pbnbv(in);
-  EXPECT_EQ(stop.outcome, PlanResult::Outcome::kStop);
-  EXPECT_NE(stop.reason.find("weak"), std::string::npos) << stop.reason;
-
-  in.first_quality = 9.9 * best_f;  // now above 0.1 of the first: F decides
-  in.when_done = WhenDone::kSpread;
-  const PlanResult strong = plan_pbnbv(in);
-  EXPECT_EQ(strong.chosen, paper.chosen);
+  EXPECT_EQ(plan_pbnbv(in).outcome, PlanResult::Outcome::kStop);
 }
 
 }  // namespace pbnbv

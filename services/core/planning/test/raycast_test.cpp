@@ -223,5 +223,90 @@ TEST(RandomPlanner, ReproducibleChoiceAmongAllowedCandidatesOnly) {
   EXPECT_GT(chosen.size(), 30u);  // 40 seeds over ~100 allowed candidates: mostly different
 }
 
+
+// The combined ranking's ray term (unobserved_ray_scores) casts the same rays as ray casting; per
+// ray 1 - exp(-n / saturation), n the unobserved voxels it crosses before an Occupied one.
+UnobservedRayParams saturating(double saturation_voxels) {
+  UnobservedRayParams p;
+  p.camera = dense().camera;
+  p.range = dense().range;
+  p.ray_spacing_voxels = dense().ray_spacing_voxels;
+  p.saturation_voxels = saturation_voxels;
+  p.threads = 2;
+  return p;
+}
+
+TEST(UnobservedRays, AShortSaturationCountsTheRaysThatReachUnobservedSpace) {
+  const VoxelGrid g = cube_grid(10, VoxelState::kUnknown);
+  const auto rays = raycast_gains(g, {from_above(3.0)}, {}, dense())[0].rays;
+  // Every ray enters the cube's top layer, so with n >= 1 and a saturation of 1e-3 voxel each ray
+  // scores 1 - exp(-1000) = 1: the score is the number of rays.
+  EXPECT_NEAR(unobserved_ray_scores(g, {from_above(3.0)}, {}, saturating(1e-3))[0], rays, 1e-9);
+}
+
+TEST(UnobservedRays, ALongSaturationAddsUpTheVoxelsEachRayCrosses) {
+  // One unknown layer (z = 9) over empty space: a ray from 3 m above crosses it once, in one voxel
+  // (or two where it crosses a side of a voxel within the 0.1 m layer). With saturation S much
+  // larger than n, 1 - exp(-n / S) = n / S to within n^2 / 2S^2: S x score is the crossings.
+  VoxelGrid g = cube_grid(10, VoxelState::kEmpty);
+  for (int x = 0; x < 10; ++x)
+    for (int y = 0; y < 10; ++y) set(g, x, y, 9, VoxelState::kUnknown);
+  const auto rays = raycast_gains(g, {from_above(3.0)}, {}, dense())[0].rays;
+  const double crossings = 1e6 * unobserved_ray_scores(g, {from_above(3.0)}, {}, saturating(1e6))[0];
+  EXPECT_GE(crossings, rays - 1e-3);        // every ray crosses the layer
+  EXPECT_LE(crossings, 1.25 * rays);         // at most a quarter cross it in two voxels
+}
+
+TEST(UnobservedRays, OccupiedVoxelsStopTheRaysAndEmptySpaceScoresNothing) {
+  VoxelGrid g = cube_grid(10, VoxelState::kUnknown);
+  for (int x = 0; x < 10; ++x)
+    for (int y = 0; y < 10; ++y) set(g, x, y, 9, VoxelState::kOccupied);  // a lid on top
+  EXPECT_EQ(unobserved_ray_scores(g, {from_above(3.0)}, {}, saturating(8))[0], 0.0);
+  EXPECT_EQ(unobserved_ray_scores(cube_grid(10, VoxelState::kEmpty), {from_above(3.0)}, {}, saturating(8))[0], 0.0);
+  EXPECT_EQ(unobserved_ray_scores(g, {from_above(3.0)}, {0}, saturating(8))[0], 0.0);  // inactive
+}
+
+// A box with a deep slot: a 10 x 10 x 10 block of Occupied voxels (seen surface all round), with a
+// one-voxel slot down its middle from the top, x = y = 5, z = 4..9, never seen into (Unknown).
+// Looking down the slot the rays reach its bottom, 6 voxels deep; from above at 45 degrees a ray
+// that enters the 0.1 m opening meets a wall within two voxels; from the side nothing is seen.
+// A short saturation counts the rays that reach the slot, a long one the voxels they cross: their
+// ratio is the mean depth reached.
+TEST(UnobservedRays, ADeepSlotIsSeenToItsBottomOnlyAlongIt) {
+  VoxelGrid g = cube_grid(10, VoxelState::kOccupied);
+  for (int z = 4; z < 10; ++z) set(g, 5, 5, z, VoxelState::kUnknown);
+  const Pose side = look_at(Eigen::Vector3d(3, 0, 0), Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ());
+  const Pose oblique = look_at(Eigen::Vector3d(2.1, 0, 2.1), Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ());
+  const std::vector<Pose> views = {from_above(3.0), side, oblique};
+  const auto reached = unobserved_ray_scores(g, views, {}, saturating(1e-3));
+  const auto crossed = unobserved_ray_scores(g, views, {}, saturating(1e6));
+  // From above: the rays through the slot's 0.1 m opening at 2.5 m depth, 20 x 20 px at f = 500,
+  // with 5 rays per 0.1 m voxel footprint at B's centre (3 m, 16.7 px): about 6 x 6 = 36.
+  EXPECT_GT(reached[0], 20.0);
+  EXPECT_LT(reached[0], 50.0);
+  EXPECT_GT(1e6 * crossed[0] / reached[0], 5.0);   // nearly all 6 voxels deep
+  EXPECT_EQ(reached[1], 0.0);                     // the side: walls only
+  EXPECT_GT(reached[2], 0.0);                     // at 45 degrees: into the opening...
+  EXPECT_LE(1e6 * crossed[2] / reached[2], 2.0);  // ...but no deeper than two voxels
+}
+
+TEST(UnobservedRays, CoarsenedKeepsOccupiedThenUnobservedThenEmpty) {
+  VoxelGrid g = cube_grid(4, VoxelState::kEmpty);  // 0.4 m, 0.1 m voxels
+  set(g, 0, 0, 0, VoxelState::kFrontier);           // block (0, 0, 0): unobserved
+  set(g, 2, 0, 0, VoxelState::kUnknown);            // block (1, 0, 0): Occupied wins
+  set(g, 3, 1, 1, VoxelState::kOccupied);
+  set(g, 0, 3, 3, VoxelState::kNone);               // block (0, 1, 1): unobserved
+  const VoxelGrid c = coarsened(g, 2);
+  EXPECT_EQ(c.dims, Eigen::Vector3i(2, 2, 2));
+  EXPECT_DOUBLE_EQ(c.resolution_m, 0.2);
+  EXPECT_EQ(c.origin_m, g.origin_m);
+  EXPECT_EQ(c.at(0, 0, 0), VoxelState::kUnknown);
+  EXPECT_EQ(c.at(1, 0, 0), VoxelState::kOccupied);
+  EXPECT_EQ(c.at(0, 1, 1), VoxelState::kUnknown);
+  EXPECT_EQ(c.at(1, 1, 1), VoxelState::kEmpty);
+  EXPECT_EQ(coarsened(cube_grid(5, VoxelState::kEmpty), 2).dims, Eigen::Vector3i(3, 3, 3));  // partial blocks
+  EXPECT_THROW(coarsened(g, 0), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace pbnbv
