@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
-#include <utility>
 
 #include "core/base/parallel.hpp"
 
@@ -11,16 +10,15 @@ namespace pbnbv {
 
 namespace {
 
-constexpr double kLastCell = 2097151.0;  // 2^21 - 1
+constexpr double kLastCell = 1023.0;  // 2^10 - 1
 
-// The 21 low bits of x spread to every third bit (bit k to bit 3k).
+// The 10 low bits of x spread to every third bit (bit k to bit 3k).
 std::uint64_t spread_bits(std::uint64_t x) {
-  x &= 0x1fffffULL;
-  x = (x | x << 32) & 0x1f00000000ffffULL;
-  x = (x | x << 16) & 0x1f0000ff0000ffULL;
-  x = (x | x << 8) & 0x100f00f00f00f00fULL;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-  x = (x | x << 2) & 0x1249249249249249ULL;
+  x &= 0x3ffULL;
+  x = (x | x << 16) & 0x30000ffULL;
+  x = (x | x << 8) & 0x300f00fULL;
+  x = (x | x << 4) & 0x30c30c3ULL;
+  x = (x | x << 2) & 0x9249249ULL;
   return x;
 }
 
@@ -39,20 +37,21 @@ std::vector<std::uint32_t> morton_order(const std::vector<Eigen::Vector3d>& poin
   }
   const double edge = (hi - lo).maxCoeff();
   const double cells_per_m = edge > 0.0 ? kLastCell / edge : 0.0;  // all points alike: one cell
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(points.size());
+  // The code in the high 32 bits, the index in the low ones: one integer sort.
+  std::vector<std::uint64_t> keyed(points.size());
   parallel_for(points.size(), [&](std::size_t begin, std::size_t end, int) {
     for (std::size_t i = begin; i < end; ++i) {
-      // In [0, 2^21 - 1] but for rounding, which the clamp takes care of.
+      // In [0, 2^10 - 1] but for rounding, which the clamp takes care of.
       const Eigen::Vector3d g = ((points[i] - lo) * cells_per_m).cwiseMax(0.0).cwiseMin(kLastCell);
       const std::uint64_t code = spread_bits(static_cast<std::uint64_t>(g.x())) |
                                  spread_bits(static_cast<std::uint64_t>(g.y())) << 1 |
                                  spread_bits(static_cast<std::uint64_t>(g.z())) << 2;
-      keyed[i] = {code, static_cast<std::uint32_t>(i)};
+      keyed[i] = code << 32 | i;
     }
   }, 8192);
   if (!std::is_sorted(keyed.begin(), keyed.end())) std::sort(keyed.begin(), keyed.end());  // sorted already: points given in this order
   std::vector<std::uint32_t> order(keyed.size());
-  for (std::size_t k = 0; k < keyed.size(); ++k) order[k] = keyed[k].second;
+  for (std::size_t k = 0; k < keyed.size(); ++k) order[k] = static_cast<std::uint32_t>(keyed[k]);
   return order;
 }
 

@@ -10,9 +10,10 @@
 namespace pbnbv {
 
 // The indices 0 .. n-1 of `points` sorted by their Morton code (ties by index): the points'
-// bounding box cut into 2^21 cells along its longest edge (as many of that size along the
-// others), and the bits of a point's three cell indices interleaved, x lowest; the codes are
-// computed on the workers of core/base/parallel.hpp. Throws std::invalid_argument
+// bounding box cut into 1024 cells along its longest edge (cells of that size along the others
+// too, at most 1024), and the bits of a point's three cell indices interleaved, x lowest (a
+// 30-bit code; finer cells would not change which tree nodes neighbours in the order share);
+// the codes are computed on the workers of core/base/parallel.hpp. Throws std::invalid_argument
 // "<what>: points[i] is not finite" for the first non-finite point, and for more than 2^32 - 1
 // points.
 std::vector<std::uint32_t> morton_order(const std::vector<Eigen::Vector3d>& points, const std::string& what);
