@@ -201,7 +201,8 @@ std::vector<double> distances_to_surface(const TriangleMesh& mesh,
                                          const std::vector<Eigen::Vector3d>& points) {
   if (points.empty()) return {};
   // The hints pay off beyond a few dozen queries.
-  const MeshTree tree(mesh, points.size() >= 64 ? DistanceHints::kSurface : DistanceHints::kNone, "distances_to_surface");
+  const MeshTree tree(mesh, points.size() >= 64 ? DistanceHints::kSurface : DistanceHints::kNone,
+                      "distances_to_surface");
   return tree.distances_m(points);
 }
 

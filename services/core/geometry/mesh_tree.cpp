@@ -33,10 +33,10 @@ Eigen::Vector3d vec(const K::Point_3& p) { return {p.x(), p.y(), p.z()}; }
 // Distance queries per worker below which another worker does not pay for its start.
 constexpr std::size_t kQueriesPerWorker = 1000;
 
-// kSurface's hint points: on each triangle, the centroids of the n x n triangles its edges cut
-// into n parts make (n^2 points, n = 1: the centroid), n = the triangle's area over the mean
-// triangle's, square-rooted and rounded (at least 1): points about as far apart on a large
-// triangle as on a mean one, at most 2.25 per triangle all told.
+// kSurface's hint points: on each triangle, the centroids of the n^2 small triangles that cutting
+// each of its edges into n parts makes (n = 1: its centroid), n = the square root of the
+// triangle's area over the mean triangle's, rounded (at least 1): points about as far apart on a
+// large triangle as on a mean one, at most 2.25 per triangle all told.
 struct HintPoints {
   std::vector<Eigen::Vector3d> xyz;
   std::vector<std::uint32_t> triangle;  // index in MeshTree::Impl::triangles
@@ -48,8 +48,8 @@ struct HintPoints {
     return false;  // nanoflann computes it
   }
 };
-using HintTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, HintPoints, double, std::uint32_t>,
-                                                     HintPoints, 3, std::uint32_t>;
+using HintDistance = nanoflann::L2_Simple_Adaptor<double, HintPoints, double, std::uint32_t>;
+using HintTree = nanoflann::KDTreeSingleIndexAdaptor<HintDistance, HintPoints, 3, std::uint32_t>;
 
 HintPoints hint_points(const std::vector<Triangle>& triangles) {
   std::vector<double> area(triangles.size());
@@ -68,8 +68,8 @@ HintPoints hint_points(const std::vector<Triangle>& triangles) {
     };
     for (int u = 0; u < n; ++u) {
       for (int v = 0; u + v < n; ++v) {
-        add(u + 1.0 / 3, v + 1.0 / 3);                          // the small triangle pointing as the big one
-        if (u + v < n - 1) add(u + 2.0 / 3, v + 2.0 / 3);       // the one upside down beside it
+        add(u + 1.0 / 3, v + 1.0 / 3);                     // the small triangle pointing as the big one
+        if (u + v < n - 1) add(u + 2.0 / 3, v + 2.0 / 3);  // the one upside down beside it
       }
     }
   }
@@ -97,7 +97,8 @@ struct NearestHint {
 // farther than the best one so far; a node is opened when its box is not farther), the best
 // point's squared distance kept rather than recomputed at every node, and a triangle whose
 // plane is already farther than the best point skipped before its projection (its points are no
-// nearer than its plane).
+// nearer than its plane; only a triangle as near as the best point to within rounding can be
+// skipped wrongly, and its distance is the best one's but for the last bits).
 class NearestTriangle {
  public:
   using Node = CGAL::AABB_node<Tree::AABB_traits>;

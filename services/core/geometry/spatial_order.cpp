@@ -49,7 +49,8 @@ std::vector<std::uint32_t> morton_order(const std::vector<Eigen::Vector3d>& poin
       keyed[i] = code << 32 | i;
     }
   }, 8192);
-  if (!std::is_sorted(keyed.begin(), keyed.end())) std::sort(keyed.begin(), keyed.end());  // sorted already: points given in this order
+  // Points given in this order (samples kept sorted) need no sort.
+  if (!std::is_sorted(keyed.begin(), keyed.end())) std::sort(keyed.begin(), keyed.end());
   std::vector<std::uint32_t> order(keyed.size());
   for (std::size_t k = 0; k < keyed.size(); ++k) order[k] = static_cast<std::uint32_t>(keyed[k]);
   return order;

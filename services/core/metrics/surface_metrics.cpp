@@ -1,13 +1,15 @@
 // Accuracy, completeness and F-score of a model against a reference mesh: the distances come
-// from the one mesh tree (CGAL's AABB tree with its distance hints) and the one k-d tree of
+// from the one mesh tree (CGAL's AABB tree, started from its surface hints) and the one k-d tree of
 // cloud points (nanoflann), each query run on the workers of core/base/parallel.hpp. The figures
 // do not depend on the order of the distances (distance_stats sorts them; the fractions count).
 #include "core/metrics/surface_metrics.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include <fmt/format.h>
 

@@ -211,7 +211,8 @@ TEST(MeshTree, AMovedTreeAnswersTheSame) {
 TEST(MeshTree, BadInputIsNamed) {
   TriangleMesh broken = cube();
   broken.triangles[3][2] = 8;
-  expect_invalid([&] { MeshTree t(broken, DistanceHints::kNone, "coverage"); }, {"coverage: ", "mesh triangle 3", "vertex index 8", "[0, 8)"});
+  expect_invalid([&] { MeshTree t(broken, DistanceHints::kNone, "coverage"); },
+                 {"coverage: ", "mesh triangle 3", "vertex index 8", "[0, 8)"});
   TriangleMesh nan = cube();
   nan.vertices[5].x() = std::numeric_limits<double>::quiet_NaN();
   expect_invalid([&] { MeshTree t(nan); }, {"MeshTree: ", "non-finite vertex"});

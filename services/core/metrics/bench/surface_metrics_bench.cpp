@@ -100,7 +100,9 @@ void BM_CloudMetricsOneShot(benchmark::State& state) {
 }
 
 void before_and_now(benchmark::internal::Benchmark* b) {
-  b->ArgName("hints")->Arg(static_cast<int>(pbnbv::DistanceHints::kCgal))->Arg(static_cast<int>(pbnbv::DistanceHints::kSurface));
+  b->ArgName("hints")
+      ->Arg(static_cast<int>(pbnbv::DistanceHints::kCgal))
+      ->Arg(static_cast<int>(pbnbv::DistanceHints::kSurface));
   b->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 }
 
