@@ -200,8 +200,9 @@ std::vector<Eigen::Vector3d> sample_surface(const TriangleMesh& mesh, std::size_
 std::vector<double> distances_to_surface(const TriangleMesh& mesh,
                                          const std::vector<Eigen::Vector3d>& points) {
   if (points.empty()) return {};
-  // The k-d tree of hints pays off beyond a few dozen queries.
-  const MeshTree tree(mesh, points.size() >= 64, "distances_to_surface");
+  // The hints pay off beyond a few dozen queries.
+  const MeshTree tree(mesh, points.size() >= 64 ? DistanceHints::kSurface : DistanceHints::kNone,
+                      "distances_to_surface");
   return tree.distances_m(points);
 }
 

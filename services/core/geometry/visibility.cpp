@@ -86,7 +86,7 @@ class SampleTest {
  public:
   SampleTest(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& samples,
              const std::vector<Eigen::Vector3d>& normals, const VisibilityParams& p)
-      : tree_(mesh, false, kName), samples_(samples), normals_(normals), p_(p),
+      : tree_(mesh, DistanceHints::kNone, kName), samples_(samples), normals_(normals), p_(p),
         cos_max_(std::cos(p.max_incidence_deg * kPi / 180.0)) {}
 
   static ViewFrame frame(const Pose& view) { return {view.linear().transpose(), view.translation()}; }

@@ -59,11 +59,18 @@ std::size_t sample_count(double area_m2, double samples_per_cm2);
 // models. Queries are const.
 class ReferenceSurface {
  public:
-  // Throws std::invalid_argument (starting with "reference mesh") for a mesh with no triangle of
-  // non-zero area, a bad index or vertex, or bad params.
-  explicit ReferenceSurface(const TriangleMesh& mesh, const MetricParams& params = {});
+  // `hints`: how the trees of the reference and of a model mesh start their distance queries
+  // (core/geometry/mesh_tree.hpp); every kind gives the same figures. kSurface (the default)
+  // also keeps the samples in Morton order (core/geometry/spatial_order.hpp), so the queries
+  // that start from them (completeness) walk each tree in order; kCgal keeps them in the order
+  // drawn: the metrics as computed before kSurface, for the tests and benchmarks that compare
+  // the two. Throws std::invalid_argument (starting with "reference mesh") for a mesh with no
+  // triangle of non-zero area, a bad index or vertex, or bad params.
+  explicit ReferenceSurface(const TriangleMesh& mesh, const MetricParams& params = {},
+                            DistanceHints hints = DistanceHints::kSurface);
 
   const MetricParams& params() const { return params_; }
+  // sample_surface(mesh, sample_count(area, density), seed), in the order `hints` says.
   const std::vector<Eigen::Vector3d>& samples() const { return samples_; }
   double area_m2() const { return area_m2_; }
 
