@@ -282,4 +282,59 @@ TEST(Planner, CombinedRankingGoesOnWithoutAFrontierUntilNoRayReachesUnobservedSp
   EXPECT_EQ(plan_pbnbv(in).outcome, PlanResult::Outcome::kStop);
 }
 
+// The shortlist against full ray casting, on a scene counted by hand: B (0.3 m, ten 0.03 m voxels a
+// side) is all Occupied except a slot two voxels wide down its middle from the top, six deep,
+// never seen into. Four views were taken round the equator; no frontier ellipsoid is left. Only a
+// candidate whose eye is above B's top (z > 0.3 m: polar angle below 80 deg on the sphere of
+// radius 0.6 + 0.26 m about (0, 0, 0.15)) can see into the slot, and to its bottom only within
+// atan(0.06 / 0.18) = 18 deg of the vertical: the ray term cast for every candidate is 0 below
+// that height and largest near the top. The shortlist (the top 40 by the gap, all near the top)
+// holds it, and the combined ranking chooses a view down the slot that full casting ranks at
+// its best.
+TEST(Planner, CombinedRankingFindsTheViewDownADeepSlotThatFullRayCastingFinds) {
+  PlanInput in = scene(0.0, 1);
+  in.ellipsoids.pop_back();  // no frontier ellipsoid
+  Eigen::Vector3d centre;
+  double radius = 0;
+  candidate_sphere(in.bbox, in.candidates.working_distance_m, &centre, &radius);
+  for (const Eigen::Vector3d d : {Eigen::Vector3d::UnitX(), Eigen::Vector3d(-1, 0, 0), Eigen::Vector3d::UnitY(),
+                                  Eigen::Vector3d(0, -1, 0)}) {
+    in.views_done.push_back(look_at_z_up(centre + radius * d, centre));
+  }
+  VoxelGrid grid = grid_of(in.bbox, VoxelState::kOccupied);
+  ASSERT_EQ(grid.dims, Eigen::Vector3i(10, 10, 10));
+  for (int z = 4; z < 10; ++z)
+    for (int y = 4; y < 6; ++y)
+      for (int x = 4; x < 6; ++x) grid.cells[x + 10 * (y + 10 * z)] = VoxelState::kUnknown;
+  in.grid = &grid;
+  const PlanResult r = plan_pbnbv(in);
+  ASSERT_EQ(r.outcome, PlanResult::Outcome::kView) << r.reason;
+  ASSERT_EQ(r.ranking, Ranking::kCombined);
+
+  // Full ray casting: the same ray term for every scored candidate.
+  std::vector<uint8_t> all(r.candidates.size(), 0);
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = r.status[i] == CandidateStatus::kScored;
+  UnobservedRayParams rp;
+  rp.camera = in.camera;
+  rp.range = in.depth_range;
+  rp.saturation_voxels = in.combined.saturation_m / grid.resolution_m;
+  const std::vector<double> full = unobserved_ray_scores(grid, r.candidates, all, rp);
+  auto polar_deg = [&](int i) {
+    return std::acos((r.candidates[i].translation() - centre).normalized().z()) * 180.0 / kPi;
+  };
+  int best = -1;
+  for (int i = 0; i < static_cast<int>(full.size()); ++i) {
+    if (!all[i]) continue;
+    if (polar_deg(i) > 81.0) EXPECT_EQ(full[i], 0.0) << "candidate " << i << " below B's top sees into the slot";
+    if (best < 0 || full[i] > full[best]) best = i;
+  }
+  ASSERT_GE(best, 0);
+  EXPECT_GT(full[best], 0.0);
+  EXPECT_LT(polar_deg(best), 18.5) << "full casting's best looks down the slot";
+  EXPECT_EQ(r.rays[best], full[best]) << "full casting's best is in the shortlist";
+  EXPECT_EQ(r.rays[r.chosen], full[r.chosen]);
+  EXPECT_GE(r.rays[r.chosen], 0.95 * full[best]);
+  EXPECT_LT(polar_deg(r.chosen), 18.5);
+}
+
 }  // namespace pbnbv

@@ -290,6 +290,38 @@ TEST(UnobservedRays, ADeepSlotIsSeenToItsBottomOnlyAlongIt) {
   EXPECT_LE(1e6 * crossed[2] / reached[2], 2.0);  // ...but no deeper than two voxels
 }
 
+// A thin rod not yet seen: one 0.1 m voxel thick (x = y = 6), the whole height of a 1.2 m grid of
+// Empty space. Coarsened by 3 (the combined ranking's 0.03 m cells over a 0.01 m map, scaled) it
+// stays: the 4 coarse cells of its column are unobserved, the other 60 Empty. Looking along it,
+// a ray that reaches it stays in it all 4 cells; from the side a ray crosses it in one cell (two
+// where it passes a cell's corner). The rod seen at 0.1 m is reached from the side as well.
+TEST(UnobservedRays, AThinRodOfUnseenSpaceSurvivesCoarseningAndIsSeenAlongItsLength) {
+  VoxelGrid g = cube_grid(12, VoxelState::kEmpty);
+  for (int z = 0; z < 12; ++z) set(g, 6, 6, z, VoxelState::kUnknown);
+  const VoxelGrid c = coarsened(g, 3);
+  ASSERT_EQ(c.dims, Eigen::Vector3i(4, 4, 4));
+  int unobserved = 0;
+  for (int z = 0; z < 4; ++z)
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 4; ++x) {
+        const bool rod = x == 2 && y == 2;
+        EXPECT_EQ(c.at(x, y, z), rod ? VoxelState::kUnknown : VoxelState::kEmpty) << x << " " << y << " " << z;
+        unobserved += c.at(x, y, z) == VoxelState::kUnknown;
+      }
+  EXPECT_EQ(unobserved, 4);
+  // The coarse rod's column is centred at (0.15, 0.15): look down it from above and across it.
+  const Eigen::Vector3d axis(0.15, 0.15, 0);
+  const Pose along = look_at(axis + Eigen::Vector3d(0, 0, 4), axis, Eigen::Vector3d::UnitY());
+  const Pose across = look_at(axis + Eigen::Vector3d(4, 0, 0), axis, Eigen::Vector3d::UnitZ());
+  const auto reached = unobserved_ray_scores(c, {along, across}, {}, saturating(1e-3));
+  const auto crossed = unobserved_ray_scores(c, {along, across}, {}, saturating(1e6));
+  ASSERT_GT(reached[0], 0.0);
+  ASSERT_GT(reached[1], 0.0);
+  EXPECT_GT(1e6 * crossed[0] / reached[0], 3.5);  // down the rod: nearly all 4 cells
+  EXPECT_LE(1e6 * crossed[1] / reached[1], 2.0);  // across it: one cell, two at a corner
+  EXPECT_GT(unobserved_ray_scores(g, {across}, {}, saturating(1e-3))[0], 0.0);  // the fine rod too
+}
+
 TEST(UnobservedRays, CoarsenedKeepsOccupiedThenUnobservedThenEmpty) {
   VoxelGrid g = cube_grid(4, VoxelState::kEmpty);  // 0.4 m, 0.1 m voxels
   set(g, 0, 0, 0, VoxelState::kFrontier);           // block (0, 0, 0): unobserved
