@@ -297,8 +297,7 @@ TEST(Planner, CombinedRankingFindsTheViewDownADeepSlotThatFullRayCastingFinds) {
   Eigen::Vector3d centre;
   double radius = 0;
   candidate_sphere(in.bbox, in.candidates.working_distance_m, &centre, &radius);
-  for (const Eigen::Vector3d d : {Eigen::Vector3d::UnitX(), Eigen::Vector3d(-1, 0, 0), Eigen::Vector3d::UnitY(),
-                                  Eigen::Vector3d(0, -1, 0)}) {
+  for (const Eigen::Vector3d& d : std::vector<Eigen::Vector3d>{{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}}) {
     in.views_done.push_back(look_at_z_up(centre + radius * d, centre));
   }
   VoxelGrid grid = grid_of(in.bbox, VoxelState::kOccupied);

@@ -292,9 +292,12 @@ TEST(UnobservedRays, ADeepSlotIsSeenToItsBottomOnlyAlongIt) {
 
 // A thin rod not yet seen: one 0.1 m voxel thick (x = y = 6), the whole height of a 1.2 m grid of
 // Empty space. Coarsened by 3 (the combined ranking's 0.03 m cells over a 0.01 m map, scaled) it
-// stays: the 4 coarse cells of its column are unobserved, the other 60 Empty. Looking along it,
-// a ray that reaches it stays in it all 4 cells; from the side a ray crosses it in one cell (two
-// where it passes a cell's corner). The rod seen at 0.1 m is reached from the side as well.
+// stays: the 4 coarse cells of its column are unobserved, the other 60 Empty. Looking down it from
+// 4 m, the rays enter its 0.3 m top at 3.4 m and spread as they go: a ray entering at (x, y) off
+// the axis leaves through the side at 3.4 * 0.15 / max(|x|, |y|) m, so over the top's square the
+// mean is 3.19 of the 4 cells (the 55 % within 0.111 m of the axis cross all 4). From the side a
+// ray crosses it in one cell (two where it passes a cell's corner). The rod seen at 0.1 m is
+// reached from the side as well.
 TEST(UnobservedRays, AThinRodOfUnseenSpaceSurvivesCoarseningAndIsSeenAlongItsLength) {
   VoxelGrid g = cube_grid(12, VoxelState::kEmpty);
   for (int z = 0; z < 12; ++z) set(g, 6, 6, z, VoxelState::kUnknown);
@@ -317,7 +320,7 @@ TEST(UnobservedRays, AThinRodOfUnseenSpaceSurvivesCoarseningAndIsSeenAlongItsLen
   const auto crossed = unobserved_ray_scores(c, {along, across}, {}, saturating(1e6));
   ASSERT_GT(reached[0], 0.0);
   ASSERT_GT(reached[1], 0.0);
-  EXPECT_GT(1e6 * crossed[0] / reached[0], 3.5);  // down the rod: nearly all 4 cells
+  EXPECT_GT(1e6 * crossed[0] / reached[0], 3.0);  // down the rod: 3.19 cells by hand
   EXPECT_LE(1e6 * crossed[1] / reached[1], 2.0);  // across it: one cell, two at a corner
   EXPECT_GT(unobserved_ray_scores(g, {across}, {}, saturating(1e-3))[0], 0.0);  // the fine rod too
 }
