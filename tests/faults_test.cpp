@@ -11,6 +11,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <thread>
 
@@ -308,6 +309,110 @@ TEST(Faults, AKilledLauncherLeavesNoProcessBehindAndTheScanResumes) {
   const CommandResult again = run_command(bin_dir() + "/pbnbv scan --resume " + out.string());
   EXPECT_EQ(again.exit_code, 0);
   EXPECT_NE(again.output.find("nothing to resume"), std::string::npos) << again.output;
+}
+
+namespace {
+
+// Starts `pbnbv scan OPTIONS` into `out`, lets it record `views` views, then kills the launcher
+// (SIGKILL: the kernel stops what it started) and waits until scan.json says "stopped" and none of
+// its processes runs: a folder to resume.
+void scan_then_kill_launcher(const fs::path& out, const std::string& options, std::size_t views) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string cmd = netns_run() + " " + scan_command(out, options);
+    ::execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  ASSERT_TRUE(wait_for_views(out, views, 180)) << read_text(out.string() + ".stdout");
+  std::vector<int> pids;
+  for (const auto& p : read_json_file(out / "processes.json")["processes"]) pids.push_back(p["pid"].get<int>());
+  ::kill(pid, SIGKILL);
+  ASSERT_EQ(wait_exit(pid, 5), 128 + SIGKILL);
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  const auto stopped = [&] {
+    for (int p : pids) if (alive(p)) return false;
+    try {
+      return read_json_file(out / "scan.json")["status"]["state"] == "stopped";
+    } catch (const std::exception&) {  // being replaced
+      return false;
+    }
+  };
+  while (!stopped() && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_TRUE(stopped()) << "the killed launcher's scan did not stop: " << read_json_file(out / "scan.json")["status"].dump();
+  ASSERT_LT(read_json_file(out / "scan.json")["status"]["views_done"].get<int>(), 10) << "the scan ended before the kill";
+}
+
+// Every file under `dir` (path relative to it) with its size and modification time.
+std::map<std::string, std::pair<std::uintmax_t, fs::file_time_type>> files_of(const fs::path& dir) {
+  std::map<std::string, std::pair<std::uintmax_t, fs::file_time_type>> files;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    if (e.is_regular_file()) files[fs::relative(e.path(), dir).string()] = {e.file_size(), e.last_write_time()};
+  }
+  return files;
+}
+
+}  // namespace
+
+// processes.json is a record: a command planted in it (every process's argv wrapped in a shell
+// that first touches a file) does not run on `pbnbv scan --resume`, which builds every command
+// again from settings.json and completes the scan. (Before: the planted command ran and the
+// resume returned 0.)
+TEST(Faults, ResumeNeverRunsTheCommandsOfProcessesJson) {
+  const fs::path out = fresh_dir("planted") / "scan";
+  scan_then_kill_launcher(out, "--object sphere --planner ring --rig arm --views 10 --sim-speed 4 --no-log", 2);
+  if (HasFatalFailure()) return;
+  const fs::path planted = fs::temp_directory_path() / ("pbnbv-pwned-" + std::to_string(::getpid()) + "-" +
+                                                        std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()));
+  nlohmann::json procs = read_json_file(out / "processes.json");
+  for (auto& p : procs["processes"]) {
+    std::vector<std::string> argv = {"/bin/sh", "-c", "touch " + planted.string() + "; exec \"$0\" \"$@\""};
+    for (const auto& a : p["argv"]) argv.push_back(a.get<std::string>());
+    p["argv"] = argv;
+  }
+  std::ofstream(out / "processes.json") << procs.dump(2);
+
+  const CommandResult resumed = run_command(netns_run() + " " + bin_dir() + "/pbnbv scan --resume " + out.string());
+  const bool ran = fs::exists(planted);
+  fs::remove(planted);
+  EXPECT_FALSE(ran) << "the command planted in processes.json ran";
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  const auto done = read_json_file(out / "scan.json");
+  EXPECT_EQ(done["status"]["state"], "done");
+  EXPECT_EQ(done["status"]["views_done"], 10);
+  // The record now holds the commands that ran: the programs themselves, no shell.
+  for (const auto& p : read_json_file(out / "processes.json")["processes"]) {
+    const fs::path program = p["argv"][0].get<std::string>();
+    EXPECT_EQ(program.filename(), "pbnbv-" + p["name"].get<std::string>()) << p.dump();
+  }
+}
+
+// A copy of an interrupted scan's folder, resumed, completes in the copy (10 of 10 views, the
+// resumed views' plan figures in the copy's plans/) and leaves the original as it was: every file
+// with its size and time, scan.json still "stopped". (Before: the processes were started with the
+// original's --out, wrote into it, and the copy stayed "stopped" with exit code 0.)
+TEST(Faults, AResumedCopyCompletesInTheCopyAndLeavesTheOriginalAlone) {
+  const fs::path dir = fresh_dir("copied");
+  const fs::path original = dir / "original", copy = dir / "copy";
+  scan_then_kill_launcher(original, "--object bunny --rig free --views 10 --sim-speed 4 --no-log", 3);
+  if (HasFatalFailure()) return;
+  const int before = read_json_file(original / "scan.json")["status"]["views_done"].get<int>();
+  fs::copy(original, copy, fs::copy_options::recursive);
+  const auto original_files = files_of(original);
+  const std::string original_scan = read_text(original / "scan.json");
+
+  const CommandResult resumed = run_command(netns_run() + " " + bin_dir() + "/pbnbv scan --resume " + copy.string());
+  EXPECT_EQ(resumed.exit_code, 0) << resumed.output;
+  const auto done = read_json_file(copy / "scan.json");
+  EXPECT_EQ(done["status"]["state"], "done") << done["status"].dump();
+  EXPECT_EQ(done["status"]["views_done"], 10);
+  ASSERT_EQ(done["views"].size(), 10u);
+  for (int i = 0; i < 10; ++i) EXPECT_EQ(done["views"][i]["view"], i);
+  EXPECT_TRUE(fs::exists(copy / "plans" / "view_010.png")) << "the last plan's figure, drawn into the copy";
+  EXPECT_FALSE(fs::exists(original / "plans" / "view_010.png"));
+  EXPECT_EQ(read_text(original / "scan.json"), original_scan) << "the original's scan.json changed";
+  EXPECT_TRUE(files_of(original) == original_files) << "files of the original were written or added";
+  std::cout << "original stopped after " << before << " views; its copy resumed to "
+            << done["status"]["views_done"] << " views, the original unchanged\n";
 }
 
 // `pbnbv stop` in the middle of a move: the motion executor holds the arm where it is (the twin's

@@ -341,7 +341,6 @@ inline plan_request_t to_msg(const PlanRequest& r) {
   m.turntable_angle_rad = r.turntable_angle_rad;
   m.object_z_m = r.object_z_m;
   box_to_arrays(r.keepout, m.keepout_min_m, m.keepout_max_m);
-  m.figure_path = r.figure_path;
   return m;
 }
 

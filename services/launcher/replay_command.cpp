@@ -9,6 +9,7 @@
 #include "core/scan/replay_rig.hpp"
 #include "core/scan/scan_comparison.hpp"
 #include "launcher/commands.hpp"
+#include "launcher/scan_processes.hpp"
 #include "launcher/supervise.hpp"
 
 namespace fs = std::filesystem;
@@ -17,8 +18,14 @@ namespace pbnbv::launcher {
 
 namespace {
 
-// Whether the recorded scan ran with registration: its registration service's command line.
+// Whether the recorded scan ran with registration: settings.json's "launch", or for a folder
+// written before it, the registration service's command line in processes.json (a value read
+// from the record, never a command run).
 bool recorded_registration(const fs::path& dir, const ScanSettings& s) {
+  const nlohmann::json settings = read_json((dir / "settings.json").string());
+  if (settings.contains("launch")) {
+    return launch_settings_from_json(settings.at("launch"), (dir / "settings.json").string()).registration;
+  }
   bool on = s.rig == RigKind::kArm;  // the scan's default
   if (!fs::exists(dir / "processes.json")) return on;
   for (const auto& p : read_json((dir / "processes.json").string()).value("processes", nlohmann::json::array())) {

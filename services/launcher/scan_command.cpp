@@ -23,6 +23,7 @@
 #include "eval/objects.hpp"
 #include "launcher/commands.hpp"
 #include "launcher/external_rig.hpp"
+#include "launcher/scan_processes.hpp"
 #include "pbnbv/stop_request_t.hpp"
 #include "launcher/supervise.hpp"
 #include "process/processes.hpp"
@@ -243,7 +244,10 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
                   "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m), "--frontier-empty",
                   std::to_string(frontier_empty_neighbours(s.planner))});
   if (uses_ellipsoids(s.planner)) add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
-  if (uses_view_scorer(s.planner)) add("scorer", {(bin / "pbnbv-scorer").string(), "--model", s.rig_model_path});
+  // The scorer draws each plan into out/plans/ (its own --out: no path comes from the bus).
+  if (uses_view_scorer(s.planner)) {
+    add("scorer", {(bin / "pbnbv-scorer").string(), "--model", s.rig_model_path, "--out", out.string()});
+  }
   if (uses_truth(s.planner)) {
     // The oracle chooses by the true surface: the twin's object, written to the scan folder.
     const fs::path truth = out / "object.stl";
@@ -259,11 +263,11 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
   add("coordinator", coordinator, true);
 }
 
-int resume_scan(const fs::path& dir);
+int resume_scan(const fs::path& dir, const fs::path& bin);
 int run_external_scan(const ScanOptions& o, const fs::path& bin);
 
 int run_scan(const ScanOptions& o, const fs::path& bin) {
-  if (!o.resume.empty()) return resume_scan(o.resume);
+  if (!o.resume.empty()) return resume_scan(o.resume, bin);
   if (o.external_rig) return run_external_scan(o, bin);
   ScanSettings s = o.settings;
   eval::ObjectSpec object = eval::resolve_object(o.object);
@@ -286,7 +290,8 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
   const std::string stl = (out / "object.stl").string();
   write_stl_binary(mesh, stl);
   write_obj(mesh, (out / "object.obj").string());
-  write_json_atomic(to_json(s), (out / "settings.json").string());
+  const LaunchSettings launch = launch_settings_of(o);
+  write_scan_settings(s, launch, out);
 
   std::cout << "pbnbv scan: " << object_name << " (" << s.normalisation.num_triangles << " triangles, "
             << s.normalisation.extent_m.x() << " x " << s.normalisation.extent_m.y() << " x "
@@ -294,27 +299,8 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
             << " " << name_of(s.planner) << " views -> " << out.string() << " (scan " << s.scan_id << ")" << std::endl;
   warn_small_receive_buffer();
 
-  std::vector<process::Child> children;
-  // Every process serves this scan only (--scan): other scans on the same bus are ignored.
-  auto add = [&](const std::string& name, std::vector<std::string> argv) {
-    children.push_back(scan_process(name, std::move(argv), s, out));
-  };
-  // The logger listens with the services' receive buffer (bus::lcm_url()).
-  if (o.record_log) {
-    add("lcm-logger", {"/usr/bin/lcm-logger", "-q", "--lcm-url=" + bus::lcm_url(), "-f", (out / "scan.lcmlog").string()});
-  }
-  add("twin", {(bin / "pbnbv-twin").string(), "--model", s.rig_model_path, "--mesh", stl,
-               "--object-z", exact(s.object_z_m), "--model-out", (out / "twin_model.xml").string(),
-               "--width", std::to_string(s.camera.width), "--height", std::to_string(s.camera.height),
-               "--fx", exact(s.camera.fx), "--fy", exact(s.camera.fy), "--cx", exact(s.camera.cx), "--cy", exact(s.camera.cy),
-               "--depth-min", exact(s.depth_range.min_m), "--depth-max", exact(s.depth_range.max_m),
-               "--noise-sigma", exact(o.noise_sigma), "--dropout", exact(o.dropout), "--speed", exact(s.sim_speed),
-               "--hand-eye-error-mm", exact(o.hand_eye_error_mm), "--hand-eye-error-deg", exact(o.hand_eye_error_deg),
-               "--turntable-error-deg", exact(o.turntable_error_deg), "--joint-error-deg", exact(o.joint_error_deg),
-               "--error-seed", std::to_string(o.error_seed), "--truth-out", (out / "twin_truth.jsonl").string()});
-  add_services(children, s, out, bin, o.registration);
-
-  return supervise(children, s, out, o.record_log);
+  std::vector<process::Child> children = scan_processes(s, launch, out, bin);
+  return supervise(children, s, out, launch.record_log);
 }
 
 // An external-rig scan: the drivers are checked (nothing moves), the first views planned and their
@@ -347,17 +333,13 @@ int run_external_scan(const ScanOptions& o, const fs::path& bin) {
 
   const fs::path out = fs::absolute(o.out.empty() ? "out/scan-" + timestamp() + "-" + s.scan_id.substr(s.scan_id.size() - 4) : o.out);
   prepare_out(out, o.overwrite);
-  write_json_atomic(to_json(s), (out / "settings.json").string());
+  const LaunchSettings launch = launch_settings_of(o);
+  write_scan_settings(s, launch, out);
   std::cout << "scanning: " << s.views << " " << name_of(s.planner) << " views -> " << out.string() << " (scan "
             << s.scan_id << ")" << std::endl;
   warn_small_receive_buffer();
-  std::vector<process::Child> children;
-  if (o.record_log) {
-    children.push_back(scan_process(
-        "lcm-logger", {"/usr/bin/lcm-logger", "-q", "--lcm-url=" + bus::lcm_url(), "-f", (out / "scan.lcmlog").string()}, s, out));
-  }
-  add_services(children, s, out, bin, o.registration, {}, o.rig_host);
-  return supervise(children, s, out, o.record_log, false);
+  std::vector<process::Child> children = scan_processes(s, launch, out, bin);
+  return supervise(children, s, out, launch.record_log, false);
 }
 
 int supervise(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, bool record_log,
@@ -553,43 +535,36 @@ bool still_running(int pid, const fs::path& out) {
   return !cmdline.empty() && cmdline.find(out.string()) != std::string::npos;
 }
 
-int resume_scan(const fs::path& dir) {
-  const fs::path out = fs::absolute(dir);
-  for (const char* f : {"processes.json", "settings.json"}) {
-    if (!fs::exists(out / f)) {
-      throw std::invalid_argument("--resume " + out.string() + ": no scan to resume there (" + f + " is missing)");
-    }
-  }
-  const ScanSettings s = scan_settings_from_json(read_json((out / "settings.json").string()));
+// The scan's processes are built again from settings.json and the executables in `bin`, with the
+// folder being resumed as their folder (a copied folder is resumed into the copy); processes.json
+// is read only for the PIDs of a launcher's processes that may still run.
+int resume_scan(const fs::path& dir, const fs::path& bin) {
+  fs::path out = fs::absolute(dir).lexically_normal();
+  if (out.filename().empty()) out = out.parent_path();  // "DIR/": the folder itself
+  const Resumable r = read_resumable(out);
+  const ScanSettings& s = r.settings;
   if (fs::exists(out / "scan.json") &&
       read_json((out / "scan.json").string()).value("status", nlohmann::json::object()).value("state", "") == "done") {
     std::cout << "pbnbv scan: " << out.string() << " holds a complete scan (" << s.scan_id << "): nothing to resume"
               << std::endl;
     return 0;
   }
-  const nlohmann::json procs = read_json((out / "processes.json").string());
-  std::vector<process::Child> children;
-  bool record_log = false;
-  for (const auto& p : procs.at("processes")) {
-    if (p.contains("pid") && p["pid"].is_number() && p["pid"].get<int>() > 0 && still_running(p["pid"].get<int>(), out)) {
-      throw std::invalid_argument("--resume " + out.string() + ": its " + p["name"].get<std::string>() + " (pid " +
-                                  std::to_string(p["pid"].get<int>()) + ") is still running");
+  if (fs::exists(out / "processes.json")) {
+    const nlohmann::json procs = read_json((out / "processes.json").string());
+    for (const auto& p : procs.value("processes", nlohmann::json::array())) {
+      if (!p.is_object() || !p.contains("pid") || !p["pid"].is_number_integer()) continue;
+      const int64_t pid = p["pid"].get<int64_t>();
+      if (pid > 0 && pid < (int64_t{1} << 22) && still_running(static_cast<int>(pid), out)) {
+        throw std::invalid_argument("--resume " + out.string() + ": its " + p.value("name", std::string("process")) +
+                                    " (pid " + std::to_string(pid) + ") is still running");
+      }
     }
-    process::Child c;
-    c.name = p.at("name").get<std::string>();
-    c.argv = p.at("argv").get<std::vector<std::string>>();
-    c.log_path = p.at("log").get<std::string>();
-    c.death_signal = death_signal_of(c.name);
-    c.stdout_to_terminal = c.name == "coordinator";  // its progress lines
-    record_log = record_log || c.name == "lcm-logger";
-    continue_scan(c);
-    children.push_back(std::move(c));
   }
-  if (children.empty() || children.back().name != "coordinator") {
-    throw std::invalid_argument("--resume " + out.string() + ": processes.json does not end with the coordinator");
-  }
-  std::cout << "pbnbv scan: resuming " << s.scan_id << " in " << out.string() << std::endl;
-  return supervise(children, s, out, record_log, !s.external_rig);
+  std::vector<process::Child> children = scan_processes(s, r.launch, out, bin);
+  for (auto& c : children) continue_scan(c);
+  std::cout << "pbnbv scan: resuming " << s.scan_id << " in " << out.string()
+            << (r.rerooted.empty() ? "" : " (" + r.rerooted + ")") << std::endl;
+  return supervise(children, s, out, r.launch.record_log, !s.external_rig);
 }
 
 }  // namespace pbnbv::launcher

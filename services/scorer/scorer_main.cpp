@@ -1,6 +1,8 @@
 // pbnbv-scorer: the view scorer (PB-NBV's next-best-view choice, and the benchmark's baselines).
 //   in:  PLAN_REQUEST, VOXEL_MAP, ELLIPSOIDS
-//   out: VIEW_PLAN, HEARTBEAT; the request's figure_path (PNG) per plan
+//   out: VIEW_PLAN, HEARTBEAT; with --out DIR (and --scan), a picture of each plan of that scan:
+//        DIR/plans/view_NNN.png and .svg, NNN the request's view (iteration + 1). No path comes
+//        from the bus: a request names its view, bounded (0..999), never a file.
 // Answers each PLAN_REQUEST from the VOXEL_MAP (bounding box B) and ELLIPSOIDS of the request's
 // map_iteration: candidates on the sphere around B, the rig's reachability check (arm rig: the
 // same check as the motion executor's, on the same rig model), F of every candidate by ellipsoid
@@ -14,6 +16,7 @@
 // Reachability runs as soon as B is known, while the ellipsoid fitter is still working.
 #include <chrono>
 #include <deque>
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -24,10 +27,12 @@
 #include "bus/reply_cache.hpp"
 #include "bus/rig_options.hpp"
 #include "bus/service.hpp"
+#include "core/base/format.hpp"
 #include "core/base/log.hpp"
 #include "core/base/parallel.hpp"
 #include "core/io/mesh_file.hpp"
 #include "core/planning/planner.hpp"
+#include "core/scan/scan_options.hpp"
 #include "report/plan_figure.hpp"
 #include "core/rig/rig.hpp"
 #include "pbnbv/ellipsoid_set_t.hpp"
@@ -49,10 +54,16 @@ struct Truth {
   SurfaceSamples samples;
 };
 
+// Where the plan figure of view `iteration` (0-based) of the scan in `out` goes: plans/view_NNN.png.
+std::filesystem::path plan_figure_file(const std::filesystem::path& out, int iteration) {
+  return out / "plans" / view_file(iteration, "png");
+}
+
 class ScorerService {
  public:
-  ScorerService(bus::Bus& bus, const RigModel& rig, std::optional<Truth> truth)
-      : bus_(bus), rig_(rig), truth_(std::move(truth)) {
+  // `figures_out`: the scan's folder, where plans/ receives a figure per plan ("": none).
+  ScorerService(bus::Bus& bus, const RigModel& rig, std::optional<Truth> truth, std::filesystem::path figures_out)
+      : bus_(bus), rig_(rig), truth_(std::move(truth)), figures_out_(std::move(figures_out)) {
     bus_.subscribe<voxel_set_t>(channels::kVoxelMap, [this](const voxel_set_t& m) { maps_.offer(m); });
     bus_.subscribe<ellipsoid_set_t>(channels::kEllipsoids, [this](const ellipsoid_set_t& e) { ellipsoids_.offer(e); });
     bus_.subscribe<plan_request_t>(channels::kPlanRequest, [this](const plan_request_t& r) { on_request(r); });
@@ -136,6 +147,8 @@ class ScorerService {
     p.request = r;
     p.planner = *planner;
     try {
+      // The view to plan names the figure's file: bounded as the scan's view budget is.
+      bus::require_range(r.iteration, 0, kViews.max - 1, "PLAN_REQUEST iteration");
       p.input = bus::plan_input_from_msg(r);
       if (r.check_reachability) {
         bus::to_vector6(std::vector<double>(r.joint_position_rad, r.joint_position_rad + 6), "PLAN_REQUEST joint_position_rad");
@@ -240,7 +253,9 @@ class ScorerService {
       out.reason = e.what();
     }
     publish(out);
-    if (!r.figure_path.empty() && !result.candidates.empty()) {
+    // Only for the scan this scorer serves (the bus drops other scans' requests before this; checked
+    // again here because it decides where a file is written).
+    if (!figures_out_.empty() && r.scan_id == bus_.scope() && !result.candidates.empty()) {
       try {
         std::ostringstream title;
         title << r.planner << ": view " << r.iteration + 1 << " - planned from the map of view " << r.map_iteration + 1;
@@ -249,7 +264,9 @@ class ScorerService {
         if (p.planner == PlannerKind::kRaycast) figure.quality_label = "unobserved voxels each scored candidate's rays reach";
         if (p.planner == PlannerKind::kRandom) figure.quality_label = "random choice (no score)";
         if (p.planner == PlannerKind::kOracle) figure.quality_label = "true surface samples each candidate sees that no view taken saw";
-        write_plan_figure(figure, r.figure_path);
+        const std::filesystem::path file = plan_figure_file(figures_out_, r.iteration);
+        std::filesystem::create_directories(file.parent_path());
+        write_plan_figure(figure, file.string());
       } catch (const std::exception& e) {
         bus_.note_error(std::string("figure not written: ") + e.what());
       }
@@ -281,6 +298,7 @@ class ScorerService {
   bus::Bus& bus_;
   RigModel rig_;
   std::optional<Truth> truth_;  // --truth-mesh: the oracle's
+  std::filesystem::path figures_out_;  // --out: plans/ of this scan's folder ("": no figures)
   std::vector<std::unique_ptr<ReachabilityChecker>> checkers_;  // one per worker, made on first use
   bus::LatestPerScan<voxel_set_t> maps_;
   bus::LatestPerScan<ellipsoid_set_t> ellipsoids_;
@@ -304,9 +322,21 @@ int main(int argc, char** argv) {
                 "the object's true mesh in the object frame (a twin scan's object.stl), for --planner oracle only: "
                 "the benchmark's yardstick, never a real scan",
                 "PATH");
+  std::string out;
+  cli::add_text(app, "out", &out,
+                "the scan's folder: a figure of each plan of the scan --scan names goes to DIR/plans/view_NNN.png "
+                "(and .svg); none without it",
+                "DIR");
   int truth_samples = kOracleSamples.value;
   cli::add(app, kOracleSamples, &truth_samples);
   return bus::run_service("scorer", app, argc, argv, 5, [&](bus::Bus& bus) -> std::function<void()> {
+    if (!out.empty() && bus.scope().empty()) {
+      throw std::invalid_argument("--out " + out + " needs --scan ID: the figures in " + out +
+                                  "/plans are those of the one scan this scorer serves");
+    }
+    if (!out.empty() && !std::filesystem::is_directory(out)) {
+      throw std::invalid_argument("--out " + out + " is not a folder (the scan's folder, made by the launcher)");
+    }
     const RigModel rig = bus::load_rig(rig_options);
     std::optional<Truth> truth;
     if (!truth_mesh.empty()) {
@@ -316,7 +346,7 @@ int main(int argc, char** argv) {
       log_info("true mesh " + truth_mesh + ": " + std::to_string(truth->mesh.triangles.size()) + " triangles, " +
                std::to_string(truth->samples.points.size()) + " surface samples (the oracle's)");
     }
-    auto service = std::make_shared<ScorerService>(bus, rig, std::move(truth));
+    auto service = std::make_shared<ScorerService>(bus, rig, std::move(truth), out);
     log_info("ready");
     return [service] { service->tick(); };
   });

@@ -167,7 +167,6 @@ struct PlanRequest {
   double turntable_angle_rad = 0;
   double object_z_m = 0;
   Eigen::AlignedBox3d keepout;             // empty: none
-  std::string figure_path;                 // PNG of this planning step; empty: none
 };
 
 enum class PlanOutcome : int8_t { kView = 0, kStop = 1, kFailed = 2 };

@@ -218,11 +218,6 @@ void ScanRecord::set_next_best_view_plan(const std::string& planner, const Pose&
   report_["plan"] = {{"planner", planner}, {"initial_view", to_json(initial_view)}};
 }
 
-std::string ScanRecord::plan_figure_path(int view) const {
-  fs::create_directories(out_ / "plans");
-  return (out_ / "plans" / view_file(view, "png")).string();
-}
-
 void ScanRecord::keep_depth_frame(DepthFrame frame) {
   constexpr std::size_t kKept = 4;  // the frames of the last views (a view's arrives before its cloud)
   depth_frames_.push_back(std::move(frame));

@@ -91,9 +91,6 @@ class ScanRecord {
   void set_ring_plan(double radius_m, double elevation_deg);
   void set_next_best_view_plan(const std::string& planner, const Pose& initial_view);
 
-  // Where the view scorer draws the picture of planning view `view` (plans/ is created).
-  std::string plan_figure_path(int view) const;
-
   // A depth frame the camera sent: accumulate finds a view's frame among the last few by its
   // depth_frame_seq (normals from its neighbourhood; depth/view_NNN.png with the writer below).
   void keep_depth_frame(DepthFrame frame);

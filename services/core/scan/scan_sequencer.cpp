@@ -361,7 +361,6 @@ void ScanSequencer::begin_plan(double now_s) {
   r.turntable_angle_rad = done_.turntable_rad;
   r.object_z_m = s_.object_z_m;
   r.keepout = box_or_none(s_.keepout_min_m, s_.keepout_max_m);
-  r.figure_path = record_.plan_figure_path(iteration_);
   if (done_.last_map < 0) {  // nothing to plan from: no request
     ViewPlan none;
     none.scan_id = s_.scan_id;
