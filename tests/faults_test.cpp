@@ -402,15 +402,16 @@ TEST(Faults, AResumedCopyCompletesInTheCopyAndLeavesTheOriginalAlone) {
 
   const CommandResult resumed = run_command(netns_run() + " " + bin_dir() + "/pbnbv scan --resume " + copy.string());
   EXPECT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_TRUE(read_text(original / "scan.json") == original_scan)
+      << "the original's scan.json changed: " << read_json_file(original / "scan.json")["status"].dump();
+  EXPECT_TRUE(files_of(original) == original_files) << "files of the original were written or added";
+  EXPECT_FALSE(fs::exists(original / "plans" / "view_010.png"));
   const auto done = read_json_file(copy / "scan.json");
   EXPECT_EQ(done["status"]["state"], "done") << done["status"].dump();
   EXPECT_EQ(done["status"]["views_done"], 10);
+  EXPECT_TRUE(fs::exists(copy / "plans" / "view_010.png")) << "the last plan's figure, drawn into the copy";
   ASSERT_EQ(done["views"].size(), 10u);
   for (int i = 0; i < 10; ++i) EXPECT_EQ(done["views"][i]["view"], i);
-  EXPECT_TRUE(fs::exists(copy / "plans" / "view_010.png")) << "the last plan's figure, drawn into the copy";
-  EXPECT_FALSE(fs::exists(original / "plans" / "view_010.png"));
-  EXPECT_EQ(read_text(original / "scan.json"), original_scan) << "the original's scan.json changed";
-  EXPECT_TRUE(files_of(original) == original_files) << "files of the original were written or added";
   std::cout << "original stopped after " << before << " views; its copy resumed to "
             << done["status"]["views_done"] << " views, the original unchanged\n";
 }

@@ -97,7 +97,8 @@ TEST_F(PlanningServices, PlanFiguresGoUnderTheScorersOutNamedByView) {
   r.iteration = 4;
   lcm.publish("PLAN_REQUEST", &r);
   ASSERT_TRUE(listener_->spin_until([] { return listener_->plans.count({"planning", 11}) > 0; }, 30.0));
-  ASSERT_EQ(listener_->plans[{"planning", 11}].outcome, view_plan_t::kView) << listener_->plans[{"planning", 11}].reason;
+  const view_plan_t& planned = listener_->plans[{"planning", 11}];
+  ASSERT_EQ(planned.outcome, view_plan_t::kView) << planned.reason;
   const fs::path png = figures_ / "plans" / "view_005.png";
   ASSERT_TRUE(listener_->spin_until([&] { return fs::exists(fs::path(png).replace_extension(".svg")); }, 20.0))
       << "no figure of view 5 under " << figures_;

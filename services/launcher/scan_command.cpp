@@ -541,14 +541,17 @@ bool still_running(int pid, const fs::path& out) {
 int resume_scan(const fs::path& dir, const fs::path& bin) {
   fs::path out = fs::absolute(dir).lexically_normal();
   if (out.filename().empty()) out = out.parent_path();  // "DIR/": the folder itself
+  // A complete scan (of any version: `pbnbv bench` reruns over its folders) starts nothing.
+  if (fs::is_regular_file(out / "settings.json") && fs::is_regular_file(out / "scan.json")) {
+    const nlohmann::json scan = read_json((out / "scan.json").string());
+    if (scan.value("status", nlohmann::json::object()).value("state", "") == "done") {
+      std::cout << "pbnbv scan: " << out.string() << " holds a complete scan ("
+                << scan.value("settings", nlohmann::json::object()).value("scan_id", "") << "): nothing to resume" << std::endl;
+      return 0;
+    }
+  }
   const Resumable r = read_resumable(out);
   const ScanSettings& s = r.settings;
-  if (fs::exists(out / "scan.json") &&
-      read_json((out / "scan.json").string()).value("status", nlohmann::json::object()).value("state", "") == "done") {
-    std::cout << "pbnbv scan: " << out.string() << " holds a complete scan (" << s.scan_id << "): nothing to resume"
-              << std::endl;
-    return 0;
-  }
   if (fs::exists(out / "processes.json")) {
     const nlohmann::json procs = read_json((out / "processes.json").string());
     for (const auto& p : procs.value("processes", nlohmann::json::array())) {
