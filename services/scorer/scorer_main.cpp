@@ -329,14 +329,18 @@ int main(int argc, char** argv) {
                 "DIR");
   int truth_samples = kOracleSamples.value;
   cli::add(app, kOracleSamples, &truth_samples);
-  return bus::run_service("scorer", app, argc, argv, 5, [&](bus::Bus& bus) -> std::function<void()> {
-    if (!out.empty() && bus.scope().empty()) {
+  // Checked once the command line is read (run_service adds --scan), before the bus starts.
+  app.callback([&] {
+    if (out.empty()) return;
+    if (app.get_option("--scan")->count() == 0) {
       throw std::invalid_argument("--out " + out + " needs --scan ID: the figures in " + out +
                                   "/plans are those of the one scan this scorer serves");
     }
-    if (!out.empty() && !std::filesystem::is_directory(out)) {
+    if (!std::filesystem::is_directory(out)) {
       throw std::invalid_argument("--out " + out + " is not a folder (the scan's folder, made by the launcher)");
     }
+  });
+  return bus::run_service("scorer", app, argc, argv, 5, [&](bus::Bus& bus) -> std::function<void()> {
     const RigModel rig = bus::load_rig(rig_options);
     std::optional<Truth> truth;
     if (!truth_mesh.empty()) {
