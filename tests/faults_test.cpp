@@ -1,5 +1,6 @@
 // Faults a scan must survive or report (ctest label `faults`): other scans and foreign traffic on
-// the same bus, a launcher killed without warning, a folder that already holds a scan, objects
+// the same bus, a launcher killed without warning (and its folder resumed: with a command planted
+// in processes.json, and as a copy), a folder that already holds a scan, objects
 // no rig can scan, and the main job's log. Every scan runs the real processes on a real LCM bus;
 // the checks are figures (distances to the true surface, coverage, counts), not only exit codes.
 // Coverage comes from eval::evaluate_coverage: the figures of evaluate_scan without its surface
