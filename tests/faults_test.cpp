@@ -19,6 +19,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "bus/log_audit.hpp"
+#include "bus/rig_log.hpp"
 #include "pbnbv/arm_status_t.hpp"
 #include "eval/evaluate.hpp"
 #include "scan_checks.hpp"
@@ -447,7 +448,7 @@ TEST(Faults, StopMidMoveHaltsTheRigAndTheScanKeepsWhatItHas) {
     if (e->channel == "STOP" && stop_at < 0) stop_at = e->timestamp;
     if (e->channel == "ARM_STATUS" && stop_at >= 0 && e->timestamp > stop_at + 50000) {
       arm_status_t s;
-      if (s.decode(e->data, 0, e->datalen) < 0) continue;
+      if (!bus::decode_logged(*e, &s)) continue;
       double v = 0;
       for (double q : s.joint_velocity_rad_s) v = std::max(v, std::abs(q));
       speed_after = std::max(speed_after, v);

@@ -10,10 +10,12 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <utility>
 
 #include "bus/channels.hpp"
+#include "bus/message_guard.hpp"
 #include "core/base/log.hpp"
 #include "core/base/signals.hpp"
 
@@ -58,9 +60,16 @@ const std::string& scan_of(const T& m) {
 }
 const std::string& scan_of(const heartbeat_t& m);
 
+// The string member scan_of reads, by name, for the filter that runs before a message is decoded
+// (message_guard finds it in the encoding).
+template <class T>
+constexpr const char* scope_field() {
+  return std::is_same_v<T, heartbeat_t> ? "serves_scan" : "scan_id";
+}
+
 // Whether a message of `scan_id` is for a process serving `scope` ("": every scan); an empty
 // scan_id is for every scan when the message MayBeUnscoped.
-inline bool in_scope(const std::string& scope, const std::string& scan_id, bool may_be_unscoped) {
+inline bool in_scope(std::string_view scope, std::string_view scan_id, bool may_be_unscoped) {
   return scope.empty() || scan_id == scope || (may_be_unscoped && scan_id.empty());
 }
 
@@ -93,9 +102,11 @@ class Bus {
 
 
   // Subscribes to `channel`; each message is decoded as T and passed to `handler`. A message
-  // that does not decode, or whose handler throws std::exception (its validation failing),
-  // is counted as rejected and dropped; a message of another scan (serve_scan) is counted as
-  // ignored and dropped. Both are logged with the channel and the reason, at most one line per
+  // that fails the message guard (check_message: its size, type hash, string lengths and array
+  // counts against its bytes and the contract's limits; before any decoding), that does not
+  // decode, or whose handler throws std::exception (its validation failing), is counted as
+  // rejected and dropped; a message of another scan (serve_scan) is counted as ignored and
+  // dropped, its scan id read from the checked bytes so it is never decoded. Both are logged with the channel and the reason, at most one line per
   // channel and kind every 10 s (then with the count of the lines left out).
   template <class T>
   void subscribe(const std::string& channel, std::function<void(const T&)> handler) {
@@ -137,23 +148,29 @@ class Bus {
     std::function<void(const T&)> handler;
     void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& chan) {
       Dispatch* d = this;
+      const MessageCheck check = check_message(rbuf->data, rbuf->data_size, T::getTypeName(), T::getHash(),
+                                               HasScanId<T>::value ? scope_field<T>() : "", d->bus->limits_);
+      if (!check.ok) {
+        d->bus->reject(chan, check.reason);
+        return;
+      }
+      if constexpr (HasScanId<T>::value) {
+        if (!in_scope(d->bus->scope_, check.scope, MayBeUnscoped<T>::value)) {
+          d->bus->ignore(chan, std::string(check.scope));
+          return;
+        }
+      }
       T msg;
       bool decoded = false;
       try {
         decoded = msg.decode(rbuf->data, 0, rbuf->data_size) >= 0;
-      } catch (const std::exception& e) {  // e.g. a corrupt array length
+      } catch (const std::exception& e) {  // the guard passed it: a decoder it does not know of
         decoded = false;
       }
       if (!decoded) {
         d->bus->reject(chan, "malformed message (" + std::to_string(rbuf->data_size) +
                                  " bytes) does not decode as " + T::getTypeName());
         return;
-      }
-      if constexpr (HasScanId<T>::value) {
-        if (!in_scope(d->bus->scope_, scan_of(msg), MayBeUnscoped<T>::value)) {
-          d->bus->ignore(chan, scan_of(msg));
-          return;
-        }
       }
       try {
         d->handler(msg);
@@ -178,6 +195,7 @@ class Bus {
   int64_t rejected_ = 0;
   int64_t ignored_ = 0;
   std::string scope_;
+  DecodeLimits limits_;
   LogLimiter log_limit_;
   double next_heartbeat_s_ = 0;
 };

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "bus/depth_codec.hpp"
+#include "bus/message_guard.hpp"
 #include "core/geometry/camera_model.hpp"
 #include "core/base/pose.hpp"
 #include "pbnbv/depth_frame_t.hpp"
@@ -66,13 +67,19 @@ struct DecodedFrame {
 inline DecodedFrame decode_frame(const depth_frame_t& f) {
   DecodedFrame d;
   d.intrinsics = CameraIntrinsics{f.width, f.height, f.fx, f.fy, f.cx, f.cy};
-  d.intrinsics.validate();
   d.range = DepthRange{f.depth_min_m, f.depth_max_m};
-  d.range.validate();
+  try {
+    d.intrinsics.validate();
+    d.range.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("DEPTH_FRAME " + std::to_string(f.seq) + ": " + e.what());
+  }
   if (f.encoding == depth_frame_t::kEncodingRaw) {
     d.depth_m = decode_depth_u16(f.depth, f.width, f.height, f.depth_unit_m);
   } else if (f.encoding == depth_frame_t::kEncodingZlib) {
+    // width and height passed validate(), so the image is within the contract's largest.
     const std::vector<uint8_t> raw = inflate_bytes(f.depth, static_cast<std::size_t>(f.width) * f.height * 2,
+                                                   2 * static_cast<std::size_t>(kMaxFramePixels),
                                                    "DEPTH_FRAME " + std::to_string(f.seq) + " depth (zlib)");
     d.depth_m = decode_depth_u16(raw, f.width, f.height, f.depth_unit_m);
   } else {

@@ -17,7 +17,16 @@ std::vector<uint8_t> deflate_bytes(const std::vector<uint8_t>& raw, int level) {
 }
 
 std::vector<uint8_t> inflate_bytes(const std::vector<uint8_t>& compressed, std::size_t expected_size,
-                                   const std::string& what) {
+                                   std::size_t max_size, const std::string& what) {
+  if (expected_size > max_size) {
+    throw std::invalid_argument(what + " declares " + std::to_string(expected_size) + " bytes, more than the " +
+                                std::to_string(max_size) + " allowed");
+  }
+  // No compressed byte inflates to more than kMaxInflateRatio bytes (the header and checksum to none).
+  if (expected_size > compressed.size() * kMaxInflateRatio) {
+    throw std::invalid_argument(what + " declares " + std::to_string(expected_size) + " bytes, which " +
+                                std::to_string(compressed.size()) + " compressed bytes cannot inflate to");
+  }
   std::vector<uint8_t> out(expected_size + 1);  // one spare byte: a longer image is an error too
   uLongf size = static_cast<uLongf>(out.size());
   const int rc = uncompress(out.data(), &size, compressed.data(), static_cast<uLong>(compressed.size()));

@@ -11,6 +11,8 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "bus/message_guard.hpp"
+
 #include "pbnbv/arm_command_t.hpp"
 #include "pbnbv/arm_status_t.hpp"
 #include "pbnbv/depth_frame_t.hpp"
@@ -19,15 +21,12 @@
 
 namespace pbnbv::bus {
 
-// Decodes a log event as T; false (not a throw) for an event that does not decode: a log may hold
-// a truncated last event or another program's messages on a channel.
+// Decodes a log event as T once the message guard passed it (bus/message_guard.hpp: a logged
+// packet claiming gigabytes is refused, not allocated); false (not a throw) for an event that does
+// not decode: a log may hold a truncated last event or another program's messages on a channel.
 template <class T>
 bool decode_logged(const lcm::LogEvent& e, T* msg) {
-  try {
-    return msg->decode(e.data, 0, e.datalen) >= 0;
-  } catch (const std::exception&) {
-    return false;
-  }
+  return decode_checked(e.channel, e.data, e.datalen, msg);
 }
 
 // A message and its event number in the log (over every file, in order).

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "bus/message_guard.hpp"
 #include "core/io/json.hpp"
 
 namespace pbnbv::bus {
@@ -27,8 +28,9 @@ std::optional<T> load_message(const std::string& path) {
   if (!std::filesystem::exists(path)) return std::nullopt;
   const std::string bytes = read_text(path);
   T msg;
-  if (msg.decode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0) {
-    throw std::invalid_argument(path + " does not hold a " + std::string(T::getTypeName()));
+  std::string why;
+  if (!decode_checked(path, bytes.data(), static_cast<int64_t>(bytes.size()), &msg, &why)) {
+    throw std::invalid_argument(path + " does not hold a " + std::string(T::getTypeName()) + " (" + why + ")");
   }
   return msg;
 }

@@ -32,9 +32,12 @@ constexpr int kWristJoint = 4;           // a5
 class Recorder {
  public:
   explicit Recorder(bus::Bus& bus) : bus_(bus) {
-    subs_.push_back(bus.raw().subscribe(channels::kArmStatus, &Recorder::on_arm, this));
-    subs_.push_back(bus.raw().subscribe(channels::kTurntableStatus, &Recorder::on_turntable, this));
-    subs_.push_back(bus.raw().subscribe(channels::kDepthFrame, &Recorder::on_frame, this));
+    // Raw subscriptions (removed when the check ends), each message passed through the message
+    // guard before it is decoded, as Bus::subscribe does.
+    subs_.push_back(bus.raw().subscribe(channels::kArmStatus, &Recorder::on_raw<arm_status_t, &Recorder::on_arm>, this));
+    subs_.push_back(bus.raw().subscribe(channels::kTurntableStatus,
+                                        &Recorder::on_raw<turntable_status_t, &Recorder::on_turntable>, this));
+    subs_.push_back(bus.raw().subscribe(channels::kDepthFrame, &Recorder::on_raw<depth_frame_t, &Recorder::on_frame>, this));
   }
   ~Recorder() {
     for (lcm::Subscription* s : subs_) bus_.raw().unsubscribe(s);
@@ -60,6 +63,13 @@ class Recorder {
   int64_t status_after_utime = 0;  // newest ARM_STATUS utime heard within 0.1 s of the frame
 
  private:
+  // A message that fails the guard or does not decode is dropped, as LCM's typed subscriptions
+  // drop one that does not decode: it may be another program's on the same channel.
+  template <class T, void (Recorder::*handle)(const lcm::ReceiveBuffer*, const std::string&, const T*)>
+  void on_raw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    T m;
+    if (bus::decode_checked(channel, rbuf->data, rbuf->data_size, &m)) (this->*handle)(rbuf, channel, &m);
+  }
   void on_arm(const lcm::ReceiveBuffer*, const std::string&, const arm_status_t* m) {
     const double now = bus::now_s();
     arm_clock.push_back(StatusSample{now, m->utime, m->driver_utime});

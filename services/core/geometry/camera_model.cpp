@@ -18,6 +18,11 @@ void require(bool ok, const std::string& field, double value, const char* rule) 
 void CameraIntrinsics::validate() const {
   require(width > 0 && width <= 16384, "width", width, "must be in 1..16384");
   require(height > 0 && height <= 16384, "height", height, "must be in 1..16384");
+  if (static_cast<long long>(width) * height > kMaxImagePixels) {
+    throw std::invalid_argument("camera intrinsics: " + std::to_string(width) + " x " + std::to_string(height) +
+                                " = " + std::to_string(static_cast<long long>(width) * height) +
+                                " pixels is more than the largest image, " + std::to_string(kMaxImagePixels));
+  }
   require(std::isfinite(fx) && fx > 0, "fx", fx, "must be a positive number of pixels");
   require(std::isfinite(fy) && fy > 0, "fy", fy, "must be a positive number of pixels");
   require(std::isfinite(cx) && cx >= 0 && cx <= width, "cx", cx, "must lie inside the image");
