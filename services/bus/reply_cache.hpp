@@ -25,6 +25,21 @@ class ReplyCache {
     const auto it = entries_.find(key);
     return it == entries_.end() ? nullptr : &it->second;
   }
+  Reply* find(const Key& key) {
+    const auto it = entries_.find(key);
+    return it == entries_.end() ? nullptr : &it->second;
+  }
+
+  // Makes `key`'s entry the newest (the last to be dropped); nothing when it is not stored.
+  void touch(const Key& key) {
+    for (auto it = order_.begin(); it != order_.end(); ++it) {
+      if (*it == key) {
+        order_.erase(it);
+        order_.push_back(key);
+        return;
+      }
+    }
+  }
 
   // Stores (or replaces) the answer to `key`; it becomes the newest entry.
   void put(const Key& key, Reply reply) {
@@ -56,36 +71,42 @@ class ReplyCache {
   std::deque<Key> order_;  // oldest first
 };
 
-// The newest message of each scan by its iteration (e.g. the latest VOXEL_MAP of every scan), for
-// a service that answers requests about "the map of view i". A message older than the one kept
-// for its scan is ignored. Keeps the `max_scans` scans heard from most recently.
+// The messages of each scan a service plans from (e.g. the VOXEL_MAPs), for a service that answers
+// requests about "the map of view i": the `per_scan` received last of each scan, by arrival, so
+// that a message claiming a later view (a forged iteration 2^31 - 1) cannot push out the one a
+// request will ask for; iterations outside 0..max_iteration are refused. Keeps the `max_scans`
+// scans heard from most recently.
 template <class Message>
-class LatestPerScan {
+class RecentPerScan {
  public:
-  explicit LatestPerScan(std::size_t max_scans = 16) : scans_(max_scans) {}
+  explicit RecentPerScan(std::size_t per_scan = 4, int max_iteration = 999, std::size_t max_scans = 16)
+      : per_scan_(per_scan), max_iteration_(max_iteration), scans_(max_scans) {}
 
-  // Keeps `m` if it is the newest of its scan (m.scan_id, m.iteration). Returns whether it did.
+  // Keeps `m` as its scan's newest arrival (replacing one of the same iteration). Returns false,
+  // keeping nothing, for an iteration outside 0..max_iteration.
   bool offer(const Message& m) {
-    const Message* kept = scans_.find(m.scan_id);
-    if (kept && kept->iteration > m.iteration) return false;
-    scans_.put(m.scan_id, m);
+    if (m.iteration < 0 || m.iteration > max_iteration_) return false;
+    ReplyCache<int, Message>* kept = scans_.find(m.scan_id);
+    if (!kept) {
+      scans_.put(m.scan_id, ReplyCache<int, Message>(per_scan_));
+      kept = scans_.find(m.scan_id);
+    } else {
+      scans_.touch(m.scan_id);
+    }
+    kept->put(m.iteration, m);
     return true;
   }
 
   // The kept message of `scan_id` for `iteration`, or nullptr.
   const Message* find(const std::string& scan_id, int iteration) const {
-    const Message* kept = scans_.find(scan_id);
-    return kept && kept->iteration == iteration ? kept : nullptr;
-  }
-
-  // The iteration kept for the scan (-1: none): a request for an older one can never be met.
-  int latest(const std::string& scan_id) const {
-    const Message* kept = scans_.find(scan_id);
-    return kept ? kept->iteration : -1;
+    const ReplyCache<int, Message>* kept = scans_.find(scan_id);
+    return kept ? kept->find(iteration) : nullptr;
   }
 
  private:
-  ReplyCache<std::string, Message> scans_;
+  std::size_t per_scan_;
+  int max_iteration_;
+  ReplyCache<std::string, ReplyCache<int, Message>> scans_;
 };
 
 }  // namespace pbnbv::bus

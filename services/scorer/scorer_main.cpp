@@ -75,20 +75,6 @@ class ScorerService {
     const voxel_set_t* map = maps_.find(r.scan_id, r.map_iteration);
     const bool needs_ellipsoids = uses_ellipsoids(pending_->planner);
     const ellipsoid_set_t* ell = needs_ellipsoids ? ellipsoids_.find(r.scan_id, r.map_iteration) : nullptr;
-    // Only the latest map (and its ellipsoids) of each scan is kept: a request for an older one
-    // can never be met, so it fails now, naming both.
-    const int map_kept = maps_.latest(r.scan_id);
-    const int ell_kept = ellipsoids_.latest(r.scan_id);
-    if (!map && map_kept > r.map_iteration) {
-      fail("the VOXEL_MAP of view " + std::to_string(r.map_iteration) + " is gone: the scorer keeps the latest map of each scan (view " +
-           std::to_string(map_kept) + "); ask for that one");
-      return;
-    }
-    if (needs_ellipsoids && !ell && ell_kept > r.map_iteration) {
-      fail("the ELLIPSOIDS of view " + std::to_string(r.map_iteration) + " are gone: the scorer keeps the latest set of each scan (view " +
-           std::to_string(ell_kept) + "); ask for that one");
-      return;
-    }
     if (map && !pending_->reachable && r.check_reachability) {
       try {
         pending_->reachable = reachability(r, *map);
@@ -300,8 +286,8 @@ class ScorerService {
   std::optional<Truth> truth_;  // --truth-mesh: the oracle's
   std::filesystem::path figures_out_;  // --out: plans/ of this scan's folder ("": no figures)
   std::vector<std::unique_ptr<ReachabilityChecker>> checkers_;  // one per worker, made on first use
-  bus::LatestPerScan<voxel_set_t> maps_;
-  bus::LatestPerScan<ellipsoid_set_t> ellipsoids_;
+  bus::RecentPerScan<voxel_set_t> maps_;
+  bus::RecentPerScan<ellipsoid_set_t> ellipsoids_;
   std::optional<Pending> pending_;
   std::string reach_key_;                 // the candidate set of the last reachability check
   std::vector<bool> reach_cache_;

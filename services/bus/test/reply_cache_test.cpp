@@ -41,17 +41,36 @@ struct Map {
 };
 }  // namespace
 
-TEST(LatestPerScan, KeepsEachScansNewestMapHoweverManyOtherScansSpeak) {
-  LatestPerScan<Map> maps(4);
+// Two kept per scan, by arrival: a map claiming view 1000 or 2^31 - 1 is refused, one claiming
+// view 999 is kept but does not push out the map of view 1 that arrives after it.
+TEST(RecentPerScan, AForgedLaterIterationDoesNotPushOutTheMapARequestWillAskFor) {
+  RecentPerScan<Map> maps(2, 999, 4);
   EXPECT_TRUE(maps.offer({"bunny", 0}));
-  for (int i = 0; i < 20; ++i) maps.offer({"bunny", 0});  // repeats
-  EXPECT_TRUE(maps.offer({"teapot", 3}));
-  EXPECT_FALSE(maps.offer({"teapot", 2}));  // older than the kept one
-  ASSERT_NE(maps.find("bunny", 0), nullptr);
-  EXPECT_EQ(maps.find("bunny", 1), nullptr);
-  EXPECT_EQ(maps.latest("teapot"), 3);
-  EXPECT_EQ(maps.latest("elk"), -1);
-  EXPECT_TRUE(maps.offer({"bunny", 5}));
-  EXPECT_EQ(maps.find("bunny", 0), nullptr);  // replaced by the newer map
-  EXPECT_EQ(maps.latest("bunny"), 5);
+  EXPECT_FALSE(maps.offer({"bunny", 2147483647}));
+  EXPECT_FALSE(maps.offer({"bunny", 1000}));
+  EXPECT_FALSE(maps.offer({"bunny", -1}));
+  EXPECT_TRUE(maps.offer({"bunny", 999}));  // forged, in range
+  EXPECT_TRUE(maps.offer({"bunny", 1}));
+  ASSERT_NE(maps.find("bunny", 1), nullptr);
+  EXPECT_NE(maps.find("bunny", 999), nullptr);
+  EXPECT_EQ(maps.find("bunny", 0), nullptr) << "the oldest arrival went";
+  for (int k = 0; k < 20; ++k) maps.offer({"bunny", 1});  // repeats replace, push nothing out
+  EXPECT_NE(maps.find("bunny", 999), nullptr);
+  EXPECT_EQ(maps.find("bunny", 2), nullptr);
+}
+
+// Four scans kept, the one heard from longest ago dropped first; hearing a scan again keeps it.
+TEST(RecentPerScan, KeepsTheScansHeardFromMostRecently) {
+  RecentPerScan<Map> maps(2, 999, 4);
+  maps.offer({"bunny", 0});
+  maps.offer({"teapot", 0});
+  maps.offer({"elk", 0});
+  maps.offer({"bunny", 1});  // bunny heard again
+  maps.offer({"cow", 0});
+  maps.offer({"dino", 0});  // a fifth scan: teapot, heard longest ago, goes
+  EXPECT_EQ(maps.find("teapot", 0), nullptr);
+  EXPECT_NE(maps.find("bunny", 0), nullptr);
+  EXPECT_NE(maps.find("bunny", 1), nullptr);
+  EXPECT_NE(maps.find("elk", 0), nullptr);
+  EXPECT_NE(maps.find("dino", 0), nullptr);
 }

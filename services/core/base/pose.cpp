@@ -79,6 +79,15 @@ void pose_to_arrays(const Pose& pose, double position_m[3], double quat_wxyz[4])
   quat_wxyz[3] = q.z();
 }
 
+bool is_rigid(const Pose& pose, double tolerance) {
+  const Eigen::Matrix4d& m = pose.matrix();
+  if (!m.allFinite()) return false;
+  if ((m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > tolerance) return false;
+  const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
+  return (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= tolerance &&
+         std::abs(r.determinant() - 1.0) <= tolerance;
+}
+
 double wrap_angle_rad(double a) {
   a = std::fmod(a + kPi, 2.0 * kPi);
   if (a <= 0) a += 2.0 * kPi;

@@ -35,6 +35,10 @@ Pose pose_from_arrays(const double position_m[3], const double quat_wxyz[4],
 // Writes a pose into a position and a unit quaternion (w, x, y, z; w >= 0).
 void pose_to_arrays(const Pose& pose, double position_m[3], double quat_wxyz[4]);
 
+// Whether `pose` is a rigid transform: every entry finite, the rotation orthonormal with
+// determinant +1 to within `tolerance`, the last row (0, 0, 0, 1).
+bool is_rigid(const Pose& pose, double tolerance = 1e-6);
+
 // Wraps an angle into (-pi, pi].
 double wrap_angle_rad(double a);
 // The angle equal to `a` modulo 2*pi that is nearest to `reference`.

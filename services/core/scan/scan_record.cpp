@@ -335,7 +335,7 @@ void ScanRecord::set_replay_of(const std::string& recorded, int views) {
 void ScanRecord::write(const std::string& state, const std::string& message, int views_done, double elapsed_s) {
   report_["status"] = {{"state", state},           {"message", message},        {"views_done", views_done},
                        {"views_planned", views_planned_}, {"elapsed_s", elapsed_s}, {"num_points", accumulated_.size()},
-                       {"next_request_id", next_request_id_}};
+                       {"next_request_id", next_request_id_}, {"answers_refused", answers_refused_}};
   write_json_atomic(report_, (out_ / "scan.json").string());
 }
 

@@ -127,6 +127,9 @@ class ScanRecord {
   // Request ids used so far end below this (written in scan.json's status, so that a resumed
   // coordinator never reuses one a service still has an answer for).
   void set_next_request_id(int64_t id) { next_request_id_ = id; }
+  // Answers that carried an outstanding request's id but were refused (a field out of range for
+  // what was asked): scan.json's status "answers_refused".
+  void set_answers_refused(int n) { answers_refused_ = n; }
   // Continues the record in its folder: scan.json as written so far and the merged cloud (a
   // resumed scan). Throws naming the file when scan.json is missing or not a scan of `scan_id`.
   void continue_from_folder(const std::string& scan_id);
@@ -145,6 +148,7 @@ class ScanRecord {
   std::deque<DepthFrame> depth_frames_;
   DepthImageWriter depth_writer_;
   int64_t next_request_id_ = 1;
+  int answers_refused_ = 0;
 };
 
 }  // namespace pbnbv

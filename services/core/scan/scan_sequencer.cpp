@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <stdexcept>
 
 #include "core/base/format.hpp"
@@ -151,6 +152,8 @@ void ScanSequencer::replay(std::vector<std::vector<Pose>> attempts, const std::s
 }
 
 void ScanSequencer::start(double now_s) {
+  done_.next_request_id = first_request_id();
+  record_.set_next_request_id(done_.next_request_id);
   t_start_s_ = now_s;
   phase_ = Phase::kWaitingReady;
   set_status(ScanState::kStarting, "waiting for the rig and services", now_s);
@@ -233,11 +236,37 @@ void ScanSequencer::on(const Heard& h, double now_s) {
 
 void ScanSequencer::on(const ViewPlan& p, double now_s) {
   if (p.scan_id != s_.scan_id || phase_ != Phase::kPlanning || p.request_id != awaited_.request_id) return;
+  const std::string what = "VIEW_PLAN of request " + std::to_string(p.request_id);
+  if (p.iteration != iteration_) return refuse(what, "it plans view " + std::to_string(p.iteration + 1));
+  if (p.planner != s_.planner) return refuse(what, std::string("its planner is ") + name_of(p.planner));
+  if (p.outcome == PlanOutcome::kView) {
+    if (!is_rigid(p.object_T_camera)) return refuse(what, "its view is not a rigid transform");
+    if (!std::isfinite(p.view_quality)) return refuse(what, "its view_quality is not finite");
+    if (p.alternatives.size() > static_cast<std::size_t>(s_.alternatives) ||
+        p.alternative_quality.size() != p.alternatives.size()) {
+      return refuse(what, std::to_string(p.alternatives.size()) + " alternatives with " +
+                              std::to_string(p.alternative_quality.size()) + " qualities (at most " +
+                              std::to_string(s_.alternatives) + " asked for)");
+    }
+    for (const Pose& a : p.alternatives) {
+      if (!is_rigid(a)) return refuse(what, "an alternative is not a rigid transform");
+    }
+  }
+  for (const int n : {p.num_candidates, p.num_unreachable, p.num_excluded, p.num_scored}) {
+    if (n < 0 || n > s_.candidates) {
+      return refuse(what, "a candidate count " + std::to_string(n) + " is outside 0.." + std::to_string(s_.candidates));
+    }
+  }
   planned(p, now_s);
 }
 
 void ScanSequencer::on(const MoveResult& r, double now_s) {
   if (r.scan_id != s_.scan_id || phase_ != Phase::kMoving || r.request_id != awaited_.request_id) return;
+  const std::string what = "MOVE_RESULT of request " + std::to_string(r.request_id);
+  if (r.iteration != iteration_) return refuse(what, "it is for view " + std::to_string(r.iteration + 1));
+  if (r.status == MoveStatus::kReached && !is_rigid(r.reached_object_T_camera)) {
+    return refuse(what, "the reached pose is not a rigid transform");
+  }
   if (r.status == MoveStatus::kBusy) {  // still finishing an earlier move: ask again now
     outputs_.push_back(*awaited_.request);
     awaited_.last_sent_s = now_s;
@@ -264,6 +293,9 @@ void ScanSequencer::on(const MoveResult& r, double now_s) {
 
 void ScanSequencer::on(const CaptureResult& c, double now_s) {
   if (c.scan_id != s_.scan_id || phase_ != Phase::kCapturing || c.request_id != capture_id_) return;
+  if (c.iteration != iteration_) {
+    return refuse("CLOUD of request " + std::to_string(c.request_id), "it is for view " + std::to_string(c.iteration + 1));
+  }
   captured(c, now_s);
 }
 
@@ -271,6 +303,10 @@ void ScanSequencer::on(const RegisteredCloud& r, double now_s) {
   // The registration may answer the cloud before the sequence has taken the cloud itself.
   if (r.scan_id != s_.scan_id || r.request_id != capture_id_) return;
   if (phase_ != Phase::kCapturing && phase_ != Phase::kRegistering) return;
+  if (r.iteration != iteration_) {
+    return refuse("REGISTERED_CLOUD of request " + std::to_string(r.request_id),
+                  "it is for view " + std::to_string(r.iteration + 1));
+  }
   registered_ = r;
   if (phase_ == Phase::kRegistering) registered(now_s);
 }
@@ -283,7 +319,8 @@ void ScanSequencer::on(const VoxelMapSummary& m, double now_s) {
 }
 
 void ScanSequencer::on(const EllipsoidSetSummary& e, double /*now_s*/) {
-  if (e.scan_id != s_.scan_id || e.iteration < done_.latest_map) return;
+  // Sets of maps not yet made (a view after the current one) are not kept: nothing asks for them.
+  if (e.scan_id != s_.scan_id || e.iteration < done_.latest_map || e.iteration > iteration_) return;
   ellipsoids_[e.iteration] = e;
 }
 
@@ -617,6 +654,22 @@ void ScanSequencer::wait_for_answer(double deadline_s, double now_s) {
 std::string ScanSequencer::waited(const std::string& from, const std::string& what, const std::string& request) const {
   return from + " sent no " + what + " for " + view_name() + " in " + fixed(awaited_.deadline_s - awaited_.since_s, 0) +
          " s (" + request + " sent " + std::to_string(awaited_.sends) + (awaited_.sends == 1 ? " time)" : " times)");
+}
+
+int64_t first_request_id() {
+  std::random_device entropy;
+  std::uniform_int_distribution<int64_t> pick(int64_t{1} << 32, (int64_t{1} << 62) - 1);
+  return pick(entropy);
+}
+
+void ScanSequencer::refuse(const std::string& what, const std::string& why) {
+  constexpr int kLogged = 20;
+  ++done_.answers_refused;
+  record_.set_answers_refused(done_.answers_refused);
+  if (done_.answers_refused <= kLogged) {
+    progress("refused a " + what + ": " + why + " (" + std::to_string(done_.answers_refused) + " refused so far" +
+             (done_.answers_refused == kLogged ? "; the next ones are counted in scan.json, not logged)" : ")"));
+  }
 }
 
 void ScanSequencer::progress(const std::string& what, bool ends_view) {

@@ -19,7 +19,10 @@
 // - stop on the planner's decision, the surface rule (core/scan/stop_rule.hpp), the view
 //   budget, or no view produced.
 // Every request is re-sent with the same request_id while unanswered and has a deadline
-// (ScanTimeouts); request ids are unique within the scan.
+// (ScanTimeouts); request ids are unique within the scan and start at a random number. An answer
+// is taken only for the request outstanding and only when its fields are what was asked (its
+// view, its planner, poses that are rigid transforms, counts within the request's); one that is
+// not is refused, counted (scan.json status "answers_refused") and logged, never acted on.
 #include <cstdint>
 #include <filesystem>
 #include <limits>
@@ -100,8 +103,14 @@ struct ScanSoFar {
   Vector6d joints_rad = Vector6d::Zero();  // the rig where the last view was reached
   double turntable_rad = 0;
   int views_done = 0;                      // views that produced a cloud
-  int64_t next_request_id = 1;             // request ids are unique within the scan
+  int64_t next_request_id = 1;             // request ids are unique within the scan; a new scan
+                                           // starts them at a random number (first_request_id)
+  int answers_refused = 0;                 // answers with an outstanding id but a field out of range
 };
+
+// Where a new scan's request ids start: a random number in [2^32, 2^62) from the system's entropy
+// source, so that a sender who has not seen the scan's requests cannot guess an id to answer.
+int64_t first_request_id();
 
 // The views a scan knows before it has seen anything (object_T_camera): every view of the ring
 // planner, or the first view of a next-best-view scan (--initial-view, else the ring's first), on
@@ -201,6 +210,8 @@ class ScanSequencer {
     return done_.next_request_id++;
   }
   CaptureRequest capture_request(int iteration, int64_t request_id, int64_t not_before_utime) const;
+  // Refuses an answer to the outstanding request: counted, recorded and logged (the first 20).
+  void refuse(const std::string& what, const std::string& why);
   void progress(const std::string& what, bool ends_view = false);
   void set_status(ScanState state, const std::string& message, double now_s);
   void publish_status(double now_s);

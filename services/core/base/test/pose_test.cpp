@@ -62,3 +62,27 @@ TEST(Pose, RotationAngleIsAccurateFromZeroToPi) {
   EXPECT_NEAR(rotation_angle_rad(a, a * Eigen::AngleAxisd(kPi, axis).toRotationMatrix()), kPi, 1e-7);
   EXPECT_EQ(rotation_angle_rad(a, a), 0.0);
 }
+
+// A rotation about z by 30 deg and a shift is rigid; a shear of 1e-3, a mirror (determinant -1),
+// a scale of 1.001, a NaN and a last row that is not (0, 0, 0, 1) are not.
+TEST(Pose, IsRigidAcceptsRotationsAndShiftsAndNothingElse) {
+  Pose p = Pose::Identity();
+  p.rotate(Eigen::AngleAxisd(30.0 * kPi / 180.0, Eigen::Vector3d::UnitZ()));
+  p.translation() = Eigen::Vector3d(0.5, -2, 3);
+  EXPECT_TRUE(is_rigid(p));
+  Pose shear = p;
+  shear.matrix()(0, 1) += 1e-3;
+  EXPECT_FALSE(is_rigid(shear));
+  Pose mirror = p;
+  mirror.matrix().col(2) *= -1;
+  EXPECT_FALSE(is_rigid(mirror));
+  Pose scaled = p;
+  scaled.matrix().topLeftCorner<3, 3>() *= 1.001;
+  EXPECT_FALSE(is_rigid(scaled));
+  Pose nan = p;
+  nan.translation().x() = std::nan("");
+  EXPECT_FALSE(is_rigid(nan));
+  Pose projective = p;
+  projective.matrix()(3, 0) = 0.1;
+  EXPECT_FALSE(is_rigid(projective));
+}

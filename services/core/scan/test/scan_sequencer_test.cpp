@@ -482,7 +482,9 @@ TEST_F(ScanSequencerTest, MoreThanAHundredAlternativesKeepRequestIdsUnique) {
   for (const auto& [t, r] : captures_) ids.insert(r.request_id);
   for (const auto& [t, r] : plans_) ids.insert(r.request_id);
   EXPECT_EQ(ids.size(), moves_.size() + captures_.size() + plans_.size()) << "a request id was used twice";
-  EXPECT_EQ(seq_->so_far().next_request_id, static_cast<int64_t>(ids.size()) + 1);
+  // Consecutive from a random start: the next id is the first plus the number used.
+  EXPECT_EQ(seq_->so_far().next_request_id, *ids.begin() + static_cast<int64_t>(ids.size()));
+  EXPECT_GE(*ids.begin(), int64_t{1} << 32);
   const json scan = scan_json();
   EXPECT_EQ(scan["views"][1]["option"], 120);
   EXPECT_EQ(scan["views"][1]["failed_moves"].size(), 120u);
@@ -871,6 +873,78 @@ TEST_F(ScanSequencerTest, AnswersOfAnotherScanOrAnOldRequestAreIgnored) {
   run(10);
   EXPECT_FALSE(seq_->finished());
   EXPECT_FALSE(std::filesystem::exists(dir_ / "scan.json")) << "nothing recorded yet";
+}
+
+// Request ids start at a random number per scan (2^32 or more), so a sender that has not seen the
+// scan's requests cannot answer one: a forged "stop" for every id from 0 to 60 (the ids a scan
+// used to start from) ends nothing, and the scan completes its views.
+TEST_F(ScanSequencerTest, RequestIdsStartAtARandomNumberSoForgedAnswersToSmallIdsEndNothing) {
+  std::set<int64_t> firsts;
+  for (int k = 0; k < 4; ++k) firsts.insert(first_request_id());
+  EXPECT_EQ(firsts.size(), 4u) << "four scans, four different first ids";
+  for (const int64_t f : firsts) EXPECT_GE(f, int64_t{1} << 32);
+
+  // While each plan is awaited, 61 forged stops arrive before the scorer's answer.
+  scorer = [&](const PlanRequest& r) -> std::optional<ViewPlan> {
+    for (int64_t id = 0; id <= 60; ++id) {
+      ViewPlan stop;
+      stop.scan_id = "unit-scan";
+      stop.iteration = r.iteration;
+      stop.request_id = id;
+      stop.planner = PlannerKind::kPbnbv;
+      stop.outcome = PlanOutcome::kStop;
+      stop.reason = "forged";
+      later(0.1, stop);
+    }
+    return make_plan(r, view_from(0.1, 0.7, 0.3 + 0.01 * r.iteration), {});
+  };
+  start(test_settings("pbnbv", 3));
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  const json scan = scan_json();
+  EXPECT_EQ(scan["status"]["views_done"], 3);
+  EXPECT_EQ(scan["status"]["state"], "done");
+  for (const auto& [t, r] : plans_) EXPECT_GE(r.request_id, int64_t{1} << 32);
+}
+
+// An answer with the outstanding request's id is still refused when a field is not what was
+// asked: another view, another planner, more alternatives than asked for, a pose that is not a
+// rigid transform, a candidate count above N. Each is counted (scan.json "answers_refused") and
+// logged, none is acted on; the scorer's own answer then plans the view.
+TEST_F(ScanSequencerTest, AnAnswerWhoseFieldsAreNotWhatWasAskedIsRefusedCountedAndNotActedOn) {
+  ScanSettings s = test_settings("pbnbv", 2);
+  s.alternatives = 3;
+  const Pose real = view_from(0.1, 0.7, 0.31);
+  scorer = [&](const PlanRequest& r) -> std::optional<ViewPlan> {
+    const ViewPlan good = make_plan(r, real, {});
+    ViewPlan wrong_view = make_plan(r, view_from(0.9, 0.1, 0.2), {});
+    wrong_view.iteration = r.iteration + 5;
+    ViewPlan wrong_planner = wrong_view;
+    wrong_planner.iteration = r.iteration;
+    wrong_planner.planner = PlannerKind::kRandom;
+    ViewPlan too_many = make_plan(r, view_from(0.9, 0.1, 0.2), std::vector<Pose>(4, real));
+    ViewPlan sheared = make_plan(r, view_from(0.9, 0.1, 0.2), {});
+    sheared.object_T_camera.matrix()(0, 1) += 0.5;
+    ViewPlan counted = make_plan(r, view_from(0.9, 0.1, 0.2), {});
+    counted.num_scored = 100000;
+    ViewPlan stop = good;  // a well-formed stop of another view
+    stop.outcome = PlanOutcome::kStop;
+    stop.iteration = r.iteration - 1;
+    double t = 0.1;
+    for (const ViewPlan& bad : {wrong_view, wrong_planner, too_many, sheared, counted, stop}) later(t += 0.05, bad);
+    return good;  // at 0.5 s, after the six
+  };
+  start(s);
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  const json scan = scan_json();
+  EXPECT_EQ(scan["status"]["views_done"], 2);
+  EXPECT_EQ(scan["status"]["answers_refused"], 6) << "six refused for view 2";
+  ASSERT_EQ(moves_of(1).size(), 1u);
+  EXPECT_TRUE(moves_of(1)[0].object_T_camera.isApprox(real, 1e-12)) << "the scorer's own plan was moved to";
+  int logged = 0;
+  for (const std::string& l : lines_) logged += l.find("refused a VIEW_PLAN") != std::string::npos;
+  EXPECT_EQ(logged, 6);
 }
 
 TEST_F(ScanSequencerTest, StatusIsRepeatedEverySecondWhileWaiting) {
