@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <string>
 #include <thread>
 
@@ -527,4 +528,60 @@ TEST(Faults, TheMainJobsLogHoldsEveryMessageOfItsScan) {
   EXPECT_NE(r.output.find("scan.lcmlog: "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("every depth frame, cloud, registered cloud and map of the 10 views"), std::string::npos)
       << r.output;
+}
+
+// Hostile traffic from view 2 to the end of a 10-view pbnbv scan on the free rig
+// (pbnbv-test-hostile, every 100 ms: garbage of random length on every channel; a depth frame, a
+// cloud and a voxel map of ~100 bytes claiming 2^31 - 1 elements; a zlib frame declaring 8192 x
+// 8192; forged VIEW_PLAN "stop", MOVE_RESULT "unreachable" and failed CLOUD answers for request ids
+// 0..60 and random ones; a VOXEL_MAP and ELLIPSOIDS of view 2^31 - 1; a PLAN_REQUEST for view
+// 5000). The scan completes 10 of 10 views "done" with no process restarted and the coverage of
+// the same scan without it (the free rig is reproducible: equal to 0.05 points), every process
+// stays under 1 GB, and the services said what they refused. (Before: the forged stops ended the
+// scan at view 7 with exit 0; the 2 GB counts got the camera and mapping killed as hung.)
+TEST(Faults, HostileTrafficFromView2TakesNothingOver) {
+  const fs::path dir = fresh_dir("hostile");
+  const fs::path hostile = dir / "hostile", clean = dir / "clean";
+  const std::string nbv = "--object bunny --rig free --views 10 --sim-speed 4";
+  const std::string sender = bin_dir() + "/../tests/pbnbv-test-hostile --out " + hostile.string() + " --from-view 2 --deadline 600";
+  const CommandResult r = run_command(netns_run() + " sh -c '" + sender + " > " + hostile.string() + ".hostile 2>&1 & p=$!; " +
+                                      scan_command(hostile, nbv) + "; s=$?; wait $p; exit $s'");
+  const std::string report = read_text(hostile.string() + ".hostile");
+  std::cout << report;
+  ASSERT_EQ(r.exit_code, 0) << r.output << read_text(hostile.string() + ".stdout");
+  ASSERT_NE(report.find("hostile traffic for scan"), std::string::npos) << "the sender never started";
+  ASSERT_EQ(run_command(netns_run() + " sh -c '" + scan_command(clean, nbv + " --no-log") + "'").exit_code, 0)
+      << read_text(clean.string() + ".stdout");
+
+  const auto s = read_json_file(hostile / "scan.json");
+  EXPECT_EQ(s["status"]["state"], "done");
+  EXPECT_EQ(s["status"]["views_done"], 10);
+  for (const auto& p : read_json_file(hostile / "processes.json")["processes"]) {
+    EXPECT_EQ(p["restarts"], 0) << p["name"];
+  }
+  const std::vector<double> with = eval::evaluate_coverage(hostile).coverage_by_view;
+  const std::vector<double> without = eval::evaluate_coverage(clean).coverage_by_view;
+  ASSERT_EQ(with.size(), 10u);
+  ASSERT_EQ(without.size(), 10u);
+  for (int i = 0; i < 10; ++i) EXPECT_NEAR(with[i], without[i], 0.05) << "view " << i + 1;
+  // Peak memory: "peak RSS (VmHWM, MB): camera 93.1 coordinator 120.4 ..."
+  const std::size_t at = report.find("peak RSS (VmHWM, MB):");
+  ASSERT_NE(at, std::string::npos);
+  std::istringstream peaks(report.substr(at + 21));
+  std::string name;
+  double mb = 0;
+  int read = 0;
+  while (peaks >> name >> mb) {
+    EXPECT_LT(mb, 1024.0) << name;
+    ++read;
+  }
+  EXPECT_GE(read, 8) << "peaks of the launcher and its processes";
+  int rejected = 0;
+  for (const auto& e : fs::directory_iterator(hostile / "logs")) {
+    const std::string log = read_text(e.path());
+    for (std::size_t k = log.find("rejected message on"); k != std::string::npos; k = log.find("rejected message on", k + 1)) ++rejected;
+  }
+  EXPECT_GT(rejected, 0) << "the services name what they refused";
+  std::cout << "hostile traffic: coverage after view 10 " << with.back() << " % (without it " << without.back()
+            << " %); " << rejected << " log lines on rejected messages\n";
 }
