@@ -66,8 +66,14 @@ void check_input_file(const std::string& path, const char* ctx) {
   if (st.type() == std::filesystem::file_type::not_found) fail(ctx, path, "file does not exist");
   if (ec) fail(ctx, path, "cannot access file: " + ec.message());
   if (std::filesystem::is_directory(st)) fail(ctx, path, "is a directory, not a file");
+  // A link to /dev/zero or a FIFO would be read until memory runs out or forever.
+  if (!std::filesystem::is_regular_file(st)) fail(ctx, path, "is not a regular file (a device, FIFO or socket)");
   if (!std::ifstream(path, std::ios::binary)) fail(ctx, path, std::string("cannot open file: ") + std::strerror(errno));
-  if (std::filesystem::file_size(path, ec) == 0 && !ec) fail(ctx, path, "empty file");
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (!ec && size == 0) fail(ctx, path, "empty file");
+  if (!ec && size > kMaxInputFileBytes) {
+    fail(ctx, path, fmt::format("{} bytes, more than the {} bytes (4 GiB) an input file may hold", size, kMaxInputFileBytes));
+  }
 }
 
 std::string stopped_at(const std::string& path, std::istream& in, bool whole_lines) {

@@ -2,13 +2,19 @@
 // What CGAL's file readers leave unsaid, shared by the mesh and cloud readers of this folder:
 // where a reader stopped, and the checks of a PLY header CGAL needs done before it reads.
 #include <cstddef>
+#include <cstdint>
 #include <istream>
 #include <string>
 
 namespace pbnbv {
 
+// The largest mesh, cloud or config file read (4 GiB): far above any real scan's, far below
+// what a reader's memory would stand.
+inline constexpr std::uintmax_t kMaxInputFileBytes = std::uintmax_t{4} << 30;
+
 // Throws std::runtime_error "<ctx>: <path>: ..." unless `path` names an existing, non-empty
-// file (not a directory) that can be opened for reading.
+// regular file (not a directory, device, FIFO or socket, also behind a link) of at most
+// kMaxInputFileBytes that can be opened for reading.
 void check_input_file(const std::string& path, const char* ctx);
 
 // Where a reader that failed on `in` (a text file at `path`) stopped: "at line N: '<text>'".

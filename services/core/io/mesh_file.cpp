@@ -28,6 +28,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -143,6 +144,34 @@ std::string stl_failure(const std::string& path, std::uintmax_t size) {
   return "neither an ASCII nor a binary STL file CGAL::IO::read_STL can read";
 }
 
+// The counts an OFF header declares ("OFF" or a variant such as "COFF", then the vertex, face and
+// edge counts, '#' comments allowed), checked against the file's size before CGAL reserves for
+// them: a vertex takes at least 6 bytes ("0 0 0\n"), a face at least 8 ("3 0 1 2\n").
+void check_off_counts(std::istream& in, const std::string& path) {
+  std::vector<std::string> tokens;
+  std::string line;
+  while (tokens.size() < 4 && std::getline(in, line)) {
+    std::istringstream words(line.substr(0, line.find('#')));
+    for (std::string w; tokens.size() < 4 && words >> w;) tokens.push_back(w);
+  }
+  in.clear();
+  in.seekg(0);
+  if (tokens.size() < 4 || tokens[0].size() < 3 || tokens[0].compare(tokens[0].size() - 3, 3, "OFF") != 0) return;  // CGAL says why
+  const std::uintmax_t size = std::filesystem::file_size(path);
+  auto count = [&](const std::string& t, const char* what, const char* plural, std::uintmax_t min_bytes) {
+    std::uintmax_t n = 0;
+    const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), n);
+    if (ec != std::errc() || end != t.data() + t.size()) {
+      fail(kLoad, path, fmt::format("the OFF header's {} count '{}' is not a whole number", what, t));
+    }
+    if (n > size / min_bytes) {
+      fail(kLoad, path, fmt::format("the OFF header declares {} {}, more than a file of {} bytes can hold", n, plural, size));
+    }
+  };
+  count(tokens[1], "vertex", "vertices", 6);
+  count(tokens[2], "face", "faces", 8);
+}
+
 }  // namespace
 
 TriangleMesh load_mesh(const std::string& path) {
@@ -171,6 +200,7 @@ TriangleMesh load_mesh(const std::string& path) {
       fail(kLoad, path, "cannot read it as OBJ: CGAL::IO::read_OBJ stopped " + stopped_at(path, in, true));
     }
   } else if (ext == ".off") {
+    check_off_counts(in, path);
     CGAL::IO::set_mode(in, CGAL::IO::ASCII);
     if (!CGAL::IO::read_OFF(in, points, polygons, quiet)) {
       fail(kLoad, path, "cannot read it as OFF: CGAL::IO::read_OFF stopped " + stopped_at(path, in, true));

@@ -228,6 +228,24 @@ TEST_F(MeshFiles, OffIndexOutOfRange) {
   expect_error([&] { load_mesh(p); }, {p, "line 6", "'3 0 1 3'"});
 }
 
+// A header that declares more than the file can hold is refused naming the file and the count
+// before anything is reserved for it (before: std::bad_alloc, no file named).
+TEST_F(MeshFiles, OffHeaderCountsBeyondTheFileAreRefusedBeforeReading) {
+  const std::string huge = write("huge.off", "OFF\n4000000000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  expect_error([&] { load_mesh(huge); }, {huge, "declares 4000000000000 vertices", "bytes can hold"});
+  const std::string faces = write("faces.off", "OFF 3 90000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  expect_error([&] { load_mesh(faces); }, {faces, "declares 90000000000 faces"});
+  const std::string word = write("word.off", "OFF\nmany 1 0\n0 0 0\n");
+  expect_error([&] { load_mesh(word); }, {word, "vertex count 'many' is not a whole number"});
+}
+
+// A mesh path that is a link to /dev/zero (read until memory ran out) or a FIFO is refused.
+TEST_F(MeshFiles, ALinkToADeviceIsNotAMeshFile) {
+  const std::string link = path("zero.obj");
+  std::filesystem::create_symlink("/dev/zero", link);
+  expect_error([&] { load_mesh(link); }, {link, "not a regular file"});
+}
+
 // ---- PLY ---------------------------------------------------------------------------------
 TEST_F(MeshFiles, PlyAsciiBox) {
   std::string s =
