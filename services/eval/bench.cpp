@@ -257,9 +257,7 @@ void BenchSpec::validate() const {
   kPlannerSeed.checked(seed);
   kJobs.checked(jobs);
   kFirstViews.checked(first_views);
-  if (initial_view && initial_view->norm() < 0.05) {
-    throw std::invalid_argument("--initial-view must be away from the object centre (at least 0.05 m)");
-  }
+  if (initial_view) check_initial_view(*initial_view);
   if (initial_view && first_views > 1) {
     throw std::invalid_argument(fmt::format("--first-views {} draws the first views 2..{} while --initial-view fixes "
                                             "the first view of every scan: give one or the other",

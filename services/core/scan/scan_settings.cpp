@@ -165,11 +165,19 @@ void ScanSettings::validate() const {
   kCloudVoxel.checked(voxel_m);
   kSpeedScale.checked(speed_scale);
   kSimSpeed.checked(sim_speed);
-  if (initial_view_m.allFinite() && initial_view_m.norm() < 0.05) {
-    throw std::invalid_argument("--initial-view must be away from the object centre (at least 0.05 m)");
-  }
+  // Not given: every coordinate NaN.
+  if (!initial_view_m.array().isNaN().all()) check_initial_view(initial_view_m);
   camera.validate();
   depth_range.validate();
+}
+
+void check_initial_view(const Eigen::Vector3d& p) {
+  const std::string given = fmt::format("--initial-view {},{},{}", p.x(), p.y(), p.z());
+  if (!p.allFinite()) throw std::invalid_argument(given + ": every coordinate must be a finite number (m)");
+  if (p.norm() < 0.05) throw std::invalid_argument(given + " must be away from the object centre (at least 0.05 m)");
+  if (p.norm() > kMaxInitialViewM) {
+    throw std::invalid_argument(fmt::format("{} is {:.3g} m from the object centre: at most {} m", given, p.norm(), kMaxInitialViewM));
+  }
 }
 
 Eigen::Vector3d ScanSettings::expected_extent_m() const {

@@ -21,6 +21,12 @@
 
 namespace pbnbv {
 
+// The farthest --initial-view from the object centre, m (a camera farther sees nothing a rig can use).
+inline constexpr double kMaxInitialViewM = 10.0;
+// Throws std::invalid_argument naming --initial-view unless `p` is finite and 0.05..10 m from the
+// object centre.
+void check_initial_view(const Eigen::Vector3d& p);
+
 struct ScanSettings {
   std::string scan_id;
   RigKind rig = kRig.value;

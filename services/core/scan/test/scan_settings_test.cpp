@@ -111,3 +111,34 @@ TEST(UnknownObject, ItsFrameKeepOutAndCropComeFromTheWorkingVolume) {
   EXPECT_EQ(back.working_volume->to_text(), "cylinder:0.2,0.5");
   EXPECT_TRUE(back.expected_extent_m().isApprox(Eigen::Vector3d(0.4, 0.4, 0.5)));
 }
+
+namespace pbnbv {
+
+// --initial-view is a camera position 0.05..10 m from the object centre, every coordinate finite:
+// 1e308 (which passed and failed only in the coordinator, after every process had started), inf
+// and a point at the centre are refused naming the option; 0.9 m above is taken.
+TEST(InitialView, OnlyAFinitePointFiveCentimetresToTenMetresFromTheCentreIsTaken) {
+  ScanSettings s;
+  s.scan_id = "unit";
+  s.initial_view_m = Eigen::Vector3d(0, 0, 0.9);
+  EXPECT_NO_THROW(s.validate());
+  auto refused = [&](const Eigen::Vector3d& p, const std::string& why) {
+    s.initial_view_m = p;
+    try {
+      s.validate();
+      ADD_FAILURE() << p.transpose() << " was taken";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("--initial-view"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  };
+  refused(Eigen::Vector3d(1e308, 0, 0), "at most 10 m");
+  refused(Eigen::Vector3d(0, 10.01, 0), "at most 10 m");
+  refused(Eigen::Vector3d(std::numeric_limits<double>::infinity(), 0, 0), "finite");
+  refused(Eigen::Vector3d(std::nan(""), 0, 1), "finite");
+  refused(Eigen::Vector3d(0.01, 0, 0.01), "at least 0.05 m");
+  s.initial_view_m = Eigen::Vector3d::Constant(std::nan(""));  // not given
+  EXPECT_NO_THROW(s.validate());
+}
+
+}  // namespace pbnbv
