@@ -44,7 +44,7 @@ class MotionService {
     bus_.subscribe<move_request_t>(channels::kMoveRequest, [this](const move_request_t& r) { on_request(r); });
     bus_.subscribe<stop_request_t>(channels::kStop, [this](const stop_request_t& s) {
       log_warn("STOP (" + s.reason + "): holding the rig where it is");
-      apply(sequencer_.halt("STOP (" + s.reason + ")", bus::now_s()));
+      apply(sequencer_.halt("STOP (" + s.reason + ")", bus::now_s(), s.scan_id));
     });
   }
 

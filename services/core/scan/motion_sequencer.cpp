@@ -54,6 +54,14 @@ MotionStep MotionSequencer::on_request(const MoveRequest& r, double now_s) {
     return step;  // already moving for it
   }
   MoveResult result = blank_result(r);
+  last_scan_ = r.scan_id;
+  if (held_ && held_->scan_id == r.scan_id) {
+    result.status = MoveStatus::kRejected;
+    result.reason = "the rig is held: " + held_->why + " (a new scan or pbnbv scan --resume releases it)";
+    step.result = result;
+    return step;
+  }
+  held_.reset();  // another scan: a new one
   if (job_) {
     result.status = MoveStatus::kBusy;
     result.reason = fmt::format("busy with request {}", job_->request.request_id);
@@ -237,8 +245,9 @@ MotionStep MotionSequencer::finish(MoveStatus status, const std::string& reason,
   return step;
 }
 
-MotionStep MotionSequencer::halt(const std::string& why, double now_s) {
+MotionStep MotionSequencer::halt(const std::string& why, double now_s, const std::string& scan_id) {
   MotionStep step;
+  held_ = Held{scan_id.empty() ? last_scan_ : scan_id, why};
   if (job_) step = finish(MoveStatus::kRejected, "halted: " + why, now_s);
   ArmCommand hold;
   hold.seq = next_seq_++;

@@ -64,12 +64,23 @@ class MotionSequencer {
   MotionStep tick(double now_s);
 
   // STOP: holds the arm where it is and the turntable at its last reading (new commands, sent
-  // at once), and answers the move in progress kRejected with `why`.
-  MotionStep halt(const std::string& why, double now_s);
+  // at once), and answers the move in progress kRejected with `why`. Latched: every later request
+  // of the held scan (`scan_id`; "": the scan of the last request) is answered kRejected, the rig
+  // not moved, until a request of another scan comes (a new scan) or the executor starts again
+  // (`pbnbv scan --resume` starts every process afresh).
+  MotionStep halt(const std::string& why, double now_s, const std::string& scan_id = "");
+  // The scan STOP holds the rig for, or nullptr.
+  const std::string* held_scan() const { return held_ ? &held_->scan_id : nullptr; }
 
   bool moving() const { return job_.has_value(); }
 
  private:
+  struct Held {
+    std::string scan_id;
+    std::string why;
+  };
+  std::optional<Held> held_;  // STOP latched
+  std::string last_scan_;     // of the last request
   struct Job {
     MoveRequest request;
     ViewSolution solution;

@@ -484,5 +484,42 @@ TEST_F(ArmMotion, HaltHoldsTheRigWhereItIsAndEndsTheMoveInProgress) {
   EXPECT_FALSE(again.result);
 }
 
+// STOP is latched: the held scan's next move requests (a coordinator that re-sends, a forged
+// request) are answered kRejected and move nothing; a request of another scan (a new scan)
+// releases the rig and moves. (Before: the next request moved the rig again.)
+TEST_F(ArmMotion, StopHoldsTheScanUntilAnotherScanAsks) {
+  start();
+  seq_.halt("STOP (operator abort)", 101.0, "test");
+  ASSERT_NE(seq_.held_scan(), nullptr);
+  EXPECT_EQ(*seq_.held_scan(), "test");
+  idle_readings(102.0);
+  for (int64_t id : {2, 3}) {
+    const MotionStep refused = seq_.on_request(reachable_request(id), 102.0);
+    ASSERT_TRUE(refused.result);
+    EXPECT_EQ(refused.result->status, MoveStatus::kRejected);
+    EXPECT_NE(refused.result->reason.find("the rig is held: STOP (operator abort)"), std::string::npos) << refused.result->reason;
+    EXPECT_FALSE(refused.arm_command);
+    EXPECT_FALSE(refused.turntable_command);
+  }
+  MoveRequest next = reachable_request(1);
+  next.scan_id = "another";
+  const MotionStep moved = seq_.on_request(next, 103.0);
+  EXPECT_FALSE(moved.result) << moved.result->reason;
+  EXPECT_TRUE(moved.arm_command);
+  EXPECT_EQ(seq_.held_scan(), nullptr);
+}
+
+// STOP for every scan ("") holds the scan of the last request.
+TEST_F(ArmMotion, AStopForEveryScanHoldsTheScanInProgress) {
+  start();
+  seq_.halt("STOP (everyone)", 101.0);
+  ASSERT_NE(seq_.held_scan(), nullptr);
+  EXPECT_EQ(*seq_.held_scan(), "test");
+  idle_readings(102.0);
+  const MotionStep refused = seq_.on_request(reachable_request(5), 102.0);
+  ASSERT_TRUE(refused.result);
+  EXPECT_EQ(refused.result->status, MoveStatus::kRejected);
+}
+
 }  // namespace
 }  // namespace pbnbv
