@@ -62,6 +62,9 @@ struct PoseErrorModel {
 PoseErrorModel make_pose_error(double hand_eye_m, double hand_eye_rad, double turntable_rad,
                                double joint_sigma_rad, uint64_t seed);
 
+// The most one TURNTABLE_COMMAND may turn the turntable from its setpoint, rad (one full turn).
+inline constexpr double kMaxTurntableTurnRad = 2 * 3.14159265358979323846;
+
 // A command target outside its joint's limits (the twin reports kFaultOutOfLimits; other
 // std::invalid_argument from a command: kFaultCommandRejected).
 struct OutOfLimits : std::invalid_argument {
