@@ -229,7 +229,7 @@ void RigSim::command_arm(const Vector6d& target, double speed_scale, long seq) {
 void RigSim::command_turntable(double target_rad, double speed_scale, long seq) {
   if (!turntable_) throw std::invalid_argument("this rig has no turntable");
   // The turntable turns without end stops, but one command turns it at most one full turn from
-  // where it is heading: 1e6 rad would be eleven days of turning.
+  // where it is now (its setpoint): 1e6 rad would be eleven days of turning.
   if (std::isfinite(target_rad) && std::abs(target_rad - errors_.turntable_offset_rad - turntable_->setpoint[0]) > kMaxTurntableTurnRad) {
     std::ostringstream os;
     os << "turntable target " << target_rad << " rad is " << std::abs(target_rad - turntable_->setpoint[0])
