@@ -135,6 +135,31 @@ json_check "http://127.0.0.1:$PORT/api/scene?view=1" \
 json_check "http://127.0.0.1:$PORT/api/scene?view=$taken" "len(j['views_taken']) == $taken and j['chosen'] is None" \
   || fail "the last view of the folder: not $taken views taken, or a plan after the last view"
 curl -s -o /dev/null -w '%{http_code}' "http://127.0.0.1:$PORT/api/scene?view=99" | grep -q 404 || fail "view 99 is not a 404"
+# Hostile clients: another site's Host (DNS rebinding) is refused; a 4 MB body is refused before
+# it is buffered (the server's memory stays within 16 MB of before); twenty connections that send
+# nothing leave the page answering.
+code=$(curl -s -o /dev/null -w '%{http_code}' -H "Host: evil.example:$PORT" "http://127.0.0.1:$PORT/api/views")
+[ "$code" = 403 ] || fail "Host evil.example was answered $code, not 403"
+curl -sf -o /dev/null -H "Host: localhost:$PORT" "http://127.0.0.1:$PORT/api/views" || fail "Host localhost was refused"
+view_pid=${pids[-1]}
+rss() { awk '/^VmRSS/ {print $2}' "/proc/$view_pid/status"; }
+before=$(rss)
+code=$(head -c 4000000 /dev/zero | curl -s -o /dev/null -w '%{http_code}' --max-time 10 -X POST --data-binary @- \
+  "http://127.0.0.1:$PORT/api/views")
+[ "$code" = 413 ] || fail "a 4 MB body was answered $code, not 413"
+after=$(rss)
+[ $((after - before)) -lt 16384 ] || fail "a 4 MB body grew the view from $before kB to $after kB"
+"$PY" - "$PORT" <<'PYEOF' || fail "twenty idle connections starved the page"
+import socket, sys, time, urllib.request
+port = int(sys.argv[1])
+idle = [socket.create_connection(("127.0.0.1", port)) for _ in range(20)]
+for s in idle:
+    s.send(b"GET /api/views HTTP/1.1\r\n")  # and never the rest
+t0 = time.time()
+with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/views", timeout=3) as r:
+    assert r.status == 200
+print(f"pbnbv view: answered in {time.time() - t0:.2f} s beside 20 idle connections")
+PYEOF
 screenshot "http://127.0.0.1:$PORT/?view=1" "$tmp/dir.png"
 check_pixels "$tmp/dir.png" 300 50
 echo "pbnbv view: live and folder scenes drawn ($taken views)"

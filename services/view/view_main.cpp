@@ -17,6 +17,7 @@
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
 #include "bus/convert_planning.hpp"
+#include "bus/reply_cache.hpp"
 #include "cli/options.hpp"
 #include "core/base/install_paths.hpp"
 #include "core/base/log.hpp"
@@ -86,13 +87,16 @@ class LiveScene {
     bus.subscribe<voxel_set_t>(channels::kVoxelMap, [this](const voxel_set_t& m) { on_map(m); });
     bus.subscribe<ellipsoid_set_t>(channels::kEllipsoids, [this](const ellipsoid_set_t& m) { on_ellipsoids(m); });
     bus.subscribe<plan_request_t>(channels::kPlanRequest, [this](const plan_request_t& m) {
-      if (follows(m.scan_id)) requests_[m.request_id] = m;
+      if (follows(m.scan_id)) requests_.put(m.request_id, m);
     });
     bus.subscribe<view_plan_t>(channels::kViewPlan, [this](const view_plan_t& m) { on_plan(m); });
   }
 
  private:
   bool follows(const std::string& id) const { return !id.empty() && id == scene_.scan_id; }
+  // A scan has at most 1000 views (--views): what claims another is not kept.
+  static bool view_in_range(int iteration) { return iteration >= 0 && iteration < 1000; }
+  static constexpr std::size_t kRequestsKept = 16;
 
   void publish() { store_.put(scene_); }
 
@@ -117,7 +121,7 @@ class LiveScene {
   }
 
   void on_cloud(const registered_cloud_t& m) {
-    if (!follows(m.scan_id) || taken_.count(m.iteration)) return;  // a repeat from a cache
+    if (!follows(m.scan_id) || taken_.count(m.iteration) || !view_in_range(m.iteration)) return;  // a repeat from a cache
     taken_[m.iteration] = bus::from_msg(m.cloud.object_T_camera, "REGISTERED_CLOUD cloud.object_T_camera");
     // A new view: its scene is the one after it (the views taken so far counted), and its plan
     // (the next view's) is still to come; the plan made after the earlier view stays with that
@@ -139,7 +143,7 @@ class LiveScene {
   }
 
   void on_map(const voxel_set_t& m) {
-    if (!follows(m.scan_id)) return;
+    if (!follows(m.scan_id) || !view_in_range(m.iteration)) return;
     maps_[m.iteration] = bus::bbox_of(m);
     scene_.resolution_m = m.resolution_m;
     scene_.frontier.clear();
@@ -148,7 +152,7 @@ class LiveScene {
   }
 
   void on_ellipsoids(const ellipsoid_set_t& m) {
-    if (!follows(m.scan_id)) return;
+    if (!follows(m.scan_id) || !view_in_range(m.iteration)) return;
     std::vector<Ellipsoid>& e = ellipsoids_[m.iteration];
     e.clear();
     for (std::size_t i = 0; i < m.ellipsoids.size(); ++i) {
@@ -161,17 +165,17 @@ class LiveScene {
 
   void on_plan(const view_plan_t& m) {
     if (!follows(m.scan_id) || m.outcome != view_plan_t::kView || m.request_id == last_plan_) return;
-    const auto req = requests_.find(m.request_id);
-    if (req == requests_.end()) return;  // its request was not heard: nothing to score with
-    const auto map = maps_.find(req->second.map_iteration);
-    const auto ell = ellipsoids_.find(req->second.map_iteration);
+    const plan_request_t* req = requests_.find(m.request_id);
+    if (!req) return;  // its request was not heard (or is long gone): nothing to score with
+    const auto map = maps_.find(req->map_iteration);
+    const auto ell = ellipsoids_.find(req->map_iteration);
     last_plan_ = m.request_id;
     scene_.chosen = bus::from_msg(m.object_T_camera, "VIEW_PLAN object_T_camera");
     scene_.chosen_quality = m.view_quality;
     scene_.chosen_ranking = m.ranking;
     scene_.plan_candidates = m.num_candidates;
     if (map != maps_.end()) {
-      const PlanInput in = bus::plan_input_from_msg(req->second);
+      const PlanInput in = bus::plan_input_from_msg(*req);
       scene_.candidates = score_candidates(ell != ellipsoids_.end() ? ell->second : std::vector<Ellipsoid>{}, map->second,
                                            in.candidates, in.camera);
     }
@@ -187,11 +191,26 @@ class LiveScene {
   std::map<int, Pose> taken_;
   std::map<int, Eigen::AlignedBox3d> maps_;
   std::map<int, std::vector<Ellipsoid>> ellipsoids_;
-  std::map<int64_t, plan_request_t> requests_;
+  bus::ReplyCache<int64_t, plan_request_t> requests_{kRequestsKept};  // the last few: a plan follows its request
   int64_t last_plan_ = -1;
 };
 
 std::string read_file(const fs::path& p) { return read_text(p.string()); }
+
+constexpr std::size_t kViewMaxBodyBytes = 64 * 1024;
+constexpr std::size_t kViewWorkers = 32;
+
+// Whether a Host header names this machine's loopback: 127.0.0.1, localhost or [::1], with or
+// without a port.
+bool host_is_local(const std::string& host) {
+  std::string name = host;
+  if (!name.empty() && name.front() == '[') {
+    name = name.substr(0, name.find(']') + 1);
+  } else if (const std::size_t colon = name.find(':'); colon != std::string::npos) {
+    name = name.substr(0, colon);
+  }
+  return name == "127.0.0.1" || name == "localhost" || name == "[::1]";
+}
 
 }  // namespace
 
@@ -236,6 +255,25 @@ int main(int argc, char** argv) {
     server.set_socket_options([](socket_t sock) {
       int yes = 1;
       ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+    });
+    // Limits, so that no client can take the page from the user: the page only reads (GET), so a
+    // body beyond 64 kB is refused (413) before it is buffered; a client that sends or reads
+    // nothing for 5 s is dropped; 32 workers serve at once, so ten slow clients leave room.
+    server.set_payload_max_length(kViewMaxBodyBytes);
+    server.set_read_timeout(5, 0);
+    server.set_write_timeout(5, 0);
+    server.set_keep_alive_timeout(5);
+    server.set_keep_alive_max_count(100);
+    server.new_task_queue = [] { return new httplib::ThreadPool(kViewWorkers); };
+    // Only a page this machine opened by its own name: a browser led to 127.0.0.1 by another
+    // site's DNS name (DNS rebinding) sends that name as Host and is refused.
+    server.set_pre_routing_handler([](const httplib::Request& req, httplib::Response& res) {
+      if (host_is_local(req.get_header_value("Host"))) return httplib::Server::HandlerResponse::Unhandled;
+      res.status = 403;
+      res.set_content("pbnbv view serves http://127.0.0.1 and http://localhost only, not Host '" +
+                          req.get_header_value("Host").substr(0, 100) + "'",
+                      "text/plain");
+      return httplib::Server::HandlerResponse::Handled;
     });
     const auto file = [](httplib::Response& res, const fs::path& p, const char* type) {
       if (!fs::is_regular_file(p)) {
