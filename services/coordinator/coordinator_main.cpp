@@ -24,6 +24,7 @@
 #include "bus/convert_rig.hpp"
 #include "bus/convert_scan.hpp"
 #include "cli/options.hpp"
+#include "core/base/atomic_file.hpp"
 #include "core/base/log.hpp"
 #include "core/io/json.hpp"
 #include "core/scan/scan_comparison.hpp"
@@ -58,6 +59,12 @@ bool launcher_died(pid_t launcher) {
 
 constexpr int kSpinMs = 20;  // longest wait for a message before the sequencer's tick
 constexpr double kStopLingerS = 0.3;  // after STOP, before the scan's processes are stopped
+// A full disk under --out ends the scan "failed" before a file is left half written: below this
+// many free bytes the scan stops taking views, and the reserve (state/coordinator.reserve) is
+// freed for scan.json's last words. (A view writes a few MB: frames, depth image, map files, log.)
+constexpr int64_t kMinFreeBytes = int64_t{8} << 20;
+constexpr std::size_t kReserveBytes = std::size_t{1} << 20;
+constexpr double kFreeSpaceCheckS = 0.5;
 
 // Prints a progress line: on a terminal one line per view (each stage overwrites the last),
 // otherwise (logs, pipes) every stage on its own line.
@@ -131,30 +138,58 @@ int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out, bool r
                              [&](const heartbeat_t& h) { inbox.emplace_back(Heard{"heartbeat of " + h.service}); });
 
   const pid_t parent = ::getppid();
-  if (resume) {
-    scan.resume(bus::now_s());
-  } else {
-    scan.start(bus::now_s());
-  }
-  while (!scan.finished()) {
-    send(bus, scan.take_outputs());
-    if (stop_requested()) {
-      // SIGTERM from the kernel when the launcher died (PR_SET_PDEATHSIG): say so.
-      const bool orphaned = launcher_died(parent);
-      scan.stop(bus::now_s(), orphaned ? "stopped: the launcher (pid " + std::to_string(parent) + ") died"
-                                       : "stopped by the user");
-      break;
+  fs::create_directories(out / "state");
+  SpaceReserve reserve((out / "state" / "coordinator.reserve").string(), kReserveBytes);
+  // Ends the scan "failed" naming why (a write that failed, the disk full): scan.json is written
+  // with the space the reserve held.
+  auto fail_scan = [&](const std::string& why) {
+    reserve.release();
+    try {
+      scan.abort(bus::now_s(), "failed: " + why);
+    } catch (const std::exception& e) {
+      log_error("cannot record that the scan failed (" + why + "): " + e.what());
     }
-    bus.spin_once(kSpinMs);
-    if (stop_reason) {
-      // The motion executor holds the rig; stay on the bus a moment so the log records it still.
-      scan.stop(bus::now_s(), *stop_reason + " (STOP)");
-      for (const double end = bus::now_s() + kStopLingerS; bus::now_s() < end;) bus.spin_once(kSpinMs);
-      break;
+  };
+  double next_space_check_s = 0;
+  try {
+    if (resume) {
+      scan.resume(bus::now_s());
+    } else {
+      scan.start(bus::now_s());
     }
-    for (const ScanEvent& e : inbox) scan.handle(e, bus::now_s());
-    inbox.clear();
-    scan.tick(bus::now_s());
+    while (!scan.finished()) {
+      if (bus::now_s() >= next_space_check_s) {
+        next_space_check_s = bus::now_s() + kFreeSpaceCheckS;
+        const int64_t free = free_bytes(out.string());
+        if (free >= 0 && free < kMinFreeBytes) {
+          fail_scan("no space left on device under " + out.string() + " (" + std::to_string(free / 1024) +
+                    " kB free; a view needs a few MB): free some and resume it (pbnbv scan --resume " + out.string() + ")");
+          break;
+        }
+      }
+      send(bus, scan.take_outputs());
+      if (stop_requested()) {
+        // SIGTERM from the kernel when the launcher died (PR_SET_PDEATHSIG): say so.
+        const bool orphaned = launcher_died(parent);
+        scan.stop(bus::now_s(), orphaned ? "stopped: the launcher (pid " + std::to_string(parent) + ") died"
+                                         : "stopped by the user");
+        break;
+      }
+      bus.spin_once(kSpinMs);
+      if (stop_reason) {
+        // The motion executor holds the rig; stay on the bus a moment so the log records it still.
+        scan.stop(bus::now_s(), *stop_reason + " (STOP)");
+        for (const double end = bus::now_s() + kStopLingerS; bus::now_s() < end;) bus.spin_once(kSpinMs);
+        break;
+      }
+      for (const ScanEvent& e : inbox) scan.handle(e, bus::now_s());
+      inbox.clear();
+      scan.tick(bus::now_s());
+    }
+  } catch (const std::exception& e) {
+    // A write of the record failed (a full disk, a folder gone read-only): say so in scan.json.
+    log_error(e.what());
+    fail_scan(e.what());
   }
   send(bus, scan.take_outputs());
   if (::isatty(STDOUT_FILENO)) std::cout << "\r\033[K";  // clear an unfinished progress line

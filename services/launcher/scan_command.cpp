@@ -64,6 +64,16 @@ nlohmann::json processes_json(const std::string& scan_id, const std::vector<proc
   return {{"scan_id", scan_id}, {"launcher_pid", static_cast<int>(::getpid())}, {"processes", procs}};
 }
 
+// Writes processes.json, the record of what runs; a failure to write it (a full disk) is said and
+// does not stop the scan: the coordinator's scan.json says what became of the scan.
+void record_processes(const fs::path& out, const nlohmann::json& procs) {
+  try {
+    write_json_atomic(procs, (out / "processes.json").string());
+  } catch (const std::exception& e) {
+    std::cerr << "warning: " << e.what() << std::endl;
+  }
+}
+
 // How a process ended, for people: "exit status 3", "killed by signal 9 (SIGKILL)".
 std::string how_it_ended(int exit_code) {
   if (exit_code > 128) {
@@ -77,12 +87,19 @@ std::string how_it_ended(int exit_code) {
 // scan.json always ends in a final state: when the coordinator could not write it (it died, or
 // was stopped because another process died), the launcher does, naming the cause.
 void finish_record(const fs::path& out, const std::string& state, const std::string& cause) {
+  // The coordinator died holding its disk reserve: free it, so the record fits on a full disk.
+  std::error_code ignored;
+  fs::remove(out / "state" / "coordinator.reserve", ignored);
   const fs::path path = out / "scan.json";
   nlohmann::json scan = fs::exists(path) ? read_json(path.string()) : nlohmann::json::object();
   nlohmann::json& status = scan["status"];
   status["state"] = state;
   status["message"] = cause;
-  write_json_atomic(scan, path.string());
+  try {
+    write_json_atomic(scan, path.string());
+  } catch (const std::exception& e) {
+    std::cerr << "error: the scan " << state << " (" << cause << ") and this cannot be recorded: " << e.what() << std::endl;
+  }
 }
 
 // Says whether scan.lcmlog holds every DEPTH_FRAME, CLOUD, REGISTERED_CLOUD and VOXEL_MAP of the
@@ -352,7 +369,7 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
     process::stop_all(children, 5.0);
     throw;
   }
-  write_json_atomic(processes_json(s.scan_id, children), (out / "processes.json").string());
+  record_processes(out, processes_json(s.scan_id, children));
   process::Child* coordinator = &children.back();
   std::string cause;  // why the scan ended early, when the coordinator could not say
   int code = 0;
@@ -380,7 +397,7 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
     process::start(c);
     w.started_s = bus::now_s();
     w.heard_s = -1;
-    write_json_atomic(processes_json(s.scan_id, children, watch), (out / "processes.json").string());
+    record_processes(out, processes_json(s.scan_id, children, watch));
   };
   while (!done) {
     if (stop_requested()) {
@@ -437,7 +454,7 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
   }
   stop_logger_last(children, out);
   // How every process ended (0 = clean exit), for the user and for the tests.
-  write_json_atomic(processes_json(s.scan_id, children, watch), (out / "processes.json").string());
+  record_processes(out, processes_json(s.scan_id, children, watch));
   if (!cause.empty()) {
     finish_record(out, "failed", cause);
   } else if (code != 0 && code != 1 && code != 130) {  // the coordinator itself died

@@ -1,4 +1,5 @@
 #include "report/canvas.hpp"
+#include "core/base/atomic_file.hpp"
 
 #include <fmt/format.h>
 
@@ -95,24 +96,10 @@ std::string Svg::document() const {
 }
 
 void write_text_file(const std::string& path, const std::string& text, const std::string& what) {
-  namespace fs = std::filesystem;
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (out) out << text;
-    out.close();
-    if (!out) {
-      std::error_code ignored;
-      fs::remove(tmp, ignored);
-      throw std::runtime_error("cannot write " + what + " to '" + path + "'");
-    }
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    throw std::runtime_error("cannot write " + what + " to '" + path + "': " + ec.message());
+  try {
+    write_file_atomic(path, text);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(what + ": " + e.what());
   }
 }
 

@@ -1,4 +1,5 @@
 #include "report/depth_png.hpp"
+#include "core/base/atomic_file.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -21,10 +22,10 @@ void write_depth_png(const std::vector<float>& depth_m, int width, int height, c
       row[u] = (std::isfinite(mm) && mm > 0.0 && mm <= 65535.0) ? static_cast<uint16_t>(mm) : 0;
     }
   }
-  // Atomically: a reader never sees half an image.
-  const std::string tmp = path + ".tmp.png";
-  if (!cv::imwrite(tmp, image)) throw std::runtime_error("write_depth_png: cannot write " + path);
-  std::filesystem::rename(tmp, path);
+  // Atomically: a reader never sees half an image, a full disk leaves no part of one.
+  std::vector<uchar> png;
+  if (!cv::imencode(".png", image, png)) throw std::runtime_error("write_depth_png: cannot encode " + path);
+  write_file_atomic(path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
 }
 
 std::vector<uint16_t> read_depth_png(const std::string& path, int& width, int& height) {

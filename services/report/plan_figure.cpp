@@ -1,4 +1,5 @@
 #include "report/plan_figure.hpp"
+#include "core/base/atomic_file.hpp"
 
 #include "report/canvas.hpp"
 
@@ -732,12 +733,7 @@ void write_plan_figure(const PlanFigure& f, const std::string& path) {
   if (!cv::imencode(".png", fig, png, {cv::IMWRITE_PNG_COMPRESSION, 6})) {
     throw std::runtime_error("cannot encode plan figure for '" + path + "'");
   }
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (out) {
-    out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-  }
-  out.close();
-  if (!out) throw std::runtime_error("cannot write plan figure to '" + path + "'");
+  write_file_atomic(path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
   drawing::write_text_file(drawing::svg_path_beside(path), svg.document(), "plan figure (SVG)");
 }
 

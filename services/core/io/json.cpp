@@ -1,5 +1,7 @@
 #include "core/io/json.hpp"
 
+#include "core/base/atomic_file.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -32,16 +34,7 @@ Pose pose_from_json(const nlohmann::json& j, const std::string& what) {
   return pose_from_arrays(pos, quat, what);  // checks finiteness and the quaternion's norm
 }
 
-void write_text_atomic(const std::string& text, const std::string& path) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw std::runtime_error("cannot write " + tmp);
-    out << text;
-    if (!out) throw std::runtime_error("error writing " + tmp);
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot rename " + tmp + " to " + path);
-}
+void write_text_atomic(const std::string& text, const std::string& path) { write_file_atomic(path, text); }
 
 void write_json_atomic(const nlohmann::json& j, const std::string& path) { write_text_atomic(j.dump(2) + "\n", path); }
 

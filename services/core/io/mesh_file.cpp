@@ -11,6 +11,7 @@
 // a mesh is loaded once by each process that needs it: at most about a tenth of a second per
 // scan for the largest default mesh, against 800 lines of parsers of our own.
 #include "core/io/mesh_file.hpp"
+#include "core/base/atomic_file.hpp"
 
 #include <CGAL/IO/OBJ.h>
 #include <CGAL/IO/OFF.h>
@@ -257,11 +258,11 @@ void write_stl_binary(const TriangleMesh& mesh, const std::string& path) {
     out.push_back(0);
     out.push_back(0);
   }
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  if (!f) fail(ctx, path, std::string("cannot open for writing: ") + std::strerror(errno));
-  f.write(out.data(), static_cast<std::streamsize>(out.size()));
-  f.close();
-  if (!f) fail(ctx, path, "write failed");
+  try {
+    write_file_atomic(path, out);
+  } catch (const std::runtime_error& e) {
+    fail(ctx, path, e.what());
+  }
 }
 
 void write_obj(const TriangleMesh& mesh, const std::string& path) {
@@ -290,11 +291,11 @@ void write_obj(const TriangleMesh& mesh, const std::string& path) {
     }
     out += '\n';
   }
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  if (!f) fail(ctx, path, std::string("cannot open for writing: ") + std::strerror(errno));
-  f.write(out.data(), static_cast<std::streamsize>(out.size()));
-  f.close();
-  if (!f) fail(ctx, path, "write failed");
+  try {
+    write_file_atomic(path, out);
+  } catch (const std::runtime_error& e) {
+    fail(ctx, path, e.what());
+  }
 }
 
 }  // namespace pbnbv

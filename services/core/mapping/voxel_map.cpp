@@ -45,6 +45,7 @@
 
 #include <octomap/ColorOcTree.h>
 
+#include "core/base/atomic_file.hpp"
 #include "core/base/format.hpp"
 #include "core/base/parallel.hpp"
 #include "core/mapping/voxel_map_frame.hpp"
@@ -641,9 +642,9 @@ void VoxelMap::write_octomap(const std::string& path) const {
     }
   }
   tree.updateInnerOccupancy();
-  if (!tree.write(path)) {
-    throw std::runtime_error("VoxelMap::write_octomap: cannot write " + path);
-  }
+  std::ostringstream bytes;
+  if (!tree.write(bytes)) throw std::runtime_error("VoxelMap::write_octomap: OctoMap cannot encode the tree for " + path);
+  write_file_atomic(path, bytes.str());
 }
 
 void VoxelMap::write_states_ply(const std::string& path) const {
@@ -685,12 +686,7 @@ void VoxelMap::write_states_ply(const std::string& path) const {
       }
     }
   }
-  std::ofstream f(path + ".tmp", std::ios::binary);
-  f.write(out.data(), static_cast<std::streamsize>(out.size()));
-  f.close();
-  if (!f || std::rename((path + ".tmp").c_str(), path.c_str()) != 0) {
-    throw std::runtime_error("VoxelMap::write_states_ply: cannot write " + path);
-  }
+  write_file_atomic(path, out);
 }
 
 namespace {

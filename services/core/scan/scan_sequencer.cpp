@@ -213,6 +213,10 @@ void ScanSequencer::stop(double now_s, const std::string& why) {
   if (phase_ != Phase::kFinished) finish(ScanState::kStopped, why, now_s);
 }
 
+void ScanSequencer::abort(double now_s, const std::string& why) {
+  if (phase_ != Phase::kFinished) finish(ScanState::kFailed, why, now_s);
+}
+
 std::vector<ScanOutput> ScanSequencer::take_outputs() {
   std::vector<ScanOutput> out;
   out.swap(outputs_);

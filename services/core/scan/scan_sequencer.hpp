@@ -153,6 +153,9 @@ class ScanSequencer {
   // The scan is stopped from outside (the user; the launcher gone): it ends "stopped" with `why`
   // as its message, the view in progress is not recorded.
   void stop(double now_s, const std::string& why = "stopped by the user");
+  // The scan cannot go on for a reason outside the sequence (a full disk): it ends "failed" with
+  // `why` as its message, the view in progress is not recorded; the folder stays resumable.
+  void abort(double now_s, const std::string& why);
 
   // What to send and print since the last call, in order.
   std::vector<ScanOutput> take_outputs();

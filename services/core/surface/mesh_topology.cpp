@@ -1,8 +1,10 @@
 #include "core/surface/mesh_topology.hpp"
+#include "core/base/atomic_file.hpp"
 
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <map>
 #include <numeric>
 #include <stdexcept>
@@ -163,10 +165,8 @@ void write_mesh_ply(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>
     throw std::invalid_argument(path + ": " + std::to_string(normals.size()) + " normals for " +
                                 std::to_string(mesh.vertices.size()) + " vertices");
   }
-  const std::string tmp = path + ".tmp";
+  std::ostringstream out;
   {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw std::runtime_error(path + ": cannot write (" + tmp + ")");
     out << "ply\nformat binary_little_endian 1.0\ncomment written by pbnbv\n"
         << "comment units metres, object frame (scan.json); triangles counter-clockwise seen from outside\n"
         << "element vertex " << mesh.vertices.size() << "\n"
@@ -185,9 +185,8 @@ void write_mesh_ply(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>
       out.write(reinterpret_cast<const char*>(&n), 1);
       out.write(reinterpret_cast<const char*>(idx), sizeof idx);
     }
-    if (!out) throw std::runtime_error(path + ": write failed");
   }
-  std::filesystem::rename(tmp, path);
+  write_file_atomic(path, out.str());
 }
 
 }  // namespace pbnbv
