@@ -585,3 +585,43 @@ TEST(Faults, HostileTrafficFromView2TakesNothingOver) {
   std::cout << "hostile traffic: coverage after view 10 " << with.back() << " % (without it " << without.back()
             << " %); " << rejected << " log lines on rejected messages\n";
 }
+
+// A full disk under --out (a 24 MB tmpfs in a private mount namespace; the scan's log fills it):
+// the scan ends "failed" saying no space is left (exit 1, not the launcher dying with 2 and
+// scan.json "running" as before), leaves no .tmp file and no empty record file, and once there is
+// space `pbnbv scan --resume` completes it.
+TEST(Faults, AFullDiskFailsTheScanSayingSoAndItResumesOnceThereIsSpace) {
+  const fs::path dir = fresh_dir("diskfull");
+  const fs::path small = dir / "small", after = dir / "after", resumed = dir / "resumed";
+  fs::create_directories(small);
+  const std::string scan = "--object bunny --rig free --views 10 --stop-rule off --out " + (small / "scan").string();
+  const std::string script =
+      "mount -t tmpfs -o size=24m tmpfs " + small.string() + " || exit 97; " +
+      netns_run() + " " + bin_dir() + "/pbnbv scan " + scan + " > " + dir.string() + "/full.stdout 2>&1; echo $? > " +
+      dir.string() + "/full.code; cp -a " + (small / "scan").string() + " " + after.string() + "; " +
+      "mount -o remount,size=1g " + small.string() + " && " + netns_run() + " " + bin_dir() + "/pbnbv scan --resume " +
+      (small / "scan").string() + " --stop-rule off > " + dir.string() + "/resume.stdout 2>&1; echo $? > " + dir.string() +
+      "/resume.code; cp -a " + (small / "scan").string() + " " + resumed.string();
+  const CommandResult r = run_command("unshare -m sh -c '" + script + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string full_out = read_text(dir / "full.stdout");
+  EXPECT_EQ(read_text(dir / "full.code"), "1\n") << full_out;
+  const auto s = read_json_file(after / "scan.json");
+  EXPECT_EQ(s["status"]["state"], "failed");
+  const std::string message = s["status"]["message"].get<std::string>();
+  EXPECT_NE(message.find("o space left on device"), std::string::npos) << message;
+  EXPECT_LT(s["status"]["views_done"].get<int>(), 10);
+  std::cout << "full disk: " << s["status"]["views_done"] << " views, then: " << message << "\n";
+  for (const auto& e : fs::recursive_directory_iterator(after)) {
+    const std::string name = e.path().filename().string();
+    EXPECT_EQ(name.find(".tmp"), std::string::npos) << e.path();
+    if (e.is_regular_file() && e.path().parent_path().filename() != "logs" && name.find(".lcmlog") == std::string::npos) {
+      EXPECT_GT(fs::file_size(e.path()), 0u) << e.path();
+    }
+  }
+  EXPECT_FALSE(fs::exists(after / "state" / "coordinator.reserve")) << "the reserve was freed for the record";
+  EXPECT_EQ(read_text(dir / "resume.code"), "0\n") << read_text(dir / "resume.stdout");
+  const auto done = read_json_file(resumed / "scan.json");
+  EXPECT_EQ(done["status"]["state"], "done");
+  EXPECT_EQ(done["status"]["views_done"], 10);
+}
