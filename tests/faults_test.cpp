@@ -600,7 +600,7 @@ TEST(Faults, AFullDiskFailsTheScanSayingSoAndItResumesOnceThereIsSpace) {
       netns_run() + " " + bin_dir() + "/pbnbv scan " + scan + " > " + dir.string() + "/full.stdout 2>&1; echo $? > " +
       dir.string() + "/full.code; cp -a " + (small / "scan").string() + " " + after.string() + "; " +
       "mount -o remount,size=1g " + small.string() + " && " + netns_run() + " " + bin_dir() + "/pbnbv scan --resume " +
-      (small / "scan").string() + " --stop-rule off > " + dir.string() + "/resume.stdout 2>&1; echo $? > " + dir.string() +
+      (small / "scan").string() + " > " + dir.string() + "/resume.stdout 2>&1; echo $? > " + dir.string() +
       "/resume.code; cp -a " + (small / "scan").string() + " " + resumed.string();
   const CommandResult r = run_command("unshare -m sh -c '" + script + "'");
   ASSERT_EQ(r.exit_code, 0) << r.output;
