@@ -103,12 +103,14 @@ int main(int argc, char** argv) {
     return 2;
   }
   Status status;
-  bus.subscribe("SCAN_STATUS", +[](const lcm::ReceiveBuffer*, const std::string&, const pbnbv::scan_status_t* m,
-                                   Status* s) {
-    s->scan_id = m->scan_id;
-    s->iteration = m->iteration;
-    s->state = m->state;
-  }, &status);
+  bus.subscribeFunction<pbnbv::scan_status_t, Status*>(
+      "SCAN_STATUS",
+      [](const lcm::ReceiveBuffer*, const std::string&, const pbnbv::scan_status_t* m, Status* s) {
+        s->scan_id = m->scan_id;
+        s->iteration = m->iteration;
+        s->state = m->state;
+      },
+      &status);
 
   const auto t0 = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };

@@ -242,7 +242,7 @@ void ScanSequencer::on(const ViewPlan& p, double now_s) {
   if (p.scan_id != s_.scan_id || phase_ != Phase::kPlanning || p.request_id != awaited_.request_id) return;
   const std::string what = "VIEW_PLAN of request " + std::to_string(p.request_id);
   if (p.iteration != iteration_) return refuse(what, "it plans view " + std::to_string(p.iteration + 1));
-  if (p.planner != s_.planner) return refuse(what, std::string("its planner is ") + name_of(p.planner));
+  if (p.planner != s_.planner) return refuse(what, "its planner is " + std::string(name_of(p.planner)));
   if (p.outcome == PlanOutcome::kView) {
     if (!is_rigid(p.object_T_camera)) return refuse(what, "its view is not a rigid transform");
     if (!std::isfinite(p.view_quality)) return refuse(what, "its view_quality is not finite");
