@@ -6,7 +6,9 @@
 #include <filesystem>
 #include <string>
 #include <sys/wait.h>
+#include <signal.h>
 #include <unistd.h>
+#include <cerrno>
 
 namespace pbnbv::testing {
 
@@ -38,10 +40,23 @@ inline std::string source_dir() { return env_or("PBNBV_SOURCE_DIR", PBNBV_TEST_S
 inline std::string netns_run() { return source_dir() + "/scripts/netns-run"; }
 
 // A fresh empty folder under the system temp dir.
+// An empty folder for one test, /tmp/pbnbv-test-NAME-PID. Folders of the same NAME left by earlier
+// runs whose process is gone are removed first: each run of the suite left about 5 GB behind
+// (scan folders, logs), and a few runs filled the disk.
 inline std::filesystem::path fresh_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("pbnbv-test-" + name + "-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  namespace fs = std::filesystem;
+  const std::string prefix = "pbnbv-test-" + name + "-";
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(fs::temp_directory_path(), ec)) {
+    const std::string n = e.path().filename().string();
+    if (n.rfind(prefix, 0) != 0) continue;
+    const std::string pid = n.substr(prefix.size());
+    if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos) continue;
+    if (::kill(static_cast<pid_t>(std::stol(pid)), 0) != 0 && errno == ESRCH) fs::remove_all(e.path(), ec);
+  }
+  const auto dir = fs::temp_directory_path() / (prefix + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
   return dir;
 }
 
