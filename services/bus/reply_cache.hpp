@@ -51,7 +51,7 @@ class ReplyCache {
         }
       }
     }
-    entries_[key] = std::move(reply);
+    entries_.insert_or_assign(key, std::move(reply));
     order_.push_back(key);
     while (order_.size() > capacity_) {
       entries_.erase(order_.front());

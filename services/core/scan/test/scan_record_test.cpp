@@ -132,7 +132,7 @@ TEST_F(ScanRecordTest, TheStatusAndStopAreWrittenWithTheViews) {
   record.add_view(v, 1, 2.5);
   json j = read_json((dir_ / "scan.json").string());
   EXPECT_EQ(j["status"], json({{"state", "running"}, {"message", ""}, {"views_done", 1}, {"views_planned", 4},
-                               {"elapsed_s", 2.5}, {"num_points", 0}, {"next_request_id", 1}}));
+                               {"elapsed_s", 2.5}, {"num_points", 0}, {"next_request_id", 1}, {"answers_refused", 0}}));
   EXPECT_EQ(j["views"].size(), 1u);
   EXPECT_EQ(j["plan"]["planner"], "ring");
   EXPECT_FALSE(j.contains("stop"));
