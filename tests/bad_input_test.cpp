@@ -14,6 +14,7 @@
 #include <map>
 #include <thread>
 
+#include "bus/convert.hpp"
 #include "core/geometry/mesh.hpp"
 #include "core/base/pose.hpp"
 #include "core/io/json.hpp"
@@ -328,5 +329,55 @@ TEST_F(BadInput, BadPlanRequestsAreAnsweredWithTheFieldNamed) {
   EXPECT_TRUE(rejections_reach("ellipsoids", before + 1));
   EXPECT_NE(listener_->heartbeats["ellipsoids"].last_error.find("frontier centre 0"), std::string::npos)
       << listener_->heartbeats["ellipsoids"].last_error;
+  EXPECT_TRUE(all_running());
+}
+
+// A depth frame the mapping service lost is sent again, and the view is mapped: the mapping
+// service does not answer a view whose frame it lacks (the code before answered "not integrated:
+// DEPTH_FRAME ... never arrived" after 3 s, and the scan went on without the view in its map);
+// the coordinator's repeated capture request makes the camera send the cloud's frame again on
+// DEPTH_FRAME_RESENT, and the view is integrated. The frame is "lost" by pushing it out of the
+// mapping service's last four frames with four more captures.
+TEST_F(BadInput, ALostDepthFrameIsSentAgainAndTheViewIsMapped) {
+  lcm::LCM& lcm = listener_->lcm();
+  const Pose view = look_at_z_up(Eigen::Vector3d(0.75, 0.0, 0.35), Eigen::Vector3d::Zero());
+  move_request_t m = move_request(1905, view);
+  lcm.publish("MOVE_REQUEST", &m);
+  ASSERT_TRUE(listener_->spin_until([] { return listener_->moves.count(1905) > 0; }, 60.0));
+  ASSERT_EQ(listener_->moves[1905].status, move_result_t::kReached) << listener_->moves[1905].reason;
+  for (int64_t id = 1950; id <= 1954; ++id) {
+    capture_request_t c = capture_request(id);
+    c.not_before_utime = listener_->moves[1905].settled_utime;
+    lcm.publish("CAPTURE_REQUEST", &c);
+    ASSERT_TRUE(listener_->spin_until([id] { return listener_->clouds.count(id) > 0; }, 40.0)) << "capture " << id;
+    ASSERT_EQ(listener_->clouds[id].status, point_cloud_t::kOk) << listener_->clouds[id].message;
+  }
+  const point_cloud_t cloud = listener_->clouds[1950];
+  registered_cloud_t r;
+  r.utime = 0;
+  r.scan_id = "bad-input";
+  r.iteration = 40;
+  r.request_id = 1950;
+  r.cloud = cloud;
+  r.kinematic_object_T_camera = cloud.object_T_camera;
+  r.accepted = true;
+  r.refined = false;
+  r.reason = "kinematic pose kept (test)";
+  r.constraint = 1;
+  r.correction = bus::to_msg(Pose::Identity());
+  r.translation_m = r.rotation_deg = r.rmse_m = r.register_s = 0;
+  r.overlap = 1;
+  r.iterations = 0;
+  r.model_points = cloud.num_points;
+  lcm.publish("REGISTERED_CLOUD", &r);
+  const std::pair<std::string, int32_t> key{"bad-input", 40};
+  EXPECT_FALSE(listener_->spin_until([&] { return listener_->maps.count(key) > 0; }, 4.5))
+      << "the mapping service answered a view whose frame it lacks: " << listener_->maps[key].message;
+  capture_request_t again = capture_request(1950);  // the coordinator's repeat
+  lcm.publish("CAPTURE_REQUEST", &again);
+  ASSERT_TRUE(listener_->spin_until([&] { return listener_->maps.count(key) > 0; }, 10.0))
+      << "mapping log:\n" << process::tail_lines((dir_ / "mapping.log").string(), 10);
+  EXPECT_TRUE(listener_->maps[key].updated) << listener_->maps[key].message;
+  EXPECT_GT(listener_->maps[key].num_occupied, 0);
   EXPECT_TRUE(all_running());
 }

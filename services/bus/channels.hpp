@@ -15,6 +15,10 @@ inline constexpr const char* kMoveRequest = "MOVE_REQUEST";        // move_reque
 inline constexpr const char* kMoveResult = "MOVE_RESULT";          // move_result_t
 inline constexpr const char* kCaptureRequest = "CAPTURE_REQUEST";  // capture_request_t
 inline constexpr const char* kCloud = "CLOUD";                     // point_cloud_t
+// The DEPTH_FRAME a CLOUD was made from, published again by the camera service when it answers a
+// repeated capture request (the coordinator repeats it while the view's REGISTERED_CLOUD or
+// VOXEL_MAP is late): a subscriber that lost the frame on the bus gets it again.
+inline constexpr const char* kDepthFrameResent = "DEPTH_FRAME_RESENT";  // depth_frame_t
 inline constexpr const char* kScanStatus = "SCAN_STATUS";          // scan_status_t
 inline constexpr const char* kHeartbeat = "HEARTBEAT";             // heartbeat_t
 inline constexpr const char* kStop = "STOP";                       // stop_request_t

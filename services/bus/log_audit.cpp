@@ -19,7 +19,7 @@ LogContents read_scan_log(const std::string& path, const std::string& scan_id) {
   LogContents c;
   while (const lcm::LogEvent* e = file.readNextEvent()) {
     ++c.events;
-    if (e->channel == channels::kDepthFrame) {
+    if (e->channel == channels::kDepthFrame || e->channel == channels::kDepthFrameResent) {
       depth_frame_t m;
       if (!decode_logged(*e, &m)) ++c.undecodable;
       else if (m.scan_id == scan_id || m.scan_id.empty()) c.depth_frames.insert(m.seq);

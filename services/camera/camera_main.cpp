@@ -1,14 +1,17 @@
 // pbnbv-camera: the camera service.
 //   in:  CAPTURE_REQUEST, DEPTH_FRAME, ARM_STATUS, TURNTABLE_STATUS
-//   out: DEPTH_TRIGGER, CLOUD, HEARTBEAT
+//   out: DEPTH_TRIGGER, CLOUD, DEPTH_FRAME_RESENT (with a repeated answer), HEARTBEAT
 // Wires the bus to core/scan's CaptureSequencer: it triggers one frame per request (3 tries),
 // takes the camera pose from the joint and turntable readings at the frame's exposure time
 // through the rig model's kinematics and hand-eye transform (never from the twin), and makes
 // the object-frame cloud; every request is answered, a failed one with the reason. Requests are
-// idempotent by request_id: a repeat is answered again from the reply cache.
+// idempotent by request_id: a repeat is answered again from the reply cache, and the frame the
+// cloud came from is sent again on DEPTH_FRAME_RESENT (the mapping service may have lost it).
 #include <fmt/format.h>
 
+#include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -28,7 +31,14 @@ using namespace pbnbv;
 
 namespace {
 
-constexpr std::size_t kCloudsKept = 4;
+constexpr std::size_t kCloudsKept = 8;  // answers kept (with their frames) for repeated requests
+constexpr std::size_t kFramesKept = 8;  // frames that answered a trigger, until their cloud is made
+
+// A capture's answer and the frame it was made from, sent again for a repeated request.
+struct Answer {
+  point_cloud_t cloud;
+  std::optional<depth_frame_t> frame;
+};
 
 class CameraService {
  public:
@@ -51,8 +61,9 @@ class CameraService {
  private:
   void on_request(const capture_request_t& m) {
     bus_.set_scan(m.scan_id, m.iteration);
-    if (const point_cloud_t* done = clouds_.find({m.scan_id, m.request_id})) {
-      bus_.publish(channels::kCloud, *done);  // a repeat: answer again
+    if (const Answer* done = answers_.find({m.scan_id, m.request_id})) {
+      bus_.publish(channels::kCloud, done->cloud);  // a repeat: answer again, with the frame it came from
+      if (done->frame) bus_.publish(channels::kDepthFrameResent, *done->frame);
       return;
     }
     sequencer_.on_request(bus::from_msg(m));  // a malformed request throws: rejected by the bus
@@ -61,6 +72,8 @@ class CameraService {
 
   void on_frame(const depth_frame_t& f) {
     if (!sequencer_.awaits_frame(f.trigger_seq)) return;  // not ours (or a late answer): not decoded
+    frames_.push_back(f);  // kept with its cloud, to send again with a repeated answer
+    if (frames_.size() > kFramesKept) frames_.pop_front();
     DepthFrame frame;
     try {
       frame = bus::from_msg(f);
@@ -89,7 +102,11 @@ class CameraService {
       point_cloud_t out = bus::to_msg(c);
       out.utime = bus::now_utime();
       bus_.publish(channels::kCloud, out);
-      clouds_.put({out.scan_id, out.request_id}, std::move(out));
+      Answer a{std::move(out), std::nullopt};
+      for (const depth_frame_t& f : frames_) {
+        if (f.seq == a.cloud.depth_frame_seq) a.frame = f;
+      }
+      answers_.put({a.cloud.scan_id, a.cloud.request_id}, std::move(a));
     }
     bus_.set_state(sequencer_.busy() ? "capturing" : "idle");
   }
@@ -98,7 +115,8 @@ class CameraService {
   const RigModel& rig_;
   CaptureSequencer sequencer_;
   std::string scan_;  // of the request being captured
-  bus::ReplyCache<std::pair<std::string, int64_t>, point_cloud_t> clouds_{kCloudsKept};
+  bus::ReplyCache<std::pair<std::string, int64_t>, Answer> answers_{kCloudsKept};
+  std::deque<depth_frame_t> frames_;  // the last frames that answered a trigger, as received
 };
 
 }  // namespace

@@ -1,6 +1,6 @@
 // pbnbv-coordinator: the scan coordinator.
 //   in:  MOVE_RESULT, CLOUD, REGISTERED_CLOUD, VOXEL_MAP, ELLIPSOIDS, VIEW_PLAN, ARM_STATUS,
-//        TURNTABLE_STATUS, HEARTBEAT, DEPTH_FRAME (the frames' normals, DIR/depth/)
+//        TURNTABLE_STATUS, HEARTBEAT, DEPTH_FRAME and DEPTH_FRAME_RESENT (the frames' normals, DIR/depth/)
 //   out: MOVE_REQUEST, CAPTURE_REQUEST, PLAN_REQUEST, SCAN_STATUS, HEARTBEAT
 // Wires the bus to the scan's sequence (core/scan/scan_sequencer.hpp: plan -> move -> capture ->
 // register -> map -> accumulate for each view, its deadlines and re-sends, the output folder):
@@ -131,7 +131,9 @@ int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out, bool r
   // The depth frames: each view's normals come from its frame's neighbourhood and the frame is
   // written to DIR/depth/ (a frame that cannot be decoded is rejected by the bus, named).
   scan.set_depth_image_writer(write_depth_png);
-  bus.subscribe<depth_frame_t>(channels::kDepthFrame, [&scan](const depth_frame_t& f) { scan.keep_depth_frame(bus::from_msg(f)); });
+  for (const char* channel : {channels::kDepthFrame, channels::kDepthFrameResent}) {
+    bus.subscribe<depth_frame_t>(channel, [&scan](const depth_frame_t& f) { scan.keep_depth_frame(bus::from_msg(f)); });
+  }
   std::optional<std::string> stop_reason;  // STOP heard (the motion executor holds the rig)
   bus.subscribe<stop_request_t>(channels::kStop, [&](const stop_request_t& s) { stop_reason = s.reason; });
   bus.subscribe<heartbeat_t>(channels::kHeartbeat,

@@ -1,5 +1,6 @@
 // pbnbv-mapping: the mapping service.
-//   in:  REGISTERED_CLOUD (which frame, and its registered camera pose), DEPTH_FRAME (the rays)
+//   in:  REGISTERED_CLOUD (which frame, and its registered camera pose), DEPTH_FRAME (the rays;
+//        DEPTH_FRAME_RESENT: the same frame sent again when it was lost)
 //   out: VOXEL_MAP, HEARTBEAT; per view DIR/maps/view_NNN.ot (OctoMap, viewable in octovis:
 //        Occupied and Empty only) and DIR/maps/view_NNN.states.ply (every cell with its state)
 // Keeps the five-state voxel map of each scan (core VoxelMap: None, Empty, Occupied, Unknown,
@@ -33,7 +34,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::size_t kFramesKept = 4;     // depth frames waiting for their registered cloud
-constexpr double kFrameWaitS = 3.0;        // wait this long for a view's depth frame
+constexpr double kFrameWaitS = 3.0;        // a view's depth frame this late is said in the log
 constexpr std::size_t kAnswersKept = 16;   // maps kept to answer a repeated view again
 
 class MappingService {
@@ -41,18 +42,31 @@ class MappingService {
   MappingService(bus::Bus& bus, const VoxelMapParams& params, const Eigen::AlignedBox3d& working_volume, fs::path out)
       : bus_(bus), params_(params), working_volume_(working_volume), out_(std::move(out)) {
     restore();
-    bus_.subscribe<depth_frame_t>(channels::kDepthFrame, [this](const depth_frame_t& f) {
-      frames_.push_back(f);
-      if (frames_.size() > kFramesKept) frames_.pop_front();
-    });
+    for (const char* channel : {channels::kDepthFrame, channels::kDepthFrameResent}) {
+      bus_.subscribe<depth_frame_t>(channel, [this](const depth_frame_t& f) {
+        if (find_frame(f.seq)) return;  // sent again: kept already
+        frames_.push_back(f);
+        if (frames_.size() > kFramesKept) frames_.pop_front();
+      });
+    }
     bus_.subscribe<registered_cloud_t>(channels::kRegisteredCloud, [this](const registered_cloud_t& r) { on_view(r); });
   }
 
+  // A view whose depth frame has not come is not answered: the coordinator repeats the view's
+  // capture request while its VOXEL_MAP is late, the camera service sends the frame again with
+  // its answer (DEPTH_FRAME_RESENT), and the view is integrated then; when it never comes, the
+  // coordinator's wait for VOXEL_MAP ends the view as failed, naming it. A view is never left
+  // out of the map with an answer that says it was mapped.
   void tick() {
-    if (pending_ && (find_frame(pending_->cloud.depth_frame_seq) || bus::now_s() > pending_deadline_)) {
+    if (!pending_) return;
+    if (find_frame(pending_->cloud.depth_frame_seq)) {
       const registered_cloud_t r = std::move(*pending_);
       pending_.reset();
       integrate(r);
+    } else if (!warned_ && bus::now_s() > pending_deadline_) {
+      warned_ = true;
+      log_warn("view " + std::to_string(pending_->iteration) + ": DEPTH_FRAME " + std::to_string(pending_->cloud.depth_frame_seq) +
+               " has not come in " + fixed(kFrameWaitS, 0) + " s; waiting for it to be sent again");
     }
   }
 
@@ -76,6 +90,7 @@ class MappingService {
     }
     pending_ = r;
     pending_deadline_ = bus::now_s() + kFrameWaitS;
+    warned_ = false;
     tick();
   }
 
@@ -191,6 +206,7 @@ class MappingService {
   std::deque<depth_frame_t> frames_;
   std::optional<registered_cloud_t> pending_;
   double pending_deadline_ = 0;
+  bool warned_ = false;  // the pending view's late frame was said in the log
   bus::ReplyCache<std::pair<std::string, int32_t>, voxel_set_t> answers_{kAnswersKept};
 };
 

@@ -220,6 +220,9 @@ void ScanRecord::set_next_best_view_plan(const std::string& planner, const Pose&
 
 void ScanRecord::keep_depth_frame(DepthFrame frame) {
   constexpr std::size_t kKept = 4;  // the frames of the last views (a view's arrives before its cloud)
+  for (const auto& f : depth_frames_) {
+    if (f.seq == frame.seq) return;  // sent again (DEPTH_FRAME_RESENT): kept already
+  }
   depth_frames_.push_back(std::move(frame));
   if (depth_frames_.size() > kKept) depth_frames_.pop_front();
 }
