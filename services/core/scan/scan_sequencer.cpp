@@ -80,14 +80,41 @@ CaptureRequest ScanSequencer::capture_request(int iteration, int64_t request_id,
   return r;
 }
 
+namespace {
+
+// Request ids a scan may use: first_request_id() draws below 2^62, and a resumed scan goes on
+// from the largest recorded, so every id of a scan stays far below what int64 holds.
+constexpr int64_t kMaxRequestId = int64_t{1} << 62;
+
+// A whole number in [lo, hi] from scan.json; throws naming `what` otherwise (a real, a string, a
+// number out of range: nlohmann's get<int> would cast it without a word).
+int64_t bounded_integer(const nlohmann::json& j, int64_t lo, int64_t hi, const std::string& what) {
+  if (j.is_number_unsigned()) {
+    const uint64_t u = j.get<uint64_t>();
+    if (u <= static_cast<uint64_t>(hi) && static_cast<int64_t>(u) >= lo) return static_cast<int64_t>(u);
+  } else if (j.is_number_integer()) {
+    const int64_t v = j.get<int64_t>();
+    if (v >= lo && v <= hi) return v;
+  }
+  throw std::invalid_argument(what + " = " + j.dump() + " is not a whole number in " + std::to_string(lo) + ".." +
+                              std::to_string(hi));
+}
+
+}  // namespace
+
 void ScanSequencer::resume(double now_s) {
   record_.continue_from_folder(s_.scan_id);
   const nlohmann::json& report = record_.report();
   const nlohmann::json views = report.value("views", nlohmann::json::array());
   const std::string file = record_.scan_json_path().string();
   int64_t max_id = 0;
+  int entry = 0;
   for (const nlohmann::json& v : views) {
-    const int i = v.at("view").get<int>();
+    ++entry;
+    // Each entry's view below the scan's view count: a folder that says otherwise was not
+    // written by a scan of these settings.
+    const int i = static_cast<int>(bounded_integer(v.is_object() && v.contains("view") ? v["view"] : nlohmann::json(), 0,
+                                                   s_.views - 1, file + " views entry " + std::to_string(entry) + " view"));
     const std::string at = file + " view " + std::to_string(i + 1);
     for (const nlohmann::json& f : v.value("failed_moves", nlohmann::json::array())) {
       if (f.contains("object_T_camera")) done_.excluded.push_back(pose_from_json(f["object_T_camera"], at + " failed move"));
@@ -105,8 +132,9 @@ void ScanSequencer::resume(double now_s) {
     if (v.contains("capture")) {
       const nlohmann::json& c = v["capture"];
       if (c.contains("request_id")) {
-        max_id = std::max(max_id, c["request_id"].get<int64_t>());
-        capture_request_ = capture_request(i, c["request_id"].get<int64_t>(), 0);  // the last one stays
+        const int64_t id = bounded_integer(c["request_id"], 0, kMaxRequestId, at + " capture request_id");
+        max_id = std::max(max_id, id);
+        capture_request_ = capture_request(i, id, 0);  // the last one stays
       }
       if (c.value("status", "") != "ok") done_.excluded.push_back(reached);
     }
@@ -124,9 +152,16 @@ void ScanSequencer::resume(double now_s) {
   }
   const nlohmann::json status = report.value("status", nlohmann::json::object());
   // Past every id recorded, with room for those the interrupted view sent but did not record.
-  done_.next_request_id = std::max<int64_t>(status.value("next_request_id", int64_t{1}), max_id + 1) + 1000;
+  const int64_t recorded_next = status.contains("next_request_id")
+                                    ? bounded_integer(status["next_request_id"], 0, kMaxRequestId, file + " status next_request_id")
+                                    : 1;
+  done_.next_request_id = std::max<int64_t>(recorded_next, max_id + 1) + 1000;
   record_.set_next_request_id(done_.next_request_id);
-  t_start_s_ = now_s - status.value("elapsed_s", 0.0);
+  const double elapsed_s = status.value("elapsed_s", 0.0);
+  if (!std::isfinite(elapsed_s) || elapsed_s < 0 || elapsed_s > 1e9) {
+    throw std::invalid_argument(file + ": status elapsed_s = " + std::to_string(elapsed_s) + " is not a duration (0..1e9 s)");
+  }
+  t_start_s_ = now_s - elapsed_s;
   if (status.value("state", "") == "done") {
     phase_ = Phase::kFinished;
     state_ = ScanState::kDone;

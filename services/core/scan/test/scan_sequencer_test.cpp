@@ -1049,4 +1049,39 @@ TEST_F(ScanSequencerTest, ResumingAFolderWithoutThisScanIsNamed) {
             std::string::npos);
 }
 
+// A planted scan.json cannot push the resumed scan's numbers past what they hold: a view beyond
+// the scan's view count, a request id near int64's end (the next id would overflow), a view
+// that is a real number and an elapsed time that is not a duration are refused, naming the
+// file and the entry.
+TEST_F(ScanSequencerTest, ResumingRefusesNumbersOutOfTheirRange) {
+  const ScanSettings s = test_settings("pbnbv", 3);
+  start(s);
+  const auto views = [&] { return std::filesystem::exists(dir_ / "scan.json") ? scan_json()["views"].size() : 0u; };
+  while (!seq_->finished() && views() < 2) run(now_ + 0.25);
+  seq_->stop(now_, "stopped: the launcher died");
+  const json good = scan_json();
+  const std::string file = (dir_ / "scan.json").string();
+  struct Case {
+    std::function<void(json&)> plant;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {[](json& j) { j["views"][1]["view"] = 2147483647; }, "views entry 2 view = 2147483647 is not a whole number in 0..2"},
+      {[](json& j) { j["views"][0]["view"] = 0.5; }, "views entry 1 view = 0.5 is not a whole number in 0..2"},
+      {[](json& j) { j["views"][1]["capture"]["request_id"] = 9223372036854775807LL; },
+       "view 2 capture request_id = 9223372036854775807 is not a whole number in 0..4611686018427387904"},
+      {[](json& j) { j["status"]["next_request_id"] = -5; }, "status next_request_id = -5 is not a whole number"},
+      {[](json& j) { j["status"]["elapsed_s"] = -1.0; }, "status elapsed_s = -1.000000 is not a duration"},
+  };
+  for (const Case& c : cases) {
+    json planted = good;
+    c.plant(planted);
+    write_json_atomic(planted, file);
+    ScanSequencer again(s, dir_);
+    const std::string what = pbnbv::testing::error_message([&] { again.resume(now_); });
+    EXPECT_NE(what.find(file), std::string::npos) << what;
+    EXPECT_NE(what.find(c.expected), std::string::npos) << what;
+  }
+}
+
 }  // namespace
