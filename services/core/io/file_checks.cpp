@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -84,7 +85,39 @@ std::string stopped_at(const std::string& path, std::istream& in, bool whole_lin
   return fmt::format("at line {}: '{}'", line, text);
 }
 
+namespace {
+
+// What CGAL's PLY reader assumes of a header without checking it (CGAL 5.5): a "property" line
+// before any "element" line makes it write through the back() of an empty vector (found by
+// fuzz_mesh_file). The header's lines are read the way the reader splits them, within 1 MB,
+// and the stream put back where it was.
+void precheck_ply_header(std::istream& in, const std::string& path, const char* ctx) {
+  constexpr std::size_t kMaxHeaderBytes = std::size_t{1} << 20;
+  const std::streampos start = in.tellg();
+  std::size_t bytes = 0;
+  long line_number = 0;
+  bool element = false;
+  for (std::string line; std::getline(in, line);) {
+    ++line_number;
+    bytes += line.size() + 1;
+    if (bytes > kMaxHeaderBytes) fail(ctx, path, "PLY header longer than 1 MB without end_header");
+    std::istringstream iss(line);
+    std::string keyword;
+    if (!(iss >> keyword)) continue;
+    if (keyword == "end_header") break;
+    if (keyword == "element") element = true;
+    if (keyword == "property" && !element) {
+      fail(ctx, path, fmt::format("PLY header line {}: a property before any element", line_number));
+    }
+  }
+  in.clear();
+  in.seekg(start);
+}
+
+}  // namespace
+
 PlyHeader check_ply_header(std::istream& in, const std::string& path, const char* ctx, bool faces) {
+  precheck_ply_header(in, path, ctx);
   CGAL::IO::internal::PLY_reader reader(false);
   if (!reader.init(in)) {
     fail(ctx, path, "not a PLY file, or a malformed PLY header: CGAL's PLY reader stopped " + stopped_at(path, in, true));
