@@ -59,7 +59,9 @@ class MappingService {
   // out of the map with an answer that says it was mapped.
   void tick() {
     if (!pending_) return;
-    if (find_frame(pending_->cloud.depth_frame_seq)) {
+    // A view that is not integrated anyway (no cloud, or registration rejected it) needs no frame.
+    const bool integrable = pending_->cloud.status == point_cloud_t::kOk && pending_->accepted;
+    if (!integrable || find_frame(pending_->cloud.depth_frame_seq)) {
       const registered_cloud_t r = std::move(*pending_);
       pending_.reset();
       integrate(r);

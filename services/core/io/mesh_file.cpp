@@ -129,9 +129,10 @@ std::string stl_failure(const std::string& path, std::uintmax_t size) {
   std::ifstream in(path, std::ios::binary);
   char head[84] = {};
   in.read(head, sizeof head);
+  const std::size_t read = static_cast<std::size_t>(in.gcount());
   std::size_t i = 0;
-  while (i < static_cast<std::size_t>(in.gcount()) && std::isspace(static_cast<unsigned char>(head[i]))) ++i;
-  if (std::strncmp(head + i, "solid", 5) == 0 && size < 84 + 50) {
+  while (i < read && std::isspace(static_cast<unsigned char>(head[i]))) ++i;
+  if (i + 5 <= read && std::strncmp(head + i, "solid", 5) == 0 && size < 84 + 50) {
     return "not a valid ASCII STL file (CGAL::IO::read_STL could not read it)";
   }
   if (size < 84) return fmt::format("truncated binary STL: {} bytes, shorter than the 84-byte header", size);
@@ -157,9 +158,10 @@ void check_off_counts(std::istream& in, const std::string& path) {
   }
   in.clear();
   in.seekg(0);
-  if (tokens.size() < 4 || tokens[0].size() < 3 || tokens[0].compare(tokens[0].size() - 3, 3, "OFF") != 0) return;  // CGAL says why
+  // Not an OFF header, or one with a dimension before the counts ("nOFF"): CGAL says what is wrong.
+  if (tokens.size() < 4 || tokens[0].find("OFF") == std::string::npos || tokens[0].find("nOFF") != std::string::npos) return;
   const std::uintmax_t size = std::filesystem::file_size(path);
-  auto count = [&](const std::string& t, const char* what, const char* plural, std::uintmax_t min_bytes) {
+  auto count = [&](const std::string& t, const char* what, const char* plural, std::uintmax_t min_bytes) -> std::uintmax_t {
     std::uintmax_t n = 0;
     const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), n);
     if (ec != std::errc() || end != t.data() + t.size()) {
@@ -168,9 +170,44 @@ void check_off_counts(std::istream& in, const std::string& path) {
     if (n > size / min_bytes) {
       fail(kLoad, path, fmt::format("the OFF header declares {} {}, more than a file of {} bytes can hold", n, plural, size));
     }
+    return n;
   };
-  count(tokens[1], "vertex", "vertices", 6);
-  count(tokens[2], "face", "faces", 8);
+  const std::uintmax_t vertices = count(tokens[1], "vertex", "vertices", 6);
+  const std::uintmax_t faces = count(tokens[2], "face", "faces", 8);
+  // Each face's corner count, which CGAL reads as a double, casts and allocates for before reading
+  // the corners: 0 to the vertex count (a polygon visits a vertex once) and to half the file's
+  // size (an index takes two bytes). Lines as CGAL's scanner reads them: one vertex, then one face
+  // per line; blank and comment lines skipped.
+  std::size_t header_tokens = 0;
+  std::uintmax_t line_number = 0, vertex_lines = 0, face_lines = 0;
+  while (face_lines < faces && std::getline(in, line)) {
+    ++line_number;
+    const std::string text = line.substr(0, line.find('#'));
+    std::istringstream words(text);
+    std::string first;
+    if (!(words >> first)) continue;
+    if (header_tokens < 4) {  // the header's lines
+      header_tokens += 1;
+      for (std::string w; header_tokens < 4 && words >> w;) ++header_tokens;
+      continue;
+    }
+    if (vertex_lines < vertices) {
+      ++vertex_lines;
+      continue;
+    }
+    ++face_lines;
+    // The first number as CGAL's scanner reads it: a double, then cast to an unsigned count
+    // (undefined for a negative or huge value).
+    std::istringstream number(text);
+    double corners = 0;
+    const double most = static_cast<double>(std::min<std::uintmax_t>(vertices, size / 2));
+    if (number >> corners && !(corners >= 0 && corners <= most)) {
+      fail(kLoad, path, fmt::format("line {}: face {} has {} corners; a face has 0 to {} (the vertices, and half the "
+                                    "file's {} bytes)", line_number, face_lines, corners, most, size));
+    }
+  }
+  in.clear();
+  in.seekg(0);
 }
 
 }  // namespace

@@ -214,6 +214,9 @@ void VoxelGrid::validate(const std::string& what) const {
   std::ostringstream os;
   if ((dims.array() < 0).any()) {
     os << what << ": dims " << dims.transpose() << " must not be negative";
+  } else if ((dims.array() > kMaxGridDim).any()) {  // and the product below stays far inside int64
+    os << what << ": dims " << dims.x() << " x " << dims.y() << " x " << dims.z() << " must be at most " << kMaxGridDim
+       << " per axis";
   } else if (static_cast<int64_t>(cells.size()) != int64_t(dims.x()) * dims.y() * dims.z()) {
     os << what << ": " << cells.size() << " cells for dims " << dims.transpose() << " ("
        << int64_t(dims.x()) * dims.y() * dims.z() << " expected)";

@@ -48,6 +48,10 @@ struct DepthView {
   Eigen::AlignedBox3d working_volume;
 };
 
+// The most voxels of a grid along one axis (a 0.002 m map over 130 m): a bound for grids that come
+// from a message or a file, so that their cell counts are computed without overflow.
+inline constexpr int kMaxGridDim = 1 << 16;
+
 // The map's cells as plain data (what the VOXEL_MAP message carries for planners that read the
 // whole map, e.g. ray casting): B's min corner, the lattice size, the states with x fastest,
 // then y, then z.
@@ -57,7 +61,7 @@ struct VoxelGrid {
   double resolution_m = 0;
   std::vector<VoxelState> cells;
 
-  bool empty() const { return dims.prod() == 0; }
+  bool empty() const { return (dims.array() == 0).any(); }
   Eigen::AlignedBox3d bounds() const {
     return Eigen::AlignedBox3d(origin_m, origin_m + dims.cast<double>() * resolution_m);
   }

@@ -236,6 +236,10 @@ TEST_F(MeshFiles, OffHeaderCountsBeyondTheFileAreRefusedBeforeReading) {
   expect_error([&] { load_mesh(huge); }, {huge, "declares 4000000000000 vertices", "bytes can hold"});
   const std::string faces = write("faces.off", "OFF 3 90000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
   expect_error([&] { load_mesh(faces); }, {faces, "declares 90000000000 faces"});
+  // A face's corner count, which CGAL allocates for before reading the corners (found by
+  // fuzz_mesh_file: 4e18 corners, an allocation of 32 EB; -4e15, cast to an unsigned count).
+  const std::string corners = write("corners.off", "OFF\n# a comment\n3 1 0\n0 0 0\n1 0 0\n\n0 1 0\n4000000000000000000 0 1 2\n");
+  expect_error([&] { load_mesh(corners); }, {corners, "line 8: face 1 has 4e+18 corners; a face has 0 to 3 (the vertices"});
   const std::string word = write("word.off", "OFF\nmany 1 0\n0 0 0\n");
   expect_error([&] { load_mesh(word); }, {word, "vertex count 'many' is not a whole number"});
 }

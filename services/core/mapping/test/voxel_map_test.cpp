@@ -1039,5 +1039,23 @@ TEST(VoxelMap, ABadSavedMapIsNamed) {
   EXPECT_NE(error(bad_cell, p).find("a cell state 9"), std::string::npos);
 }
 
+// A grid from a message with dims whose product overflows (4996 x 951255040 x 0: zero cells, so
+// the count matched, and empty() multiplied in int; found by fuzz_messages): refused per axis.
+TEST(VoxelGrid, DimsBeyondTheirBoundAreRefusedBeforeTheyAreMultiplied) {
+  VoxelGrid g;
+  g.dims = Eigen::Vector3i(4996, 951255040, 0);
+  g.resolution_m = 0.03;
+  try {
+    g.validate("VOXEL_MAP of view 3");
+    FAIL() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("VOXEL_MAP of view 3: dims 4996 x 951255040 x 0 must be at most 65536 per axis"),
+              std::string::npos) << e.what();
+  }
+  g.dims = Eigen::Vector3i(65536, 65536, 0);
+  EXPECT_NO_THROW(g.validate("grid"));
+  EXPECT_TRUE(g.empty());
+}
+
 }  // namespace
 }  // namespace pbnbv
