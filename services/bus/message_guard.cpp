@@ -110,7 +110,8 @@ class Walker {
           return fail(path + "." + std::string(f.name) + " has a negative length (" + std::string(by) + " = " +
                       std::to_string(n) + ")");
         }
-        if (n > remaining()) return fail_claim(path, f, by, by_value, n);
+        // (An empty array claims nothing, whatever its other dimensions: points_m[0][3].)
+        if (count > 0 && n > remaining()) return fail_claim(path, f, by, by_value, n);
         count *= n;
         if (count > remaining()) return fail_claim(path, f, by, by_value, count);
       }
