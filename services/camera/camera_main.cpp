@@ -106,8 +106,8 @@ class CameraService {
       for (const depth_frame_t& f : frames_) {
         if (f.seq == a.cloud.depth_frame_seq) a.frame = f;
       }
-      std::pair<std::string, int64_t> key{a.cloud.scan_id, a.cloud.request_id};  // before `a` is moved
-      answers_.put(std::move(key), std::move(a));
+      const std::pair<std::string, int64_t> key{a.cloud.scan_id, a.cloud.request_id};  // before `a` is moved
+      answers_.put(key, std::move(a));
     }
     bus_.set_state(sequencer_.busy() ? "capturing" : "idle");
   }

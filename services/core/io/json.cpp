@@ -17,6 +17,18 @@ Eigen::Vector3d vec3_from_json(const nlohmann::json& j, const std::string& what)
   return Eigen::Vector3d(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
 }
 
+int64_t integer_from_json(const nlohmann::json& j, int64_t lo, int64_t hi, const std::string& what) {
+  if (j.is_number_unsigned()) {
+    const uint64_t u = j.get<uint64_t>();
+    if (u <= static_cast<uint64_t>(hi) && static_cast<int64_t>(u) >= lo) return static_cast<int64_t>(u);
+  } else if (j.is_number_integer()) {
+    const int64_t v = j.get<int64_t>();
+    if (v >= lo && v <= hi) return v;
+  }
+  throw std::invalid_argument(what + " = " + j.dump() + " is not a whole number in " + std::to_string(lo) + ".." +
+                              std::to_string(hi));
+}
+
 nlohmann::json to_json(const Pose& p) {
   double pos[3], quat[4];
   pose_to_arrays(p, pos, quat);

@@ -3,6 +3,7 @@
 // JSON, atomic writes (a reader never sees half a file), reads that name the file on error.
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
+#include <cstdint>
 #include <string>
 
 #include "core/base/pose.hpp"
@@ -15,6 +16,9 @@ nlohmann::json to_json(const Pose& p);  // {"position_m": [...], "quat_wxyz": [.
 Pose pose_from_json(const nlohmann::json& j, const std::string& what);
 nlohmann::json to_json(const Eigen::Vector3d& v);
 Eigen::Vector3d vec3_from_json(const nlohmann::json& j, const std::string& what);
+// A whole number in [lo, hi] (hi >= 0); throws std::invalid_argument naming `what` otherwise (a
+// real, a string, a number out of range: get<int> would cast it without a word).
+int64_t integer_from_json(const nlohmann::json& j, int64_t lo, int64_t hi, const std::string& what);
 
 // Writes JSON to `path` atomically (temporary file + rename), so a reader never sees half.
 void write_json_atomic(const nlohmann::json& j, const std::string& path);

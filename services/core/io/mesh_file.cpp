@@ -150,14 +150,21 @@ std::string stl_failure(const std::string& path, std::uintmax_t size) {
 // edge counts, '#' comments allowed), checked against the file's size before CGAL reserves for
 // them: a vertex takes at least 6 bytes ("0 0 0\n"), a face at least 8 ("3 0 1 2\n").
 void check_off_counts(std::istream& in, const std::string& path) {
+  struct Rewind {  // whatever is found, CGAL reads from the start
+    std::istream& in;
+    ~Rewind() {
+      in.clear();
+      in.seekg(0);
+    }
+  } rewind{in};
   std::vector<std::string> tokens;
   std::string line;
+  std::uintmax_t line_number = 0;
   while (tokens.size() < 4 && std::getline(in, line)) {
+    ++line_number;
     std::istringstream words(line.substr(0, line.find('#')));
     for (std::string w; tokens.size() < 4 && words >> w;) tokens.push_back(w);
   }
-  in.clear();
-  in.seekg(0);
   // Not an OFF header, or one with a dimension before the counts ("nOFF"): CGAL says what is wrong.
   if (tokens.size() < 4 || tokens[0].find("OFF") == std::string::npos || tokens[0].find("nOFF") != std::string::npos) return;
   const std::uintmax_t size = std::filesystem::file_size(path);
@@ -176,21 +183,14 @@ void check_off_counts(std::istream& in, const std::string& path) {
   const std::uintmax_t faces = count(tokens[2], "face", "faces", 8);
   // Each face's corner count, which CGAL reads as a double, casts and allocates for before reading
   // the corners: 0 to the vertex count (a polygon visits a vertex once) and to half the file's
-  // size (an index takes two bytes). Lines as CGAL's scanner reads them: one vertex, then one face
-  // per line; blank and comment lines skipped.
-  std::size_t header_tokens = 0;
-  std::uintmax_t line_number = 0, vertex_lines = 0, face_lines = 0;
+  // size (an index takes two bytes). Lines as CGAL's scanner reads them after the header: one
+  // vertex, then one face per line; blank and comment lines skipped.
+  const double most = static_cast<double>(std::min<std::uintmax_t>(vertices, size / 2));
+  std::uintmax_t vertex_lines = 0, face_lines = 0;
   while (face_lines < faces && std::getline(in, line)) {
     ++line_number;
     const std::string text = line.substr(0, line.find('#'));
-    std::istringstream words(text);
-    std::string first;
-    if (!(words >> first)) continue;
-    if (header_tokens < 4) {  // the header's lines
-      header_tokens += 1;
-      for (std::string w; header_tokens < 4 && words >> w;) ++header_tokens;
-      continue;
-    }
+    if (text.find_first_not_of(" \t\r\v\f") == std::string::npos) continue;
     if (vertex_lines < vertices) {
       ++vertex_lines;
       continue;
@@ -200,14 +200,11 @@ void check_off_counts(std::istream& in, const std::string& path) {
     // (undefined for a negative or huge value).
     std::istringstream number(text);
     double corners = 0;
-    const double most = static_cast<double>(std::min<std::uintmax_t>(vertices, size / 2));
     if (number >> corners && !(corners >= 0 && corners <= most)) {
       fail(kLoad, path, fmt::format("line {}: face {} has {} corners; a face has 0 to {} (the vertices, and half the "
                                     "file's {} bytes)", line_number, face_lines, corners, most, size));
     }
   }
-  in.clear();
-  in.seekg(0);
 }
 
 }  // namespace

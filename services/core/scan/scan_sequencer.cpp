@@ -86,20 +86,6 @@ namespace {
 // from the largest recorded, so every id of a scan stays far below what int64 holds.
 constexpr int64_t kMaxRequestId = int64_t{1} << 62;
 
-// A whole number in [lo, hi] from scan.json; throws naming `what` otherwise (a real, a string, a
-// number out of range: nlohmann's get<int> would cast it without a word).
-int64_t bounded_integer(const nlohmann::json& j, int64_t lo, int64_t hi, const std::string& what) {
-  if (j.is_number_unsigned()) {
-    const uint64_t u = j.get<uint64_t>();
-    if (u <= static_cast<uint64_t>(hi) && static_cast<int64_t>(u) >= lo) return static_cast<int64_t>(u);
-  } else if (j.is_number_integer()) {
-    const int64_t v = j.get<int64_t>();
-    if (v >= lo && v <= hi) return v;
-  }
-  throw std::invalid_argument(what + " = " + j.dump() + " is not a whole number in " + std::to_string(lo) + ".." +
-                              std::to_string(hi));
-}
-
 }  // namespace
 
 void ScanSequencer::resume(double now_s) {
@@ -113,7 +99,7 @@ void ScanSequencer::resume(double now_s) {
     ++entry;
     // Each entry's view below the scan's view count: a folder that says otherwise was not
     // written by a scan of these settings.
-    const int i = static_cast<int>(bounded_integer(v.is_object() && v.contains("view") ? v["view"] : nlohmann::json(), 0,
+    const int i = static_cast<int>(integer_from_json(v.is_object() && v.contains("view") ? v["view"] : nlohmann::json(), 0,
                                                    s_.views - 1, file + " views entry " + std::to_string(entry) + " view"));
     const std::string at = file + " view " + std::to_string(i + 1);
     for (const nlohmann::json& f : v.value("failed_moves", nlohmann::json::array())) {
@@ -132,7 +118,7 @@ void ScanSequencer::resume(double now_s) {
     if (v.contains("capture")) {
       const nlohmann::json& c = v["capture"];
       if (c.contains("request_id")) {
-        const int64_t id = bounded_integer(c["request_id"], 0, kMaxRequestId, at + " capture request_id");
+        const int64_t id = integer_from_json(c["request_id"], 0, kMaxRequestId, at + " capture request_id");
         max_id = std::max(max_id, id);
         capture_request_ = capture_request(i, id, 0);  // the last one stays
       }
@@ -153,7 +139,7 @@ void ScanSequencer::resume(double now_s) {
   const nlohmann::json status = report.value("status", nlohmann::json::object());
   // Past every id recorded, with room for those the interrupted view sent but did not record.
   const int64_t recorded_next = status.contains("next_request_id")
-                                    ? bounded_integer(status["next_request_id"], 0, kMaxRequestId, file + " status next_request_id")
+                                    ? integer_from_json(status["next_request_id"], 0, kMaxRequestId, file + " status next_request_id")
                                     : 1;
   done_.next_request_id = std::max<int64_t>(recorded_next, max_id + 1) + 1000;
   record_.set_next_request_id(done_.next_request_id);
@@ -697,7 +683,7 @@ std::string ScanSequencer::waited(const std::string& from, const std::string& wh
 
 int64_t first_request_id() {
   std::random_device entropy;
-  std::uniform_int_distribution<int64_t> pick(int64_t{1} << 32, (int64_t{1} << 62) - 1);
+  std::uniform_int_distribution<int64_t> pick(int64_t{1} << 32, kMaxRequestId - 1);
   return pick(entropy);
 }
 
