@@ -59,9 +59,8 @@ class MappingService {
   // out of the map with an answer that says it was mapped.
   void tick() {
     if (!pending_) return;
-    // A view that is not integrated anyway (no cloud, or registration rejected it) needs no frame.
-    const bool integrable = pending_->cloud.status == point_cloud_t::kOk && pending_->accepted;
-    if (!integrable || find_frame(pending_->cloud.depth_frame_seq)) {
+    // A view registration rejected is not integrated: it needs no frame.
+    if (!pending_->accepted || find_frame(pending_->cloud.depth_frame_seq)) {
       const registered_cloud_t r = std::move(*pending_);
       pending_.reset();
       integrate(r);
@@ -79,6 +78,10 @@ class MappingService {
   }
 
   void on_view(const registered_cloud_t& r) {
+    // A capture that failed is no view to map: the coordinator goes on to the next view without
+    // waiting for a map, and a failed cloud must not become the answer of its view (forged with a
+    // guessed request id, it would be cached as the view's map and the real view answered from it).
+    if (r.cloud.status != point_cloud_t::kOk) return;
     bus_.set_scan(r.scan_id, r.iteration);
     if (const voxel_set_t* answer = answers_.find({r.scan_id, r.iteration})) {
       bus_.publish(channels::kVoxelMap, *answer);  // a repeat: answer again
@@ -108,9 +111,7 @@ class MappingService {
     out.updated = false;
     out.update_s = 0;
     const depth_frame_t* frame = find_frame(r.cloud.depth_frame_seq);
-    if (r.cloud.status != point_cloud_t::kOk) {
-      out.message = "no view to integrate: " + r.cloud.message;
-    } else if (!r.accepted) {
+    if (!r.accepted) {
       out.message = "not integrated: registration rejected the view (" + r.reason + ")";
     } else if (!frame) {
       out.message = "not integrated: DEPTH_FRAME " + std::to_string(r.cloud.depth_frame_seq) + " never arrived";
