@@ -200,9 +200,19 @@ void check_off_counts(std::istream& in, const std::string& path) {
     // (undefined for a negative or huge value).
     std::istringstream number(text);
     double corners = 0;
-    if (number >> corners && !(corners >= 0 && corners <= most)) {
+    if (!(number >> corners)) continue;
+    if (!(corners >= 0 && corners <= most)) {
       fail(kLoad, path, fmt::format("line {}: face {} has {} corners; a face has 0 to {} (the vertices, and half the "
                                     "file's {} bytes)", line_number, face_lines, corners, most, size));
+    }
+    // Its corners, read the same way (a double cast to an unsigned index): each a vertex of the
+    // file. A line with fewer numbers than it declares is CGAL's to name.
+    double index = 0;
+    for (std::uintmax_t k = 0; k < static_cast<std::uintmax_t>(corners) && number >> index; ++k) {
+      if (!(index >= 0 && index < static_cast<double>(vertices))) {
+        fail(kLoad, path, fmt::format("line {}: corner {} of face {} is vertex {}; the file has vertices 0 to {}",
+                                      line_number, k + 1, face_lines, index, vertices == 0 ? 0 : vertices - 1));
+      }
     }
   }
 }
