@@ -2,7 +2,7 @@
 # Three cases run alone:
 # - the packet-loss case asserts that a scan at 1 % loss takes at most twice the wall time of a
 #   clean one, and another test's load beside one of the two scans would skew that ratio;
-# - the killed-service case kills lcm-logger at view 3 and asserts that the two log files still
+# - the killed-logger case kills lcm-logger at view 3 and asserts that the two log files still
 #   hold every message of the scan: beside another test (CI, 2026-12-04, -j2) the killed logger had
 #   not yet written view 3's REGISTERED_CLOUD and VOXEL_MAP, and the case failed;
 # - the main job's log case asserts that lcm-logger on the default bus kept every message: beside
@@ -10,6 +10,8 @@
 # Their cost is the lowest: ctest starts a RUN_SERIAL test only when nothing else is running, so
 # they wait for the end of the run either way.
 set_tests_properties(Faults.PacketLossOfOneAndFivePercentCostsNoViewAndNoCoverage
-                     Faults.EachKilledServiceIsRestartedAndTheScanCompletes
+                     Faults.AKilledLoggerGoesOnInASecondFileThatHoldsEveryMessage
                      Faults.TheMainJobsLogHoldsEveryMessageOfItsScan
                      PROPERTIES RUN_SERIAL TRUE COST 0)
+# The longest case that shares the machine (about 2.5 minutes: eleven 10-view scans) starts first.
+set_tests_properties(Faults.EachKilledServiceIsRestartedAndTheScanCompletes PROPERTIES COST 200)

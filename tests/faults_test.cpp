@@ -168,49 +168,60 @@ TEST(Faults, PacketLossOfOneAndFivePercentCostsNoViewAndNoCoverage) {
   EXPECT_LE(runs[1].wall_s, 2.0 * runs[0].wall_s) << "1 % loss took " << runs[1].wall_s << " s against " << runs[0].wall_s;
 }
 
-// SIGKILL of each service (and of the twin and lcm-logger) at view 3 of a 10-view NBV scan on the
-// arm rig, and SIGSTOP of the mapping service: the launcher starts it again (a stopped one once
-// its heartbeat has been missing for 10 s), the restarted service continues from the scan's folder
-// and the coordinator's re-sent requests, and the scan completes every view with the coverage of
-// an undisturbed run.
-TEST(Faults, EachKilledServiceIsRestartedAndTheScanCompletes) {
-  const fs::path dir = fresh_dir("killed-service");
-  const auto run_killing = [&](const std::string& victim, int sig = SIGKILL) {
-    const fs::path out = dir / (victim.empty() ? std::string("undisturbed") : victim + (sig == SIGKILL ? "" : "-stopped"));
-    const std::string scan10 =
-        std::string("--object bunny --rig arm --views 10") + (victim == "lcm-logger" ? "" : " --no-log");
-    const pid_t pid = ::fork();
-    if (pid == 0) {
-      const std::string cmd = netns_run() + " " + scan_command(out, scan10);
-      ::execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
-      ::_exit(127);
-    }
-    if (!victim.empty()) {
-      EXPECT_TRUE(wait_for_views(out, 3, 120)) << victim << ": " << read_text(out.string() + ".stdout");
-      int victim_pid = -1;
-      const nlohmann::json procs_json = read_json_file(out / "processes.json");
-      for (const auto& p : procs_json["processes"]) {
-        if (p["name"] == victim) victim_pid = p["pid"].get<int>();
-      }
-      EXPECT_GT(victim_pid, 0) << victim;
-      if (victim_pid > 0) ::kill(victim_pid, sig);
-    }
-    EXPECT_EQ(wait_exit(pid, 300), 0) << victim << ": " << read_text(out.string() + ".stdout");
-    return out;
-  };
-  const fs::path undisturbed = run_killing("");
-  const std::vector<double> reference = eval::evaluate_coverage(undisturbed).coverage_by_view;
-  ASSERT_EQ(reference.size(), 10u);
-  for (const std::string victim :
-       {"twin", "motion", "camera", "registration", "mapping", "ellipsoids", "scorer", "coordinator", "lcm-logger"}) {
-    const fs::path out = run_killing(victim);
-    const auto scan = read_json_file(out / "scan.json");
-    const std::vector<double> coverage = eval::evaluate_coverage(out).coverage_by_view;
-    int restarts = -1;
+// SIGKILL of each service (and of the twin) at view 3 of a 10-view NBV scan on the arm rig, and
+// SIGSTOP of the mapping service: the launcher starts it again (a stopped one once its heartbeat
+// has been missing for 10 s), the restarted service continues from the scan's folder and the
+// coordinator's re-sent requests, and the scan completes every view with the coverage of an
+// undisturbed run. (lcm-logger: AKilledLoggerGoesOnInASecondFileThatHoldsEveryMessage.)
+namespace {
+
+// `pbnbv scan` of a 10-view bunny scan on the arm rig into dir/<name>, in its own network
+// namespace; SIGNAL sent to the process `victim` (processes.json) once view 3 is recorded.
+fs::path run_killing(const fs::path& dir, const std::string& victim, int sig = SIGKILL, bool log = false) {
+  const fs::path out = dir / (victim.empty() ? std::string("undisturbed") : victim + (sig == SIGKILL ? "" : "-stopped"));
+  const std::string scan10 = std::string("--object bunny --rig arm --views 10") + (log ? "" : " --no-log");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string cmd = netns_run() + " " + scan_command(out, scan10);
+    ::execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  if (!victim.empty()) {
+    EXPECT_TRUE(wait_for_views(out, 3, 120)) << victim << ": " << read_text(out.string() + ".stdout");
+    int victim_pid = -1;
     const nlohmann::json procs_json = read_json_file(out / "processes.json");
     for (const auto& p : procs_json["processes"]) {
-      if (p["name"] == victim) restarts = p["restarts"].get<int>();
+      if (p["name"] == victim) victim_pid = p["pid"].get<int>();
     }
+    EXPECT_GT(victim_pid, 0) << victim;
+    if (victim_pid > 0) ::kill(victim_pid, sig);
+  }
+  EXPECT_EQ(wait_exit(pid, 300), 0) << victim << ": " << read_text(out.string() + ".stdout");
+  return out;
+}
+
+// How often processes.json says `name` was started again.
+int restarts_of(const fs::path& out, const std::string& name) {
+  int restarts = -1;
+  const nlohmann::json procs_json = read_json_file(out / "processes.json");
+  for (const auto& p : procs_json["processes"]) {
+    if (p["name"] == name) restarts = p["restarts"].get<int>();
+  }
+  return restarts;
+}
+
+}  // namespace
+
+TEST(Faults, EachKilledServiceIsRestartedAndTheScanCompletes) {
+  const fs::path dir = fresh_dir("killed-service");
+  const fs::path undisturbed = run_killing(dir, "");
+  const std::vector<double> reference = eval::evaluate_coverage(undisturbed).coverage_by_view;
+  ASSERT_EQ(reference.size(), 10u);
+  for (const std::string victim : {"twin", "motion", "camera", "registration", "mapping", "ellipsoids", "scorer", "coordinator"}) {
+    const fs::path out = run_killing(dir, victim);
+    const auto scan = read_json_file(out / "scan.json");
+    const std::vector<double> coverage = eval::evaluate_coverage(out).coverage_by_view;
+    const int restarts = restarts_of(out, victim);
     std::cout << victim << " killed at view 3: " << scan["status"]["views_done"] << " views in "
               << scan["status"]["elapsed_s"].get<double>() << " s, coverage after view 10 "
               << (coverage.empty() ? 0.0 : coverage.back()) << " % (undisturbed " << reference.back() << " %), "
@@ -223,7 +234,7 @@ TEST(Faults, EachKilledServiceIsRestartedAndTheScanCompletes) {
     if (victim == "mapping") {
       // Hung, not dead: SIGSTOP (never continued). Its heartbeat stops; 10 s later the launcher
       // kills it and starts it again.
-      const fs::path hung = run_killing(victim, SIGSTOP);
+      const fs::path hung = run_killing(dir, victim, SIGSTOP);
       const auto s2 = read_json_file(hung / "scan.json");
       const std::vector<double> c2 = eval::evaluate_coverage(hung).coverage_by_view;
       std::cout << "mapping stopped (SIGSTOP) at view 3: " << s2["status"]["views_done"] << " views in "
@@ -234,15 +245,21 @@ TEST(Faults, EachKilledServiceIsRestartedAndTheScanCompletes) {
       EXPECT_NEAR(c2.back(), reference.back(), 1.0);
       EXPECT_NE(read_text(hung.string() + ".stdout").find("mapping sent no heartbeat for"), std::string::npos);
     }
-    if (victim == "lcm-logger") {  // it went on in scan.lcmlog.00 and the two files hold every message
-      EXPECT_NE(read_text(out.string() + ".stdout")
-                    .find("scan.lcmlog (2 files): "),
-                std::string::npos);
-      EXPECT_NE(read_text(out.string() + ".stdout").find("every depth frame, cloud, registered cloud and map of the 10 views"),
-                std::string::npos)
-          << read_text(out.string() + ".stdout");
-    }
   }
+}
+
+// SIGKILL of lcm-logger at view 3: the launcher starts it again, it goes on in scan.lcmlog.00,
+// and the two files hold every message of the scan (the launcher's audit says so).
+TEST(Faults, AKilledLoggerGoesOnInASecondFileThatHoldsEveryMessage) {
+  const fs::path out = run_killing(fresh_dir("killed-logger"), "lcm-logger", SIGKILL, true);
+  const auto scan = read_json_file(out / "scan.json");
+  EXPECT_EQ(scan["status"]["state"], "done");
+  EXPECT_EQ(scan["status"]["views_done"], 10);
+  EXPECT_EQ(restarts_of(out, "lcm-logger"), 1);
+  const std::string stdout_text = read_text(out.string() + ".stdout");
+  EXPECT_NE(stdout_text.find("scan.lcmlog (2 files): "), std::string::npos) << stdout_text;
+  EXPECT_NE(stdout_text.find("every depth frame, cloud, registered cloud and map of the 10 views"), std::string::npos)
+      << stdout_text;
 }
 
 // SIGKILL of the launcher: the kernel stops every process it started (none is left after 2 s)
