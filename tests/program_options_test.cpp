@@ -80,6 +80,7 @@ std::vector<Program> programs() {
         {"--resolution 0.03 --resolution 0.01", "--resolution is given 2 times (0.03, 0.01): give it once"},
         {"--resolution 0.5", "--resolution: 0.5 is outside its range [0.002, 0.2] m"},
         {"--volume-min 1,2", "--volume-min: '1,2' is not three numbers x,y,z"},
+        {"--frontier-empty 18", "--frontier-empty: unknown frontier rule '18' (expected 6 or 26)"},
         {"--resolutoin 0.03", "unknown option --resolutoin (did you mean --resolution?)"}},
        "--volume-max x,y,z"},
       {"pbnbv-ellipsoids",

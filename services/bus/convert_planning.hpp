@@ -11,7 +11,7 @@
 #include "bus/convert.hpp"
 #include "core/mapping/voxel_map.hpp"
 #include "core/planning/kinds.hpp"
-#include "core/planning/mvee.hpp"
+#include "core/planning/ellipsoid.hpp"
 #include "core/planning/planner.hpp"
 #include "core/planning/planning_options.hpp"
 #include "pbnbv/ellipsoid_t.hpp"

@@ -223,7 +223,7 @@ int main(int argc, char** argv) {
   std::optional<Eigen::Vector3d> volume_min, volume_max;
   cli::add(app, kMapResolution, &p.resolution_m);
   cli::add(app, kFrontierMargin, &p.gamma_m);
-  cli::add(app, kFrontierEmptyNeighbours, &p.frontier_empty_neighbours);
+  cli::add(app, kFrontierEmpty, &p.frontier_empty);
   cli::add_text(app, "out", &out, "write DIR/maps/view_NNN.ot (OctoMap) and view_NNN.states.ply per view; empty: none", "DIR");
   cli::add_point(app, "volume-min", &volume_min, "working volume's lower corner, object frame, m [unlimited]");
   cli::add_point(app, "volume-max", &volume_max, "working volume's upper corner, object frame, m [unlimited]");

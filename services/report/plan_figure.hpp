@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/mapping/state_colour.hpp"
-#include "core/planning/mvee.hpp"
+#include "core/planning/ellipsoid.hpp"
 #include "core/planning/planner.hpp"
 #include "core/base/pose.hpp"
 

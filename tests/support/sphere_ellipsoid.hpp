@@ -1,7 +1,7 @@
 #pragma once
 // A sphere as an ellipsoid of the given class (axes the identity, all three semi-axes r): the
 // shape whose projection the tests work out by hand (a disc, or a circle's ellipse off axis).
-#include "core/planning/mvee.hpp"
+#include "core/planning/ellipsoid.hpp"
 
 namespace pbnbv::testing {
 

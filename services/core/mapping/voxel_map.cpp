@@ -33,7 +33,7 @@
 //     rays through B; the reference the tests and benchmarks compare with.)
 //  5. update_frontiers: over ALL Unknown and Frontier voxels: an Unknown voxel with >= 1 Empty
 //     and >= 1 Occupied voxel among its 26 neighbours (Empty among the 6 face neighbours with
-//     frontier_empty_neighbours = 6) is Frontier, a Frontier voxel without that goes back to
+//     frontier_empty = kFaceNeighbours) is Frontier, a Frontier voxel without that goes back to
 //     Unknown. Neighbours outside B count as None.
 //  6. grow_around_frontiers, later frames only: B grows to cover the Unknown voxels (always inside
 //     B already, since phase 4 never leaves B) and the axis-aligned cube of half-edge gamma
@@ -152,11 +152,6 @@ VoxelMap::VoxelMap(const VoxelMapParams& params) : params_(params) {
   if (!(std::isfinite(params.gamma_m) && params.gamma_m >= 0)) {
     std::ostringstream os;
     os << "VoxelMap: gamma_m = " << params.gamma_m << " must be finite and >= 0";
-    throw std::invalid_argument(os.str());
-  }
-  if (params.frontier_empty_neighbours != 6 && params.frontier_empty_neighbours != 26) {
-    std::ostringstream os;
-    os << "VoxelMap: frontier_empty_neighbours = " << params.frontier_empty_neighbours << " must be 6 or 26";
     throw std::invalid_argument(os.str());
   }
   if (params.ray_stride_px < 0) {
@@ -301,11 +296,13 @@ void VoxelMap::reserve_bounds(const Eigen::AlignedBox3d& box_m) {
 }
 
 VoxelCounts VoxelMap::update_frontiers(Eigen::Vector3i* frontier_lo, Eigen::Vector3i* frontier_hi) {
-  // 26-neighbourhood test with a separable 3x3x3 dilation of two bits per voxel
-  // (bit 0 = Empty, bit 1 = Occupied): plane by plane, mask + dilation along x then y into
-  // scratch_; then along z on the fly while deciding each Unknown/Frontier voxel. The voxel
-  // itself is in its own 3x3x3 block, but it is Unknown/Frontier (neither bit), so the result is
-  // exactly "some 26-neighbour is Empty and some is Occupied". Outside B counts as None.
+  // Neighbourhood test with a separable 3x3x3 dilation of two bits per voxel (bit 0 = Empty,
+  // bit 1 = Occupied): plane by plane, mask + dilation along x then y into scratch_; then along z
+  // on the fly while deciding each Unknown/Frontier voxel. The voxel itself is in its own 3x3x3
+  // block, but it is Unknown/Frontier (neither bit), so the result is exactly "some 26-neighbour
+  // is Occupied and some 26-neighbour is Empty"; with the face rule (frontier_empty =
+  // kFaceNeighbours) the Empty bit is read from the 6 face neighbours instead. Outside B counts
+  // as None.
   scratch_.resize(static_cast<size_t>(dims_.prod()));
   // Several workers only for grids beyond about 200,000 voxels (each takes >= 100,000).
   const int64_t plane_cells = int64_t(dims_.x()) * dims_.y();
@@ -317,7 +314,7 @@ VoxelCounts VoxelMap::update_frontiers(Eigen::Vector3i* frontier_lo, Eigen::Vect
   parallel_run(nt, [&](int tid, int n_threads) {
     const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
     const int64_t plane = int64_t(nx) * ny;
-    const bool face_empty = params_.frontier_empty_neighbours == 6;
+    const bool face_empty = params_.frontier_empty == FrontierEmpty::kFaceNeighbours;
     uint8_t* const cells = reinterpret_cast<uint8_t*>(cells_.data());
     uint8_t* const dil = scratch_.data();
     std::vector<uint8_t> m(static_cast<size_t>(plane)), mx(static_cast<size_t>(plane));
@@ -370,7 +367,7 @@ VoxelCounts VoxelMap::update_frontiers(Eigen::Vector3i* frontier_lo, Eigen::Vect
   parallel_run(nt, [&](int tid, int n_threads) {
     const int nx = dims_.x(), nz = dims_.z();
     const int64_t plane = int64_t(nx) * dims_.y();
-    const bool face_empty = params_.frontier_empty_neighbours == 6;
+    const bool face_empty = params_.frontier_empty == FrontierEmpty::kFaceNeighbours;
     uint8_t* const cells = reinterpret_cast<uint8_t*>(cells_.data());
     const uint8_t* const dil = scratch_.data();
     int64_t cnt[5] = {0, 0, 0, 0, 0};  // local: the cell stores below cannot alias it

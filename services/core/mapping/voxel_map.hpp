@@ -29,10 +29,10 @@ struct VoxelMapParams {
   // automatic (about one ray per voxel footprint at the far side of B), 1 = one ray per pixel.
   int ray_stride_px = 0;
   // Frontier: an Unknown voxel with an Occupied voxel among its 26 neighbours and an Empty one
-  // among its `frontier_empty_neighbours`: 26 (the paper's reading) or 6, the face neighbours
-  // only (planner pbnbv: an Unknown voxel that touches observed free space only along an edge or
-  // at a corner lies behind the surface, see docs/method.md "Beyond the paper").
-  int frontier_empty_neighbours = kFrontierEmptyNeighbours.value;
+  // among all 26 (the paper's reading) or among the 6 face neighbours only (planner pbnbv: an
+  // Unknown voxel that touches observed free space only along an edge or at a corner lies behind
+  // the surface, see docs/method.md "Beyond the paper").
+  FrontierEmpty frontier_empty = kFrontierEmpty.value;
 };
 
 // One depth frame as the map needs it: planar depth (0 or non-finite = no return), the camera
@@ -100,8 +100,9 @@ class VoxelMap {
   //    leaves before its return and before the first Occupied voxel become Empty; None voxels
   //    behind that become Unknown (each voxel judged along the rays of the sample pixels, one
   //    every few pixels, that cross it: voxel_map_projection.cpp);
-  //  - then every Unknown voxel with at least one Empty and at least one Occupied voxel among
-  //    its 26 neighbours is Frontier, every other Frontier voxel goes back to Unknown;
+  //  - then every Unknown voxel with at least one Occupied voxel among its 26 neighbours and at
+  //    least one Empty voxel among the neighbours params.frontier_empty names (all 26, or the 6
+  //    face neighbours) is Frontier, every other Frontier voxel goes back to Unknown;
   //  - B: the first frame sets B to the AABB of its Occupied voxels enlarged along the viewing
   //    direction until its diagonal doubles; later frames grow B to cover the Occupied and
   //    Unknown voxels and a sphere of radius gamma around every Frontier voxel (B never shrinks).

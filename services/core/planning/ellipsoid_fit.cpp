@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "core/base/parallel.hpp"
+#include "core/planning/mvee.hpp"
 
 namespace pbnbv {
 

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "core/planning/gmm.hpp"
-#include "core/planning/mvee.hpp"
+#include "core/planning/ellipsoid.hpp"
 #include "core/mapping/map_options.hpp"
 #include "core/planning/planning_options.hpp"
 

@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "core/base/enum_names.hpp"
+#include "core/mapping/map_options.hpp"
 
 namespace pbnbv {
 
@@ -107,6 +108,8 @@ constexpr int partition_sectors(PlannerKind k, bool free_rig, int beta) {
 //    the mapping service's --frontier-empty. Only the PB-NBV planners read the frontier, so every
 //    other planner keeps pbnbv's map: a scan's map is then the same whichever of them plans it
 //    (pbnbv replay --planner random).
-constexpr int frontier_empty_neighbours(PlannerKind k) { return k == PlannerKind::kPbnbvPaper ? 26 : 6; }
+constexpr FrontierEmpty frontier_empty(PlannerKind k) {
+  return k == PlannerKind::kPbnbvPaper ? FrontierEmpty::kAllNeighbours : FrontierEmpty::kFaceNeighbours;
+}
 
 }  // namespace pbnbv

@@ -14,7 +14,7 @@
 #include "core/geometry/camera_model.hpp"
 #include "core/geometry/mesh.hpp"
 #include "core/geometry/visibility.hpp"
-#include "core/planning/mvee.hpp"
+#include "core/planning/ellipsoid.hpp"
 #include "core/base/pose.hpp"
 #include "core/planning/raycast.hpp"
 #include "core/planning/view_scoring.hpp"

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "core/geometry/camera_model.hpp"
-#include "core/planning/mvee.hpp"
+#include "core/planning/ellipsoid.hpp"
 #include "core/base/pose.hpp"
 
 namespace pbnbv {

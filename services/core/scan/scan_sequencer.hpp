@@ -195,7 +195,6 @@ class ScanSequencer {
   void begin_register(double now_s);
   void registered(double now_s);
   void mapped(double now_s);
-  void end_view(double now_s);
   // The surface rule (settings' stop_rule) on the views so far: ends the scan "done" when it says
   // stop (not at the budget's last view, nor in a replay).
   bool stopped_by_surface(double now_s);

@@ -13,7 +13,7 @@
 #include "core/base/pose.hpp"
 #include "core/geometry/camera_model.hpp"
 #include "core/geometry/point_cloud.hpp"
-#include "core/planning/mvee.hpp"
+#include "core/planning/ellipsoid.hpp"
 #include "core/planning/planner.hpp"
 
 namespace pbnbv {

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "core/geometry/visibility.hpp"
+
 namespace pbnbv {
 namespace {
 
@@ -61,6 +63,19 @@ const Points& dense_sphere_cloud() {
 }
 
 // ---- hand-made samples -------------------------------------------------------------------
+// The evaluator's samples are the surface samples the oracle and the observable surface use
+// (sample_surface_with_normals with the same count and seed), bit for bit.
+TEST(Coverage, SamplesAreTheSurfaceSamplesOfTheSameSeed) {
+  for (const TriangleMesh& mesh : {make_box(Eigen::Vector3d(0.3, 0.2, 0.1)), make_icosphere(kR, 3)}) {
+    for (std::uint64_t seed : {1u, 42u}) {
+      CoverageParams cp;
+      cp.num_samples = 5000;
+      cp.seed = seed;
+      EXPECT_EQ(CoverageEvaluator(mesh, cp).samples(), sample_surface_with_normals(mesh, 5000, seed).points);
+    }
+  }
+}
+
 TEST(Coverage, GivenSamplesRadiusIsInclusive) {
   CoverageEvaluator ev({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {10, 10, 10}}, 0.005);
   EXPECT_EQ(ev.samples().size(), 4u);

@@ -11,6 +11,7 @@
 
 #include "core/planning/ellipsoid_fit.hpp"
 #include "core/base/units.hpp"
+#include "core/planning/mvee.hpp"
 #include "ellipsoid_test_util.hpp"
 
 using namespace pbnbv;

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/base/units.hpp"
-#include "core/planning/mvee.hpp"
+#include "core/planning/ellipsoid.hpp"
 
 namespace pbnbv::testing {
 

@@ -177,7 +177,7 @@ int main(int argc, char** argv) try {
       for (const auto& planner : a.planners) {
         VoxelMapParams mp;
         mp.resolution_m = a.resolution_m;
-        mp.frontier_empty_neighbours = frontier_empty_neighbours(parse_name<PlannerKind>(planner));
+        mp.frontier_empty = frontier_empty(parse_name<PlannerKind>(planner));
         VoxelMap map(mp);
         CoverageEvaluator coverage(mesh);
         study::State state;

@@ -9,7 +9,6 @@
 #include <string>
 #include <vector>
 
-#include "eval/coverage.hpp"
 #include "core/geometry/mesh.hpp"
 #include "core/base/units.hpp"
 
@@ -55,17 +54,13 @@ Pose looking_down(const Eigen::Vector3d& eye) {
   return pose;
 }
 
-TEST(SampleSurfaceWithNormals, SamePointsAsSampleSurfaceAndCoverageEvaluator) {
+TEST(SampleSurfaceWithNormals, SamePointsAsSampleSurfaceWithOutwardUnitNormals) {
   const TriangleMesh meshes[] = {make_box(Eigen::Vector3d(0.3, 0.2, 0.1)),
                                  make_icosphere(0.15, 3)};
   for (const auto& mesh : meshes) {
     for (std::uint64_t seed : {1u, 42u}) {
       const SurfaceSamples s = sample_surface_with_normals(mesh, 5000, seed);
       EXPECT_EQ(s.points, sample_surface(mesh, 5000, seed));  // bit-identical
-      CoverageParams cp;
-      cp.num_samples = 5000;
-      cp.seed = seed;
-      EXPECT_EQ(s.points, CoverageEvaluator(mesh, cp).samples());
       ASSERT_EQ(s.normals.size(), s.points.size());
       for (std::size_t i = 0; i < s.points.size(); ++i) {
         EXPECT_NEAR(s.normals[i].norm(), 1.0, 1e-12);
