@@ -1,0 +1,390 @@
+// ReachabilityChecker: IK solutions per candidate turntable angle, checked for collisions and a
+// free line of sight in the rig's MuJoCo model. See rig.hpp (and rig_model.cpp's header comment).
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include "core/base/format.hpp"
+#include "core/base/units.hpp"
+#include "core/rig/rig_internal.hpp"
+
+namespace pbnbv {
+
+using namespace rig_internal;
+
+namespace {
+
+// A keep-out box that encloses a volume (not empty, not flat): only such a box is checked.
+bool has_volume(const Eigen::AlignedBox3d& box) { return !box.isEmpty() && box.sizes().minCoeff() > 0; }
+
+}  // namespace
+
+struct ReachabilityChecker::Impl {
+  RigModel rig;
+  ModelPtr model;
+  DataPtr data;
+  std::array<int, 6> qadr{};
+  int turntable_qadr = -1;
+  int keepout = -1;
+  int keepout_contype = 0, keepout_conaffinity = 0;
+  std::vector<char> arm_side;  // per geom: on the moving arm (or gantry) side
+  std::vector<std::string> side_name;  // per geom: name used in reasons
+  std::vector<char> in_object;  // per geom: part of the object mount (never an occluder)
+  std::vector<char> follows_flange;  // per geom: on the last joint's body or below (its pose is
+                                     // fixed by the flange pose alone)
+  bool have_neighbour = false;  // solve_batch: the previous candidate's solution seeds the next
+  Vector6d neighbour = Vector6d::Zero();
+
+  void set_keepout(const Eigen::AlignedBox3d& box, double object_z_m) {
+    mjModel* m = model.get();
+    if (!has_volume(box)) {
+      m->geom_contype[keepout] = 0;
+      m->geom_conaffinity[keepout] = 0;
+      return;
+    }
+    const Eigen::Vector3d half = 0.5 * box.sizes();
+    Eigen::Vector3d c = box.center();
+    if (rig.kind == RigKind::kArm) c.z() += object_z_m;
+    m->geom_contype[keepout] = keepout_contype;
+    m->geom_conaffinity[keepout] = keepout_conaffinity;
+    for (int i = 0; i < 3; ++i) {
+      m->geom_size[3 * keepout + i] = half[i];
+      m->geom_pos[3 * keepout + i] = c[i];
+    }
+    m->geom_quat[4 * keepout] = 1;
+    m->geom_quat[4 * keepout + 1] = m->geom_quat[4 * keepout + 2] = m->geom_quat[4 * keepout + 3] = 0;
+    m->geom_rbound[keepout] = half.norm();
+  }
+
+  // Line of sight: rays from the optical centre to the object frame origin and to the keep-out
+  // box corners pulled 20% towards its centre must not hit a rendered geom (groups 0..2) of the
+  // rig, e.g. the arm's own links or the pedestal. Call after place() (uses its kinematics).
+  // Returns the name of the blocking geom's body/geom, or "" when the view is clear.
+  std::string occluder(const Pose& world_T_camera, const Eigen::AlignedBox3d& box, double turntable_rad,
+                       double object_z_m, bool* view_fixed = nullptr) {
+    const mjModel* m = model.get();
+    mjData* d = data.get();
+    const Pose w_o = object_in_world(rig, turntable_rad, object_z_m);
+    std::vector<Eigen::Vector3d> targets{w_o.translation()};
+    if (has_volume(box)) {
+      const Eigen::Vector3d half = 0.5 * box.sizes();
+      const Eigen::Vector3d c = box.center();
+      targets[0] = w_o * c;
+      for (int k = 0; k < 8; ++k) {
+        const Eigen::Vector3d s((k & 1) ? 1 : -1, (k & 2) ? 1 : -1, (k & 4) ? 1 : -1);
+        targets.push_back(w_o * (c + 0.8 * s.cwiseProduct(half)));
+      }
+    }
+    const Eigen::Vector3d eye = world_T_camera.translation();
+    const mjtByte groups[6] = {1, 1, 1, 0, 0, 0};
+    for (const Eigen::Vector3d& t : targets) {
+      const Eigen::Vector3d vec = t - eye;
+      int gid = -1;
+      const mjtNum x = mj_ray(m, d, eye.data(), vec.data(), groups, 1, -1, &gid);
+      if (gid >= 0 && x >= 0 && x < 1.0 && !in_object[gid]) {
+        if (view_fixed) *view_fixed = !arm_side[gid] || follows_flange[gid];
+        return side_name[gid];
+      }
+    }
+    return "";
+  }
+
+  // Colliding arm/environment geom pairs at this state (keep-out box already set).
+  // `view_fixed` (optional): every colliding pair involves a geom that follows the flange (its
+  // pose is fixed by the view, whatever the configuration).
+  std::vector<std::string> colliding(const Vector6d& q, double turntable_rad, bool* view_fixed = nullptr) {
+    place(q, turntable_rad);
+    return colliding_placed(view_fixed);
+  }
+
+  // Kinematics of the model at this state (for occluder() and colliding_placed()).
+  void place(const Vector6d& q, double turntable_rad) {
+    mjData* d = data.get();
+    for (int i = 0; i < 6; ++i) d->qpos[qadr[i]] = q[i];
+    if (turntable_qadr >= 0) d->qpos[turntable_qadr] = turntable_rad - rig.turntable_zero_rad;
+    mj_kinematics(model.get(), d);
+  }
+
+  // colliding() at the state last placed.
+  std::vector<std::string> colliding_placed(bool* view_fixed = nullptr) {
+    mjModel* m = model.get();
+    mjData* d = data.get();
+    mj_collision(m, d);
+    if (view_fixed) *view_fixed = true;
+    std::vector<std::string> out;
+    for (int i = 0; i < d->ncon; ++i) {
+      const mjContact& c = d->contact[i];
+      const bool a1 = arm_side[c.geom1], a2 = arm_side[c.geom2];
+      if (a1 == a2) continue;
+      if (c.dist >= kContactMargin) continue;
+      const int ga = a1 ? c.geom1 : c.geom2, ge = a1 ? c.geom2 : c.geom1;
+      if (view_fixed) *view_fixed = *view_fixed && follows_flange[ga];
+      const std::string s = side_name[ga] + " / " + side_name[ge];
+      if (std::find(out.begin(), out.end(), s) == out.end()) out.push_back(s);
+    }
+    return out;
+  }
+};
+
+ReachabilityChecker::ReachabilityChecker(const RigModel& rig) : impl_(std::make_unique<Impl>()) {
+  Impl& im = *impl_;
+  im.rig = rig;
+  im.model = load_mj_model(rig.model_path);
+  mjModel* m = im.model.get();
+  im.data = DataPtr(mj_makeData(m));
+  if (!im.data) throw std::runtime_error("rig model " + rig.model_path + ": mj_makeData failed");
+  for (int i = 0; i < 6; ++i) {
+    const int j = mj_name2id(m, mjOBJ_JOINT, rig.joint_names[i].c_str());
+    if (j < 0) fail(rig.model_path, "missing joint \"" + rig.joint_names[i] + "\"");
+    im.qadr[i] = m->jnt_qposadr[j];
+  }
+  const int tt = mj_name2id(m, mjOBJ_JOINT, "turntable");
+  im.turntable_qadr = tt >= 0 ? m->jnt_qposadr[tt] : -1;
+  im.keepout = mj_name2id(m, mjOBJ_GEOM, "keepout");
+  if (im.keepout < 0) fail(rig.model_path, "missing geom \"keepout\"");
+
+  // Arm side: geoms of bodies in the subtree of the first joint's body.
+  const int first = m->jnt_bodyid[mj_name2id(m, mjOBJ_JOINT, rig.joint_names[0].c_str())];
+  const int mount = mj_name2id(m, mjOBJ_BODY, "object_mount");
+  im.arm_side.assign(m->ngeom, 0);
+  im.in_object.assign(m->ngeom, 0);
+  im.follows_flange.assign(m->ngeom, 0);
+  const int last = m->jnt_bodyid[mj_name2id(m, mjOBJ_JOINT, rig.joint_names[5].c_str())];
+  im.side_name.assign(m->ngeom, "");
+  int arm_contype = 0, arm_conaffinity = 0;
+  for (int g = 0; g < m->ngeom; ++g) {
+    int b = m->geom_bodyid[g];
+    const int body = b;
+    bool arm = false;
+    while (b > 0) {
+      if (b == first) arm = true;
+      b = m->body_parentid[b];
+    }
+    im.arm_side[g] = arm;
+    for (int bb = body; bb > 0; bb = m->body_parentid[bb]) {
+      if (bb == mount) im.in_object[g] = 1;
+      if (bb == last) im.follows_flange[g] = 1;
+    }
+    const char* bn = mj_id2name(m, mjOBJ_BODY, body);
+    const char* gn = mj_id2name(m, mjOBJ_GEOM, g);
+    if (arm) {
+      im.side_name[g] = bn ? bn : ("body " + std::to_string(body));
+      arm_contype |= m->geom_contype[g];
+      arm_conaffinity |= m->geom_conaffinity[g];
+    } else {
+      im.side_name[g] = gn ? gn : (bn ? bn : ("geom " + std::to_string(g)));
+    }
+    m->geom_margin[g] = kContactMargin;
+  }
+  // The keep-out box collides with the arm side only.
+  im.keepout_contype = arm_conaffinity;
+  im.keepout_conaffinity = arm_contype;
+  m->geom_contype[im.keepout] = 0;
+  m->geom_conaffinity[im.keepout] = 0;
+  // The box is moved around: make mj_kinematics place it from geom_pos/geom_quat rather than
+  // copying the body (or inertial) frame.
+  m->geom_sameframe[im.keepout] = 0;
+}
+
+ReachabilityChecker::~ReachabilityChecker() = default;
+
+std::vector<std::string> ReachabilityChecker::collisions(const Vector6d& q, double turntable_rad,
+                                                         const Eigen::AlignedBox3d& keepout,
+                                                         double object_z_m) {
+  impl_->set_keepout(keepout, object_z_m);
+  return impl_->colliding(q, turntable_rad);
+}
+
+namespace {
+
+// Joint-space distance weighted by the joint speed limits (~ motion time), with a small sum
+// term to break ties.
+double motion_cost(const RigModel& rig, const Vector6d& a, const Vector6d& b) {
+  double mx = 0, sum = 0;
+  for (int i = 0; i < 6; ++i) {
+    const double t = std::abs(a[i] - b[i]) / rig.qd_max[i];
+    mx = std::max(mx, t);
+    sum += t;
+  }
+  return mx + 0.1 * sum;
+}
+
+std::string join_unique(const std::vector<std::string>& v, size_t max_items = 3) {
+  std::string s;
+  for (size_t i = 0; i < v.size() && i < max_items; ++i) s += (i ? ", " : "") + v[i];
+  if (v.size() > max_items) s += ", ...";
+  return s;
+}
+
+}  // namespace
+
+ViewSolution ReachabilityChecker::solve(const Pose& object_T_camera, const Vector6d& q_current,
+                                        double turntable_current, const Eigen::AlignedBox3d& keepout,
+                                        double object_z_m) {
+  Impl& im = *impl_;
+  const RigModel& rig = im.rig;
+  im.set_keepout(keepout, object_z_m);
+  ViewSolution out;
+
+  // Candidate turntable angles: the one bringing the view to the preferred azimuth, then
+  // nearby azimuths (+-15 ... +-90 deg).
+  std::vector<double> angles;
+  std::vector<double> offsets_deg{0};
+  if (rig.kind == RigKind::kArm && rig.has_turntable) {
+    for (int k = 15; k <= 90; k += 15) {
+      offsets_deg.push_back(k);
+      offsets_deg.push_back(-k);
+    }
+    const Eigen::Vector3d c = object_T_camera.translation();
+    const bool above = std::hypot(c.x(), c.y()) < 1e-6;
+    const double psi = std::atan2(c.y(), c.x());
+    for (double off : offsets_deg) {
+      const double t = above ? turntable_current + off * kPi / 180.0
+                             : rig.preferred_azimuth_rad + off * kPi / 180.0 - psi + rig.turntable_zero_rad;
+      angles.push_back(nearest_equivalent_angle_rad(t, turntable_current));
+    }
+  } else {
+    angles.push_back(0.0);
+  }
+
+  std::string first_reason;
+  std::map<std::string, int> reason_count;
+  for (size_t a = 0; a < angles.size(); ++a) {
+    const double t = angles[a];
+    const Pose world_T_camera = object_in_world(rig, t, object_z_m) * object_T_camera;
+    const Pose world_T_flange = world_T_camera * rig.flange_T_camera.inverse();
+    // Candidate solutions in order of motion cost; the first collision-free one with the
+    // object in sight wins. Configurations equal up to whole joint turns share their geometry:
+    // one that failed is not checked again.
+    std::vector<std::string> hits, blocks;
+    std::vector<Vector6d> failed;
+    int checked = 0;
+    // True when a solution is clear; sets `hopeless` when what failed does not depend on the
+    // configuration (the view itself is blocked, or the camera collides), so that no other
+    // solution at this turntable angle can be clear.
+    bool hopeless = false;
+    auto first_clear = [&](std::vector<Vector6d> sols) {
+      std::sort(sols.begin(), sols.end(), [&](const Vector6d& x, const Vector6d& y) {
+        return motion_cost(rig, x, q_current) < motion_cost(rig, y, q_current);
+      });
+      for (const Vector6d& q : sols) {
+        ++checked;
+        if (std::any_of(failed.begin(), failed.end(), [&](const Vector6d& f) { return same_modulo_turns(f, q); })) {
+          continue;
+        }
+        // Line of sight first (rays are cheaper than the collision check, and a view blocked by
+        // the environment is blocked for every solution).
+        im.place(q, t);
+        const Pose w_c = camera_in_world(rig, q);
+        const std::string occ = im.occluder(w_c, keepout, t, object_z_m, &hopeless);
+        if (!occ.empty()) {
+          if (std::find(blocks.begin(), blocks.end(), occ) == blocks.end()) blocks.push_back(occ);
+          if (hopeless) return false;
+          failed.push_back(q);
+          continue;
+        }
+        const std::vector<std::string> col = im.colliding_placed(&hopeless);
+        if (!col.empty()) {
+          for (const std::string& s : col) {
+            if (std::find(hits.begin(), hits.end(), s) == hits.end()) hits.push_back(s);
+          }
+          if (hopeless) return false;
+          failed.push_back(q);
+          continue;
+        }
+        out.reachable = true;
+        out.q = q;
+        out.turntable_rad = t;
+        out.world_T_camera = w_c;
+        return true;
+      }
+      return false;
+    };
+    std::string reason;
+    if (rig.kind == RigKind::kArm && rig.ik == IkMethod::kGeneral) {
+      // General IK, seeds in stages, each stage's solutions checked before the next is tried:
+      // in a batch the previous candidate's solution (a neighbouring view: a few iterations, and
+      // the branch continues the current configuration's), then the current configuration and
+      // home, then spread seeds (in a batch only when a near seed converged). Each solution is
+      // taken in its whole-turn variant nearest the current configuration.
+      reason = general_out_of_reach(rig, rig.world_T_base.inverse() * world_T_flange);
+      if (reason.empty()) {
+        std::vector<std::vector<Vector6d>> stages;
+        if (im.have_neighbour) stages.push_back({im.neighbour});
+        stages.push_back({q_current, rig.q_home});
+        stages.push_back(spread_seeds(rig, kReachSpreadSeeds));
+        int n_seeds = 0;
+        for (const auto& st : stages) n_seeds += static_cast<int>(st.size());
+        std::vector<Vector6d> found;
+        for (const std::vector<Vector6d>& seeds : stages) {
+          std::vector<Vector6d> fresh;
+          for (const Vector6d& seed : seeds) {
+            Vector6d q;
+            if (!general_ik_seed(rig, world_T_flange, seed, kStallRatioFast, &q)) continue;
+            if (std::any_of(found.begin(), found.end(), [&](const Vector6d& f) { return same_modulo_turns(f, q); })) {
+              continue;
+            }
+            for (int i = 0; i < 6; ++i) q[i] = nearest_in_limits(rig, i, q[i], q_current[i]);
+            found.push_back(q);
+            fresh.push_back(q);
+          }
+          if (first_clear(fresh)) return out;
+          if (hopeless) break;
+          // In a batch, when not even the near seeds converge, spread seeds rarely find a
+          // solution (measured: none of the 800 hemisphere views needed them) but cost most of
+          // the time: skipped.
+          if (im.have_neighbour && found.empty() && &seeds == &stages[stages.size() - 2]) break;
+        }
+        if (found.empty()) {
+          reason = "no IK solution within the joint limits from " + std::to_string(n_seeds) +
+                   " seeds (out of reach or beyond the limits)";
+        }
+      }
+    } else {
+      std::string why;
+      std::vector<Vector6d> sols = ik_with_ref(rig, world_T_flange, q_current, &why);
+      if (sols.empty()) reason = why;
+      else if (first_clear(sols)) return out;
+    }
+    if (reason.empty()) {
+      if (blocks.empty()) {
+        reason = "all " + std::to_string(checked) + " IK solutions collide (" + join_unique(hits) + ")";
+      } else {
+        reason = "all " + std::to_string(checked) + " IK solutions collide or have the view "
+                 "blocked (" + join_unique(hits) + (hits.empty() ? "" : "; ") + "view blocked by " +
+                 join_unique(blocks) + ")";
+      }
+    }
+    if (a == 0) first_reason = reason;
+    ++reason_count[reason];
+  }
+  out.reachable = false;
+  if (angles.size() == 1) {
+    out.reason = first_reason;
+  } else {
+    out.reason = "at the preferred azimuth: " + first_reason +
+                 "; also unreachable at azimuth offsets up to +-90 deg";
+  }
+  return out;
+}
+
+std::vector<ViewSolution> ReachabilityChecker::solve_batch(
+    const std::vector<Pose>& object_T_cameras, const Vector6d& q_current,
+    double turntable_current, const Eigen::AlignedBox3d& keepout, double object_z_m) {
+  std::vector<ViewSolution> out;
+  out.reserve(object_T_cameras.size());
+  // Neighbouring candidates have nearby solutions: each seeds the next one's general IK.
+  impl_->have_neighbour = false;
+  for (const Pose& p : object_T_cameras) {
+    out.push_back(solve(p, q_current, turntable_current, keepout, object_z_m));
+    if (out.back().reachable) {
+      impl_->neighbour = out.back().q;
+      impl_->have_neighbour = true;
+    }
+  }
+  impl_->have_neighbour = false;
+  return out;
+}
+
+}  // namespace pbnbv
