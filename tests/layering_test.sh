@@ -3,7 +3,7 @@
 # at compile time (see pbnbv_library in CMakeLists.txt): only the rig library and the twin see
 # MuJoCo, only the report library draws with OpenCV, only the surface library meshes with PCL's
 # surface module, and the processes that need neither do not
-# load them (ldd).
+# load them (ldd); scan.json is parsed in one place; no core file is over 800 lines.
 set -uo pipefail
 src=${PBNBV_SOURCE_DIR:?}
 bin=${PBNBV_BIN_DIR:?}
@@ -37,6 +37,27 @@ check_ldd() {  # <binary> <library pattern>...
     fi
   done
 }
+# scan.json is parsed by core/scan alone (scan_file.cpp: read_scan_json, which checks its format);
+# every other source reads it through that.
+hits=$(cd "$src" && grep -rnE 'read_json\([^;]*(scan\.json|scan_json|scan_path|replay_of)' services twin --include=*.cpp --include=*.hpp |
+       grep -vE '/(test|bench)/' | grep -v '^services/core/scan/scan_file.cpp:' || true)
+if [ -n "$hits" ]; then
+  echo "FAIL: scan.json read outside core/scan/scan_file.cpp (use read_scan_json):"; echo "$hits" | sed 's/^/  /'
+  fail=1
+else
+  echo "ok: scan.json read by core/scan/scan_file.cpp only"
+fi
+
+# No library file of core/ over 800 lines: a file that long holds several things.
+long=$(cd "$src" && find services/core -name '*.cpp' -o -name '*.hpp' | grep -vE '/(test|bench)/' | xargs wc -l |
+       awk '$2 != "total" && $1 > 800 {print "  " $2 ": " $1 " lines"}')
+if [ -n "$long" ]; then
+  echo "FAIL: core files over 800 lines:"; echo "$long"
+  fail=1
+else
+  echo "ok: no core file over 800 lines"
+fi
+
 check_ldd pbnbv-ellipsoids libmujoco libopencv libpcl
 check_ldd pbnbv-mapping libmujoco libopencv libpcl
 check_ldd pbnbv-registration libmujoco libopencv

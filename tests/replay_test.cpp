@@ -10,6 +10,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "core/scan/scan_file.hpp"
 #include "core/io/json.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "pbnbv/arm_command_t.hpp"
@@ -87,7 +88,8 @@ fs::path scan_folder(const std::string& name, const std::string& id) {
   s.object_name = "bunny";
   s.normalisation.extent_m = Eigen::Vector3d::Constant(0.2);
   write_json_atomic(to_json(s), (dir / "settings.json").string());
-  write_json_atomic(json{{"settings", {{"scan_id", id}}}, {"views", json::array()}}, (dir / "scan.json").string());
+  write_json_atomic(json{{"format_version", kScanFormatVersion}, {"settings", {{"scan_id", id}}}, {"views", json::array()}},
+                    (dir / "scan.json").string());
   return dir;
 }
 

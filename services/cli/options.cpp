@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "core/base/version.hpp"
+
 namespace pbnbv::cli {
 
 namespace {
@@ -186,7 +188,7 @@ CLI::Option* finish(CLI::Option* o, const std::string& type) {
 }  // namespace detail
 
 void init(CLI::App& app) {
-  app.set_version_flag("--version", app.get_name() + " " + PBNBV_VERSION, "print the version and exit");
+  app.set_version_flag("--version", app.get_name() + " " + std::string(pbnbv_version()), "print the version and exit");
   app.allow_extras();  // unknown options are reported by parse(), naming the closest known one
   app.get_formatter()->column_width(32);
 }

@@ -24,6 +24,7 @@
 #include "core/io/mesh_file.hpp"
 #include "core/planning/planner.hpp"
 #include "core/rig/rig.hpp"
+#include "core/scan/scan_file.hpp"
 #include "core/scan/scan_sequencer.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "core/geometry/views.hpp"
@@ -92,7 +93,7 @@ bool netns_available() {
 bool scan_complete(const fs::path& dir) {
   try {
     if (!fs::exists(dir / "scan.json") || !fs::exists(dir / "processes.json")) return false;
-    return read_json((dir / "scan.json").string()).at("status").at("state").get<std::string>() == "done";
+    return recorded_state(dir) == "done";
   } catch (const std::exception&) {
     return false;
   }
@@ -192,7 +193,7 @@ std::string scan_failure_reason(const fs::path& dir, const fs::path& log) {
   const std::string where = " (log: " + log.string() + ")";
   try {
     if (fs::exists(dir / "scan.json")) {
-      const json st = read_json((dir / "scan.json").string()).at("status");
+      const json st = read_scan_status(dir);
       const std::string state = st.value("state", std::string("?"));
       std::string msg = "scan " + state + " after " + std::to_string(st.value("views_done", 0)) + " of " +
                         std::to_string(st.value("views_planned", 0)) + " views";
@@ -943,7 +944,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
         r.stop_rule_reason = d->reason;
       }
       r.complete = true;
-      const json plan = read_json((j.dir / "scan.json").string()).value("plan", json::object());
+      const json plan = read_scan_json(j.dir).value("plan", json::object());
       if (plan.contains("initial_view")) r.initial_view = pose_from_json(plan["initial_view"], "scan.json plan.initial_view").translation();
       if (fs::exists(j.dir / "bench_run.json")) r.wall_s = read_json((j.dir / "bench_run.json").string()).value("wall_s", 0.0);
     } catch (const std::exception& x) {

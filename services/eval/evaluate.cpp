@@ -12,6 +12,7 @@
 #include "core/io/pcd_file.hpp"
 #include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
+#include "core/scan/scan_file.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "core/scan/stop_rule.hpp"
 
@@ -30,7 +31,7 @@ json stats_mm(const DistanceStats& s) {
 // evaluate_scan, and evaluate_coverage when `metrics` is null.
 ScanEvaluation evaluate(const fs::path& out, const CoverageParams& params, const std::vector<uint8_t>* observable,
                         const MetricParams* metrics) {
-  const json scan = read_json((out / "scan.json").string());
+  const json scan = read_scan_json(out);
   const fs::path mesh_path = out / "object.stl";
   if (!fs::exists(mesh_path)) throw std::runtime_error(mesh_path.string() + " is missing: not a twin scan's output folder");
   const TriangleMesh truth = load_mesh(mesh_path.string());

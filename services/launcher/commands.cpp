@@ -12,7 +12,7 @@
 #include "core/base/install_paths.hpp"
 #include "core/io/json.hpp"
 #include "core/rig/urdf_import.hpp"
-#include "core/surface/scan_mesh.hpp"
+#include "core/scan/scan_file.hpp"
 #include "launcher/commands.hpp"
 #include "launcher/supervise.hpp"
 #include "rigcheck/rig_check.hpp"

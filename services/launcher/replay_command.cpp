@@ -8,6 +8,7 @@
 #include "core/io/json.hpp"
 #include "core/scan/replay_rig.hpp"
 #include "core/scan/scan_comparison.hpp"
+#include "core/scan/scan_file.hpp"
 #include "launcher/commands.hpp"
 #include "launcher/scan_processes.hpp"
 #include "launcher/supervise.hpp"
@@ -50,7 +51,7 @@ int run_replay(const ReplayOptions& o, const fs::path& bin) {
                                 "nothing to replay");
   }
   const std::string scan_json = (dir / "scan.json").string();
-  const nlohmann::json recorded = read_json(scan_json);
+  const nlohmann::json recorded = read_scan_json(scan_json);
   ScanSettings s = scan_settings_from_json(read_json((dir / "settings.json").string()));
   const std::string recorded_id = s.scan_id;
   if (recorded.value("settings", nlohmann::json::object()).value("scan_id", "") != recorded_id) {
@@ -105,7 +106,7 @@ int run_replay(const ReplayOptions& o, const fs::path& bin) {
   const int code = supervise(children, s, out, true, false);
   if (!fs::exists(out / "scan.json")) return code == 0 ? 1 : code;
 
-  nlohmann::json comparison = compare_scans(recorded, read_json((out / "scan.json").string()));
+  nlohmann::json comparison = compare_scans(recorded, read_scan_json(out));
   comparison["original"] = dir.string();
   comparison["replay"] = out.string();
   comparison["readings_lost_in_recording"] = readings_lost;

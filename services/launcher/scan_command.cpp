@@ -19,6 +19,7 @@
 #include "core/geometry/mesh.hpp"
 #include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
+#include "core/scan/scan_file.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/objects.hpp"
 #include "launcher/commands.hpp"
@@ -90,13 +91,8 @@ void finish_record(const fs::path& out, const std::string& state, const std::str
   // The coordinator died holding its disk reserve: free it, so the record fits on a full disk.
   std::error_code ignored;
   fs::remove(out / "state" / "coordinator.reserve", ignored);
-  const fs::path path = out / "scan.json";
-  nlohmann::json scan = fs::exists(path) ? read_json(path.string()) : nlohmann::json::object();
-  nlohmann::json& status = scan["status"];
-  status["state"] = state;
-  status["message"] = cause;
   try {
-    write_json_atomic(scan, path.string());
+    write_scan_state(out, state, cause);
   } catch (const std::exception& e) {
     std::cerr << "error: the scan " << state << " (" << cause << ") and this cannot be recorded: " << e.what() << std::endl;
   }
@@ -108,7 +104,7 @@ void audit_log(const fs::path& out, const std::string& scan_id) {
   try {
     const std::vector<std::string> files = bus::scan_log_files(out.string());  // scan.lcmlog, .NN after restarts
     const bus::LogContents log = bus::read_scan_logs(files, scan_id);
-    const nlohmann::json scan = read_json((out / "scan.json").string());
+    const nlohmann::json scan = read_scan_json(out);
     const nlohmann::json views = scan.value("views", nlohmann::json::array());
     const std::vector<std::string> missing = bus::missing_from_log(log, views);
     if (missing.empty()) {
@@ -259,7 +255,7 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
   auto vec = [&](const Eigen::Vector3d& v) { return exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z()); };
   add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", exact(s.map_resolution_m), "--out", out.string(),
                   "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m), "--frontier-empty",
-                  std::to_string(frontier_empty_neighbours(s.planner))});
+                  std::string(name_of(frontier_empty(s.planner)))});
   if (uses_ellipsoids(s.planner)) add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
   // The scorer draws each plan into out/plans/ (its own --out: no path comes from the bus).
   if (uses_view_scorer(s.planner)) {
@@ -560,10 +556,8 @@ int resume_scan(const fs::path& dir, const fs::path& bin) {
   if (out.filename().empty()) out = out.parent_path();  // "DIR/": the folder itself
   // A complete scan (of any version: `pbnbv bench` reruns over its folders) starts nothing.
   if (fs::is_regular_file(out / "settings.json") && fs::is_regular_file(out / "scan.json")) {
-    const nlohmann::json scan = read_json((out / "scan.json").string());
-    if (scan.value("status", nlohmann::json::object()).value("state", "") == "done") {
-      std::cout << "pbnbv scan: " << out.string() << " holds a complete scan ("
-                << scan.value("settings", nlohmann::json::object()).value("scan_id", "") << "): nothing to resume" << std::endl;
+    if (recorded_state(out) == "done") {
+      std::cout << "pbnbv scan: " << out.string() << " holds a complete scan: nothing to resume" << std::endl;
       return 0;
     }
   }

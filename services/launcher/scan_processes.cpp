@@ -6,6 +6,7 @@
 #include "bus/bus.hpp"
 #include "core/base/format.hpp"
 #include "core/io/json.hpp"
+#include "core/scan/scan_file.hpp"
 #include "launcher/command_line.hpp"
 #include "launcher/supervise.hpp"
 
@@ -165,7 +166,7 @@ Resumable read_resumable(const fs::path& out) {
   r.launch = launch_settings_from_json(j.at("launch"), settings_file.string());
   const fs::path scan_json = out / "scan.json";
   if (fs::exists(scan_json)) {
-    const nlohmann::json scan = read_json(scan_json.string());
+    const nlohmann::json scan = read_scan_json(scan_json);
     const nlohmann::json recorded = scan.value("settings", nlohmann::json::object()).value("scan_id", nlohmann::json());
     if (recorded != nlohmann::json(s.scan_id)) {
       throw std::invalid_argument(where + ": " + scan_json.string() + " is a record of scan " + recorded.dump() + ", " +

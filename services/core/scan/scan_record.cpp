@@ -3,11 +3,13 @@
 #include <chrono>
 
 #include "core/base/format.hpp"
+#include "core/base/version.hpp"
 #include "core/base/units.hpp"
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
 #include "core/perception/cloud_filter.hpp"
 #include "core/perception/depth_cloud.hpp"
+#include "core/scan/scan_file.hpp"
 #include "core/surface/scan_mesh.hpp"
 
 namespace fs = std::filesystem;
@@ -206,6 +208,8 @@ ScanRecord::ScanRecord(fs::path out, const ScanSettings& settings)
     : out_(std::move(out)), views_planned_(settings.views), voxel_m_(settings.voxel_m),
       stop_radius_m_(settings.stop_radius_m) {
   fs::create_directories(out_ / "frames");
+  report_["format_version"] = kScanFormatVersion;
+  report_["pbnbv_version"] = std::string(pbnbv_version());
   report_["settings"] = to_json(settings);
   report_["views"] = json::array();
 }
@@ -293,7 +297,7 @@ void ScanRecord::add_view(const ViewRecord& v, int views_done, double elapsed_s)
 void ScanRecord::continue_from_folder(const std::string& scan_id) {
   const fs::path path = out_ / "scan.json";
   if (!fs::exists(path)) throw std::invalid_argument("cannot resume: " + path.string() + " does not exist");
-  json before = read_json(path.string());
+  json before = read_scan_json(path);
   if (!before.contains("settings") || before["settings"].value("scan_id", "") != scan_id) {
     throw std::invalid_argument("cannot resume: " + path.string() + " is not a record of scan " + scan_id);
   }
@@ -319,7 +323,9 @@ void ScanRecord::continue_from_folder(const std::string& scan_id) {
 
 json ScanRecord::add_mesh(const SurfaceSettings& settings) {
   try {
-    report_["mesh"] = mesh_scan(out_, report_, settings);
+    SurfaceSettings s = settings;
+    const std::vector<SurfaceFrame> frames = read_scan_frames(out_, report_, s);
+    report_["mesh"] = mesh_scan(out_, frames, s);
   } catch (const std::exception& e) {
     report_["mesh"] = {{"error", e.what()}};
   }

@@ -4,8 +4,6 @@
 #include <stdexcept>
 
 #include "core/base/enum_names.hpp"
-#include "core/io/cloud_file.hpp"
-#include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
 #include "core/surface/mesh_topology.hpp"
 
@@ -19,42 +17,9 @@ namespace {
 constexpr std::size_t kMinComponentTriangles = 50;
 }  // namespace
 
-std::vector<SurfaceFrame> read_scan_frames(const fs::path& dir, const json& scan, SurfaceSettings& settings) {
-  const std::string where = (dir / "scan.json").string();
-  try {
-    const json& cam = scan.at("settings").at("camera");
-    settings.camera.width = cam.at("width").get<int>();
-    settings.camera.height = cam.at("height").get<int>();
-    settings.camera.fx = cam.at("fx").get<double>();
-    settings.camera.fy = cam.at("fy").get<double>();
-    settings.camera.cx = cam.at("cx").get<double>();
-    settings.camera.cy = cam.at("cy").get<double>();
-    settings.point_spacing_m = scan.at("settings").value("voxel_m", 0.0);
-  } catch (const json::exception& e) {
-    throw std::invalid_argument(where + ": settings.camera or settings.voxel_m unreadable: " + e.what());
-  }
-  std::vector<SurfaceFrame> frames;
-  for (const json& v : scan.value("views", json::array())) {
-    if (!v.value("merged", false) || !v.contains("frame_file")) continue;
-    const std::string what = where + " view " + std::to_string(v.value("view", -1));
-    SurfaceFrame f;
-    if (v.contains("registration") && v["registration"].contains("registered_object_T_camera")) {
-      f.object_T_camera = pose_from_json(v["registration"]["registered_object_T_camera"], what + " registered pose");
-    } else if (v.contains("capture")) {
-      f.object_T_camera = pose_from_json(v["capture"].at("camera_object_T_camera"), what + " camera pose");
-    } else {
-      throw std::invalid_argument(what + ": a merged view without a camera pose");
-    }
-    f.points = read_ply((dir / v["frame_file"].get<std::string>()).string());
-    frames.push_back(std::move(f));
-  }
-  if (frames.empty()) throw std::invalid_argument(where + ": no accepted view to mesh");
-  return frames;
-}
-
-json mesh_scan(const fs::path& dir, const json& scan, SurfaceSettings settings, bool with_stl) {
+json mesh_scan(const fs::path& dir, const std::vector<SurfaceFrame>& frames, const SurfaceSettings& settings,
+               bool with_stl) {
   const auto t0 = std::chrono::steady_clock::now();
-  const std::vector<SurfaceFrame> frames = read_scan_frames(dir, scan, settings);
   SurfaceStats stats;
   TriangleMesh mesh = build_surface(frames, settings, &stats);
   const std::size_t removed = remove_small_components(mesh, kMinComponentTriangles);
@@ -92,15 +57,6 @@ json mesh_scan(const fs::path& dir, const json& scan, SurfaceSettings settings, 
     j["settings"] = {{"poisson_depth", settings.poisson_depth}};
   }
   return j;
-}
-
-json mesh_scan_folder(const fs::path& dir, const SurfaceSettings& settings, bool with_stl) {
-  const std::string path = (dir / "scan.json").string();
-  json scan = read_json(path);
-  const json m = mesh_scan(dir, scan, settings, with_stl);
-  scan["mesh"] = m;
-  write_json_atomic(scan, path);
-  return m;
 }
 
 }  // namespace pbnbv

@@ -6,6 +6,7 @@
 
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
+#include "core/scan/scan_file.hpp"
 #include "core/perception/cloud_filter.hpp"
 #include "core/planning/view_scoring.hpp"
 
@@ -135,7 +136,7 @@ std::vector<Scene> load_scan_folder(const std::string& dir, double voxel_m, std:
   if (!fs::is_directory(root)) throw std::runtime_error("scan folder " + dir + " does not exist");
   const fs::path scan_path = root / "scan.json";
   if (!fs::exists(scan_path)) throw std::runtime_error("scan folder " + dir + " has no scan.json (not a scan folder?)");
-  const nlohmann::json scan = read_json(scan_path.string());
+  const nlohmann::json scan = read_scan_json(scan_path);
   const nlohmann::json views = scan.value("views", nlohmann::json::array());
   const nlohmann::json settings = scan.value("settings", nlohmann::json::object());
   std::vector<double> coverage;

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "core/scan/scan_file.hpp"
 #include "core/io/json.hpp"
 
 namespace fs = std::filesystem;
@@ -211,7 +212,8 @@ TEST(ScanProcesses, AFolderThatIsNotOneResumableScanIsRefused) {
   fs::path out = scan_folder(dir / "scan", s, LaunchSettings{});
   ScanSettings other = s;
   other.scan_id = "box-fedcba9876543210";
-  write_json_atomic({{"settings", to_json(other)}, {"status", {{"state", "stopped"}}}}, (out / "scan.json").string());
+  write_json_atomic({{"format_version", kScanFormatVersion}, {"settings", to_json(other)}, {"status", {{"state", "stopped"}}}},
+                    (out / "scan.json").string());
   EXPECT_EQ(refusal([&] { read_resumable(out); }),
             where + (out / "scan.json").string() + " is a record of scan \"box-fedcba9876543210\", " + settings +
                 " of scan \"" + kScanId + "\": the folder mixes two scans");

@@ -12,6 +12,7 @@
 #include "core/io/json.hpp"
 #include "file_test_util.hpp"
 #include "sphere_ellipsoid.hpp"
+#include "core/scan/scan_file.hpp"
 
 namespace pbnbv {
 namespace {
@@ -144,6 +145,7 @@ TEST_F(ScanFolder, OneScenePerViewWithTheCloudSoFarAndTheNextPlan) {
   const Pose p0(Eigen::Translation3d(0.7, 0, 0));
   const Pose p1(Eigen::Translation3d(0, 0.7, 0));
   nlohmann::json scan;
+  scan["format_version"] = kScanFormatVersion;
   scan["settings"] = {{"scan_id", "sphere-1"},
                       {"camera", {{"width", 1280}, {"height", 720}, {"fx", 696.0}, {"fy", 696.0}, {"cx", 640.0}, {"cy", 360.0}}},
                       {"planning", {{"candidates", 50}, {"parallels", 5}, {"area", "full"}}}};

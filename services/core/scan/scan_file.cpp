@@ -1,0 +1,118 @@
+#include "core/scan/scan_file.hpp"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+
+#include "core/base/version.hpp"
+#include "core/io/cloud_file.hpp"
+#include "core/io/json.hpp"
+#include "core/surface/scan_mesh.hpp"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace pbnbv {
+
+json read_scan_json(const fs::path& scan_json_or_folder) {
+  const fs::path path =
+      fs::is_directory(scan_json_or_folder) ? scan_json_or_folder / "scan.json" : scan_json_or_folder;
+  json scan = read_json(path.string());
+  if (!scan.is_object()) throw std::invalid_argument(path.string() + ": not a scan record (expected a JSON object)");
+  const auto version = scan.find("format_version");
+  if (version == scan.end()) {
+    throw std::invalid_argument(fmt::format(
+        "{}: a record without format_version (written by pbnbv 0.10 or older); this pbnbv ({}) reads format {} only",
+        path.string(), pbnbv_version(), kScanFormatVersion));
+  }
+  const int64_t format = integer_from_json(*version, 0, 1'000'000, path.string() + " format_version");
+  if (format != kScanFormatVersion) {
+    const auto writer = scan.find("pbnbv_version");
+    const std::string by =
+        writer != scan.end() && writer->is_string() ? "pbnbv " + writer->get<std::string>() : "an unknown pbnbv";
+    throw std::invalid_argument(fmt::format("{}: format {} (written by {}); this pbnbv ({}) reads format {} only",
+                                            path.string(), format, by, pbnbv_version(), kScanFormatVersion));
+  }
+  return scan;
+}
+
+json read_scan_status(const fs::path& scan_folder) {
+  const fs::path path = scan_folder / "scan.json";
+  const json scan = read_json(path.string());
+  if (!scan.is_object() || !scan.contains("status") || !scan["status"].is_object()) {
+    throw std::invalid_argument(path.string() + ": no \"status\" object (not a scan record)");
+  }
+  return scan["status"];
+}
+
+std::string recorded_state(const fs::path& scan_folder) {
+  try {
+    const json status = read_scan_status(scan_folder);
+    const auto state = status.find("state");
+    return state != status.end() && state->is_string() ? state->get<std::string>() : "";
+  } catch (const std::exception&) {
+    return "";
+  }
+}
+
+void write_scan_state(const fs::path& scan_folder, const std::string& state, const std::string& message) {
+  const fs::path path = scan_folder / "scan.json";
+  json scan = json::object();
+  if (fs::exists(path)) scan = read_json(path.string());
+  if (!scan.is_object()) throw std::invalid_argument(path.string() + ": not a scan record (expected a JSON object)");
+  if (!scan.contains("format_version")) {
+    scan["format_version"] = kScanFormatVersion;
+    scan["pbnbv_version"] = std::string(pbnbv_version());
+  }
+  json& status = scan["status"];
+  if (!status.is_object()) status = json::object();
+  status["state"] = state;
+  status["message"] = message;
+  write_json_atomic(scan, path.string());
+}
+
+std::vector<SurfaceFrame> read_scan_frames(const fs::path& dir, const json& scan, SurfaceSettings& settings) {
+  const std::string where = (dir / "scan.json").string();
+  try {
+    const json& cam = scan.at("settings").at("camera");
+    settings.camera.width = cam.at("width").get<int>();
+    settings.camera.height = cam.at("height").get<int>();
+    settings.camera.fx = cam.at("fx").get<double>();
+    settings.camera.fy = cam.at("fy").get<double>();
+    settings.camera.cx = cam.at("cx").get<double>();
+    settings.camera.cy = cam.at("cy").get<double>();
+    settings.point_spacing_m = scan.at("settings").value("voxel_m", 0.0);
+  } catch (const json::exception& e) {
+    throw std::invalid_argument(where + ": settings.camera or settings.voxel_m unreadable: " + e.what());
+  }
+  std::vector<SurfaceFrame> frames;
+  for (const json& v : scan.value("views", json::array())) {
+    if (!v.value("merged", false) || !v.contains("frame_file")) continue;
+    const std::string what = where + " view " + std::to_string(v.value("view", -1));
+    SurfaceFrame f;
+    if (v.contains("registration") && v["registration"].contains("registered_object_T_camera")) {
+      f.object_T_camera = pose_from_json(v["registration"]["registered_object_T_camera"], what + " registered pose");
+    } else if (v.contains("capture")) {
+      f.object_T_camera = pose_from_json(v["capture"].at("camera_object_T_camera"), what + " camera pose");
+    } else {
+      throw std::invalid_argument(what + ": a merged view without a camera pose");
+    }
+    f.points = read_ply((dir / v["frame_file"].get<std::string>()).string());
+    frames.push_back(std::move(f));
+  }
+  if (frames.empty()) throw std::invalid_argument(where + ": no accepted view to mesh");
+  return frames;
+}
+
+json mesh_scan_folder(const fs::path& dir, const SurfaceSettings& settings, bool with_stl) {
+  const fs::path path = dir / "scan.json";
+  json scan = read_scan_json(path);
+  SurfaceSettings s = settings;
+  const std::vector<SurfaceFrame> frames = read_scan_frames(dir, scan, s);
+  const json m = mesh_scan(dir, frames, s, with_stl);
+  scan["mesh"] = m;
+  write_json_atomic(scan, path.string());
+  return m;
+}
+
+}  // namespace pbnbv

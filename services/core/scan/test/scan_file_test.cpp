@@ -1,0 +1,88 @@
+// scan.json's format: a record this pbnbv writes is read back; a record of another format, or of
+// none, is refused naming both formats and the writer; the launcher's last word on a scan's state.
+#include "core/scan/scan_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <string>
+
+#include "core/base/version.hpp"
+#include "core/io/json.hpp"
+#include "core/scan/scan_record.hpp"
+#include "file_test_util.hpp"
+
+using namespace pbnbv;
+using nlohmann::json;
+
+namespace {
+
+class ScanFileTest : public pbnbv::testing::TempDirTest {
+ protected:
+  std::string path() const { return (dir_ / "scan.json").string(); }
+
+  // The message read_scan_json throws for the folder (empty when it reads it).
+  std::string refusal() const {
+    try {
+      read_scan_json(dir_);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  }
+};
+
+TEST_F(ScanFileTest, ARecordOfThisVersionIsReadBack) {
+  ScanSettings s;
+  s.scan_id = "format";
+  ScanRecord record(dir_, s);
+  record.write("running", "", 0, 0.0);
+  const json scan = read_scan_json(dir_);  // the folder or the file itself
+  EXPECT_EQ(scan["format_version"], kScanFormatVersion);
+  EXPECT_EQ(scan["pbnbv_version"], std::string(pbnbv_version()));
+  EXPECT_EQ(scan["settings"]["scan_id"], "format");
+  EXPECT_EQ(read_scan_json(path()), scan);
+  EXPECT_EQ(recorded_state(dir_), "running");
+}
+
+TEST_F(ScanFileTest, AnotherFormatIsRefusedNamingBothFormatsAndTheWriter) {
+  const std::string mine = std::string(pbnbv_version());
+  write_json_atomic({{"format_version", 2}, {"pbnbv_version", "0.12.0"}, {"status", {{"state", "done"}}}}, path());
+  EXPECT_EQ(refusal(), path() + ": format 2 (written by pbnbv 0.12.0); this pbnbv (" + mine + ") reads format 1 only");
+  write_json_atomic({{"format_version", 0}}, path());
+  EXPECT_EQ(refusal(), path() + ": format 0 (written by an unknown pbnbv); this pbnbv (" + mine + ") reads format 1 only");
+  write_json_atomic({{"settings", json::object()}, {"status", {{"state", "done"}}}}, path());
+  EXPECT_EQ(refusal(), path() + ": a record without format_version (written by pbnbv 0.10 or older); this pbnbv (" + mine +
+                           ") reads format 1 only");
+  // The state of a record of any format is still read (a bench rerun skips complete scans).
+  EXPECT_EQ(recorded_state(dir_), "done");
+  write_json_atomic({{"format_version", "1"}}, path());
+  EXPECT_NE(refusal().find("format_version"), std::string::npos) << refusal();
+  write_json_atomic(json::array({1, 2}), path());
+  EXPECT_EQ(refusal(), path() + ": not a scan record (expected a JSON object)");
+}
+
+TEST_F(ScanFileTest, TheStateOfAFolderWithoutARecordIsEmpty) {
+  EXPECT_EQ(recorded_state(dir_), "");
+  std::ofstream(path()) << "{ not json";
+  EXPECT_EQ(recorded_state(dir_), "");
+  EXPECT_THROW(read_scan_status(dir_), std::exception);
+}
+
+TEST_F(ScanFileTest, TheLaunchersWordOnTheStateKeepsTheRecordAndStartsOneWhereNone) {
+  write_scan_state(dir_, "failed", "the coordinator died (signal 9)");
+  json scan = read_scan_json(dir_);
+  EXPECT_EQ(scan["status"], json({{"state", "failed"}, {"message", "the coordinator died (signal 9)"}}));
+  ScanSettings s;
+  s.scan_id = "kept";
+  ScanRecord record(dir_, s);
+  record.write("running", "", 3, 12.5);
+  write_scan_state(dir_, "stopped", "interrupted (SIGINT)");
+  scan = read_scan_json(dir_);
+  EXPECT_EQ(scan["status"]["state"], "stopped");
+  EXPECT_EQ(scan["status"]["message"], "interrupted (SIGINT)");
+  EXPECT_EQ(scan["status"]["views_done"], 3);  // the rest of the record stands
+  EXPECT_EQ(scan["settings"]["scan_id"], "kept");
+}
+
+}  // namespace
