@@ -160,10 +160,12 @@ void check_off_counts(std::istream& in, const std::string& path) {
   std::vector<std::string> tokens;
   std::string line;
   std::uintmax_t line_number = 0;
+  std::string rest;  // what follows the counts on their line: CGAL's scanner reads it as the next line
   while (tokens.size() < 4 && std::getline(in, line)) {
     ++line_number;
     std::istringstream words(line.substr(0, line.find('#')));
     for (std::string w; tokens.size() < 4 && words >> w;) tokens.push_back(w);
+    if (tokens.size() == 4) std::getline(words, rest);
   }
   // Not an OFF header, or one with a dimension before the counts ("nOFF"): CGAL says what is wrong.
   if (tokens.size() < 4 || tokens[0].find("OFF") == std::string::npos || tokens[0].find("nOFF") != std::string::npos) return;
@@ -187,8 +189,14 @@ void check_off_counts(std::istream& in, const std::string& path) {
   // vertex, then one face per line; blank and comment lines skipped.
   const double most = static_cast<double>(std::min<std::uintmax_t>(vertices, size / 2));
   std::uintmax_t vertex_lines = 0, face_lines = 0;
-  while (face_lines < faces && std::getline(in, line)) {
-    ++line_number;
+  bool pending = true;  // `rest` first
+  while (face_lines < faces && ((pending && !rest.empty()) || std::getline(in, line))) {
+    if (pending && !rest.empty()) {
+      line = rest;
+    } else {
+      ++line_number;
+    }
+    pending = false;
     const std::string text = line.substr(0, line.find('#'));
     if (text.find_first_not_of(" \t\r\v\f") == std::string::npos) continue;
     if (vertex_lines < vertices) {

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/scan/scan_file.hpp"
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
@@ -160,7 +161,7 @@ TEST_F(EvaluateCommand, TwinScanFolderAgainstItsObjectStl) {
   write_stl_binary(slab(), (scan / "object.stl").string());
   write_ply(grid_2mm_above(), (scan / "frames" / "view_001.ply").string());
   write_ply(grid_2mm_above(), (scan / "cloud.ply").string());
-  write_json_atomic({{"status", {{"state", "done"}, {"views_done", 1}, {"message", "done"}}},
+  write_json_atomic({{"format_version", kScanFormatVersion}, {"status", {{"state", "done"}, {"views_done", 1}, {"message", "done"}}},
                      {"views", {{{"merged", true}, {"frame_file", "frames/view_001.ply"}}}}},
                     (scan / "scan.json").string());
   const json j = run({scan.string()});

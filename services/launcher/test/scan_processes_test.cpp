@@ -53,7 +53,7 @@ fs::path scan_folder(const fs::path& dir, const ScanSettings& s, const LaunchSet
   fs::create_directories(dir / "logs");
   write_scan_settings(s, l, dir);
   std::ofstream(dir / "object.stl") << "solid sphere\nendsolid sphere\n";
-  write_json_atomic({{"settings", to_json(s)}, {"status", {{"state", "stopped"}, {"views_done", 3}}}},
+  write_json_atomic({{"format_version", kScanFormatVersion}, {"settings", to_json(s)}, {"status", {{"state", "stopped"}, {"views_done", 3}}}},
                     (dir / "scan.json").string());
   return dir;
 }
