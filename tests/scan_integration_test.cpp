@@ -72,8 +72,10 @@ TEST(ScanIntegration, SphereOnTheArmRigLiesOnTheTrueSurface) {
   std::cout << "sphere, arm rig: " << d.n << " points, median distance " << d.median * 1e3
             << " mm, 95th percentile " << d.p95 * 1e3 << " mm\n";
   EXPECT_GT(d.n, 5000u);
-  EXPECT_LE(d.median, 1e-3);
-  EXPECT_LE(d.p95, 3e-3);
+  // Measured 0.008-0.012 mm median, 0.026-0.035 mm p95 (README): five times that, so that a
+  // regression of the pipeline's accuracy fails here.
+  EXPECT_LE(d.median, 0.04e-3);
+  EXPECT_LE(d.p95, 0.15e-3);
   // Four views 90 degrees apart see all around: points in every azimuth quadrant.
   const PointCloud cloud = read_ply((out / "cloud.ply").string());
   int quadrant[4] = {0, 0, 0, 0};
@@ -87,8 +89,10 @@ TEST(ScanIntegration, BoxOnTheArmRigLiesOnTheTrueSurface) {
   std::cout << "box, arm rig: " << d.n << " points, median distance " << d.median * 1e3
             << " mm, 95th percentile " << d.p95 * 1e3 << " mm\n";
   EXPECT_GT(d.n, 5000u);
-  EXPECT_LE(d.median, 1e-3);
-  EXPECT_LE(d.p95, 3e-3);
+  // Measured 0.008-0.012 mm median, 0.026-0.035 mm p95 (README): five times that, so that a
+  // regression of the pipeline's accuracy fails here.
+  EXPECT_LE(d.median, 0.04e-3);
+  EXPECT_LE(d.p95, 0.15e-3);
 }
 
 TEST(ScanIntegration, SphereOnTheFreeRigLiesOnTheTrueSurface) {
@@ -96,7 +100,7 @@ TEST(ScanIntegration, SphereOnTheFreeRigLiesOnTheTrueSurface) {
   const Distances d = cloud_to_mesh(out / "cloud.ply", out / "object.obj");
   std::cout << "sphere, free rig: " << d.n << " points, median distance " << d.median * 1e3 << " mm\n";
   EXPECT_GT(d.n, 5000u);
-  EXPECT_LE(d.median, 1e-3);
+  EXPECT_LE(d.median, 0.04e-3);  // measured 0.008 mm
   // The surface mesh the coordinator made at the end (core/surface): its vertices on the true
   // surface too, and recorded in scan.json.
   const auto scan = read_json_file(out / "scan.json");
@@ -104,7 +108,7 @@ TEST(ScanIntegration, SphereOnTheFreeRigLiesOnTheTrueSurface) {
   const Distances m = cloud_to_mesh(out / "mesh.ply", out / "object.obj");
   std::cout << "sphere, free rig, mesh: " << m.n << " vertices, median distance " << m.median * 1e3 << " mm\n";
   EXPECT_GT(m.n, 1000u);
-  EXPECT_LE(m.median, 1e-3);
+  EXPECT_LE(m.median, 0.1e-3);  // measured 0.018 mm (TSDF, 2 mm voxels)
 }
 
 namespace {

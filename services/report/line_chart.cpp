@@ -2,6 +2,7 @@
 
 #include "report/canvas.hpp"
 
+#include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -868,6 +869,24 @@ std::string line_chart_svg(const LineChart& chart, int width_px, int height_px) 
   return svg.document();
 }
 
+std::string line_chart_csv(const LineChart& chart) {
+  auto number = [](double v) { return std::isfinite(v) ? fmt::format("{:.9g}", v) : std::string("nan"); };
+  auto quoted = [](const std::string& s) {
+    std::string q = "\"";
+    for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+  };
+  std::string csv = "series,x,y,lo,hi\n";
+  for (const ChartSeries& s : chart.series) {
+    const bool band = s.lo.size() == s.x.size() && s.hi.size() == s.x.size();
+    for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
+      csv += quoted(s.label) + "," + number(s.x[i]) + "," + number(s.y[i]) + "," + (band ? number(s.lo[i]) : "") + "," +
+             (band ? number(s.hi[i]) : "") + "\n";
+    }
+  }
+  return csv;
+}
+
 void write_line_chart(const LineChart& chart, const std::string& path_png, int width_px,
                       int height_px) {
   namespace fs = std::filesystem;
@@ -901,6 +920,7 @@ void write_line_chart(const LineChart& chart, const std::string& path_png, int w
                              "': " + ec.message());
   }
   write_text_file(svg_path_beside(path_png), svg.document(), chart_name(chart) + " (SVG)");
+  write_text_file(fs::path(path_png).replace_extension(".csv").string(), line_chart_csv(chart), chart_name(chart) + " (CSV)");
 }
 
 }  // namespace pbnbv

@@ -46,8 +46,13 @@ inline constexpr double kBandAlpha = 0.18;
 // The same chart as an SVG document (width_px x height_px user units, one per image pixel).
 std::string line_chart_svg(const LineChart& chart, int width_px = 960, int height_px = 600);
 
-// Draws and writes the chart as PNG, atomically (to path_png + ".tmp.png", then renamed), and as
-// SVG beside it (path_png with the extension ".svg"). Throws std::invalid_argument as draw_line_chart, and std::runtime_error naming the path when
+// The chart's data as CSV, one row per point: series (its legend text, quoted), x, y, lo, hi
+// (empty when the series has no band); a non-finite value is written as "nan". The numbers are
+// the plotted ones, to 9 significant digits, so that another tool can draw the chart again.
+std::string line_chart_csv(const LineChart& chart);
+
+// Draws and writes the chart as PNG, atomically (to path_png + ".tmp.png", then renamed), as
+// SVG beside it (path_png with the extension ".svg") and its data as CSV (".csv"). Throws std::invalid_argument as draw_line_chart, and std::runtime_error naming the path when
 // its folder does not exist or the file cannot be written.
 void write_line_chart(const LineChart& chart, const std::string& path_png, int width_px = 960,
                       int height_px = 600);

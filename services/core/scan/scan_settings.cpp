@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <stdexcept>
 
@@ -63,6 +64,20 @@ nlohmann::json to_json(const ScanSettings& s) {
   };
 }
 
+namespace {
+
+// A whole number of settings.json, read without a cast that a huge or fractional value would make
+// undefined; the ranges are checked by validate() after.
+int int_at(const nlohmann::json& o, const char* key, const std::string& what) {
+  return static_cast<int>(
+      integer_from_json(o.at(key), std::numeric_limits<int>::min(), std::numeric_limits<int>::max(), what));
+}
+std::size_t count_at(const nlohmann::json& o, const char* key, const std::string& what) {
+  return static_cast<std::size_t>(integer_from_json(o.at(key), 0, int64_t{1} << 53, what));
+}
+
+}  // namespace
+
 ScanSettings scan_settings_from_json(const nlohmann::json& j) {
   ScanSettings s;
   try {
@@ -70,13 +85,13 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.rig = parse_rig_kind(j.at("rig").get<std::string>());
     s.rig_model_path = j.at("rig_model_path").get<std::string>();
     s.planner = parse_name<PlannerKind>(j.at("planner").get<std::string>());
-    s.views = j.at("views").get<int>();
+    s.views = int_at(j, "views", "views");
     if (j.contains("stop_rule")) {
       const auto& r = j["stop_rule"];
       s.stop_rule = parse_name<StopRule>(r.at("rule").get<std::string>());
-      s.surface_rule.window = r.at("window").get<int>();
+      s.surface_rule.window = int_at(r, "window", "stop_rule.window");
       s.surface_rule.max_new_percent = r.at("max_new_percent").get<double>();
-      s.surface_rule.min_views = r.at("min_views").get<int>();
+      s.surface_rule.min_views = int_at(r, "min_views", "stop_rule.min_views");
       s.stop_radius_m = r.at("radius_m").get<double>();
     } else {
       s.stop_rule = StopRule::kOff;  // a scan recorded before the rule existed ran without it
@@ -94,8 +109,8 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.normalisation.extent_m = vec3_from_json(n.at("extent_m"), "extent_m");
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) s.normalisation.up_rotation(r, c) = n.at("up_rotation").at(r).at(c).get<double>();
-    s.normalisation.num_vertices = n.at("num_vertices").get<std::size_t>();
-    s.normalisation.num_triangles = n.at("num_triangles").get<std::size_t>();
+    s.normalisation.num_vertices = count_at(n, "num_vertices", "object.normalisation.num_vertices");
+    s.normalisation.num_triangles = count_at(n, "num_triangles", "object.normalisation.num_triangles");
     }
     s.object_z_m = j.at("object_z_m").get<double>();
     s.working_distance_m = j.at("working_distance_m").get<double>();
@@ -103,16 +118,19 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.ring_start_azimuth_deg = j.at("ring_start_azimuth_deg").get<double>();
     if (!j.at("initial_view_m").is_null()) s.initial_view_m = vec3_from_json(j.at("initial_view_m"), "initial_view_m");
     const auto& pl = j.at("planning");
-    s.candidates = pl.at("candidates").get<int>();
-    s.parallels = pl.at("parallels").get<int>();
-    s.sectors = pl.at("sectors").get<int>();
+    s.candidates = int_at(pl, "candidates", "planning.candidates");
+    s.parallels = int_at(pl, "parallels", "planning.parallels");
+    s.sectors = int_at(pl, "sectors", "planning.sectors");
     s.area = parse_name<CandidateArea>(pl.at("area").get<std::string>());
-    s.t_max = pl.at("t_max").get<int>();
+    s.t_max = int_at(pl, "t_max", "planning.t_max");
     s.map_resolution_m = pl.at("map_resolution_m").get<double>();
     s.stop_fraction = pl.at("stop_fraction").get<double>();
     s.when_done = parse_name<WhenDone>(pl.value("when_done", std::string(name_of(kWhenDone.value))));
-    s.alternatives = pl.at("alternatives").get<int>();
-    s.seed = pl.value("seed", kPlannerSeed.value);
+    s.alternatives = int_at(pl, "alternatives", "planning.alternatives");
+    if (pl.contains("seed")) {
+      s.seed = integer_from_json(pl["seed"], std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max(),
+                                 "planning.seed");
+    }
     s.keepout_min_m = vec3_from_json(j.at("keepout").at("min_m"), "keepout.min_m");
     s.keepout_max_m = vec3_from_json(j.at("keepout").at("max_m"), "keepout.max_m");
     s.crop_min_m = vec3_from_json(j.at("crop").at("min_m"), "crop.min_m");
@@ -120,8 +138,8 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.ground_clearance_m = j.at("crop").at("ground_clearance_m").get<double>();
     s.voxel_m = j.at("voxel_m").get<double>();
     const auto& c = j.at("camera");
-    s.camera.width = c.at("width").get<int>();
-    s.camera.height = c.at("height").get<int>();
+    s.camera.width = int_at(c, "width", "camera.width");
+    s.camera.height = int_at(c, "height", "camera.height");
     s.camera.fx = c.at("fx").get<double>();
     s.camera.fy = c.at("fy").get<double>();
     s.camera.cx = c.at("cx").get<double>();

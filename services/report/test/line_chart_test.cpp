@@ -344,6 +344,26 @@ std::string read_all(const std::string& p) {
   return ss.str();
 }
 
+// The data beside the PNG as CSV: one row per point with the legend text quoted, the band's lo
+// and hi when there is one, "nan" for a gap.
+TEST_F(LineChartFile, WritesTheDataBesideThePngAsCsv) {
+  LineChart c = diagonal();
+  ChartSeries band;
+  band.label = "mean \"A\"";
+  band.x = {1, 2};
+  band.y = {0.5, NAN};
+  band.lo = {0.25, NAN};
+  band.hi = {0.75, NAN};
+  c.series.push_back(band);
+  write_line_chart(c, path("chart.png"), 640, 400);
+  const std::string csv = read_all(path("chart.csv"));
+  EXPECT_EQ(csv, line_chart_csv(c));
+  EXPECT_EQ(csv.substr(0, csv.find('\n', csv.find('\n') + 1) + 1), "series,x,y,lo,hi\n\"y = x\",0,0,,\n");
+  EXPECT_NE(csv.find("\"y = x\",10,10,,\n"), std::string::npos);
+  EXPECT_NE(csv.find("\"mean \"\"A\"\"\",1,0.5,0.25,0.75\n\"mean \"\"A\"\"\",2,nan,nan,nan\n"), std::string::npos) << csv;
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 11 + 2);
+}
+
 // The SVG beside the PNG draws the same primitives: the same size, the title, and each data
 // point's marker at the PNG's pixel centre (pixel i covers [i, i+1) in SVG units).
 TEST_F(LineChartFile, WritesSvgBesideThePngWithTheSamePrimitives) {

@@ -2,6 +2,8 @@
 // file names and channel text. Object limits: what the twin cannot load and what no rig can scan.
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include <regex>
 #include <set>
 #include <string>
@@ -110,6 +112,33 @@ TEST(UnknownObject, ItsFrameKeepOutAndCropComeFromTheWorkingVolume) {
   ASSERT_TRUE(back.working_volume.has_value());
   EXPECT_EQ(back.working_volume->to_text(), "cylinder:0.2,0.5");
   EXPECT_TRUE(back.expected_extent_m().isApprox(Eigen::Vector3d(0.4, 0.4, 0.5)));
+}
+
+// A settings.json whose whole numbers are huge, fractional or text is refused naming the field
+// (before: get<int> cast 1e300 without a word, undefined behaviour, and validate() saw garbage).
+TEST(ScanSettingsJson, WholeNumbersOutOfIntOrFractionalAreRefusedByName) {
+  ScanSettings s;
+  s.scan_id = "numbers";
+  const nlohmann::json good = to_json(s);
+  EXPECT_EQ(scan_settings_from_json(good).views, s.views);
+  auto refusal = [&](const std::function<void(nlohmann::json&)>& plant) -> std::string {
+    nlohmann::json j = good;
+    plant(j);
+    try {
+      scan_settings_from_json(j);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(refusal([](nlohmann::json& j) { j["views"] = 1e300; }),
+            "scan settings: views = 1e+300 is not a whole number in -2147483648..2147483647");
+  EXPECT_EQ(refusal([](nlohmann::json& j) { j["planning"]["candidates"] = 800.5; }),
+            "scan settings: planning.candidates = 800.5 is not a whole number in -2147483648..2147483647");
+  EXPECT_EQ(refusal([](nlohmann::json& j) { j["camera"]["width"] = "1280"; }),
+            "scan settings: camera.width = \"1280\" is not a whole number in -2147483648..2147483647");
+  EXPECT_EQ(refusal([](nlohmann::json& j) { j["planning"]["seed"] = 2.5; }),
+            "scan settings: planning.seed = 2.5 is not a whole number in -9223372036854775808..9223372036854775807");
 }
 
 namespace pbnbv {
