@@ -7,6 +7,7 @@
 #include "core/base/version.hpp"
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
+#include "core/scan/scan_settings.hpp"
 #include "core/surface/scan_mesh.hpp"
 
 namespace fs = std::filesystem;
@@ -74,16 +75,12 @@ void write_scan_state(const fs::path& scan_folder, const std::string& state, con
 std::vector<SurfaceFrame> read_scan_frames(const fs::path& dir, const json& scan, SurfaceSettings& settings) {
   const std::string where = (dir / "scan.json").string();
   try {
-    const json& cam = scan.at("settings").at("camera");
-    settings.camera.width = cam.at("width").get<int>();
-    settings.camera.height = cam.at("height").get<int>();
-    settings.camera.fx = cam.at("fx").get<double>();
-    settings.camera.fy = cam.at("fy").get<double>();
-    settings.camera.cx = cam.at("cx").get<double>();
-    settings.camera.cy = cam.at("cy").get<double>();
-    settings.point_spacing_m = scan.at("settings").value("voxel_m", 0.0);
-  } catch (const json::exception& e) {
-    throw std::invalid_argument(where + ": settings.camera or settings.voxel_m unreadable: " + e.what());
+    // The record's settings as the scan had them (bounded reads, every field checked).
+    const ScanSettings scanned = scan_settings_from_json(scan.at("settings"));
+    settings.camera = scanned.camera;
+    settings.point_spacing_m = scanned.voxel_m;
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(where + ": " + e.what());
   }
   std::vector<SurfaceFrame> frames;
   for (const json& v : scan.value("views", json::array())) {
