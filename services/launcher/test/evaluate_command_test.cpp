@@ -6,11 +6,13 @@
 
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "core/base/version.hpp"
 #include "core/scan/scan_file.hpp"
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
@@ -240,6 +242,39 @@ TEST_F(EvaluateCommand, BadInputIsNamed) {
     EXPECT_EQ(line.parse(static_cast<int>(argv.size()), argv.data(), out, err), 2);
     EXPECT_NE(err.str().find(needle), std::string::npos) << err.str();
   }
+}
+
+// A scan folder whose scan.json is of another format (here format 2, as a later pbnbv might write)
+// is refused by `pbnbv evaluate` and `pbnbv mesh` naming the file, both formats and the writer;
+// nothing is written into the folder.
+TEST_F(EvaluateCommand, AFolderOfAnotherScanFormatIsRefusedNamingBothFormats) {
+  const fs::path scan = dir_ / "later";
+  fs::create_directories(scan / "frames");
+  write_stl_binary(slab(), (scan / "object.stl").string());
+  write_ply(grid_2mm_above(), (scan / "frames" / "view_001.ply").string());
+  write_ply(grid_2mm_above(), (scan / "cloud.ply").string());
+  write_json_atomic({{"format_version", 2}, {"pbnbv_version", "0.12.0"}, {"status", {{"state", "done"}}},
+                     {"views", {{{"merged", true}, {"frame_file", "frames/view_001.ply"}}}}},
+                    (scan / "scan.json").string());
+  const std::string expected = (scan / "scan.json").string() + ": format 2 (written by pbnbv 0.12.0); this pbnbv (" +
+                               std::string(pbnbv_version()) + ") reads format 1 only";
+  auto refusal = [](const std::function<void()>& f) -> std::string {
+    try {
+      f();
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    return "(no error)";
+  };
+  EvaluateOptions e;
+  e.target = scan.string();
+  std::ostringstream table;
+  EXPECT_EQ(refusal([&] { run_evaluate(e, table); }), expected);
+  MeshOptions m;
+  m.dir = scan.string();
+  EXPECT_EQ(refusal([&] { run_mesh(m); }), expected);
+  EXPECT_FALSE(fs::exists(scan / "mesh.ply"));
+  EXPECT_EQ(refusal([&] { eval::evaluate_coverage(scan); }), expected);
 }
 
 }  // namespace
