@@ -9,55 +9,46 @@ src=${PBNBV_SOURCE_DIR:?}
 bin=${PBNBV_BIN_DIR:?}
 fail=0
 
+# verdict <hits> <what failed> <what holds>: FAIL with the hits (one per line) or ok.
+verdict() {
+  if [ -n "$1" ]; then
+    echo "FAIL: $2:"; echo "$1" | sed 's/^/  /'
+    fail=1
+  else
+    echo "ok: $3"
+  fi
+}
+
 # Library and service sources (not tests, not benchmarks) that include a header they must not.
 check_includes() {  # <pattern> <what> <allowed path regex>
   local hits
   hits=$(cd "$src" && grep -rlE "#include <$1" services twin --include=*.cpp --include=*.hpp |
          grep -vE '/(test|bench)/' | grep -vE "$3" || true)
-  if [ -n "$hits" ]; then
-    echo "FAIL: $2 is included outside its layer by:"; echo "$hits" | sed 's/^/  /'
-    fail=1
-  else
-    echo "ok: $2 only in $3"
-  fi
+  verdict "$hits" "$2 is included outside its layer by" "$2 only in $3"
 }
 check_includes 'mujoco/' "MuJoCo" '^(services/core/rig/|twin/)'
 check_includes 'opencv2/' "OpenCV" '^services/report/'
 check_includes 'pcl/surface/' "PCL's surface module (marching-cubes tables, Poisson)" '^services/core/surface/'
+
+# scan.json is parsed by core/scan alone (scan_file.cpp: read_scan_json, which checks its format);
+# every other source reads it through that.
+verdict "$(cd "$src" && grep -rnE 'read_json\([^;]*(scan\.json|scan_json|scan_path|replay_of)' services twin \
+             --include=*.cpp --include=*.hpp | grep -vE '/(test|bench)/' | grep -v '^services/core/scan/scan_file.cpp:' || true)" \
+        "scan.json read outside core/scan/scan_file.cpp (use read_scan_json)" "scan.json read by core/scan/scan_file.cpp only"
+
+# No library file of core/ over 800 lines: a file that long holds several things.
+verdict "$(cd "$src" && find services/core -name '*.cpp' -o -name '*.hpp' | grep -vE '/(test|bench)/' | xargs wc -l |
+             awk '$2 != "total" && $1 > 800 {print $2 ": " $1 " lines"}')" \
+        "core files over 800 lines" "no core file over 800 lines"
 
 # Processes that must not load a library.
 check_ldd() {  # <binary> <library pattern>...
   local b=$1; shift
   [ -x "$bin/$b" ] || { echo "FAIL: $bin/$b is missing"; fail=1; return; }
   for lib in "$@"; do
-    if ldd "$bin/$b" | grep -q "$lib"; then
-      echo "FAIL: $b loads $lib:"; ldd "$bin/$b" | grep "$lib" | sed 's/^/  /'; fail=1
-    else
-      echo "ok: $b does not load $lib"
-    fi
+    verdict "$(ldd "$bin/$b" | grep "$lib" || true)" "$b loads $lib" "$b does not load $lib"
   done
 }
-# scan.json is parsed by core/scan alone (scan_file.cpp: read_scan_json, which checks its format);
-# every other source reads it through that.
-hits=$(cd "$src" && grep -rnE 'read_json\([^;]*(scan\.json|scan_json|scan_path|replay_of)' services twin --include=*.cpp --include=*.hpp |
-       grep -vE '/(test|bench)/' | grep -v '^services/core/scan/scan_file.cpp:' || true)
-if [ -n "$hits" ]; then
-  echo "FAIL: scan.json read outside core/scan/scan_file.cpp (use read_scan_json):"; echo "$hits" | sed 's/^/  /'
-  fail=1
-else
-  echo "ok: scan.json read by core/scan/scan_file.cpp only"
-fi
-
-# No library file of core/ over 800 lines: a file that long holds several things.
-long=$(cd "$src" && find services/core -name '*.cpp' -o -name '*.hpp' | grep -vE '/(test|bench)/' | xargs wc -l |
-       awk '$2 != "total" && $1 > 800 {print "  " $2 ": " $1 " lines"}')
-if [ -n "$long" ]; then
-  echo "FAIL: core files over 800 lines:"; echo "$long"
-  fail=1
-else
-  echo "ok: no core file over 800 lines"
-fi
-
 check_ldd pbnbv-ellipsoids libmujoco libopencv libpcl
 check_ldd pbnbv-mapping libmujoco libopencv libpcl
 check_ldd pbnbv-registration libmujoco libopencv

@@ -189,14 +189,14 @@ void check_off_counts(std::istream& in, const std::string& path) {
   // vertex, then one face per line; blank and comment lines skipped.
   const double most = static_cast<double>(std::min<std::uintmax_t>(vertices, size / 2));
   std::uintmax_t vertex_lines = 0, face_lines = 0;
-  bool pending = true;  // `rest` first
-  while (face_lines < faces && ((pending && !rest.empty()) || std::getline(in, line))) {
-    if (pending && !rest.empty()) {
+  bool from_rest = !rest.empty();  // the counts' line goes on: that first, then the next lines
+  while (face_lines < faces && (from_rest || std::getline(in, line))) {
+    if (from_rest) {
       line = rest;
+      from_rest = false;
     } else {
       ++line_number;
     }
-    pending = false;
     const std::string text = line.substr(0, line.find('#'));
     if (text.find_first_not_of(" \t\r\v\f") == std::string::npos) continue;
     if (vertex_lines < vertices) {
@@ -215,11 +215,12 @@ void check_off_counts(std::istream& in, const std::string& path) {
     }
     // Its corners, read the same way (a double cast to an unsigned index): each a vertex of the
     // file. A line with fewer numbers than it declares is CGAL's to name.
+    // (Inside the loop corners >= 1, so vertices >= 1.)
     double index = 0;
     for (std::uintmax_t k = 0; k < static_cast<std::uintmax_t>(corners) && number >> index; ++k) {
       if (!(index >= 0 && index < static_cast<double>(vertices))) {
         fail(kLoad, path, fmt::format("line {}: corner {} of face {} is vertex {}; the file has vertices 0 to {}",
-                                      line_number, k + 1, face_lines, index, vertices == 0 ? 0 : vertices - 1));
+                                      line_number, k + 1, face_lines, index, vertices - 1));
       }
     }
   }

@@ -6,7 +6,6 @@
 
 #include <cmath>
 #include <filesystem>
-#include <functional>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -18,6 +17,7 @@
 #include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
 #include "eval/evaluate.hpp"
+#include "error_message.hpp"
 #include "file_test_util.hpp"
 #include "launcher/command_line.hpp"
 #include "launcher/commands.hpp"
@@ -80,6 +80,19 @@ class EvaluateCommand : public testing::TempDirTest {
     return "(no error)";
   }
   std::string table_;
+
+  // A finished twin scan in miniature in dir_/name: the true mesh, one merged frame, the cloud,
+  // and scan.json holding `record` with that view.
+  fs::path mini_scan(const std::string& name, json record) {
+    const fs::path scan = dir_ / name;
+    fs::create_directories(scan / "frames");
+    write_stl_binary(slab(), (scan / "object.stl").string());
+    write_ply(grid_2mm_above(), (scan / "frames" / "view_001.ply").string());
+    write_ply(grid_2mm_above(), (scan / "cloud.ply").string());
+    record["views"] = {{{"merged", true}, {"frame_file", "frames/view_001.ply"}}};
+    write_json_atomic(record, (scan / "scan.json").string());
+    return scan;
+  }
 };
 
 // Accuracy `lo`..`hi` mm in every statistic, precision 1 and the slab's recall at 5 mm.
@@ -157,15 +170,8 @@ TEST_F(EvaluateCommand, MeshTwoMillimetresAboveAndAScanFolder) {
 }
 
 TEST_F(EvaluateCommand, TwinScanFolderAgainstItsObjectStl) {
-  // A finished twin scan in miniature: the true mesh, one merged frame, the cloud.
-  const fs::path scan = dir_ / "scan";
-  fs::create_directories(scan / "frames");
-  write_stl_binary(slab(), (scan / "object.stl").string());
-  write_ply(grid_2mm_above(), (scan / "frames" / "view_001.ply").string());
-  write_ply(grid_2mm_above(), (scan / "cloud.ply").string());
-  write_json_atomic({{"format_version", kScanFormatVersion}, {"status", {{"state", "done"}, {"views_done", 1}, {"message", "done"}}},
-                     {"views", {{{"merged", true}, {"frame_file", "frames/view_001.ply"}}}}},
-                    (scan / "scan.json").string());
+  const fs::path scan = mini_scan(
+      "scan", {{"format_version", kScanFormatVersion}, {"status", {{"state", "done"}, {"views_done", 1}, {"message", "done"}}}});
   const json j = run({scan.string()});
   ASSERT_EQ(j.at("models").size(), 1u);
   expect_above_the_top(j["models"][0]);
@@ -248,33 +254,20 @@ TEST_F(EvaluateCommand, BadInputIsNamed) {
 // is refused by `pbnbv evaluate` and `pbnbv mesh` naming the file, both formats and the writer;
 // nothing is written into the folder.
 TEST_F(EvaluateCommand, AFolderOfAnotherScanFormatIsRefusedNamingBothFormats) {
-  const fs::path scan = dir_ / "later";
-  fs::create_directories(scan / "frames");
-  write_stl_binary(slab(), (scan / "object.stl").string());
-  write_ply(grid_2mm_above(), (scan / "frames" / "view_001.ply").string());
-  write_ply(grid_2mm_above(), (scan / "cloud.ply").string());
-  write_json_atomic({{"format_version", 2}, {"pbnbv_version", "0.12.0"}, {"status", {{"state", "done"}}},
-                     {"views", {{{"merged", true}, {"frame_file", "frames/view_001.ply"}}}}},
-                    (scan / "scan.json").string());
+  const fs::path scan =
+      mini_scan("later", {{"format_version", 2}, {"pbnbv_version", "0.12.0"}, {"status", {{"state", "done"}}}});
   const std::string expected = (scan / "scan.json").string() + ": format 2 (written by pbnbv 0.12.0); this pbnbv (" +
                                std::string(pbnbv_version()) + ") reads format 1 only";
-  auto refusal = [](const std::function<void()>& f) -> std::string {
-    try {
-      f();
-    } catch (const std::exception& e) {
-      return e.what();
-    }
-    return "(no error)";
-  };
+  using pbnbv::testing::error_message;
   EvaluateOptions e;
   e.target = scan.string();
   std::ostringstream table;
-  EXPECT_EQ(refusal([&] { run_evaluate(e, table); }), expected);
+  EXPECT_EQ(error_message([&] { run_evaluate(e, table); }), expected);
   MeshOptions m;
   m.dir = scan.string();
-  EXPECT_EQ(refusal([&] { run_mesh(m); }), expected);
+  EXPECT_EQ(error_message([&] { run_mesh(m); }), expected);
   EXPECT_FALSE(fs::exists(scan / "mesh.ply"));
-  EXPECT_EQ(refusal([&] { eval::evaluate_coverage(scan); }), expected);
+  EXPECT_EQ(error_message([&] { eval::evaluate_coverage(scan); }), expected);
 }
 
 }  // namespace

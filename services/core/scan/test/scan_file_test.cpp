@@ -10,6 +10,7 @@
 #include "core/base/version.hpp"
 #include "core/io/json.hpp"
 #include "core/scan/scan_record.hpp"
+#include "error_message.hpp"
 #include "file_test_util.hpp"
 
 using namespace pbnbv;
@@ -21,14 +22,9 @@ class ScanFileTest : public pbnbv::testing::TempDirTest {
  protected:
   std::string path() const { return (dir_ / "scan.json").string(); }
 
-  // The message read_scan_json throws for the folder (empty when it reads it).
+  // The message read_scan_json throws for the folder.
   std::string refusal() const {
-    try {
-      read_scan_json(dir_);
-    } catch (const std::invalid_argument& e) {
-      return e.what();
-    }
-    return "";
+    return pbnbv::testing::error_message([&] { read_scan_json(dir_); });
   }
 };
 

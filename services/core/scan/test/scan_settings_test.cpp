@@ -10,6 +10,7 @@
 
 #include "core/geometry/mesh.hpp"
 #include "core/scan/scan_settings.hpp"
+#include "error_message.hpp"
 
 using namespace pbnbv;
 
@@ -124,12 +125,7 @@ TEST(ScanSettingsJson, WholeNumbersOutOfIntOrFractionalAreRefusedByName) {
   auto refusal = [&](const std::function<void(nlohmann::json&)>& plant) -> std::string {
     nlohmann::json j = good;
     plant(j);
-    try {
-      scan_settings_from_json(j);
-    } catch (const std::invalid_argument& e) {
-      return e.what();
-    }
-    return "";
+    return pbnbv::testing::error_message([&] { scan_settings_from_json(j); });
   };
   EXPECT_EQ(refusal([](nlohmann::json& j) { j["views"] = 1e300; }),
             "scan settings: views = 1e+300 is not a whole number in -2147483648..2147483647");
