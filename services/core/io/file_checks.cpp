@@ -3,6 +3,8 @@
 #include <CGAL/IO/PLY.h>
 
 #include <algorithm>
+#include <charconv>
+#include <iterator>
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
@@ -61,6 +63,14 @@ bool has_named(CGAL::IO::internal::PLY_element& e, const char* name) {
 
 }  // namespace
 
+std::string shown(std::string_view word) {
+  std::string out(word.substr(0, 40));
+  for (char& c : out) {
+    if (c < 0x20 || c > 0x7e) c = '?';
+  }
+  return word.size() > 40 ? out + "..." : out;
+}
+
 void check_input_file(const std::string& path, const char* ctx) {
   std::error_code ec;
   const auto st = std::filesystem::status(path, ec);
@@ -87,16 +97,56 @@ std::string stopped_at(const std::string& path, std::istream& in, bool whole_lin
 
 namespace {
 
-// What CGAL's PLY reader assumes of a header without checking it (CGAL 5.5): a "property" line
-// before any "element" line makes it write through the back() of an empty vector (found by
-// fuzz_mesh_file). The header's lines are read the way the reader splits them, within 1 MB,
-// and the stream put back where it was.
-void precheck_ply_header(std::istream& in, const std::string& path, const char* ctx) {
+// A PLY file's layout as its header declares it: the format and each element's count and
+// properties (a scalar's size in bytes, or a list's count and entry sizes).
+struct PlyLayout {
+  struct Property {
+    int bytes = 0;        // a scalar's, or a list entry's
+    int count_bytes = 0;  // a list's count; 0 for a scalar
+    bool count_signed = false;
+  };
+  struct Element {
+    std::string name;
+    std::uint64_t count = 0;
+    std::vector<Property> properties;
+  };
+  std::string format;  // ascii, binary_little_endian or binary_big_endian
+  std::vector<Element> elements;
+};
+
+// The size in bytes of PLY type `type`, and whether it is a signed integer; 0 for an unknown type.
+int ply_type_bytes(const std::string& type, bool* is_signed = nullptr, bool* integer = nullptr) {
+  static const struct {
+    const char* name;
+    int bytes;
+    bool is_signed, integer;
+  } kTypes[] = {{"char", 1, true, true},     {"int8", 1, true, true},    {"uchar", 1, false, true},
+                {"uint8", 1, false, true},   {"short", 2, true, true},   {"int16", 2, true, true},
+                {"ushort", 2, false, true},  {"uint16", 2, false, true}, {"int", 4, true, true},
+                {"int32", 4, true, true},    {"uint", 4, false, true},   {"uint32", 4, false, true},
+                {"float", 4, true, false},   {"float32", 4, true, false}, {"double", 8, true, false},
+                {"float64", 8, true, false}};
+  for (const auto& t : kTypes) {
+    if (type == t.name) {
+      if (is_signed) *is_signed = t.is_signed;
+      if (integer) *integer = t.integer;
+      return t.bytes;
+    }
+  }
+  return 0;
+}
+
+// The header's lines read the way CGAL's reader splits them, within 1 MB; the stream is left at
+// the first byte of the body. What CGAL 5.5 assumes of a header without checking it, each found
+// by fuzz_mesh_file: a "property" line before any "element" line makes it write through the
+// back() of an empty vector; an element count of -4 becomes 2^64 - 4 items, read for ever from
+// the end of the file. So every element count is a whole number no larger than the file (an item
+// takes at least a byte), and every list counted in an integer type.
+PlyLayout read_ply_layout(std::istream& in, const std::string& path, const char* ctx, std::uintmax_t size) {
   constexpr std::size_t kMaxHeaderBytes = std::size_t{1} << 20;
-  const std::streampos start = in.tellg();
+  PlyLayout layout;
   std::size_t bytes = 0;
   long line_number = 0;
-  bool element = false;
   for (std::string line; std::getline(in, line);) {
     ++line_number;
     bytes += line.size() + 1;
@@ -104,12 +154,107 @@ void precheck_ply_header(std::istream& in, const std::string& path, const char* 
     std::istringstream iss(line);
     std::string keyword;
     if (!(iss >> keyword)) continue;
-    if (keyword == "end_header") break;
-    if (keyword == "element") element = true;
-    if (keyword == "property" && !element) {
-      fail(ctx, path, fmt::format("PLY header line {}: a property before any element", line_number));
+    if (keyword == "end_header") return layout;
+    if (keyword == "format") iss >> layout.format;
+    if (keyword == "element") {
+      PlyLayout::Element& e = layout.elements.emplace_back();
+      std::string count;
+      iss >> e.name >> count;
+      const auto [end, err] = std::from_chars(count.data(), count.data() + count.size(), e.count);
+      if (count.empty() || err != std::errc() || end != count.data() + count.size()) {
+        fail(ctx, path, fmt::format("PLY header line {}: element '{}' has count '{}', not a whole number", line_number,
+                                    shown(e.name), shown(count)));
+      }
+      if (e.count > size) {
+        fail(ctx, path, fmt::format("PLY header line {}: element '{}' declares {} items, more than a file of {} bytes "
+                                    "can hold", line_number, shown(e.name), e.count, size));
+      }
+    }
+    if (keyword != "property") continue;
+    if (layout.elements.empty()) fail(ctx, path, fmt::format("PLY header line {}: a property before any element", line_number));
+    PlyLayout::Property& prop = layout.elements.back().properties.emplace_back();
+    std::string type, count_type, entry_type;
+    iss >> type;
+    if (type == "list") {
+      iss >> count_type >> entry_type;
+      bool integer = false;
+      prop.count_bytes = ply_type_bytes(count_type, &prop.count_signed, &integer);
+      if (prop.count_bytes == 0 || !integer) {
+        fail(ctx, path, fmt::format("PLY header line {}: a list counted in '{}', not an integer type", line_number,
+                                    shown(count_type)));
+      }
+      type = entry_type;
+    }
+    prop.bytes = ply_type_bytes(type);
+    if (prop.bytes == 0) fail(ctx, path, fmt::format("PLY header line {}: unknown property type '{}'", line_number, shown(type)));
+  }
+  return layout;  // no end_header: CGAL's reader names it
+}
+
+// The body of a PLY file walked item by item before CGAL reads it: CGAL reads a list's count and
+// allocates for it before reading the entries (a 32-bit count from a few hostile bytes: up to 32
+// GB). Every list's count here fits in what is left of the file (an entry takes its size in a
+// binary file, two bytes in an ASCII one). A body cut short is left to CGAL's reader to name.
+void check_ply_lists(std::istream& in, const std::string& path, const char* ctx, const PlyLayout& layout,
+                     std::uintmax_t size) {
+  const bool ascii = layout.format == "ascii";
+  const bool big = layout.format == "binary_big_endian";
+  if (!ascii && !big && layout.format != "binary_little_endian") return;  // CGAL names the format
+  bool lists = false;
+  for (const auto& e : layout.elements) {
+    for (const auto& p : e.properties) lists = lists || p.count_bytes > 0;
+  }
+  if (!lists) return;
+  std::uintmax_t pos = static_cast<std::uintmax_t>(in.tellg());
+  std::string token;
+  for (const auto& e : layout.elements) {
+    for (std::uint64_t item = 0; item < e.count; ++item) {
+      for (const auto& p : e.properties) {
+        if (p.count_bytes == 0) {  // a scalar
+          if (ascii ? !(in >> token) : !in.seekg(p.bytes, std::ios::cur)) return;
+          continue;
+        }
+        std::int64_t count = 0;
+        if (ascii) {
+          if (!(in >> token)) return;
+          const auto [end, err] = std::from_chars(token.data(), token.data() + token.size(), count);
+          if (err != std::errc() || end != token.data() + token.size()) return;  // CGAL names it
+        } else {
+          unsigned char b[4] = {};
+          if (!in.read(reinterpret_cast<char*>(b), p.count_bytes)) return;
+          std::uint32_t u = 0;
+          for (int k = 0; k < p.count_bytes; ++k) u = (u << 8) | b[big ? k : p.count_bytes - 1 - k];
+          const int bits = 8 * p.count_bytes;
+          count = (p.count_signed && bits < 64 && (u >> (bits - 1)) != 0) ? static_cast<std::int64_t>(u) - (std::int64_t{1} << bits)
+                                                                          : static_cast<std::int64_t>(u);
+        }
+        pos = static_cast<std::uintmax_t>(in.tellg());
+        const std::uintmax_t left = size > pos ? size - pos : 0;
+        const std::uintmax_t most = left / (ascii ? 2 : static_cast<std::uintmax_t>(p.bytes));
+        // A polygon's worth past the end (at most 65,535 entries) is a file cut short: CGAL's
+        // reader says so.
+        if (count >= 0 && count <= 65535 && static_cast<std::uintmax_t>(count) > most) return;
+        if (count < 0 || static_cast<std::uintmax_t>(count) > most) {
+          fail(ctx, path, fmt::format("PLY element '{}' item {}: a list of {} entries, more than the {} bytes left in "
+                                      "the file can hold", shown(e.name), item, count, left));
+        }
+        for (std::int64_t k = 0; k < count; ++k) {
+          if (ascii ? !(in >> token) : !in.seekg(p.bytes, std::ios::cur)) return;
+        }
+      }
     }
   }
+}
+
+// Checks the header and the body's lists (read_ply_layout and check_ply_lists say what and why),
+// then puts the stream back where it was.
+void precheck_ply(std::istream& in, const std::string& path, const char* ctx) {
+  const std::streampos start = in.tellg();
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) return;
+  const PlyLayout layout = read_ply_layout(in, path, ctx, size);
+  if (in) check_ply_lists(in, path, ctx, layout, size);
   in.clear();
   in.seekg(start);
 }
@@ -117,7 +262,7 @@ void precheck_ply_header(std::istream& in, const std::string& path, const char* 
 }  // namespace
 
 PlyHeader check_ply_header(std::istream& in, const std::string& path, const char* ctx, bool faces) {
-  precheck_ply_header(in, path, ctx);
+  precheck_ply(in, path, ctx);
   CGAL::IO::internal::PLY_reader reader(false);
   if (!reader.init(in)) {
     fail(ctx, path, "not a PLY file, or a malformed PLY header: CGAL's PLY reader stopped " + stopped_at(path, in, true));

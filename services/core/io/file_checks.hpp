@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <istream>
 #include <string>
+#include <string_view>
 
 namespace pbnbv {
 
@@ -29,10 +30,16 @@ struct PlyHeader {
   std::size_t faces = 0;
 };
 
+// `word`, read from a file, as an error message shows it: at most 40 bytes (then "..."), any
+// byte that is not printable ASCII shown as '?'.
+std::string shown(std::string_view word);
+
 // Reads the PLY header on `in` (CGAL's PLY header reader) and checks that it has a vertex
 // element with x, y and z of type float or double (CGAL 5.5's read_PLY reads any other type
 // through a null pointer) and, with `faces`, that a face element, if any, has a vertex_indices
-// (or vertex_index) list of int or uint (the types CGAL reads). Throws std::runtime_error
+// (or vertex_index) list of int or uint (the types CGAL reads). Before that, what CGAL does not
+// check: every element count within the file's size, every list counted in an integer type and
+// every list in the body no longer than what is left of the file. Throws std::runtime_error
 // "<ctx>: <path>: ..." saying what is wrong. Leaves `in` after the header.
 PlyHeader check_ply_header(std::istream& in, const std::string& path, const char* ctx, bool faces);
 

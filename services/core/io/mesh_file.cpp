@@ -1,6 +1,6 @@
-// Mesh files. Reading is CGAL's: the polygon-soup readers CGAL::IO::read_polygon_soup picks by
-// extension (read_OBJ, read_OFF, read_STL, read_PLY), called on a stream we hold so that, when
-// one fails, the place where it stopped can be named. What CGAL does not check (indices in
+// Mesh files. Reading OBJ, STL and PLY is CGAL's: the polygon-soup readers (read_OBJ, read_STL,
+// read_PLY), called on a stream we hold so that, when one fails, the place where it stopped can
+// be named. OFF is read by our own reader (read_off says why). What CGAL does not check (indices in
 // range, finite coordinates, polygons of at least 3 corners, something left to scan) is checked
 // after reading; PLY headers are checked before (see check_ply_header). Writing (binary STL,
 // OBJ) is our own: a few lines each, exact, and what the twin and the reports read.
@@ -14,7 +14,6 @@
 #include "core/base/atomic_file.hpp"
 
 #include <CGAL/IO/OBJ.h>
-#include <CGAL/IO/OFF.h>
 #include <CGAL/IO/PLY.h>
 #include <CGAL/IO/STL.h>
 #include <CGAL/Simple_cartesian.h>
@@ -33,6 +32,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/base/format.hpp"
@@ -146,82 +146,135 @@ std::string stl_failure(const std::string& path, std::uintmax_t size) {
   return "neither an ASCII nor a binary STL file CGAL::IO::read_STL can read";
 }
 
-// The counts an OFF header declares ("OFF" or a variant such as "COFF", then the vertex, face and
-// edge counts, '#' comments allowed), checked against the file's size before CGAL reserves for
-// them: a vertex takes at least 6 bytes ("0 0 0\n"), a face at least 8 ("3 0 1 2\n").
-void check_off_counts(std::istream& in, const std::string& path) {
-  struct Rewind {  // whatever is found, CGAL reads from the start
-    std::istream& in;
-    ~Rewind() {
-      in.clear();
-      in.seekg(0);
-    }
-  } rewind{in};
-  std::vector<std::string> tokens;
+// The whitespace-separated words of `line` before any '#'.
+std::vector<std::string_view> words_of(std::string_view line) {
+  line = line.substr(0, line.find('#'));
+  std::vector<std::string_view> words;
+  constexpr std::string_view kSpace = " \t\r\v\f";
+  for (std::size_t at = line.find_first_not_of(kSpace); at != std::string_view::npos;) {
+    const std::size_t end = std::min(line.find_first_of(kSpace, at), line.size());
+    words.push_back(line.substr(at, end - at));
+    at = line.find_first_not_of(kSpace, end);
+  }
+  return words;
+}
+
+// `word` as a whole number, or false.
+bool whole_number(std::string_view word, std::uint64_t& n) {
+  const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), n);
+  return ec == std::errc() && end == word.data() + word.size();
+}
+
+// An ASCII OFF file (Geomview's format: "OFF", or with the prefixes ST, C and N for texture
+// coordinates, colours and normals, which are read past; the vertex, face and optional edge
+// counts on the keyword's line or the next; one vertex, then one face per line, each face its
+// corner count and corners, counted from 0, then an optional colour; '#' comments anywhere).
+//
+// Ours, not CGAL's: CGAL's scanner reads every count and index as a double, casts it to an
+// unsigned integer (undefined for a negative or huge one) and allocates for the counts before
+// checking them; fuzz_mesh_file found five ways past the checks we had put in front of it (a
+// corner count of 4e18 or -4e15, a corner index of 2e88, a face on the counts' line, a keyword
+// with bytes after it). Every number here is read whole, checked and bounded before it is used.
+void read_off(std::istream& in, const std::string& path, std::vector<Point>& points,
+              std::vector<Polygon>& polygons) {
+  const std::uintmax_t size = std::filesystem::file_size(path);
   std::string line;
   std::uintmax_t line_number = 0;
-  std::string rest;  // what follows the counts on their line: CGAL's scanner reads it as the next line
-  while (tokens.size() < 4 && std::getline(in, line)) {
-    ++line_number;
-    std::istringstream words(line.substr(0, line.find('#')));
-    for (std::string w; tokens.size() < 4 && words >> w;) tokens.push_back(w);
-    if (tokens.size() == 4) std::getline(words, rest);
-  }
-  // Not an OFF header, or one with a dimension before the counts ("nOFF"): CGAL says what is wrong.
-  if (tokens.size() < 4 || tokens[0].find("OFF") == std::string::npos || tokens[0].find("nOFF") != std::string::npos) return;
-  const std::uintmax_t size = std::filesystem::file_size(path);
-  auto count = [&](const std::string& t, const char* what, const char* plural, std::uintmax_t min_bytes) -> std::uintmax_t {
-    std::uintmax_t n = 0;
-    const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), n);
-    if (ec != std::errc() || end != t.data() + t.size()) {
-      fail(kLoad, path, fmt::format("the OFF header's {} count '{}' is not a whole number", what, t));
-    }
-    if (n > size / min_bytes) {
-      fail(kLoad, path, fmt::format("the OFF header declares {} {}, more than a file of {} bytes can hold", n, plural, size));
-    }
-    return n;
-  };
-  const std::uintmax_t vertices = count(tokens[1], "vertex", "vertices", 6);
-  const std::uintmax_t faces = count(tokens[2], "face", "faces", 8);
-  // Each face's corner count, which CGAL reads as a double, casts and allocates for before reading
-  // the corners: 0 to the vertex count (a polygon visits a vertex once) and to half the file's
-  // size (an index takes two bytes). Lines as CGAL's scanner reads them after the header: one
-  // vertex, then one face per line; blank and comment lines skipped.
-  const double most = static_cast<double>(std::min<std::uintmax_t>(vertices, size / 2));
-  std::uintmax_t vertex_lines = 0, face_lines = 0;
-  bool from_rest = !rest.empty();  // the counts' line goes on: that first, then the next lines
-  while (face_lines < faces && (from_rest || std::getline(in, line))) {
-    if (from_rest) {
-      line = rest;
-      from_rest = false;
-    } else {
+  // The next line that has words, or an empty list at the end of the file.
+  auto next_words = [&]() {
+    while (std::getline(in, line)) {
       ++line_number;
+      auto words = words_of(line);
+      if (!words.empty()) return words;
     }
-    const std::string text = line.substr(0, line.find('#'));
-    if (text.find_first_not_of(" \t\r\v\f") == std::string::npos) continue;
-    if (vertex_lines < vertices) {
-      ++vertex_lines;
-      continue;
+    return std::vector<std::string_view>{};
+  };
+  std::vector<std::string_view> words = next_words();
+  if (words.empty()) fail(kLoad, path, "not an OFF file: nothing but blank and comment lines");
+  std::string_view keyword = words[0];
+  for (std::string_view prefix : {"ST", "C", "N"}) {
+    if (keyword.substr(0, prefix.size()) == prefix && keyword.size() > 3) keyword.remove_prefix(prefix.size());
+  }
+  if (keyword == "4OFF" || keyword == "nOFF" || keyword == "4nOFF") {
+    fail(kLoad, path, fmt::format("line {}: '{}' is an OFF file of 4 or n dimensions; only 3-D meshes are read",
+                                  line_number, shown(words[0])));
+  }
+  if (keyword != "OFF") {
+    fail(kLoad, path, fmt::format("line {}: not an OFF file: it starts with '{}', not OFF (or COFF, NOFF, STOFF)",
+                                  line_number, shown(words[0])));
+  }
+  words.erase(words.begin());
+  if (!words.empty() && words[0] == "BINARY") {
+    fail(kLoad, path, fmt::format("line {}: a binary OFF file; only ASCII OFF is read", line_number));
+  }
+  if (words.empty()) words = next_words();
+  if (words.size() < 2 || words.size() > 3) {
+    fail(kLoad, path, fmt::format("line {}: the OFF counts line has {} words; expected the vertex, face and edge "
+                                  "counts", line_number, words.size()));
+  }
+  auto count = [&](std::string_view word, const char* what, const char* plural, std::uintmax_t min_bytes) {
+    std::uint64_t n = 0;
+    if (!whole_number(word, n)) {
+      fail(kLoad, path, fmt::format("the OFF header's {} count '{}' is not a whole number", what, shown(word)));
     }
-    ++face_lines;
-    // The first number as CGAL's scanner reads it: a double, then cast to an unsigned count
-    // (undefined for a negative or huge value).
-    std::istringstream number(text);
-    double corners = 0;
-    if (!(number >> corners)) continue;
-    if (!(corners >= 0 && corners <= most)) {
-      fail(kLoad, path, fmt::format("line {}: face {} has {} corners; a face has 0 to {} (the vertices, and half the "
-                                    "file's {} bytes)", line_number, face_lines, corners, most, size));
+    // A vertex takes at least 6 bytes ("0 0 0\n"), a face at least 8 ("3 0 1 2\n").
+    if (n > size / min_bytes) {
+      fail(kLoad, path, fmt::format("the OFF header declares {} {}, more than a file of {} bytes can hold", n,
+                                    plural, size));
     }
-    // Its corners, read the same way (a double cast to an unsigned index): each a vertex of the
-    // file. A line with fewer numbers than it declares is CGAL's to name.
-    // (Inside the loop corners >= 1, so vertices >= 1.)
-    double index = 0;
-    for (std::uintmax_t k = 0; k < static_cast<std::uintmax_t>(corners) && number >> index; ++k) {
-      if (!(index >= 0 && index < static_cast<double>(vertices))) {
-        fail(kLoad, path, fmt::format("line {}: corner {} of face {} is vertex {}; the file has vertices 0 to {}",
-                                      line_number, k + 1, face_lines, index, vertices - 1));
+    return static_cast<std::size_t>(n);
+  };
+  const std::size_t vertices = count(words[0], "vertex", "vertices", 6);
+  const std::size_t faces = count(words[1], "face", "faces", 8);
+  if (words.size() == 3) count(words[2], "edge", "edges", 1);
+
+  points.reserve(vertices);
+  for (std::size_t v = 0; v < vertices; ++v) {
+    words = next_words();
+    if (words.empty()) {
+      fail(kLoad, path, fmt::format("the file ends after {} of the {} vertices its header declares", v, vertices));
+    }
+    double xyz[3] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k) {
+      const std::string_view w = k < static_cast<int>(words.size()) ? words[static_cast<std::size_t>(k)] : "";
+      const auto [end, ec] = std::from_chars(w.data(), w.data() + w.size(), xyz[k]);
+      if (w.empty() || ec != std::errc() || end != w.data() + w.size() || !std::isfinite(xyz[k])) {
+        fail(kLoad, path, fmt::format("line {}: vertex {} '{}' is not three finite numbers", line_number, v,
+                                      shown(line)));
       }
+    }
+    points.emplace_back(xyz[0], xyz[1], xyz[2]);
+  }
+  polygons.reserve(faces);
+  for (std::size_t f = 1; f <= faces; ++f) {
+    words = next_words();
+    if (words.empty()) {
+      fail(kLoad, path, fmt::format("the file ends after {} of the {} faces its header declares", f - 1, faces));
+    }
+    std::uint64_t corners = 0;
+    if (!whole_number(words[0], corners)) {
+      fail(kLoad, path, fmt::format("line {}: face {}'s corner count '{}' is not a whole number", line_number, f,
+                                    shown(words[0])));
+    }
+    if (corners < 3) {
+      fail(kLoad, path, fmt::format("line {}: face {} has {} corners, fewer than 3", line_number, f, corners));
+    }
+    if (corners > vertices) {
+      fail(kLoad, path, fmt::format("line {}: face {} has {} corners, more than the file's {} vertices", line_number,
+                                    f, corners, vertices));
+    }
+    if (words.size() - 1 < corners) {
+      fail(kLoad, path, fmt::format("line {}: face {} declares {} corners and lists {}", line_number, f, corners,
+                                    words.size() - 1));
+    }
+    Polygon& polygon = polygons.emplace_back(static_cast<std::size_t>(corners));
+    for (std::size_t k = 1; k <= corners; ++k) {
+      std::uint64_t index = 0;
+      if (!whole_number(words[k], index) || index >= vertices) {
+        fail(kLoad, path, fmt::format("line {}: corner {} of face {} is vertex '{}'; the file has vertices 0 to {}",
+                                      line_number, k, f, shown(words[k]), vertices - 1));
+      }
+      polygon[k - 1] = static_cast<std::size_t>(index);
     }
   }
 }
@@ -254,11 +307,7 @@ TriangleMesh load_mesh(const std::string& path) {
       fail(kLoad, path, "cannot read it as OBJ: CGAL::IO::read_OBJ stopped " + stopped_at(path, in, true));
     }
   } else if (ext == ".off") {
-    check_off_counts(in, path);
-    CGAL::IO::set_mode(in, CGAL::IO::ASCII);
-    if (!CGAL::IO::read_OFF(in, points, polygons, quiet)) {
-      fail(kLoad, path, "cannot read it as OFF: CGAL::IO::read_OFF stopped " + stopped_at(path, in, true));
-    }
+    read_off(in, path, points, polygons);
   } else if (ext == ".stl") {
     CGAL::IO::set_mode(in, CGAL::IO::BINARY);
     if (!CGAL::IO::read_STL(in, points, polygons, quiet) || polygons.empty()) {

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -80,6 +81,7 @@ PointCloud read_pcd(const std::string& path) {
   for (std::size_t i = 0; i < fields.size(); ++i) {
     const Field& f = fields[i];
     if (f.size <= 0 || f.count <= 0) fail(path, "field " + f.name + " has a size or count below 1");
+    if (f.size > 8) fail(path, fmt::format("field {} has SIZE {}; a PCD value takes 1, 2, 4 or 8 bytes", f.name, f.size));
     offset[i] = stride;
     column[i] = columns;
     stride += static_cast<std::size_t>(f.size) * f.count;
@@ -94,6 +96,18 @@ PointCloud read_pcd(const std::string& path) {
   if (ix < 0 || iy < 0 || iz < 0) fail(path, "the FIELDS have no x, y and z");
   const int xyz[3] = {ix, iy, iz};
 
+  // What the header declares, bounded by the file before anything is allocated for it (found by
+  // fuzz_cloud_file: POINTS 4999...9, a reservation of 60 TB): a point of an ASCII body takes at
+  // least two bytes a value ("0 "), one of a binary body its stride.
+  const std::uintmax_t file_bytes = std::filesystem::file_size(path);
+  const std::uintmax_t point_bytes = data == "ascii" ? 2 * static_cast<std::uintmax_t>(columns) : stride;
+  if (stride > file_bytes) {
+    fail(path, fmt::format("the FIELDS take {} bytes a point, more than the file's {} bytes", stride, file_bytes));
+  }
+  if (static_cast<std::uintmax_t>(points) > file_bytes / point_bytes) {
+    fail(path, fmt::format("POINTS {}: more points than a file of {} bytes can hold ({} bytes a point at least)", points,
+                           file_bytes, point_bytes));
+  }
   PointCloud cloud;
   cloud.reserve(static_cast<std::size_t>(points));
   if (data == "ascii") {

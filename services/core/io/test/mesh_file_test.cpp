@@ -227,7 +227,7 @@ TEST_F(MeshFiles, OffCountsOnHeaderLineAndNoff) {
 TEST_F(MeshFiles, OffIndexOutOfRange) {
   const std::string p = write("bad.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n");
   // Three vertices: indices 0 to 2; the face's third corner names vertex 3.
-  expect_error([&] { load_mesh(p); }, {p, "line 6: corner 3 of face 1 is vertex 3; the file has vertices 0 to 2"});
+  expect_error([&] { load_mesh(p); }, {p, "line 6: corner 3 of face 1 is vertex '3'; the file has vertices 0 to 2"});
 }
 
 // A header that declares more than the file can hold is refused naming the file and the count
@@ -237,19 +237,52 @@ TEST_F(MeshFiles, OffHeaderCountsBeyondTheFileAreRefusedBeforeReading) {
   expect_error([&] { load_mesh(huge); }, {huge, "declares 4000000000000 vertices", "bytes can hold"});
   const std::string faces = write("faces.off", "OFF 3 90000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
   expect_error([&] { load_mesh(faces); }, {faces, "declares 90000000000 faces"});
-  // A face's corner count, which CGAL allocates for before reading the corners (found by
-  // fuzz_mesh_file: 4e18 corners, an allocation of 32 EB; -4e15, cast to an unsigned count).
+  // What fuzz_mesh_file found CGAL's OFF scanner doing, each now refused before anything is
+  // allocated: a corner count of 4e18 (an allocation of 32 EB) or a negative one (cast to an
+  // unsigned count), a corner index of 2e88 (a double cast to an integer: undefined), a face on
+  // the counts' line (40,000,000 corners allocated for), an edge count with a face behind it
+  // ("5-4000": CGAL reads 5 edges, then a corner -4000, cast to an unsigned index).
   const std::string corners = write("corners.off", "OFF\n# a comment\n3 1 0\n0 0 0\n1 0 0\n\n0 1 0\n4000000000000000000 0 1 2\n");
-  expect_error([&] { load_mesh(corners); }, {corners, "line 8: face 1 has 4e+18 corners; a face has 0 to 3 (the vertices"});
-  // A corner index too large for any integer (CGAL casts the double it reads: undefined; found by
-  // CI's run of fuzz_mesh_file), and a face on the counts' line, which CGAL's scanner reads as the
-  // first line after them (found by fuzz_mesh_file: 40,000,000 corners allocated for).
+  expect_error([&] { load_mesh(corners); }, {corners, "line 8: face 1 has 4000000000000000000 corners, more than the file's 3 vertices"});
+  const std::string negative = write("negative.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n-4e15 0 1 2\n");
+  expect_error([&] { load_mesh(negative); }, {negative, "line 6: face 1's corner count '-4e15' is not a whole number"});
   const std::string index = write("index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 2e88 1\n");
-  expect_error([&] { load_mesh(index); }, {index, "line 6: corner 2 of face 1 is vertex 2e+88; the file has vertices 0 to 2"});
+  expect_error([&] { load_mesh(index); }, {index, "line 6: corner 2 of face 1 is vertex '2e88'; the file has vertices 0 to 2"});
   const std::string same_line = write("same_line.off", "OFF\n0 1 0 40000000 1 2\n");
-  expect_error([&] { load_mesh(same_line); }, {same_line, "line 2: face 1 has 40000000 corners; a face has 0 to 0"});
+  expect_error([&] { load_mesh(same_line); }, {same_line, "line 2: the OFF counts line has 6 words; expected the vertex, face and edge counts"});
+  const std::string edges = write("edges.off", "OFF\n# a 0\n0 1 \n5-4000 1 2\n");
+  expect_error([&] { load_mesh(edges); }, {edges, "line 4: face 1's corner count '5-4000' is not a whole number"});
+  const std::string few = write("few.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n");
+  expect_error([&] { load_mesh(few); }, {few, "line 6: face 1 declares 3 corners and lists 2"});
+  const std::string two = write("two.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n");
+  expect_error([&] { load_mesh(two); }, {two, "line 6: face 1 has 2 corners, fewer than 3"});
   const std::string word = write("word.off", "OFF\nmany 1 0\n0 0 0\n");
   expect_error([&] { load_mesh(word); }, {word, "vertex count 'many' is not a whole number"});
+}
+
+// What is not an ASCII OFF file of 3-D points, and a file shorter than its header, are named.
+TEST_F(MeshFiles, OffKeywordsAndTruncationAreNamed) {
+  const std::string nul = write("nul.off", std::string("\0OFF\n0 1 0\n", 11));
+  expect_error([&] { load_mesh(nul); }, {nul, "line 1: not an OFF file: it starts with '?OFF', not OFF"});
+  const std::string four = write("four.off", "4OFF\n1 0 0\n0 0 0 1\n");
+  expect_error([&] { load_mesh(four); }, {four, "line 1: '4OFF' is an OFF file of 4 or n dimensions"});
+  const std::string binary = write("binary.off", "OFF BINARY\n");
+  expect_error([&] { load_mesh(binary); }, {binary, "line 1: a binary OFF file; only ASCII OFF is read"});
+  const std::string blank = write("blank.off", "# nothing\n\n");
+  expect_error([&] { load_mesh(blank); }, {blank, "not an OFF file: nothing but blank and comment lines"});
+  const std::string vertices = write("vertices.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n");
+  expect_error([&] { load_mesh(vertices); }, {vertices, "the file ends after 2 of the 3 vertices its header declares"});
+  const std::string faces = write("faces.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  expect_error([&] { load_mesh(faces); }, {faces, "the file ends after 1 of the 2 faces its header declares"});
+  // Every prefix (a normal, a colour, texture coordinates after each vertex), the counts on the
+  // keyword's line, no edge count: a tetrahedron.
+  std::string tetrahedron = "STCNOFF 4 4\n";
+  for (const char* corner : {"0 0 0", "1 0 0", "0 1 0", "0 0 1"}) tetrahedron += std::string(corner) + " 0 0 1 1 1 1 1 0.5 0.5\n";
+  tetrahedron += "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3 255 0 0\n";
+  const TriangleMesh m = load_mesh(write("counts.off", tetrahedron));
+  EXPECT_EQ(m.vertices.size(), 4u);
+  EXPECT_EQ(m.triangles.size(), 4u);
+  EXPECT_EQ(m.vertices[3], Eigen::Vector3d(0, 0, 1));
 }
 
 // A mesh path that is a link to /dev/zero (read until memory ran out) or a FIFO is refused.
@@ -268,6 +301,33 @@ TEST_F(MeshFiles, PlyPropertyBeforeAnyElementIsRefusedBeforeCgalReadsIt) {
   const std::string p = write("early.ply", "ply\nformat ascii 1.0\nproperty float x\nelement vertex 1\nend_header\n0\n");
   expect_error([&] { load_mesh(p); }, {p, "PLY header line 3: a property before any element"});
   expect_error([&] { read_ply(p); }, {p, "PLY header line 3: a property before any element"});
+}
+
+// Counts CGAL's PLY reader trusts, refused before it reads: an element count of -4 (2^64 - 4
+// items, read for ever: found by fuzz_mesh_file), one larger than the file, a list counted in a
+// float, and a list in the body longer than the rest of the file (allocated for before its
+// entries are read: 2,000,000,000 entries, 8 GB here; a polygon's worth past the end is a file
+// cut short, named as such by MeshFiles.PlyBinaryLittleEndianFloatUintIndices).
+TEST_F(MeshFiles, PlyCountsBeyondTheFileAreRefusedBeforeCgalReadsThem) {
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex ";
+  const std::string xyz = "property float x\nproperty float y\nproperty float z\n";
+  const std::string negative = write("negative.ply", head + "-4\n" + xyz + "end_header\n0 0 0\n");
+  expect_error([&] { load_mesh(negative); }, {negative, "PLY header line 3: element 'vertex' has count '-4', not a whole number"});
+  expect_error([&] { read_ply(negative); }, {negative, "element 'vertex' has count '-4'"});
+  const std::string many = write("many.ply", head + "1000\n" + xyz + "end_header\n0 0 0\n");  // 109 bytes
+  expect_error([&] { load_mesh(many); }, {many, "PLY header line 3: element 'vertex' declares 1000 items, more than a file of 109 bytes can hold"});
+  const std::string tet = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n";
+  const std::string float_count = write("float.ply", head + "4\n" + xyz + "element face 1\nproperty list float int vertex_indices\nend_header\n" + tet + "3 0 1 2\n");
+  expect_error([&] { load_mesh(float_count); }, {float_count, "PLY header line 8: a list counted in 'float', not an integer type"});
+  const std::string long_ascii = write("long.ply", head + "4\n" + xyz + "element face 1\nproperty list int int vertex_indices\nend_header\n" + tet + "1000000 0 1 2\n");
+  expect_error([&] { load_mesh(long_ascii); }, {long_ascii, "PLY element 'face' item 0: a list of 1000000 entries, more than the 7 bytes left in the file can hold"});
+  std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 4\n" + xyz +
+                       "element face 1\nproperty list int uint vertex_indices\nend_header\n";
+  for (float c : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f}) put_f32_le(binary, c);
+  put_u32_le(binary, 2000000000u);
+  for (uint32_t i : {0u, 1u, 2u}) put_u32_le(binary, i);
+  const std::string long_binary = write("long_binary.ply", binary);
+  expect_error([&] { load_mesh(long_binary); }, {long_binary, "PLY element 'face' item 0: a list of 2000000000 entries, more than the 12 bytes left"});
 }
 TEST_F(MeshFiles, PlyAsciiBox) {
   std::string s =

@@ -66,5 +66,17 @@ TEST_F(PcdFiles, RefusedNamingWhy) {
   expect_error([&] { read_pcd(write("p.ply", "ply\nformat ascii 1.0\n")); }, {"p.ply", "no FIELDS"});
 }
 
+// Counts a header declares beyond what the file can hold are refused before anything is
+// allocated for them (found by fuzz_cloud_file: POINTS 4999...9, 60 TB reserved).
+TEST_F(PcdFiles, CountsBeyondTheFileAreRefusedBeforeReading) {
+  const std::string many = header("x y z", "4 4 4", "F F F", "1 1 1", 2000000000, "ascii") + "0 0 0\n";
+  const std::string a = write("many.pcd", many);
+  expect_error([&] { read_pcd(a); }, {a, fmt::format("POINTS 2000000000: more points than a file of {} bytes can hold (6 bytes a point at least)", many.size())});
+  const std::string b = write("wide.pcd", header("x y z", "16 4 4", "F F F", "1 1 1", 1, "binary") + std::string(24, '\0'));
+  expect_error([&] { read_pcd(b); }, {b, "field x has SIZE 16; a PCD value takes 1, 2, 4 or 8 bytes"});
+  const std::string c = write("stride.pcd", header("x y z n", "4 4 4 4", "F F F F", "1 1 1 100000", 1, "binary") + std::string(24, '\0'));
+  expect_error([&] { read_pcd(c); }, {c, "the FIELDS take 400012 bytes a point, more than the file's"});
+}
+
 }  // namespace
 }  // namespace pbnbv
