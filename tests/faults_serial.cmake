@@ -14,4 +14,4 @@ set_tests_properties(Faults.PacketLossOfOneAndFivePercentCostsNoViewAndNoCoverag
                      Faults.TheMainJobsLogHoldsEveryMessageOfItsScan
                      PROPERTIES RUN_SERIAL TRUE COST 0)
 # The longest case that shares the machine (about 2.5 minutes: eleven 10-view scans) starts first.
-set_tests_properties(Faults.EachKilledServiceIsRestartedAndTheScanCompletes PROPERTIES COST 200)
+set_tests_properties(Faults.EachKilledServiceIsRestartedAndTheScanCompletes PROPERTIES COST 115)

@@ -168,17 +168,21 @@ TEST(Faults, PacketLossOfOneAndFivePercentCostsNoViewAndNoCoverage) {
   EXPECT_LE(runs[1].wall_s, 2.0 * runs[0].wall_s) << "1 % loss took " << runs[1].wall_s << " s against " << runs[0].wall_s;
 }
 
-// SIGKILL of each service (and of the twin) at view 3 of a 10-view NBV scan on the arm rig, and
-// SIGSTOP of the mapping service: the launcher starts it again (a stopped one once its heartbeat
-// has been missing for 10 s), the restarted service continues from the scan's folder and the
+// SIGKILL of each service (and of the twin) in a 10-view NBV scan on the arm rig, two per scan
+// (the first once view 3 is recorded, the second once view 6 is), and SIGSTOP of the mapping
+// service at view 3: the launcher starts each again (a stopped one once its heartbeat has been
+// missing for 10 s), the restarted service continues from the scan's folder and the
 // coordinator's re-sent requests, and the scan completes every view with the coverage of an
 // undisturbed run. (lcm-logger: AKilledLoggerGoesOnInASecondFileThatHoldsEveryMessage.)
 namespace {
 
-// `pbnbv scan` of a 10-view bunny scan on the arm rig into dir/<name>, in its own network
-// namespace; SIGNAL sent to the process `victim` (processes.json) once view 3 is recorded.
-fs::path run_killing(const fs::path& dir, const std::string& victim, int sig = SIGKILL, bool log = false) {
-  const fs::path out = dir / (victim.empty() ? std::string("undisturbed") : victim + (sig == SIGKILL ? "" : "-stopped"));
+// `pbnbv scan` of a 10-view bunny scan on the arm rig into dir/<victims joined by '+'>, in its
+// own network namespace; SIGNAL sent to victims[k] (by its processes.json pid) once view 3 + 3k
+// is recorded.
+fs::path run_killing(const fs::path& dir, const std::vector<std::string>& victims, int sig = SIGKILL, bool log = false) {
+  std::string name = victims.empty() ? std::string("undisturbed") : victims[0];
+  for (std::size_t k = 1; k < victims.size(); ++k) name += "+" + victims[k];
+  const fs::path out = dir / (name + (sig == SIGKILL ? "" : "-stopped"));
   const std::string scan10 = std::string("--object bunny --rig arm --views 10") + (log ? "" : " --no-log");
   const pid_t pid = ::fork();
   if (pid == 0) {
@@ -186,17 +190,18 @@ fs::path run_killing(const fs::path& dir, const std::string& victim, int sig = S
     ::execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
     ::_exit(127);
   }
-  if (!victim.empty()) {
-    EXPECT_TRUE(wait_for_views(out, 3, 120)) << victim << ": " << read_text(out.string() + ".stdout");
+  for (std::size_t k = 0; k < victims.size(); ++k) {
+    const int view = 3 + 3 * static_cast<int>(k);
+    EXPECT_TRUE(wait_for_views(out, view, 120)) << victims[k] << ": " << read_text(out.string() + ".stdout");
     int victim_pid = -1;
     const nlohmann::json procs_json = read_json_file(out / "processes.json");
     for (const auto& p : procs_json["processes"]) {
-      if (p["name"] == victim) victim_pid = p["pid"].get<int>();
+      if (p["name"] == victims[k]) victim_pid = p["pid"].get<int>();
     }
-    EXPECT_GT(victim_pid, 0) << victim;
+    EXPECT_GT(victim_pid, 0) << victims[k];
     if (victim_pid > 0) ::kill(victim_pid, sig);
   }
-  EXPECT_EQ(wait_exit(pid, 300), 0) << victim << ": " << read_text(out.string() + ".stdout");
+  EXPECT_EQ(wait_exit(pid, 300), 0) << name << ": " << read_text(out.string() + ".stdout");
   return out;
 }
 
@@ -214,44 +219,45 @@ int restarts_of(const fs::path& out, const std::string& name) {
 
 TEST(Faults, EachKilledServiceIsRestartedAndTheScanCompletes) {
   const fs::path dir = fresh_dir("killed-service");
-  const fs::path undisturbed = run_killing(dir, "");
+  const fs::path undisturbed = run_killing(dir, {});
   const std::vector<double> reference = eval::evaluate_coverage(undisturbed).coverage_by_view;
   ASSERT_EQ(reference.size(), 10u);
-  for (const std::string victim : {"twin", "motion", "camera", "registration", "mapping", "ellipsoids", "scorer", "coordinator"}) {
-    const fs::path out = run_killing(dir, victim);
+  const std::vector<std::vector<std::string>> pairs = {
+      {"twin", "motion"}, {"camera", "registration"}, {"mapping", "ellipsoids"}, {"scorer", "coordinator"}};
+  for (const std::vector<std::string>& victims : pairs) {
+    const fs::path out = run_killing(dir, victims);
     const auto scan = read_json_file(out / "scan.json");
     const std::vector<double> coverage = eval::evaluate_coverage(out).coverage_by_view;
-    const int restarts = restarts_of(out, victim);
-    std::cout << victim << " killed at view 3: " << scan["status"]["views_done"] << " views in "
-              << scan["status"]["elapsed_s"].get<double>() << " s, coverage after view 10 "
-              << (coverage.empty() ? 0.0 : coverage.back()) << " % (undisturbed " << reference.back() << " %), "
-              << restarts << " restart\n";
-    EXPECT_EQ(scan["status"]["state"], "done") << victim;
-    EXPECT_EQ(scan["status"]["views_done"], 10) << victim;
-    EXPECT_EQ(restarts, 1) << victim;
-    ASSERT_EQ(coverage.size(), 10u) << victim;
-    EXPECT_NEAR(coverage.back(), reference.back(), 1.0) << victim;
-    if (victim == "mapping") {
-      // Hung, not dead: SIGSTOP (never continued). Its heartbeat stops; 10 s later the launcher
-      // kills it and starts it again.
-      const fs::path hung = run_killing(dir, victim, SIGSTOP);
-      const auto s2 = read_json_file(hung / "scan.json");
-      const std::vector<double> c2 = eval::evaluate_coverage(hung).coverage_by_view;
-      std::cout << "mapping stopped (SIGSTOP) at view 3: " << s2["status"]["views_done"] << " views in "
-                << s2["status"]["elapsed_s"].get<double>() << " s, coverage after view 10 " << (c2.empty() ? 0.0 : c2.back())
-                << " %\n";
-      EXPECT_EQ(s2["status"]["views_done"], 10);
-      ASSERT_EQ(c2.size(), 10u);
-      EXPECT_NEAR(c2.back(), reference.back(), 1.0);
-      EXPECT_NE(read_text(hung.string() + ".stdout").find("mapping sent no heartbeat for"), std::string::npos);
-    }
+    const std::string name = out.filename().string();
+    std::cout << victims[0] << " killed at view 3, " << victims[1] << " at view 6: " << scan["status"]["views_done"]
+              << " views in " << scan["status"]["elapsed_s"].get<double>() << " s, coverage after view 10 "
+              << (coverage.empty() ? 0.0 : coverage.back()) << " % (undisturbed " << reference.back() << " %), restarts "
+              << restarts_of(out, victims[0]) << " and " << restarts_of(out, victims[1]) << "\n";
+    EXPECT_EQ(scan["status"]["state"], "done") << name;
+    EXPECT_EQ(scan["status"]["views_done"], 10) << name;
+    for (const std::string& victim : victims) EXPECT_EQ(restarts_of(out, victim), 1) << victim;
+    ASSERT_EQ(coverage.size(), 10u) << name;
+    EXPECT_NEAR(coverage.back(), reference.back(), 1.0) << name;
   }
+  // Hung, not dead: SIGSTOP (never continued). Its heartbeat stops; 10 s later the launcher kills
+  // it and starts it again.
+  const fs::path hung = run_killing(dir, {"mapping"}, SIGSTOP);
+  const auto s2 = read_json_file(hung / "scan.json");
+  const std::vector<double> c2 = eval::evaluate_coverage(hung).coverage_by_view;
+  std::cout << "mapping stopped (SIGSTOP) at view 3: " << s2["status"]["views_done"] << " views in "
+            << s2["status"]["elapsed_s"].get<double>() << " s, coverage after view 10 " << (c2.empty() ? 0.0 : c2.back())
+            << " %\n";
+  EXPECT_EQ(s2["status"]["views_done"], 10);
+  EXPECT_EQ(restarts_of(hung, "mapping"), 1);
+  ASSERT_EQ(c2.size(), 10u);
+  EXPECT_NEAR(c2.back(), reference.back(), 1.0);
+  EXPECT_NE(read_text(hung.string() + ".stdout").find("mapping sent no heartbeat for"), std::string::npos);
 }
 
 // SIGKILL of lcm-logger at view 3: the launcher starts it again, it goes on in scan.lcmlog.00,
 // and the two files hold every message of the scan (the launcher's audit says so).
 TEST(Faults, AKilledLoggerGoesOnInASecondFileThatHoldsEveryMessage) {
-  const fs::path out = run_killing(fresh_dir("killed-logger"), "lcm-logger", SIGKILL, true);
+  const fs::path out = run_killing(fresh_dir("killed-logger"), {"lcm-logger"}, SIGKILL, true);
   const auto scan = read_json_file(out / "scan.json");
   EXPECT_EQ(scan["status"]["state"], "done");
   EXPECT_EQ(scan["status"]["views_done"], 10);
