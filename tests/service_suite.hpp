@@ -257,7 +257,7 @@ inline plan_request_t plan_request(const std::string& scan_id, int64_t id, int m
   r.scan_id = scan_id;
   r.iteration = 1;
   r.request_id = id;
-  r.planner = "pbnbv";
+  r.planner = plan_request_t::kPlannerPbnbv;
   r.map_iteration = map_iteration;
   r.num_views_done = 0;
   r.num_excluded = 0;

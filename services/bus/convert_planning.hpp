@@ -9,6 +9,7 @@
 #include <string>
 
 #include "bus/convert.hpp"
+#include "bus/convert_kinds.hpp"
 #include "core/mapping/voxel_map.hpp"
 #include "core/planning/kinds.hpp"
 #include "core/planning/ellipsoid.hpp"
@@ -107,6 +108,30 @@ inline PlanInput plan_input_from_msg(const plan_request_t& r) {
   return in;
 }
 
+// What the reachability of a request's candidates depends on, as a cache key: the scan, B (the
+// map's bounding box), what places the candidates (count, parallels, sphere or hemisphere,
+// working distance), the rig state the check starts from (joints, turntable: they order the IK
+// solutions and choose among a turntable angle's whole turns), the object's height and the
+// keep-out box. Exact (17 digits): equal keys, equal answers. ConvertPlanning's
+// TheReachabilityKeyCoversEveryFieldItDependsOn classifies every field of PLAN_REQUEST, so a field
+// added to the contract fails that test until it is placed in the key or said not to matter.
+inline std::string reachability_key(const plan_request_t& r, const Eigen::AlignedBox3d& box) {
+  std::ostringstream key;
+  key.precision(17);
+  key << r.scan_id.size() << ':' << r.scan_id << ' ' << box.min().transpose() << ' ' << box.max().transpose() << ' '
+      << r.num_candidates << ' ' << r.num_parallels << ' ' << r.full_sphere << ' ' << r.working_distance_m << ' '
+      << r.object_z_m << ' ' << r.turntable_angle_rad;
+  for (int k = 0; k < 6; ++k) key << ' ' << r.joint_position_rad[k];
+  for (int k = 0; k < 3; ++k) key << ' ' << r.keepout_min_m[k] << ' ' << r.keepout_max_m[k];
+  return key.str();
+}
+
+static_assert(static_cast<int>(VoxelState::kNone) == voxel_set_t::kNone && static_cast<int>(VoxelState::kEmpty) == voxel_set_t::kEmpty &&
+                  static_cast<int>(VoxelState::kOccupied) == voxel_set_t::kOccupied &&
+                  static_cast<int>(VoxelState::kUnknown) == voxel_set_t::kUnknown &&
+                  static_cast<int>(VoxelState::kFrontier) == voxel_set_t::kFrontier,
+              "the map's states are the VOXEL_MAP constants");
+
 // The VOXEL_MAP's cells as the ray caster reads them; throws naming the message's bad field.
 inline VoxelGrid grid_from_msg(const voxel_set_t& map) {
   VoxelGrid g;
@@ -127,7 +152,7 @@ inline void fill_answer(view_plan_t& out, const PlanResult& res) {
   out.outcome = res.outcome == PlanResult::Outcome::kView ? view_plan_t::kView
                 : res.outcome == PlanResult::Outcome::kStop ? view_plan_t::kStop : view_plan_t::kFailed;
   out.reason = res.reason;
-  out.ranking = std::string(name_of(res.ranking));
+  out.ranking = ranking_to_msg(res.ranking);
   if (const ViewScore* s = res.chosen_score()) {
     out.object_T_camera = to_msg(res.candidates[res.chosen]);
     out.view_quality = s->quality;
@@ -166,8 +191,12 @@ inline view_plan_t empty_answer(const plan_request_t& r) {
   out.planner = r.planner;
   out.object_T_camera = to_msg(Pose::Identity());
   // No scores yet: what the planner asked for ranks by (a request naming no planner fails later).
-  const std::optional<PlannerKind> kind = find_name<PlannerKind>(r.planner);
-  out.ranking = std::string(name_of(kind ? ranking_of(*kind) : Ranking::kF));
+  Ranking ranking = Ranking::kF;
+  try {
+    ranking = ranking_of(planner_from_msg(r.planner, "PLAN_REQUEST planner"));
+  } catch (const std::invalid_argument&) {
+  }
+  out.ranking = ranking_to_msg(ranking);
   out.view_quality = 0;
   out.first_quality = r.first_quality;
   out.partition = -1;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "bus/convert.hpp"
+#include "bus/convert_kinds.hpp"
 #include "core/scan/messages.hpp"
 #include "pbnbv/capture_request_t.hpp"
 #include "pbnbv/ellipsoid_set_t.hpp"
@@ -312,7 +313,7 @@ inline plan_request_t to_msg(const PlanRequest& r) {
   m.scan_id = r.scan_id;
   m.iteration = r.iteration;
   m.request_id = r.request_id;
-  m.planner = std::string(name_of(r.planner));
+  m.planner = planner_to_msg(r.planner);
   m.seed = r.seed;
   m.map_iteration = r.map_iteration;
   for (const Pose& v : r.views_done) m.views_done.push_back(to_msg(v));
@@ -351,21 +352,13 @@ inline ViewPlan from_msg(const view_plan_t& m) {
   p.scan_id = m.scan_id;
   p.iteration = m.iteration;
   p.request_id = m.request_id;
-  try {
-    p.planner = parse_name<PlannerKind>(m.planner);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string("VIEW_PLAN planner: ") + e.what());
-  }
+  p.planner = planner_from_msg(m.planner, "VIEW_PLAN planner");
   if (m.outcome < view_plan_t::kView || m.outcome > view_plan_t::kFailed) {
     throw std::invalid_argument("VIEW_PLAN outcome = " + std::to_string(m.outcome) + " is not one of its constants (0..2)");
   }
   p.outcome = static_cast<PlanOutcome>(m.outcome);
   p.reason = m.reason;
-  try {
-    p.ranking = parse_name<Ranking>(m.ranking);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string("VIEW_PLAN ranking: ") + e.what());
-  }
+  p.ranking = ranking_from_msg(m.ranking, "VIEW_PLAN ranking");
   if (p.outcome == PlanOutcome::kView) {  // the poses of a stop or a failure are not filled
     p.object_T_camera = from_msg(m.object_T_camera, "VIEW_PLAN object_T_camera");
     for (std::size_t a = 0; a < m.alternatives.size(); ++a) {

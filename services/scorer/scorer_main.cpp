@@ -113,11 +113,13 @@ class ScorerService {
       return;
     }
     if (pending_ && pending_->request.scan_id == r.scan_id && pending_->request.request_id == r.request_id) return;
-    const std::optional<PlannerKind> planner = find_name<PlannerKind>(r.planner);
-    if (!planner || !uses_view_scorer(*planner)) {
+    std::optional<PlannerKind> planner;
+    try {
+      planner = bus::planner_from_msg(r.planner, "PLAN_REQUEST planner");
+    } catch (const std::invalid_argument& e) {
       view_plan_t out = bus::empty_answer(r);
       out.outcome = view_plan_t::kFailed;
-      out.reason = "planner '" + r.planner + "' is not served by pbnbv-scorer (pbnbv, pbnbv-paper, raycast, random, oracle)";
+      out.reason = std::string(e.what()) + ": pbnbv-scorer serves pbnbv, pbnbv-paper, raycast, random and oracle";
       publish(out);
       return;
     }
@@ -163,14 +165,10 @@ class ScorerService {
     const auto t0 = std::chrono::steady_clock::now();
     const Eigen::AlignedBox3d box = bus::bbox_of(map);
     const std::vector<Pose> cands = candidate_views(box, pending_->input.candidates);
-    // B often stops growing late in a scan: the same candidate set, the same answer. (The motion
-    // executor checks the chosen view again, with the rig's actual state.)
-    std::ostringstream key;
-    key.precision(17);
-    key << r.scan_id << ' ' << box.min().transpose() << ' ' << box.max().transpose() << ' ' << r.num_candidates << ' '
-        << r.num_parallels << ' ' << r.full_sphere << ' ' << r.working_distance_m << ' ' << r.object_z_m;
-    for (int k = 0; k < 3; ++k) key << ' ' << r.keepout_min_m[k] << ' ' << r.keepout_max_m[k];
-    if (key.str() == reach_key_) {
+    // A request asked again (its answer lost), or planned again from the same rig state after a
+    // view could not be taken: the same candidates from the same state, the same answer.
+    const std::string key = bus::reachability_key(r, box);
+    if (key == reach_key_) {
       pending_->reachability_s = 0;
       return reach_cache_;
     }
@@ -191,7 +189,7 @@ class ScorerService {
     }, kCandidatesPerWorker, workers);
     const std::vector<bool> ok(reachable.begin(), reachable.end());
     pending_->reachability_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    reach_key_ = key.str();
+    reach_key_ = key;
     reach_cache_ = ok;
     return ok;
   }
@@ -244,7 +242,7 @@ class ScorerService {
     if (!figures_out_.empty() && r.scan_id == bus_.scope() && !result.candidates.empty()) {
       try {
         std::ostringstream title;
-        title << r.planner << ": view " << r.iteration + 1 << " - planned from the map of view " << r.map_iteration + 1;
+        title << name_of(p.planner) << ": view " << r.iteration + 1 << " - planned from the map of view " << r.map_iteration + 1;
         if (ell) title << " - T occupied " << ell->occupied_components << ", T frontier " << ell->frontier_components;
         PlanFigure figure = plan_figure(p.input, result, title.str());
         if (p.planner == PlannerKind::kRaycast) figure.quality_label = "unobserved voxels each scored candidate's rays reach";

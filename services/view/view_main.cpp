@@ -172,7 +172,12 @@ class LiveScene {
     last_plan_ = m.request_id;
     scene_.chosen = bus::from_msg(m.object_T_camera, "VIEW_PLAN object_T_camera");
     scene_.chosen_quality = m.view_quality;
-    scene_.chosen_ranking = m.ranking;
+    try {
+      scene_.chosen_ranking = std::string(name_of(bus::ranking_from_msg(m.ranking, "VIEW_PLAN ranking")));
+    } catch (const std::invalid_argument& e) {
+      log_warn(e.what());
+      scene_.chosen_ranking = std::string(name_of(Ranking::kF));
+    }
     scene_.plan_candidates = m.num_candidates;
     if (map != maps_.end()) {
       const PlanInput in = bus::plan_input_from_msg(*req);

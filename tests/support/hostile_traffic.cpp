@@ -210,10 +210,10 @@ int main(int argc, char** argv) {
       stop.scan_id = scan;
       stop.iteration = status.iteration;
       stop.request_id = id;
-      stop.planner = "pbnbv";
+      stop.planner = pbnbv::plan_request_t::kPlannerPbnbv;
       stop.outcome = pbnbv::view_plan_t::kStop;
       stop.reason = "forged";
-      stop.ranking = "f_px";
+      stop.ranking = pbnbv::view_plan_t::kRankingF;
       stop.object_T_camera = identity_pose();
       bus.publish("VIEW_PLAN", &stop);
       pbnbv::move_result_t move{};
@@ -244,7 +244,7 @@ int main(int argc, char** argv) {
     far.scan_id = scan;
     far.iteration = 5000;
     far.request_id = static_cast<int64_t>(rng() >> 2);
-    far.planner = "pbnbv";
+    far.planner = pbnbv::plan_request_t::kPlannerPbnbv;
     bus.publish("PLAN_REQUEST", &far);
     sent += 3;
 

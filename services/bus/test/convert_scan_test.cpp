@@ -82,10 +82,10 @@ view_plan_t plan_message(int alternatives) {
   m.scan_id = "s";
   m.iteration = 2;
   m.request_id = 7;
-  m.planner = "pbnbv";
+  m.planner = plan_request_t::kPlannerPbnbv;
   m.outcome = view_plan_t::kView;
   m.reason = "best F";
-  m.ranking = "f_px";
+  m.ranking = view_plan_t::kRankingF;
   m.object_T_camera = bus::to_msg(look_at_z_up(Eigen::Vector3d(0.6, 0, 0.3), Eigen::Vector3d::Zero()));
   m.view_quality = 1500;
   m.partition = 2;
@@ -125,10 +125,12 @@ TEST(ConvertScan, ViewPlanOutcomeAndPosesAreChecked) {
   m.alternatives[1].quat_wxyz[0] = 2;  // not a unit quaternion
   expect_error([&] { bus::from_msg(m); }, "VIEW_PLAN alternatives[1]");
   m = plan_message(2);
-  m.ranking = "F";  // not one of the names
-  expect_error([&] { bus::from_msg(m); }, "VIEW_PLAN ranking: unknown plan ranking 'F'");
-  m.ranking = "gap_deg";
+  m.ranking = 6;  // not one of the constants
+  expect_error([&] { bus::from_msg(m); }, "VIEW_PLAN ranking = 6 is not one of its constants (0..5)");
+  m.ranking = view_plan_t::kRankingGapAngle;
   EXPECT_EQ(bus::from_msg(m).ranking, Ranking::kGapAngle);
+  m.planner = -1;
+  expect_error([&] { bus::from_msg(m); }, "VIEW_PLAN planner = -1 is not one of its constants (0..4)");
   // A stop carries no view: its (unset) poses are not read.
   m = plan_message(0);
   m.outcome = view_plan_t::kStop;

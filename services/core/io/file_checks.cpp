@@ -160,6 +160,13 @@ PlyLayout read_ply_layout(std::istream& in, const std::string& path, const char*
       PlyLayout::Element& e = layout.elements.emplace_back();
       std::string count;
       iss >> e.name >> count;
+      // CGAL checks the first element of a name and reads the last (found by fuzz_cloud_file: a
+      // second vertex element with uchar coordinates, read through a null pointer).
+      for (std::size_t k = 0; k + 1 < layout.elements.size(); ++k) {
+        if (layout.elements[k].name == e.name) {
+          fail(ctx, path, fmt::format("PLY header line {}: a second element '{}'", line_number, shown(e.name)));
+        }
+      }
       const auto [end, err] = std::from_chars(count.data(), count.data() + count.size(), e.count);
       if (count.empty() || err != std::errc() || end != count.data() + count.size()) {
         fail(ctx, path, fmt::format("PLY header line {}: element '{}' has count '{}', not a whole number", line_number,
@@ -271,10 +278,12 @@ PlyHeader check_ply_header(std::istream& in, const std::string& path, const char
   auto* vertex = find_element(reader, "vertex");
   if (!vertex) fail(ctx, path, "PLY has no 'vertex' element");
   h.vertices = vertex->number_of_items();
-  for (const char* c : {"x", "y", "z"}) {
-    if (!has_named(*vertex, c)) fail(ctx, path, "PLY vertex element lacks x, y or z");
+  // A coordinate or a normal's component of another type is read through a null pointer.
+  for (const char* c : {"x", "y", "z", "nx", "ny", "nz"}) {
+    const bool normal = c[0] == 'n';
+    if (!normal && !has_named(*vertex, c)) fail(ctx, path, "PLY vertex element lacks x, y or z");
     // has_property<double> accepts a float or a double property.
-    if (!vertex->has_property<double>(c)) {
+    if (has_named(*vertex, c) && !vertex->has_property<double>(c)) {
       fail(ctx, path, fmt::format("PLY vertex property '{}' is not float or double", c));
     }
   }

@@ -113,6 +113,17 @@ TEST_F(CloudFiles, Errors) {
                                       "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
                                       "property uchar y\nproperty float z\nend_header\n1 2 3\n");
   expect_error([&] { read_ply(uchar_xyz); }, {uchar_xyz, "'y' is not float or double"});
+  // CGAL reads each of these through a null pointer (found by fuzz_cloud_file): a normal's
+  // component of another type, and a second vertex element (CGAL checks the first, reads the last).
+  const std::string uchar_normal = write("uchar_normal.ply",
+                                         "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                         "property float z\nproperty float nx\nproperty uchar ny\nproperty float nz\n"
+                                         "end_header\n1 2 3 0 1 0\n");
+  expect_error([&] { read_ply(uchar_normal); }, {uchar_normal, "PLY vertex property 'ny' is not float or double"});
+  const std::string twice = write("twice.ply",
+                                  "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                  "property float z\nelement vertex 1\nproperty uchar x\nend_header\n1 2 3\n1\n");
+  expect_error([&] { read_ply(twice); }, {twice, "PLY header line 7: a second element 'vertex'"});
   PointCloud c(10, Eigen::Vector3f(1, 2, 3));
   const std::string p = path("cut.ply");
   write_ply(c, p);
