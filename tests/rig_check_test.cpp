@@ -168,6 +168,33 @@ TEST_F(RigCheck, PassesOnTheTwin) {
   EXPECT_GT(o.turntable_commands, 0);
 }
 
+// The README's driver skeleton (examples/driver_skeleton: the driver library, an ideal rig in
+// software) passes every passive check against the shipped rig file: statuses, rates, both
+// clocks, joint names, a frame answering its trigger with the rig file's camera and its exposure
+// on the status clock. (Its frames show a wall 1 m away, not the rig: the active checks compare
+// depth with forward kinematics, a real camera's to pass.)
+TEST_F(RigCheck, TheDriverSkeletonPassesThePassiveChecks) {
+  rig_ = source_dir() + "/models/rig_arm.xml";
+  process::Child c;
+  c.name = "driver-skeleton";
+  c.argv = {bin_dir() + "/../tests/pbnbv-driver-skeleton"};
+  c.log_path = (dir_ / "skeleton.log").string();
+  children_.push_back(c);
+  process::start(children_.back());
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (listener_.arm_statuses == 0 && std::chrono::steady_clock::now() < end) listener_.spin(50);
+  ASSERT_GT(listener_.arm_statuses, 0) << process::tail_lines(c.log_path, 20);
+  listener_.arm_commands = listener_.turntable_commands = 0;
+  const Outcome o = rig_check({"--passive"});
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_EQ(o.output.find("FAIL"), std::string::npos) << o.output;
+  for (const char* check : {"ARM_STATUS rate", "ARM_STATUS clocks increase", "TURNTABLE_STATUS rate",
+                            "DEPTH_FRAME answers DEPTH_TRIGGER", "frame size", "exposure stamps on the status clock"}) {
+    EXPECT_NE(o.output.find(std::string(check) + " "), std::string::npos) << check << "\n" << o.output;
+  }
+  EXPECT_EQ(o.arm_commands, 0);
+}
+
 TEST_F(RigCheck, PassiveCommandsNothing) {
   start_twin({});
   const Outcome o = rig_check({"--passive"});

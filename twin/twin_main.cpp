@@ -3,7 +3,8 @@
 //   in:  ARM_COMMAND, TURNTABLE_COMMAND, DEPTH_TRIGGER
 //   out: ARM_STATUS, TURNTABLE_STATUS (every 10 ms of rig time), DEPTH_FRAME (per trigger),
 //        HEARTBEAT
-// The reference driver of the contract (README "Writing a driver"); --fault makes it a faulty one
+// The reference driver of the contract, built on the driver library (services/driver; README
+// "Writing a driver"): the checks, faults, statuses and frames are the library's; --fault makes it a faulty one
 // (twin/driver_faults.hpp), for `pbnbv rig-check`'s tests.
 #include <unistd.h>
 
@@ -35,13 +36,13 @@
 #include "pbnbv/turntable_command_t.hpp"
 #include "pbnbv/turntable_status_t.hpp"
 #include "twin/rig_sim.hpp"
+#include "driver/rig_driver.hpp"
 #include "core/base/units.hpp"
 
 using namespace pbnbv;
 
 namespace {
 
-constexpr double kStatusPeriodS = 0.01;  // 100 Hz of rig time
 constexpr double kSlowStatusPeriodS = 0.05;  // --fault slow-status: 20 Hz
 constexpr double kDepthUnitM = 1e-4;     // 0.1 mm per count
 constexpr const char* kCameraId = "pbnbv-twin";  // depth_frame_t camera_id
@@ -50,32 +51,12 @@ int64_t rig_utime(int64_t epoch_utime, double sim_s) {
   return epoch_utime + static_cast<int64_t>(std::llround(sim_s * 1e6));
 }
 
-// The mode of a joint group as Status's constants (arm_status_t or turntable_status_t).
-template <class Status>
-int8_t mode_of(const twin::RigSim& sim, const twin::JointGroup& g) {
-  if (g.command_seq < 0 && sim.settled(g)) return Status::kModeIdle;
-  return sim.settled(g) ? Status::kModeSettled : Status::kModeMoving;
+// A joint group's motion as the contract reports it: idle before its first command, settled at
+// its target, else moving.
+driver::Motion motion_of(const twin::RigSim& sim, const twin::JointGroup& g) {
+  if (g.command_seq < 0 && sim.settled(g)) return driver::Motion::kIdle;
+  return sim.settled(g) ? driver::Motion::kSettled : driver::Motion::kMoving;
 }
-
-// The last command a driver refused, until it accepts one: the twin's only faults
-// (kFaultOutOfLimits, kFaultCommandRejected; it has no drive that can fail).
-struct Rejection {
-  std::string fault;         // empty: none
-  int64_t command_seq = -1;  // the refused command
-  bool out_of_limits = false;
-  void set(const std::string& what, int64_t seq, bool limits = false) {
-    fault = what;
-    command_seq = seq;
-    out_of_limits = limits;
-  }
-  void clear() { set("", -1); }
-  // The status's fault_code (arm_status_t or turntable_status_t constants).
-  template <class Status>
-  int8_t code() const {
-    if (fault.empty()) return Status::kFaultNone;
-    return out_of_limits ? Status::kFaultOutOfLimits : Status::kFaultCommandRejected;
-  }
-};
 
 }  // namespace
 
@@ -230,82 +211,55 @@ int main(int argc, char** argv) {
     // which stops the clock of the rig while it runs).
     double wall0 = 0, sim0 = 0;
     const int64_t epoch = bus::now_utime();
-    long status_seq = 0;
     // Frame numbers start at the wall clock (microseconds): a restarted twin never repeats one, so
     // twin_truth.jsonl and the frames of one scan stay unambiguous.
     int64_t frame_seq = bus::now_utime();
-    Rejection arm_fault, turntable_fault;
+    const bool no_echo = faulty(DriverFault::kNoSeqEcho);
+    driver::DepthCamera camera;
+    camera.camera_id = kCameraId;
+    camera.width = k.width;
+    camera.height = k.height;
+    camera.fx = k.fx;
+    camera.fy = k.fy;
+    camera.cx = k.cx;
+    camera.cy = k.cy;
+    camera.depth_min_m = range.min_m;
+    camera.depth_max_m = range.max_m;
+    camera.depth_unit_m = kDepthUnitM;
+    camera.compress = !raw_depth;
 
-    bus.subscribe<arm_command_t>(channels::kArmCommand, [&](const arm_command_t& c) {
+    driver::RigDriver::Handlers handlers;
+    handlers.move_arm = [&](const driver::ArmTarget& t) {
       try {
-        if (c.mode == arm_command_t::kModeHold) {
-          sim.hold_arm(c.seq);
-        } else if (c.mode == arm_command_t::kModePosition) {
-          if (c.num_joints != 6) {
-            throw std::invalid_argument("num_joints = " + std::to_string(c.num_joints) + ", this arm has 6");
-          }
-          sim.command_arm(bus::to_vector6(c.joint_position_rad, "joint_position_rad"),
-                          c.speed_scale, c.seq);
+        if (t.hold) {
+          sim.hold_arm(t.seq);
         } else {
-          throw std::invalid_argument("unknown mode " + std::to_string(c.mode));
+          sim.command_arm(Eigen::Map<const Vector6d>(t.position_rad.data()), t.speed_scale, t.seq);
         }
-        arm_fault.clear();
-      } catch (const std::exception& e) {
-        arm_fault.set("rejected ARM_COMMAND seq " + std::to_string(c.seq) + ": " + e.what(), c.seq,
-                      dynamic_cast<const twin::OutOfLimits*>(&e) != nullptr);
-        throw std::invalid_argument(arm_fault.fault);
+      } catch (const twin::OutOfLimits& e) {
+        throw driver::OutOfLimits(e.what());
       }
-    });
-    bus.subscribe<turntable_command_t>(channels::kTurntableCommand, [&](const turntable_command_t& c) {
-      try {
-        sim.command_turntable(c.angle_rad, c.speed_scale, c.seq);
-        turntable_fault.clear();
-      } catch (const std::exception& e) {
-        turntable_fault.set("rejected TURNTABLE_COMMAND seq " + std::to_string(c.seq) + ": " + e.what(), c.seq,
-                            dynamic_cast<const twin::OutOfLimits*>(&e) != nullptr);
-        throw std::invalid_argument(turntable_fault.fault);
-      }
-    });
-    bus.subscribe<depth_trigger_t>(channels::kDepthTrigger, [&](const depth_trigger_t& t) {
+    };
+    if (sim.has_turntable()) {
+      handlers.turn_table = [&](const driver::TurntableTarget& t) {
+        try {
+          sim.command_turntable(t.angle_rad, t.speed_scale, t.seq);
+        } catch (const twin::OutOfLimits& e) {
+          throw driver::OutOfLimits(e.what());
+        }
+      };
+    }
+    handlers.capture = [&](const depth_trigger_t& t) {
       bus.set_state("rendering");
       mj_forward(sim.model(), sim.data());
       twin::DepthImage image = renderer.render(sim.data());
       if (noise.enabled()) twin::apply_depth_noise(image, noise, rng);
-      depth_frame_t f;
       // The renderer exposes instantaneously: the exposure starts and ends at this rig time.
-      f.utime = rig_utime(epoch, sim.time_s()) + (faulty(DriverFault::kLateExposure) ? 1000000 : 0);
-      f.exposure_start_utime = f.utime;
-      f.exposure_us = 0;
-      f.camera_id = kCameraId;
-      f.seq = frame_seq++;
-      f.trigger_seq = faulty(DriverFault::kNoTriggerId) ? -1 : t.seq;
-      f.scan_id = t.scan_id;
-      f.width = image.width;
-      f.height = image.height;
-      f.fx = k.fx;
-      f.fy = k.fy;
-      f.cx = k.cx;
-      f.cy = k.cy;
-      f.depth_min_m = range.min_m;
-      f.depth_max_m = range.max_m;
-      f.depth_unit_m = kDepthUnitM;
-      std::vector<uint8_t> raw(static_cast<std::size_t>(image.width) * image.height * 2);
+      driver::Exposure exposure;
+      exposure.start_utime = rig_utime(epoch, sim.time_s()) + (faulty(DriverFault::kLateExposure) ? 1000000 : 0);
       const double unit_m = faulty(DriverFault::kDepthUnitMm) ? 1e-3 : kDepthUnitM;
-      for (std::size_t i = 0; i < image.depth_m.size(); ++i) {
-        const double counts = std::round(image.depth_m[i] / unit_m);
-        const uint16_t v = counts > 0 && counts < 65535 ? static_cast<uint16_t>(counts) : 0;
-        raw[2 * i] = static_cast<uint8_t>(v & 0xff);
-        raw[2 * i + 1] = static_cast<uint8_t>(v >> 8);
-      }
-      if (raw_depth) {
-        f.encoding = depth_frame_t::kEncodingRaw;
-        f.depth = std::move(raw);
-      } else {
-        f.encoding = depth_frame_t::kEncodingZlib;
-        f.depth = bus::deflate_bytes(raw, 1);
-      }
-      f.num_bytes = static_cast<int32_t>(f.depth.size());
-      bus.publish(channels::kDepthFrame, f);
+      depth_frame_t f = driver::depth_frame(camera, driver::depth_counts(image.depth_m, unit_m), exposure, frame_seq++, t);
+      if (faulty(DriverFault::kNoTriggerId)) f.trigger_seq = -1;
       if (truth.is_open()) {
         double p[3], q[4];
         pose_to_arrays(sim.true_camera_in_object(object.object_z_m), p, q);
@@ -317,59 +271,44 @@ int main(int argc, char** argv) {
       bus.set_state("idle");
       wall0 = bus::now_s();
       sim0 = sim.time_s();
-    });
+      return f;
+    };
+    driver::RigDriver::Options options;
+    options.any_speed_scale = true;  // RigSim refuses a speed scale outside (0, 1] (or clamps it: ignore-limits)
+    driver::RigDriver rig_driver(bus, handlers, options);
 
     // Rig time runs at `speed` x wall time; the loop sleeps when it is ahead.
     wall0 = bus::now_s();
     sim0 = sim.time_s();
     double next_status = sim.time_s();
-    const double status_period_s = faulty(DriverFault::kSlowStatus) ? kSlowStatusPeriodS : kStatusPeriodS;
+    const double status_period_s = faulty(DriverFault::kSlowStatus) ? kSlowStatusPeriodS : driver::kStatusPeriodS;
     while (!stop_requested()) {
       bus.spin_once(0);
       sim.step();
       if (sim.time_s() + 1e-12 >= next_status) {
         next_status += status_period_s;
-        const bool backwards = faulty(DriverFault::kUtimeBackwards) && status_seq % 20 == 19;
-        const int64_t utime = rig_utime(epoch, sim.time_s()) - (backwards ? 50000 : 0);
-        // The driver's own clock: the simulation's, from the twin's start.
-        const int64_t driver_utime = std::llround(sim.time_s() * 1e6);
-        const bool no_echo = faulty(DriverFault::kNoSeqEcho);
-        arm_status_t s;
-        s.utime = utime;
-        s.driver_utime = driver_utime;
-        s.seq = status_seq;
-        s.scan_id = scope;
-        s.num_joints = 6;
-        s.joint_names = rig.joint_names;
-        s.joint_position_rad = bus::to_std(sim.arm_position_reported());
-        s.joint_velocity_rad_s = bus::to_std(sim.arm_velocity());
-        s.joint_position_commanded_rad = bus::to_std(
+        const bool backwards = faulty(DriverFault::kUtimeBackwards) && rig_driver.statuses_published() % 20 == 19;
+        driver::Stamp stamp;
+        stamp.utime = rig_utime(epoch, sim.time_s()) - (backwards ? 50000 : 0);
+        stamp.driver_utime = std::llround(sim.time_s() * 1e6);  // the driver's own clock: the simulation's
+        driver::ArmReading arm;
+        arm.joint_names = rig.joint_names;
+        arm.position_rad = bus::to_std(sim.arm_position_reported());
+        arm.velocity_rad_s = bus::to_std(sim.arm_velocity());
+        arm.commanded_rad = bus::to_std(
             Eigen::Map<const Vector6d>(sim.arm().target.data()) + (sim.arm_position_reported() - sim.arm_position()));
-        s.command_seq = no_echo ? -1 : sim.arm().command_seq;
-        const bool arm_faulted = !arm_fault.fault.empty();
-        s.mode = arm_faulted ? arm_status_t::kModeFault : mode_of<arm_status_t>(sim, sim.arm());
-        s.fault_code = arm_fault.code<arm_status_t>();
-        s.fault_command_seq = arm_fault.command_seq;
-        s.fault = arm_fault.fault;
-        bus.publish(channels::kArmStatus, s);
+        arm.command_seq = no_echo ? -1 : sim.arm().command_seq;
+        arm.motion = motion_of(sim, sim.arm());
+        std::optional<driver::TurntableReading> turntable;
         if (sim.has_turntable()) {
-          turntable_status_t t;
-          t.utime = utime;
-          t.driver_utime = driver_utime;
-          t.seq = status_seq;
-          t.scan_id = scope;
+          driver::TurntableReading& t = turntable.emplace();
           t.angle_rad = sim.turntable_angle_reported();
           t.velocity_rad_s = sim.turntable_velocity();
-          t.angle_commanded_rad = sim.turntable().target[0] + errors.turntable_offset_rad;
+          t.commanded_rad = sim.turntable().target[0] + errors.turntable_offset_rad;
           t.command_seq = no_echo ? -1 : sim.turntable().command_seq;
-          const bool turntable_faulted = !turntable_fault.fault.empty();
-          t.mode = turntable_faulted ? turntable_status_t::kModeFault : mode_of<turntable_status_t>(sim, sim.turntable());
-          t.fault_code = turntable_fault.code<turntable_status_t>();
-          t.fault_command_seq = turntable_fault.command_seq;
-          t.fault = turntable_fault.fault;
-          bus.publish(channels::kTurntableStatus, t);
+          t.motion = motion_of(sim, sim.turntable());
         }
-        ++status_seq;
+        rig_driver.publish_statuses(stamp, arm, turntable);
         // Pace: sleep while rig time is ahead of speed x wall time.
         const double ahead = (sim.time_s() - sim0) / speed - (bus::now_s() - wall0);
         if (ahead > 0) {
