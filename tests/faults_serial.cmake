@@ -13,5 +13,5 @@ set_tests_properties(Faults.PacketLossOfOneAndFivePercentCostsNoViewAndNoCoverag
                      Faults.AKilledLoggerGoesOnInASecondFileThatHoldsEveryMessage
                      Faults.TheMainJobsLogHoldsEveryMessageOfItsScan
                      PROPERTIES RUN_SERIAL TRUE COST 0)
-# The longest case that shares the machine (about 2 minutes: six 10-view scans) starts first.
-set_tests_properties(Faults.EachKilledServiceIsRestartedAndTheScanCompletes PROPERTIES COST 115)
+# The longest case that shares the machine (about 1.5 minutes: four 10-view scans) starts first.
+set_tests_properties(Faults.EachKilledServiceIsRestartedAndTheScanCompletes PROPERTIES COST 90)
