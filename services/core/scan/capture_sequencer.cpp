@@ -107,8 +107,18 @@ CaptureStep CaptureSequencer::tick(double now_s) {
     const bool arm_after = !arm_.empty() && arm_.back().utime >= t;
     const bool turntable_after = !rig_.has_turntable || (!turntable_.empty() && turntable_.back().utime >= t);
     if ((arm_after && turntable_after) || now_s - job_->t_frame > kCaptureReadingWaitS) {
-      const DepthFrame frame = std::move(*job_->frame);  // process() ends the job
-      return process(frame);
+      const DepthFrame frame = std::move(*job_->frame);
+      job_->frame.reset();
+      // Statuses lost around the exposure (a flooded or lossy bus): another frame while the
+      // request's deadline allows, not a lost view. (A lost message is asked for again.)
+      const std::string missing = missing_reading(frame.utime);
+      if (!missing.empty() && now_s < job_->deadline) {
+        job_->last_unusable = fmt::format("frame {} unusable: {}", frame.seq, missing);
+        CaptureStep step = trigger(now_s);
+        step.warnings.push_back(job_->last_unusable + ": triggering again");
+        return step;
+      }
+      return process(frame);  // ends the job
     }
     return {};
   }
@@ -121,6 +131,11 @@ CaptureStep CaptureSequencer::tick(double now_s) {
     return trigger(now_s);
   }
   if (job_ && now_s > job_->deadline) {
+    if (!job_->last_unusable.empty()) {
+      return fail(fmt::format("no usable DEPTH_FRAME answered {} triggers within {} s (the last: {})",
+                              job_->triggers.size(), exact(job_->request.timeout_s), job_->last_unusable),
+                  now_s);
+    }
     return fail(fmt::format("no usable DEPTH_FRAME answered {} triggers within {} s: is the camera driver (or the twin) "
                             "running?",
                             job_->triggers.size(), exact(job_->request.timeout_s)),
@@ -136,6 +151,20 @@ CaptureStep CaptureSequencer::tick(double now_s) {
   return {};
 }
 
+std::string CaptureSequencer::missing_reading(int64_t utime) const {
+  const auto* arm = nearest(arm_, utime);
+  if (!arm || std::llabs(arm->utime - utime) > kCaptureReadingMatchUs) {
+    return "no ARM_STATUS within 50 ms of the frame's exposure time (" + distance_text(arm, utime) + ")";
+  }
+  if (rig_.has_turntable) {
+    const auto* tt = nearest(turntable_, utime);
+    if (!tt || std::llabs(tt->utime - utime) > kCaptureReadingMatchUs) {
+      return "no TURNTABLE_STATUS within 50 ms of the frame's exposure time (" + distance_text(tt, utime) + ")";
+    }
+  }
+  return "";
+}
+
 // The answer to the job from its frame: the pose from the readings nearest the exposure, the
 // object-frame cloud; a failure naming the frame and why when there is no reading to use.
 CaptureStep CaptureSequencer::process(const DepthFrame& f) {
@@ -145,19 +174,12 @@ CaptureStep CaptureSequencer::process(const DepthFrame& f) {
   CaptureResult out = blank(r);
   out.capture_s = job_->t_frame - job_->t_trigger;
   try {
+    if (const std::string missing = missing_reading(f.utime); !missing.empty()) throw std::runtime_error(missing);
     const auto* arm = nearest(arm_, f.utime);
-    if (!arm || std::llabs(arm->utime - f.utime) > kCaptureReadingMatchUs) {
-      throw std::runtime_error("no ARM_STATUS within 50 ms of the frame's exposure time (" +
-                               distance_text(arm, f.utime) + ")");
-    }
     double turntable = 0;
     double turntable_speed = 0;
     if (rig_.has_turntable) {
       const auto* tt = nearest(turntable_, f.utime);
-      if (!tt || std::llabs(tt->utime - f.utime) > kCaptureReadingMatchUs) {
-        throw std::runtime_error("no TURNTABLE_STATUS within 50 ms of the frame's exposure time (" +
-                                 distance_text(tt, f.utime) + ")");
-      }
       turntable = tt->value;
       turntable_speed = tt->speed;
     }

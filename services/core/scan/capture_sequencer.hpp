@@ -2,7 +2,9 @@
 // The camera service's sequencing, without a bus: capture requests are queued and served one at
 // a time; each is a DEPTH_TRIGGER with a fresh sequence number, triggered again every
 // kCaptureRetriggerS while no frame answers (a frame lost on the bus costs about a second, not the
-// request's timeout) and when the frame was exposed before the request's not_before_utime; a frame
+// request's timeout), when the frame was exposed before the request's not_before_utime and when
+// no arm or turntable reading lies within kCaptureReadingMatchUs of its exposure (statuses lost on
+// a flooded or lossy bus; the request then fails at its timeout naming that frame); a frame
 // answering any of the request's triggers is taken (a camera slower than kCaptureRetriggerS still
 // succeeds). The request fails when no usable frame came within its timeout. The camera pose at exposure comes from the arm
 // and turntable readings nearest the frame's exposure time (within kCaptureReadingMatchUs),
@@ -77,10 +79,14 @@ class CaptureSequencer {
     double t_start = 0, t_trigger = 0, deadline = 0;
     std::optional<DepthFrame> frame;  // received, waiting for the readings at its exposure
     double t_frame = 0;
+    std::string last_unusable;  // why the last frame could not be placed ("": none was refused)
   };
 
   CaptureStep trigger(double now_s);
   CaptureStep process(const DepthFrame& frame);
+  // Why a frame exposed at `utime` cannot be placed: no arm (or turntable) reading within
+  // kCaptureReadingMatchUs of it; "" when both are there.
+  std::string missing_reading(int64_t utime) const;
   CaptureStep fail(const std::string& why, double now_s);
   CaptureResult blank(const CaptureRequest& r) const;
 
