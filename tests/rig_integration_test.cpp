@@ -205,7 +205,10 @@ TEST(TwoHosts, AScanAcrossALinkCoversWhatItDoesOnOneHost) {
   const double object_z = read_json_file(twin_run / "settings.json")["object_z_m"].get<double>();
   const std::string twin = "--mesh " + (twin_run / "object.stl").string() + " --object-z " + std::to_string(object_z);
   const std::string rig = rig_model("rig_arm.xml");
-  const std::string scan = "--rig-model " + rig + " --views 5 --working-volume " + measured_volume(twin_run);
+  // Registration off, as in NbvIntegration.Ur5eRigScansLikeTheKuka: the twin's kinematic poses are
+  // exact, and an ICP rejection (a registration matter, not the link's) drops a view from one scan
+  // only (seen: "not converged" at a 0.01 mm correction, 67 % against 72.8 %).
+  const std::string scan = "--rig-model " + rig + " --views 5 --registration off --working-volume " + measured_volume(twin_run);
 
   const fs::path one = fresh_dir("one-host");
   const CommandResult b = run_command(with_twin_as_hardware(
