@@ -71,6 +71,11 @@ std::string shown(std::string_view word) {
   return word.size() > 40 ? out + "..." : out;
 }
 
+bool whole_number(std::string_view word, std::uint64_t& n) {
+  const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), n);
+  return ec == std::errc() && end == word.data() + word.size();
+}
+
 void check_input_file(const std::string& path, const char* ctx) {
   std::error_code ec;
   const auto st = std::filesystem::status(path, ec);
@@ -167,8 +172,7 @@ PlyLayout read_ply_layout(std::istream& in, const std::string& path, const char*
           fail(ctx, path, fmt::format("PLY header line {}: a second element '{}'", line_number, shown(e.name)));
         }
       }
-      const auto [end, err] = std::from_chars(count.data(), count.data() + count.size(), e.count);
-      if (count.empty() || err != std::errc() || end != count.data() + count.size()) {
+      if (!whole_number(count, e.count)) {
         fail(ctx, path, fmt::format("PLY header line {}: element '{}' has count '{}', not a whole number", line_number,
                                     shown(e.name), shown(count)));
       }

@@ -34,6 +34,9 @@ struct PlyHeader {
 // byte that is not printable ASCII shown as '?'.
 std::string shown(std::string_view word);
 
+// `word` as a whole number (decimal digits only, all of it, within 64 bits) in `n`, or false.
+bool whole_number(std::string_view word, std::uint64_t& n);
+
 // Reads the PLY header on `in` (CGAL's PLY header reader) and checks that it has a vertex
 // element with x, y and z of type float or double (CGAL 5.5's read_PLY reads any other type
 // through a null pointer) and, with `faces`, that a face element, if any, has a vertex_indices

@@ -159,12 +159,6 @@ std::vector<std::string_view> words_of(std::string_view line) {
   return words;
 }
 
-// `word` as a whole number, or false.
-bool whole_number(std::string_view word, std::uint64_t& n) {
-  const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), n);
-  return ec == std::errc() && end == word.data() + word.size();
-}
-
 // An ASCII OFF file (Geomview's format: "OFF", or with the prefixes ST, C and N for texture
 // coordinates, colours and normals, which are read past; the vertex, face and optional edge
 // counts on the keyword's line or the next; one vertex, then one face per line, each face its
