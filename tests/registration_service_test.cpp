@@ -1,6 +1,7 @@
 // The registration service on a real bus: a view placed 10 cm off by a wrong kinematic pose is
 // rejected by the registration gates, not merged into the model, and not integrated by the
-// mapping service, which says why.
+// mapping service, which says why; a cloud that answers no capture request heard is taken by
+// neither service.
 // Runs inside a private network namespace (see CMakeLists.txt).
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -10,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "bus/convert.hpp"
 #include "core/geometry/mesh.hpp"
 #include "service_suite.hpp"
 
@@ -30,6 +32,15 @@ class RegistrationService : public ServiceSuite {
     });
   }
   static void TearDownTestSuite() { stop_suite(); }
+
+  // The coordinator's CAPTURE_REQUEST for `id` (no camera runs here: only the services that take
+  // the capture's answers hear it), and a moment for it to arrive before its answer.
+  static void ask_capture(const std::string& scan_id, int64_t id) {
+    capture_request_t c = capture_request(id);
+    c.scan_id = scan_id;
+    listener_->lcm().publish("CAPTURE_REQUEST", &c);
+    listener_->spin_until([] { return false; }, 0.2);
+  }
 };
 
 TEST_F(RegistrationService, AViewTenCentimetresOffIsRejectedAndNotMerged) {
@@ -71,11 +82,13 @@ TEST_F(RegistrationService, AViewTenCentimetresOffIsRejectedAndNotMerged) {
     return c;
   };
   lcm::LCM& lcm = listener_->lcm();
+  ask_capture("registration-gate", 0);
   const point_cloud_t first = cloud_msg(0, Eigen::Vector3d::Zero());
   lcm.publish("CLOUD", &first);
   ASSERT_TRUE(listener_->spin_until([] { return listener_->registered.count({"registration-gate", 0}) > 0; }, 20.0));
   const registered_cloud_t a = listener_->registered[{"registration-gate", 0}];
   EXPECT_TRUE(a.accepted) << a.reason;
+  ask_capture("registration-gate", 1);
   const point_cloud_t off = cloud_msg(1, Eigen::Vector3d(0.1, 0.0, 0.0));
   lcm.publish("CLOUD", &off);
   ASSERT_TRUE(listener_->spin_until([] { return listener_->registered.count({"registration-gate", 1}) > 0; }, 20.0));
@@ -90,6 +103,60 @@ TEST_F(RegistrationService, AViewTenCentimetresOffIsRejectedAndNotMerged) {
   const voxel_set_t& m = listener_->maps[{"registration-gate", 1}];
   EXPECT_FALSE(m.updated);
   EXPECT_NE(m.message.find("registration rejected"), std::string::npos) << m.message;
+  EXPECT_EQ(m.request_id, 1) << "the map answers the view's capture request";
+}
+
+// A CLOUD and a REGISTERED_CLOUD of the scan's id that answer no CAPTURE_REQUEST the services heard
+// (forged with a guessed request id): neither is taken, each is refused naming the request; once
+// the request is heard, the same REGISTERED_CLOUD is mapped, and the map carries its request id.
+// (Before, a well-formed cloud of the current view was integrated whatever its request id, and its
+// map cached as the view's answer.)
+TEST_F(RegistrationService, CloudsThatAnswerNoCaptureRequestAreNotTaken) {
+  lcm::LCM& lcm = listener_->lcm();
+  point_cloud_t cloud{};
+  cloud.scan_id = "registration-ask";
+  cloud.iteration = 3;
+  cloud.request_id = 4242;
+  cloud.status = point_cloud_t::kOk;
+  cloud.frame = "object";
+  cloud.object_T_camera = bus::to_msg(look_at_z_up(Eigen::Vector3d(0.8, 0.1, 0.4), Eigen::Vector3d::Zero()));
+  cloud.num_joints = 6;
+  cloud.joint_position_rad.assign(6, 0.0);
+  cloud.depth_frame_seq = -1;
+  cloud.voxel_m = 0.002;
+  for (int i = 0; i < 200; ++i) cloud.points_m.push_back({0.001f * i, 0.0f, 0.1f});
+  cloud.num_points = static_cast<int32_t>(cloud.points_m.size());
+  const int64_t registration_before = rejected("registration");
+  lcm.publish("CLOUD", &cloud);
+  EXPECT_TRUE(rejections_reach("registration", registration_before + 1));
+  EXPECT_NE(listener_->heartbeats["registration"].last_error.find(
+                "CLOUD of scan 'registration-ask' answers request 4242, which no CAPTURE_REQUEST heard here asked for"),
+            std::string::npos)
+      << listener_->heartbeats["registration"].last_error;
+  EXPECT_EQ(listener_->registered.count({"registration-ask", 3}), 0u);
+
+  registered_cloud_t r{};
+  r.scan_id = cloud.scan_id;
+  r.iteration = cloud.iteration;
+  r.request_id = cloud.request_id;
+  r.cloud = cloud;
+  r.kinematic_object_T_camera = cloud.object_T_camera;
+  r.correction = bus::to_msg(Pose::Identity());
+  r.accepted = false;  // no depth frame needed: the map answers without integrating
+  r.reason = "rejected (test)";
+  const int64_t mapping_before = rejected("mapping");
+  lcm.publish("REGISTERED_CLOUD", &r);
+  EXPECT_TRUE(rejections_reach("mapping", mapping_before + 1));
+  EXPECT_NE(listener_->heartbeats["mapping"].last_error.find("REGISTERED_CLOUD of scan 'registration-ask' answers request 4242"),
+            std::string::npos)
+      << listener_->heartbeats["mapping"].last_error;
+  EXPECT_EQ(listener_->maps.count({"registration-ask", 3}), 0u);
+
+  ask_capture("registration-ask", 4242);
+  lcm.publish("REGISTERED_CLOUD", &r);
+  ASSERT_TRUE(listener_->spin_until([] { return listener_->maps.count({"registration-ask", 3}) > 0; }, 10.0));
+  EXPECT_EQ((listener_->maps[{"registration-ask", 3}].request_id), 4242);
+  EXPECT_TRUE(all_running());
 }
 
 }  // namespace

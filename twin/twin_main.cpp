@@ -58,6 +58,268 @@ driver::Motion motion_of(const twin::RigSim& sim, const twin::JointGroup& g) {
   return sim.settled(g) ? driver::Motion::kSettled : driver::Motion::kMoving;
 }
 
+// What the command line sets.
+struct TwinOptions {
+  bus::RigOptions rig;
+  twin::ObjectPlacement object;
+  std::string model_out = "twin_model.xml";
+  CameraIntrinsics k;
+  std::optional<double> cx, cy;
+  DepthRange range;
+  twin::DepthNoise noise;
+  int64_t noise_seed = 0;
+  double speed = 0;
+  double hand_eye_error_mm = 0, hand_eye_error_deg = 0, turntable_error_deg = 0, joint_error_deg = 0;
+  int64_t error_seed = 0;
+  std::string scope;
+  bool raw_depth = false;
+  std::string truth_path;
+  std::vector<twin::DriverFault> faults;
+  std::string truth_rig_path;
+
+  bool faulty(twin::DriverFault f) const { return twin::has_fault(faults, f); }
+};
+
+void add_options(CLI::App& app, TwinOptions& o) {
+  bus::add_rig_options(app, &o.rig);
+  cli::add_text(app, "mesh", &o.object.mesh_path, "object mesh in the normalised object frame (binary STL or OBJ)", "PATH");
+  cli::add(app, Setting<double>{"object-z", 0.0, -1.0, 2.0, "m", "object frame origin above the turntable top"},
+           &o.object.object_z_m);
+  cli::add(app, kSphereRadius.renamed("calibration-sphere", "put the calibration sphere of this radius on the platter "
+                                      "mark (0: none; see pbnbv calibrate)").with_default(0.0),
+           &o.object.calibration_sphere_radius_m);
+  o.object.calibration_sphere_offset_m = kSphereOffset.value;
+  cli::add(app, kSphereOffset.renamed("calibration-sphere-offset", "the calibration sphere's centre from the turntable axis, "
+                                      "on the platter's +x axis"),
+           &o.object.calibration_sphere_offset_m);
+  cli::add_text(app, "model-out", &o.model_out, "where to write the composed model", "PATH");
+  cli::add(app, kImageWidth, &o.k.width);
+  cli::add(app, kImageHeight, &o.k.height);
+  cli::add(app, kFocalX, &o.k.fx);
+  cli::add(app, kFocalY, &o.k.fy);
+  cli::add(app, kPrincipalX, &o.cx, "width / 2");
+  cli::add(app, kPrincipalY, &o.cy, "height / 2");
+  cli::add(app, kDepthMin, &o.range.min_m);
+  cli::add(app, kDepthMax, &o.range.max_m);
+  cli::add(app, kDepthNoise, &o.noise.sigma_per_m);
+  cli::add(app, kDropout, &o.noise.dropout);
+  cli::add(app, Setting<int64_t>{"seed", 1, 0, int64_t{1} << 40, "", "depth noise seed"}, &o.noise_seed);
+  // Run by hand the twin keeps real time, as the rig it stands for; `pbnbv scan` asks for
+  // --sim-speed (4 by default).
+  cli::add(app, kSimSpeed.renamed("speed", "simulation speed, multiple of real time").with_default(1.0), &o.speed);
+  cli::add(app, kHandEyeErrorMm, &o.hand_eye_error_mm);
+  cli::add(app, kHandEyeErrorDeg, &o.hand_eye_error_deg);
+  cli::add(app, kTurntableErrorDeg, &o.turntable_error_deg);
+  cli::add(app, kJointErrorDeg, &o.joint_error_deg);
+  cli::add(app, kErrorSeed, &o.error_seed);
+  cli::add_text(app, "scan", &o.scope,
+                "play the rig of this scan only: commands and triggers of other scans are ignored and counted "
+                "(default: obey every command, as a real driver does)",
+                "ID");
+  cli::add_flag(app, "raw-depth", &o.raw_depth,
+                "send depth frames uncompressed (encoding raw; default zlib: 20x smaller, survives packet loss)");
+  cli::add_text(app, "truth-out", &o.truth_path,
+                "append each frame's true camera pose to this file (JSON lines; evaluation only)", "PATH");
+  cli::add_list(app, "fault", &o.faults,
+                "play a faulty driver, for pbnbv rig-check's tests: slow-status (20 Hz), no-seq-echo, depth-unit-mm "
+                "(counts in mm, unit field 0.1 mm), no-trigger-id, ignore-limits (executes out-of-limit commands), "
+                "utime-backwards, late-exposure (frames stamped 1 s late)");
+  cli::add_text(app, "truth-rig-out", &o.truth_rig_path,
+                "write the true hand-eye transform and turntable zero to this JSON file (evaluation only)", "PATH");
+}
+
+// Checks what the options say together, and fills in what they leave to defaults.
+void complete(TwinOptions& o) {
+  if (!o.object.mesh_path.empty()) {
+    o.object.mesh_path = std::filesystem::absolute(o.object.mesh_path).string();
+    if (!std::filesystem::exists(o.object.mesh_path)) {
+      throw std::invalid_argument("--mesh " + o.object.mesh_path + " does not exist");
+    }
+  }
+  o.k.cx = o.cx.value_or(o.k.width / 2.0);
+  o.k.cy = o.cy.value_or(o.k.height / 2.0);
+  o.k.validate();
+  o.range.validate();
+  if (o.object.calibration_sphere_radius_m > 0 &&
+      o.object.calibration_sphere_radius_m + o.object.calibration_sphere_offset_m > 0.2) {
+    throw std::invalid_argument("--calibration-sphere " + std::to_string(o.object.calibration_sphere_radius_m) +
+                                " m at --calibration-sphere-offset " + std::to_string(o.object.calibration_sphere_offset_m) +
+                                " m reaches beyond the platter (radius 0.2 m)");
+  }
+}
+
+// --truth-rig-out: the true hand-eye transform and turntable zero, for the calibration's tests.
+void write_truth_rig(const TwinOptions& o, const std::string& model_path, const RigModel& rig,
+                     const twin::PoseErrorModel& errors, double turntable_error_rad) {
+  nlohmann::json j;
+  j["model"] = model_path;
+  j["flange_T_camera"] = to_json(rig.flange_T_camera * errors.hand_eye_error);
+  j["model_flange_T_camera"] = to_json(rig.flange_T_camera);
+  j["turntable_zero_rad"] = errors.turntable_offset_rad;
+  j["model_turntable_zero_rad"] = rig.turntable_zero_rad;
+  j["turntable_error_rad"] = turntable_error_rad;
+  j["turntable_axis_direction_world"] = to_json(Eigen::Vector3d(rig.world_T_turntable.linear().col(2)));
+  j["turntable_axis_point_world"] = to_json(Eigen::Vector3d(rig.world_T_turntable.translation()));
+  if (o.object.calibration_sphere_radius_m > 0) {
+    j["calibration_sphere"] = {{"radius_m", o.object.calibration_sphere_radius_m},
+                               {"offset_m", o.object.calibration_sphere_offset_m}};
+  }
+  write_json_atomic(j, o.truth_rig_path);
+}
+
+driver::DepthCamera camera_of(const TwinOptions& o) {
+  driver::DepthCamera camera;
+  camera.camera_id = kCameraId;
+  camera.width = o.k.width;
+  camera.height = o.k.height;
+  camera.fx = o.k.fx;
+  camera.fy = o.k.fy;
+  camera.cx = o.k.cx;
+  camera.cy = o.k.cy;
+  camera.depth_min_m = o.range.min_m;
+  camera.depth_max_m = o.range.max_m;
+  camera.depth_unit_m = kDepthUnitM;
+  camera.compress = !o.raw_depth;
+  return camera;
+}
+
+// --truth-out: a frame's true camera pose, one JSON line.
+void append_truth(std::ofstream& truth, const depth_frame_t& f, const Pose& object_T_camera) {
+  double p[3], q[4];
+  pose_to_arrays(object_T_camera, p, q);
+  truth << std::setprecision(12) << "{\"frame_seq\": " << f.seq << ", \"trigger_seq\": " << f.trigger_seq
+        << ", \"utime\": " << f.utime << ", \"object_T_camera\": {\"position_m\": [" << p[0] << ", " << p[1] << ", "
+        << p[2] << "], \"quat_wxyz\": [" << q[0] << ", " << q[1] << ", " << q[2] << ", " << q[3] << "]}}" << std::endl;
+}
+
+// The simulated rig on the bus: the driver library's contract over RigSim and the renderer, rig
+// time paced at --speed x wall time.
+class Twin {
+ public:
+  Twin(const TwinOptions& o, const RigModel& rig, twin::RigSim& sim, twin::DepthRenderer& renderer,
+       const twin::PoseErrorModel& errors, bus::Bus& bus)
+      : o_(o), rig_(rig), sim_(sim), renderer_(renderer), errors_(errors), bus_(bus), camera_(camera_of(o)),
+        rng_(static_cast<uint64_t>(o.noise_seed)), epoch_(bus::now_utime()), frame_seq_(bus::now_utime()) {
+    if (!o.truth_path.empty()) {
+      truth_.open(o.truth_path, std::ios::app);
+      if (!truth_) throw std::runtime_error("cannot write --truth-out " + o.truth_path);
+    }
+  }
+
+  // Until SIGINT or SIGTERM. Rig time runs at `speed` x wall time; the loop sleeps when it is ahead.
+  void run() {
+    driver::RigDriver::Options options;
+    options.any_speed_scale = true;  // RigSim refuses a speed scale outside (0, 1] (or clamps it: ignore-limits)
+    driver::RigDriver rig_driver(bus_, handlers(), options);
+    wall0_ = bus::now_s();
+    sim0_ = sim_.time_s();
+    double next_status = sim_.time_s();
+    const double status_period_s = o_.faulty(twin::DriverFault::kSlowStatus) ? kSlowStatusPeriodS : driver::kStatusPeriodS;
+    while (!stop_requested()) {
+      bus_.spin_once(0);
+      sim_.step();
+      if (sim_.time_s() + 1e-12 < next_status) continue;
+      next_status += status_period_s;
+      publish_statuses(rig_driver);
+      // Pace: sleep while rig time is ahead of speed x wall time.
+      const double ahead = (sim_.time_s() - sim0_) / o_.speed - (bus::now_s() - wall0_);
+      if (ahead > 0) bus_.spin_once(static_cast<int>(ahead * 1000));  // sleeps in the LCM wait
+    }
+  }
+
+ private:
+  driver::RigDriver::Handlers handlers() {
+    driver::RigDriver::Handlers h;
+    h.move_arm = [this](const driver::ArmTarget& t) {
+      try {
+        if (t.hold) {
+          sim_.hold_arm(t.seq);
+        } else {
+          sim_.command_arm(Eigen::Map<const Vector6d>(t.position_rad.data()), t.speed_scale, t.seq);
+        }
+      } catch (const twin::OutOfLimits& e) {
+        throw driver::OutOfLimits(e.what());
+      }
+    };
+    if (sim_.has_turntable()) {
+      h.turn_table = [this](const driver::TurntableTarget& t) {
+        try {
+          sim_.command_turntable(t.angle_rad, t.speed_scale, t.seq);
+        } catch (const twin::OutOfLimits& e) {
+          throw driver::OutOfLimits(e.what());
+        }
+      };
+    }
+    h.capture = [this](const depth_trigger_t& t) { return capture(t); };
+    return h;
+  }
+
+  // A trigger's frame: rendered at this rig time (the renderer exposes instantaneously), with the
+  // noise model and the faults that break the frame.
+  depth_frame_t capture(const depth_trigger_t& t) {
+    using twin::DriverFault;
+    bus_.set_state("rendering");
+    mj_forward(sim_.model(), sim_.data());
+    twin::DepthImage image = renderer_.render(sim_.data());
+    if (o_.noise.enabled()) twin::apply_depth_noise(image, o_.noise, rng_);
+    driver::Exposure exposure;
+    exposure.start_utime = rig_utime(epoch_, sim_.time_s()) + (o_.faulty(DriverFault::kLateExposure) ? 1000000 : 0);
+    const double unit_m = o_.faulty(DriverFault::kDepthUnitMm) ? 1e-3 : kDepthUnitM;
+    depth_frame_t f = driver::depth_frame(camera_, driver::depth_counts(image.depth_m, unit_m), exposure, frame_seq_++, t);
+    if (o_.faulty(DriverFault::kNoTriggerId)) f.trigger_seq = -1;
+    if (truth_.is_open()) append_truth(truth_, f, sim_.true_camera_in_object(o_.object.object_z_m));
+    bus_.set_state("idle");
+    // The render stopped the rig's clock while it ran: pacing starts again from here.
+    wall0_ = bus::now_s();
+    sim0_ = sim_.time_s();
+    return f;
+  }
+
+  void publish_statuses(driver::RigDriver& rig_driver) {
+    using twin::DriverFault;
+    const bool no_echo = o_.faulty(DriverFault::kNoSeqEcho);
+    const bool backwards = o_.faulty(DriverFault::kUtimeBackwards) && rig_driver.statuses_published() % 20 == 19;
+    driver::Stamp stamp;
+    stamp.utime = rig_utime(epoch_, sim_.time_s()) - (backwards ? 50000 : 0);
+    stamp.driver_utime = std::llround(sim_.time_s() * 1e6);  // the driver's own clock: the simulation's
+    driver::ArmReading arm;
+    arm.joint_names = rig_.joint_names;
+    arm.position_rad = bus::to_std(sim_.arm_position_reported());
+    arm.velocity_rad_s = bus::to_std(sim_.arm_velocity());
+    arm.commanded_rad = bus::to_std(Eigen::Map<const Vector6d>(sim_.arm().target.data()) +
+                                    (sim_.arm_position_reported() - sim_.arm_position()));
+    arm.command_seq = no_echo ? -1 : sim_.arm().command_seq;
+    arm.motion = motion_of(sim_, sim_.arm());
+    std::optional<driver::TurntableReading> turntable;
+    if (sim_.has_turntable()) {
+      driver::TurntableReading& t = turntable.emplace();
+      t.angle_rad = sim_.turntable_angle_reported();
+      t.velocity_rad_s = sim_.turntable_velocity();
+      t.commanded_rad = sim_.turntable().target[0] + errors_.turntable_offset_rad;
+      t.command_seq = no_echo ? -1 : sim_.turntable().command_seq;
+      t.motion = motion_of(sim_, sim_.turntable());
+    }
+    rig_driver.publish_statuses(stamp, arm, turntable);
+  }
+
+  const TwinOptions& o_;
+  const RigModel& rig_;
+  twin::RigSim& sim_;
+  twin::DepthRenderer& renderer_;
+  twin::PoseErrorModel errors_;
+  bus::Bus& bus_;
+  driver::DepthCamera camera_;
+  std::mt19937_64 rng_;
+  int64_t epoch_;      // rig time 0, wall clock
+  // Frame numbers start at the wall clock (microseconds): a restarted twin never repeats one, so
+  // twin_truth.jsonl and the frames of one scan stay unambiguous.
+  int64_t frame_seq_;
+  std::ofstream truth_;
+  // Pacing reference: rig time runs at `speed` x wall time from here (reset after a render,
+  // which stops the clock of the rig while it runs).
+  double wall0_ = 0, sim0_ = 0;
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -66,123 +328,25 @@ int main(int argc, char** argv) {
                "would be",
                "pbnbv-twin"};
   cli::init(app);
-  bus::RigOptions rig_options;
-  bus::add_rig_options(app, &rig_options);
-  twin::ObjectPlacement object;
-  cli::add_text(app, "mesh", &object.mesh_path, "object mesh in the normalised object frame (binary STL or OBJ)", "PATH");
-  cli::add(app, Setting<double>{"object-z", 0.0, -1.0, 2.0, "m", "object frame origin above the turntable top"},
-           &object.object_z_m);
-  cli::add(app, kSphereRadius.renamed("calibration-sphere", "put the calibration sphere of this radius on the platter "
-                                      "mark (0: none; see pbnbv calibrate)").with_default(0.0),
-           &object.calibration_sphere_radius_m);
-  object.calibration_sphere_offset_m = kSphereOffset.value;
-  cli::add(app, kSphereOffset.renamed("calibration-sphere-offset", "the calibration sphere's centre from the turntable axis, "
-                                      "on the platter's +x axis"),
-           &object.calibration_sphere_offset_m);
-  std::string model_out = "twin_model.xml";
-  cli::add_text(app, "model-out", &model_out, "where to write the composed model", "PATH");
-  CameraIntrinsics k;
-  std::optional<double> cx, cy;
-  cli::add(app, kImageWidth, &k.width);
-  cli::add(app, kImageHeight, &k.height);
-  cli::add(app, kFocalX, &k.fx);
-  cli::add(app, kFocalY, &k.fy);
-  cli::add(app, kPrincipalX, &cx, "width / 2");
-  cli::add(app, kPrincipalY, &cy, "height / 2");
-  DepthRange range;
-  cli::add(app, kDepthMin, &range.min_m);
-  cli::add(app, kDepthMax, &range.max_m);
-  twin::DepthNoise noise;
-  cli::add(app, kDepthNoise, &noise.sigma_per_m);
-  cli::add(app, kDropout, &noise.dropout);
-  int64_t noise_seed = 0;
-  cli::add(app, Setting<int64_t>{"seed", 1, 0, int64_t{1} << 40, "", "depth noise seed"}, &noise_seed);
-  // Run by hand the twin keeps real time, as the rig it stands for; `pbnbv scan` asks for
-  // --sim-speed (4 by default).
-  double speed = 0;
-  cli::add(app, kSimSpeed.renamed("speed", "simulation speed, multiple of real time").with_default(1.0), &speed);
-  double hand_eye_error_mm = 0, hand_eye_error_deg = 0, turntable_error_deg = 0, joint_error_deg = 0;
-  int64_t error_seed = 0;
-  cli::add(app, kHandEyeErrorMm, &hand_eye_error_mm);
-  cli::add(app, kHandEyeErrorDeg, &hand_eye_error_deg);
-  cli::add(app, kTurntableErrorDeg, &turntable_error_deg);
-  cli::add(app, kJointErrorDeg, &joint_error_deg);
-  cli::add(app, kErrorSeed, &error_seed);
-  std::string scope;
-  cli::add_text(app, "scan", &scope,
-                "play the rig of this scan only: commands and triggers of other scans are ignored and counted "
-                "(default: obey every command, as a real driver does)",
-                "ID");
-  bool raw_depth = false;
-  cli::add_flag(app, "raw-depth", &raw_depth,
-                "send depth frames uncompressed (encoding raw; default zlib: 20x smaller, survives packet loss)");
-  std::string truth_path;
-  cli::add_text(app, "truth-out", &truth_path,
-                "append each frame's true camera pose to this file (JSON lines; evaluation only)", "PATH");
-  std::vector<twin::DriverFault> faults;
-  cli::add_list(app, "fault", &faults,
-                "play a faulty driver, for pbnbv rig-check's tests: slow-status (20 Hz), no-seq-echo, depth-unit-mm "
-                "(counts in mm, unit field 0.1 mm), no-trigger-id, ignore-limits (executes out-of-limit commands), "
-                "utime-backwards, late-exposure (frames stamped 1 s late)");
-  std::string truth_rig_path;
-  cli::add_text(app, "truth-rig-out", &truth_rig_path,
-                "write the true hand-eye transform and turntable zero to this JSON file (evaluation only)", "PATH");
+  TwinOptions o;
+  add_options(app, o);
   if (const std::optional<int> code = cli::parse(app, argc, argv, std::cout, std::cerr)) return *code;
   install_stop_handlers();
   try {
-    const std::string model_path = rig_options.model_path.empty() ? default_rig_path(rig_options.kind)
-                                                                  : rig_options.model_path;
-    if (!object.mesh_path.empty()) {
-      object.mesh_path = std::filesystem::absolute(object.mesh_path).string();
-      if (!std::filesystem::exists(object.mesh_path)) {
-        throw std::invalid_argument("--mesh " + object.mesh_path + " does not exist");
-      }
-    }
-    k.cx = cx.value_or(k.width / 2.0);
-    k.cy = cy.value_or(k.height / 2.0);
-    k.validate();
-    range.validate();
-    std::mt19937_64 rng(static_cast<uint64_t>(noise_seed));
+    complete(o);
+    const std::string model_path = o.rig.model_path.empty() ? default_rig_path(o.rig.kind) : o.rig.model_path;
     twin::PoseErrorModel errors = twin::make_pose_error(
-        hand_eye_error_mm * 1e-3, hand_eye_error_deg * kPi / 180, turntable_error_deg * kPi / 180,
-        joint_error_deg * kPi / 180, static_cast<uint64_t>(error_seed));
-
+        o.hand_eye_error_mm * 1e-3, o.hand_eye_error_deg * kPi / 180, o.turntable_error_deg * kPi / 180,
+        o.joint_error_deg * kPi / 180, static_cast<uint64_t>(o.error_seed));
     const RigModel rig = load_rig(model_path);
-    if (object.calibration_sphere_radius_m > 0 && object.calibration_sphere_radius_m + object.calibration_sphere_offset_m > 0.2) {
-      throw std::invalid_argument("--calibration-sphere " + std::to_string(object.calibration_sphere_radius_m) +
-                                  " m at --calibration-sphere-offset " + std::to_string(object.calibration_sphere_offset_m) +
-                                  " m reaches beyond the platter (radius 0.2 m)");
-    }
     // The turntable reports its reading: the platter's true angle plus the model's zero (a
     // calibrated file's pbnbv_turntable_zero) plus the error model's offset.
     const double turntable_error_rad = errors.turntable_offset_rad;
     errors.turntable_offset_rad += rig.turntable_zero_rad;
-    twin::RigSim sim(rig, object, model_out, errors);
-    using twin::DriverFault;
-    const auto faulty = [&](DriverFault f) { return twin::has_fault(faults, f); };
-    sim.set_ignore_limits(faulty(DriverFault::kIgnoreLimits));
-    for (const DriverFault f : faults) log_warn("playing a faulty driver: " + std::string(name_of(f)));
-    if (!truth_rig_path.empty()) {
-      nlohmann::json j;
-      j["model"] = model_path;
-      j["flange_T_camera"] = to_json(rig.flange_T_camera * errors.hand_eye_error);
-      j["model_flange_T_camera"] = to_json(rig.flange_T_camera);
-      j["turntable_zero_rad"] = errors.turntable_offset_rad;
-      j["model_turntable_zero_rad"] = rig.turntable_zero_rad;
-      j["turntable_error_rad"] = turntable_error_rad;
-      j["turntable_axis_direction_world"] = to_json(Eigen::Vector3d(rig.world_T_turntable.linear().col(2)));
-      j["turntable_axis_point_world"] = to_json(Eigen::Vector3d(rig.world_T_turntable.translation()));
-      if (object.calibration_sphere_radius_m > 0) {
-        j["calibration_sphere"] = {{"radius_m", object.calibration_sphere_radius_m},
-                                   {"offset_m", object.calibration_sphere_offset_m}};
-      }
-      write_json_atomic(j, truth_rig_path);
-    }
-    std::ofstream truth;
-    if (!truth_path.empty()) {
-      truth.open(truth_path, std::ios::app);
-      if (!truth) throw std::runtime_error("cannot write --truth-out " + truth_path);
-    }
+    twin::RigSim sim(rig, o.object, o.model_out, errors);
+    sim.set_ignore_limits(o.faulty(twin::DriverFault::kIgnoreLimits));
+    for (const twin::DriverFault f : o.faults) log_warn("playing a faulty driver: " + std::string(name_of(f)));
+    if (!o.truth_rig_path.empty()) write_truth_rig(o, model_path, rig, errors, turntable_error_rad);
     if (errors.enabled()) {
       const Eigen::AngleAxisd r(errors.hand_eye_error.linear());
       std::ostringstream os;
@@ -191,7 +355,7 @@ int main(int argc, char** argv) {
          << " deg, joints sigma " << errors.joint_sigma_rad * 180 / kPi << " deg";
       log_info(os.str());
     }
-    if (object.calibration_sphere_radius_m > 0) {
+    if (o.object.calibration_sphere_radius_m > 0) {
       // MuJoCo draws a sphere as an inscribed polyhedron (28 x 16 facets by default: up to 0.3 mm
       // inside a 50 mm sphere, which biases the fitted centre along each view); 256 x 256 keeps
       // the drawn surface within 5 um of the sphere (twin/test/depth_renderer_test.cpp).
@@ -199,123 +363,14 @@ int main(int argc, char** argv) {
       sim.model()->vis.quality.numstacks = 256;
     }
     twin::EglContext egl;
-    twin::DepthRenderer renderer(sim.model(), "depth", k, range);
-    log_info("rig '" + rig.arm_name + "' from " + model_path + ", rendering " +
-             std::to_string(k.width) + "x" + std::to_string(k.height) + " on " + egl.description());
-
-    bus::Bus bus("twin");
-    bus.serve_scan(scope);
+    twin::DepthRenderer renderer(sim.model(), "depth", o.k, o.range);
+    log_info("rig '" + rig.arm_name + "' from " + model_path + ", rendering " + std::to_string(o.k.width) + "x" +
+             std::to_string(o.k.height) + " on " + egl.description());
     // Statuses name the scan this twin plays the rig of ("" when it obeys every scan, as a real
     // driver does); frames echo the scan of their trigger.
-    // Pacing reference: rig time runs at `speed` x wall time from here (reset after a render,
-    // which stops the clock of the rig while it runs).
-    double wall0 = 0, sim0 = 0;
-    const int64_t epoch = bus::now_utime();
-    // Frame numbers start at the wall clock (microseconds): a restarted twin never repeats one, so
-    // twin_truth.jsonl and the frames of one scan stay unambiguous.
-    int64_t frame_seq = bus::now_utime();
-    const bool no_echo = faulty(DriverFault::kNoSeqEcho);
-    driver::DepthCamera camera;
-    camera.camera_id = kCameraId;
-    camera.width = k.width;
-    camera.height = k.height;
-    camera.fx = k.fx;
-    camera.fy = k.fy;
-    camera.cx = k.cx;
-    camera.cy = k.cy;
-    camera.depth_min_m = range.min_m;
-    camera.depth_max_m = range.max_m;
-    camera.depth_unit_m = kDepthUnitM;
-    camera.compress = !raw_depth;
-
-    driver::RigDriver::Handlers handlers;
-    handlers.move_arm = [&](const driver::ArmTarget& t) {
-      try {
-        if (t.hold) {
-          sim.hold_arm(t.seq);
-        } else {
-          sim.command_arm(Eigen::Map<const Vector6d>(t.position_rad.data()), t.speed_scale, t.seq);
-        }
-      } catch (const twin::OutOfLimits& e) {
-        throw driver::OutOfLimits(e.what());
-      }
-    };
-    if (sim.has_turntable()) {
-      handlers.turn_table = [&](const driver::TurntableTarget& t) {
-        try {
-          sim.command_turntable(t.angle_rad, t.speed_scale, t.seq);
-        } catch (const twin::OutOfLimits& e) {
-          throw driver::OutOfLimits(e.what());
-        }
-      };
-    }
-    handlers.capture = [&](const depth_trigger_t& t) {
-      bus.set_state("rendering");
-      mj_forward(sim.model(), sim.data());
-      twin::DepthImage image = renderer.render(sim.data());
-      if (noise.enabled()) twin::apply_depth_noise(image, noise, rng);
-      // The renderer exposes instantaneously: the exposure starts and ends at this rig time.
-      driver::Exposure exposure;
-      exposure.start_utime = rig_utime(epoch, sim.time_s()) + (faulty(DriverFault::kLateExposure) ? 1000000 : 0);
-      const double unit_m = faulty(DriverFault::kDepthUnitMm) ? 1e-3 : kDepthUnitM;
-      depth_frame_t f = driver::depth_frame(camera, driver::depth_counts(image.depth_m, unit_m), exposure, frame_seq++, t);
-      if (faulty(DriverFault::kNoTriggerId)) f.trigger_seq = -1;
-      if (truth.is_open()) {
-        double p[3], q[4];
-        pose_to_arrays(sim.true_camera_in_object(object.object_z_m), p, q);
-        truth << std::setprecision(12) << "{\"frame_seq\": " << f.seq << ", \"trigger_seq\": " << f.trigger_seq
-              << ", \"utime\": " << f.utime << ", \"object_T_camera\": {\"position_m\": [" << p[0] << ", "
-              << p[1] << ", " << p[2] << "], \"quat_wxyz\": [" << q[0] << ", " << q[1] << ", " << q[2] << ", "
-              << q[3] << "]}}" << std::endl;
-      }
-      bus.set_state("idle");
-      wall0 = bus::now_s();
-      sim0 = sim.time_s();
-      return f;
-    };
-    driver::RigDriver::Options options;
-    options.any_speed_scale = true;  // RigSim refuses a speed scale outside (0, 1] (or clamps it: ignore-limits)
-    driver::RigDriver rig_driver(bus, handlers, options);
-
-    // Rig time runs at `speed` x wall time; the loop sleeps when it is ahead.
-    wall0 = bus::now_s();
-    sim0 = sim.time_s();
-    double next_status = sim.time_s();
-    const double status_period_s = faulty(DriverFault::kSlowStatus) ? kSlowStatusPeriodS : driver::kStatusPeriodS;
-    while (!stop_requested()) {
-      bus.spin_once(0);
-      sim.step();
-      if (sim.time_s() + 1e-12 >= next_status) {
-        next_status += status_period_s;
-        const bool backwards = faulty(DriverFault::kUtimeBackwards) && rig_driver.statuses_published() % 20 == 19;
-        driver::Stamp stamp;
-        stamp.utime = rig_utime(epoch, sim.time_s()) - (backwards ? 50000 : 0);
-        stamp.driver_utime = std::llround(sim.time_s() * 1e6);  // the driver's own clock: the simulation's
-        driver::ArmReading arm;
-        arm.joint_names = rig.joint_names;
-        arm.position_rad = bus::to_std(sim.arm_position_reported());
-        arm.velocity_rad_s = bus::to_std(sim.arm_velocity());
-        arm.commanded_rad = bus::to_std(
-            Eigen::Map<const Vector6d>(sim.arm().target.data()) + (sim.arm_position_reported() - sim.arm_position()));
-        arm.command_seq = no_echo ? -1 : sim.arm().command_seq;
-        arm.motion = motion_of(sim, sim.arm());
-        std::optional<driver::TurntableReading> turntable;
-        if (sim.has_turntable()) {
-          driver::TurntableReading& t = turntable.emplace();
-          t.angle_rad = sim.turntable_angle_reported();
-          t.velocity_rad_s = sim.turntable_velocity();
-          t.commanded_rad = sim.turntable().target[0] + errors.turntable_offset_rad;
-          t.command_seq = no_echo ? -1 : sim.turntable().command_seq;
-          t.motion = motion_of(sim, sim.turntable());
-        }
-        rig_driver.publish_statuses(stamp, arm, turntable);
-        // Pace: sleep while rig time is ahead of speed x wall time.
-        const double ahead = (sim.time_s() - sim0) / speed - (bus::now_s() - wall0);
-        if (ahead > 0) {
-          bus.spin_once(static_cast<int>(ahead * 1000));  // sleeps in the LCM wait
-        }
-      }
-    }
+    bus::Bus bus("twin");
+    bus.serve_scan(o.scope);
+    Twin(o, rig, sim, renderer, errors, bus).run();
     log_info("stopping");
     return 0;
   } catch (const std::exception& e) {

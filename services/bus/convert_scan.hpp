@@ -253,6 +253,7 @@ inline VoxelMapSummary from_msg(const voxel_set_t& m) {
   VoxelMapSummary v;
   v.scan_id = m.scan_id;
   v.iteration = m.iteration;
+  v.request_id = m.request_id;
   v.updated = m.updated;
   v.message = m.message;
   v.resolution_m = m.resolution_m;
@@ -284,6 +285,7 @@ inline EllipsoidSetSummary from_msg(const ellipsoid_set_t& m) {
   EllipsoidSetSummary s;
   s.scan_id = m.scan_id;
   s.iteration = m.iteration;
+  s.request_id = m.request_id;
   s.occupied_components = m.occupied_components;
   s.frontier_components = m.frontier_components;
   s.fit_s = m.fit_s;
@@ -316,6 +318,7 @@ inline plan_request_t to_msg(const PlanRequest& r) {
   m.planner = planner_to_msg(r.planner);
   m.seed = r.seed;
   m.map_iteration = r.map_iteration;
+  m.map_request_id = r.map_request_id;
   for (const Pose& v : r.views_done) m.views_done.push_back(to_msg(v));
   m.num_views_done = static_cast<int32_t>(m.views_done.size());
   for (const Pose& v : r.excluded) m.excluded.push_back(to_msg(v));

@@ -3,6 +3,7 @@
 // requester re-sends when an answer is lost), and the latest input of each scan a service plans
 // from. One eviction policy everywhere: the oldest entry goes first.
 #include <cstddef>
+#include <cstdint>
 #include <deque>
 #include <map>
 #include <stdexcept>
@@ -72,10 +73,12 @@ class ReplyCache {
 };
 
 // The messages of each scan a service plans from (e.g. the VOXEL_MAPs), for a service that answers
-// requests about "the map of view i": the `per_scan` received last of each scan, by arrival, so
-// that a message claiming a later view (a forged iteration 2^31 - 1) cannot push out the one a
-// request will ask for; iterations outside 0..max_iteration are refused. Keeps the `max_scans`
-// scans heard from most recently.
+// requests about "the map of view i, answering request r": the `per_scan` received last of each
+// scan, by arrival, so that a message claiming a later view (a forged iteration 2^31 - 1) cannot
+// push out the one a request will ask for; iterations outside 0..max_iteration are refused. Kept
+// by view and request id (Message::request_id): a message of another request for the same view (a
+// forgery with a guessed id) is kept beside the real one, never in its place. Keeps the
+// `max_scans` scans heard from most recently.
 template <class Message>
 class RecentPerScan {
  public:
@@ -86,27 +89,28 @@ class RecentPerScan {
   // keeping nothing, for an iteration outside 0..max_iteration.
   bool offer(const Message& m) {
     if (m.iteration < 0 || m.iteration > max_iteration_) return false;
-    ReplyCache<int, Message>* kept = scans_.find(m.scan_id);
+    Kept* kept = scans_.find(m.scan_id);
     if (!kept) {
-      scans_.put(m.scan_id, ReplyCache<int, Message>(per_scan_));
+      scans_.put(m.scan_id, Kept(per_scan_));
       kept = scans_.find(m.scan_id);
     } else {
       scans_.touch(m.scan_id);
     }
-    kept->put(m.iteration, m);
+    kept->put({m.iteration, m.request_id}, m);
     return true;
   }
 
-  // The kept message of `scan_id` for `iteration`, or nullptr.
-  const Message* find(const std::string& scan_id, int iteration) const {
-    const ReplyCache<int, Message>* kept = scans_.find(scan_id);
-    return kept ? kept->find(iteration) : nullptr;
+  // The kept message of `scan_id` for `iteration` and `request_id`, or nullptr.
+  const Message* find(const std::string& scan_id, int iteration, int64_t request_id) const {
+    const Kept* kept = scans_.find(scan_id);
+    return kept ? kept->find({iteration, request_id}) : nullptr;
   }
 
  private:
+  using Kept = ReplyCache<std::pair<int, int64_t>, Message>;
   std::size_t per_scan_;
   int max_iteration_;
-  ReplyCache<std::string, ReplyCache<int, Message>> scans_;
+  ReplyCache<std::string, Kept> scans_;
 };
 
 }  // namespace pbnbv::bus

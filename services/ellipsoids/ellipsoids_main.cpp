@@ -4,10 +4,13 @@
 // For every voxel map, clusters the Occupied and the Frontier voxel centres with a Gaussian
 // mixture (T in [1, T_max] by BIC) and publishes the minimum-volume enclosing ellipsoid of each
 // cluster, fitted to voxel corners (docs/method.md "Ellipsoids"; core fit_ellipsoids). Idempotent:
-// a map already answered (same scan and iteration) is answered again with the stored result.
+// a map already answered (same scan, iteration and request id) is answered again with the stored
+// result. The answer carries the map's request id: the map of another request for the same view
+// (a forgery with a guessed id) gets its own answer, never the real map's.
 #include <chrono>
 #include <map>
 #include <sstream>
+#include <tuple>
 
 #include "bus/bus.hpp"
 #include "bus/convert.hpp"
@@ -49,7 +52,7 @@ class EllipsoidService {
  private:
   void on_map(const voxel_set_t& m) {
     bus_.set_scan(m.scan_id, m.iteration);
-    const auto key = std::make_pair(m.scan_id, m.iteration);
+    const auto key = std::make_tuple(m.scan_id, m.iteration, m.request_id);
     if (const ellipsoid_set_t* answer = answers_.find(key)) {
       bus_.publish(channels::kEllipsoids, *answer);
       return;
@@ -70,6 +73,7 @@ class EllipsoidService {
     ellipsoid_set_t out;
     out.scan_id = m.scan_id;
     out.iteration = m.iteration;
+    out.request_id = m.request_id;
     out.occupied_components = t_occ;
     out.frontier_components = t_front;
     out.fit_s = fit_s;
@@ -87,7 +91,7 @@ class EllipsoidService {
   bus::Bus& bus_;
   int t_max_;
   uint64_t seed_;
-  bus::ReplyCache<std::pair<std::string, int32_t>, ellipsoid_set_t> answers_{kAnswersKept};
+  bus::ReplyCache<std::tuple<std::string, int32_t, int64_t>, ellipsoid_set_t> answers_{kAnswersKept};
 };
 
 }  // namespace

@@ -718,11 +718,11 @@ json to_json(const BenchResult& r) {
   return j;
 }
 
-BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostream& log, bool terminal) {
-  BenchSpec spec = spec_in;
-  spec.validate();
-  fs::create_directories(spec.out / "logs");
-  // A folder holds one benchmark: a rerun with other settings must not mix results.
+namespace {
+
+// A folder holds one benchmark: a rerun with other settings must not mix results. Refuses a folder
+// whose bench.json says other settings, naming the first; writes this run's.
+void claim_folder(const BenchSpec& spec) {
   const fs::path spec_path = spec.out / "bench.json";
   json settings = to_json(spec);
   settings.erase("objects");  // objects may be added to a folder's benchmark
@@ -740,17 +740,11 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
     }
   }
   write_json_atomic(settings, spec_path.string());
+}
 
-  if (spec.netns && !netns_available()) {
-    log << "pbnbv bench: cannot create a private network namespace here (needs root or unprivileged user "
-           "namespaces): every scan runs on the current LCM bus, one at a time"
-        << std::endl;
-    spec.netns = false;
-  }
-  if (!spec.netns) spec.jobs = 1;
-
-  // The jobs, object by object (and first view by first view) so that a partial run has every
-  // planner on the first objects.
+// The jobs, object by object (and first view by first view) so that a partial run has every
+// planner on the first objects.
+std::vector<Job> plan_jobs(const BenchSpec& spec) {
   std::vector<Job> jobs;
   std::map<std::string, std::string> names;  // object as given -> its name
   const std::vector<Eigen::Vector3d> directions = first_view_directions(spec);
@@ -784,62 +778,70 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       }
     }
   }
-  const int total = static_cast<int>(jobs.size());
-  std::vector<Job*> todo;
-  for (auto& j : jobs) {
-    if (scan_complete(j.dir)) continue;
-    todo.push_back(&j);
+  return jobs;
+}
+
+// Runs the scans of `todo` (of `jobs`), spec.jobs at a time, each a `pbnbv scan` process, printing
+// each start, view and end (live, one line per running scan and an estimate, on a terminal).
+// SIGINT or SIGTERM stops every scan (each keeps what it has) and throws.
+class ScanRunner {
+ public:
+  ScanRunner(const BenchSpec& spec, std::vector<Job>& jobs, int complete, const fs::path& self, std::ostream& log,
+             bool terminal)
+      : spec_(spec), jobs_(jobs), self_(self), live_(log, terminal), finished_(complete) {}
+
+  void run(const std::vector<Job*>& todo) {
+    install_stop_handlers();
+    while (next_ < todo.size() || !running_.empty()) {
+      if (stop_requested()) stop_every_scan();
+      while (static_cast<int>(running_.size()) < spec_.jobs && next_ < todo.size()) start(todo[next_++]);
+      reap_finished();
+      read_progress();
+      if (live_.live()) show_live(todo.size() - next_);
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    live_.update({});  // the live block ends before the evaluation's lines
   }
-  log << "pbnbv bench: " << spec.objects.size() << " objects x "
-      << (spec.first_views > 1 ? std::to_string(spec.first_views) + " first views x " : std::string())
-      << spec.planners.size() << " planners = " << total
-      << " scans (" << total - static_cast<int>(todo.size()) << " already complete in " << spec.out.string() << "), "
-      << spec.jobs << " at a time" << std::endl;
 
-  install_stop_handlers();
-  LiveLines live(log, terminal);
-  std::vector<double> walls;  // of the scans finished in this run
+ private:
+  std::string prefix(const Job* j) const {
+    return "[" + std::to_string(j - jobs_.data() + 1) + "/" + std::to_string(jobs_.size()) + "] " + j->run + " - " +
+           std::string(name_of(j->planner)) + ": ";
+  }
 
-  // The scans running now: their processes and, at the same index, their jobs.
-  std::vector<Child> children;
-  std::vector<Job*> running;
-  std::size_t next = 0;
-  int finished = total - static_cast<int>(todo.size());
-  auto prefix = [&](const Job* j) {
-    return "[" + std::to_string(j - jobs.data() + 1) + "/" + std::to_string(total) + "] " + j->run + " - " + std::string(name_of(j->planner)) + ": ";
-  };
-  while (next < todo.size() || !running.empty()) {
-    if (stop_requested()) {
-      for (const Child& c : children) ::kill(c.pid, SIGINT);  // each scan keeps what it has and stops its processes
-      for (int i = 0; i < 500; ++i) {
-        reap(children);
-        if (std::none_of(children.begin(), children.end(), [](const Child& c) { return c.running; })) break;
-        std::this_thread::sleep_for(std::chrono::milliseconds(20));
-      }
-      stop_all(children, 5.0);
-      throw std::runtime_error("interrupted: the scans completed so far are kept in " + spec.out.string() +
-                               "; run the same command again to resume");
+  [[noreturn]] void stop_every_scan() {
+    for (const Child& c : children_) ::kill(c.pid, SIGINT);  // each scan keeps what it has and stops its processes
+    for (int i = 0; i < 500; ++i) {
+      reap(children_);
+      if (std::none_of(children_.begin(), children_.end(), [](const Child& c) { return c.running; })) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
-    while (static_cast<int>(running.size()) < spec.jobs && next < todo.size()) {
-      Job* j = todo[next++];
-      // An interrupted scan is resumed (scan_argv); a folder without its processes.json starts anew.
-      if (fs::exists(j->dir) && !fs::exists(j->dir / "processes.json")) fs::remove_all(j->dir);
-      fs::create_directories(j->dir.parent_path());
-      Child c;
-      c.name = std::string(name_of(j->planner)) + "-" + j->run;
-      c.argv = scan_argv(spec, self, j->object, j->planner, j->initial_view, j->dir);
-      c.log_path = j->log.string();
-      j->started = std::chrono::steady_clock::now();
-      start(c);
-      children.push_back(std::move(c));
-      running.push_back(j);
-      live.event(prefix(j) + "started");
-    }
-    for (const Child* c : reap(children)) {
-      Job* j = running[c - children.data()];
+    stop_all(children_, 5.0);
+    throw std::runtime_error("interrupted: the scans completed so far are kept in " + spec_.out.string() +
+                             "; run the same command again to resume");
+  }
+
+  void start(Job* j) {
+    // An interrupted scan is resumed (scan_argv); a folder without its processes.json starts anew.
+    if (fs::exists(j->dir) && !fs::exists(j->dir / "processes.json")) fs::remove_all(j->dir);
+    fs::create_directories(j->dir.parent_path());
+    Child c;
+    c.name = std::string(name_of(j->planner)) + "-" + j->run;
+    c.argv = scan_argv(spec_, self_, j->object, j->planner, j->initial_view, j->dir);
+    c.log_path = j->log.string();
+    j->started = std::chrono::steady_clock::now();
+    pbnbv::process::start(c);
+    children_.push_back(std::move(c));
+    running_.push_back(j);
+    live_.event(prefix(j) + "started");
+  }
+
+  void reap_finished() {
+    for (const Child* c : reap(children_)) {
+      Job* j = running_[c - children_.data()];
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - j->started).count();
-      ++finished;
-      walls.push_back(wall);
+      ++finished_;
+      walls_.push_back(wall);
       if (c->exit_code == 0 && scan_complete(j->dir)) {
         write_json_atomic({{"wall_s", wall}, {"command", c->argv}}, (j->dir / "bench_run.json").string());
         std::string line;
@@ -849,22 +851,25 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
           if (!cv.empty()) line = ", coverage after view " + std::to_string(cv.size()) + " " + fixed(cv.back().get<double>()) + " %";
         } catch (const std::exception&) {
         }
-        live.event(prefix(j) + "done in " + fixed(wall, 0) + " s" + line + " (" + std::to_string(finished) + " of " +
-                   std::to_string(total) + " scans complete)");
+        live_.event(prefix(j) + "done in " + fixed(wall, 0) + " s" + line + " (" + std::to_string(finished_) + " of " +
+                    std::to_string(jobs_.size()) + " scans complete)");
       } else {
         std::string tail = tail_lines(j->log.string(), 6);
         while (!tail.empty() && tail.back() == '\n') tail.pop_back();
-        live.event(prefix(j) + "FAILED (exit " + std::to_string(c->exit_code) + "): " + scan_failure_reason(j->dir, j->log) +
-                   "; the end of " + j->log.string() + ":\n" + tail);
+        live_.event(prefix(j) + "FAILED (exit " + std::to_string(c->exit_code) + "): " + scan_failure_reason(j->dir, j->log) +
+                    "; the end of " + j->log.string() + ":\n" + tail);
       }
     }
-    for (std::size_t i = children.size(); i-- > 0;) {
-      if (children[i].running) continue;
-      children.erase(children.begin() + i);
-      running.erase(running.begin() + i);
+    for (std::size_t i = children_.size(); i-- > 0;) {
+      if (children_[i].running) continue;
+      children_.erase(children_.begin() + i);
+      running_.erase(running_.begin() + i);
     }
-    for (Job* j : running) {
-      // Progress: the scan's "[view k/N] ..." line; off a terminal printed when the view changes.
+  }
+
+  // Progress: each scan's "[view k/N] ..." line; off a terminal printed when the view changes.
+  void read_progress() {
+    for (Job* j : running_) {
       const std::string last = tail_lines(j->log.string(), 1);
       const auto a = last.rfind("[view ");
       if (a == std::string::npos) continue;
@@ -872,41 +877,119 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       if (tag != j->last_progress) {
         j->last_progress = tag;
         std::sscanf(tag.c_str(), "[view %d/%d]", &j->view, &j->views);
-        if (!live.live()) live.event(prefix(j) + tag.substr(1, tag.size() - 2));
+        if (!live_.live()) live_.event(prefix(j) + tag.substr(1, tag.size() - 2));
       }
     }
-    if (live.live()) {
-      // One line per running scan, then the whole run's estimate: the scans to go at the mean
-      // wall time of those finished (else of the running ones' estimates), spread over the jobs.
-      const auto now = std::chrono::steady_clock::now();
-      std::vector<std::string> lines;
-      double left_running = 0, projected = 0;
-      int with_estimate = 0;
-      for (const Job* j : running) {
-        const double elapsed = std::chrono::duration<double>(now - j->started).count();
-        // prefix(j) ends in ": ", as the progress line of an empty name starts.
-        lines.push_back(prefix(j) + scan_progress_line("", j->view, j->views > 0 ? j->views : spec.views, elapsed).substr(2));
-        if (const auto left = scan_time_left_s(j->view, j->views > 0 ? j->views : spec.views, elapsed)) {
-          left_running += *left;
-          projected += elapsed + *left;
-          ++with_estimate;
-        }
-      }
-      std::string summary = "bench: " + std::to_string(finished) + " of " + std::to_string(total) + " scans done, " +
-                            std::to_string(running.size()) + " running";
-      const double per_scan = !walls.empty() ? std::accumulate(walls.begin(), walls.end(), 0.0) / walls.size()
-                              : with_estimate > 0 ? projected / with_estimate
-                                                  : NAN;
-      if (std::isfinite(per_scan)) {
-        const double waiting = static_cast<double>(todo.size() - next);
-        summary += ", about " + duration_text((left_running + waiting * per_scan) / std::max(1, spec.jobs)) + " left";
-      }
-      lines.push_back(summary);
-      live.update(lines);
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
-  live.update({});  // the live block ends before the evaluation's lines
+
+  // One line per running scan, then the whole run's estimate: the scans to go at the mean wall
+  // time of those finished (else of the running ones' estimates), spread over the jobs.
+  void show_live(std::size_t waiting) {
+    const auto now = std::chrono::steady_clock::now();
+    std::vector<std::string> lines;
+    double left_running = 0, projected = 0;
+    int with_estimate = 0;
+    for (const Job* j : running_) {
+      const double elapsed = std::chrono::duration<double>(now - j->started).count();
+      // prefix(j) ends in ": ", as the progress line of an empty name starts.
+      lines.push_back(prefix(j) + scan_progress_line("", j->view, j->views > 0 ? j->views : spec_.views, elapsed).substr(2));
+      if (const auto left = scan_time_left_s(j->view, j->views > 0 ? j->views : spec_.views, elapsed)) {
+        left_running += *left;
+        projected += elapsed + *left;
+        ++with_estimate;
+      }
+    }
+    std::string summary = "bench: " + std::to_string(finished_) + " of " + std::to_string(jobs_.size()) + " scans done, " +
+                          std::to_string(running_.size()) + " running";
+    const double per_scan = !walls_.empty() ? std::accumulate(walls_.begin(), walls_.end(), 0.0) / walls_.size()
+                            : with_estimate > 0 ? projected / with_estimate
+                                                : NAN;
+    if (std::isfinite(per_scan)) {
+      summary += ", about " + duration_text((left_running + static_cast<double>(waiting) * per_scan) / std::max(1, spec_.jobs)) +
+                 " left";
+    }
+    lines.push_back(summary);
+    live_.update(lines);
+  }
+
+  const BenchSpec& spec_;
+  std::vector<Job>& jobs_;
+  fs::path self_;
+  LiveLines live_;
+  std::vector<Child> children_;  // the scans running now: their processes and, at the same index,
+  std::vector<Job*> running_;    // their jobs
+  std::size_t next_ = 0;         // in todo
+  int finished_;
+  std::vector<double> walls_;  // of the scans finished in this run
+};
+
+// One scan of the folder against the ground truth (its object's observable-surface mask made once
+// and kept in `masks`); a scan that is not complete, or fails to evaluate, is a run with its error.
+ObjectRun evaluate_job(const BenchSpec& spec, const Job& j, std::map<std::string, std::vector<uint8_t>>& masks,
+                       std::ostream& log) {
+  ObjectRun r;
+  r.object = j.name;
+  r.first_view = j.first_view;
+  r.initial_view = j.initial_view;  // until the scan's record says where it started
+  r.planner = j.planner;
+  try {
+    if (!scan_complete(j.dir)) throw std::runtime_error(scan_failure_reason(j.dir, j.log));
+    if (!masks.count(j.name)) {
+      std::string what;
+      masks[j.name] = observable_mask(spec, j.dir, &what);
+      log << j.name << ": observable surface: " << what << std::endl;
+    }
+    const ScanEvaluation e = evaluate_scan(j.dir, spec.coverage, &masks[j.name], spec.metrics);
+    r.coverage_by_view = pad_views(e.coverage_by_view, spec.views);
+    r.observable_by_view = pad_views(e.observable_by_view, spec.views);
+    r.planner_ms = e.planner_ms;
+    r.views_to_95 = views_to_reach(r.coverage_by_view, 95.0);
+    r.views_done = e.views_done;
+    r.stop_reason = e.stop_reason;
+    r.new_surface_by_view = e.new_surface_by_view;
+    r.cloud_metrics = e.cloud_metrics;
+    r.mesh_metrics = e.mesh_metrics;
+    if (const auto d = first_surface_stop(e.new_surface_by_view, spec.stop_rule); d && d->after_views < spec.views) {
+      r.stop_view = d->after_views;
+      r.stop_rule_reason = d->reason;
+    }
+    r.complete = true;
+    const json plan = read_scan_json(j.dir).value("plan", json::object());
+    if (plan.contains("initial_view")) r.initial_view = pose_from_json(plan["initial_view"], "scan.json plan.initial_view").translation();
+    if (fs::exists(j.dir / "bench_run.json")) r.wall_s = read_json((j.dir / "bench_run.json").string()).value("wall_s", 0.0);
+  } catch (const std::exception& x) {
+    r.error = x.what();
+  }
+  return r;
+}
+
+}  // namespace
+
+BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostream& log, bool terminal) {
+  BenchSpec spec = spec_in;
+  spec.validate();
+  fs::create_directories(spec.out / "logs");
+  claim_folder(spec);
+  if (spec.netns && !netns_available()) {
+    log << "pbnbv bench: cannot create a private network namespace here (needs root or unprivileged user "
+           "namespaces): every scan runs on the current LCM bus, one at a time"
+        << std::endl;
+    spec.netns = false;
+  }
+  if (!spec.netns) spec.jobs = 1;
+
+  std::vector<Job> jobs = plan_jobs(spec);
+  std::vector<Job*> todo;
+  for (auto& j : jobs) {
+    if (!scan_complete(j.dir)) todo.push_back(&j);
+  }
+  const int total = static_cast<int>(jobs.size());
+  log << "pbnbv bench: " << spec.objects.size() << " objects x "
+      << (spec.first_views > 1 ? std::to_string(spec.first_views) + " first views x " : std::string())
+      << spec.planners.size() << " planners = " << total
+      << " scans (" << total - static_cast<int>(todo.size()) << " already complete in " << spec.out.string() << "), "
+      << spec.jobs << " at a time" << std::endl;
+  ScanRunner(spec, jobs, total - static_cast<int>(todo.size()), self, log, terminal).run(todo);
 
   // Evaluation of every scan in the folder against the ground truth.
   BenchResult result;
@@ -914,44 +997,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
   result.spec.jobs = spec_in.jobs;
   std::map<std::string, std::vector<uint8_t>> masks;
   std::map<PlannerKind, std::vector<ObjectRun>> runs;
-  for (auto& j : jobs) {
-    ObjectRun r;
-    r.object = j.name;
-    r.first_view = j.first_view;
-    r.initial_view = j.initial_view;  // until the scan's record says where it started
-    r.planner = j.planner;
-    try {
-      if (!scan_complete(j.dir)) {
-        throw std::runtime_error(scan_failure_reason(j.dir, j.log));
-      }
-      if (!masks.count(j.name)) {
-        std::string what;
-        masks[j.name] = observable_mask(spec, j.dir, &what);
-        log << j.name << ": observable surface: " << what << std::endl;
-      }
-      const ScanEvaluation e = evaluate_scan(j.dir, spec.coverage, &masks[j.name], spec.metrics);
-      r.coverage_by_view = pad_views(e.coverage_by_view, spec.views);
-      r.observable_by_view = pad_views(e.observable_by_view, spec.views);
-      r.planner_ms = e.planner_ms;
-      r.views_to_95 = views_to_reach(r.coverage_by_view, 95.0);
-      r.views_done = e.views_done;
-      r.stop_reason = e.stop_reason;
-      r.new_surface_by_view = e.new_surface_by_view;
-      r.cloud_metrics = e.cloud_metrics;
-      r.mesh_metrics = e.mesh_metrics;
-      if (const auto d = first_surface_stop(e.new_surface_by_view, spec.stop_rule); d && d->after_views < spec.views) {
-        r.stop_view = d->after_views;
-        r.stop_rule_reason = d->reason;
-      }
-      r.complete = true;
-      const json plan = read_scan_json(j.dir).value("plan", json::object());
-      if (plan.contains("initial_view")) r.initial_view = pose_from_json(plan["initial_view"], "scan.json plan.initial_view").translation();
-      if (fs::exists(j.dir / "bench_run.json")) r.wall_s = read_json((j.dir / "bench_run.json").string()).value("wall_s", 0.0);
-    } catch (const std::exception& x) {
-      r.error = x.what();
-    }
-    runs[j.planner].push_back(r);
-  }
+  for (const auto& j : jobs) runs[j.planner].push_back(evaluate_job(spec, j, masks, log));
   for (const auto& p : spec.planners) result.planners.push_back(summarise(p, runs[p], spec.views));
   add_gaps_to_oracle(result.planners, spec.views);
   result.halves = summarise_halves(spec, result.planners);

@@ -1,6 +1,7 @@
 // pbnbv-mapping: the mapping service.
-//   in:  REGISTERED_CLOUD (which frame, and its registered camera pose), DEPTH_FRAME (the rays;
-//        DEPTH_FRAME_RESENT: the same frame sent again when it was lost)
+//   in:  REGISTERED_CLOUD (which frame, and its registered camera pose; taken only when it answers
+//        a CAPTURE_REQUEST heard: bus/asked_captures.hpp), DEPTH_FRAME (the rays;
+//        DEPTH_FRAME_RESENT: the same frame sent again when it was lost), CAPTURE_REQUEST
 //   out: VOXEL_MAP, HEARTBEAT; per view DIR/maps/view_NNN.ot (OctoMap, viewable in octovis:
 //        Occupied and Empty only) and DIR/maps/view_NNN.states.ply (every cell with its state)
 // Keeps the five-state voxel map of each scan (core VoxelMap: None, Empty, Occupied, Unknown,
@@ -15,7 +16,9 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <tuple>
 
+#include "bus/asked_captures.hpp"
 #include "bus/bus.hpp"
 #include "bus/reply_cache.hpp"
 #include "bus/state_file.hpp"
@@ -24,6 +27,7 @@
 #include "core/base/format.hpp"
 #include "core/base/log.hpp"
 #include "core/mapping/voxel_map.hpp"
+#include "pbnbv/capture_request_t.hpp"
 #include "pbnbv/depth_frame_t.hpp"
 #include "pbnbv/registered_cloud_t.hpp"
 #include "pbnbv/voxel_set_t.hpp"
@@ -49,6 +53,8 @@ class MappingService {
         if (frames_.size() > kFramesKept) frames_.pop_front();
       });
     }
+    bus_.subscribe<capture_request_t>(channels::kCaptureRequest,
+                                      [this](const capture_request_t& c) { asked_.heard(c.scan_id, c.request_id); });
     bus_.subscribe<registered_cloud_t>(channels::kRegisteredCloud, [this](const registered_cloud_t& r) { on_view(r); });
   }
 
@@ -82,12 +88,18 @@ class MappingService {
     // waiting for a map, and a failed cloud must not become the answer of its view (forged with a
     // guessed request id, it would be cached as the view's map and the real view answered from it).
     if (r.cloud.status != point_cloud_t::kOk) return;
+    // Nor is a cloud that answers no capture request heard (forged with a guessed request id: it
+    // would be integrated and answered as its view's map).
+    asked_.require("REGISTERED_CLOUD", r.scan_id, r.request_id);
     bus_.set_scan(r.scan_id, r.iteration);
-    if (const voxel_set_t* answer = answers_.find({r.scan_id, r.iteration})) {
+    if (const voxel_set_t* answer = answers_.find({r.scan_id, r.iteration, r.request_id})) {
       bus_.publish(channels::kVoxelMap, *answer);  // a repeat: answer again
       return;
     }
-    if (pending_ && pending_->scan_id == r.scan_id && pending_->iteration == r.iteration) return;  // a repeat: still waiting
+    if (pending_ && pending_->scan_id == r.scan_id && pending_->iteration == r.iteration &&
+        pending_->request_id == r.request_id) {
+      return;  // a repeat: still waiting
+    }
     if (pending_) {  // a newer view arrived: settle the older one now
       const registered_cloud_t older = std::move(*pending_);
       pending_.reset();
@@ -108,6 +120,7 @@ class MappingService {
     voxel_set_t out;
     out.scan_id = r.scan_id;
     out.iteration = r.iteration;
+    out.request_id = r.request_id;
     out.updated = false;
     out.update_s = 0;
     const depth_frame_t* frame = find_frame(r.cloud.depth_frame_seq);
@@ -146,7 +159,7 @@ class MappingService {
     // ellipsoid fitter works on the answer.
     save(out);
     bus_.publish(channels::kVoxelMap, out);
-    answers_.put({r.scan_id, r.iteration}, out);
+    answers_.put({r.scan_id, r.iteration, r.request_id}, out);
     std::ostringstream os;
     os << "view " << r.iteration << ": " << out.message << " (" << out.update_s * 1e3 << " ms; occupied "
        << out.num_occupied << ", frontier " << out.num_frontier << ", unknown " << out.num_unknown << ")";
@@ -171,7 +184,7 @@ class MappingService {
     if (!last || last->scan_id != bus_.scope()) return;
     map_ = VoxelMap::restore(read_text(state_path("mapping.map").string()), params_, state_path("mapping.map").string());
     scan_id_ = last->scan_id;
-    answers_.put({last->scan_id, last->iteration}, *last);
+    answers_.put({last->scan_id, last->iteration, last->request_id}, *last);
     log_info("continuing the map of scan " + scan_id_ + " after view " + std::to_string(last->iteration) + " from " +
              state_path("mapping.map").string());
   }
@@ -210,7 +223,8 @@ class MappingService {
   std::optional<registered_cloud_t> pending_;
   double pending_deadline_ = 0;
   bool warned_ = false;  // the pending view's late frame was said in the log
-  bus::ReplyCache<std::pair<std::string, int32_t>, voxel_set_t> answers_{kAnswersKept};
+  bus::ReplyCache<std::tuple<std::string, int32_t, int64_t>, voxel_set_t> answers_{kAnswersKept};
+  bus::AskedCaptures asked_;
 };
 
 }  // namespace

@@ -1,5 +1,6 @@
 // pbnbv-registration: the registration service.
-//   in:  CLOUD (a view placed by the rig's kinematic pose)
+//   in:  CLOUD (a view placed by the rig's kinematic pose), CAPTURE_REQUEST (a CLOUD is taken only
+//        when it answers a capture request heard: bus/asked_captures.hpp)
 //   out: REGISTERED_CLOUD, HEARTBEAT
 // Refines each view's pose against the accumulated model of its scan with point-to-plane ICP
 // (core register_frame), starting from the kinematic pose; an implausible alignment is
@@ -12,6 +13,7 @@
 
 #include <filesystem>
 
+#include "bus/asked_captures.hpp"
 #include "bus/bus.hpp"
 #include "bus/state_file.hpp"
 #include "core/io/cloud_file.hpp"
@@ -23,6 +25,7 @@
 #include "core/base/log.hpp"
 #include "core/perception/cloud_filter.hpp"
 #include "core/perception/registration.hpp"
+#include "pbnbv/capture_request_t.hpp"
 #include "pbnbv/point_cloud_t.hpp"
 #include "pbnbv/registered_cloud_t.hpp"
 
@@ -38,11 +41,14 @@ class RegistrationService {
                       std::filesystem::path out)
       : bus_(bus), params_(params), model_voxel_m_(model_voxel_m), off_(off), out_(std::move(out)) {
     restore();
+    bus_.subscribe<capture_request_t>(channels::kCaptureRequest,
+                                      [this](const capture_request_t& c) { asked_.heard(c.scan_id, c.request_id); });
     bus_.subscribe<point_cloud_t>(channels::kCloud, [this](const point_cloud_t& c) { on_cloud(c); });
   }
 
  private:
   void on_cloud(const point_cloud_t& c) {
+    asked_.require("CLOUD", c.scan_id, c.request_id);  // a cloud nobody asked for is not merged
     bus_.set_scan(c.scan_id, c.iteration);
     if (const registered_cloud_t* answer = answers_.find({c.scan_id, c.request_id})) {
       bus_.publish(channels::kRegisteredCloud, *answer);  // a repeat: answer again
@@ -131,6 +137,7 @@ class RegistrationService {
              std::to_string(last->iteration) + " from " + state_path("registration.ply").string());
   }
 
+  bus::AskedCaptures asked_;
   bus::Bus& bus_;
   RegistrationParams params_;
   double model_voxel_m_;

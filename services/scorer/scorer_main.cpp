@@ -72,9 +72,9 @@ class ScorerService {
   void tick() {
     if (!pending_) return;
     const plan_request_t& r = pending_->request;
-    const voxel_set_t* map = maps_.find(r.scan_id, r.map_iteration);
+    const voxel_set_t* map = maps_.find(r.scan_id, r.map_iteration, r.map_request_id);
     const bool needs_ellipsoids = uses_ellipsoids(pending_->planner);
-    const ellipsoid_set_t* ell = needs_ellipsoids ? ellipsoids_.find(r.scan_id, r.map_iteration) : nullptr;
+    const ellipsoid_set_t* ell = needs_ellipsoids ? ellipsoids_.find(r.scan_id, r.map_iteration, r.map_request_id) : nullptr;
     if (map && !pending_->reachable && r.check_reachability) {
       try {
         pending_->reachable = reachability(r, *map);

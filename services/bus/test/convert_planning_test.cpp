@@ -160,6 +160,7 @@ TEST(ConvertPlanning, TheReachabilityKeyCoversEveryFieldItDependsOn) {
       {"iteration", {[](plan_request_t& r) { r.iteration += 1; }, "which view is planned: the state and B say the rest"}},
       {"request_id", {[](plan_request_t& r) { r.request_id += 1; }, "an answer's id"}},
       {"map_iteration", {[](plan_request_t& r) { r.map_iteration += 1; }, "the map enters the key as B"}},
+      {"map_request_id", {[](plan_request_t& r) { r.map_request_id += 1; }, "the map enters the key as B"}},
       {"planner", {[](plan_request_t& r) { r.planner = plan_request_t::kPlannerRaycast; }, kChosenAfter}},
       {"seed", {[](plan_request_t& r) { r.seed += 1; }, kChosenAfter}},
       {"num_views_done", {[](plan_request_t& r) { r.num_views_done = 1; r.views_done.resize(1); }, kChosenAfter}},

@@ -199,6 +199,7 @@ TEST(ConvertScan, VoxelMapAndEllipsoidSummariesAreChecked) {
   voxel_set_t v{};
   v.scan_id = "s";
   v.iteration = 3;
+  v.request_id = (int64_t{1} << 40) + 5;
   v.updated = true;
   v.resolution_m = 0.03;
   v.bbox_max_m[0] = 0.3;
@@ -207,6 +208,7 @@ TEST(ConvertScan, VoxelMapAndEllipsoidSummariesAreChecked) {
   v.frontier_centres_m = {{0, 0, 0}, {0.03f, 0, 0}};
   const VoxelMapSummary s = bus::from_msg(v);
   EXPECT_EQ(s.iteration, 3);
+  EXPECT_EQ(s.request_id, (int64_t{1} << 40) + 5);  // the view's capture request, whole
   EXPECT_EQ(s.num_empty, 12);
   EXPECT_EQ(s.num_frontier, 2);
   EXPECT_EQ(s.bbox_max_m.x(), 0.3);
@@ -219,6 +221,7 @@ TEST(ConvertScan, VoxelMapAndEllipsoidSummariesAreChecked) {
   ellipsoid_set_t e{};
   e.scan_id = "s";
   e.iteration = 3;
+  e.request_id = (int64_t{1} << 40) + 5;
   e.fit_s = 0.01;
   e.num_ellipsoids = 2;
   e.ellipsoids.resize(2);
@@ -228,6 +231,7 @@ TEST(ConvertScan, VoxelMapAndEllipsoidSummariesAreChecked) {
   e.ellipsoids[1].semi_axes_m[0] = 0.05;
   e.ellipsoids[1].num_voxels = 9;
   const EllipsoidSetSummary es = bus::from_msg(e);
+  EXPECT_EQ(es.request_id, (int64_t{1} << 40) + 5);
   ASSERT_EQ(es.ellipsoids.size(), 2u);
   EXPECT_FALSE(es.ellipsoids[0].frontier);
   EXPECT_TRUE(es.ellipsoids[1].frontier);

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <string>
 #include <utility>
 
@@ -38,6 +39,7 @@ namespace {
 struct Map {
   std::string scan_id;
   int iteration;
+  int64_t request_id = 7;
 };
 }  // namespace
 
@@ -51,12 +53,12 @@ TEST(RecentPerScan, AForgedLaterIterationDoesNotPushOutTheMapARequestWillAskFor)
   EXPECT_FALSE(maps.offer({"bunny", -1}));
   EXPECT_TRUE(maps.offer({"bunny", 999}));  // forged, in range
   EXPECT_TRUE(maps.offer({"bunny", 1}));
-  ASSERT_NE(maps.find("bunny", 1), nullptr);
-  EXPECT_NE(maps.find("bunny", 999), nullptr);
-  EXPECT_EQ(maps.find("bunny", 0), nullptr) << "the oldest arrival went";
+  ASSERT_NE(maps.find("bunny", 1, 7), nullptr);
+  EXPECT_NE(maps.find("bunny", 999, 7), nullptr);
+  EXPECT_EQ(maps.find("bunny", 0, 7), nullptr) << "the oldest arrival went";
   for (int k = 0; k < 20; ++k) maps.offer({"bunny", 1});  // repeats replace, push nothing out
-  EXPECT_NE(maps.find("bunny", 999), nullptr);
-  EXPECT_EQ(maps.find("bunny", 2), nullptr);
+  EXPECT_NE(maps.find("bunny", 999, 7), nullptr);
+  EXPECT_EQ(maps.find("bunny", 2, 7), nullptr);
 }
 
 // Four scans kept, the one heard from longest ago dropped first; hearing a scan again keeps it.
@@ -68,9 +70,22 @@ TEST(RecentPerScan, KeepsTheScansHeardFromMostRecently) {
   maps.offer({"bunny", 1});  // bunny heard again
   maps.offer({"cow", 0});
   maps.offer({"dino", 0});  // a fifth scan: teapot, heard longest ago, goes
-  EXPECT_EQ(maps.find("teapot", 0), nullptr);
-  EXPECT_NE(maps.find("bunny", 0), nullptr);
-  EXPECT_NE(maps.find("bunny", 1), nullptr);
-  EXPECT_NE(maps.find("elk", 0), nullptr);
-  EXPECT_NE(maps.find("dino", 0), nullptr);
+  EXPECT_EQ(maps.find("teapot", 0, 7), nullptr);
+  EXPECT_NE(maps.find("bunny", 0, 7), nullptr);
+  EXPECT_NE(maps.find("bunny", 1, 7), nullptr);
+  EXPECT_NE(maps.find("elk", 0, 7), nullptr);
+  EXPECT_NE(maps.find("dino", 0, 7), nullptr);
+}
+
+// A map of the same view for another request (forged with a guessed id) is kept beside the real
+// one, never in its place: a request finds the map of the id it names. (Before, kept by view
+// only, the later arrival replaced the real map.)
+TEST(RecentPerScan, AMapOfAnotherRequestForTheSameViewDoesNotReplaceTheRealOne) {
+  RecentPerScan<Map> maps(4, 999, 4);
+  maps.offer({"bunny", 1, 4100});
+  maps.offer({"bunny", 1, 9999});  // forged, arrives later
+  ASSERT_NE(maps.find("bunny", 1, 4100), nullptr);
+  EXPECT_EQ(maps.find("bunny", 1, 4100)->request_id, 4100);
+  EXPECT_EQ(maps.find("bunny", 1, 9999)->request_id, 9999);
+  EXPECT_EQ(maps.find("bunny", 1, 5), nullptr);
 }

@@ -3,6 +3,7 @@
 #include <CGAL/IO/PLY.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <iterator>
 #include <cerrno>
@@ -216,30 +217,54 @@ void check_ply_lists(std::istream& in, const std::string& path, const char* ctx,
     for (const auto& p : e.properties) lists = lists || p.count_bytes > 0;
   }
   if (!lists) return;
+  // The position is counted here, not asked of the stream: tellg and seekg are a system call each
+  // on a file stream, and a mesh of 300,000 faces walked that way took seconds (ignore, get and
+  // read take the stream's buffer).
   std::uintmax_t pos = static_cast<std::uintmax_t>(in.tellg());
+  const auto skip = [&](std::size_t n) {  // binary: n bytes
+    in.ignore(static_cast<std::streamsize>(n));
+    pos += static_cast<std::uintmax_t>(in.gcount());
+    return static_cast<std::size_t>(in.gcount()) == n;
+  };
   std::string token;
+  const auto next_token = [&] {  // ASCII: the next word, up to the whitespace after it
+    token.clear();
+    int c = in.get();
+    while (c != std::char_traits<char>::eof() && std::isspace(c)) {
+      ++pos;
+      c = in.get();
+    }
+    if (c == std::char_traits<char>::eof()) return false;
+    for (; c != std::char_traits<char>::eof() && !std::isspace(c); c = in.get()) {
+      ++pos;
+      token.push_back(static_cast<char>(c));
+    }
+    if (c != std::char_traits<char>::eof()) in.unget();
+    in.clear();
+    return true;
+  };
   for (const auto& e : layout.elements) {
     for (std::uint64_t item = 0; item < e.count; ++item) {
       for (const auto& p : e.properties) {
         if (p.count_bytes == 0) {  // a scalar
-          if (ascii ? !(in >> token) : !in.seekg(p.bytes, std::ios::cur)) return;
+          if (ascii ? !next_token() : !skip(static_cast<std::size_t>(p.bytes))) return;
           continue;
         }
         std::int64_t count = 0;
         if (ascii) {
-          if (!(in >> token)) return;
+          if (!next_token()) return;
           const auto [end, err] = std::from_chars(token.data(), token.data() + token.size(), count);
           if (err != std::errc() || end != token.data() + token.size()) return;  // CGAL names it
         } else {
           unsigned char b[4] = {};
           if (!in.read(reinterpret_cast<char*>(b), p.count_bytes)) return;
+          pos += static_cast<std::uintmax_t>(p.count_bytes);
           std::uint32_t u = 0;
           for (int k = 0; k < p.count_bytes; ++k) u = (u << 8) | b[big ? k : p.count_bytes - 1 - k];
           const int bits = 8 * p.count_bytes;
           count = (p.count_signed && bits < 64 && (u >> (bits - 1)) != 0) ? static_cast<std::int64_t>(u) - (std::int64_t{1} << bits)
                                                                           : static_cast<std::int64_t>(u);
         }
-        pos = static_cast<std::uintmax_t>(in.tellg());
         const std::uintmax_t left = size > pos ? size - pos : 0;
         const std::uintmax_t most = left / (ascii ? 2 : static_cast<std::uintmax_t>(p.bytes));
         // A polygon's worth past the end (at most 65,535 entries) is a file cut short: CGAL's
@@ -249,8 +274,12 @@ void check_ply_lists(std::istream& in, const std::string& path, const char* ctx,
           fail(ctx, path, fmt::format("PLY element '{}' item {}: a list of {} entries, more than the {} bytes left in "
                                       "the file can hold", shown(e.name), item, count, left));
         }
+        if (!ascii) {
+          if (!skip(static_cast<std::size_t>(count) * static_cast<std::size_t>(p.bytes))) return;
+          continue;
+        }
         for (std::int64_t k = 0; k < count; ++k) {
-          if (ascii ? !(in >> token) : !in.seekg(p.bytes, std::ios::cur)) return;
+          if (!next_token()) return;
         }
       }
     }

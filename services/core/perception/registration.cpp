@@ -183,237 +183,248 @@ double overlap_constraint(const std::vector<std::pair<Eigen::Vector3d, Eigen::Ve
   return std::max(0.0, eig.eigenvalues()[0]);
 }
 
+namespace {
+
+using Tree = IndexSearch<pcl::PointNormal>;
+using Cloud = pcl::PointCloud<pcl::PointNormal>;
+
+// Whether the overlap at the kinematic pose pins the alignment down: a plane or a sphere lets ICP
+// slide until it runs out of iterations, so ICP is skipped then. Pairs within the coarsest
+// correspondence distance (the kinematic pose may be off by several mm); a conservative threshold
+// (half the gate's): the final gate decides.
+bool overlap_pins_alignment(const Cloud& source, const Cloud& target, const Tree& tree, const RegistrationParams& params) {
+  if (target.size() < 10 || source.size() < 10) return true;
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> near;
+  const float r2 = static_cast<float>(params.max_correspondence_m * params.max_correspondence_m);
+  for (const auto& p : source) {
+    float d2;
+    const pcl::index_t i = tree.index().nearest(p.getVector3fMap(), r2, d2);
+    if (i >= 0) near.emplace_back(p.getVector3fMap().cast<double>(), target[i].getNormalVector3fMap().cast<double>());
+  }
+  return near.size() < 6 || overlap_constraint(near, nullptr) >= 0.5 * params.min_constraint;
+}
+
+// Point-to-plane ICP from the kinematic pose, coarse to fine. Returns the transform; sets
+// res.iterations and res.converged, and `note` to why it did not converge.
+Eigen::Matrix4d run_icp(const Cloud::Ptr& source, const Cloud::Ptr& target, Tree::Ptr tree, const RegistrationParams& params,
+                        double voxel, RegistrationResult& res, std::string& note) {
+  Eigen::Matrix4d t_final = Eigen::Matrix4d::Identity();
+  Icp icp;
+  icp.setInputSource(source);
+  icp.setInputTarget(target);
+  icp.setSearchMethodTarget(tree, true);
+  icp.setMaximumIterations(std::max(params.max_iterations, 1));
+  // A stage ends when a step moves less than 10 um and 0.001 deg (pcl compares the squared
+  // translation and the rotation's cosine).
+  icp.setTransformationEpsilon(1e-5 * 1e-5);
+  icp.setTransformationRotationEpsilon(std::cos(1e-3 * kPi / 180.0));
+  icp.setEuclideanFitnessEpsilon(1e-9);
+  // Point-to-plane pulls only along the model's normal; a frame point on a surface the model
+  // has not seen, matched to the edge of one it has, would pull sideways. Normal agreement
+  // drops those pairs (it halved the rotation error on partial-overlap frames).
+  auto rejector = std::make_shared<NormalCompatibilityRejector>(source, target, kMaxNormalAngleDeg);
+  icp.addCorrespondenceRejector(rejector);
+  // Coarse to fine: each stage halves the correspondence distance, from
+  // max_correspondence_m down to the overlap distance (at least 1.5 voxels) so the part of
+  // the frame the model has not seen does not pull. max_iterations is per stage.
+  std::vector<double> stages;
+  const double finest = std::max(params.overlap_distance_m, 1.5 * voxel);
+  for (double d = params.max_correspondence_m; d > finest * 1.0001; d *= 0.5) stages.push_back(d);
+  stages.push_back(std::min(finest, params.max_correspondence_m));
+  pcl::PointCloud<pcl::PointNormal> aligned;
+  bool converged = false;
+  int state = Criteria::CONVERGENCE_CRITERIA_NOT_CONVERGED;
+  for (double d : stages) {
+    icp.setMaxCorrespondenceDistance(d);
+    tree->set_k1_bound(d * 1.001);
+    rejector->set_rotation(t_final.topLeftCorner<3, 3>().cast<float>());
+    icp.align(aligned, t_final);
+    res.iterations += icp.iterations();
+    state = icp.getConvergeCriteria()->getConvergenceState();
+    converged = icp.hasConverged();
+    if (state == Criteria::CONVERGENCE_CRITERIA_NO_CORRESPONDENCES) {
+      note = fmt::format("no correspondences within {:.1f} mm", d * 1e3);
+      break;
+    }
+    t_final = icp.getFinalTransformation();
+  }
+  res.converged = converged && state != Criteria::CONVERGENCE_CRITERIA_ITERATIONS &&
+                  state != Criteria::CONVERGENCE_CRITERIA_FAILURE_AFTER_MAX_ITERATIONS;
+  if (!res.converged && note.empty()) {
+    note = "ICP did not converge in the final stage's " + std::to_string(params.max_iterations) + " iterations";
+  }
+  return t_final;
+}
+
+// The rigid correction of ICP's estimate (a product of small rigid steps), orthonormalised; sets
+// res.correction, its size, and, for a non-finite estimate, the identity and `note`.
+void set_correction(const Eigen::Matrix4d& t_final, RegistrationResult& res, std::string& note) {
+  Pose correction = Pose::Identity();
+  Eigen::Quaterniond q(Eigen::Matrix3d(t_final.topLeftCorner<3, 3>()));
+  q.normalize();
+  correction.linear() = q.toRotationMatrix();
+  correction.translation() = t_final.topRightCorner<3, 1>();
+  if (!correction.matrix().allFinite()) {
+    correction = Pose::Identity();
+    res.converged = false;
+    note = "ICP produced a non-finite transform";
+  }
+  res.correction = correction;
+  res.translation_m = correction.translation().norm();
+  res.rotation_deg = rad_to_deg(rotation_angle_rad(Eigen::Matrix3d::Identity(), correction.linear()));
+}
+
+// The fit after alignment, on the downsampled frame against the cropped model: res.overlap,
+// res.rmse_m (point-to-plane) and res.constraint; returns the overlap's weakest direction.
+Eigen::Matrix<double, 6, 1> measure_fit(const PointCloud& frame_ds, const Cloud& target, const Tree& tree,
+                                        const RegistrationParams& params, RegistrationResult& res) {
+  std::size_t n_overlap = 0;
+  double sum_sq = 0;
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> pairs;  // aligned point, model normal
+  if (target.size() >= 3) {
+    const float r2 = static_cast<float>(params.overlap_distance_m * params.overlap_distance_m);
+    const Eigen::Matrix3f r = res.correction.linear().cast<float>();
+    const Eigen::Vector3f t = res.correction.translation().cast<float>();
+    pcl::PointNormal q;
+    for (const auto& p : frame_ds) {
+      q.getVector3fMap() = r * p + t;
+      float d2;
+      const pcl::index_t i = tree.index().nearest(q.getVector3fMap(), r2, d2);
+      if (i < 0) continue;
+      ++n_overlap;
+      // Point-to-plane distance to the model's local surface.
+      const auto& m = target[i];
+      const double e = (q.getVector3fMap() - m.getVector3fMap()).cast<double>().dot(m.getNormalVector3fMap().cast<double>());
+      sum_sq += e * e;
+      pairs.emplace_back(q.getVector3fMap().cast<double>(), m.getNormalVector3fMap().cast<double>());
+    }
+  }
+  Eigen::Matrix<double, 6, 1> weakest = Eigen::Matrix<double, 6, 1>::Zero();
+  res.constraint = overlap_constraint(pairs, &weakest);
+  res.overlap = static_cast<double>(n_overlap) / static_cast<double>(frame_ds.size());
+  res.rmse_m = n_overlap ? std::sqrt(sum_sq / static_cast<double>(n_overlap)) : 0.0;
+  return weakest;
+}
+
+// The verdict: gates on the data (does the view fit the model?) and on the motion (is the
+// correction plausible, did ICP settle?). Where the overlap leaves a direction free, ICP's motion
+// means nothing (it slides, may not converge): the kinematic pose is kept if the view fits the
+// model. Elsewhere every gate counts. Sets res.accepted, res.refined and res.reason.
+void judge(const RegistrationParams& params, const Eigen::Matrix<double, 6, 1>& weakest, const std::string& icp_note,
+           const std::string& dropped_note, RegistrationResult& res) {
+  std::vector<std::string> fails, motion_fails;
+  if (res.overlap < params.min_overlap) {
+    fails.push_back(fmt::format("overlap {:.2f}", res.overlap) + fmt::format(" below {:.2f}", params.min_overlap));
+  }
+  if (res.overlap == 0 || res.rmse_m > params.max_rmse_m) {
+    fails.push_back(res.overlap == 0 ? std::string("rmse undefined (no overlapping points)")
+                                     : fmt::format("rmse {:.2f} mm", res.rmse_m * 1e3) +
+                                           fmt::format(" exceeds {:.2f} mm", params.max_rmse_m * 1e3));
+  }
+  if (res.translation_m > params.max_translation_m) {
+    motion_fails.push_back(fmt::format("correction {:.3f} m", res.translation_m) +
+                           fmt::format(" exceeds {:.3f} m", params.max_translation_m));
+  }
+  if (res.rotation_deg > params.max_rotation_deg) {
+    motion_fails.push_back(fmt::format("correction {:.2f} deg", res.rotation_deg) +
+                           fmt::format(" exceeds {:.2f} deg", params.max_rotation_deg));
+  }
+  if (!res.converged) motion_fails.push_back("not converged: " + icp_note);
+  const bool degenerate = res.constraint < params.min_constraint;
+  if (!degenerate) fails.insert(fails.end(), motion_fails.begin(), motion_fails.end());
+
+  if (fails.empty() && degenerate) {
+    // ICP may have slid along the free direction: trust the kinematics instead.
+    const bool rotation = weakest.head<3>().norm() > weakest.tail<3>().norm();
+    const Eigen::Vector3d axis = (rotation ? weakest.head<3>() : weakest.tail<3>()).normalized();
+    res.accepted = true;
+    res.refined = false;
+    res.reason = "kinematic pose kept: the overlap does not constrain the alignment (weakest direction: " +
+                 std::string(rotation ? "rotation about " : "translation along ") +
+                 fmt::format("({:.2f}, ", axis.x()) + fmt::format("{:.2f}, ", axis.y()) + fmt::format("{:.2f})", axis.z()) +
+                 fmt::format(", constraint {:.4f}", res.constraint) + fmt::format(" below {:.4f}", params.min_constraint) +
+                 fmt::format("; ICP would have moved it {:.2f} mm)", res.translation_m * 1e3);
+    res.correction = Pose::Identity();
+    res.translation_m = 0;
+    res.rotation_deg = 0;
+  } else if (fails.empty()) {
+    res.accepted = true;
+    res.refined = true;
+    res.reason = "accepted: " + fmt::format("{:.2f} mm, ", res.translation_m * 1e3) +
+                 fmt::format("{:.3f} deg, ", res.rotation_deg) + fmt::format("overlap {:.2f}, ", res.overlap) +
+                 fmt::format("rmse {:.2f} mm", res.rmse_m * 1e3) + fmt::format(", constraint {:.4f}", res.constraint) + dropped_note;
+  } else {
+    res.accepted = false;
+    res.reason = "rejected: ";
+    for (std::size_t i = 0; i < fails.size(); ++i) res.reason += (i ? "; " : "") + fails[i];
+    res.reason += dropped_note;
+  }
+}
+
+// register_frame's steps after the inputs' checks; throws what PCL throws.
+void align_and_judge(const PointCloud& model_ds, const PointCloud& frame_ds, const RegistrationParams& params,
+                     const std::string& dropped_note, RegistrationResult& res) {
+  const double voxel = params.voxel_m;
+  // Only the part of the model the frame can reach matters: keep the model points within
+  // `margin` (the largest correspondence distance plus room for the normals) of the frame,
+  // via a grid of margin/2 cells: the frame's cells dilated by two.
+  const double margin = std::max(params.max_correspondence_m, params.overlap_distance_m) + 4.0 * voxel;
+  const PointCloud model_crop = near_points(model_ds, frame_ds, margin);
+  const auto target = with_normals(model_crop);
+  const auto source = with_normals(frame_ds);
+  Tree::Ptr tree(new Tree);
+  if (target->size() >= 3) tree->setInputCloud(target);
+
+  Eigen::Matrix4d t_final = Eigen::Matrix4d::Identity();
+  std::string icp_note;
+  if (!overlap_pins_alignment(*source, *target, *tree, params)) {
+    res.converged = true;
+    icp_note = "skipped: the overlap does not constrain the alignment";
+  } else if (target->size() >= 10 && source->size() >= 10) {
+    t_final = run_icp(source, target, tree, params, voxel, res, icp_note);
+  } else {
+    icp_note = "no model points near the frame";
+  }
+  set_correction(t_final, res, icp_note);
+  const Eigen::Matrix<double, 6, 1> weakest = measure_fit(frame_ds, *target, *tree, params, res);
+  judge(params, weakest, icp_note, dropped_note, res);
+}
+
+}  // namespace
+
 RegistrationResult register_frame(const PointCloud& model, const PointCloud& frame,
                                   const RegistrationParams& params) {
   const auto t0 = Clock::now();
   RegistrationResult res;
-  auto finish = [&]() -> RegistrationResult {
-    res.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
-    return res;
-  };
-
   try {
     const PointCloud model_f = finite_points(model);
     const PointCloud frame_f = finite_points(frame);
-    const size_t dropped = (model.size() - model_f.size()) + (frame.size() - frame_f.size());
-    const std::string dropped_note =
-        dropped ? " (" + std::to_string(dropped) + " non-finite points dropped)" : "";
-
+    const std::size_t dropped = (model.size() - model_f.size()) + (frame.size() - frame_f.size());
+    const std::string dropped_note = dropped ? " (" + std::to_string(dropped) + " non-finite points dropped)" : "";
+    const PointCloud model_ds = model_f.empty() ? PointCloud() : voxel_downsample(model_f, params.voxel_m);
+    const PointCloud frame_ds = model_f.empty() ? PointCloud() : voxel_downsample(frame_f, params.voxel_m);
+    const std::size_t min_points = static_cast<std::size_t>(std::max(params.min_points, 3));
     if (model_f.empty()) {
       res.accepted = true;
       res.converged = true;
       res.reason = "first frame: defines the model" + dropped_note;
-      return finish();
-    }
-
-    const double voxel = params.voxel_m;
-    const PointCloud model_ds = voxel_downsample(model_f, voxel);
-    const PointCloud frame_ds = voxel_downsample(frame_f, voxel);
-    const size_t min_points = static_cast<size_t>(std::max(params.min_points, 3));
-    if (frame_ds.size() < min_points || model_ds.size() < min_points) {
-      res.reason = "rejected: too few points: frame " + std::to_string(frame_ds.size()) +
-                   ", model " + std::to_string(model_ds.size()) + " after " +
-                   fmt::format("{:.1f}", voxel * 1e3) + " mm downsampling (of " +
-                   std::to_string(frame_f.size()) + " and " + std::to_string(model_f.size()) +
+    } else if (frame_ds.size() < min_points || model_ds.size() < min_points) {
+      res.reason = "rejected: too few points: frame " + std::to_string(frame_ds.size()) + ", model " +
+                   std::to_string(model_ds.size()) + " after " + fmt::format("{:.1f}", params.voxel_m * 1e3) +
+                   " mm downsampling (of " + std::to_string(frame_f.size()) + " and " + std::to_string(model_f.size()) +
                    " finite points), need " + std::to_string(min_points) + dropped_note;
-      return finish();
-    }
-
-    // Only the part of the model the frame can reach matters: keep the model points within
-    // `margin` (the largest correspondence distance plus room for the normals) of the frame,
-    // via a grid of margin/2 cells: the frame's cells dilated by two.
-    const double margin =
-        std::max(params.max_correspondence_m, params.overlap_distance_m) + 4.0 * voxel;
-    const PointCloud model_crop = near_points(model_ds, frame_ds, margin);
-
-    const auto target = with_normals(model_crop);
-    const auto source = with_normals(frame_ds);
-
-    IndexSearch<pcl::PointNormal>::Ptr tree(new IndexSearch<pcl::PointNormal>);
-    Eigen::Matrix4d t_final = Eigen::Matrix4d::Identity();
-    std::string icp_note;
-    if (target->size() >= 3) tree->setInputCloud(target);
-
-    // Overlap that cannot pin the alignment down (a plane, a sphere) lets ICP slide until it
-    // runs out of iterations: measure it at the kinematic pose first and skip ICP then.
-    bool pinned = true;
-    if (target->size() >= 10 && source->size() >= 10) {
-      // Pairs within the coarsest correspondence distance (the kinematic pose may be off by
-      // several mm); a conservative threshold (half the gate's): the final gate decides.
-      std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> near;
-      const float r2 = static_cast<float>(params.max_correspondence_m * params.max_correspondence_m);
-      for (const auto& p : *source) {
-        float d2;
-        const pcl::index_t i = tree->index().nearest(p.getVector3fMap(), r2, d2);
-        if (i >= 0) near.emplace_back(p.getVector3fMap().cast<double>(), (*target)[i].getNormalVector3fMap().cast<double>());
-      }
-      pinned = near.size() < 6 || overlap_constraint(near, nullptr) >= 0.5 * params.min_constraint;
-    }
-    if (!pinned) {
-      res.converged = true;
-      icp_note = "skipped: the overlap does not constrain the alignment";
-    } else if (target->size() >= 10 && source->size() >= 10) {
-      Icp icp;
-      icp.setInputSource(source);
-      icp.setInputTarget(target);
-      icp.setSearchMethodTarget(tree, true);
-      icp.setMaximumIterations(std::max(params.max_iterations, 1));
-      // A stage ends when a step moves less than 10 um and 0.001 deg (pcl compares the squared
-      // translation and the rotation's cosine).
-      icp.setTransformationEpsilon(1e-5 * 1e-5);
-      icp.setTransformationRotationEpsilon(std::cos(1e-3 * kPi / 180.0));
-      icp.setEuclideanFitnessEpsilon(1e-9);
-      // Point-to-plane pulls only along the model's normal; a frame point on a surface the model
-      // has not seen, matched to the edge of one it has, would pull sideways. Normal agreement
-      // drops those pairs (it halved the rotation error on partial-overlap frames).
-      auto rejector =
-          std::make_shared<NormalCompatibilityRejector>(source, target, kMaxNormalAngleDeg);
-      icp.addCorrespondenceRejector(rejector);
-      // Coarse to fine: each stage halves the correspondence distance, from
-      // max_correspondence_m down to the overlap distance (at least 1.5 voxels) so the part of
-      // the frame the model has not seen does not pull. max_iterations is per stage.
-      std::vector<double> stages;
-      const double finest = std::max(params.overlap_distance_m, 1.5 * voxel);
-      for (double d = params.max_correspondence_m; d > finest * 1.0001; d *= 0.5) {
-        stages.push_back(d);
-      }
-      stages.push_back(std::min(finest, params.max_correspondence_m));
-      pcl::PointCloud<pcl::PointNormal> aligned;
-      bool converged = false;
-      int state = Criteria::CONVERGENCE_CRITERIA_NOT_CONVERGED;
-      for (double d : stages) {
-        icp.setMaxCorrespondenceDistance(d);
-        tree->set_k1_bound(d * 1.001);
-        rejector->set_rotation(t_final.topLeftCorner<3, 3>().cast<float>());
-        icp.align(aligned, t_final);
-        res.iterations += icp.iterations();
-        state = icp.getConvergeCriteria()->getConvergenceState();
-        converged = icp.hasConverged();
-        if (state == Criteria::CONVERGENCE_CRITERIA_NO_CORRESPONDENCES) {
-          icp_note = fmt::format("no correspondences within {:.1f} mm", d * 1e3);
-          break;
-        }
-        t_final = icp.getFinalTransformation();
-      }
-      res.converged = converged && state != Criteria::CONVERGENCE_CRITERIA_ITERATIONS &&
-                      state != Criteria::CONVERGENCE_CRITERIA_FAILURE_AFTER_MAX_ITERATIONS;
-      if (!res.converged && icp_note.empty()) {
-        icp_note = "ICP did not converge in the final stage's " +
-                   std::to_string(params.max_iterations) + " iterations";
-      }
     } else {
-      icp_note = "no model points near the frame";
+      align_and_judge(model_ds, frame_ds, params, dropped_note, res);
     }
-
-    // Orthonormalise the correction (the estimate is a product of small rigid steps).
-    Pose correction = Pose::Identity();
-    {
-      const Eigen::Matrix3d r = t_final.topLeftCorner<3, 3>();
-      Eigen::Quaterniond q(r);
-      q.normalize();
-      correction.linear() = q.toRotationMatrix();
-      correction.translation() = t_final.topRightCorner<3, 1>();
-    }
-    if (!correction.matrix().allFinite()) {
-      correction = Pose::Identity();
-      res.converged = false;
-      icp_note = "ICP produced a non-finite transform";
-    }
-    res.correction = correction;
-    res.translation_m = correction.translation().norm();
-    res.rotation_deg =
-        rad_to_deg(rotation_angle_rad(Eigen::Matrix3d::Identity(), correction.linear()));
-
-    // Gates, on the downsampled frame after alignment against the cropped model.
-    size_t n_overlap = 0;
-    double sum_sq = 0;
-    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> pairs;  // aligned point, model normal
-    if (target->size() >= 3) {
-      const float r2 = static_cast<float>(params.overlap_distance_m * params.overlap_distance_m);
-      const Eigen::Matrix3f r = correction.linear().cast<float>();
-      const Eigen::Vector3f t = correction.translation().cast<float>();
-      pcl::PointNormal q;
-      for (const auto& p : frame_ds) {
-        q.getVector3fMap() = r * p + t;
-        float d2;
-        const pcl::index_t i = tree->index().nearest(q.getVector3fMap(), r2, d2);
-        if (i < 0) continue;
-        ++n_overlap;
-        // Point-to-plane distance to the model's local surface.
-        const auto& m = (*target)[i];
-        const double e = (q.getVector3fMap() - m.getVector3fMap())
-                             .cast<double>()
-                             .dot(m.getNormalVector3fMap().cast<double>());
-        sum_sq += e * e;
-        pairs.emplace_back(q.getVector3fMap().cast<double>(), m.getNormalVector3fMap().cast<double>());
-      }
-    }
-    Eigen::Matrix<double, 6, 1> weakest = Eigen::Matrix<double, 6, 1>::Zero();
-    res.constraint = overlap_constraint(pairs, &weakest);
-    res.overlap = static_cast<double>(n_overlap) / static_cast<double>(frame_ds.size());
-    res.rmse_m = n_overlap ? std::sqrt(sum_sq / static_cast<double>(n_overlap)) : 0.0;
-
-    // Gates on the data (does the view fit the model?) and on the motion (is the correction
-    // plausible, did ICP settle?).
-    std::vector<std::string> fails, motion_fails;
-    if (res.overlap < params.min_overlap) {
-      fails.push_back(fmt::format("overlap {:.2f}", res.overlap) + fmt::format(" below {:.2f}", params.min_overlap));
-    }
-    if (n_overlap == 0 || res.rmse_m > params.max_rmse_m) {
-      fails.push_back(n_overlap == 0 ? std::string("rmse undefined (no overlapping points)")
-                                     : fmt::format("rmse {:.2f} mm", res.rmse_m * 1e3) +
-                                           fmt::format(" exceeds {:.2f} mm", params.max_rmse_m * 1e3));
-    }
-    if (res.translation_m > params.max_translation_m) {
-      motion_fails.push_back(fmt::format("correction {:.3f} m", res.translation_m) +
-                             fmt::format(" exceeds {:.3f} m", params.max_translation_m));
-    }
-    if (res.rotation_deg > params.max_rotation_deg) {
-      motion_fails.push_back(fmt::format("correction {:.2f} deg", res.rotation_deg) +
-                             fmt::format(" exceeds {:.2f} deg", params.max_rotation_deg));
-    }
-    if (!res.converged) motion_fails.push_back("not converged: " + icp_note);
-    // Where the overlap leaves a direction free, ICP's motion means nothing (it slides, may not
-    // converge): the kinematic pose is kept if the view fits the model. Elsewhere every gate counts.
-    const bool degenerate = res.constraint < params.min_constraint;
-    if (!degenerate) fails.insert(fails.end(), motion_fails.begin(), motion_fails.end());
-
-    if (fails.empty() && degenerate) {
-      // ICP may have slid along the free direction: trust the kinematics instead.
-      const bool rotation = weakest.head<3>().norm() > weakest.tail<3>().norm();
-      const Eigen::Vector3d axis = (rotation ? weakest.head<3>() : weakest.tail<3>()).normalized();
-      res.accepted = true;
-      res.refined = false;
-      res.reason = "kinematic pose kept: the overlap does not constrain the alignment (weakest direction: " +
-                   std::string(rotation ? "rotation about " : "translation along ") +
-                   fmt::format("({:.2f}, ", axis.x()) + fmt::format("{:.2f}, ", axis.y()) + fmt::format("{:.2f})", axis.z()) +
-                   fmt::format(", constraint {:.4f}", res.constraint) + fmt::format(" below {:.4f}", params.min_constraint) +
-                   fmt::format("; ICP would have moved it {:.2f} mm)", res.translation_m * 1e3);
-      res.correction = Pose::Identity();
-      res.translation_m = 0;
-      res.rotation_deg = 0;
-    } else if (fails.empty()) {
-      res.accepted = true;
-      res.refined = true;
-      res.reason = "accepted: " + fmt::format("{:.2f} mm, ", res.translation_m * 1e3) +
-                   fmt::format("{:.3f} deg, ", res.rotation_deg) + fmt::format("overlap {:.2f}, ", res.overlap) +
-                   fmt::format("rmse {:.2f} mm", res.rmse_m * 1e3) + fmt::format(", constraint {:.4f}", res.constraint) + dropped_note;
-    } else {
-      res.accepted = false;
-      res.reason = "rejected: ";
-      for (size_t i = 0; i < fails.size(); ++i) res.reason += (i ? "; " : "") + fails[i];
-      res.reason += dropped_note;
-    }
-    return finish();
   } catch (const std::exception& e) {
     res = RegistrationResult{};
     res.reason = std::string("rejected: registration failed: ") + e.what();
-    return finish();
   } catch (...) {
     res = RegistrationResult{};
     res.reason = "rejected: registration failed";
-    return finish();
   }
+  res.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  return res;
 }
 
 }  // namespace pbnbv

@@ -113,6 +113,7 @@ struct RegisteredCloud {
 struct VoxelMapSummary {
   std::string scan_id;
   int iteration = 0;                       // view integrated last
+  int64_t request_id = 0;                  // that view's capture request
   bool updated = false;                    // false: this view left the map unchanged
   std::string message;
   double resolution_m = 0;
@@ -135,6 +136,7 @@ struct EllipsoidSummary {
 struct EllipsoidSetSummary {
   std::string scan_id;
   int iteration = 0;                       // the map's view
+  int64_t request_id = 0;                  // the map's request (its view's capture request)
   int occupied_components = 0;             // T chosen by BIC
   int frontier_components = 0;
   double fit_s = 0;
@@ -149,6 +151,7 @@ struct PlanRequest {
   PlannerKind planner = PlannerKind::kPbnbv;  // pbnbv, raycast, random or oracle (not ring)
   int64_t seed = 0;                        // the random planner's seed for this request
   int map_iteration = -1;                  // plan from the map of this view
+  int64_t map_request_id = 0;              // answering this request (that view's capture request)
   std::vector<Pose> views_done;            // registered camera poses of the mapped views
   std::vector<Pose> excluded;              // views the rig could not reach, capture or map
   int num_candidates = 0;                  // N

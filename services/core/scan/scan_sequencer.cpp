@@ -126,6 +126,7 @@ void ScanSequencer::resume(double now_s) {
     }
     if (v.contains("map")) {
       done_.latest_map = i;
+      done_.latest_map_request = capture_request_.request_id;
       ++done_.views_done;
       if (v["map"].value("updated", false)) {
         done_.last_map = i;
@@ -337,7 +338,9 @@ void ScanSequencer::on(const RegisteredCloud& r, double now_s) {
 }
 
 void ScanSequencer::on(const VoxelMapSummary& m, double now_s) {
-  if (m.scan_id != s_.scan_id || m.iteration != iteration_) return;
+  // A map of another request for this view (a forged cloud the mapping service took, an earlier
+  // capture) is not this view's map.
+  if (m.scan_id != s_.scan_id || m.iteration != iteration_ || m.request_id != capture_id_) return;
   if (phase_ != Phase::kCapturing && phase_ != Phase::kRegistering && phase_ != Phase::kMapping) return;
   map_ = m;
   if (phase_ == Phase::kMapping) mapped(now_s);
@@ -346,6 +349,9 @@ void ScanSequencer::on(const VoxelMapSummary& m, double now_s) {
 void ScanSequencer::on(const EllipsoidSetSummary& e, double /*now_s*/) {
   // Sets of maps not yet made (a view after the current one) are not kept: nothing asks for them.
   if (e.scan_id != s_.scan_id || e.iteration < done_.latest_map || e.iteration > iteration_) return;
+  // Fitted to the map of the request the view's was (the current view's, or the newest map's).
+  const int64_t map_request = e.iteration == iteration_ ? capture_id_ : done_.latest_map_request;
+  if (e.request_id != map_request) return;
   ellipsoids_[e.iteration] = e;
 }
 
@@ -405,6 +411,7 @@ void ScanSequencer::begin_plan(double now_s) {
   r.planner = s_.planner;
   r.seed = s_.seed + iteration_;
   r.map_iteration = done_.latest_map;  // the newest map: the view scorer keeps only that one
+  r.map_request_id = done_.latest_map_request;
   r.views_done = done_.views_taken;
   r.excluded = done_.excluded;
   r.num_candidates = s_.candidates;
@@ -574,6 +581,7 @@ void ScanSequencer::mapped(double now_s) {
   const VoxelMapSummary& m = *map_;
   const RegisteredCloud& reg = *registered_;
   done_.latest_map = iteration_;
+  done_.latest_map_request = m.request_id;
   latest_map_summary_ = m;
   ellipsoids_.erase(ellipsoids_.begin(), ellipsoids_.lower_bound(done_.latest_map));
   view_.map = m;

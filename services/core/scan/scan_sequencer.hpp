@@ -100,6 +100,7 @@ struct ScanSoFar {
   double first_quality = std::numeric_limits<double>::quiet_NaN();  // F of the first plan
   int last_map = -1;                       // last view integrated into the map
   int latest_map = -1;                     // last view the mapping service answered
+  int64_t latest_map_request = 0;          // that view's capture request (its map answers it)
   Vector6d joints_rad = Vector6d::Zero();  // the rig where the last view was reached
   double turntable_rad = 0;
   int views_done = 0;                      // views that produced a cloud

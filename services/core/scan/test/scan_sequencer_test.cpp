@@ -123,7 +123,7 @@ class ScanSequencerTest : public pbnbv::testing::TempDirTest {
       later(1.5, *reg);
       if (auto map = mapping(*reg)) {
         later(1.75, *map);
-        if (settings_.planner == PlannerKind::kPbnbv) later(2.0, ellipsoids(map->iteration));
+        if (settings_.planner == PlannerKind::kPbnbv) later(2.0, ellipsoids(map->iteration, map->request_id));
       }
     }
   }
@@ -184,6 +184,7 @@ class ScanSequencerTest : public pbnbv::testing::TempDirTest {
     VoxelMapSummary m;
     m.scan_id = r.scan_id;
     m.iteration = r.iteration;
+    m.request_id = r.request_id;
     m.updated = r.accepted;
     m.message = r.accepted ? "updated" : "registration rejected the view";
     m.resolution_m = 0.03;
@@ -198,10 +199,11 @@ class ScanSequencerTest : public pbnbv::testing::TempDirTest {
     return m;
   };
 
-  static EllipsoidSetSummary ellipsoids(int map_view) {
+  static EllipsoidSetSummary ellipsoids(int map_view, int64_t map_request_id) {
     EllipsoidSetSummary e;
     e.scan_id = "unit-scan";
     e.iteration = map_view;
+    e.request_id = map_request_id;
     e.occupied_components = 1;
     e.frontier_components = 1;
     e.fit_s = 0.02;
@@ -873,6 +875,36 @@ TEST_F(ScanSequencerTest, AnswersOfAnotherScanOrAnOldRequestAreIgnored) {
   run(10);
   EXPECT_FALSE(seq_->finished());
   EXPECT_FALSE(std::filesystem::exists(dir_ / "scan.json")) << "nothing recorded yet";
+}
+
+// A map and ellipsoids of view 1 for another request (a cloud forged with a guessed request id that
+// a mapping service took, or an earlier capture of the view), the map before the real one and the
+// ellipsoids after, are not the view's: the view records the real map, the plan of view 2 asks for the map of view 1's capture
+// request and is recorded with the real ellipsoids. (Before, the first map of the view's iteration
+// was taken, and the last ellipsoids.)
+TEST_F(ScanSequencerTest, AMapOrEllipsoidsOfAnotherRequestForTheViewAreNotItsAnswers) {
+  mapping = [&, inner = mapping](const RegisteredCloud& r) -> std::optional<VoxelMapSummary> {
+    std::optional<VoxelMapSummary> real = inner(r);
+    if (r.iteration == 0) {
+      VoxelMapSummary forged = *real;
+      forged.request_id = r.request_id + 7;
+      forged.num_frontier = 999;
+      later(1.6, forged);  // before the real map (1.75 s)
+      EllipsoidSetSummary e = ellipsoids(0, r.request_id + 7);
+      e.fit_s = 9.0;
+      later(2.1, e);  // after the real ellipsoids (2.0 s), before the plan (2.25 s)
+    }
+    return real;
+  };
+  start(test_settings("pbnbv", 2));
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  ASSERT_EQ(plans_.size(), 1u);
+  EXPECT_EQ(plans_[0].second.map_iteration, 0);
+  EXPECT_EQ(plans_[0].second.map_request_id, captures_.at(0).second.request_id);
+  const json scan = scan_json();
+  EXPECT_EQ(scan["views"][0]["map"]["voxels"]["frontier"], 5);
+  EXPECT_NEAR(scan["views"][1]["plan"]["time_ms"]["ellipsoid_fit"].get<double>(), 20.0, 1e-12);
 }
 
 // Request ids start at a random number per scan (2^32 or more), so a sender that has not seen the
