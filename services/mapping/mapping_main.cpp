@@ -100,6 +100,13 @@ class MappingService {
         pending_->request_id == r.request_id) {
       return;  // a repeat: still waiting
     }
+    if (pending_ && pending_->scan_id == r.scan_id && r.iteration < pending_->iteration) {
+      // Another capture of an earlier view, late: nobody waits for it any more (the coordinator
+      // asks for the current view only), and settling the later view now would leave it out.
+      log_info("view " + std::to_string(r.iteration) + " (request " + std::to_string(r.request_id) + ") came while view " +
+               std::to_string(pending_->iteration) + " waits for its depth frame: not integrated");
+      return;
+    }
     if (pending_) {  // a newer view arrived: settle the older one now
       const registered_cloud_t older = std::move(*pending_);
       pending_.reset();

@@ -308,7 +308,14 @@ VoxelCounts VoxelMap::update_frontiers(Eigen::Vector3i* frontier_lo, Eigen::Vect
   const int64_t plane_cells = int64_t(dims_.x()) * dims_.y();
   const int nt = worker_count(static_cast<std::size_t>(dims_.z()),
                               static_cast<std::size_t>((kVoxelsPerWorker + plane_cells - 1) / plane_cells));
+  dilate_in_planes(nt);
+  return classify_unknown(nt, frontier_lo, frontier_hi);
+}
 
+// The frontier pass's first half: each plane's Empty/Occupied bits dilated along x and y into
+// scratch_ (with the face rule, bit 0 from the in-plane face neighbours and bit 2 the plane's own
+// Empty).
+void VoxelMap::dilate_in_planes(int nt) {
   // Each pass copies the sizes into locals: the byte stores could alias the lambda's captures,
   // and loop bounds read through them would keep the compiler from vectorising the loops.
   parallel_run(nt, [&](int tid, int n_threads) {
@@ -360,7 +367,11 @@ VoxelCounts VoxelMap::update_frontiers(Eigen::Vector3i* frontier_lo, Eigen::Vect
       }
     }
   });
+}
 
+// The frontier pass's second half: the dilation along z on the fly, each Unknown or Frontier voxel
+// decided again; returns the counts per state and sets the Frontier voxels' index box.
+VoxelCounts VoxelMap::classify_unknown(int nt, Eigen::Vector3i* frontier_lo, Eigen::Vector3i* frontier_hi) {
   std::vector<std::array<int64_t, 5>> n(static_cast<std::size_t>(nt), std::array<int64_t, 5>{});
   std::vector<Eigen::Vector3i> f_lo(static_cast<std::size_t>(nt), Eigen::Vector3i::Constant(std::numeric_limits<int>::max()));
   std::vector<Eigen::Vector3i> f_hi(static_cast<std::size_t>(nt), Eigen::Vector3i::Constant(std::numeric_limits<int>::min()));

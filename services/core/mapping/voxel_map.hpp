@@ -181,6 +181,8 @@ class VoxelMap {
   // Re-evaluates Frontier/Unknown over the whole grid; returns the state counts and the box of
   // the Frontier voxels (local indices; empty, lo > hi, when there is none).
   VoxelCounts update_frontiers(Eigen::Vector3i* frontier_lo, Eigen::Vector3i* frontier_hi);
+  void dilate_in_planes(int nt);
+  VoxelCounts classify_unknown(int nt, Eigen::Vector3i* frontier_lo, Eigen::Vector3i* frontier_hi);
 
   // The phases of integrate(), in order (voxel_map_frame.hpp: what they share about the frame).
   MapFrame prepare_frame(const DepthView& view);                   // checks; the working volume

@@ -51,88 +51,77 @@ void radix_sort(std::vector<KeyIndex>& a, int bits) {
   }
 }
 
-}  // namespace
-
-PointCloud voxel_downsample(const PointCloud& cloud, double voxel_m) {
-  if (!(voxel_m > 0.0) || !std::isfinite(voxel_m)) return cloud;
-  if (cloud.size() > std::numeric_limits<uint32_t>::max()) {
-    throw std::invalid_argument("voxel_downsample: too many points");
-  }
-  // Voxel index of a point; false for non-finite points and absurdly far ones (dropped).
+// A point's voxel index; false for non-finite points and absurdly far ones (dropped).
+inline bool voxel_of(const Eigen::Vector3f& p, double voxel_m, int64_t q[3]) {
   constexpr double kMaxIndex = 4.0e18;
-  auto voxel_of = [voxel_m](const Eigen::Vector3f& p, int64_t q[3]) {
-    for (int k = 0; k < 3; ++k) {
-      const double f = std::floor(static_cast<double>(p[k]) / voxel_m);
-      if (!(std::fabs(f) < kMaxIndex)) return false;  // also catches NaN
-      q[k] = static_cast<int64_t>(f);
-    }
-    return true;
-  };
+  for (int k = 0; k < 3; ++k) {
+    const double f = std::floor(static_cast<double>(p[k]) / voxel_m);
+    if (!(std::fabs(f) < kMaxIndex)) return false;  // also catches NaN
+    q[k] = static_cast<int64_t>(f);
+  }
+  return true;
+}
 
-  // Pass 1: range of the voxel indices.
-  int64_t lo[3], hi[3];
+// Appends the centroid of a run of points [b, e) of `cloud`, all in one voxel, to `out`.
+inline void emit_centroid(const PointCloud& cloud, const KeyIndex* b, const KeyIndex* e, PointCloud& out) {
+  double sx = 0, sy = 0, sz = 0;
+  for (const KeyIndex* it = b; it != e; ++it) {
+    const Eigen::Vector3f& p = cloud[it->index];
+    sx += p.x();
+    sy += p.y();
+    sz += p.z();
+  }
+  const double inv = 1.0 / static_cast<double>(e - b);
+  out.emplace_back(static_cast<float>(sx * inv), static_cast<float>(sy * inv), static_cast<float>(sz * inv));
+}
+
+// The range [lo, hi] of the points' voxel indices; returns how many points have one.
+std::size_t voxel_range(const PointCloud& cloud, double voxel_m, int64_t lo[3], int64_t hi[3]) {
   for (int k = 0; k < 3; ++k) {
     lo[k] = std::numeric_limits<int64_t>::max();
     hi[k] = std::numeric_limits<int64_t>::min();
   }
-  size_t n = 0;
+  std::size_t n = 0;
   for (const auto& p : cloud) {
     int64_t q[3];
-    if (!voxel_of(p, q)) continue;
+    if (!voxel_of(p, voxel_m, q)) continue;
     ++n;
     for (int k = 0; k < 3; ++k) {
       lo[k] = std::min(lo[k], q[k]);
       hi[k] = std::max(hi[k], q[k]);
     }
   }
-  PointCloud out;
-  if (n == 0) return out;
-  int bits[3];
-  for (int k = 0; k < 3; ++k) {
-    bits[k] = bit_width(static_cast<uint64_t>(hi[k]) - static_cast<uint64_t>(lo[k]));
+  return n;
+}
+
+// The centroids by packed key (x, then y, then z: lexicographic order, bits[k] bits each from
+// lo), radix-sorted, one per run of equal keys.
+void downsample_packed(const PointCloud& cloud, double voxel_m, std::size_t n, const int64_t lo[3], const int bits[3],
+                       PointCloud& out) {
+  std::vector<KeyIndex> ki;
+  ki.reserve(n);
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    int64_t q[3];
+    if (!voxel_of(cloud[i], voxel_m, q)) continue;
+    uint64_t key = static_cast<uint64_t>(q[0]) - static_cast<uint64_t>(lo[0]);
+    for (int k = 1; k < 3; ++k) {
+      key = bits[k] ? (key << bits[k]) : key;
+      key |= static_cast<uint64_t>(q[k]) - static_cast<uint64_t>(lo[k]);
+    }
+    ki.push_back({key, static_cast<uint32_t>(i)});
   }
-  const int total_bits = bits[0] + bits[1] + bits[2];
-
-  // Emits the centroid of a run of points [b, e) of `ki`, all in one voxel.
-  auto emit = [&](const KeyIndex* b, const KeyIndex* e) {
-    double sx = 0, sy = 0, sz = 0;
-    for (const KeyIndex* it = b; it != e; ++it) {
-      const Eigen::Vector3f& p = cloud[it->index];
-      sx += p.x();
-      sy += p.y();
-      sz += p.z();
-    }
-    const double inv = 1.0 / static_cast<double>(e - b);
-    out.emplace_back(static_cast<float>(sx * inv), static_cast<float>(sy * inv),
-                     static_cast<float>(sz * inv));
-  };
-
-  if (total_bits <= 64) {
-    // Pass 2: packed key (x, then y, then z: lexicographic order), radix sort, runs.
-    std::vector<KeyIndex> ki;
-    ki.reserve(n);
-    for (size_t i = 0; i < cloud.size(); ++i) {
-      int64_t q[3];
-      if (!voxel_of(cloud[i], q)) continue;
-      uint64_t key = static_cast<uint64_t>(q[0]) - static_cast<uint64_t>(lo[0]);
-      for (int k = 1; k < 3; ++k) {
-        key = bits[k] ? (key << bits[k]) : key;
-        key |= static_cast<uint64_t>(q[k]) - static_cast<uint64_t>(lo[k]);
-      }
-      ki.push_back({key, static_cast<uint32_t>(i)});
-    }
-    radix_sort(ki, total_bits);
-    size_t j = 0;
-    while (j < n) {
-      size_t e = j + 1;
-      while (e < n && ki[e].key == ki[j].key) ++e;
-      emit(&ki[j], &ki[e]);
-      j = e;
-    }
-    return out;
+  radix_sort(ki, bits[0] + bits[1] + bits[2]);
+  size_t j = 0;
+  while (j < n) {
+    size_t e = j + 1;
+    while (e < n && ki[e].key == ki[j].key) ++e;
+    emit_centroid(cloud, &ki[j], &ki[e], out);
+    j = e;
   }
+}
 
-  // Keys too wide to pack: sort index triples (stable, so the summation order is fixed).
+// Keys too wide to pack: index triples sorted (stable, so the summation order is fixed).
+void downsample_wide(const PointCloud& cloud, double voxel_m, std::size_t n, PointCloud& out) {
   struct Wide {
     int64_t q[3];
     uint32_t index;
@@ -141,7 +130,7 @@ PointCloud voxel_downsample(const PointCloud& cloud, double voxel_m) {
   w.reserve(n);
   for (size_t i = 0; i < cloud.size(); ++i) {
     Wide x;
-    if (!voxel_of(cloud[i], x.q)) continue;
+    if (!voxel_of(cloud[i], voxel_m, x.q)) continue;
     x.index = static_cast<uint32_t>(i);
     w.push_back(x);
   }
@@ -154,8 +143,28 @@ PointCloud voxel_downsample(const PointCloud& cloud, double voxel_m) {
     size_t e = j;
     run.clear();
     while (e < n && std::equal(w[e].q, w[e].q + 3, w[j].q)) run.push_back({0, w[e++].index});
-    emit(run.data(), run.data() + run.size());
+    emit_centroid(cloud, run.data(), run.data() + run.size(), out);
     j = e;
+  }
+}
+
+}  // namespace
+
+PointCloud voxel_downsample(const PointCloud& cloud, double voxel_m) {
+  if (!(voxel_m > 0.0) || !std::isfinite(voxel_m)) return cloud;
+  if (cloud.size() > std::numeric_limits<uint32_t>::max()) {
+    throw std::invalid_argument("voxel_downsample: too many points");
+  }
+  int64_t lo[3], hi[3];
+  const std::size_t n = voxel_range(cloud, voxel_m, lo, hi);
+  PointCloud out;
+  if (n == 0) return out;
+  int bits[3];
+  for (int k = 0; k < 3; ++k) bits[k] = bit_width(static_cast<uint64_t>(hi[k]) - static_cast<uint64_t>(lo[k]));
+  if (bits[0] + bits[1] + bits[2] <= 64) {
+    downsample_packed(cloud, voxel_m, n, lo, bits, out);
+  } else {
+    downsample_wide(cloud, voxel_m, n, out);
   }
   return out;
 }

@@ -267,130 +267,110 @@ std::string model_file_path(const std::string& file_name) {
 
 std::string default_rig_path(RigKind kind) { return model_file_path("rig_" + to_string(kind) + ".xml"); }
 
-RigModel load_rig(const std::string& path) {
-  ModelPtr mp = load_mj_model(path);
-  const mjModel* m = mp.get();
-  RigModel rig;
-  rig.model_path = path;
-  try {
-    rig.kind = parse_rig_kind(custom_text(m, path, "pbnbv_rig_kind"));
-  } catch (const std::invalid_argument& e) {
-    fail(path, std::string("pbnbv_rig_kind: ") + e.what());
-  }
-  {
-    const int id = mj_name2id(m, mjOBJ_TEXT, "pbnbv_arm_name");
-    rig.arm_name = id >= 0 ? std::string(m->text_data + m->text_adr[id])
-                           : (rig.kind == RigKind::kFree ? "virtual gantry" : "");
-  }
+namespace {
 
-  const Eigen::Vector3d ex = Eigen::Vector3d::UnitX(), ey = Eigen::Vector3d::UnitY(),
-                        ez = Eigen::Vector3d::UnitZ();
-  const int flange = body_id(m, path, "flange");
-  const int camera = body_id(m, path, "camera_optical");
-  if (m->body_jntnum[flange] != 0 || m->body_jntnum[camera] != 0) {
-    fail(path, "bodies \"flange\" and \"camera_optical\" must not carry joints");
-  }
-  if (rig.kind == RigKind::kArm) {
-    load_arm_chain(m, path, flange, &rig);
-  } else {
-    const std::vector<ChainSpec> spec = {
-        {"gantry_x", mjJNT_SLIDE, ex},     {"gantry_y", mjJNT_SLIDE, ey},
-        {"gantry_z", mjJNT_SLIDE, ez},     {"gantry_yaw", mjJNT_HINGE, ez},
-        {"gantry_pitch", mjJNT_HINGE, ey}, {"gantry_roll", mjJNT_HINGE, ex}};
-    std::vector<int> jids, bids;
-    check_chain_joints(m, path, spec, &jids, &bids);
-    for (int i = 0; i < 6; ++i) {
-      rig.joint_names.push_back(spec[i].name);
-      rig.q_lower[i] = m->jnt_range[2 * jids[i]];
-      rig.q_upper[i] = m->jnt_range[2 * jids[i] + 1];
-      if (!(rig.q_lower[i] < rig.q_upper[i])) {
-        fail(path, std::string("joint \"") + spec[i].name + "\" has an empty range");
-      }
-      if (!near(body_local_pose(m, bids[i]).translation(), Eigen::Vector3d::Zero())) {
-        fail(path, "gantry body of joint " + rig.joint_names[i] + " must sit at its parent's origin");
-      }
+// The free rig's gantry: six joints (x, y, z, yaw, pitch, roll) ending in the flange.
+void load_gantry_chain(const mjModel* m, const std::string& path, int flange, RigModel* out) {
+  RigModel& rig = *out;
+  const Eigen::Vector3d ex = Eigen::Vector3d::UnitX(), ey = Eigen::Vector3d::UnitY(), ez = Eigen::Vector3d::UnitZ();
+  const std::vector<ChainSpec> spec = {
+      {"gantry_x", mjJNT_SLIDE, ex},     {"gantry_y", mjJNT_SLIDE, ey},
+      {"gantry_z", mjJNT_SLIDE, ez},     {"gantry_yaw", mjJNT_HINGE, ez},
+      {"gantry_pitch", mjJNT_HINGE, ey}, {"gantry_roll", mjJNT_HINGE, ex}};
+  std::vector<int> jids, bids;
+  check_chain_joints(m, path, spec, &jids, &bids);
+  for (int i = 0; i < 6; ++i) {
+    rig.joint_names.push_back(spec[i].name);
+    rig.q_lower[i] = m->jnt_range[2 * jids[i]];
+    rig.q_upper[i] = m->jnt_range[2 * jids[i] + 1];
+    if (!(rig.q_lower[i] < rig.q_upper[i])) {
+      fail(path, std::string("joint \"") + spec[i].name + "\" has an empty range");
     }
-    const int base_body = m->body_parentid[bids[0]];
-    if (m->body_weldid[base_body] != 0) {
-      fail(path, "the body carrying the first joint must be attached to a static body");
-    }
-    rig.world_T_base = body_world_pose_static(m, base_body);
-    if (m->body_parentid[flange] != bids[5] || !near(body_local_pose(m, flange).translation(), Eigen::Vector3d::Zero()) ||
-        !is_identity_rotation(body_local_pose(m, flange))) {
-      fail(path, "body \"flange\" must be a child of the last joint's body, coinciding with its frame");
+    if (!near(body_local_pose(m, bids[i]).translation(), Eigen::Vector3d::Zero())) {
+      fail(path, "gantry body of joint " + rig.joint_names[i] + " must sit at its parent's origin");
     }
   }
+  const int base_body = m->body_parentid[bids[0]];
+  if (m->body_weldid[base_body] != 0) {
+    fail(path, "the body carrying the first joint must be attached to a static body");
+  }
+  rig.world_T_base = body_world_pose_static(m, base_body);
+  if (m->body_parentid[flange] != bids[5] || !near(body_local_pose(m, flange).translation(), Eigen::Vector3d::Zero()) ||
+      !is_identity_rotation(body_local_pose(m, flange))) {
+    fail(path, "body \"flange\" must be a child of the last joint's body, coinciding with its frame");
+  }
+}
 
-  // Camera.
-  if (m->body_parentid[camera] != flange) {
-    fail(path, "body \"camera_optical\" must be a child of body \"flange\"");
+// The arm rig's turntable: a hinge about world +z through the origin carrying the object mount;
+// its speed limit and the calibrated zero.
+void load_turntable(const mjModel* m, const std::string& path, int tt, int mount, RigModel* out) {
+  RigModel& rig = *out;
+  const Eigen::Vector3d ez = Eigen::Vector3d::UnitZ();
+  if (tt < 0) fail(path, "missing joint \"turntable\"");
+  if (m->jnt_type[tt] != mjJNT_HINGE) fail(path, "joint \"turntable\" must be a hinge");
+  if (std::abs(m->qpos0[m->jnt_qposadr[tt]]) > 1e-12) {
+    fail(path, "joint \"turntable\" has a nonzero reference position");
   }
-  rig.flange_T_camera = body_local_pose(m, camera);
-  if (mj_name2id(m, mjOBJ_CAMERA, "depth") < 0) fail(path, "missing camera \"depth\"");
-  if (mj_name2id(m, mjOBJ_GEOM, "keepout") < 0) fail(path, "missing geom \"keepout\"");
-
-  // Object mount and turntable.
-  const int mount = body_id(m, path, "object_mount");
-  const int tt = mj_name2id(m, mjOBJ_JOINT, "turntable");
-  if (rig.kind == RigKind::kArm) {
-    if (tt < 0) fail(path, "missing joint \"turntable\"");
-    if (m->jnt_type[tt] != mjJNT_HINGE) fail(path, "joint \"turntable\" must be a hinge");
-    if (std::abs(m->qpos0[m->jnt_qposadr[tt]]) > 1e-12) {
-      fail(path, "joint \"turntable\" has a nonzero reference position");
-    }
-    // Turntable axis in the world at angle 0 must be world z through the origin.
-    const int tb = m->jnt_bodyid[tt];
-    if (m->body_weldid[m->body_parentid[tb]] != 0 || m->body_jntnum[tb] != 1) {
-      fail(path, "the turntable platter must be a single-joint body on a static body");
-    }
-    const Pose w_tb = body_world_pose_static(m, tb);
-    const Eigen::Vector3d axis_l(m->jnt_axis[3 * tt], m->jnt_axis[3 * tt + 1],
-                                 m->jnt_axis[3 * tt + 2]);
-    const Eigen::Vector3d anchor_l(m->jnt_pos[3 * tt], m->jnt_pos[3 * tt + 1],
-                                   m->jnt_pos[3 * tt + 2]);
-    const Eigen::Vector3d axis_w = w_tb.linear() * axis_l;
-    const Eigen::Vector3d anchor_w = w_tb * anchor_l;
-    if (!near(axis_w, ez) || std::hypot(anchor_w.x(), anchor_w.y()) > 1e-9) {
-      fail(path, "the turntable axis must be world +z through the world origin (axis " +
-                     vec_str(axis_w) + " through " + vec_str(anchor_w) + ")");
-    }
-    int b = mount;
-    bool on_platter = false;
-    while (b > 0) {
-      if (b == tb) on_platter = true;
-      if (b != tb && b != mount && m->body_jntnum[b] != 0) on_platter = false;
-      b = m->body_parentid[b];
-    }
-    if (!on_platter || m->body_jntnum[mount] != 0) {
-      fail(path, "body \"object_mount\" must be fixed on the turntable platter");
-    }
-    rig.world_T_turntable = body_world_pose_static(m, mount);
-    if (!near(rig.world_T_turntable.linear().col(2), ez) ||
-        std::hypot(rig.world_T_turntable.translation().x(),
-                   rig.world_T_turntable.translation().y()) > 1e-9) {
-      fail(path, "body \"object_mount\" must have z along the turntable axis and its origin on it");
-    }
-    rig.has_turntable = true;
-    rig.turntable_qd_max = custom_numeric(m, path, "pbnbv_turntable_speed_limit", 1)[0];
-    if (!(rig.turntable_qd_max > 0)) fail(path, "pbnbv_turntable_speed_limit must be positive");
-    const Eigen::Vector3d b_rel = rig.world_T_base.translation() - rig.world_T_turntable.translation();
-    rig.preferred_azimuth_rad = std::atan2(b_rel.y(), b_rel.x());
-    if (mj_name2id(m, mjOBJ_NUMERIC, "pbnbv_turntable_zero") >= 0) {
-      rig.turntable_zero_rad = custom_numeric(m, path, "pbnbv_turntable_zero", 1)[0];
-      if (!(std::abs(rig.turntable_zero_rad) <= kPi)) fail(path, "pbnbv_turntable_zero must be within [-pi, pi]");
-    }
-  } else {
-    if (tt >= 0) fail(path, "the free rig must not have a turntable joint");
-    if (m->body_weldid[mount] != 0) fail(path, "body \"object_mount\" must be static");
-    rig.world_T_turntable = body_world_pose_static(m, mount);
-    if (!near(rig.world_T_turntable.translation(), Eigen::Vector3d::Zero()) ||
-        !is_identity_rotation(rig.world_T_turntable)) {
-      fail(path, "free rig: body \"object_mount\" must sit at the world origin, unrotated");
-    }
-    rig.has_turntable = false;
-    rig.preferred_azimuth_rad = 0;
+  // Turntable axis in the world at angle 0 must be world z through the origin.
+  const int tb = m->jnt_bodyid[tt];
+  if (m->body_weldid[m->body_parentid[tb]] != 0 || m->body_jntnum[tb] != 1) {
+    fail(path, "the turntable platter must be a single-joint body on a static body");
   }
+  const Pose w_tb = body_world_pose_static(m, tb);
+  const Eigen::Vector3d axis_l(m->jnt_axis[3 * tt], m->jnt_axis[3 * tt + 1],
+                               m->jnt_axis[3 * tt + 2]);
+  const Eigen::Vector3d anchor_l(m->jnt_pos[3 * tt], m->jnt_pos[3 * tt + 1],
+                                 m->jnt_pos[3 * tt + 2]);
+  const Eigen::Vector3d axis_w = w_tb.linear() * axis_l;
+  const Eigen::Vector3d anchor_w = w_tb * anchor_l;
+  if (!near(axis_w, ez) || std::hypot(anchor_w.x(), anchor_w.y()) > 1e-9) {
+    fail(path, "the turntable axis must be world +z through the world origin (axis " +
+                   vec_str(axis_w) + " through " + vec_str(anchor_w) + ")");
+  }
+  int b = mount;
+  bool on_platter = false;
+  while (b > 0) {
+    if (b == tb) on_platter = true;
+    if (b != tb && b != mount && m->body_jntnum[b] != 0) on_platter = false;
+    b = m->body_parentid[b];
+  }
+  if (!on_platter || m->body_jntnum[mount] != 0) {
+    fail(path, "body \"object_mount\" must be fixed on the turntable platter");
+  }
+  rig.world_T_turntable = body_world_pose_static(m, mount);
+  if (!near(rig.world_T_turntable.linear().col(2), ez) ||
+      std::hypot(rig.world_T_turntable.translation().x(),
+                 rig.world_T_turntable.translation().y()) > 1e-9) {
+    fail(path, "body \"object_mount\" must have z along the turntable axis and its origin on it");
+  }
+  rig.has_turntable = true;
+  rig.turntable_qd_max = custom_numeric(m, path, "pbnbv_turntable_speed_limit", 1)[0];
+  if (!(rig.turntable_qd_max > 0)) fail(path, "pbnbv_turntable_speed_limit must be positive");
+  const Eigen::Vector3d b_rel = rig.world_T_base.translation() - rig.world_T_turntable.translation();
+  rig.preferred_azimuth_rad = std::atan2(b_rel.y(), b_rel.x());
+  if (mj_name2id(m, mjOBJ_NUMERIC, "pbnbv_turntable_zero") >= 0) {
+    rig.turntable_zero_rad = custom_numeric(m, path, "pbnbv_turntable_zero", 1)[0];
+    if (!(std::abs(rig.turntable_zero_rad) <= kPi)) fail(path, "pbnbv_turntable_zero must be within [-pi, pi]");
+  }
+}
 
+// The free rig's object mount: static, at the world origin, unrotated; no turntable.
+void load_free_mount(const mjModel* m, const std::string& path, int tt, int mount, RigModel* out) {
+  RigModel& rig = *out;
+  if (tt >= 0) fail(path, "the free rig must not have a turntable joint");
+  if (m->body_weldid[mount] != 0) fail(path, "body \"object_mount\" must be static");
+  rig.world_T_turntable = body_world_pose_static(m, mount);
+  if (!near(rig.world_T_turntable.translation(), Eigen::Vector3d::Zero()) ||
+      !is_identity_rotation(rig.world_T_turntable)) {
+    fail(path, "free rig: body \"object_mount\" must sit at the world origin, unrotated");
+  }
+  rig.has_turntable = false;
+  rig.preferred_azimuth_rad = 0;
+}
+
+// The speed limits, the home pose, the working volume and the platter's radius.
+void load_limits(const mjModel* m, const std::string& path, RigModel* out) {
+  RigModel& rig = *out;
   const std::vector<double> qd = custom_numeric(m, path, "pbnbv_joint_speed_limits", 6);
   const std::vector<double> qh = custom_numeric(m, path, "pbnbv_q_home", 6);
   for (int i = 0; i < 6; ++i) {
@@ -409,6 +389,53 @@ RigModel load_rig(const std::string& path) {
   if (const int platter = mj_name2id(m, mjOBJ_GEOM, "platter"); platter >= 0 && m->geom_type[platter] == mjGEOM_CYLINDER) {
     rig.turntable_radius_m = m->geom_size[3 * platter];
   }
+}
+
+}  // namespace
+
+RigModel load_rig(const std::string& path) {
+  ModelPtr mp = load_mj_model(path);
+  const mjModel* m = mp.get();
+  RigModel rig;
+  rig.model_path = path;
+  try {
+    rig.kind = parse_rig_kind(custom_text(m, path, "pbnbv_rig_kind"));
+  } catch (const std::invalid_argument& e) {
+    fail(path, std::string("pbnbv_rig_kind: ") + e.what());
+  }
+  {
+    const int id = mj_name2id(m, mjOBJ_TEXT, "pbnbv_arm_name");
+    rig.arm_name = id >= 0 ? std::string(m->text_data + m->text_adr[id])
+                           : (rig.kind == RigKind::kFree ? "virtual gantry" : "");
+  }
+  const int flange = body_id(m, path, "flange");
+  const int camera = body_id(m, path, "camera_optical");
+  if (m->body_jntnum[flange] != 0 || m->body_jntnum[camera] != 0) {
+    fail(path, "bodies \"flange\" and \"camera_optical\" must not carry joints");
+  }
+  if (rig.kind == RigKind::kArm) {
+    load_arm_chain(m, path, flange, &rig);
+  } else {
+    load_gantry_chain(m, path, flange, &rig);
+  }
+
+  // Camera.
+  if (m->body_parentid[camera] != flange) {
+    fail(path, "body \"camera_optical\" must be a child of body \"flange\"");
+  }
+  rig.flange_T_camera = body_local_pose(m, camera);
+  if (mj_name2id(m, mjOBJ_CAMERA, "depth") < 0) fail(path, "missing camera \"depth\"");
+  if (mj_name2id(m, mjOBJ_GEOM, "keepout") < 0) fail(path, "missing geom \"keepout\"");
+
+  // Object mount and turntable.
+  const int mount = body_id(m, path, "object_mount");
+  const int tt = mj_name2id(m, mjOBJ_JOINT, "turntable");
+  if (rig.kind == RigKind::kArm) {
+    load_turntable(m, path, tt, mount, &rig);
+  } else {
+    load_free_mount(m, path, tt, mount, &rig);
+  }
+  load_limits(m, path, &rig);
   rig.camera = read_camera(m, path);
   return rig;
 }

@@ -124,18 +124,22 @@ void SurfaceSettings::validate() const {
   if (!(point_spacing_m >= 0)) throw std::invalid_argument("point spacing " + std::to_string(point_spacing_m) + " m is negative");
 }
 
-TriangleMesh fuse_tsdf(const std::vector<SurfaceFrame>& frames, const SurfaceSettings& s, SurfaceStats* stats) {
-  s.validate();
-  const double v = s.voxel_m;
-  const double trunc = s.truncation_voxels * v;
-  std::size_t num_points = 0;
-  for (const auto& f : frames) num_points += f.points.size();
-  if (num_points == 0) throw std::invalid_argument("TSDF fusion: the frames hold no points");
+namespace {
 
-  // Blocks within the truncation distance of any point; each frame updates the ones near its
-  // own points (as its depth image would: farther free space is left alone).
+// The TSDF's blocks of voxels, found by their block index.
+struct BlockGrid {
   std::unordered_map<Key, int> block_of;
   std::vector<Block> blocks;
+};
+
+// Blocks within the truncation distance `trunc` of any point; returns, per frame, the blocks
+// near its own points (the ones its integration updates).
+std::vector<std::vector<int>> allocate_blocks(const std::vector<SurfaceFrame>& frames, double v, double trunc,
+                                              std::size_t num_points, BlockGrid& grid) {
+  // Blocks within the truncation distance of any point; each frame updates the ones near its
+  // own points (as its depth image would: farther free space is left alone).
+  std::unordered_map<Key, int>& block_of = grid.block_of;
+  std::vector<Block>& blocks = grid.blocks;
   std::vector<std::vector<int>> frame_blocks(frames.size());
   block_of.reserve(num_points / 8);
   for (std::size_t fi = 0; fi < frames.size(); ++fi) {
@@ -167,53 +171,52 @@ TriangleMesh fuse_tsdf(const std::vector<SurfaceFrame>& frames, const SurfaceSet
           }
     }
   }
+  return frame_blocks;
+}
 
-  // Integration, frame by frame, blocks in parallel.
-  std::vector<int> scales;
-  for (std::size_t fi = 0; fi < frames.size(); ++fi) {
-    const SurfaceFrame& f = frames[fi];
-    if (f.points.empty()) continue;
-    const int scale = image_scale(f, s);
-    scales.push_back(scale);
-    const SplatImage im = splat(f, s.camera, scale);
-    const std::vector<Eigen::Vector3f> normals = image_normals(f, im, 2.0 * trunc);
-    const Pose camera_T_object = f.object_T_camera.inverse();
-    const std::vector<int>& touched = frame_blocks[fi];
-    parallel_for(touched.size(), [&](std::size_t begin, std::size_t end, int) {
-      for (std::size_t bi = begin; bi < end; ++bi) {
-        Block& b = blocks[touched[bi]];
-        for (int z = 0; z < kBlock; ++z)
-          for (int y = 0; y < kBlock; ++y)
-            for (int x = 0; x < kBlock; ++x) {
-              const Eigen::Vector3d pw = (b.origin + Eigen::Vector3i(x, y, z)).cast<double>() * v;
-              const Eigen::Vector3d q = camera_T_object * pw;
-              if (!(q.z() > 0)) continue;
-              const double uf = im.fx * q.x() / q.z() + im.cx, vf = im.fy * q.y() / q.z() + im.cy;
-              const int u = int(std::lround(uf)), w = int(std::lround(vf));
-              // The pixel's point, else the nearest filled neighbour (the splat has gaps).
-              int idx = -1;
-              static constexpr int kDu[9] = {0, 1, -1, 0, 0, 1, -1, 1, -1}, kDv[9] = {0, 0, 0, 1, -1, 1, 1, -1, -1};
-              for (int n = 0; n < 9 && idx < 0; ++n) {
-                const int uu = u + kDu[n], vv = w + kDv[n];
-                if (uu < 0 || vv < 0 || uu >= im.width || vv >= im.height) continue;
-                idx = im.index[std::size_t(vv) * im.width + uu];
-              }
-              if (idx < 0) continue;
-              const Eigen::Vector3d p = f.points[idx].cast<double>();
-              const double along = (camera_T_object * p).z() - q.z();  // > 0: the voxel is in front
-              if (along < -trunc) continue;                              // hidden behind the surface
-              // Point-to-plane where the point has a normal, else along the ray.
-              double d = along > trunc || normals[idx].isZero() ? along : normals[idx].cast<double>().dot(pw - p);
-              d = std::clamp(d, -trunc, trunc) / trunc;
-              const int li = local_index(x, y, z);
-              const float wsum = b.weight[li] + 1.0f;
-              b.sdf[li] = float((b.sdf[li] * b.weight[li] + d) / wsum);
-              b.weight[li] = wsum;
+// One frame into the blocks it touches, in parallel: each voxel's signed distance to the frame's
+// surface (its splat at `scale` camera pixels a splat pixel), truncated, averaged with the weights.
+void integrate_frame(const SurfaceFrame& f, const SurfaceSettings& s, int scale, double v, double trunc,
+                     const std::vector<int>& touched, BlockGrid& grid) {
+  const SplatImage im = splat(f, s.camera, scale);
+  const std::vector<Eigen::Vector3f> normals = image_normals(f, im, 2.0 * trunc);
+  const Pose camera_T_object = f.object_T_camera.inverse();
+  parallel_for(touched.size(), [&](std::size_t begin, std::size_t end, int) {
+    for (std::size_t bi = begin; bi < end; ++bi) {
+      Block& b = grid.blocks[touched[bi]];
+      for (int z = 0; z < kBlock; ++z)
+        for (int y = 0; y < kBlock; ++y)
+          for (int x = 0; x < kBlock; ++x) {
+            const Eigen::Vector3d pw = (b.origin + Eigen::Vector3i(x, y, z)).cast<double>() * v;
+            const Eigen::Vector3d q = camera_T_object * pw;
+            if (!(q.z() > 0)) continue;
+            const double uf = im.fx * q.x() / q.z() + im.cx, vf = im.fy * q.y() / q.z() + im.cy;
+            const int u = int(std::lround(uf)), w = int(std::lround(vf));
+            // The pixel's point, else the nearest filled neighbour (the splat has gaps).
+            int idx = -1;
+            static constexpr int kDu[9] = {0, 1, -1, 0, 0, 1, -1, 1, -1}, kDv[9] = {0, 0, 0, 1, -1, 1, 1, -1, -1};
+            for (int n = 0; n < 9 && idx < 0; ++n) {
+              const int uu = u + kDu[n], vv = w + kDv[n];
+              if (uu < 0 || vv < 0 || uu >= im.width || vv >= im.height) continue;
+              idx = im.index[std::size_t(vv) * im.width + uu];
             }
-      }
-    }, 16);
-  }
+            if (idx < 0) continue;
+            const Eigen::Vector3d p = f.points[idx].cast<double>();
+            const double along = (camera_T_object * p).z() - q.z();  // > 0: the voxel is in front
+            if (along < -trunc) continue;                              // hidden behind the surface
+            // Point-to-plane where the point has a normal, else along the ray.
+            double d = along > trunc || normals[idx].isZero() ? along : normals[idx].cast<double>().dot(pw - p);
+            d = std::clamp(d, -trunc, trunc) / trunc;
+            const int li = local_index(x, y, z);
+            const float wsum = b.weight[li] + 1.0f;
+            b.sdf[li] = float((b.sdf[li] * b.weight[li] + d) / wsum);
+            b.weight[li] = wsum;
+          }
+    }
+  }, 16);
+}
 
+TriangleMesh extract_surface(const BlockGrid& grid, double v) {
   // Marching cubes over every cube whose eight corners were seen. Corner c of the cube at grid
   // point g is g + offset(c) in PCL's numbering; edge e joins corners kEdge[e].
   auto corner_offset = [](int c) {
@@ -223,9 +226,9 @@ TriangleMesh fuse_tsdf(const std::vector<SurfaceFrame>& frames, const SurfaceSet
                                        {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
   auto lookup = [&](const Eigen::Vector3i& g, float& sdf) {
     const Eigen::Vector3i bk(floor_div(g.x(), kBlock), floor_div(g.y(), kBlock), floor_div(g.z(), kBlock));
-    const auto it = block_of.find(pack(bk));
-    if (it == block_of.end()) return false;
-    const Block& b = blocks[it->second];
+    const auto it = grid.block_of.find(pack(bk));
+    if (it == grid.block_of.end()) return false;
+    const Block& b = grid.blocks[it->second];
     const Eigen::Vector3i l = g - b.origin;
     const int li = local_index(l.x(), l.y(), l.z());
     sdf = b.sdf[li];
@@ -233,8 +236,8 @@ TriangleMesh fuse_tsdf(const std::vector<SurfaceFrame>& frames, const SurfaceSet
   };
   TriangleMesh mesh;
   std::unordered_map<Key, int> vertex_of_edge;  // key: the edge's lower grid point and axis
-  vertex_of_edge.reserve(blocks.size() * 64);
-  for (const Block& b : blocks) {
+  vertex_of_edge.reserve(grid.blocks.size() * 64);
+  for (const Block& b : grid.blocks) {
     for (int z = 0; z < kBlock; ++z)
       for (int y = 0; y < kBlock; ++y)
         for (int x = 0; x < kBlock; ++x) {
@@ -288,10 +291,33 @@ TriangleMesh fuse_tsdf(const std::vector<SurfaceFrame>& frames, const SurfaceSet
           }
         }
   }
+  return mesh;
+}
+
+}  // namespace
+
+TriangleMesh fuse_tsdf(const std::vector<SurfaceFrame>& frames, const SurfaceSettings& s, SurfaceStats* stats) {
+  s.validate();
+  const double v = s.voxel_m;
+  const double trunc = s.truncation_voxels * v;
+  std::size_t num_points = 0;
+  for (const auto& f : frames) num_points += f.points.size();
+  if (num_points == 0) throw std::invalid_argument("TSDF fusion: the frames hold no points");
+  BlockGrid grid;
+  const std::vector<std::vector<int>> frame_blocks = allocate_blocks(frames, v, trunc, num_points, grid);
+  // Integration, frame by frame, blocks in parallel.
+  std::vector<int> scales;
+  for (std::size_t fi = 0; fi < frames.size(); ++fi) {
+    if (frames[fi].points.empty()) continue;
+    const int scale = image_scale(frames[fi], s);
+    scales.push_back(scale);
+    integrate_frame(frames[fi], s, scale, v, trunc, frame_blocks[fi], grid);
+  }
+  TriangleMesh mesh = extract_surface(grid, v);
   if (stats) {
     stats->frames = frames.size();
     stats->points = num_points;
-    stats->voxels = blocks.size() * kBlockVoxels;
+    stats->voxels = grid.blocks.size() * kBlockVoxels;
     if (!scales.empty()) {
       std::nth_element(scales.begin(), scales.begin() + scales.size() / 2, scales.end());
       stats->image_scale = scales[scales.size() / 2];
