@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -196,6 +197,167 @@ std::pair<double, double> mm_deg(const Pose& a, const Pose& b) {
   return {(a.translation() - b.translation()).norm() * 1e3, rotation_angle_rad(a.linear(), b.linear()) / kDeg};
 }
 
+// View i of the calibration: moved to, captured, the sphere fitted in the camera frame; `frame`
+// records what happened (and why a view was skipped). Throws when the rig's drivers or the camera
+// fell silent.
+std::optional<SphereObservation> observe_view(CalibrationRun& run, const CalibrateOptions& o, const Pose& view,
+                                              std::size_t i, int64_t& request_id, json& frame) {
+  const Eigen::Vector3d s = o.sphere.centre_in_mount();
+  MoveRequest m;
+  m.scan_id = kCalibrationScan;
+  m.iteration = static_cast<int>(i);
+  m.request_id = ++request_id;
+  m.object_T_camera = view;
+  m.speed_scale = o.speed_scale;
+  m.timeout_s = kMoveTimeoutS;
+  const MoveResult moved = run.move(m, o.status_wait_s);
+  if (moved.status == MoveStatus::kRigSilent) {
+    throw std::runtime_error("view " + std::to_string(i) + ": the rig's drivers fell silent for more than " +
+                             fixed(o.status_wait_s, 1) + " s (--status-wait): " + moved.reason);
+  }
+  if (moved.status != MoveStatus::kReached) {
+    std::cerr << "pbnbv calibrate: view " << i << " skipped: " << to_string(moved.status) << ": " << moved.reason
+              << std::endl;
+    frame["skipped"] = std::string(to_string(moved.status)) + ": " + moved.reason;
+    return std::nullopt;
+  }
+  CaptureRequest c;
+  c.scan_id = kCalibrationScan;
+  c.iteration = static_cast<int>(i);
+  c.request_id = ++request_id;
+  c.not_before_utime = moved.settled_utime;
+  // Only what lies near the sphere as the model places it (its errors are millimetres), above
+  // the platter.
+  const double margin = o.sphere.radius_m + 0.05;
+  c.crop = Eigen::AlignedBox3d(s - Eigen::Vector3d::Constant(margin), s + Eigen::Vector3d::Constant(margin));
+  c.ground_clearance_m = 0.01;
+  c.timeout_s = kCaptureTimeoutS;
+  const CaptureResult cap = run.capture(c);
+  if (!cap.ok) {
+    if (cap.message.find("no frame") != std::string::npos || cap.depth_frame_seq < 0) {
+      throw std::runtime_error("view " + std::to_string(i) + ": no depth frame (DEPTH_FRAME from the camera driver): " +
+                               cap.message);
+    }
+    std::cerr << "pbnbv calibrate: view " << i << " skipped: the sphere is not in the frame (" << cap.message << ")"
+              << std::endl;
+    frame["skipped"] = "capture: " + cap.message;
+    return std::nullopt;
+  }
+  // Back to the camera frame: the points were placed with cap.object_T_camera.
+  const Pose camera_T_object = cap.object_T_camera.inverse();
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(cap.points.size());
+  for (const Eigen::Vector3f& p : cap.points) points.push_back(camera_T_object * p.cast<double>());
+  const SphereFit fit = fit_sphere_known_radius(points, o.sphere.radius_m);
+  frame["joint_position_rad"] = vec6_json(cap.joint_position_rad);
+  frame["turntable_angle_rad"] = cap.turntable_angle_rad;
+  frame["depth_frame_seq"] = cap.depth_frame_seq;
+  frame["points"] = points.size();
+  frame["fit"] = {{"ok", fit.ok}, {"inliers", fit.inliers}, {"rms_mm", fit.rms_m * 1e3}, {"cap_spread", fit.cap_spread}};
+  if (!fit.ok) {
+    std::cerr << "pbnbv calibrate: view " << i << " skipped: the sphere is not seen (" << fit.why << ")" << std::endl;
+    frame["skipped"] = "sphere fit: " + fit.why;
+    return std::nullopt;
+  }
+  frame["fit"]["centre_in_camera_m"] = to_json(fit.centre);
+  std::cout << fmt::format("  view {:2}: turntable {:7} deg, sphere fitted to {} points (rms {} mm)", i,
+                           fixed(cap.turntable_angle_rad / kDeg, 1), fit.inliers, fixed(fit.rms_m * 1e3, 3))
+            << std::endl;
+  return SphereObservation{cap.joint_position_rad, cap.turntable_angle_rad, fit.centre};
+}
+
+// calibration.json: the corrections, the axis as measured and every frame with its residuals.
+json calibration_json(const CalibrateOptions& o, const RigModel& rig, const RigModel& calibrated, const RigCalibration& cal,
+                      const CalibrationSolveOptions& so, const fs::path& rig_out, std::size_t num_views,
+                      std::size_t num_observations, json& frames) {
+  const Eigen::Vector3d s = o.sphere.centre_in_mount();
+  const auto [mount_mm, mount_deg] = mm_deg(rig.flange_T_camera, cal.flange_T_camera);
+  const double zero_deg = (cal.turntable_zero_rad - rig.turntable_zero_rad) / kDeg;
+  const double tilt_deg = std::acos(std::clamp(cal.axis_direction_world.dot(rig.world_T_turntable.linear().col(2)), -1.0, 1.0)) / kDeg;
+  const Eigen::Vector3d axis_offset = cal.axis_point_world - rig.world_T_turntable.translation();
+  for (std::size_t k = 0, f = 0; f < frames.size(); ++f) {
+    if (!frames[f].contains("observation")) continue;
+    frames[f]["residual_before_mm"] = cal.residual_before_m[k] * 1e3;
+    frames[f]["residual_after_mm"] = cal.residual_after_m[k] * 1e3;
+    frames[f]["used"] = static_cast<bool>(cal.used[k]);
+    ++k;
+  }
+  const int used = static_cast<int>(std::count(cal.used.begin(), cal.used.end(), true));
+  json j;
+  j["rig_model"] = o.rig_model;
+  j["calibrated_rig_model"] = rig_out.string();
+  j["sphere"] = {{"radius_m", o.sphere.radius_m}, {"offset_m", o.sphere.offset_m}, {"centre_in_mount_m", to_json(s)}};
+  j["views"] = num_views;
+  j["frames_fitted"] = num_observations;
+  j["frames_used"] = used;
+  j["fit_axis"] = so.fit_axis;
+  j["flange_T_camera"] = to_json(calibrated.flange_T_camera);
+  j["model_flange_T_camera"] = to_json(rig.flange_T_camera);
+  j["hand_eye_correction"] = {{"translation_mm", mount_mm}, {"rotation_deg", mount_deg},
+                              {"model_T_calibrated", to_json(rig.flange_T_camera.inverse() * cal.flange_T_camera)}};
+  j["turntable_zero_rad"] = calibrated.turntable_zero_rad;
+  j["model_turntable_zero_rad"] = rig.turntable_zero_rad;
+  j["turntable_zero_correction_deg"] = zero_deg;
+  j["turntable_axis"] = {{"direction_world", to_json(cal.axis_direction_world)},
+                         {"point_world_m", to_json(cal.axis_point_world)},
+                         {"tilt_from_model_deg", tilt_deg},
+                         {"offset_from_model_mm", to_json(Eigen::Vector3d(axis_offset * 1e3))},
+                         {"in_rig_file", false}};
+  j["rms_before_mm"] = cal.rms_before_m * 1e3;
+  j["rms_after_mm"] = cal.rms_after_m * 1e3;
+  j["iterations"] = cal.iterations;
+  j["frames"] = frames;
+
+  return j;
+}
+
+// report.md: the corrections and a row per view, from calibration.json's figures.
+std::string calibration_report(const CalibrateOptions& o, const json& j, const RigModel& calibrated,
+                               const fs::path& rig_out) {
+  const json& frames = j.at("frames");
+  const double mount_mm = j["hand_eye_correction"]["translation_mm"].get<double>(),
+               mount_deg = j["hand_eye_correction"]["rotation_deg"].get<double>(),
+               zero_deg = j["turntable_zero_correction_deg"].get<double>(),
+               tilt_deg = j["turntable_axis"]["tilt_from_model_deg"].get<double>();
+  const Eigen::Vector3d axis_offset = vec3_from_json(j["turntable_axis"]["offset_from_model_mm"], "axis offset") * 1e-3;
+  const std::size_t fitted = j["frames_fitted"].get<std::size_t>(), num_views = j["views"].get<std::size_t>();
+  const int used = j["frames_used"].get<int>();
+  const double rms_before_m = j["rms_before_mm"].get<double>() * 1e-3, rms_after_m = j["rms_after_mm"].get<double>() * 1e-3;
+  std::ostringstream r;
+  r << "# Calibration of " << o.rig_model << "\n\n"
+    << "Sphere of radius " << fixed(o.sphere.radius_m * 1e3, 1) << " mm, centre " << fixed(o.sphere.offset_m * 1e3, 1)
+    << " mm from the turntable axis on the platter's +x axis. " << fitted << " of " << num_views
+    << " views fitted, " << used << " used.\n\n"
+    << "| correction | value |\n|---|---|\n"
+    << "| hand-eye (camera mount) | " << fixed(mount_mm, 3) << " mm, " << fixed(mount_deg, 4) << " deg |\n"
+    << "| turntable zero | " << fixed(zero_deg, 4) << " deg (reading at the platter's zero: "
+    << fixed(calibrated.turntable_zero_rad / kDeg, 4) << " deg) |\n"
+    << "| turntable axis tilt (reported, not in the file) | " << fixed(tilt_deg, 4) << " deg |\n"
+    << "| turntable axis offset (reported, not in the file) | " << fixed(axis_offset.x() * 1e3, 3) << ", "
+    << fixed(axis_offset.y() * 1e3, 3) << ", " << fixed(axis_offset.z() * 1e3, 3) << " mm |\n"
+    << "| sphere centre residual, rms | before " << fixed(rms_before_m * 1e3, 3) << " mm, after "
+    << fixed(rms_after_m * 1e3, 3) << " mm |\n\n"
+    << "| view | turntable, deg | fit points | fit rms, mm | residual before, mm | after, mm | used |\n"
+    << "|---|---|---|---|---|---|---|\n";
+  for (const json& f : frames) {
+    if (!f.contains("observation")) {
+      r << "| " << f["view"].get<int>() << " | | | | | | skipped: " << f.value("skipped", std::string()) << " |\n";
+      continue;
+    }
+    r << "| " << f["view"].get<int>() << " | " << fixed(f["turntable_angle_rad"].get<double>() / kDeg, 2) << " | "
+      << f["fit"]["inliers"].get<int>() << " | " << fixed(f["fit"]["rms_mm"].get<double>(), 3) << " | "
+      << fixed(f["residual_before_mm"].get<double>(), 3) << " | " << fixed(f["residual_after_mm"].get<double>(), 3)
+      << " | " << (f["used"].get<bool>() ? "yes" : "no (outlier)") << " |\n";
+  }
+  r << "\nThe calibrated rig file " << rig_out.string()
+    << " is the input file with the camera_optical body's pose and pbnbv_turntable_zero replaced. "
+    << "The world frame is the rig file's (the arm defines it); an axis tilt or offset beyond a few hundredths of "
+    << "a degree or millimetre means the turntable stands differently from the file's description: correct the "
+    << "file's platter and table geometry by hand.\n";
+  return r.str();
+
+}
+
 }  // namespace
 
 int run_calibrate(const CalibrateOptions& o) {
@@ -221,72 +383,11 @@ int run_calibrate(const CalibrateOptions& o) {
   int64_t request_id = bus::now_utime();
   for (std::size_t i = 0; i < views.size(); ++i) {
     json frame = {{"view", i}, {"requested_object_T_camera", to_json(views[i])}};
-    MoveRequest m;
-    m.scan_id = kCalibrationScan;
-    m.iteration = static_cast<int>(i);
-    m.request_id = ++request_id;
-    m.object_T_camera = views[i];
-    m.speed_scale = o.speed_scale;
-    m.timeout_s = kMoveTimeoutS;
-    const MoveResult moved = run.move(m, o.status_wait_s);
-    if (moved.status == MoveStatus::kRigSilent) {
-      throw std::runtime_error("view " + std::to_string(i) + ": the rig's drivers fell silent for more than " +
-                               fixed(o.status_wait_s, 1) + " s (--status-wait): " + moved.reason);
+    if (const std::optional<SphereObservation> seen = observe_view(run, o, views[i], i, request_id, frame)) {
+      frame["observation"] = observations.size();
+      observations.push_back(*seen);
     }
-    if (moved.status != MoveStatus::kReached) {
-      std::cerr << "pbnbv calibrate: view " << i << " skipped: " << to_string(moved.status) << ": " << moved.reason
-                << std::endl;
-      frame["skipped"] = std::string(to_string(moved.status)) + ": " + moved.reason;
-      frames.push_back(frame);
-      continue;
-    }
-    CaptureRequest c;
-    c.scan_id = kCalibrationScan;
-    c.iteration = static_cast<int>(i);
-    c.request_id = ++request_id;
-    c.not_before_utime = moved.settled_utime;
-    // Only what lies near the sphere as the model places it (its errors are millimetres), above
-    // the platter.
-    const double margin = o.sphere.radius_m + 0.05;
-    c.crop = Eigen::AlignedBox3d(s - Eigen::Vector3d::Constant(margin), s + Eigen::Vector3d::Constant(margin));
-    c.ground_clearance_m = 0.01;
-    c.timeout_s = kCaptureTimeoutS;
-    const CaptureResult cap = run.capture(c);
-    if (!cap.ok) {
-      if (cap.message.find("no frame") != std::string::npos || cap.depth_frame_seq < 0) {
-        throw std::runtime_error("view " + std::to_string(i) + ": no depth frame (DEPTH_FRAME from the camera driver): " +
-                                 cap.message);
-      }
-      std::cerr << "pbnbv calibrate: view " << i << " skipped: the sphere is not in the frame (" << cap.message << ")"
-                << std::endl;
-      frame["skipped"] = "capture: " + cap.message;
-      frames.push_back(frame);
-      continue;
-    }
-    // Back to the camera frame: the points were placed with cap.object_T_camera.
-    const Pose camera_T_object = cap.object_T_camera.inverse();
-    std::vector<Eigen::Vector3d> points;
-    points.reserve(cap.points.size());
-    for (const Eigen::Vector3f& p : cap.points) points.push_back(camera_T_object * p.cast<double>());
-    const SphereFit fit = fit_sphere_known_radius(points, o.sphere.radius_m);
-    frame["joint_position_rad"] = vec6_json(cap.joint_position_rad);
-    frame["turntable_angle_rad"] = cap.turntable_angle_rad;
-    frame["depth_frame_seq"] = cap.depth_frame_seq;
-    frame["points"] = points.size();
-    frame["fit"] = {{"ok", fit.ok}, {"inliers", fit.inliers}, {"rms_mm", fit.rms_m * 1e3}, {"cap_spread", fit.cap_spread}};
-    if (!fit.ok) {
-      std::cerr << "pbnbv calibrate: view " << i << " skipped: the sphere is not seen (" << fit.why << ")" << std::endl;
-      frame["skipped"] = "sphere fit: " + fit.why;
-      frames.push_back(frame);
-      continue;
-    }
-    frame["fit"]["centre_in_camera_m"] = to_json(fit.centre);
-    frame["observation"] = observations.size();
-    observations.push_back({cap.joint_position_rad, cap.turntable_angle_rad, fit.centre});
     frames.push_back(frame);
-    std::cout << fmt::format("  view {:2}: turntable {:7} deg, sphere fitted to {} points (rms {} mm)", i,
-                             fixed(cap.turntable_angle_rad / kDeg, 1), fit.inliers, fixed(fit.rms_m * 1e3, 3))
-              << std::endl;
   }
   if (static_cast<int>(observations.size()) < kMinFrames) {
     throw std::runtime_error(fmt::format("the sphere was fitted in {} of {} views, at least {} are needed (is the "
@@ -303,82 +404,20 @@ int run_calibrate(const CalibrateOptions& o) {
   write_text_atomic(calibrated_rig_xml(read_text(o.rig_model), o.rig_model, cal.flange_T_camera, cal.turntable_zero_rad),
                     rig_out.string());
   const RigModel calibrated = load_rig(rig_out.string());
-  const auto [mount_mm, mount_deg] = mm_deg(rig.flange_T_camera, cal.flange_T_camera);
-  const double zero_deg = (cal.turntable_zero_rad - rig.turntable_zero_rad) / kDeg;
-  const double tilt_deg = std::acos(std::clamp(cal.axis_direction_world.dot(rig.world_T_turntable.linear().col(2)), -1.0, 1.0)) / kDeg;
-  const Eigen::Vector3d axis_offset = cal.axis_point_world - rig.world_T_turntable.translation();
-  for (std::size_t k = 0, f = 0; f < frames.size(); ++f) {
-    if (!frames[f].contains("observation")) continue;
-    frames[f]["residual_before_mm"] = cal.residual_before_m[k] * 1e3;
-    frames[f]["residual_after_mm"] = cal.residual_after_m[k] * 1e3;
-    frames[f]["used"] = static_cast<bool>(cal.used[k]);
-    ++k;
-  }
-  const int used = static_cast<int>(std::count(cal.used.begin(), cal.used.end(), true));
-  json j;
-  j["rig_model"] = o.rig_model;
-  j["calibrated_rig_model"] = rig_out.string();
-  j["sphere"] = {{"radius_m", o.sphere.radius_m}, {"offset_m", o.sphere.offset_m}, {"centre_in_mount_m", to_json(s)}};
-  j["views"] = views.size();
-  j["frames_fitted"] = observations.size();
-  j["frames_used"] = used;
-  j["fit_axis"] = so.fit_axis;
-  j["flange_T_camera"] = to_json(calibrated.flange_T_camera);
-  j["model_flange_T_camera"] = to_json(rig.flange_T_camera);
-  j["hand_eye_correction"] = {{"translation_mm", mount_mm}, {"rotation_deg", mount_deg},
-                              {"model_T_calibrated", to_json(rig.flange_T_camera.inverse() * cal.flange_T_camera)}};
-  j["turntable_zero_rad"] = calibrated.turntable_zero_rad;
-  j["model_turntable_zero_rad"] = rig.turntable_zero_rad;
-  j["turntable_zero_correction_deg"] = zero_deg;
-  j["turntable_axis"] = {{"direction_world", to_json(cal.axis_direction_world)},
-                         {"point_world_m", to_json(cal.axis_point_world)},
-                         {"tilt_from_model_deg", tilt_deg},
-                         {"offset_from_model_mm", to_json(Eigen::Vector3d(axis_offset * 1e3))},
-                         {"in_rig_file", false}};
-  j["rms_before_mm"] = cal.rms_before_m * 1e3;
-  j["rms_after_mm"] = cal.rms_after_m * 1e3;
-  j["iterations"] = cal.iterations;
-  j["frames"] = frames;
+  const json j = calibration_json(o, rig, calibrated, cal, so, rig_out, views.size(), observations.size(), frames);
   write_json_atomic(j, (out / "calibration.json").string());
+  write_text_atomic(calibration_report(o, j, calibrated, rig_out), (out / "report.md").string());
 
-  std::ostringstream r;
-  r << "# Calibration of " << o.rig_model << "\n\n"
-    << "Sphere of radius " << fixed(o.sphere.radius_m * 1e3, 1) << " mm, centre " << fixed(o.sphere.offset_m * 1e3, 1)
-    << " mm from the turntable axis on the platter's +x axis. " << observations.size() << " of " << views.size()
-    << " views fitted, " << used << " used.\n\n"
-    << "| correction | value |\n|---|---|\n"
-    << "| hand-eye (camera mount) | " << fixed(mount_mm, 3) << " mm, " << fixed(mount_deg, 4) << " deg |\n"
-    << "| turntable zero | " << fixed(zero_deg, 4) << " deg (reading at the platter's zero: "
-    << fixed(calibrated.turntable_zero_rad / kDeg, 4) << " deg) |\n"
-    << "| turntable axis tilt (reported, not in the file) | " << fixed(tilt_deg, 4) << " deg |\n"
-    << "| turntable axis offset (reported, not in the file) | " << fixed(axis_offset.x() * 1e3, 3) << ", "
-    << fixed(axis_offset.y() * 1e3, 3) << ", " << fixed(axis_offset.z() * 1e3, 3) << " mm |\n"
-    << "| sphere centre residual, rms | before " << fixed(cal.rms_before_m * 1e3, 3) << " mm, after "
-    << fixed(cal.rms_after_m * 1e3, 3) << " mm |\n\n"
-    << "| view | turntable, deg | fit points | fit rms, mm | residual before, mm | after, mm | used |\n"
-    << "|---|---|---|---|---|---|---|\n";
-  for (const json& f : frames) {
-    if (!f.contains("observation")) {
-      r << "| " << f["view"].get<int>() << " | | | | | | skipped: " << f.value("skipped", std::string()) << " |\n";
-      continue;
-    }
-    r << "| " << f["view"].get<int>() << " | " << fixed(f["turntable_angle_rad"].get<double>() / kDeg, 2) << " | "
-      << f["fit"]["inliers"].get<int>() << " | " << fixed(f["fit"]["rms_mm"].get<double>(), 3) << " | "
-      << fixed(f["residual_before_mm"].get<double>(), 3) << " | " << fixed(f["residual_after_mm"].get<double>(), 3)
-      << " | " << (f["used"].get<bool>() ? "yes" : "no (outlier)") << " |\n";
-  }
-  r << "\nThe calibrated rig file " << rig_out.string()
-    << " is the input file with the camera_optical body's pose and pbnbv_turntable_zero replaced. "
-    << "The world frame is the rig file's (the arm defines it); an axis tilt or offset beyond a few hundredths of "
-    << "a degree or millimetre means the turntable stands differently from the file's description: correct the "
-    << "file's platter and table geometry by hand.\n";
-  write_text_atomic(r.str(), (out / "report.md").string());
-
+  const json& axis = j["turntable_axis"];
   std::cout << fmt::format("pbnbv calibrate: hand-eye corrected by {} mm / {} deg, turntable zero by {} deg; axis tilt "
                            "{} deg, offset {} mm (reported); residual rms {} mm -> {} mm over {} frames",
-                           fixed(mount_mm, 3), fixed(mount_deg, 4), fixed(zero_deg, 4), fixed(tilt_deg, 4),
-                           fixed(axis_offset.head<2>().norm() * 1e3, 3), fixed(cal.rms_before_m * 1e3, 3),
-                           fixed(cal.rms_after_m * 1e3, 3), used)
+                           fixed(j["hand_eye_correction"]["translation_mm"].get<double>(), 3),
+                           fixed(j["hand_eye_correction"]["rotation_deg"].get<double>(), 4),
+                           fixed(j["turntable_zero_correction_deg"].get<double>(), 4),
+                           fixed(axis["tilt_from_model_deg"].get<double>(), 4),
+                           fixed(std::hypot(axis["offset_from_model_mm"][0].get<double>(),
+                                            axis["offset_from_model_mm"][1].get<double>()), 3),
+                           fixed(cal.rms_before_m * 1e3, 3), fixed(cal.rms_after_m * 1e3, 3), j["frames_used"].get<int>())
             << "\n  " << rig_out.string() << ", " << (out / "calibration.json").string() << ", "
             << (out / "report.md").string() << std::endl;
   return 0;

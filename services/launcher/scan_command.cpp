@@ -355,6 +355,90 @@ int run_external_scan(const ScanOptions& o, const fs::path& bin) {
   return supervise(children, s, out, launch.record_log, false);
 }
 
+namespace {
+
+// After a scan of the twin: coverage after every view and the surface metrics against the ground
+// truth it rendered, printed and written to coverage.json (a warning when they cannot be).
+void evaluate_against_truth(const ScanSettings& s, const fs::path& out) {
+  // Against the ground truth the twin rendered: coverage after every view, the surface metrics.
+  try {
+    const CoverageParams cp;
+    const eval::ScanEvaluation e = eval::evaluate_scan(out, cp);
+    write_json_atomic(eval::to_json(e, cp), (out / "coverage.json").string());
+    std::string line;
+    for (double c : e.coverage_by_view) line += " " + fixed(c, 1);
+    std::cout << "coverage after each view (%, ground truth):" << line << std::endl;
+    for (const auto& [name, m] : {std::pair{"cloud.ply", &e.cloud_metrics}, std::pair{"mesh.ply", &e.mesh_metrics}}) {
+      if (!*m) continue;
+      std::cout << name << " against the true mesh: accuracy mean " << fixed((*m)->accuracy.mean_m * 1e3, 2) << " mm, median "
+                << fixed((*m)->accuracy.median_m * 1e3, 2) << " mm; F-score " << fixed((*m)->f_score, 3) << " within "
+                << fixed((*m)->threshold_m * 1e3, 1) << " mm (precision " << fixed((*m)->precision, 3) << ", recall "
+                << fixed((*m)->recall, 3) << ")" << std::endl;
+    }
+    if (!e.mesh_error.empty()) std::cerr << "warning: mesh.ply not evaluated: " << e.mesh_error << std::endl;
+    if (!e.planner_ms.empty()) {
+      std::vector<double> t = e.planner_ms;
+      std::sort(t.begin(), t.end());
+      std::cout << "planner step (map update + " << (uses_ellipsoids(s.planner) ? "ellipsoids + " : "") << "view selection): median "
+                << t[t.size() / 2] << " ms"
+                << std::endl;
+    }
+  } catch (const std::exception& x) {
+    std::cerr << "warning: coverage not evaluated: " << x.what() << std::endl;
+  }
+}
+
+// The end of a scan: the rig left stopped where it is when the scan failed, the logger stopped
+// last, processes.json with how every process ended, scan.json's state when the coordinator
+// could not say it, and the log's audit.
+void wind_down(bus::Bus& bus, std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, int code,
+               const std::string& cause, const std::map<std::string, Watch>& watch, bool record_log) {
+  if (code != 0) {
+    // Leave the rig stopped where it is: the motion executor halts it on STOP (three times: UDP may
+    // lose one); a rig whose motion executor is gone is held by the launcher itself.
+    send_stop(bus, s.scan_id, cause.empty() ? (code == 130 ? "interrupted" : "the scan failed") : cause);
+    const auto motion = std::find_if(children.begin(), children.end(), [](const process::Child& c) { return c.name == "motion"; });
+    if (s.external_rig && (motion == children.end() || !motion->running) && !s.scan_id.empty()) hold_rig(bus, s.scan_id);
+  }
+  stop_logger_last(children, out);
+  // How every process ended (0 = clean exit), for the user and for the tests.
+  record_processes(out, processes_json(s.scan_id, children, watch));
+  if (!cause.empty()) {
+    finish_record(out, "failed", cause);
+  } else if (code != 0 && code != 1 && code != 130) {  // the coordinator itself died
+    finish_record(out, "failed", "the coordinator stopped unexpectedly (" + how_it_ended(code) + "); see logs/coordinator.log");
+  }
+  for (const auto& c : children) {
+    if (c.exit_code != 0 && code == 0) {
+      std::cerr << "warning: " << c.name << " exited with status " << c.exit_code << " (log: " << c.log_path << ")" << std::endl;
+    }
+  }
+  if (record_log && fs::exists(out / "scan.json")) audit_log(out, s.scan_id);
+}
+
+// What the user reads at the end: the outputs (with the evaluation of a twin scan), or where the
+// logs of a failed scan are.
+void report_outcome(int code, const ScanSettings& s, const fs::path& out, bool record_log, bool evaluate) {
+  if (code == 0 && !evaluate) {
+    std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
+              << (fs::exists(out / "mesh.ply") ? (out / "mesh.ply").string() + " (.obj), " : std::string())
+              << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
+              << (out / "scan.json").string() << (record_log ? ", " + (out / "scan.lcmlog").string() : "")
+              << (s.external_rig ? " (no coverage: the object is unknown)" : "") << std::endl;
+  } else if (code == 0 && evaluate) {
+    evaluate_against_truth(s, out);
+    std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
+              << (fs::exists(out / "mesh.ply") ? (out / "mesh.ply").string() + " (.obj), " : std::string())
+              << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
+              << (out / "scan.json").string() << ", " << (out / "coverage.json").string()
+              << (record_log ? ", " + (out / "scan.lcmlog").string() : "") << std::endl;
+  } else if (code != 0 && code != 130) {
+    std::cerr << "scan failed (exit " << code << "); logs in " << (out / "logs").string() << std::endl;
+  }
+}
+
+}  // namespace
+
 int supervise(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, bool record_log,
               bool evaluate) {
   install_stop_handlers();
@@ -441,68 +525,8 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
     }
     bus.spin_once(20);
   }
-  if (code != 0) {
-    // Leave the rig stopped where it is: the motion executor halts it on STOP (three times: UDP may
-    // lose one); a rig whose motion executor is gone is held by the launcher itself.
-    send_stop(bus, s.scan_id, cause.empty() ? (code == 130 ? "interrupted" : "the scan failed") : cause);
-    const auto motion = std::find_if(children.begin(), children.end(), [](const process::Child& c) { return c.name == "motion"; });
-    if (s.external_rig && (motion == children.end() || !motion->running) && !s.scan_id.empty()) hold_rig(bus, s.scan_id);
-  }
-  stop_logger_last(children, out);
-  // How every process ended (0 = clean exit), for the user and for the tests.
-  record_processes(out, processes_json(s.scan_id, children, watch));
-  if (!cause.empty()) {
-    finish_record(out, "failed", cause);
-  } else if (code != 0 && code != 1 && code != 130) {  // the coordinator itself died
-    finish_record(out, "failed", "the coordinator stopped unexpectedly (" + how_it_ended(code) + "); see logs/coordinator.log");
-  }
-  for (const auto& c : children) {
-    if (c.exit_code != 0 && code == 0) {
-      std::cerr << "warning: " << c.name << " exited with status " << c.exit_code << " (log: " << c.log_path << ")" << std::endl;
-    }
-  }
-  if (record_log && fs::exists(out / "scan.json")) audit_log(out, s.scan_id);
-  if (code == 0 && !evaluate) {
-    std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
-              << (fs::exists(out / "mesh.ply") ? (out / "mesh.ply").string() + " (.obj), " : std::string())
-              << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
-              << (out / "scan.json").string() << (record_log ? ", " + (out / "scan.lcmlog").string() : "")
-              << (s.external_rig ? " (no coverage: the object is unknown)" : "") << std::endl;
-  } else if (code == 0 && evaluate) {
-    // Against the ground truth the twin rendered: coverage after every view, the surface metrics.
-    try {
-      const CoverageParams cp;
-      const eval::ScanEvaluation e = eval::evaluate_scan(out, cp);
-      write_json_atomic(eval::to_json(e, cp), (out / "coverage.json").string());
-      std::string line;
-      for (double c : e.coverage_by_view) line += " " + fixed(c, 1);
-      std::cout << "coverage after each view (%, ground truth):" << line << std::endl;
-      for (const auto& [name, m] : {std::pair{"cloud.ply", &e.cloud_metrics}, std::pair{"mesh.ply", &e.mesh_metrics}}) {
-        if (!*m) continue;
-        std::cout << name << " against the true mesh: accuracy mean " << fixed((*m)->accuracy.mean_m * 1e3, 2) << " mm, median "
-                  << fixed((*m)->accuracy.median_m * 1e3, 2) << " mm; F-score " << fixed((*m)->f_score, 3) << " within "
-                  << fixed((*m)->threshold_m * 1e3, 1) << " mm (precision " << fixed((*m)->precision, 3) << ", recall "
-                  << fixed((*m)->recall, 3) << ")" << std::endl;
-      }
-      if (!e.mesh_error.empty()) std::cerr << "warning: mesh.ply not evaluated: " << e.mesh_error << std::endl;
-      if (!e.planner_ms.empty()) {
-        std::vector<double> t = e.planner_ms;
-        std::sort(t.begin(), t.end());
-        std::cout << "planner step (map update + " << (uses_ellipsoids(s.planner) ? "ellipsoids + " : "") << "view selection): median "
-                  << t[t.size() / 2] << " ms"
-                  << std::endl;
-      }
-    } catch (const std::exception& x) {
-      std::cerr << "warning: coverage not evaluated: " << x.what() << std::endl;
-    }
-    std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
-              << (fs::exists(out / "mesh.ply") ? (out / "mesh.ply").string() + " (.obj), " : std::string())
-              << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
-              << (out / "scan.json").string() << ", " << (out / "coverage.json").string()
-              << (record_log ? ", " + (out / "scan.lcmlog").string() : "") << std::endl;
-  } else if (code != 0 && code != 130) {
-    std::cerr << "scan failed (exit " << code << "); logs in " << (out / "logs").string() << std::endl;
-  }
+  wind_down(bus, children, s, out, code, cause, watch, record_log);
+  report_outcome(code, s, out, record_log, evaluate);
   return code;
 }
 

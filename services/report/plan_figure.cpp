@@ -352,76 +352,63 @@ void draw_ortho_panel(cv::Mat& fig, Svg* svg, const PlanFigureLayout& l, const O
 
 // --- Panel 3 ---
 
-void draw_map_panel(cv::Mat& fig, Svg* svg, const PlanFigureLayout& l, const PlanFigure& f,
-                    const FRange& range) {
+// The sphere map: the allowed sectors, the grid, the sector boundaries and the markers (those
+// near the 0/360 deg edges at both edges: the map wraps around).
+void draw_sphere_map(cv::Mat& fig, Svg* svg, const PlanFigureLayout& l, const PlanFigure& f, const FRange& range) {
   const cv::Rect& r = l.map;
   const double start_deg = f.sector_start_rad * 180.0 / kPi;
   auto wrap_deg = [](double a) { return a - 360.0 * std::floor(a / 360.0); };
-  {
-    Canvas c(fig, r, kPixelCentre, svg);
-    // Allowed sectors and sector boundaries.
-    if (f.beta > 1) {
-      for (int s : f.allowed_sectors) {
-        if (s < 0 || s >= f.beta) continue;
-        // The sector's azimuth span on the 0..360 map, split where it wraps.
-        const double a0 = wrap_deg(start_deg + 360.0 * s / f.beta), a1 = a0 + 360.0 / f.beta;
-        auto shade = [&](double lo, double hi) {
-          c.polygon({sphere_map_pixel(l, lo, 0), sphere_map_pixel(l, hi, 0), sphere_map_pixel(l, hi, 180),
-                     sphere_map_pixel(l, lo, 180)},
-                    kAllowedShade);
-        };
-        if (a1 <= 360.0) {
-          shade(a0, a1);
-        } else {
-          shade(a0, 360.0);
-          shade(0.0, a1 - 360.0);
-        }
+  Canvas c(fig, r, kPixelCentre, svg);
+  // Allowed sectors and sector boundaries.
+  if (f.beta > 1) {
+    for (int s : f.allowed_sectors) {
+      if (s < 0 || s >= f.beta) continue;
+      // The sector's azimuth span on the 0..360 map, split where it wraps.
+      const double a0 = wrap_deg(start_deg + 360.0 * s / f.beta), a1 = a0 + 360.0 / f.beta;
+      auto shade = [&](double lo, double hi) {
+        c.polygon({sphere_map_pixel(l, lo, 0), sphere_map_pixel(l, hi, 0), sphere_map_pixel(l, hi, 180),
+                   sphere_map_pixel(l, lo, 180)},
+                  kAllowedShade);
+      };
+      if (a1 <= 360.0) {
+        shade(a0, a1);
+      } else {
+        shade(a0, 360.0);
+        shade(0.0, a1 - 360.0);
       }
     }
-    for (int az = 45; az < 360; az += 45) {
-      c.line(sphere_map_pixel(l, az, 0), sphere_map_pixel(l, az, 180), kGrid);
-    }
-    for (int po = 30; po < 180; po += 30) {
-      c.line(sphere_map_pixel(l, 0, po), sphere_map_pixel(l, 360, po),
-             po == 90 ? cv::Scalar(205, 205, 205) : kGrid);
-    }
-    if (f.beta > 1) {
-      for (int s = 0; s < f.beta; ++s) {
-        const double a0 = wrap_deg(start_deg + 360.0 * s / f.beta);
-        if (a0 > 1e-9) c.line(sphere_map_pixel(l, a0, 0), sphere_map_pixel(l, a0, 180), kSectorLine);
-      }
-    }
-    // Markers near the 0/360 deg edges are drawn at both edges (the map wraps around).
-    for (size_t i = 0; i < f.candidates.size(); ++i) {
-      for (const auto& p : map_pixels(l, f.candidates[i].translation(), kCandidateRadius)) {
-        candidate_marker(c, p, f, i, range, false);
-      }
-    }
-    for (size_t k = 0; k < f.past_views.size(); ++k) {
-      for (const auto& p : map_pixels(l, f.past_views[k].translation(), kPastRadius)) {
-        past_marker(c, p, static_cast<int>(k) + 1);
-      }
-    }
-    if (f.chosen >= 0) {
-      for (const auto& p : map_pixels(l, f.candidates[f.chosen].translation(), kChosenRadius)) chosen_marker(c, p);
+  }
+  for (int az = 45; az < 360; az += 45) {
+    c.line(sphere_map_pixel(l, az, 0), sphere_map_pixel(l, az, 180), kGrid);
+  }
+  for (int po = 30; po < 180; po += 30) {
+    c.line(sphere_map_pixel(l, 0, po), sphere_map_pixel(l, 360, po),
+           po == 90 ? cv::Scalar(205, 205, 205) : kGrid);
+  }
+  if (f.beta > 1) {
+    for (int s = 0; s < f.beta; ++s) {
+      const double a0 = wrap_deg(start_deg + 360.0 * s / f.beta);
+      if (a0 > 1e-9) c.line(sphere_map_pixel(l, a0, 0), sphere_map_pixel(l, a0, 180), kSectorLine);
     }
   }
-  Canvas all(fig, cv::Rect(0, 0, fig.cols, fig.rows), kPixelCentre, svg);
-  for (const auto& sl : sector_labels(l, f)) {  // sector names in the strip above the map
-    if (!sl.in_top) all.label(sl.text, sl.centre, kSectorLabelScale, kSectorLine, sector_background(f, sl.sector));
+  // Markers near the 0/360 deg edges are drawn at both edges (the map wraps around).
+  for (size_t i = 0; i < f.candidates.size(); ++i) {
+    for (const auto& p : map_pixels(l, f.candidates[i].translation(), kCandidateRadius)) {
+      candidate_marker(c, p, f, i, range, false);
+    }
   }
-  all.rect({double(r.x), double(r.y)}, {double(r.br().x), double(r.br().y)}, kFrame);
-  for (int az = 0; az <= 360; az += 90) {
-    all.text(std::to_string(az), sphere_map_pixel(l, az, 180) + cv::Point2d(0, 16), 0.4, kSubText,
-             1, 1);
+  for (size_t k = 0; k < f.past_views.size(); ++k) {
+    for (const auto& p : map_pixels(l, f.past_views[k].translation(), kPastRadius)) {
+      past_marker(c, p, static_cast<int>(k) + 1);
+    }
   }
-  for (int po = 0; po <= 180; po += 30) {
-    all.text(std::to_string(po), sphere_map_pixel(l, 0, po) + cv::Point2d(-6, 5), 0.4, kSubText, 1,
-             2);
+  if (f.chosen >= 0) {
+    for (const auto& p : map_pixels(l, f.candidates[f.chosen].translation(), kChosenRadius)) chosen_marker(c, p);
   }
-  all.text("azimuth about the centre (deg)", {r.x + r.width / 2.0, r.br().y + 34.0}, 0.45, kText,
-           1, 1);
+}
 
+// The colour bar of the candidates' quality, with the chosen view's mark.
+void draw_colour_bar(Canvas& all, const PlanFigureLayout& l, const PlanFigure& f, const FRange& range) {
   // Colour bar.
   const cv::Rect& b = l.colour_bar;
   if (range.any) {
@@ -453,8 +440,10 @@ void draw_map_panel(cv::Mat& fig, Svg* svg, const PlanFigureLayout& l, const Pla
     all.text("chosen " + fmt::format("{:.4g}", f.quality[f.chosen]), {x, b.br().y + 16.0}, 0.42, col, 1,
              x > b.x + b.width * 0.75 ? 2 : x < b.x + b.width * 0.25 ? 0 : 1);
   }
+}
 
-  // Legend, as laid out by legend_items.
+// The legend, as laid out by legend_items.
+void draw_legend(Canvas& all, const PlanFigureLayout& l, const PlanFigure& f) {
   auto swatch = [&all](const cv::Point2d& p, const cv::Vec3b& col) {
     const cv::Scalar c = mix(scalar(PlanFigureColours::background()), scalar(col), PlanFigureColours::fill_alpha());
     all.ellipse(p, 10, 6, 0, c, cv::FILLED);
@@ -481,6 +470,29 @@ void draw_map_panel(cv::Mat& fig, Svg* svg, const PlanFigureLayout& l, const Pla
     all.text(it.text, it.text_org, it.kind == LegendKind::kNote ? 0.4 : kLegendScale,
              it.kind == LegendKind::kNote ? kSubText : kText);
   }
+}
+
+void draw_map_panel(cv::Mat& fig, Svg* svg, const PlanFigureLayout& l, const PlanFigure& f,
+                    const FRange& range) {
+  const cv::Rect& r = l.map;
+  draw_sphere_map(fig, svg, l, f, range);
+  Canvas all(fig, cv::Rect(0, 0, fig.cols, fig.rows), kPixelCentre, svg);
+  for (const auto& sl : sector_labels(l, f)) {  // sector names in the strip above the map
+    if (!sl.in_top) all.label(sl.text, sl.centre, kSectorLabelScale, kSectorLine, sector_background(f, sl.sector));
+  }
+  all.rect({double(r.x), double(r.y)}, {double(r.br().x), double(r.br().y)}, kFrame);
+  for (int az = 0; az <= 360; az += 90) {
+    all.text(std::to_string(az), sphere_map_pixel(l, az, 180) + cv::Point2d(0, 16), 0.4, kSubText,
+             1, 1);
+  }
+  for (int po = 0; po <= 180; po += 30) {
+    all.text(std::to_string(po), sphere_map_pixel(l, 0, po) + cv::Point2d(-6, 5), 0.4, kSubText, 1,
+             2);
+  }
+  all.text("azimuth about the centre (deg)", {r.x + r.width / 2.0, r.br().y + 34.0}, 0.45, kText,
+           1, 1);
+  draw_colour_bar(all, l, f, range);
+  draw_legend(all, l, f);
 }
 
 }  // namespace

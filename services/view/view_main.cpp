@@ -217,6 +217,75 @@ bool host_is_local(const std::string& host) {
   return name == "127.0.0.1" || name == "localhost" || name == "[::1]";
 }
 
+// The server's limits, so that no client can take the page from the user, and its Host check.
+void harden(httplib::Server& server) {
+  // SO_REUSEADDR only: httplib's default also sets SO_REUSEPORT, with which a second pbnbv view
+  // on the same port would bind too instead of being told the port is in use.
+  server.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+  });
+  // Limits, so that no client can take the page from the user: the page only reads (GET), so a
+  // body beyond 64 kB is refused (413) before it is buffered; a client that sends or reads
+  // nothing for 5 s is dropped; 32 workers serve at once, so ten slow clients leave room.
+  server.set_payload_max_length(kViewMaxBodyBytes);
+  server.set_read_timeout(5, 0);
+  server.set_write_timeout(5, 0);
+  server.set_keep_alive_timeout(5);
+  server.set_keep_alive_max_count(100);
+  server.new_task_queue = [] { return new httplib::ThreadPool(kViewWorkers); };
+  // Only a page this machine opened by its own name: a browser led to 127.0.0.1 by another
+  // site's DNS name (DNS rebinding) sends that name as Host and is refused.
+  server.set_pre_routing_handler([](const httplib::Request& req, httplib::Response& res) {
+    if (host_is_local(req.get_header_value("Host"))) return httplib::Server::HandlerResponse::Unhandled;
+    res.status = 403;
+    res.set_content("pbnbv view serves http://127.0.0.1 and http://localhost only, not Host '" +
+                        req.get_header_value("Host").substr(0, 100) + "'",
+                    "text/plain");
+    return httplib::Server::HandlerResponse::Handled;
+  });
+}
+
+// The page, its script, three.js and the two API routes (the views, a view's scene).
+void add_routes(httplib::Server& server, const fs::path& web, SceneStore& store) {
+  // Every handler keeps what it reads by value (the store by pointer: it outlives the server).
+  const fs::path three = web / "three";
+  SceneStore* const st = &store;
+  const auto file = [](httplib::Response& res, const fs::path& p, const char* type) {
+    if (!fs::is_regular_file(p)) {
+      res.status = 404;
+      return;
+    }
+    res.set_content(read_file(p), type);
+  };
+  server.Get("/", [file, web](const httplib::Request&, httplib::Response& res) { file(res, web / "index.html", "text/html"); });
+  server.Get("/view.js", [file, web](const httplib::Request&, httplib::Response& res) { file(res, web / "view.js", "text/javascript"); });
+  server.Get(R"(/three/([A-Za-z0-9_.]+\.js))", [file, three](const httplib::Request& req, httplib::Response& res) {
+    file(res, three / req.matches[1].str(), "text/javascript");
+  });
+  server.Get("/api/views", [st](const httplib::Request&, httplib::Response& res) { res.set_content(st->views(), "application/json"); });
+  server.Get("/api/scene", [st](const httplib::Request& req, httplib::Response& res) {
+    int view = -1;
+    if (req.has_param("view")) {
+      try {
+        view = std::stoi(req.get_param_value("view"));
+      } catch (const std::exception&) {
+        res.status = 400;
+        res.set_content("view must be a whole number, got '" + req.get_param_value("view") + "'", "text/plain");
+        return;
+      }
+    }
+    std::string body = st->scene(view);
+    if (body.empty()) {
+      res.status = 404;
+      res.set_content("no view " + std::to_string(view), "text/plain");
+      return;
+    }
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(body, "application/json");
+  });
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -255,64 +324,8 @@ int main(int argc, char** argv) {
       for (const Scene& s : load_scan_folder(dir, voxel_m, static_cast<std::size_t>(max_points))) store.put(s);
     }
     httplib::Server server;
-    // SO_REUSEADDR only: httplib's default also sets SO_REUSEPORT, with which a second pbnbv view
-    // on the same port would bind too instead of being told the port is in use.
-    server.set_socket_options([](socket_t sock) {
-      int yes = 1;
-      ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
-    });
-    // Limits, so that no client can take the page from the user: the page only reads (GET), so a
-    // body beyond 64 kB is refused (413) before it is buffered; a client that sends or reads
-    // nothing for 5 s is dropped; 32 workers serve at once, so ten slow clients leave room.
-    server.set_payload_max_length(kViewMaxBodyBytes);
-    server.set_read_timeout(5, 0);
-    server.set_write_timeout(5, 0);
-    server.set_keep_alive_timeout(5);
-    server.set_keep_alive_max_count(100);
-    server.new_task_queue = [] { return new httplib::ThreadPool(kViewWorkers); };
-    // Only a page this machine opened by its own name: a browser led to 127.0.0.1 by another
-    // site's DNS name (DNS rebinding) sends that name as Host and is refused.
-    server.set_pre_routing_handler([](const httplib::Request& req, httplib::Response& res) {
-      if (host_is_local(req.get_header_value("Host"))) return httplib::Server::HandlerResponse::Unhandled;
-      res.status = 403;
-      res.set_content("pbnbv view serves http://127.0.0.1 and http://localhost only, not Host '" +
-                          req.get_header_value("Host").substr(0, 100) + "'",
-                      "text/plain");
-      return httplib::Server::HandlerResponse::Handled;
-    });
-    const auto file = [](httplib::Response& res, const fs::path& p, const char* type) {
-      if (!fs::is_regular_file(p)) {
-        res.status = 404;
-        return;
-      }
-      res.set_content(read_file(p), type);
-    };
-    server.Get("/", [&](const httplib::Request&, httplib::Response& res) { file(res, web / "index.html", "text/html"); });
-    server.Get("/view.js", [&](const httplib::Request&, httplib::Response& res) { file(res, web / "view.js", "text/javascript"); });
-    server.Get(R"(/three/([A-Za-z0-9_.]+\.js))", [&](const httplib::Request& req, httplib::Response& res) {
-      file(res, three / req.matches[1].str(), "text/javascript");
-    });
-    server.Get("/api/views", [&](const httplib::Request&, httplib::Response& res) { res.set_content(store.views(), "application/json"); });
-    server.Get("/api/scene", [&](const httplib::Request& req, httplib::Response& res) {
-      int view = -1;
-      if (req.has_param("view")) {
-        try {
-          view = std::stoi(req.get_param_value("view"));
-        } catch (const std::exception&) {
-          res.status = 400;
-          res.set_content("view must be a whole number, got '" + req.get_param_value("view") + "'", "text/plain");
-          return;
-        }
-      }
-      std::string body = store.scene(view);
-      if (body.empty()) {
-        res.status = 404;
-        res.set_content("no view " + std::to_string(view), "text/plain");
-        return;
-      }
-      res.set_header("Cache-Control", "no-store");
-      res.set_content(body, "application/json");
-    });
+    harden(server);
+    add_routes(server, web, store);
     if (!server.bind_to_port("127.0.0.1", port)) {
       throw std::runtime_error("cannot listen on 127.0.0.1:" + std::to_string(port) + " (in use? choose another with --port)");
     }

@@ -46,6 +46,40 @@ Vector6d polish_arm(const RigModel& rig, const Pose& target, Vector6d q) {
 
 namespace rig_internal {
 
+// The arm's raw solutions checked against the pose (polished when off) and expanded into their
+// whole-turn variants within the joint limits, without duplicates; when none is left, why_none
+// says which limit the raw ones broke.
+std::vector<Vector6d> checked_arm_solutions(const RigModel& rig, const Pose& world_T_flange, const std::vector<Vector6d>& raw,
+                                            std::string* why_none) {
+  const std::array<bool, 6> revolute{true, true, true, true, true, true};
+  std::vector<Vector6d> sols;
+  std::string violation;
+  for (const Vector6d& q : raw) {
+    Vector6d qq = q;
+    for (int i = 0; i < 6; ++i) qq[i] = wrap_angle_rad(qq[i]);
+    // Verify (and polish if needed) before expanding variants.
+    auto [ep, er] = pose_error(flange_in_world(rig, qq), world_T_flange);
+    if (ep > 1e-10 || er > 1e-10) {
+      qq = polish_arm(rig, world_T_flange, qq);
+      std::tie(ep, er) = pose_error(flange_in_world(rig, qq), world_T_flange);
+    }
+    if (ep > kVerifyPosTol || er > kVerifyRotTol) continue;
+    expand_variants(rig, qq, revolute, &sols, &violation);
+  }
+  // Remove duplicates (singular cases can produce the same configuration twice).
+  std::vector<Vector6d> uniq;
+  for (const Vector6d& q : sols) {
+    bool dup = false;
+    for (const Vector6d& u : uniq) dup = dup || (q - u).cwiseAbs().maxCoeff() < 1e-9;
+    if (!dup) uniq.push_back(q);
+  }
+  if (uniq.empty() && why_none) {
+    *why_none = "all " + std::to_string(raw.size()) + " solutions violate joint limits" +
+                (violation.empty() ? std::string() : " (e.g. " + violation + ")");
+  }
+  return uniq;
+}
+
 // Arm IK; q_ref resolves the free angles at singularities (wrist centre on the A1 axis, q5 = 0).
 std::vector<Vector6d> arm_ik(const RigModel& rig, const Pose& world_T_flange,
                              const Vector6d& q_ref, std::string* why_none) {
@@ -123,33 +157,7 @@ std::vector<Vector6d> arm_ik(const RigModel& rig, const Pose& world_T_flange,
     return {};
   }
 
-  const std::array<bool, 6> revolute{true, true, true, true, true, true};
-  std::vector<Vector6d> sols;
-  std::string violation;
-  for (const Vector6d& q : raw) {
-    Vector6d qq = q;
-    for (int i = 0; i < 6; ++i) qq[i] = wrap_angle_rad(qq[i]);
-    // Verify (and polish if needed) before expanding variants.
-    auto [ep, er] = pose_error(flange_in_world(rig, qq), world_T_flange);
-    if (ep > 1e-10 || er > 1e-10) {
-      qq = polish_arm(rig, world_T_flange, qq);
-      std::tie(ep, er) = pose_error(flange_in_world(rig, qq), world_T_flange);
-    }
-    if (ep > kVerifyPosTol || er > kVerifyRotTol) continue;
-    expand_variants(rig, qq, revolute, &sols, &violation);
-  }
-  // Remove duplicates (singular cases can produce the same configuration twice).
-  std::vector<Vector6d> uniq;
-  for (const Vector6d& q : sols) {
-    bool dup = false;
-    for (const Vector6d& u : uniq) dup = dup || (q - u).cwiseAbs().maxCoeff() < 1e-9;
-    if (!dup) uniq.push_back(q);
-  }
-  if (uniq.empty() && why_none) {
-    *why_none = "all " + std::to_string(raw.size()) + " solutions violate joint limits" +
-                (violation.empty() ? std::string() : " (e.g. " + violation + ")");
-  }
-  return uniq;
+  return checked_arm_solutions(rig, world_T_flange, raw, why_none);
 }
 
 // Free-rig IK: slides = position, ZYX Euler angles of the flange rotation.

@@ -217,7 +217,133 @@ std::string join_unique(const std::vector<std::string>& v, size_t max_items = 3)
   return s;
 }
 
+// The turntable angles to try a view at: the one bringing it to the preferred azimuth, then
+// nearby azimuths (+-15 ... +-90 deg); 0 alone without a turntable.
+std::vector<double> candidate_turntable_angles(const RigModel& rig, const Pose& object_T_camera, double turntable_current) {
+  if (rig.kind != RigKind::kArm || !rig.has_turntable) return {0.0};
+  std::vector<double> offsets_deg{0};
+  for (int k = 15; k <= 90; k += 15) {
+    offsets_deg.push_back(k);
+    offsets_deg.push_back(-k);
+  }
+  const Eigen::Vector3d c = object_T_camera.translation();
+  const bool above = std::hypot(c.x(), c.y()) < 1e-6;
+  const double psi = std::atan2(c.y(), c.x());
+  std::vector<double> angles;
+  for (double off : offsets_deg) {
+    const double t = above ? turntable_current + off * kPi / 180.0
+                           : rig.preferred_azimuth_rad + off * kPi / 180.0 - psi + rig.turntable_zero_rad;
+    angles.push_back(nearest_equivalent_angle_rad(t, turntable_current));
+  }
+  return angles;
+}
+
 }  // namespace
+
+// The search for a clear solution at one turntable angle: candidate solutions in order of motion
+// cost; the first collision-free one with the object in sight wins. Configurations equal up to
+// whole joint turns share their geometry: one that failed is not checked again.
+struct ReachabilityChecker::AngleSearch {
+  Impl& im;
+  const Vector6d& q_current;
+  const Eigen::AlignedBox3d& keepout;
+  double object_z_m;
+  double t;  // the turntable angle
+  std::vector<std::string> hits, blocks;
+  std::vector<Vector6d> failed;
+  int checked = 0;
+  // Set when what failed does not depend on the configuration (the view itself is blocked, or
+  // the camera collides), so that no other solution at this turntable angle can be clear.
+  bool hopeless = false;
+
+  // True, with `out` set, when one of `sols` is clear.
+  bool first_clear(std::vector<Vector6d> sols, ViewSolution& out) {
+    const RigModel& rig = im.rig;
+    std::sort(sols.begin(), sols.end(), [&](const Vector6d& x, const Vector6d& y) {
+      return motion_cost(rig, x, q_current) < motion_cost(rig, y, q_current);
+    });
+    for (const Vector6d& q : sols) {
+      ++checked;
+      if (std::any_of(failed.begin(), failed.end(), [&](const Vector6d& f) { return same_modulo_turns(f, q); })) {
+        continue;
+      }
+      // Line of sight first (rays are cheaper than the collision check, and a view blocked by
+      // the environment is blocked for every solution).
+      im.place(q, t);
+      const Pose w_c = camera_in_world(rig, q);
+      const std::string occ = im.occluder(w_c, keepout, t, object_z_m, &hopeless);
+      if (!occ.empty()) {
+        if (std::find(blocks.begin(), blocks.end(), occ) == blocks.end()) blocks.push_back(occ);
+        if (hopeless) return false;
+        failed.push_back(q);
+        continue;
+      }
+      const std::vector<std::string> col = im.colliding_placed(&hopeless);
+      if (!col.empty()) {
+        for (const std::string& c : col) {
+          if (std::find(hits.begin(), hits.end(), c) == hits.end()) hits.push_back(c);
+        }
+        if (hopeless) return false;
+        failed.push_back(q);
+        continue;
+      }
+      out.reachable = true;
+      out.q = q;
+      out.turntable_rad = t;
+      out.world_T_camera = w_c;
+      return true;
+    }
+    return false;
+  }
+
+  // General IK, seeds in stages, each stage's solutions checked before the next is tried: in a
+  // batch the previous candidate's solution (a neighbouring view: a few iterations, and the branch
+  // continues the current configuration's), then the current configuration and home, then spread
+  // seeds (in a batch only when a near seed converged). Each solution is taken in its whole-turn
+  // variant nearest the current configuration. True when one is clear; else `reason` says why
+  // none was found ("" when some were found and failed).
+  bool general(const Pose& world_T_flange, ViewSolution& out, std::string& reason) {
+    const RigModel& rig = im.rig;
+    reason = general_out_of_reach(rig, rig.world_T_base.inverse() * world_T_flange);
+    if (!reason.empty()) return false;
+    std::vector<std::vector<Vector6d>> stages;
+    if (im.have_neighbour) stages.push_back({im.neighbour});
+    stages.push_back({q_current, rig.q_home});
+    stages.push_back(spread_seeds(rig, kReachSpreadSeeds));
+    int n_seeds = 0;
+    for (const auto& st : stages) n_seeds += static_cast<int>(st.size());
+    std::vector<Vector6d> found;
+    for (const std::vector<Vector6d>& seeds : stages) {
+      std::vector<Vector6d> fresh;
+      for (const Vector6d& seed : seeds) {
+        Vector6d q;
+        if (!general_ik_seed(rig, world_T_flange, seed, kStallRatioFast, &q)) continue;
+        if (std::any_of(found.begin(), found.end(), [&](const Vector6d& f) { return same_modulo_turns(f, q); })) continue;
+        for (int i = 0; i < 6; ++i) q[i] = nearest_in_limits(rig, i, q[i], q_current[i]);
+        found.push_back(q);
+        fresh.push_back(q);
+      }
+      if (first_clear(fresh, out)) return true;
+      if (hopeless) break;
+      // In a batch, when not even the near seeds converge, spread seeds rarely find a
+      // solution (measured: none of the 800 hemisphere views needed them) but cost most of
+      // the time: skipped.
+      if (im.have_neighbour && found.empty() && &seeds == &stages[stages.size() - 2]) break;
+    }
+    if (found.empty()) {
+      reason = "no IK solution within the joint limits from " + std::to_string(n_seeds) +
+               " seeds (out of reach or beyond the limits)";
+    }
+    return false;
+  }
+
+  // Why every solution checked failed.
+  std::string collided() const {
+    if (blocks.empty()) return "all " + std::to_string(checked) + " IK solutions collide (" + join_unique(hits) + ")";
+    return "all " + std::to_string(checked) + " IK solutions collide or have the view blocked (" + join_unique(hits) +
+           (hits.empty() ? "" : "; ") + "view blocked by " + join_unique(blocks) + ")";
+  }
+};
 
 ViewSolution ReachabilityChecker::solve(const Pose& object_T_camera, const Vector6d& q_current,
                                         double turntable_current, const Eigen::AlignedBox3d& keepout,
@@ -226,146 +352,29 @@ ViewSolution ReachabilityChecker::solve(const Pose& object_T_camera, const Vecto
   const RigModel& rig = im.rig;
   im.set_keepout(keepout, object_z_m);
   ViewSolution out;
-
-  // Candidate turntable angles: the one bringing the view to the preferred azimuth, then
-  // nearby azimuths (+-15 ... +-90 deg).
-  std::vector<double> angles;
-  std::vector<double> offsets_deg{0};
-  if (rig.kind == RigKind::kArm && rig.has_turntable) {
-    for (int k = 15; k <= 90; k += 15) {
-      offsets_deg.push_back(k);
-      offsets_deg.push_back(-k);
-    }
-    const Eigen::Vector3d c = object_T_camera.translation();
-    const bool above = std::hypot(c.x(), c.y()) < 1e-6;
-    const double psi = std::atan2(c.y(), c.x());
-    for (double off : offsets_deg) {
-      const double t = above ? turntable_current + off * kPi / 180.0
-                             : rig.preferred_azimuth_rad + off * kPi / 180.0 - psi + rig.turntable_zero_rad;
-      angles.push_back(nearest_equivalent_angle_rad(t, turntable_current));
-    }
-  } else {
-    angles.push_back(0.0);
-  }
-
+  const std::vector<double> angles = candidate_turntable_angles(rig, object_T_camera, turntable_current);
   std::string first_reason;
-  std::map<std::string, int> reason_count;
-  for (size_t a = 0; a < angles.size(); ++a) {
+  for (std::size_t a = 0; a < angles.size(); ++a) {
     const double t = angles[a];
     const Pose world_T_camera = object_in_world(rig, t, object_z_m) * object_T_camera;
     const Pose world_T_flange = world_T_camera * rig.flange_T_camera.inverse();
-    // Candidate solutions in order of motion cost; the first collision-free one with the
-    // object in sight wins. Configurations equal up to whole joint turns share their geometry:
-    // one that failed is not checked again.
-    std::vector<std::string> hits, blocks;
-    std::vector<Vector6d> failed;
-    int checked = 0;
-    // True when a solution is clear; sets `hopeless` when what failed does not depend on the
-    // configuration (the view itself is blocked, or the camera collides), so that no other
-    // solution at this turntable angle can be clear.
-    bool hopeless = false;
-    auto first_clear = [&](std::vector<Vector6d> sols) {
-      std::sort(sols.begin(), sols.end(), [&](const Vector6d& x, const Vector6d& y) {
-        return motion_cost(rig, x, q_current) < motion_cost(rig, y, q_current);
-      });
-      for (const Vector6d& q : sols) {
-        ++checked;
-        if (std::any_of(failed.begin(), failed.end(), [&](const Vector6d& f) { return same_modulo_turns(f, q); })) {
-          continue;
-        }
-        // Line of sight first (rays are cheaper than the collision check, and a view blocked by
-        // the environment is blocked for every solution).
-        im.place(q, t);
-        const Pose w_c = camera_in_world(rig, q);
-        const std::string occ = im.occluder(w_c, keepout, t, object_z_m, &hopeless);
-        if (!occ.empty()) {
-          if (std::find(blocks.begin(), blocks.end(), occ) == blocks.end()) blocks.push_back(occ);
-          if (hopeless) return false;
-          failed.push_back(q);
-          continue;
-        }
-        const std::vector<std::string> col = im.colliding_placed(&hopeless);
-        if (!col.empty()) {
-          for (const std::string& s : col) {
-            if (std::find(hits.begin(), hits.end(), s) == hits.end()) hits.push_back(s);
-          }
-          if (hopeless) return false;
-          failed.push_back(q);
-          continue;
-        }
-        out.reachable = true;
-        out.q = q;
-        out.turntable_rad = t;
-        out.world_T_camera = w_c;
-        return true;
-      }
-      return false;
-    };
+    AngleSearch search{im, q_current, keepout, object_z_m, t, {}, {}, {}};
     std::string reason;
     if (rig.kind == RigKind::kArm && rig.ik == IkMethod::kGeneral) {
-      // General IK, seeds in stages, each stage's solutions checked before the next is tried:
-      // in a batch the previous candidate's solution (a neighbouring view: a few iterations, and
-      // the branch continues the current configuration's), then the current configuration and
-      // home, then spread seeds (in a batch only when a near seed converged). Each solution is
-      // taken in its whole-turn variant nearest the current configuration.
-      reason = general_out_of_reach(rig, rig.world_T_base.inverse() * world_T_flange);
-      if (reason.empty()) {
-        std::vector<std::vector<Vector6d>> stages;
-        if (im.have_neighbour) stages.push_back({im.neighbour});
-        stages.push_back({q_current, rig.q_home});
-        stages.push_back(spread_seeds(rig, kReachSpreadSeeds));
-        int n_seeds = 0;
-        for (const auto& st : stages) n_seeds += static_cast<int>(st.size());
-        std::vector<Vector6d> found;
-        for (const std::vector<Vector6d>& seeds : stages) {
-          std::vector<Vector6d> fresh;
-          for (const Vector6d& seed : seeds) {
-            Vector6d q;
-            if (!general_ik_seed(rig, world_T_flange, seed, kStallRatioFast, &q)) continue;
-            if (std::any_of(found.begin(), found.end(), [&](const Vector6d& f) { return same_modulo_turns(f, q); })) {
-              continue;
-            }
-            for (int i = 0; i < 6; ++i) q[i] = nearest_in_limits(rig, i, q[i], q_current[i]);
-            found.push_back(q);
-            fresh.push_back(q);
-          }
-          if (first_clear(fresh)) return out;
-          if (hopeless) break;
-          // In a batch, when not even the near seeds converge, spread seeds rarely find a
-          // solution (measured: none of the 800 hemisphere views needed them) but cost most of
-          // the time: skipped.
-          if (im.have_neighbour && found.empty() && &seeds == &stages[stages.size() - 2]) break;
-        }
-        if (found.empty()) {
-          reason = "no IK solution within the joint limits from " + std::to_string(n_seeds) +
-                   " seeds (out of reach or beyond the limits)";
-        }
-      }
+      if (search.general(world_T_flange, out, reason)) return out;
     } else {
       std::string why;
-      std::vector<Vector6d> sols = ik_with_ref(rig, world_T_flange, q_current, &why);
+      const std::vector<Vector6d> sols = ik_with_ref(rig, world_T_flange, q_current, &why);
       if (sols.empty()) reason = why;
-      else if (first_clear(sols)) return out;
+      else if (search.first_clear(sols, out)) return out;
     }
-    if (reason.empty()) {
-      if (blocks.empty()) {
-        reason = "all " + std::to_string(checked) + " IK solutions collide (" + join_unique(hits) + ")";
-      } else {
-        reason = "all " + std::to_string(checked) + " IK solutions collide or have the view "
-                 "blocked (" + join_unique(hits) + (hits.empty() ? "" : "; ") + "view blocked by " +
-                 join_unique(blocks) + ")";
-      }
-    }
+    if (reason.empty()) reason = search.collided();
     if (a == 0) first_reason = reason;
-    ++reason_count[reason];
   }
   out.reachable = false;
-  if (angles.size() == 1) {
-    out.reason = first_reason;
-  } else {
-    out.reason = "at the preferred azimuth: " + first_reason +
-                 "; also unreachable at azimuth offsets up to +-90 deg";
-  }
+  out.reason = angles.size() == 1 ? first_reason
+                                  : "at the preferred azimuth: " + first_reason +
+                                        "; also unreachable at azimuth offsets up to +-90 deg";
   return out;
 }
 

@@ -175,6 +175,7 @@ class ReachabilityChecker {
 
  private:
   struct Impl;
+  struct AngleSearch;  // solve()'s search at one turntable angle
   std::unique_ptr<Impl> impl_;
 };
 
