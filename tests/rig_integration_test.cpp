@@ -130,9 +130,13 @@ TEST(ExternalRig, AnUnknownObjectIsScannedAsWellOnTheUr5e) {
 TEST(ExternalRig, ADryRunCommandsNothing) {
   const fs::path dir = fresh_dir("external-dry-run");
   const std::string log = (dir / "bus.lcmlog").string();
+  // The dry run starts once the logger has recorded a message (the twin's statuses, 100 Hz), for
+  // at most 10 s: a fixed 0.5 s was not always enough for lcm-logger to start on a loaded machine,
+  // and the run's one DEPTH_TRIGGER went unrecorded (CI run of this stop, beside three scans).
+  const std::string wait_until_recording = "for i in $(seq 100); do [ -s " + log + " ] && break; sleep 0.1; done; ";
   const CommandResult r = run_command(with_twin_as_hardware(
       "--model-out " + (dir / "hw.xml").string(),
-      "/usr/bin/lcm-logger -q -f " + log + " & L=$!; sleep 0.5; " + bin_dir() +
+      "/usr/bin/lcm-logger -q -f " + log + " & L=$!; " + wait_until_recording + bin_dir() +
           "/pbnbv scan --external-rig --rig-model " + rig_model("rig_arm.xml") + " --dry-run; rc=$?; sleep 0.3; kill $L; wait $L; (exit $rc)"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("dry run: nothing is commanded"), std::string::npos) << r.output;
@@ -231,7 +235,11 @@ TEST(TwoHosts, AScanAcrossALinkCoversWhatItDoesOnOneHost) {
   const double seconds = read_json_file(two / "scan" / "scan.json")["status"]["elapsed_s"].get<double>();
   std::cout << "coverage after 5 views: one host " << one_host << " %, two hosts " << two_hosts << " %; the link carried "
             << log_mb << " MB in " << seconds << " s\n";
-  EXPECT_NEAR(two_hosts, one_host, 1.0);
+  // Scans of one setup differ by the views the planner picks from poses the physics settles a
+  // fraction of a millimetre apart: measured 71.82, 71.83, 72.79 and 73.31 % (one host and two,
+  // 2026-12-05, idle and beside the packet-loss case), so two draws differ by up to 1.5 points; a
+  // view lost on the link costs 5 or more (one of five views; 67 against 72.8 % when ICP dropped one).
+  EXPECT_NEAR(two_hosts, one_host, 2.0);
 }
 
 // The driver's frames are not the camera the rig file states (the twin renders 320 x 180, the

@@ -46,6 +46,8 @@ Vector6d polish_arm(const RigModel& rig, const Pose& target, Vector6d q) {
 
 namespace rig_internal {
 
+namespace {
+
 // The arm's raw solutions checked against the pose (polished when off) and expanded into their
 // whole-turn variants within the joint limits, without duplicates; when none is left, why_none
 // says which limit the raw ones broke.
@@ -79,6 +81,8 @@ std::vector<Vector6d> checked_arm_solutions(const RigModel& rig, const Pose& wor
   }
   return uniq;
 }
+
+}  // namespace
 
 // Arm IK; q_ref resolves the free angles at singularities (wrist centre on the A1 axis, q5 = 0).
 std::vector<Vector6d> arm_ik(const RigModel& rig, const Pose& world_T_flange,

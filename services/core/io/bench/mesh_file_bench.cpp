@@ -1,11 +1,13 @@
 // Loading the default object meshes (build/data/meshes: the .off set, bunny.obj, teapot.obj),
-// each registered as BM_LoadMesh/<file>, the largest of them as binary STL, and writing /
-// reading a scan-sized point cloud (PLY).
+// each registered as BM_LoadMesh/<file>, the largest of them as binary STL and as a binary PLY
+// mesh, and writing / reading a scan-sized point cloud (PLY).
 #include <benchmark/benchmark.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 #include <vector>
@@ -64,6 +66,41 @@ void BM_LoadMeshBinaryStl(benchmark::State& state) {
   fs::remove(stl, ec);
 }
 BENCHMARK(BM_LoadMeshBinaryStl)->Unit(benchmark::kMillisecond);
+
+// A scan's mesh.ply as the surface step writes it (binary little endian, float vertices, a uchar
+// count and int indices per face): armadillo.off's triangles, read back by load_mesh, which walks
+// every face list of the body before CGAL reads it (a list longer than the rest of the file is
+// refused). The walk took a system call per value before it counted its own position.
+void BM_LoadMeshBinaryPly(benchmark::State& state) {
+  const fs::path off = fs::path(PBNBV_DATA_DIR) / "meshes" / "armadillo.off";
+  std::error_code ec;
+  if (!fs::exists(off, ec)) {
+    state.SkipWithError(("no " + off.string()).c_str());
+    return;
+  }
+  const pbnbv::TriangleMesh mesh = pbnbv::load_mesh(off.string());
+  const std::string ply =
+      (fs::temp_directory_path() / ("pbnbv_io_bench_" + std::to_string(::getpid()) + "_armadillo.ply")).string();
+  {
+    std::ofstream out(ply, std::ios::binary);
+    out << "ply\nformat binary_little_endian 1.0\nelement vertex " << mesh.vertices.size()
+        << "\nproperty float x\nproperty float y\nproperty float z\nelement face " << mesh.triangles.size()
+        << "\nproperty list uchar int vertex_indices\nend_header\n";
+    for (const auto& v : mesh.vertices) {
+      const float xyz[3] = {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
+      out.write(reinterpret_cast<const char*>(xyz), sizeof(xyz));
+    }
+    for (const auto& t : mesh.triangles) {
+      const unsigned char n = 3;
+      const int32_t idx[3] = {static_cast<int32_t>(t[0]), static_cast<int32_t>(t[1]), static_cast<int32_t>(t[2])};
+      out.write(reinterpret_cast<const char*>(&n), 1);
+      out.write(reinterpret_cast<const char*>(idx), sizeof(idx));
+    }
+  }
+  load_mesh_file(state, ply);
+  fs::remove(ply, ec);
+}
+BENCHMARK(BM_LoadMeshBinaryPly)->Unit(benchmark::kMillisecond);
 
 // A 300k-point cloud (about what a scan accumulates), Gaussian around the origin.
 const pbnbv::PointCloud& cloud() {
