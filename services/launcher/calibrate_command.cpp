@@ -18,6 +18,7 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include "bus/bus.hpp"
 #include "bus/convert_rig.hpp"
@@ -266,15 +267,27 @@ std::optional<SphereObservation> observe_view(CalibrationRun& run, const Calibra
   return SphereObservation{cap.joint_position_rad, cap.turntable_angle_rad, fit.centre};
 }
 
-// calibration.json: the corrections, the axis as measured and every frame with its residuals.
-json calibration_json(const CalibrateOptions& o, const RigModel& rig, const RigModel& calibrated, const RigCalibration& cal,
-                      const CalibrationSolveOptions& so, const fs::path& rig_out, std::size_t num_views,
-                      std::size_t num_observations, json& frames) {
-  const Eigen::Vector3d s = o.sphere.centre_in_mount();
-  const auto [mount_mm, mount_deg] = mm_deg(rig.flange_T_camera, cal.flange_T_camera);
-  const double zero_deg = (cal.turntable_zero_rad - rig.turntable_zero_rad) / kDeg;
-  const double tilt_deg = std::acos(std::clamp(cal.axis_direction_world.dot(rig.world_T_turntable.linear().col(2)), -1.0, 1.0)) / kDeg;
-  const Eigen::Vector3d axis_offset = cal.axis_point_world - rig.world_T_turntable.translation();
+// The corrections the calibration found, as its outputs report them.
+struct Corrections {
+  double mount_mm = 0, mount_deg = 0;  // hand-eye: model -> calibrated
+  double zero_deg = 0;                 // turntable zero
+  double tilt_deg = 0;                 // the measured axis against the model's (reported, not in the file)
+  Eigen::Vector3d axis_offset_m = Eigen::Vector3d::Zero();
+  int used = 0;                        // frames used (the others: outliers)
+};
+
+Corrections corrections_of(const RigModel& rig, const RigCalibration& cal) {
+  Corrections c;
+  std::tie(c.mount_mm, c.mount_deg) = mm_deg(rig.flange_T_camera, cal.flange_T_camera);
+  c.zero_deg = (cal.turntable_zero_rad - rig.turntable_zero_rad) / kDeg;
+  c.tilt_deg = std::acos(std::clamp(cal.axis_direction_world.dot(rig.world_T_turntable.linear().col(2)), -1.0, 1.0)) / kDeg;
+  c.axis_offset_m = cal.axis_point_world - rig.world_T_turntable.translation();
+  c.used = static_cast<int>(std::count(cal.used.begin(), cal.used.end(), true));
+  return c;
+}
+
+// Each fitted frame's sphere-centre residuals before and after, and whether the solve used it.
+void add_residuals(const RigCalibration& cal, json& frames) {
   for (std::size_t k = 0, f = 0; f < frames.size(); ++f) {
     if (!frames[f].contains("observation")) continue;
     frames[f]["residual_before_mm"] = cal.residual_before_m[k] * 1e3;
@@ -282,61 +295,58 @@ json calibration_json(const CalibrateOptions& o, const RigModel& rig, const RigM
     frames[f]["used"] = static_cast<bool>(cal.used[k]);
     ++k;
   }
-  const int used = static_cast<int>(std::count(cal.used.begin(), cal.used.end(), true));
+}
+
+// calibration.json: the corrections, the axis as measured and every frame with its residuals.
+json calibration_json(const CalibrateOptions& o, const RigModel& rig, const RigModel& calibrated, const RigCalibration& cal,
+                      const Corrections& c, const CalibrationSolveOptions& so, const fs::path& rig_out,
+                      std::size_t num_views, std::size_t num_observations, const json& frames) {
   json j;
   j["rig_model"] = o.rig_model;
   j["calibrated_rig_model"] = rig_out.string();
-  j["sphere"] = {{"radius_m", o.sphere.radius_m}, {"offset_m", o.sphere.offset_m}, {"centre_in_mount_m", to_json(s)}};
+  j["sphere"] = {{"radius_m", o.sphere.radius_m}, {"offset_m", o.sphere.offset_m},
+                 {"centre_in_mount_m", to_json(o.sphere.centre_in_mount())}};
   j["views"] = num_views;
   j["frames_fitted"] = num_observations;
-  j["frames_used"] = used;
+  j["frames_used"] = c.used;
   j["fit_axis"] = so.fit_axis;
   j["flange_T_camera"] = to_json(calibrated.flange_T_camera);
   j["model_flange_T_camera"] = to_json(rig.flange_T_camera);
-  j["hand_eye_correction"] = {{"translation_mm", mount_mm}, {"rotation_deg", mount_deg},
+  j["hand_eye_correction"] = {{"translation_mm", c.mount_mm}, {"rotation_deg", c.mount_deg},
                               {"model_T_calibrated", to_json(rig.flange_T_camera.inverse() * cal.flange_T_camera)}};
   j["turntable_zero_rad"] = calibrated.turntable_zero_rad;
   j["model_turntable_zero_rad"] = rig.turntable_zero_rad;
-  j["turntable_zero_correction_deg"] = zero_deg;
+  j["turntable_zero_correction_deg"] = c.zero_deg;
   j["turntable_axis"] = {{"direction_world", to_json(cal.axis_direction_world)},
                          {"point_world_m", to_json(cal.axis_point_world)},
-                         {"tilt_from_model_deg", tilt_deg},
-                         {"offset_from_model_mm", to_json(Eigen::Vector3d(axis_offset * 1e3))},
+                         {"tilt_from_model_deg", c.tilt_deg},
+                         {"offset_from_model_mm", to_json(Eigen::Vector3d(c.axis_offset_m * 1e3))},
                          {"in_rig_file", false}};
   j["rms_before_mm"] = cal.rms_before_m * 1e3;
   j["rms_after_mm"] = cal.rms_after_m * 1e3;
   j["iterations"] = cal.iterations;
   j["frames"] = frames;
-
   return j;
 }
 
-// report.md: the corrections and a row per view, from calibration.json's figures.
-std::string calibration_report(const CalibrateOptions& o, const json& j, const RigModel& calibrated,
-                               const fs::path& rig_out) {
-  const json& frames = j.at("frames");
-  const double mount_mm = j["hand_eye_correction"]["translation_mm"].get<double>(),
-               mount_deg = j["hand_eye_correction"]["rotation_deg"].get<double>(),
-               zero_deg = j["turntable_zero_correction_deg"].get<double>(),
-               tilt_deg = j["turntable_axis"]["tilt_from_model_deg"].get<double>();
-  const Eigen::Vector3d axis_offset = vec3_from_json(j["turntable_axis"]["offset_from_model_mm"], "axis offset") * 1e-3;
-  const std::size_t fitted = j["frames_fitted"].get<std::size_t>(), num_views = j["views"].get<std::size_t>();
-  const int used = j["frames_used"].get<int>();
-  const double rms_before_m = j["rms_before_mm"].get<double>() * 1e-3, rms_after_m = j["rms_after_mm"].get<double>() * 1e-3;
+// report.md: the corrections and a row per view.
+std::string calibration_report(const CalibrateOptions& o, const RigCalibration& cal, const Corrections& c,
+                               const RigModel& calibrated, const fs::path& rig_out, std::size_t num_views,
+                               std::size_t num_observations, const json& frames) {
   std::ostringstream r;
   r << "# Calibration of " << o.rig_model << "\n\n"
     << "Sphere of radius " << fixed(o.sphere.radius_m * 1e3, 1) << " mm, centre " << fixed(o.sphere.offset_m * 1e3, 1)
-    << " mm from the turntable axis on the platter's +x axis. " << fitted << " of " << num_views
-    << " views fitted, " << used << " used.\n\n"
+    << " mm from the turntable axis on the platter's +x axis. " << num_observations << " of " << num_views
+    << " views fitted, " << c.used << " used.\n\n"
     << "| correction | value |\n|---|---|\n"
-    << "| hand-eye (camera mount) | " << fixed(mount_mm, 3) << " mm, " << fixed(mount_deg, 4) << " deg |\n"
-    << "| turntable zero | " << fixed(zero_deg, 4) << " deg (reading at the platter's zero: "
+    << "| hand-eye (camera mount) | " << fixed(c.mount_mm, 3) << " mm, " << fixed(c.mount_deg, 4) << " deg |\n"
+    << "| turntable zero | " << fixed(c.zero_deg, 4) << " deg (reading at the platter's zero: "
     << fixed(calibrated.turntable_zero_rad / kDeg, 4) << " deg) |\n"
-    << "| turntable axis tilt (reported, not in the file) | " << fixed(tilt_deg, 4) << " deg |\n"
-    << "| turntable axis offset (reported, not in the file) | " << fixed(axis_offset.x() * 1e3, 3) << ", "
-    << fixed(axis_offset.y() * 1e3, 3) << ", " << fixed(axis_offset.z() * 1e3, 3) << " mm |\n"
-    << "| sphere centre residual, rms | before " << fixed(rms_before_m * 1e3, 3) << " mm, after "
-    << fixed(rms_after_m * 1e3, 3) << " mm |\n\n"
+    << "| turntable axis tilt (reported, not in the file) | " << fixed(c.tilt_deg, 4) << " deg |\n"
+    << "| turntable axis offset (reported, not in the file) | " << fixed(c.axis_offset_m.x() * 1e3, 3) << ", "
+    << fixed(c.axis_offset_m.y() * 1e3, 3) << ", " << fixed(c.axis_offset_m.z() * 1e3, 3) << " mm |\n"
+    << "| sphere centre residual, rms | before " << fixed(cal.rms_before_m * 1e3, 3) << " mm, after "
+    << fixed(cal.rms_after_m * 1e3, 3) << " mm |\n\n"
     << "| view | turntable, deg | fit points | fit rms, mm | residual before, mm | after, mm | used |\n"
     << "|---|---|---|---|---|---|---|\n";
   for (const json& f : frames) {
@@ -355,7 +365,6 @@ std::string calibration_report(const CalibrateOptions& o, const json& j, const R
     << "a degree or millimetre means the turntable stands differently from the file's description: correct the "
     << "file's platter and table geometry by hand.\n";
   return r.str();
-
 }
 
 }  // namespace
@@ -404,20 +413,18 @@ int run_calibrate(const CalibrateOptions& o) {
   write_text_atomic(calibrated_rig_xml(read_text(o.rig_model), o.rig_model, cal.flange_T_camera, cal.turntable_zero_rad),
                     rig_out.string());
   const RigModel calibrated = load_rig(rig_out.string());
-  const json j = calibration_json(o, rig, calibrated, cal, so, rig_out, views.size(), observations.size(), frames);
-  write_json_atomic(j, (out / "calibration.json").string());
-  write_text_atomic(calibration_report(o, j, calibrated, rig_out), (out / "report.md").string());
+  const Corrections c = corrections_of(rig, cal);
+  add_residuals(cal, frames);
+  write_json_atomic(calibration_json(o, rig, calibrated, cal, c, so, rig_out, views.size(), observations.size(), frames),
+                    (out / "calibration.json").string());
+  write_text_atomic(calibration_report(o, cal, c, calibrated, rig_out, views.size(), observations.size(), frames),
+                    (out / "report.md").string());
 
-  const json& axis = j["turntable_axis"];
   std::cout << fmt::format("pbnbv calibrate: hand-eye corrected by {} mm / {} deg, turntable zero by {} deg; axis tilt "
                            "{} deg, offset {} mm (reported); residual rms {} mm -> {} mm over {} frames",
-                           fixed(j["hand_eye_correction"]["translation_mm"].get<double>(), 3),
-                           fixed(j["hand_eye_correction"]["rotation_deg"].get<double>(), 4),
-                           fixed(j["turntable_zero_correction_deg"].get<double>(), 4),
-                           fixed(axis["tilt_from_model_deg"].get<double>(), 4),
-                           fixed(std::hypot(axis["offset_from_model_mm"][0].get<double>(),
-                                            axis["offset_from_model_mm"][1].get<double>()), 3),
-                           fixed(cal.rms_before_m * 1e3, 3), fixed(cal.rms_after_m * 1e3, 3), j["frames_used"].get<int>())
+                           fixed(c.mount_mm, 3), fixed(c.mount_deg, 4), fixed(c.zero_deg, 4), fixed(c.tilt_deg, 4),
+                           fixed(c.axis_offset_m.head<2>().norm() * 1e3, 3), fixed(cal.rms_before_m * 1e3, 3),
+                           fixed(cal.rms_after_m * 1e3, 3), c.used)
             << "\n  " << rig_out.string() << ", " << (out / "calibration.json").string() << ", "
             << (out / "report.md").string() << std::endl;
   return 0;
