@@ -426,10 +426,7 @@ void per_object_section(const BenchResult& r, std::ostream& md) {
   }
   md << "\n";
   // Where pbnbv ends more than a point below ray casting.
-  const PlannerSummary* raycast = nullptr;
-  for (const auto& p : r.planners) {
-    if (p.planner == PlannerKind::kRaycast) raycast = &p;
-  }
+  const PlannerSummary* raycast = find_planner(r, PlannerKind::kRaycast);
   if (pbnbv && raycast) {
     std::vector<std::string> below;
     for (const auto& name : names) {

@@ -419,20 +419,15 @@ void wind_down(bus::Bus& bus, std::vector<process::Child>& children, const ScanS
 // What the user reads at the end: the outputs (with the evaluation of a twin scan), or where the
 // logs of a failed scan are.
 void report_outcome(int code, const ScanSettings& s, const fs::path& out, bool record_log, bool evaluate) {
-  if (code == 0 && !evaluate) {
+  if (code == 0) {
+    if (evaluate) evaluate_against_truth(s, out);
     std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
               << (fs::exists(out / "mesh.ply") ? (out / "mesh.ply").string() + " (.obj), " : std::string())
               << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
-              << (out / "scan.json").string() << (record_log ? ", " + (out / "scan.lcmlog").string() : "")
-              << (s.external_rig ? " (no coverage: the object is unknown)" : "") << std::endl;
-  } else if (code == 0 && evaluate) {
-    evaluate_against_truth(s, out);
-    std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
-              << (fs::exists(out / "mesh.ply") ? (out / "mesh.ply").string() + " (.obj), " : std::string())
-              << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
-              << (out / "scan.json").string() << ", " << (out / "coverage.json").string()
-              << (record_log ? ", " + (out / "scan.lcmlog").string() : "") << std::endl;
-  } else if (code != 0 && code != 130) {
+              << (out / "scan.json").string() << (evaluate ? ", " + (out / "coverage.json").string() : std::string())
+              << (record_log ? ", " + (out / "scan.lcmlog").string() : "")
+              << (s.external_rig && !evaluate ? " (no coverage: the object is unknown)" : "") << std::endl;
+  } else if (code != 130) {
     std::cerr << "scan failed (exit " << code << "); logs in " << (out / "logs").string() << std::endl;
   }
 }
