@@ -369,6 +369,10 @@ TEST_F(BadInput, ALostDepthFrameIsSentAgainAndTheViewIsMapped) {
   r.overlap = 1;
   r.iterations = 0;
   r.model_points = cloud.num_points;
+  r.normals = registered_cloud_t::kNormalsDepthImage;
+  r.frame_points = r.model_points_before = 0;
+  r.new_points = -1;  // not merged: no figure
+  r.new_surface_radius_m = r.accumulate_s = 0;
   lcm.publish("REGISTERED_CLOUD", &r);
   const std::pair<std::string, int32_t> key{"bad-input", 40};
   EXPECT_FALSE(listener_->spin_until([&] { return listener_->maps.count(key) > 0; }, 4.5))

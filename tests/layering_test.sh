@@ -2,8 +2,9 @@
 # The dependency direction between layers, beyond what the include directories already enforce
 # at compile time (see pbnbv_library in CMakeLists.txt): only the rig library and the twin see
 # MuJoCo, only the report library draws with OpenCV, only the surface library meshes with PCL's
-# surface module, and the processes that need neither do not
-# load them (ldd); scan.json is parsed in one place; no core file is over 800 lines.
+# surface module, and the processes that need neither do not load them (ldd: the coordinator,
+# which writes scan.json and nothing else, loads none of MuJoCo, PCL and OpenCV); scan.json is
+# parsed in one place; no core file is over 800 lines.
 set -uo pipefail
 src=${PBNBV_SOURCE_DIR:?}
 bin=${PBNBV_BIN_DIR:?}
@@ -51,5 +52,7 @@ check_ldd() {  # <binary> <library pattern>...
 }
 check_ldd pbnbv-ellipsoids libmujoco libopencv libpcl
 check_ldd pbnbv-mapping libmujoco libopencv libpcl
-check_ldd pbnbv-registration libmujoco libopencv
+check_ldd pbnbv-registration libmujoco
+# The coordinator owns scan.json only: it decodes no frame, meshes nothing, loads no rig model.
+check_ldd pbnbv-coordinator libmujoco libpcl libopencv
 exit $fail

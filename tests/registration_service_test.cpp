@@ -79,6 +79,7 @@ TEST_F(RegistrationService, AViewTenCentimetresOffIsRejectedAndNotMerged) {
       c.points_m.push_back({static_cast<float>(y.x()), static_cast<float>(y.y()), static_cast<float>(y.z())});
     }
     c.num_points = static_cast<int32_t>(c.points_m.size());
+    c.num_normals = 0;  // none: the service fits them to the neighbours
     return c;
   };
   lcm::LCM& lcm = listener_->lcm();

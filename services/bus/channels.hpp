@@ -28,5 +28,8 @@ inline constexpr const char* kVoxelMap = "VOXEL_MAP";                // voxel_se
 inline constexpr const char* kEllipsoids = "ELLIPSOIDS";             // ellipsoid_set_t
 inline constexpr const char* kPlanRequest = "PLAN_REQUEST";          // plan_request_t
 inline constexpr const char* kViewPlan = "VIEW_PLAN";                // view_plan_t
+// The scan's end: the surface mesh of the merged views, made by the registration service.
+inline constexpr const char* kMeshRequest = "MESH_REQUEST";          // mesh_request_t
+inline constexpr const char* kMeshResult = "MESH_RESULT";            // mesh_result_t
 
 }  // namespace pbnbv::channels

@@ -5,14 +5,20 @@
 // applies: each from_msg throws std::invalid_argument naming the message and the field.
 // Array lengths need no check: lcm-gen's decoder sizes every array by its count field.
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <climits>
 #include <string>
 #include <vector>
 
 #include "bus/convert.hpp"
 #include "bus/convert_kinds.hpp"
+#include "core/base/format.hpp"
+#include "core/io/file_checks.hpp"
 #include "core/scan/messages.hpp"
 #include "pbnbv/capture_request_t.hpp"
 #include "pbnbv/ellipsoid_set_t.hpp"
+#include "pbnbv/mesh_request_t.hpp"
+#include "pbnbv/mesh_result_t.hpp"
 #include "pbnbv/move_request_t.hpp"
 #include "pbnbv/move_result_t.hpp"
 #include "pbnbv/plan_request_t.hpp"
@@ -185,6 +191,9 @@ inline point_cloud_t to_msg(const CaptureResult& c) {
   m.num_points = static_cast<int32_t>(c.points.size());
   m.points_m.resize(c.points.size());
   for (std::size_t i = 0; i < c.points.size(); ++i) m.points_m[i] = {c.points[i].x(), c.points[i].y(), c.points[i].z()};
+  m.num_normals = static_cast<int32_t>(c.normals.size());
+  m.normals.resize(c.normals.size());
+  for (std::size_t i = 0; i < c.normals.size(); ++i) m.normals[i] = {c.normals[i].x(), c.normals[i].y(), c.normals[i].z()};
   return m;
 }
 
@@ -213,6 +222,21 @@ inline CaptureResult from_msg(const point_cloud_t& m) {
     const Eigen::Vector3f p(m.points_m[i][0], m.points_m[i][1], m.points_m[i][2]);
     if (!p.allFinite()) throw std::invalid_argument("CLOUD points_m[" + std::to_string(i) + "] is not finite");
     c.points.push_back(p);
+  }
+  // Normals: none, or one per point, each a unit vector or zero (none found there).
+  if (!m.normals.empty() && m.normals.size() != m.points_m.size()) {
+    throw std::invalid_argument("CLOUD num_normals = " + std::to_string(m.normals.size()) + ": neither 0 nor num_points (" +
+                                std::to_string(m.points_m.size()) + ")");
+  }
+  c.normals.reserve(m.normals.size());
+  for (std::size_t i = 0; i < m.normals.size(); ++i) {
+    const Eigen::Vector3f n(m.normals[i][0], m.normals[i][1], m.normals[i][2]);
+    const float norm = n.norm();
+    if (!(norm == 0.0f || std::abs(norm - 1.0f) < 1e-3f)) {
+      throw std::invalid_argument("CLOUD normals[" + std::to_string(i) + "] is neither a unit vector nor zero (length " +
+                                  std::to_string(norm) + ")");
+    }
+    c.normals.push_back(n);
   }
   return c;
 }
@@ -244,6 +268,36 @@ inline RegisteredCloud from_msg(const registered_cloud_t& m) {
   r.iterations = m.iterations;
   r.model_points = m.model_points;
   r.register_s = m.register_s;
+  // The files it names are the view's own in the scan's folder, or none: a reader of scan.json
+  // opens them, so no other path is taken from the wire.
+  const std::string frame = "frames/" + view_file(m.iteration, "ply");
+  if (!m.frame_file.empty() && m.frame_file != frame) {
+    throw std::invalid_argument("REGISTERED_CLOUD frame_file '" + shown(m.frame_file) + "' is neither '' nor '" + frame + "'");
+  }
+  const std::string depth = "depth/" + view_file(m.iteration, "png");
+  if (!m.depth_file.empty() && m.depth_file != depth) {
+    throw std::invalid_argument("REGISTERED_CLOUD depth_file '" + shown(m.depth_file) + "' is neither '' nor '" + depth + "'");
+  }
+  r.frame_file = m.frame_file;
+  r.depth_file = m.depth_file;
+  if (m.normals != registered_cloud_t::kNormalsDepthImage && m.normals != registered_cloud_t::kNormalsNeighbours) {
+    throw std::invalid_argument("REGISTERED_CLOUD normals = " + std::to_string(m.normals) +
+                                " is neither kNormalsDepthImage (0) nor kNormalsNeighbours (1)");
+  }
+  r.normals_from_depth = m.normals == registered_cloud_t::kNormalsDepthImage;
+  if (m.new_points >= 0) {
+    if (m.frame_points < m.new_points || m.model_points_before < 0) {
+      throw std::invalid_argument("REGISTERED_CLOUD new surface: new_points " + std::to_string(m.new_points) + ", frame_points " +
+                                  std::to_string(m.frame_points) + ", model_points_before " +
+                                  std::to_string(m.model_points_before) + " (need 0 <= new <= frame, model >= 0)");
+    }
+    require_range(m.new_surface_radius_m, 1e-6, 1.0, "REGISTERED_CLOUD new_surface_radius_m");
+    r.new_surface = NewSurface{m.frame_points, m.new_points, m.model_points_before, m.new_surface_radius_m};
+  } else if (m.new_points != -1) {
+    throw std::invalid_argument("REGISTERED_CLOUD new_points = " + std::to_string(m.new_points) + ": -1 (not merged) or a count");
+  }
+  require_range(m.accumulate_s, 0.0, 3600.0, "REGISTERED_CLOUD accumulate_s");
+  r.accumulate_s = m.accumulate_s;
   return r;
 }
 
@@ -404,6 +458,149 @@ inline scan_status_t to_msg(const ScanStatus& s) {
   m.elapsed_s = s.elapsed_s;
   m.num_points = s.num_points;
   return m;
+}
+
+// ---- The scan's mesh -------------------------------------------------------------------------
+
+inline mesh_request_t to_msg(const MeshRequest& r) {
+  mesh_request_t m;
+  m.utime = 0;
+  m.scan_id = r.scan_id;
+  m.request_id = r.request_id;
+  m.num_views = static_cast<int32_t>(r.views.size());
+  m.views.assign(r.views.begin(), r.views.end());
+  m.width = r.camera.width;
+  m.height = r.camera.height;
+  m.fx = r.camera.fx;
+  m.fy = r.camera.fy;
+  m.cx = r.camera.cx;
+  m.cy = r.camera.cy;
+  m.point_spacing_m = r.point_spacing_m;
+  return m;
+}
+
+// Throws naming the field when a view is outside 0..max_views-1 or out of order, the camera is
+// not one, or the spacing is outside [0, 0.05] m.
+inline MeshRequest from_msg(const mesh_request_t& m, int max_views) {
+  MeshRequest r;
+  r.scan_id = m.scan_id;
+  r.request_id = m.request_id;
+  if (m.views.empty() || static_cast<int>(m.views.size()) > max_views) {
+    throw std::invalid_argument("MESH_REQUEST num_views = " + std::to_string(m.views.size()) + " is outside 1.." +
+                                std::to_string(max_views));
+  }
+  for (std::size_t i = 0; i < m.views.size(); ++i) {
+    if (m.views[i] < 0 || m.views[i] >= max_views || (i > 0 && m.views[i] <= m.views[i - 1])) {
+      throw std::invalid_argument("MESH_REQUEST views[" + std::to_string(i) + "] = " + std::to_string(m.views[i]) +
+                                  ": the views are 0.." + std::to_string(max_views - 1) + ", ascending");
+    }
+  }
+  r.views.assign(m.views.begin(), m.views.end());
+  r.camera = CameraIntrinsics{m.width, m.height, m.fx, m.fy, m.cx, m.cy};
+  try {
+    r.camera.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("MESH_REQUEST camera: ") + e.what());
+  }
+  require_range(m.point_spacing_m, 0.0, 0.05, "MESH_REQUEST point_spacing_m");
+  r.point_spacing_m = m.point_spacing_m;
+  return r;
+}
+
+inline mesh_result_t to_msg(const MeshResult& r) {
+  const MeshSummary& s = r.mesh;
+  auto count = [](std::size_t n) { return static_cast<int32_t>(std::min<std::size_t>(n, INT32_MAX)); };
+  mesh_result_t m;
+  m.utime = 0;
+  m.scan_id = r.scan_id;
+  m.request_id = r.request_id;
+  m.status = r.ok ? mesh_result_t::kOk : mesh_result_t::kFailed;
+  m.message = r.message;
+  m.method = s.tsdf ? mesh_result_t::kTsdf : mesh_result_t::kPoisson;
+  m.with_stl = s.files.size() > 2;
+  m.frames = count(s.frames);
+  m.points = count(s.points);
+  m.vertices = count(s.vertices);
+  m.triangles = count(s.triangles);
+  m.watertight = s.watertight;
+  m.boundary_loops = count(s.boundary_loops);
+  m.boundary_edges = count(s.boundary_edges);
+  m.non_manifold_edges = count(s.non_manifold_edges);
+  m.hole_boundary_length_m = s.hole_boundary_length_m;
+  m.area_m2 = s.area_m2;
+  m.volume_m3 = s.volume_m3.value_or(0.0);
+  m.small_fragments_removed_triangles = count(s.small_fragments_removed_triangles);
+  m.holes_filled = count(s.holes_filled);
+  m.fill_holes_m = s.fill_holes_m;
+  m.seconds = s.seconds;
+  m.voxel_m = s.voxel_m;
+  m.truncation_m = s.truncation_m;
+  m.image_scale = s.image_scale;
+  m.voxels = static_cast<int64_t>(s.voxels);
+  m.poisson_depth = s.poisson_depth;
+  return m;
+}
+
+// Throws naming the field when the status or method is not one of its constants, a count is
+// negative, or a figure is not finite or out of its range.
+inline MeshResult from_msg(const mesh_result_t& m) {
+  MeshResult r;
+  r.scan_id = m.scan_id;
+  r.request_id = m.request_id;
+  if (m.status != mesh_result_t::kOk && m.status != mesh_result_t::kFailed) {
+    throw std::invalid_argument("MESH_RESULT status = " + std::to_string(m.status) + " is neither kOk (0) nor kFailed (1)");
+  }
+  r.ok = m.status == mesh_result_t::kOk;
+  r.message = m.message;
+  if (!r.ok) return r;
+  if (m.method != mesh_result_t::kTsdf && m.method != mesh_result_t::kPoisson) {
+    throw std::invalid_argument("MESH_RESULT method = " + std::to_string(m.method) + " is neither kTsdf (0) nor kPoisson (1)");
+  }
+  auto count = [](int64_t n, const char* what) {
+    if (n < 0) throw std::invalid_argument(std::string("MESH_RESULT ") + what + " = " + std::to_string(n) + " is negative");
+    return static_cast<std::size_t>(n);
+  };
+  MeshSummary& s = r.mesh;
+  s.tsdf = m.method == mesh_result_t::kTsdf;
+  s.files = {"mesh.ply", "mesh.obj"};
+  if (m.with_stl) s.files.push_back("mesh.stl");
+  s.frames = count(m.frames, "frames");
+  s.points = count(m.points, "points");
+  s.vertices = count(m.vertices, "vertices");
+  s.triangles = count(m.triangles, "triangles");
+  s.watertight = m.watertight;
+  s.boundary_loops = count(m.boundary_loops, "boundary_loops");
+  s.boundary_edges = count(m.boundary_edges, "boundary_edges");
+  s.non_manifold_edges = count(m.non_manifold_edges, "non_manifold_edges");
+  require_range(m.hole_boundary_length_m, 0.0, 1e3, "MESH_RESULT hole_boundary_length_m");
+  s.hole_boundary_length_m = m.hole_boundary_length_m;
+  require_range(m.area_m2, 0.0, 1e3, "MESH_RESULT area_m2");
+  s.area_m2 = m.area_m2;
+  if (m.watertight) {
+    require_range(m.volume_m3, -1e3, 1e3, "MESH_RESULT volume_m3");
+    s.volume_m3 = m.volume_m3;
+  }
+  s.small_fragments_removed_triangles = count(m.small_fragments_removed_triangles, "small_fragments_removed_triangles");
+  s.holes_filled = count(m.holes_filled, "holes_filled");
+  require_range(m.fill_holes_m, 0.0, 10.0, "MESH_RESULT fill_holes_m");
+  s.fill_holes_m = m.fill_holes_m;
+  require_range(m.seconds, 0.0, 1e6, "MESH_RESULT seconds");
+  s.seconds = m.seconds;
+  if (s.tsdf) {
+    require_range(m.voxel_m, 0.0, 1.0, "MESH_RESULT voxel_m");
+    require_range(m.truncation_m, 0.0, 10.0, "MESH_RESULT truncation_m");
+    s.voxel_m = m.voxel_m;
+    s.truncation_m = m.truncation_m;
+    if (m.image_scale < 1) throw std::invalid_argument("MESH_RESULT image_scale = " + std::to_string(m.image_scale) + " is below 1");
+    s.image_scale = m.image_scale;
+    s.voxels = count(m.voxels, "voxels");
+  } else {
+    if (m.poisson_depth < 1 || m.poisson_depth > 16) {
+      throw std::invalid_argument("MESH_RESULT poisson_depth = " + std::to_string(m.poisson_depth) + " is outside 1..16");
+    }
+    s.poisson_depth = m.poisson_depth;
+  }
+  return r;
 }
 
 }  // namespace pbnbv::bus

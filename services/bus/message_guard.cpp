@@ -259,8 +259,8 @@ int64_t DecodeLimits::max_message_bytes(std::string_view type_name) const {
   // Room for a message's scalars and strings around its arrays.
   constexpr int64_t kSmall = 64 * kKiB;
   if (type_name == "depth_frame_t") return frame_bytes(max_frame_pixels) + kSmall;
-  // A cloud has at most one point (12 bytes) per pixel of its frame.
-  if (type_name == "point_cloud_t" || type_name == "registered_cloud_t") return 12 * max_frame_pixels + kSmall;
+  // A cloud has at most one point (12 bytes) and one normal (12 bytes) per pixel of its frame.
+  if (type_name == "point_cloud_t" || type_name == "registered_cloud_t") return 24 * max_frame_pixels + kSmall;
   // Every cell of B, a byte each, plus its occupied and frontier centres: a B of 400^3 cells.
   if (type_name == "voxel_set_t") return 256 * kMiB;
   // Poses of the views taken and excluded (up to 1000 views each), candidates' alternatives and
@@ -271,7 +271,7 @@ int64_t DecodeLimits::max_message_bytes(std::string_view type_name) const {
 
 int64_t DecodeLimits::max_elements(std::string_view type_name, std::string_view field) const {
   if (type_name == "depth_frame_t" && field == "depth") return frame_bytes(max_frame_pixels);
-  if (type_name == "point_cloud_t" && field == "points_m") return 3 * max_frame_pixels;
+  if (type_name == "point_cloud_t" && (field == "points_m" || field == "normals")) return 3 * max_frame_pixels;
   return -1;
 }
 

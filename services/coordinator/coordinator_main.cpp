@@ -1,9 +1,11 @@
 // pbnbv-coordinator: the scan coordinator.
-//   in:  MOVE_RESULT, CLOUD, REGISTERED_CLOUD, VOXEL_MAP, ELLIPSOIDS, VIEW_PLAN, ARM_STATUS,
-//        TURNTABLE_STATUS, HEARTBEAT, DEPTH_FRAME and DEPTH_FRAME_RESENT (the frames' normals, DIR/depth/)
-//   out: MOVE_REQUEST, CAPTURE_REQUEST, PLAN_REQUEST, SCAN_STATUS, HEARTBEAT
+//   in:  MOVE_RESULT, CLOUD, REGISTERED_CLOUD, VOXEL_MAP, ELLIPSOIDS, VIEW_PLAN, MESH_RESULT,
+//        ARM_STATUS, TURNTABLE_STATUS, HEARTBEAT
+//   out: MOVE_REQUEST, CAPTURE_REQUEST, PLAN_REQUEST, MESH_REQUEST, SCAN_STATUS, HEARTBEAT
 // Wires the bus to the scan's sequence (core/scan/scan_sequencer.hpp: plan -> move -> capture ->
-// register -> map -> accumulate for each view, its deadlines and re-sends, the output folder):
+// register -> map for each view, the mesh at the end, its deadlines and re-sends) and writes
+// scan.json, the one file it owns (the frames, cloud.ply, the depth images and the mesh are the
+// registration service's, maps/ the mapping service's, plans/ the view scorer's):
 // converts what arrives, feeds it and the clock to the sequencer, publishes what it asks for and
 // prints its progress. Messages of another scan are ignored. With --replay-of it replays a
 // recorded scan (`pbnbv replay`): the recorded views, with this scan's plans recorded beside them.
@@ -32,8 +34,6 @@
 #include "core/scan/scan_sequencer.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "pbnbv/arm_status_t.hpp"
-#include "pbnbv/depth_frame_t.hpp"
-#include "report/depth_png.hpp"
 #include "pbnbv/heartbeat_t.hpp"
 #include "pbnbv/stop_request_t.hpp"
 #include "pbnbv/turntable_status_t.hpp"
@@ -95,6 +95,8 @@ void send(bus::Bus& bus, const std::vector<ScanOutput>& outputs) {
       publish(bus, channels::kCaptureRequest, *r);
     } else if (const auto* r = std::get_if<PlanRequest>(&out)) {
       publish(bus, channels::kPlanRequest, *r);
+    } else if (const auto* r = std::get_if<MeshRequest>(&out)) {
+      publish(bus, channels::kMeshRequest, *r);
     } else if (const auto* s = std::get_if<ScanStatus>(&out)) {
       publish(bus, channels::kScanStatus, *s);
       bus.set_scan(s->scan_id, s->iteration);  // for the heartbeat
@@ -126,15 +128,10 @@ int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out, bool r
   take<voxel_set_t>(bus, channels::kVoxelMap, inbox);
   take<ellipsoid_set_t>(bus, channels::kEllipsoids, inbox);
   take<view_plan_t>(bus, channels::kViewPlan, inbox);
+  take<mesh_result_t>(bus, channels::kMeshResult, inbox);
   bus.subscribe<arm_status_t>(channels::kArmStatus, [&](const arm_status_t&) { inbox.emplace_back(Heard{"ARM_STATUS"}); });
   bus.subscribe<turntable_status_t>(channels::kTurntableStatus,
                                     [&](const turntable_status_t&) { inbox.emplace_back(Heard{"TURNTABLE_STATUS"}); });
-  // The depth frames: each view's normals come from its frame's neighbourhood and the frame is
-  // written to DIR/depth/ (a frame that cannot be decoded is rejected by the bus, named).
-  scan.set_depth_image_writer(write_depth_png);
-  for (const char* channel : {channels::kDepthFrame, channels::kDepthFrameResent}) {
-    bus.subscribe<depth_frame_t>(channel, [&scan](const depth_frame_t& f) { scan.keep_depth_frame(bus::from_msg(f)); });
-  }
   std::optional<std::string> stop_reason;  // STOP heard (the motion executor holds the rig)
   bus.subscribe<stop_request_t>(channels::kStop, [&](const stop_request_t& s) { stop_reason = s.reason; });
   bus.subscribe<heartbeat_t>(channels::kHeartbeat,
@@ -209,7 +206,7 @@ int main(int argc, char** argv) {
                "pbnbv-coordinator"};
   cli::init(app);
   std::string out, settings_path;
-  cli::add_text(app, "out", &out, "the scan's folder (scan.json, cloud.ply, frames/, plans/)", "DIR")->required();
+  cli::add_text(app, "out", &out, "the scan's folder (its scan.json)", "DIR")->required();
   cli::add_text(app, "settings", &settings_path, "the scan's settings [DIR/settings.json]", "PATH");
   bool resume = false;
   cli::add_flag(app, "resume", &resume, "continue the scan recorded in DIR (scan.json, cloud.ply) with its next view");

@@ -12,7 +12,11 @@
 #include "core/base/install_paths.hpp"
 #include "core/io/json.hpp"
 #include "core/rig/urdf_import.hpp"
+#include "core/io/cloud_file.hpp"
 #include "core/scan/scan_file.hpp"
+#include "core/scan/scan_record.hpp"
+#include "core/scan/scan_settings.hpp"
+#include "core/surface/scan_mesh.hpp"
 #include "launcher/commands.hpp"
 #include "launcher/supervise.hpp"
 #include "rigcheck/rig_check.hpp"
@@ -112,7 +116,20 @@ int run_rig_check(const RigCheckOptions& o) {
 
 int run_mesh(const MeshOptions& o) {
   const fs::path dir(o.dir);
-  const nlohmann::json m = mesh_scan_folder(dir, o.surface, o.stl);
+  // The frames scan.json names as merged, with the camera and point spacing the scan had.
+  const nlohmann::json scan = read_scan_json(dir);
+  SurfaceSettings s = o.surface;
+  try {
+    const ScanSettings scanned = scan_settings_from_json(scan.at("settings"));
+    s.camera = scanned.camera;
+    s.point_spacing_m = scanned.voxel_m;
+  } catch (const std::exception& e) {
+    throw std::invalid_argument((dir / "scan.json").string() + ": " + e.what());
+  }
+  std::vector<SurfaceFrame> frames;
+  for (const MergedFrame& f : merged_frames(dir, scan)) frames.push_back({read_ply(f.file.string()), f.object_T_camera});
+  const nlohmann::json m = to_json(mesh_scan(dir, frames, s, o.stl));
+  write_scan_mesh(dir, m);
   std::cout << "pbnbv mesh: " << (dir / "mesh.ply").string() << " (and mesh.obj" << (o.stl ? ", mesh.stl" : "") << "): " << m["method"].get<std::string>()
             << ", " << m["vertices"] << " vertices, " << m["triangles"] << " triangles, "
             << (m["watertight"].get<bool>() ? std::string("watertight")

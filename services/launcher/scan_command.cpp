@@ -247,7 +247,9 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
     add("motion", {(bin / "pbnbv-motion").string(), "--model", s.rig_model_path});
     add("camera", {(bin / "pbnbv-camera").string(), "--model", s.rig_model_path});
   }
-  add("registration", {(bin / "pbnbv-registration").string(), "--out", out.string()});
+  // The model (cloud.ply) at the scan's cloud voxel, its new surface at the stop rule's radius.
+  add("registration", {(bin / "pbnbv-registration").string(), "--out", out.string(), "--model-voxel", exact(s.voxel_m),
+                       "--new-surface-radius", exact(s.stop_radius_m)});
   if (!registration) children.back().argv.push_back("--off");
   // The map's working volume: the cloud's crop box, above the turntable top.
   Eigen::Vector3d volume_min = s.crop_min_m;

@@ -1,13 +1,22 @@
 // pbnbv-registration: the registration service.
-//   in:  CLOUD (a view placed by the rig's kinematic pose), CAPTURE_REQUEST (a CLOUD is taken only
-//        when it answers a capture request heard: bus/asked_captures.hpp)
-//   out: REGISTERED_CLOUD, HEARTBEAT
+//   in:  CLOUD (a view placed by the rig's kinematic pose, with its normals), CAPTURE_REQUEST (a
+//        CLOUD is taken only when it answers a capture request heard: bus/asked_captures.hpp),
+//        DEPTH_FRAME and DEPTH_FRAME_RESENT (each view's depth image, for DIR/depth/),
+//        MESH_REQUEST (the scan's end)
+//   out: REGISTERED_CLOUD, MESH_RESULT, HEARTBEAT; with --out DIR: DIR/frames/view_NNN.ply (every
+//        view), DIR/cloud.ply (the model), DIR/depth/view_NNN.png and .json, DIR/mesh.ply and
+//        mesh.obj (the surface of the merged views, core/surface/scan_mesh.hpp)
 // Refines each view's pose against the accumulated model of its scan with point-to-plane ICP
 // (core register_frame), starting from the kinematic pose; an implausible alignment is
 // rejected with the reason and the kinematic pose kept, and a rejected view is not merged.
-// The model is rebuilt from the messages of the scan (a restarted service starts a new model
-// at the next scan); answers are idempotent by (scan_id, request_id).
+// It owns the model and what is made of it (core/surface/scan_model.hpp): each view's frame,
+// the merged cloud and what each view added to it (new surface), said in the answer. A
+// restarted service continues the model of its scan from DIR/cloud.ply; answers are idempotent
+// by (scan_id, request_id). The mesh is made on a worker thread, so the service's heartbeat goes
+// on while it fuses (seconds).
+#include <chrono>
 #include <deque>
+#include <future>
 #include <iostream>
 #include <sstream>
 
@@ -19,13 +28,19 @@
 #include "core/io/cloud_file.hpp"
 #include "bus/reply_cache.hpp"
 #include "bus/service.hpp"
-#include "bus/convert.hpp"
+#include "bus/convert_scan.hpp"
 #include "core/perception/perception_options.hpp"
 #include "core/geometry/point_cloud.hpp"
 #include "core/base/log.hpp"
 #include "core/perception/cloud_filter.hpp"
 #include "core/perception/registration.hpp"
+#include "core/scan/scan_options.hpp"
+#include "core/surface/scan_model.hpp"
 #include "pbnbv/capture_request_t.hpp"
+#include "pbnbv/depth_frame_t.hpp"
+#include "pbnbv/mesh_request_t.hpp"
+#include "pbnbv/mesh_result_t.hpp"
+#include "report/depth_png.hpp"
 #include "pbnbv/point_cloud_t.hpp"
 #include "pbnbv/registered_cloud_t.hpp"
 
@@ -34,22 +49,70 @@ using namespace pbnbv;
 namespace {
 
 constexpr std::size_t kAnswersKept = 4;
+constexpr std::size_t kFramesKept = 4;  // depth frames of the last views (a view's comes before its cloud)
 
 class RegistrationService {
  public:
-  RegistrationService(bus::Bus& bus, const RegistrationParams& params, double model_voxel_m, bool off,
-                      std::filesystem::path out)
-      : bus_(bus), params_(params), model_voxel_m_(model_voxel_m), off_(off), out_(std::move(out)) {
+  RegistrationService(bus::Bus& bus, const RegistrationParams& params, double model_voxel_m, double new_surface_radius_m,
+                      bool off, std::filesystem::path out)
+      : bus_(bus), params_(params), off_(off), out_(std::move(out)),
+        model_(bus_.scope().empty() ? std::filesystem::path() : out_, model_voxel_m, new_surface_radius_m) {
     restore();
     bus_.subscribe<capture_request_t>(channels::kCaptureRequest,
                                       [this](const capture_request_t& c) { asked_.heard(c.scan_id, c.request_id); });
     bus_.subscribe<point_cloud_t>(channels::kCloud, [this](const point_cloud_t& c) { on_cloud(c); });
+    bus_.subscribe<mesh_request_t>(channels::kMeshRequest, [this](const mesh_request_t& m) { on_mesh_request(m); });
+    for (const char* channel : {channels::kDepthFrame, channels::kDepthFrameResent}) {
+      bus_.subscribe<depth_frame_t>(channel, [this](const depth_frame_t& f) {
+        for (const auto& kept : frames_) if (kept.seq == f.seq) return;  // sent again: kept already
+        frames_.push_back(f);
+        if (frames_.size() > kFramesKept) frames_.pop_front();
+      });
+    }
+  }
+
+  // Answers the mesh request whose mesh the worker has finished.
+  void tick() {
+    if (!meshing_.valid() || meshing_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+    mesh_result_t out = bus::to_msg(meshing_.get());
+    out.utime = bus::now_utime();
+    log_info(out.status == mesh_result_t::kOk ? "mesh: " + std::to_string(out.triangles) + " triangles (" +
+                                                    std::to_string(out.seconds) + " s)"
+                                              : "no mesh: " + out.message);
+    bus_.publish(channels::kMeshResult, out);
+    meshes_.put({out.scan_id, out.request_id}, out);
   }
 
  private:
+  void on_mesh_request(const mesh_request_t& m) {
+    if (const mesh_result_t* answer = meshes_.find({m.scan_id, m.request_id})) {
+      bus_.publish(channels::kMeshResult, *answer);  // a repeat: answer again
+      return;
+    }
+    if (meshing_.valid()) return;  // a repeat while the mesh is made (or another request: asked again later)
+    const MeshRequest r = bus::from_msg(m, kViews.max);  // a malformed request throws: rejected by the bus
+    bus_.set_scan(r.scan_id, -1);
+    log_info("meshing " + std::to_string(r.views.size()) + " views");
+    // The mesh reads only the frames' files, which no view changes after the scan's end (a CLOUD
+    // that comes while it is made waits for it: on_cloud).
+    meshing_ = std::async(std::launch::async, [this, r] {
+      MeshResult out;
+      out.scan_id = r.scan_id;
+      out.request_id = r.request_id;
+      try {
+        out.mesh = model_.mesh(r.views, r.camera, r.point_spacing_m);
+        out.ok = true;
+      } catch (const std::exception& e) {
+        out.message = e.what();
+      }
+      return out;
+    });
+  }
+
   void on_cloud(const point_cloud_t& c) {
     asked_.require("CLOUD", c.scan_id, c.request_id);  // a cloud nobody asked for is not merged
     bus_.set_scan(c.scan_id, c.iteration);
+    if (meshing_.valid()) meshing_.wait();  // the frames stay as the mesh read them
     if (const registered_cloud_t* answer = answers_.find({c.scan_id, c.request_id})) {
       bus_.publish(channels::kRegisteredCloud, *answer);  // a repeat: answer again
       return;
@@ -58,6 +121,7 @@ class RegistrationService {
       scan_id_ = c.scan_id;
       model_.clear();
     }
+    const CaptureResult capture = bus::from_msg(c);  // a malformed cloud throws: rejected by the bus
     registered_cloud_t out;
     out.scan_id = c.scan_id;
     out.iteration = c.iteration;
@@ -68,20 +132,24 @@ class RegistrationService {
     out.translation_m = out.rotation_deg = out.overlap = out.rmse_m = out.register_s = out.constraint = 0;
     out.refined = false;
     out.iterations = 0;
+    out.cloud.num_normals = 0;  // written to the frame's file, not sent on
+    out.cloud.normals.clear();
+    out.normals = registered_cloud_t::kNormalsDepthImage;
+    out.frame_points = out.model_points_before = 0;
+    out.new_points = -1;
+    out.new_surface_radius_m = out.accumulate_s = 0;
     if (c.status != point_cloud_t::kOk) {
       out.accepted = false;
       out.reason = "no cloud to register: " + c.message;
     } else {
-      PointCloud frame;
-      frame.reserve(c.points_m.size());
-      for (const auto& p : c.points_m) frame.emplace_back(p[0], p[1], p[2]);
-      const Pose kinematic = bus::from_msg(c.object_T_camera, "CLOUD object_T_camera");
+      const PointCloud& frame = capture.points;
+      const Pose kinematic = capture.object_T_camera;
       RegistrationResult r;
       if (off_) {  // for comparisons: every view kept where the kinematics put it
         r.accepted = true;
         r.reason = "registration off: kinematic pose kept";
       } else {
-        r = register_frame(model_, frame, params_);
+        r = register_frame(model_.points(), frame, params_);
       }
       out.accepted = r.accepted;
       out.refined = r.refined;
@@ -94,34 +162,66 @@ class RegistrationService {
       out.rmse_m = r.rmse_m;
       out.iterations = r.iterations;
       out.register_s = r.time_s;
+      PointCloud placed = frame;
+      std::vector<Eigen::Vector3f> normals = capture.normals;
+      Pose pose = kinematic;
       if (r.accepted) {
-        const PointCloud registered = transform_cloud(frame, r.correction);
-        out.cloud.object_T_camera = bus::to_msg(r.correction * kinematic);
-        for (std::size_t i = 0; i < registered.size(); ++i) {
-          out.cloud.points_m[i] = {registered[i].x(), registered[i].y(), registered[i].z()};
-        }
-        model_.insert(model_.end(), registered.begin(), registered.end());
-        model_ = voxel_downsample(model_, model_voxel_m_);
+        placed = transform_cloud(frame, r.correction);
+        const Eigen::Matrix3f turn = r.correction.linear().cast<float>();
+        for (auto& n : normals) n = turn * n;
+        pose = r.correction * kinematic;
+        out.cloud.object_T_camera = bus::to_msg(pose);
+        for (std::size_t i = 0; i < placed.size(); ++i) out.cloud.points_m[i] = {placed[i].x(), placed[i].y(), placed[i].z()};
       }
+      add_to_model(c, placed, std::move(normals), pose, r.accepted, out);
       std::ostringstream os;
       os << "view " << c.iteration << ": " << r.reason << " (" << r.time_s * 1e3 << " ms)";
       log_info(os.str());
     }
-    out.model_points = static_cast<int32_t>(model_.size());
+    out.model_points = static_cast<int32_t>(model_.points().size());
     out.utime = bus::now_utime();
     bus_.publish(channels::kRegisteredCloud, out);
     answers_.put({out.scan_id, out.request_id}, out);
     save(out);
   }
 
-  // The state a restarted service continues from: DIR/state/registration.ply (the model) and
+  // The view into the model (and, with a folder, its frame, its depth image and cloud.ply); what
+  // it added goes into the answer.
+  void add_to_model(const point_cloud_t& c, const PointCloud& placed, std::vector<Eigen::Vector3f> normals, const Pose& pose,
+                    bool merge, registered_cloud_t& out) {
+    const std::size_t before = model_.points().size();
+    const ModelUpdate u = model_.add_view(c.iteration, placed, std::move(normals), pose, merge);
+    out.frame_file = u.frame_file;
+    out.normals = u.normals_from_depth ? registered_cloud_t::kNormalsDepthImage : registered_cloud_t::kNormalsNeighbours;
+    if (u.new_surface) {
+      out.frame_points = u.new_surface->frame_points;
+      out.new_points = u.new_surface->new_points;
+      out.model_points_before = static_cast<int32_t>(before);
+      out.new_surface_radius_m = u.new_surface->radius_m;
+    }
+    double seconds = u.seconds;
+    for (const depth_frame_t& f : frames_) {
+      if (f.seq != c.depth_frame_seq || model_.folder().empty()) continue;
+      const auto t0 = std::chrono::steady_clock::now();
+      try {
+        const bus::DecodedFrame d = bus::decode_frame(f);
+        out.depth_file = model_.write_depth(c.iteration, DepthImage{&d.depth_m, d.intrinsics, d.range, f.seq}, pose, merge,
+                                            write_depth_png);
+      } catch (const std::invalid_argument& e) {
+        log_warn("view " + std::to_string(c.iteration + 1) + ": DEPTH_FRAME " + std::to_string(f.seq) + " not written: " + e.what());
+      }
+      seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    out.accumulate_s = seconds;
+  }
+
+  // The state a restarted service continues from: DIR/cloud.ply (the model) and
   // DIR/state/registration.answer (the last REGISTERED_CLOUD), written after every view.
   std::filesystem::path state_path(const char* name) const { return out_ / "state" / name; }
 
   void save(const registered_cloud_t& answer) {
     if (out_.empty() || bus_.scope().empty()) return;  // only a service started for one scan
     std::filesystem::create_directories(out_ / "state");
-    write_ply(model_, state_path("registration.ply").string());
     bus::save_message(answer, state_path("registration.answer").string());
   }
 
@@ -130,21 +230,23 @@ class RegistrationService {
     if (out_.empty() || bus_.scope().empty()) return;
     const auto last = bus::load_message<registered_cloud_t>(state_path("registration.answer").string());
     if (!last || last->scan_id != bus_.scope()) return;
-    model_ = read_ply(state_path("registration.ply").string());
+    model_.restore();
     scan_id_ = last->scan_id;
     answers_.put({last->scan_id, last->request_id}, *last);
-    log_info("continuing the model of scan " + scan_id_ + " (" + std::to_string(model_.size()) + " points) after view " +
-             std::to_string(last->iteration) + " from " + state_path("registration.ply").string());
+    log_info("continuing the model of scan " + scan_id_ + " (" + std::to_string(model_.points().size()) +
+             " points) after view " + std::to_string(last->iteration) + " from " + (out_ / "cloud.ply").string());
   }
 
   bus::AskedCaptures asked_;
   bus::Bus& bus_;
   RegistrationParams params_;
-  double model_voxel_m_;
   bool off_;
   std::filesystem::path out_;
   std::string scan_id_;
-  PointCloud model_;
+  ScanModel model_;
+  std::deque<depth_frame_t> frames_;  // the last depth frames, as received
+  std::future<MeshResult> meshing_;   // the mesh being made
+  bus::ReplyCache<std::pair<std::string, int64_t>, mesh_result_t> meshes_{kAnswersKept};
   bus::ReplyCache<std::pair<std::string, int64_t>, registered_cloud_t> answers_{kAnswersKept};
 };
 
@@ -176,14 +278,18 @@ int main(int argc, char** argv) {
            &p.max_rotation_deg);
   double model_voxel_m = 0;
   cli::add(app, kCloudVoxel.renamed("model-voxel", "the model cloud's downsampling voxel (0: off)"), &model_voxel_m);
+  double new_surface_radius_m = kStopRadius.value;
+  cli::add(app, kStopRadius.renamed("new-surface-radius", "a view's point farther than this from the model is new surface"),
+           &new_surface_radius_m);
   bool off = false;
   cli::add_flag(app, "off", &off, "pass every view through with its kinematic pose (no ICP)");
   std::string out;
   cli::add_text(app, "out", &out,
-                "the scan's folder: with --scan, the model is kept in DIR/state and continued after a restart", "DIR");
+                "the scan's folder: with --scan, each view's frame (DIR/frames/), depth image (DIR/depth/) and the model "
+                "(DIR/cloud.ply, continued after a restart) are written there", "DIR");
   return bus::run_service("registration", app, argc, argv, 20, [&](bus::Bus& bus) -> std::function<void()> {
-    auto service = std::make_shared<RegistrationService>(bus, p, model_voxel_m, off, out);
+    auto service = std::make_shared<RegistrationService>(bus, p, model_voxel_m, new_surface_radius_m, off, out);
     log_info("ready");
-    return [service] {};
+    return [service] { service->tick(); };
   });
 }

@@ -41,6 +41,8 @@ void convert(const ellipsoid_t& m) { bus::from_msg(m, "fuzz"); }
 void convert(const pose_t& m) { bus::from_msg(m, "fuzz"); }
 void convert(const view_plan_t& m) { bus::from_msg(m); }
 void convert(const plan_request_t& m) { bus::plan_input_from_msg(m); }
+void convert(const mesh_request_t& m) { bus::from_msg(m, 1000); }
+void convert(const mesh_result_t& m) { bus::from_msg(m); }
 
 template <class T>
 void receive(const uint8_t* data, size_t size) {

@@ -182,17 +182,125 @@ TEST(ConvertScan, RegisteredCloudNamesItsBadField) {
   m.correction = bus::to_msg(Pose(Eigen::Translation3d(0.001, 0, 0)));
   m.accepted = true;
   m.translation_m = 0.001;
+  m.iteration = 2;
+  m.frame_file = "frames/view_003.ply";
+  m.depth_file = "";
+  m.normals = registered_cloud_t::kNormalsNeighbours;
+  m.frame_points = 200;
+  m.new_points = 50;
+  m.model_points_before = 1000;
+  m.new_surface_radius_m = 0.005;
+  m.accumulate_s = 0.01;
   const RegisteredCloud r = bus::from_msg(m);
   EXPECT_EQ(r.request_id, 4);
   EXPECT_TRUE(r.accepted);
   EXPECT_EQ(r.cloud.points.size(), 1u);
   EXPECT_NEAR(r.correction.translation().x(), 0.001, 1e-15);
+  EXPECT_EQ(r.frame_file, "frames/view_003.ply");
+  EXPECT_FALSE(r.normals_from_depth);
+  ASSERT_TRUE(r.new_surface.has_value());
+  EXPECT_EQ(r.new_surface->percent_of_model(), 5.0);
+  // The files it names are the view's own or none: no other path is taken from the wire.
+  for (const char* path : {"../../etc/passwd", "frames/view_001.ply", "/tmp/x.ply"}) {
+    registered_cloud_t bad = m;
+    bad.frame_file = path;
+    expect_error([&] { bus::from_msg(bad); }, "REGISTERED_CLOUD frame_file '" + std::string(path) + "' is neither '' nor 'frames/view_003.ply'");
+  }
+  registered_cloud_t bad = m;
+  bad.depth_file = "depth/../../x.png";
+  expect_error([&] { bus::from_msg(bad); }, "REGISTERED_CLOUD depth_file");
+  bad = m;
+  bad.new_points = 201;  // more new points than the view has
+  expect_error([&] { bus::from_msg(bad); }, "REGISTERED_CLOUD new surface: new_points 201, frame_points 200");
+  bad = m;
+  bad.new_points = -1;  // not merged: no figure
+  EXPECT_FALSE(bus::from_msg(bad).new_surface.has_value());
+  bad.new_points = -2;
+  expect_error([&] { bus::from_msg(bad); }, "REGISTERED_CLOUD new_points = -2");
+  bad = m;
+  bad.normals = 7;
+  expect_error([&] { bus::from_msg(bad); }, "REGISTERED_CLOUD normals = 7");
   m.cloud.points_m[0][1] = std::nanf("");
   expect_error([&] { bus::from_msg(m); }, "REGISTERED_CLOUD cloud: CLOUD points_m[0]");
   m = registered_cloud_t{};
   m.cloud = bus::to_msg(c);
   m.kinematic_object_T_camera = bus::to_msg(Pose::Identity());
   expect_error([&] { bus::from_msg(m); }, "REGISTERED_CLOUD correction");  // all-zero quaternion
+}
+
+// A cloud's normals: none, or one unit vector (or zero: none found) per point.
+TEST(ConvertScan, CloudNormalsAreOnePerPointAndUnitOrZero) {
+  CaptureResult c;
+  c.scan_id = "s";
+  c.ok = true;
+  c.points = {Eigen::Vector3f(0.1f, 0.2f, 0.3f), Eigen::Vector3f(0.1f, 0.2f, 0.4f)};
+  c.normals = {Eigen::Vector3f(0, 0, 1), Eigen::Vector3f::Zero()};
+  point_cloud_t m = bus::to_msg(c);
+  EXPECT_EQ(m.num_normals, 2);
+  EXPECT_EQ(bus::from_msg(m).normals, c.normals);
+  m.normals[1] = {0.5f, 0, 0};
+  expect_error([&] { bus::from_msg(m); }, "CLOUD normals[1] is neither a unit vector nor zero (length 0.5");
+  m.normals[1] = {std::nanf(""), 0, 0};
+  expect_error([&] { bus::from_msg(m); }, "CLOUD normals[1] is neither a unit vector nor zero");
+  m.normals.pop_back();
+  m.num_normals = 1;
+  expect_error([&] { bus::from_msg(m); }, "CLOUD num_normals = 1: neither 0 nor num_points (2)");
+  c.normals.clear();
+  EXPECT_TRUE(bus::from_msg(bus::to_msg(c)).normals.empty());
+}
+
+// MESH_REQUEST and MESH_RESULT round trip; a request's views are bounded and ascending, a
+// result's figures checked.
+TEST(ConvertScan, MeshRequestsAndResultsAreChecked) {
+  MeshRequest q;
+  q.scan_id = "s";
+  q.request_id = 9;
+  q.views = {0, 2, 5};
+  q.camera = CameraIntrinsics{320, 180, 200, 200, 160, 90};
+  q.point_spacing_m = 0.002;
+  mesh_request_t qm = bus::to_msg(q);
+  const MeshRequest back = bus::from_msg(qm, 1000);
+  EXPECT_EQ(back.views, q.views);
+  EXPECT_EQ(back.camera.cx, 160.0);
+  qm.views = {0, 2, 2};
+  expect_error([&] { bus::from_msg(qm, 1000); }, "MESH_REQUEST views[2] = 2: the views are 0..999, ascending");
+  qm.views = {1000};
+  expect_error([&] { bus::from_msg(qm, 1000); }, "MESH_REQUEST views[0] = 1000");
+  qm.views = {};
+  expect_error([&] { bus::from_msg(qm, 1000); }, "MESH_REQUEST num_views = 0 is outside 1..1000");
+  qm = bus::to_msg(q);
+  qm.width = 0;
+  expect_error([&] { bus::from_msg(qm, 1000); }, "MESH_REQUEST camera:");
+
+  MeshResult r;
+  r.scan_id = "s";
+  r.request_id = 9;
+  r.ok = true;
+  r.mesh.files = {"mesh.ply", "mesh.obj"};
+  r.mesh.triangles = 12;
+  r.mesh.watertight = true;
+  r.mesh.volume_m3 = 0.001;
+  r.mesh.voxel_m = 0.001;
+  r.mesh.truncation_m = 0.004;
+  r.mesh.image_scale = 2;
+  mesh_result_t rm = bus::to_msg(r);
+  const MeshResult got = bus::from_msg(rm);
+  EXPECT_TRUE(got.ok);
+  EXPECT_EQ(got.mesh.triangles, 12u);
+  EXPECT_EQ(got.mesh.volume_m3, 0.001);
+  EXPECT_EQ(got.mesh.files, r.mesh.files);
+  rm.triangles = -1;
+  expect_error([&] { bus::from_msg(rm); }, "MESH_RESULT triangles = -1 is negative");
+  rm = bus::to_msg(r);
+  rm.method = 5;
+  expect_error([&] { bus::from_msg(rm); }, "MESH_RESULT method = 5");
+  rm = bus::to_msg(r);
+  rm.area_m2 = std::nan("");
+  expect_error([&] { bus::from_msg(rm); }, "MESH_RESULT area_m2");
+  rm.status = mesh_result_t::kFailed;  // no mesh: its figures are not read
+  rm.message = "no accepted view";
+  EXPECT_FALSE(bus::from_msg(rm).ok);
+  EXPECT_EQ(bus::from_msg(rm).message, "no accepted view");
 }
 
 TEST(ConvertScan, VoxelMapAndEllipsoidSummariesAreChecked) {

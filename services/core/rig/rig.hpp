@@ -29,8 +29,10 @@ struct EnumNames<RigKind> {
   static constexpr std::string_view what = "rig kind";
   static constexpr std::array<NamedValue<RigKind>, 2> names{{{RigKind::kArm, "arm"}, {RigKind::kFree, "free"}}};
 };
-std::string to_string(RigKind kind);  // "arm" | "free" (name_of)
-RigKind parse_rig_kind(const std::string& s);  // parse_name: throws naming the value and the choices
+// "arm" | "free"; parse_rig_kind throws naming the value and the choices. Inline: a program that
+// only names rig kinds (the coordinator) does not link the rig's model loading (MuJoCo).
+inline std::string to_string(RigKind kind) { return std::string(name_of(kind)); }
+inline RigKind parse_rig_kind(const std::string& s) { return parse_name<RigKind>(s); }
 // The rig option of every program that works with a rig (pbnbv scan, motion, camera, scorer, twin).
 inline constexpr ChoiceSetting<RigKind> kRig{"rig", RigKind::kArm,
                                              "arm + turntable, or a free-flying camera (the paper's setup)"};

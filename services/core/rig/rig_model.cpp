@@ -257,10 +257,6 @@ void load_arm_chain(const mjModel* m, const std::string& path, int flange, RigMo
 
 }  // namespace
 
-std::string to_string(RigKind kind) { return std::string(name_of(kind)); }
-
-RigKind parse_rig_kind(const std::string& s) { return parse_name<RigKind>(s); }
-
 std::string model_file_path(const std::string& file_name) {
   return resource_dir("PBNBV_MODELS_DIR", "models", PBNBV_MODELS_DIR) + "/" + file_name;
 }

@@ -6,12 +6,15 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/base/pose.hpp"
 #include "core/geometry/camera_model.hpp"
+#include "core/geometry/mesh_summary.hpp"
 #include "core/geometry/point_cloud.hpp"
+#include "core/perception/new_surface.hpp"
 #include "core/planning/kinds.hpp"
 
 namespace pbnbv {
@@ -83,6 +86,9 @@ struct CaptureResult {
   double voxel_m = 0;
   double capture_s = 0, process_s = 0;
   PointCloud points;                       // object frame, m
+  // One unit normal per point, object frame, facing the camera, from the depth image's
+  // neighbourhood (zero where none was found); empty: none sent.
+  std::vector<Eigen::Vector3f> normals;
 };
 
 // ---- What the coordinator sends and receives besides moves and captures ----------------------
@@ -107,6 +113,31 @@ struct RegisteredCloud {
   int iterations = 0;                      // ICP iterations
   int model_points = 0;
   double register_s = 0;
+  // What the registration service made of the view in the scan's folder (empty names: it writes
+  // none): the frame, the depth image, the model (cloud.ply) it was merged into.
+  std::string frame_file;                  // "frames/view_NNN.ply"
+  std::string depth_file;                  // "depth/view_NNN.png" ("": the frame did not arrive)
+  bool normals_from_depth = true;          // false: fitted to the nearest points
+  std::optional<NewSurface> new_surface;   // accepted views: what the view added to the model
+  double accumulate_s = 0;                 // writing the frame and the model, s
+};
+
+// MESH_REQUEST: mesh the scan's merged views (the registration service's frames) at its end.
+struct MeshRequest {
+  std::string scan_id;
+  int64_t request_id = 0;
+  std::vector<int> views;           // the merged views, 0-based, ascending
+  CameraIntrinsics camera;          // the frames' camera
+  double point_spacing_m = 0;       // their downsampling voxel
+};
+
+// MESH_RESULT: the mesh written into the scan's folder (ok), or why there is none.
+struct MeshResult {
+  std::string scan_id;
+  int64_t request_id = 0;
+  bool ok = false;
+  std::string message;              // why not
+  MeshSummary mesh;                 // ok only
 };
 
 // VOXEL_MAP as the coordinator records it: the map's state after a view, without the voxels.

@@ -5,10 +5,9 @@
 #include <stdexcept>
 
 #include "core/base/version.hpp"
-#include "core/io/cloud_file.hpp"
+#include "core/base/format.hpp"
 #include "core/io/json.hpp"
 #include "core/scan/scan_settings.hpp"
-#include "core/surface/scan_mesh.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -72,21 +71,17 @@ void write_scan_state(const fs::path& scan_folder, const std::string& state, con
   write_json_atomic(scan, path.string());
 }
 
-std::vector<SurfaceFrame> read_scan_frames(const fs::path& dir, const json& scan, SurfaceSettings& settings) {
+std::vector<MergedFrame> merged_frames(const fs::path& dir, const json& scan) {
   const std::string where = (dir / "scan.json").string();
-  try {
-    // The record's settings as the scan had them (bounded reads, every field checked).
-    const ScanSettings scanned = scan_settings_from_json(scan.at("settings"));
-    settings.camera = scanned.camera;
-    settings.point_spacing_m = scanned.voxel_m;
-  } catch (const std::exception& e) {
-    throw std::invalid_argument(where + ": " + e.what());
-  }
-  std::vector<SurfaceFrame> frames;
+  std::vector<MergedFrame> frames;
   for (const json& v : scan.value("views", json::array())) {
-    if (!v.value("merged", false) || !v.contains("frame_file")) continue;
-    const std::string what = where + " view " + std::to_string(v.value("view", -1));
-    SurfaceFrame f;
+    if (!v.is_object() || !v.value("merged", false) || !v.contains("frame_file")) continue;
+    MergedFrame f;
+    f.view = v.value("view", -1);
+    const std::string what = where + " view " + std::to_string(f.view + 1);
+    if (f.view < 0 || f.view >= kViews.max) throw std::invalid_argument(what + ": no view number");
+    const std::string own = "frames/" + view_file(f.view, "ply");
+    if (v["frame_file"] != own) throw std::invalid_argument(what + ": frame_file is not " + own);
     if (v.contains("registration") && v["registration"].contains("registered_object_T_camera")) {
       f.object_T_camera = pose_from_json(v["registration"]["registered_object_T_camera"], what + " registered pose");
     } else if (v.contains("capture")) {
@@ -94,22 +89,18 @@ std::vector<SurfaceFrame> read_scan_frames(const fs::path& dir, const json& scan
     } else {
       throw std::invalid_argument(what + ": a merged view without a camera pose");
     }
-    f.points = read_ply((dir / v["frame_file"].get<std::string>()).string());
+    f.file = dir / own;
     frames.push_back(std::move(f));
   }
   if (frames.empty()) throw std::invalid_argument(where + ": no accepted view to mesh");
   return frames;
 }
 
-json mesh_scan_folder(const fs::path& dir, const SurfaceSettings& settings, bool with_stl) {
+void write_scan_mesh(const fs::path& dir, const json& mesh) {
   const fs::path path = dir / "scan.json";
   json scan = read_scan_json(path);
-  SurfaceSettings s = settings;
-  const std::vector<SurfaceFrame> frames = read_scan_frames(dir, scan, s);
-  const json m = mesh_scan(dir, frames, s, with_stl);
-  scan["mesh"] = m;
+  scan["mesh"] = mesh;
   write_json_atomic(scan, path.string());
-  return m;
 }
 
 }  // namespace pbnbv

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "core/surface/surface.hpp"
+#include "core/base/pose.hpp"
 
 namespace pbnbv {
 
@@ -36,15 +36,19 @@ std::string recorded_state(const std::filesystem::path& scan_folder);
 // was stopped around it). A folder without a record gets one holding only this status.
 void write_scan_state(const std::filesystem::path& scan_folder, const std::string& state, const std::string& message);
 
-// The accepted frames of the scan in `dir` (frames/view_NNN.ply, each with the pose its points
-// were placed with) and the settings its record implies (camera, point spacing) on top of
-// `settings` (method, voxel, truncation). Throws naming the file when a frame or a field is
-// missing or unreadable, or no view was accepted.
-std::vector<SurfaceFrame> read_scan_frames(const std::filesystem::path& dir, const nlohmann::json& scan,
-                                           SurfaceSettings& settings);
+// A merged view's frame as scan.json names it.
+struct MergedFrame {
+  int view = 0;
+  std::filesystem::path file;               // DIR/frames/view_NNN.ply
+  Pose object_T_camera = Pose::Identity();  // the pose its points were placed with
+};
 
-// `pbnbv mesh DIR`: meshes the accepted frames of the scan in `dir` (mesh_scan) and writes the
-// "mesh" object it returns into scan.json.
-nlohmann::json mesh_scan_folder(const std::filesystem::path& dir, const SurfaceSettings& settings, bool with_stl = false);
+// The merged views of the scan in `dir` whose record is `scan` (read_scan_json), in order. Throws
+// naming the file when a merged view has no pose, names a frame file that is not its own
+// (frames/view_NNN.ply), or no view was merged.
+std::vector<MergedFrame> merged_frames(const std::filesystem::path& dir, const nlohmann::json& scan);
+
+// Sets scan.json's "mesh" in the folder (`pbnbv mesh`, meshing a scan again), written atomically.
+void write_scan_mesh(const std::filesystem::path& dir, const nlohmann::json& mesh);
 
 }  // namespace pbnbv

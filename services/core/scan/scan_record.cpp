@@ -5,12 +5,8 @@
 #include "core/base/format.hpp"
 #include "core/base/version.hpp"
 #include "core/base/units.hpp"
-#include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
-#include "core/perception/cloud_filter.hpp"
-#include "core/perception/depth_cloud.hpp"
 #include "core/scan/scan_file.hpp"
-#include "core/surface/scan_mesh.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -179,23 +175,52 @@ json to_json(const ViewRecord& v) {
     view["time_s"]["map_update"] = v.map->update_s;
     view["time_s"]["map_round_trip"] = v.map_round_trip_s;
   }
-  if (!v.frame_file.empty()) {
-    view["frame_file"] = v.frame_file;
-    if (v.registration) {
+  if (v.registration) {
+    // What the registration service wrote for the view (its folder) and added to the model.
+    const RegisteredCloud& r = *v.registration;
+    if (!r.frame_file.empty()) {
+      view["frame_file"] = r.frame_file;
       // The pose the frame's points were placed with (the registered one when accepted): the
       // camera_pose comment of the frame's PLY header.
-      view["camera_pose"] = to_json(v.registration->cloud.object_T_camera);
+      view["camera_pose"] = to_json(r.cloud.object_T_camera);
       view["camera_pose"]["frame"] = "object";
       view["camera_pose"]["of"] = "the camera's optical frame (x right, y down, z forward)";
+      view["normals"] = r.normals_from_depth ? "depth image" : "neighbours";
     }
-    if (!v.normals.empty()) view["normals"] = v.normals;
-    if (!v.depth_file.empty()) view["depth_file"] = v.depth_file;
-    view["merged"] = v.merged;
-    if (v.new_surface) view["new_surface"] = to_json(*v.new_surface);
-    view["time_s"]["accumulate"] = v.accumulate_s;
-    view["time_s"]["view_total"] = v.view_total_s;
+    if (!r.depth_file.empty()) view["depth_file"] = r.depth_file;
+    view["merged"] = r.accepted;
+    if (r.new_surface) view["new_surface"] = to_json(*r.new_surface);
+    view["time_s"]["accumulate"] = r.accumulate_s;
   }
+  if (v.map) view["time_s"]["view_total"] = v.view_total_s;
   return view;
+}
+
+json to_json(const MeshSummary& m) {
+  json j = {{"file", m.files.empty() ? std::string() : m.files.front()},
+            {"also", m.files.size() > 1 ? std::vector<std::string>(m.files.begin() + 1, m.files.end()) : std::vector<std::string>{}},
+            {"method", m.tsdf ? "tsdf" : "poisson"},
+            {"frames", m.frames},
+            {"points", m.points},
+            {"vertices", m.vertices},
+            {"triangles", m.triangles},
+            {"watertight", m.watertight},
+            {"boundary_loops", m.boundary_loops},
+            {"boundary_edges", m.boundary_edges},
+            {"non_manifold_edges", m.non_manifold_edges},
+            {"hole_boundary_length_m", m.hole_boundary_length_m},
+            {"area_m2", m.area_m2},
+            {"volume_m3", m.volume_m3 ? json(*m.volume_m3) : json(nullptr)},
+            {"small_fragments_removed_triangles", m.small_fragments_removed_triangles},
+            {"holes_filled", m.holes_filled},
+            {"fill_holes_m", m.fill_holes_m},
+            {"seconds", m.seconds}};
+  if (m.tsdf) {
+    j["settings"] = {{"voxel_m", m.voxel_m}, {"truncation_m", m.truncation_m}, {"image_scale", m.image_scale}, {"voxels", m.voxels}};
+  } else {
+    j["settings"] = {{"poisson_depth", m.poisson_depth}};
+  }
+  return j;
 }
 
 json to_json(const ScanStop& s) {
@@ -205,9 +230,8 @@ json to_json(const ScanStop& s) {
 }
 
 ScanRecord::ScanRecord(fs::path out, const ScanSettings& settings)
-    : out_(std::move(out)), views_planned_(settings.views), voxel_m_(settings.voxel_m),
-      stop_radius_m_(settings.stop_radius_m) {
-  fs::create_directories(out_ / "frames");
+    : out_(std::move(out)), views_planned_(settings.views) {
+  fs::create_directories(out_);
   report_["format_version"] = kScanFormatVersion;
   report_["pbnbv_version"] = std::string(pbnbv_version());
   report_["settings"] = to_json(settings);
@@ -220,73 +244,6 @@ void ScanRecord::set_ring_plan(double radius_m, double elevation_deg) {
 
 void ScanRecord::set_next_best_view_plan(const std::string& planner, const Pose& initial_view) {
   report_["plan"] = {{"planner", planner}, {"initial_view", to_json(initial_view)}};
-}
-
-void ScanRecord::keep_depth_frame(DepthFrame frame) {
-  constexpr std::size_t kKept = 4;  // the frames of the last views (a view's arrives before its cloud)
-  for (const auto& f : depth_frames_) {
-    if (f.seq == frame.seq) return;  // sent again (DEPTH_FRAME_RESENT): kept already
-  }
-  depth_frames_.push_back(std::move(frame));
-  if (depth_frames_.size() > kKept) depth_frames_.pop_front();
-}
-
-double ScanRecord::accumulate(const RegisteredCloud& r, ViewRecord& v) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const std::string name = view_file(v.view, "ply");
-  const Pose& pose = r.cloud.object_T_camera;
-  const DepthFrame* frame = nullptr;
-  for (const auto& f : depth_frames_) {
-    if (f.seq == r.cloud.depth_frame_seq) frame = &f;
-  }
-  CloudExtras extras;
-  if (frame) {
-    extras.normals = depth_normals(r.cloud.points, frame->depth_m, frame->intrinsics, pose);
-    v.normals = "depth image";
-  } else {
-    extras.normals = neighbour_normals(r.cloud.points, pose.translation());
-    v.normals = "neighbours";
-  }
-  extras.camera_poses = {pose};
-  write_ply(r.cloud.points, (out_ / "frames" / name).string(), extras);
-  v.frame_file = "frames/" + name;
-  if (frame && depth_writer_) {
-    fs::create_directories(out_ / "depth");
-    const std::string png = view_file(v.view, "png");
-    depth_writer_(frame->depth_m, frame->intrinsics.width, frame->intrinsics.height, (out_ / "depth" / png).string());
-    const CameraIntrinsics& k = frame->intrinsics;
-    json intrinsics = {{"image", png},
-                       {"width", k.width},
-                       {"height", k.height},
-                       {"fx", k.fx},
-                       {"fy", k.fy},
-                       {"cx", k.cx},
-                       {"cy", k.cy},
-                       {"depth_scale", 1000},
-                       {"depth_units", "value / depth_scale = planar depth along the optical axis, m; 0 = no reading"},
-                       {"depth_min_m", frame->range.min_m},
-                       {"depth_max_m", frame->range.max_m},
-                       {"depth_frame_seq", frame->seq},
-                       {"object_T_camera", to_json(pose)},
-                       {"pose_frame", "object"},
-                       {"registered", r.accepted}};
-    write_json_atomic(intrinsics, (out_ / "depth" / view_file(v.view, "json")).string());
-    v.depth_file = "depth/" + png;
-  }
-  v.merged = r.accepted;
-  if (r.accepted) {
-    v.new_surface = new_surface(r.cloud.points, accumulated_, stop_radius_m_);
-    PointCloud grown = accumulated_;
-    grown.insert(grown.end(), r.cloud.points.begin(), r.cloud.points.end());
-    std::vector<Eigen::Vector3f> grown_normals = accumulated_normals_;
-    grown_normals.resize(accumulated_.size(), Eigen::Vector3f::Zero());
-    grown_normals.insert(grown_normals.end(), extras.normals.begin(), extras.normals.end());
-    accumulated_ = voxel_downsample(grown, voxel_m_);
-    accumulated_normals_ = voxel_normals(grown, grown_normals, accumulated_, voxel_m_);
-    merged_poses_.push_back(pose);
-    write_ply(accumulated_, (out_ / "cloud.ply").string(), CloudExtras{accumulated_normals_, merged_poses_});
-  }
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 void ScanRecord::add_view(const ViewRecord& v, int views_done, double elapsed_s) {
@@ -304,32 +261,9 @@ void ScanRecord::continue_from_folder(const std::string& scan_id) {
   report_["views"] = before.value("views", json::array());
   if (before.contains("plan")) report_["plan"] = before["plan"];
   if (before.contains("status")) report_["status"] = before["status"];
-  if (fs::exists(out_ / "cloud.ply")) {
-    CloudExtras extras;
-    accumulated_ = read_ply((out_ / "cloud.ply").string(), extras);
-    merged_poses_ = extras.camera_poses;
-    accumulated_normals_ = extras.normals;
-    if (accumulated_normals_.size() != accumulated_.size()) {
-      // A cloud.ply written before normals were: fit them to the neighbours, facing away from
-      // the cloud's centre (the cameras look at the object from outside).
-      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-      for (const auto& p : accumulated_) centre += p.cast<double>();
-      if (!accumulated_.empty()) centre /= static_cast<double>(accumulated_.size());
-      accumulated_normals_ = neighbour_normals(accumulated_, centre);
-      for (auto& n : accumulated_normals_) n = -n;
-    }
+  if (before.contains("status") && before["status"].is_object()) {
+    model_points_ = before["status"].value("num_points", std::size_t{0});
   }
-}
-
-json ScanRecord::add_mesh(const SurfaceSettings& settings) {
-  try {
-    SurfaceSettings s = settings;
-    const std::vector<SurfaceFrame> frames = read_scan_frames(out_, report_, s);
-    report_["mesh"] = mesh_scan(out_, frames, s);
-  } catch (const std::exception& e) {
-    report_["mesh"] = {{"error", e.what()}};
-  }
-  return report_["mesh"];
 }
 
 void ScanRecord::set_stop(const ScanStop& stop) { report_["stop"] = to_json(stop); }
@@ -343,7 +277,7 @@ void ScanRecord::set_replay_of(const std::string& recorded, int views) {
 
 void ScanRecord::write(const std::string& state, const std::string& message, int views_done, double elapsed_s) {
   report_["status"] = {{"state", state},           {"message", message},        {"views_done", views_done},
-                       {"views_planned", views_planned_}, {"elapsed_s", elapsed_s}, {"num_points", accumulated_.size()},
+                       {"views_planned", views_planned_}, {"elapsed_s", elapsed_s}, {"num_points", model_points_},
                        {"next_request_id", next_request_id_}, {"answers_refused", answers_refused_}};
   write_json_atomic(report_, (out_ / "scan.json").string());
 }

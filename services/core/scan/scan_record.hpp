@@ -1,25 +1,24 @@
 #pragma once
-// The scan's output folder as the coordinator writes it: scan.json (settings, the view plan, one
-// entry per view with what was planned, moved, captured, registered and mapped, why the scan
-// stopped, its status), frames/view_NNN.ply (each view's cloud, registered when accepted) and
-// cloud.ply (the accepted views merged and downsampled). The keys and their meaning are the ones
-// services/eval/evaluate.cpp, the tests and the README read; everything written is plain data
-// from the sequence (core/scan/messages.hpp), so a record can be checked without a bus.
-#include <deque>
+// scan.json as the coordinator writes it: settings, the view plan, one entry per view with what
+// was planned, moved, captured, registered (and the files the registration service wrote for it:
+// frames/view_NNN.ply, depth/view_NNN.png, what it added to cloud.ply) and mapped, why the scan
+// stopped, the mesh, its status. The coordinator writes this file only; the keys and their
+// meaning are the ones services/eval/evaluate.cpp, the tests and the README read. Everything
+// written is plain data from the sequence (core/scan/messages.hpp), so a record can be checked
+// without a bus.
 #include <filesystem>
-#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "core/geometry/mesh_summary.hpp"
 #include "core/geometry/point_cloud.hpp"
 #include "core/scan/messages.hpp"
 #include "core/scan/rig_readings.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "core/scan/stop_rule.hpp"
-#include "core/surface/surface.hpp"
 
 namespace pbnbv {
 
@@ -57,15 +56,11 @@ struct ViewRecord {
   std::optional<MoveResult> move;
   bool capture_unanswered = false;           // no CLOUD after every attempt
   std::optional<CaptureResult> capture;
-  std::optional<RegisteredCloud> registration;
+  std::optional<RegisteredCloud> registration;  // with the files written for the view (frame, depth
+                                                // image) and what it added to the model
   std::optional<VoxelMapSummary> map;
-  std::string frame_file;                    // "frames/view_NNN.ply" once written
-  std::string normals;                       // how the frame's normals were found: "depth image", "neighbours"
-  std::string depth_file;                    // "depth/view_NNN.png" once written (its intrinsics: view_NNN.json)
-  bool merged = false;                       // merged into cloud.ply
-  std::optional<NewSurface> new_surface;     // what it added to the model (merged views)
   double move_round_trip_s = kUnset, capture_round_trip_s = kUnset, register_round_trip_s = kUnset,
-         map_round_trip_s = kUnset, accumulate_s = kUnset, view_total_s = kUnset;
+         map_round_trip_s = kUnset, view_total_s = kUnset;
 };
 
 // Why the scan stopped before or at its view budget.
@@ -80,39 +75,23 @@ struct ScanStop {
 nlohmann::json to_json(const ViewRecord& v);
 nlohmann::json to_json(const PlanRecord& p);
 nlohmann::json to_json(const ScanStop& s);
+// scan.json's "mesh": file, also, method, vertices, triangles, watertight, boundary_loops,
+// hole_boundary_length_m, area_m2, volume_m3 (null unless watertight), seconds, settings, ...
+nlohmann::json to_json(const MeshSummary& m);
 
 class ScanRecord {
  public:
-  // A record of the scan `settings` in folder `out` (created, with out/frames). Nothing is
-  // written until the first view or the end.
+  // A record of the scan `settings` in folder `out` (created). Nothing is written until the first
+  // view or the end.
   ScanRecord(std::filesystem::path out, const ScanSettings& settings);
 
   // scan.json's "plan": the ring's geometry, or the next-best-view planner and its first view.
   void set_ring_plan(double radius_m, double elevation_deg);
   void set_next_best_view_plan(const std::string& planner, const Pose& initial_view);
 
-  // A depth frame the camera sent: accumulate finds a view's frame among the last few by its
-  // depth_frame_seq (normals from its neighbourhood; depth/view_NNN.png with the writer below).
-  void keep_depth_frame(DepthFrame frame);
-  // Writes a depth image (m, row-major, 0 = no reading) as a 16-bit PNG of millimetres; set by
-  // the coordinator (OpenCV lives in report/). Unset: no depth/ folder.
-  using DepthImageWriter = std::function<void(const std::vector<float>& depth_m, int width, int height, const std::string& path)>;
-  void set_depth_image_writer(DepthImageWriter writer) { depth_writer_ = std::move(writer); }
-
-  // Writes the view's cloud (registered when accepted) to frames/view_NNN.ply and, when the
-  // registration accepted it, merges it into cloud.ply (voxel-downsampled at the settings'
-  // voxel_m), both with normals facing the camera (from the view's depth frame when it was kept,
-  // else from each point's nearest neighbours) and the camera poses in the header; writes the
-  // depth frame to depth/ when it was kept and a writer is set.
-  // Sets v.frame_file, v.normals, v.depth_file, v.merged and, when merged, v.new_surface (the view's points
-  // farther than the settings' stop_radius_m from the model before it); returns the wall time
-  // this took, s.
-  double accumulate(const RegisteredCloud& r, ViewRecord& v);
-
-  // Meshes the accepted frames (core/surface/scan_mesh.hpp: mesh.ply and mesh.obj in
-  // the folder) and sets scan.json's "mesh" (written with the next write); when meshing fails,
-  // "mesh" is {"error": why} and the scan stands. Returns the "mesh" object.
-  nlohmann::json add_mesh(const SurfaceSettings& settings);
+  // scan.json's "mesh": the registration service's answer to the scan's mesh request, or
+  // {"error": why} when there is no mesh (written with the next write).
+  void set_mesh(const nlohmann::json& mesh) { report_["mesh"] = mesh; }
 
   // Appends a view to "views" and writes scan.json with state "running".
   void add_view(const ViewRecord& v, int views_done, double elapsed_s);
@@ -123,15 +102,16 @@ class ScanRecord {
   // Writes scan.json with the status `state` ("running", "done", "stopped", "failed").
   void write(const std::string& state, const std::string& message, int views_done, double elapsed_s);
 
-  std::size_t num_points() const { return accumulated_.size(); }
+  // Points in the model (cloud.ply) after the last view: the registration service's count.
+  std::size_t num_points() const { return model_points_; }
+  void set_model_points(std::size_t n) { model_points_ = n; }
   // Request ids used so far end below this (written in scan.json's status, so that a resumed
   // coordinator never reuses one a service still has an answer for).
   void set_next_request_id(int64_t id) { next_request_id_ = id; }
   // Answers that carried an outstanding request's id but were refused (a field out of range for
   // what was asked): scan.json's status "answers_refused".
   void set_answers_refused(int n) { answers_refused_ = n; }
-  // Continues the record in its folder: scan.json as written so far and the merged cloud (a
-  // resumed scan). Throws naming the file when scan.json is missing or not a scan of `scan_id`.
+  // Continues the record in its folder: scan.json as written so far (a resumed scan). Throws naming the file when scan.json is missing or not a scan of `scan_id`.
   void continue_from_folder(const std::string& scan_id);
   const nlohmann::json& report() const { return report_; }
   std::filesystem::path scan_json_path() const { return out_ / "scan.json"; }
@@ -139,14 +119,8 @@ class ScanRecord {
  private:
   std::filesystem::path out_;
   int views_planned_;
-  double voxel_m_;
-  double stop_radius_m_;
   nlohmann::json report_;
-  PointCloud accumulated_;
-  std::vector<Eigen::Vector3f> accumulated_normals_;  // one per accumulated point (zero: none)
-  std::vector<Pose> merged_poses_;                    // the merged views' camera poses, in order
-  std::deque<DepthFrame> depth_frames_;
-  DepthImageWriter depth_writer_;
+  std::size_t model_points_ = 0;
   int64_t next_request_id_ = 1;
   int answers_refused_ = 0;
 };

@@ -216,6 +216,13 @@ void ScanSequencer::tick(double now_s) {
     case Phase::kMapping:
       if (awaited_.expired(now_s)) return fail_view(waited("the mapping service", "VOXEL_MAP", "the capture request"), now_s);
       break;
+    case Phase::kMeshing:
+      if (awaited_.expired(now_s)) {
+        return meshed({{"error", "the registration service sent no MESH_RESULT in " + fixed(awaited_.deadline_s - awaited_.since_s, 0) +
+                                     " s (the mesh request sent " + std::to_string(awaited_.sends) + " times)"}},
+                      now_s);
+      }
+      break;
   }
   if (phase_ == Phase::kFinished) return;
   if (awaited_.resend_due(now_s)) {
@@ -344,6 +351,17 @@ void ScanSequencer::on(const VoxelMapSummary& m, double now_s) {
   if (phase_ != Phase::kCapturing && phase_ != Phase::kRegistering && phase_ != Phase::kMapping) return;
   map_ = m;
   if (phase_ == Phase::kMapping) mapped(now_s);
+}
+
+void ScanSequencer::on(const MeshResult& m, double now_s) {
+  if (m.scan_id != s_.scan_id || phase_ != Phase::kMeshing || m.request_id != awaited_.request_id) return;
+  if (!m.ok) return meshed({{"error", m.message}}, now_s);
+  const std::size_t merged = std::get<MeshRequest>(*awaited_.request).views.size();
+  if (m.mesh.frames > merged) {
+    return refuse("MESH_RESULT of request " + std::to_string(m.request_id),
+                  "it fused " + std::to_string(m.mesh.frames) + " frames of " + std::to_string(merged) + " asked for");
+  }
+  meshed(to_json(m.mesh), now_s);
 }
 
 void ScanSequencer::on(const EllipsoidSetSummary& e, double /*now_s*/) {
@@ -592,9 +610,8 @@ void ScanSequencer::mapped(double now_s) {
   } else {  // not mapped (e.g. registration rejected it): do not plan it again
     done_.excluded.push_back(moved_.reached_object_T_camera);
   }
-  set_status(ScanState::kIntegrating, "adding " + view_name(), now_s);
-  view_.accumulate_s = record_.accumulate(reg, view_);
-  view_.view_total_s = now_s - t_view_s_ + view_.accumulate_s;
+  view_.view_total_s = now_s - t_view_s_;
+  record_.set_model_points(static_cast<std::size_t>(std::max(reg.model_points, 0)));
   ++done_.views_done;
   record_.add_view(view_, done_.views_done, now_s - t_start_s_);
   const std::string verdict = !reg.accepted ? std::string("registration rejected")
@@ -607,7 +624,7 @@ void ScanSequencer::mapped(double now_s) {
                      fixed(moved_.move_s + moved_.settle_s, 2) + " s, capture " + fixed(view_.capture->capture_s, 2) +
                      " s, register " + fixed(reg.register_s, 2) + " s, map " + fixed(m.update_s * 1e3, 2) + " ms";
   if (view_.plan) line += ", plan " + fixed(planner_step_ms(*view_.plan), 2) + " ms";
-  if (view_.new_surface) line += "; " + fixed(view_.new_surface->percent_of_model(), 2) + " % new surface";
+  if (reg.new_surface) line += "; " + fixed(reg.new_surface->percent_of_model(), 2) + " % new surface";
   progress(line, true);
   if (stopped_by_surface(now_s)) return;
   next_view(now_s);
@@ -647,21 +664,46 @@ void ScanSequencer::fail_view(const std::string& message, double now_s) {
 }
 
 void ScanSequencer::finish(ScanState state, const std::string& message, double now_s) {
+  // A scan that is done gets its surface mesh first (a resumed scan and an external rig's too:
+  // they end here).
+  if (state == ScanState::kDone && phase_ != Phase::kMeshing) return begin_mesh(message, now_s);
+  conclude(state, message, now_s);
+}
+
+void ScanSequencer::begin_mesh(const std::string& message, double now_s) {
+  phase_ = Phase::kMeshing;
+  done_message_ = message;
+  MeshRequest r;
+  r.scan_id = s_.scan_id;
+  r.request_id = next_request_id();
+  for (const nlohmann::json& v : record_.report().at("views")) {
+    if (v.value("merged", false)) r.views.push_back(v.at("view").get<int>());
+  }
+  if (r.views.empty()) return meshed({{"error", "no view was merged into the model: nothing to mesh"}}, now_s);
+  r.camera = s_.camera;
+  r.point_spacing_m = s_.voxel_m;
+  set_status(ScanState::kIntegrating, "meshing the scan (" + std::to_string(r.views.size()) + " views)", now_s);
+  outputs_.push_back(ProgressLine{"meshing " + std::to_string(r.views.size()) + " views", false});
+  send(r, r.request_id, t_.resend_s, now_s + t_.mesh_s, now_s);
+}
+
+void ScanSequencer::meshed(const nlohmann::json& m, double now_s) {
+  record_.set_mesh(m);
+  outputs_.push_back(ProgressLine{
+      m.contains("error") ? "no mesh: " + m["error"].get<std::string>()
+                          : "mesh.ply: " + std::to_string(m["triangles"].get<std::size_t>()) + " triangles, " +
+                                (m["watertight"].get<bool>() ? std::string("watertight")
+                                                             : std::to_string(m["boundary_loops"].get<std::size_t>()) + " holes") +
+                                ", " + fixed(m["seconds"].get<double>(), 2) + " s",
+      true});
+  conclude(ScanState::kDone, done_message_, now_s);
+}
+
+void ScanSequencer::conclude(ScanState state, const std::string& message, double now_s) {
   phase_ = Phase::kFinished;
   awaited_ = Awaited{};
   set_status(state, message, now_s);
   const char* name = state == ScanState::kDone ? "done" : state == ScanState::kStopped ? "stopped" : "failed";
-  // A finished scan's surface mesh (a resumed scan and an external rig's too: they end here).
-  if (state == ScanState::kDone) {
-    const nlohmann::json m = record_.add_mesh(SurfaceSettings{});
-    outputs_.push_back(ProgressLine{
-        m.contains("error") ? "no mesh: " + m["error"].get<std::string>()
-                            : "mesh.ply: " + std::to_string(m["triangles"].get<std::size_t>()) + " triangles, " +
-                                  (m["watertight"].get<bool>() ? std::string("watertight")
-                                                               : std::to_string(m["boundary_loops"].get<std::size_t>()) + " holes") +
-                                  ", " + fixed(m["seconds"].get<double>(), 2) + " s",
-        true});
-  }
   record_.write(name, message, done_.views_done, now_s - t_start_s_);
   summary_ = (state == ScanState::kDone ? "" : "scan ") + message + ": " + std::to_string(done_.views_done) + " of " +
              std::to_string(s_.views) + " views, " + std::to_string(record_.num_points()) + " points, " +

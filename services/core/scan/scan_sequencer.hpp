@@ -1,6 +1,6 @@
 #pragma once
 // The scan coordinator's per-view sequence as a plain class: plan -> move -> capture ->
-// register -> map -> accumulate for each view, driven by the answers it is handed (plain
+// register -> map for each view, then the mesh, driven by the answers it is handed (plain
 // structs, core/scan/messages.hpp) and by ticks of a clock the caller reads (`now_s`, seconds
 // on a monotonic clock). It never blocks and never touches a bus: each call consumes one event
 // or tick and queues what the caller must send (requests, SCAN_STATUS) and print (progress
@@ -15,9 +15,12 @@
 // - capture; a failed capture excludes the view and the scan goes on;
 // - wait for the registration's and the mapping service's answers to the view; a view the map
 //   did not take (e.g. registration rejected it) is excluded from later plans;
-// - write its frame, merge it into cloud.ply when accepted;
+//   (the registration service has written its frame and merged it into cloud.ply when accepted);
 // - stop on the planner's decision, the surface rule (core/scan/stop_rule.hpp), the view
-//   budget, or no view produced.
+//   budget, or no view produced;
+// - a scan that is done asks the registration service for the mesh of its merged views
+//   (MESH_REQUEST / MESH_RESULT) and records it, or why there is none: a mesh that fails does
+//   not fail the scan.
 // Every request is re-sent with the same request_id while unanswered and has a deadline
 // (ScanTimeouts); request ids are unique within the scan and start at a random number. An answer
 // is taken only for the request outstanding and only when its fields are what was asked (its
@@ -47,7 +50,7 @@ struct ProgressLine {
 
 // What the sequencer asks its caller to do, in order: publish a request or a status, print a
 // line.
-using ScanOutput = std::variant<MoveRequest, CaptureRequest, PlanRequest, ScanStatus, ProgressLine>;
+using ScanOutput = std::variant<MoveRequest, CaptureRequest, PlanRequest, MeshRequest, ScanStatus, ProgressLine>;
 
 // A sign of life the readiness wait counts: "ARM_STATUS", "TURNTABLE_STATUS", or
 // "heartbeat of <service>".
@@ -57,7 +60,7 @@ struct Heard {
 
 // What the sequencer reacts to besides ticks.
 using ScanEvent = std::variant<MoveResult, CaptureResult, RegisteredCloud, VoxelMapSummary, EllipsoidSetSummary,
-                               ViewPlan, Heard>;
+                               ViewPlan, MeshResult, Heard>;
 
 // How long the sequence waits, s.
 struct ScanTimeouts {
@@ -74,6 +77,8 @@ struct ScanTimeouts {
   double capture_extra_s = 5.0;   // beyond twice the capture timeout (the camera service
                                   // re-triggers within one timeout and then answers)
   double status_period_s = 1.0;   // SCAN_STATUS while nothing changes
+  double mesh_s = 600.0;          // the registration service's mesh of the scan (seconds for a
+                                  // 10-view scan; the request is re-sent every resend_s)
 };
 
 // An answer the sequence waits for: the request that asks for it (none: the answer follows
@@ -169,12 +174,9 @@ class ScanSequencer {
   const std::string& summary() const { return summary_; }
   const ScanRecord& record() const { return record_; }
   const ScanSoFar& so_far() const { return done_; }
-  // The camera's depth frames and how to write them as images (ScanRecord's, which uses them).
-  void keep_depth_frame(DepthFrame frame) { record_.keep_depth_frame(std::move(frame)); }
-  void set_depth_image_writer(ScanRecord::DepthImageWriter writer) { record_.set_depth_image_writer(std::move(writer)); }
 
  private:
-  enum class Phase { kIdle, kWaitingReady, kPlanning, kMoving, kCapturing, kRegistering, kMapping, kFinished };
+  enum class Phase { kIdle, kWaitingReady, kPlanning, kMoving, kCapturing, kRegistering, kMapping, kMeshing, kFinished };
 
   void on(const MoveResult& r, double now_s);
   void on(const CaptureResult& c, double now_s);
@@ -182,6 +184,7 @@ class ScanSequencer {
   void on(const VoxelMapSummary& m, double now_s);
   void on(const EllipsoidSetSummary& e, double now_s);
   void on(const ViewPlan& p, double now_s);
+  void on(const MeshResult& m, double now_s);
   void on(const Heard& h, double now_s);
 
   void check_ready(double now_s);
@@ -201,7 +204,11 @@ class ScanSequencer {
   bool stopped_by_surface(double now_s);
   void next_view(double now_s);
   void fail_view(const std::string& message, double now_s);  // records the view so far, fails the scan
+  // Ends the scan; one that is done asks for its mesh first (begin_mesh), then concludes.
   void finish(ScanState state, const std::string& message, double now_s);
+  void begin_mesh(const std::string& message, double now_s);
+  void meshed(const nlohmann::json& mesh, double now_s);  // records the mesh (or why none), concludes
+  void conclude(ScanState state, const std::string& message, double now_s);
 
   void send(const ScanOutput& request, int64_t request_id, double resend_s, double deadline_s, double now_s);
   void wait_for_answer(double deadline_s, double now_s);
@@ -244,6 +251,7 @@ class ScanSequencer {
   std::optional<RegisteredCloud> registered_;  // kept when it comes before it is waited for
   std::optional<VoxelMapSummary> map_;
   Awaited awaited_;
+  std::string done_message_;                // the scan's closing message while its mesh is made
 
   std::optional<std::vector<std::vector<Pose>>> replay_;  // replaying: each recorded view's poses
   int next_view_after_ready_ = 0;           // the view after the readiness wait (resume: the next)

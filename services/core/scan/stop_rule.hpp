@@ -1,8 +1,7 @@
 #pragma once
-// When a scan is done without knowing the object: what each view added to the surface seen so
-// far (new_surface: the share of the view's points farther than the coverage scale, 5 mm, from
-// every point of the model before it), and the rule that stops the scan when the last few views
-// each added less than a threshold (surface_stop). Plain data and functions, no bus: the
+// When a scan is done without knowing the object: the rule that stops the scan when the last few
+// views each added less than a threshold of new surface (surface_stop; the figure per view,
+// NewSurface, is the registration service's: core/perception/new_surface.hpp). Plain data and functions, no bus: the
 // coordinator applies the rule after each view, the benchmark computes from a fixed-budget scan's
 // recorded figures where the rule would have stopped it.
 #include <nlohmann/json.hpp>
@@ -11,27 +10,10 @@
 #include <vector>
 
 #include "core/geometry/point_cloud.hpp"
+#include "core/perception/new_surface.hpp"
 #include "core/scan/scan_options.hpp"
 
 namespace pbnbv {
-
-// What one view's cloud added to the model (the accumulated cloud of the views before it).
-struct NewSurface {
-  int frame_points = 0;  // the view's points (finite)
-  int new_points = 0;    // of them, farther than radius_m from every model point
-  int model_points = 0;  // the model before the view
-  double radius_m = 0;
-
-  // new_points as a percent of the model before the view (100 for the first view): roughly the
-  // surface the view added relative to the surface seen so far, the figure the rule reads.
-  double percent_of_model() const;
-  // new_points as a percent of the view's own points (0 for an empty view).
-  double percent_of_frame() const;
-};
-
-// Counts the points of `frame` farther than radius_m from every point of `model` (a k-d tree
-// over the model). Throws std::invalid_argument when radius_m is not positive.
-NewSurface new_surface(const PointCloud& frame, const PointCloud& model, double radius_m = kStopRadius.value);
 
 nlohmann::json to_json(const NewSurface& n);
 

@@ -17,8 +17,8 @@ namespace {
 constexpr std::size_t kMinComponentTriangles = 50;
 }  // namespace
 
-json mesh_scan(const fs::path& dir, const std::vector<SurfaceFrame>& frames, const SurfaceSettings& settings,
-               bool with_stl) {
+MeshSummary mesh_scan(const fs::path& dir, const std::vector<SurfaceFrame>& frames, const SurfaceSettings& settings,
+                      bool with_stl) {
   const auto t0 = std::chrono::steady_clock::now();
   SurfaceStats stats;
   TriangleMesh mesh = build_surface(frames, settings, &stats);
@@ -29,34 +29,34 @@ json mesh_scan(const fs::path& dir, const std::vector<SurfaceFrame>& frames, con
   write_mesh_ply(mesh, vertex_normals(mesh), (dir / "mesh.ply").string());
   write_obj(mesh, (dir / "mesh.obj").string());
   if (with_stl) write_stl_binary(mesh, (dir / "mesh.stl").string());
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  json j = {{"file", "mesh.ply"},
-            {"also", with_stl ? json{"mesh.obj", "mesh.stl"} : json{"mesh.obj"}},
-            {"method", std::string(name_of(settings.method))},
-            {"frames", stats.frames},
-            {"points", stats.points},
-            {"vertices", mesh.vertices.size()},
-            {"triangles", mesh.triangles.size()},
-            {"watertight", t.watertight},
-            {"boundary_loops", t.boundary_loops},
-            {"boundary_edges", t.boundary_edges},
-            {"non_manifold_edges", t.non_manifold_edges},
-            {"hole_boundary_length_m", t.boundary_length_m},
-            {"area_m2", t.area_m2},
-            {"volume_m3", t.watertight ? json(t.volume_m3) : json(nullptr)},
-            {"small_fragments_removed_triangles", removed},
-            {"holes_filled", filled},
-            {"fill_holes_m", settings.fill_holes_m},
-            {"seconds", seconds}};
-  if (settings.method == MeshMethod::kTsdf) {
-    j["settings"] = {{"voxel_m", settings.voxel_m},
-                     {"truncation_m", settings.voxel_m * settings.truncation_voxels},
-                     {"image_scale", stats.image_scale},
-                     {"voxels", stats.voxels}};
+  MeshSummary m;
+  m.tsdf = settings.method == MeshMethod::kTsdf;
+  m.files = {"mesh.ply", "mesh.obj"};
+  if (with_stl) m.files.push_back("mesh.stl");
+  m.frames = stats.frames;
+  m.points = stats.points;
+  m.vertices = mesh.vertices.size();
+  m.triangles = mesh.triangles.size();
+  m.watertight = t.watertight;
+  m.boundary_loops = t.boundary_loops;
+  m.boundary_edges = t.boundary_edges;
+  m.non_manifold_edges = t.non_manifold_edges;
+  m.hole_boundary_length_m = t.boundary_length_m;
+  m.area_m2 = t.area_m2;
+  if (t.watertight) m.volume_m3 = t.volume_m3;
+  m.small_fragments_removed_triangles = removed;
+  m.holes_filled = filled;
+  m.fill_holes_m = settings.fill_holes_m;
+  if (m.tsdf) {
+    m.voxel_m = settings.voxel_m;
+    m.truncation_m = settings.voxel_m * settings.truncation_voxels;
+    m.image_scale = stats.image_scale;
+    m.voxels = stats.voxels;
   } else {
-    j["settings"] = {{"poisson_depth", settings.poisson_depth}};
+    m.poisson_depth = settings.poisson_depth;
   }
-  return j;
+  m.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return m;
 }
 
 }  // namespace pbnbv

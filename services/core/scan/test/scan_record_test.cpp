@@ -34,32 +34,6 @@ RegisteredCloud registered(bool accepted, const PointCloud& points) {
   return r;
 }
 
-TEST_F(ScanRecordTest, AcceptedViewsAreMergedAndDownsampledRejectedOnesOnlyKeptInFrames) {
-  ScanRecord record(dir_, settings());
-  EXPECT_TRUE(std::filesystem::is_directory(dir_ / "frames"));
-  // Two points 0.5 mm apart fall into one 2 mm voxel: merged into their centroid.
-  ViewRecord v0;
-  v0.view = 0;
-  record.accumulate(registered(true, {Eigen::Vector3f(0.0105f, 0.0105f, 0.0105f), Eigen::Vector3f(0.5f, 0, 0)}), v0);
-  ViewRecord v1;
-  v1.view = 1;
-  record.accumulate(registered(true, {Eigen::Vector3f(0.0110f, 0.0105f, 0.0105f)}), v1);
-  ViewRecord v2;
-  v2.view = 2;
-  record.accumulate(registered(false, {Eigen::Vector3f(-0.3f, 0, 0), Eigen::Vector3f(-0.2f, 0, 0)}), v2);
-  EXPECT_EQ(v0.frame_file, "frames/view_001.ply");  // files count views from 1
-  EXPECT_EQ(v2.frame_file, "frames/view_003.ply");
-  EXPECT_TRUE(v1.merged);
-  EXPECT_FALSE(v2.merged);
-  EXPECT_EQ(read_ply((dir_ / "frames/view_003.ply").string()).size(), 2u);
-  const PointCloud cloud = read_ply((dir_ / "cloud.ply").string());
-  ASSERT_EQ(cloud.size(), 2u);
-  EXPECT_EQ(record.num_points(), 2u);
-  bool centroid = false;
-  for (const auto& p : cloud) centroid |= std::abs(p.x() - 0.01075f) < 1e-6f;
-  EXPECT_TRUE(centroid) << "the two close points become their centroid";
-}
-
 TEST_F(ScanRecordTest, AViewEntryHasASectionPerStepReached) {
   ViewRecord v;
   v.view = 2;
@@ -146,70 +120,57 @@ TEST_F(ScanRecordTest, TheStatusAndStopAreWrittenWithTheViews) {
 
 }  // namespace
 
-// A wall 0.5 m in front of a 64 x 48 camera (fx = fy = 50 px) looking along the object's -x from
-// x = 0.7: its points come back with normals facing the camera, +x (from the depth image's
-// neighbourhood; k-NN when the frame is gone), the camera pose in the PLY header and scan.json,
-// and the depth image's file with the camera model beside it.
-TEST_F(ScanRecordTest, FramesCarryNormalsTowardsTheCameraItsPoseAndTheDepthImage) {
-  ScanRecord record(dir_, settings());
-  const Pose pose = look_at_z_up(Eigen::Vector3d(0.7, 0, 0), Eigen::Vector3d::Zero());
-  DepthFrame frame;
-  frame.seq = 7;
-  frame.intrinsics = CameraIntrinsics{64, 48, 50.0, 50.0, 32.0, 24.0};
-  frame.depth_m.assign(64 * 48, 0.5f);
+// A view's files and model figures are the registration service's answer, said as it said them.
+TEST_F(ScanRecordTest, AViewEntrySaysTheFilesAndNewSurfaceTheRegistrationWrote) {
+  ViewRecord v;
+  v.view = 0;
   RegisteredCloud r = registered(true, {});
-  for (int v = 2; v < 46; v += 4) {
-    for (int u = 2; u < 62; u += 4) {
-      r.cloud.points.push_back((pose * back_project(frame.intrinsics, u, v, 0.5)).cast<float>());
-    }
-  }
-  r.cloud.object_T_camera = pose;
-  r.cloud.depth_frame_seq = 7;
-  std::vector<std::string> written;
-  record.set_depth_image_writer([&](const std::vector<float>& d, int w, int h, const std::string& path) {
-    EXPECT_EQ(d.size(), static_cast<std::size_t>(w * h));
-    written.push_back(path);
-  });
-  record.keep_depth_frame(frame);
-  ViewRecord v0;
-  v0.view = 0;
-  v0.registration = r;
-  record.accumulate(r, v0);
-  EXPECT_EQ(v0.normals, "depth image");
-  EXPECT_EQ(v0.depth_file, "depth/view_001.png");
-  ASSERT_EQ(written.size(), 1u);
-  EXPECT_EQ(written[0], (dir_ / "depth" / "view_001.png").string());
-  CloudExtras extras;
-  const PointCloud points = read_ply((dir_ / "frames/view_001.ply").string(), extras);
-  ASSERT_EQ(points.size(), r.cloud.points.size());
-  ASSERT_EQ(extras.normals.size(), points.size());
-  for (const auto& n : extras.normals) EXPECT_NEAR(n.x(), 1.0f, 1e-5f) << n.transpose();  // the wall faces +x
-  ASSERT_EQ(extras.camera_poses.size(), 1u);
-  EXPECT_TRUE(extras.camera_poses[0].isApprox(pose, 1e-6));
-  CloudExtras merged;
-  read_ply((dir_ / "cloud.ply").string(), merged);
-  ASSERT_FALSE(merged.normals.empty());
-  for (const auto& n : merged.normals) EXPECT_NEAR(n.x(), 1.0f, 1e-5f);
-  ASSERT_EQ(merged.camera_poses.size(), 1u);
-  // The camera model beside the image, as the frame gave it.
-  const json k = read_json((dir_ / "depth" / "view_001.json").string());
-  EXPECT_EQ(k["image"], "view_001.png");
-  EXPECT_EQ(k["width"], 64);
-  EXPECT_EQ(k["height"], 48);
-  EXPECT_EQ(k["fx"], 50.0);
-  EXPECT_EQ(k["cy"], 24.0);
-  EXPECT_EQ(k["depth_scale"], 1000);
-  EXPECT_TRUE(pose_from_json(k["object_T_camera"], "object_T_camera").isApprox(pose, 1e-12));
-  const json j = to_json(v0);
+  r.cloud.object_T_camera = look_at_z_up(Eigen::Vector3d(0.7, 0, 0), Eigen::Vector3d::Zero());
+  r.frame_file = "frames/view_001.ply";
+  r.depth_file = "depth/view_001.png";
+  r.normals_from_depth = true;
+  r.new_surface = NewSurface{200, 50, 1000, 0.005};
+  r.accumulate_s = 0.25;
+  v.registration = r;
+  json j = to_json(v);
+  EXPECT_EQ(j["frame_file"], "frames/view_001.ply");
   EXPECT_EQ(j["depth_file"], "depth/view_001.png");
+  EXPECT_EQ(j["normals"], "depth image");
+  EXPECT_EQ(j["merged"], true);
   EXPECT_NEAR(j["camera_pose"]["position_m"][0].get<double>(), 0.7, 1e-12);
-  // The frame gone: normals from the neighbours, facing the camera all the same.
-  ViewRecord v1;
-  v1.view = 1;
-  r.cloud.depth_frame_seq = 8;
-  record.accumulate(r, v1);
-  EXPECT_EQ(v1.normals, "neighbours");
-  EXPECT_TRUE(v1.depth_file.empty());
-  read_ply((dir_ / "frames/view_002.ply").string(), extras);
-  for (const auto& n : extras.normals) EXPECT_NEAR(n.x(), 1.0f, 1e-4f);
+  EXPECT_EQ(j["new_surface"]["percent_of_model"], 5.0);  // 50 new points of a model of 1000
+  EXPECT_EQ(j["new_surface"]["percent_of_frame"], 25.0);
+  EXPECT_EQ(j["time_s"]["accumulate"], 0.25);
+  // Rejected, no folder: not merged, no files, no figure.
+  v.registration = registered(false, {});
+  j = to_json(v);
+  EXPECT_EQ(j["merged"], false);
+  EXPECT_FALSE(j.contains("frame_file"));
+  EXPECT_FALSE(j.contains("new_surface"));
+}
+
+TEST_F(ScanRecordTest, TheMeshEntrySaysWhatTheMeshIs) {
+  MeshSummary m;
+  m.files = {"mesh.ply", "mesh.obj"};
+  m.triangles = 12;
+  m.vertices = 8;
+  m.watertight = true;
+  m.volume_m3 = 0.001;
+  m.voxel_m = 0.001;
+  m.truncation_m = 0.004;
+  json j = to_json(m);
+  EXPECT_EQ(j["file"], "mesh.ply");
+  EXPECT_EQ(j["also"], json::array({"mesh.obj"}));
+  EXPECT_EQ(j["method"], "tsdf");
+  EXPECT_EQ(j["triangles"], 12);
+  EXPECT_EQ(j["volume_m3"], 0.001);
+  EXPECT_EQ(j["settings"]["truncation_m"], 0.004);
+  m.watertight = false;
+  m.volume_m3.reset();
+  m.tsdf = false;
+  m.poisson_depth = 8;
+  j = to_json(m);
+  EXPECT_TRUE(j["volume_m3"].is_null());
+  EXPECT_EQ(j["method"], "poisson");
+  EXPECT_EQ(j["settings"], json({{"poisson_depth", 8}}));
 }

@@ -13,9 +13,11 @@
 #include <map>
 #include <set>
 
+#include "core/base/format.hpp"
 #include "core/base/units.hpp"
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
+#include "core/surface/scan_model.hpp"
 #include "file_test_util.hpp"
 
 using namespace pbnbv;
@@ -59,6 +61,8 @@ class ScanSequencerTest : public pbnbv::testing::TempDirTest {
   // Starts a scan and lets every service be heard at t = 0.
   void start(const ScanSettings& s, bool hear_everyone = true) {
     settings_ = s;
+    model_.emplace(dir_, s.voxel_m, s.stop_radius_m);
+    model_->restore();  // a resumed scan's
     seq_ = std::make_unique<ScanSequencer>(s, dir_);
     if (recorded_) seq_->replay(*recorded_, "recorded/scan.json");
     seq_->start(now_);
@@ -103,6 +107,9 @@ class ScanSequencerTest : public pbnbv::testing::TempDirTest {
       } else if (const auto* r = std::get_if<PlanRequest>(&out)) {
         plans_.push_back({now_, *r});
         if (auto a = scorer(*r)) later(0.5, *a);
+      } else if (const auto* r = std::get_if<MeshRequest>(&out)) {
+        meshes_.push_back({now_, *r});
+        if (auto a = mesher(*r)) later(0.5, *a);
       } else if (const auto* s = std::get_if<ScanStatus>(&out)) {
         statuses_.push_back(*s);
       } else if (const auto* p = std::get_if<ProgressLine>(&out)) {
@@ -120,6 +127,7 @@ class ScanSequencerTest : public pbnbv::testing::TempDirTest {
     if (!c) return;
     later(1.0, *c);
     if (auto reg = registration(*c)) {
+      add_to_model(*reg);
       later(1.5, *reg);
       if (auto map = mapping(*reg)) {
         later(1.75, *map);
@@ -199,6 +207,40 @@ class ScanSequencerTest : public pbnbv::testing::TempDirTest {
     return m;
   };
 
+  // What the registration service does with an answer it sends (the real model: frames/,
+  // cloud.ply, the new surface), once per capture request.
+  void add_to_model(RegisteredCloud& r) {
+    if (!r.cloud.ok) return;
+    auto [done, first] = modelled_.try_emplace(r.request_id);
+    if (first) {
+      const ModelUpdate u = model_->add_view(r.iteration, r.cloud.points, {}, r.cloud.object_T_camera, r.accepted);
+      done->second.frame_file = u.frame_file;
+      done->second.normals_from_depth = u.normals_from_depth;
+      done->second.new_surface = u.new_surface;
+      done->second.accumulate_s = 0.125;
+      done->second.model_points = static_cast<int>(model_->points().size());
+    }
+    r.frame_file = done->second.frame_file;  // a repeat: answered as the first time
+    r.normals_from_depth = done->second.normals_from_depth;
+    r.new_surface = done->second.new_surface;
+    r.accumulate_s = done->second.accumulate_s;
+    r.model_points = done->second.model_points;
+  }
+
+  // The registration service's mesh of the views asked for (the real one, from the frames).
+  std::function<std::optional<MeshResult>(const MeshRequest&)> mesher = [this](const MeshRequest& r) {
+    MeshResult m;
+    m.scan_id = r.scan_id;
+    m.request_id = r.request_id;
+    try {
+      m.mesh = model_->mesh(r.views, r.camera, r.point_spacing_m);
+      m.ok = true;
+    } catch (const std::exception& e) {
+      m.message = e.what();
+    }
+    return m;
+  };
+
   static EllipsoidSetSummary ellipsoids(int map_view, int64_t map_request_id) {
     EllipsoidSetSummary e;
     e.scan_id = "unit-scan";
@@ -260,6 +302,9 @@ class ScanSequencerTest : public pbnbv::testing::TempDirTest {
   std::vector<std::pair<double, MoveRequest>> moves_;
   std::vector<std::pair<double, CaptureRequest>> captures_;
   std::vector<std::pair<double, PlanRequest>> plans_;
+  std::vector<std::pair<double, MeshRequest>> meshes_;
+  std::optional<ScanModel> model_;        // the registration service's
+  std::map<int64_t, RegisteredCloud> modelled_;  // by capture request: what the model made of its view
   std::vector<ScanStatus> statuses_;
   std::vector<std::string> lines_;
 };
@@ -271,11 +316,16 @@ TEST_F(ScanSequencerTest, ThreeViewRingScanEndToEnd) {
   EXPECT_EQ(seq_->exit_code(), 0);
   EXPECT_EQ(seq_->state(), ScanState::kDone);
   // Each view: move answered after 2 s, cloud 1 s later, registration 0.5 s, map 0.25 s:
-  // 3.75 s a view, 11.25 s for three.
-  EXPECT_EQ(now_, 11.25);
+  // 3.75 s a view, 11.25 s for three; then the mesh, answered 0.5 s after its request.
+  EXPECT_EQ(now_, 11.75);
   ASSERT_EQ(moves_.size(), 3u);
   ASSERT_EQ(captures_.size(), 3u);
   EXPECT_TRUE(plans_.empty());
+  ASSERT_EQ(meshes_.size(), 1u);
+  EXPECT_EQ(meshes_[0].first, 11.25);
+  EXPECT_EQ(meshes_[0].second.views, std::vector<int>({0, 1, 2}));  // the merged views
+  EXPECT_EQ(meshes_[0].second.point_spacing_m, settings_.voxel_m);
+  EXPECT_EQ(meshes_[0].second.camera.width, settings_.camera.width);
   // The ring: radius d_c + half the cube's diagonal = 0.6 + 0.1 * sqrt(3), 30 deg up, azimuths
   // 0, 120, 240 deg.
   const double radius = 0.6 + 0.1 * std::sqrt(3.0);
@@ -298,7 +348,7 @@ TEST_F(ScanSequencerTest, ThreeViewRingScanEndToEnd) {
   EXPECT_EQ(scan["status"]["views_done"], 3);
   EXPECT_EQ(scan["status"]["views_planned"], 3);
   EXPECT_EQ(scan["status"]["num_points"], 30);
-  EXPECT_EQ(scan["status"]["elapsed_s"], 11.25);
+  EXPECT_EQ(scan["status"]["elapsed_s"], 11.75);
   EXPECT_EQ(scan["stop"], json({{"reason", "view budget reached (--views 3)"}, {"after_views", 3}, {"rule", "budget"}}));
   EXPECT_EQ(scan["plan"]["planner"], "ring");
   EXPECT_NEAR(scan["plan"]["radius_m"].get<double>(), radius, 1e-15);
@@ -350,8 +400,50 @@ TEST_F(ScanSequencerTest, ThreeViewRingScanEndToEnd) {
   EXPECT_EQ(std::vector<std::string>(lines_.begin(), lines_.begin() + 4), first);
   EXPECT_EQ(lines_[4], "[view 1/3] done: 10 points, 10 in the model; kinematic pose kept, 5 frontier voxels; "
                        "move 1.50 s, capture 0.75 s, register 0.25 s, map 2.00 ms; 100.00 % new surface");
-  EXPECT_EQ(seq_->summary(), "scan complete: view budget reached (--views 3): 3 of 3 views, 30 points, 11.25 s -> " +
+  EXPECT_EQ(lines_.back(), "mesh.ply: " + std::to_string(scan["mesh"]["triangles"].get<std::size_t>()) + " triangles, " +
+                              std::to_string(scan["mesh"]["boundary_loops"].get<std::size_t>()) + " holes, " +
+                              fixed(scan["mesh"]["seconds"].get<double>(), 2) + " s");
+  EXPECT_EQ(seq_->summary(), "scan complete: view budget reached (--views 3): 3 of 3 views, 30 points, 11.75 s -> " +
                                  (dir_ / "scan.json").string());
+}
+
+// The mesh is the registration service's: a lost MESH_RESULT is asked for again with the same id
+// every 3 s; one that never comes, or says there is no mesh, leaves the scan done with the reason
+// in scan.json's "mesh".
+TEST_F(ScanSequencerTest, TheScanEndsDoneWhenItsMeshIsLateLostOrFails) {
+  int asked = 0;
+  mesher = [&](const MeshRequest& r) -> std::optional<MeshResult> {
+    if (++asked < 3) return std::nullopt;  // the first two answers are lost
+    MeshResult m;
+    m.scan_id = r.scan_id;
+    m.request_id = r.request_id;
+    m.message = "frames/view_002.ply: no such file";
+    return m;
+  };
+  start(test_settings("ring", 3));
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  ASSERT_EQ(meshes_.size(), 3u);
+  EXPECT_EQ(meshes_[1].first - meshes_[0].first, 3.0);  // re-sent every resend_s
+  EXPECT_EQ(meshes_[2].second.request_id, meshes_[0].second.request_id);
+  EXPECT_EQ(now_, 11.25 + 6.5);
+  json scan = scan_json();
+  EXPECT_EQ(scan["status"]["state"], "done");
+  EXPECT_EQ(scan["mesh"], json({{"error", "frames/view_002.ply: no such file"}}));
+  EXPECT_EQ(lines_.back(), "no mesh: frames/view_002.ply: no such file");
+
+  // No answer at all: done after mesh_s (600 s), naming the registration service.
+  TearDown();
+  SetUp();
+  meshes_.clear();
+  mesher = [](const MeshRequest&) -> std::optional<MeshResult> { return std::nullopt; };
+  now_ = 0;
+  start(test_settings("ring", 3));
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  EXPECT_EQ(now_, 11.25 + 600.0);
+  scan = scan_json();
+  EXPECT_EQ(scan["mesh"]["error"], "the registration service sent no MESH_RESULT in 600 s (the mesh request sent 200 times)");
 }
 
 TEST_F(ScanSequencerTest, AnUnreachableBestViewIsReplacedByTheNextAlternative) {
@@ -483,7 +575,8 @@ TEST_F(ScanSequencerTest, MoreThanAHundredAlternativesKeepRequestIdsUnique) {
   for (const auto& [t, r] : moves_) ids.insert(r.request_id);
   for (const auto& [t, r] : captures_) ids.insert(r.request_id);
   for (const auto& [t, r] : plans_) ids.insert(r.request_id);
-  EXPECT_EQ(ids.size(), moves_.size() + captures_.size() + plans_.size()) << "a request id was used twice";
+  for (const auto& [t, r] : meshes_) ids.insert(r.request_id);
+  EXPECT_EQ(ids.size(), moves_.size() + captures_.size() + plans_.size() + meshes_.size()) << "a request id was used twice";
   // Consecutive from a random start: the next id is the first plus the number used.
   EXPECT_EQ(seq_->so_far().next_request_id, *ids.begin() + static_cast<int64_t>(ids.size()));
   EXPECT_GE(*ids.begin(), int64_t{1} << 32);

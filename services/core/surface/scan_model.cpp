@@ -1,0 +1,127 @@
+#include "core/surface/scan_model.hpp"
+
+#include <chrono>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "core/base/format.hpp"
+#include "core/io/cloud_file.hpp"
+#include "core/io/json.hpp"
+#include "core/perception/cloud_filter.hpp"
+#include "core/perception/depth_cloud.hpp"
+#include "core/surface/scan_mesh.hpp"
+
+namespace fs = std::filesystem;
+
+namespace pbnbv {
+
+ScanModel::ScanModel(fs::path folder, double voxel_m, double new_surface_radius_m)
+    : folder_(std::move(folder)), voxel_m_(voxel_m), radius_m_(new_surface_radius_m) {
+  if (!(radius_m_ > 0)) {
+    throw std::invalid_argument("the new-surface radius must be positive, not " + std::to_string(radius_m_));
+  }
+}
+
+void ScanModel::clear() {
+  points_.clear();
+  normals_.clear();
+  poses_.clear();
+}
+
+bool ScanModel::restore() {
+  const fs::path path = folder_ / "cloud.ply";
+  if (folder_.empty() || !fs::exists(path)) return false;
+  CloudExtras extras;
+  points_ = read_ply(path.string(), extras);
+  poses_ = extras.camera_poses;
+  normals_ = extras.normals;
+  if (normals_.size() != points_.size()) {
+    // A cloud.ply written before normals were: fit them to the neighbours, facing away from the
+    // cloud's centre (the cameras look at the object from outside).
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (const auto& p : points_) centre += p.cast<double>();
+    if (!points_.empty()) centre /= static_cast<double>(points_.size());
+    normals_ = neighbour_normals(points_, centre);
+    for (auto& n : normals_) n = -n;
+  }
+  return true;
+}
+
+ModelUpdate ScanModel::add_view(int view, const PointCloud& points, std::vector<Eigen::Vector3f> normals,
+                                const Pose& object_T_camera, bool merge) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ModelUpdate u;
+  if (normals.empty() && !points.empty()) {
+    normals = neighbour_normals(points, object_T_camera.translation());
+  } else if (normals.size() != points.size()) {
+    throw std::invalid_argument("view " + std::to_string(view + 1) + ": " + std::to_string(normals.size()) +
+                                " normals for " + std::to_string(points.size()) + " points");
+  } else {
+    u.normals_from_depth = true;
+  }
+  if (!folder_.empty()) {
+    const std::string name = view_file(view, "ply");
+    fs::create_directories(folder_ / "frames");
+    write_ply(points, (folder_ / "frames" / name).string(), CloudExtras{normals, {object_T_camera}});
+    u.frame_file = "frames/" + name;
+  }
+  if (merge) {
+    u.new_surface = new_surface(points, points_, radius_m_);
+    PointCloud grown = points_;
+    grown.insert(grown.end(), points.begin(), points.end());
+    std::vector<Eigen::Vector3f> grown_normals = normals_;
+    grown_normals.resize(points_.size(), Eigen::Vector3f::Zero());
+    grown_normals.insert(grown_normals.end(), normals.begin(), normals.end());
+    points_ = voxel_downsample(grown, voxel_m_);
+    normals_ = voxel_normals(grown, grown_normals, points_, voxel_m_);
+    poses_.push_back(object_T_camera);
+    if (!folder_.empty()) write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_});
+  }
+  u.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return u;
+}
+
+MeshSummary ScanModel::mesh(const std::vector<int>& views, const CameraIntrinsics& camera, double point_spacing_m) const {
+  if (folder_.empty()) throw std::invalid_argument("no scan folder to mesh in");
+  std::vector<SurfaceFrame> frames;
+  for (const int v : views) {
+    const fs::path file = folder_ / "frames" / view_file(v, "ply");
+    CloudExtras extras;
+    PointCloud points = read_ply(file.string(), extras);
+    if (extras.camera_poses.size() != 1) throw std::invalid_argument(file.string() + ": no camera pose in its header");
+    frames.push_back({std::move(points), extras.camera_poses.front()});
+  }
+  SurfaceSettings s;
+  s.camera = camera;
+  s.point_spacing_m = point_spacing_m;
+  return mesh_scan(folder_, frames, s);
+}
+
+std::string ScanModel::write_depth(int view, const DepthImage& image, const Pose& object_T_camera, bool registered,
+                                   const PngWriter& write_png) const {
+  if (folder_.empty() || !image.depth_m) return "";
+  fs::create_directories(folder_ / "depth");
+  const std::string png = view_file(view, "png");
+  const CameraIntrinsics& k = image.intrinsics;
+  write_png(*image.depth_m, k.width, k.height, (folder_ / "depth" / png).string());
+  const nlohmann::json intrinsics = {
+      {"image", png},
+      {"width", k.width},
+      {"height", k.height},
+      {"fx", k.fx},
+      {"fy", k.fy},
+      {"cx", k.cx},
+      {"cy", k.cy},
+      {"depth_scale", 1000},
+      {"depth_units", "value / depth_scale = planar depth along the optical axis, m; 0 = no reading"},
+      {"depth_min_m", image.range.min_m},
+      {"depth_max_m", image.range.max_m},
+      {"depth_frame_seq", image.seq},
+      {"object_T_camera", to_json(object_T_camera)},
+      {"pose_frame", "object"},
+      {"registered", registered}};
+  write_json_atomic(intrinsics, (folder_ / "depth" / view_file(view, "json")).string());
+  return "depth/" + png;
+}
+
+}  // namespace pbnbv

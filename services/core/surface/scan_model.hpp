@@ -1,0 +1,88 @@
+#pragma once
+// The model of a scan as its registration service keeps it: the accepted views' registered
+// points merged into one cloud (voxel-downsampled; each voxel's normal the mean of its points'
+// normals; the merged views' camera poses), and each view's own cloud. With a folder, every view
+// is written to frames/view_NNN.ply and the model, after each merged view, to cloud.ply: binary
+// PLY with normals and the camera poses in the header (core/io/cloud_file.hpp), which users'
+// tools (Open3D, MeshLab, PCL) read. cloud.ply is also the state a restarted service continues
+// from. Plain data and files, no bus.
+#include <Eigen/Core>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/base/pose.hpp"
+#include "core/geometry/camera_model.hpp"
+#include "core/geometry/mesh_summary.hpp"
+#include "core/geometry/point_cloud.hpp"
+#include "core/perception/new_surface.hpp"
+
+namespace pbnbv {
+
+// What adding a view did.
+struct ModelUpdate {
+  std::string frame_file;                  // "frames/view_NNN.ply" ("" without a folder)
+  bool normals_from_depth = false;         // the view's normals came with it (the depth image's);
+                                           // false: fitted to its points' nearest neighbours
+  std::optional<NewSurface> new_surface;   // merged views: what the view added to the model
+  double seconds = 0;                      // wall time of the update and the writes
+};
+
+// A depth image as the camera took it: planar depth, m, row-major (0 or non-finite: no reading).
+struct DepthImage {
+  const std::vector<float>* depth_m = nullptr;
+  CameraIntrinsics intrinsics;
+  DepthRange range;
+  int64_t seq = -1;  // the camera's frame number
+};
+
+class ScanModel {
+ public:
+  // A model downsampled at voxel_m (<= 0: every point kept), new surface counted within
+  // new_surface_radius_m (> 0); `folder` empty: nothing is written.
+  ScanModel(std::filesystem::path folder, double voxel_m, double new_surface_radius_m);
+
+  // Continues the model written in folder/cloud.ply (a restarted service). False when there is
+  // none. Throws naming the file when it cannot be read.
+  bool restore();
+  void clear();
+
+  // Adds view `view`: `points` (object frame, the registered ones when accepted) with `normals`
+  // (one per point, zero where none was found; empty: fitted here to the nearest points, facing
+  // the camera) seen from object_T_camera. Writes frames/view_NNN.ply; when `merge`, counts its
+  // new surface against the model before it, merges it and writes cloud.ply. Throws
+  // std::invalid_argument when the normals are neither empty nor one per point.
+  ModelUpdate add_view(int view, const PointCloud& points, std::vector<Eigen::Vector3f> normals,
+                       const Pose& object_T_camera, bool merge);
+
+  // Writes the view's depth image as depth/view_NNN.png (with `write_png`: 16-bit, millimetres)
+  // and depth/view_NNN.json beside it (the intrinsics, depth scale, range, frame number and the
+  // camera pose, `registered` or kinematic). Returns "depth/view_NNN.png".
+  using PngWriter = std::function<void(const std::vector<float>& depth_m, int width, int height, const std::string& path)>;
+  std::string write_depth(int view, const DepthImage& image, const Pose& object_T_camera, bool registered,
+                          const PngWriter& write_png) const;
+
+  // Meshes the frames of `views` (frames/view_NNN.ply in the folder, each with its camera pose
+  // from the header; `camera` the camera that took them, `point_spacing_m` their downsampling
+  // voxel) into mesh.ply and mesh.obj in the folder (core/surface/scan_mesh.hpp). Throws naming
+  // the file or the cause when there is no folder, a frame is missing or unreadable, or the
+  // frames give no triangles.
+  MeshSummary mesh(const std::vector<int>& views, const CameraIntrinsics& camera, double point_spacing_m) const;
+
+  const PointCloud& points() const { return points_; }
+  const std::vector<Eigen::Vector3f>& normals() const { return normals_; }
+  const std::vector<Pose>& camera_poses() const { return poses_; }
+  const std::filesystem::path& folder() const { return folder_; }
+
+ private:
+  std::filesystem::path folder_;
+  double voxel_m_;
+  double radius_m_;
+  PointCloud points_;
+  std::vector<Eigen::Vector3f> normals_;  // one per point (zero: none)
+  std::vector<Pose> poses_;               // the merged views' camera poses, in order
+};
+
+}  // namespace pbnbv
