@@ -35,6 +35,10 @@ void start(Child& child) {
       if (!child.stdout_to_terminal) ::dup2(log_fd, STDOUT_FILENO);
       ::dup2(log_fd, STDERR_FILENO);
     }
+    if (!child.cwd.empty() && ::chdir(child.cwd.c_str()) != 0) {
+      std::fprintf(stderr, "cannot run %s in %s: %s\n", argv[0], child.cwd.c_str(), std::strerror(errno));
+      ::_exit(127);
+    }
     ::execvp(argv[0], argv.data());  // a bare name is looked up on PATH
     std::fprintf(stderr, "cannot run %s: %s\n", argv[0], std::strerror(errno));
     ::_exit(127);
@@ -42,6 +46,29 @@ void start(Child& child) {
   if (log_fd >= 0) ::close(log_fd);
   child.pid = pid;
   child.running = true;
+}
+
+int run(Child& child, double timeout_s) {
+  start(child);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  int status = 0;
+  for (;;) {
+    const pid_t r = ::waitpid(child.pid, &status, WNOHANG);
+    if (r == child.pid) break;
+    if (r < 0 && errno != EINTR) {
+      child.running = false;
+      throw std::runtime_error("cannot wait for " + child.name + ": " + std::strerror(errno));
+    }
+    if (std::chrono::steady_clock::now() >= deadline) {
+      ::kill(child.pid, SIGKILL);
+      ::waitpid(child.pid, &status, 0);
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  child.running = false;
+  child.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return child.exit_code;
 }
 
 std::vector<Child*> reap(std::vector<Child>& children) {

@@ -11,6 +11,7 @@ struct Child {
   std::string name;       // "twin", "motion", ...
   std::vector<std::string> argv;
   std::string log_path;   // stdout+stderr go here ("" = inherit)
+  std::string cwd;        // the folder it runs in ("" = the caller's)
   bool append_log = false;  // append to the log (a restart) instead of starting it anew
   bool stdout_to_terminal = false;  // keep stdout on the terminal (progress), stderr to the log
   // What the child gets when the process that started it dies, however it dies (SIGKILL
@@ -25,6 +26,10 @@ struct Child {
 // Starts the child; throws std::runtime_error naming it when fork/exec fails. The child dies
 // with the calling process (death_signal).
 void start(Child& child);
+
+// Starts the child and waits for its end, at most timeout_s: returns its exit code; at the
+// deadline it is killed (SIGKILL) and 128 + SIGKILL returned. Throws as start.
+int run(Child& child, double timeout_s);
 
 // Reaps children that exited (non-blocking); returns the ones that just stopped.
 std::vector<Child*> reap(std::vector<Child>& children);

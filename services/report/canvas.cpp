@@ -219,15 +219,6 @@ void Canvas::fill_rect(const cv::Rect& r, const cv::Scalar& colour) {
   }
 }
 
-void Canvas::frame_rect(const cv::Rect& r, const cv::Scalar& colour) {
-  cv::rectangle(img_, cv::Rect(r.tl() - tl_, r.size()), colour, 1);
-  if (svg_) {
-    svg_->add(fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" {}/>", r.x + 0.5,
-                          r.y + 0.5, r.width - 1, r.height - 1, stroke(colour, 1)),
-              clip_);
-  }
-}
-
 void Canvas::svg_text(const std::string& s, double left, double baseline, double scale, const cv::Scalar& colour,
                       int thickness, const std::string& transform) {
   if (!svg_ || s.empty()) return;

@@ -81,10 +81,9 @@ class Canvas {
                double alpha = 1.0);
   void polygon(const std::vector<cv::Point2d>& pts, const cv::Scalar& colour, double alpha = 1.0);
   // Whole pixels (no anti-aliasing), in whole-image pixel indices: a 1-px line from pixel a to
-  // pixel b, a filled rectangle, a 1-px frame along the rectangle's outermost pixels.
+  // pixel b, a filled rectangle.
   void pixel_line(const cv::Point& a, const cv::Point& b, const cv::Scalar& colour);
   void fill_rect(const cv::Rect& r, const cv::Scalar& colour);
-  void frame_rect(const cv::Rect& r, const cv::Scalar& colour);
   // Text with its baseline starting at p; align: 0 left, 1 centre, 2 right.
   void text(const std::string& s, const cv::Point2d& p, double scale, const cv::Scalar& colour, int thickness = 1,
             int align = 0);

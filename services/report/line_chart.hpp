@@ -1,10 +1,9 @@
 #pragma once
-// Line charts for benchmark reports (coverage against views, planning time, ...): axes with
-// round tick values, a light grey grid, title and axis labels, a legend, horizontal reference
-// lines. Drawn with OpenCV (core, imgproc, imgcodecs), written as PNG and SVG (the same
-// primitives through report/canvas.hpp).
-#include <opencv2/core.hpp>
-
+// Line charts for benchmark reports (coverage against views, planning time, ...), drawn by
+// gnuplot (Debian's gnuplot-nox: PNG and PDF through cairo, SVG) from data written beside them:
+// write_line_chart writes NAME.csv (the plotted numbers) and NAME.gp (the gnuplot script that
+// draws NAME.csv) and runs gnuplot, which writes NAME.png, NAME.svg and NAME.pdf. A user redraws
+// a chart with `gnuplot NAME.gp` in its folder, edits the script, or reads the CSV into any tool.
 #include <cmath>
 #include <cstddef>
 #include <string>
@@ -19,72 +18,53 @@ struct ChartSeries {
   bool markers = true;          // draw a dot at each point
   bool dashed = false;          // e.g. a reference curve such as the paper's figures
   // Optional spread (e.g. min and max over objects): when both have x's size, a translucent band
-  // in the series colour from lo to hi at each x (non-finite: a gap), under every line; the
-  // axis range and the legend placement take it into account.
+  // in the series colour from lo to hi at each x (non-finite: a gap), under every line.
   std::vector<double> lo, hi;
 };
 
 struct LineChart {
   std::string title, x_label, y_label;
   std::vector<ChartSeries> series;
-  double y_min = NAN, y_max = NAN;  // NaN: from the data (with a margin), nice round ticks
+  double y_min = NAN, y_max = NAN;  // NaN: from the data
   double x_min = NAN, x_max = NAN;
   bool log_y = false;               // log10 axis; y <= 0 leaves a gap like a non-finite y
   bool integer_x = false;           // x ticks on integers only (view numbers 1..10)
   std::vector<std::pair<double, std::string>> y_lines;  // horizontal reference lines + label
 };
 
-// Draws the chart (CV_8UC3, white background, width_px x height_px). Series whose points are all
-// non-finite are skipped. Series i has colour chart_series_colour(i); from the 8th on the colours
-// repeat with dashed lines (dotted when the series is also `dashed`).
-// Throws std::invalid_argument naming the series when its x and y differ in size, naming the
-// chart (its title) when no series has a finite point (positive on a log axis), and when an axis
-// range is empty or (log_y) not positive or the image is smaller than 240 x 160.
-cv::Mat draw_line_chart(const LineChart& chart, int width_px = 960, int height_px = 600);
-inline constexpr double kBandAlpha = 0.18;
-
-// The same chart as an SVG document (width_px x height_px user units, one per image pixel).
-std::string line_chart_svg(const LineChart& chart, int width_px = 960, int height_px = 600);
-
-// The chart's data as CSV, one row per point: series (its legend text, quoted), x, y, lo, hi
-// (empty when the series has no band); a non-finite value is written as "nan". The numbers are
-// the plotted ones, to 9 significant digits, so that another tool can draw the chart again.
-std::string line_chart_csv(const LineChart& chart);
-
-// Draws and writes the chart as PNG, atomically (to path_png + ".tmp.png", then renamed), as
-// SVG beside it (path_png with the extension ".svg") and its data as CSV (".csv"). Throws std::invalid_argument as draw_line_chart, and std::runtime_error naming the path when
-// its folder does not exist or the file cannot be written.
-void write_line_chart(const LineChart& chart, const std::string& path_png, int width_px = 960,
-                      int height_px = 600);
-
-// --- Layout (exposed for tests and for placing annotations) ---
-
-struct ChartLayout {
-  cv::Rect plot;                      // data area in image pixels; the frame is drawn around it
-  double x0 = 0, x1 = 1, y0 = 0, y1 = 1;  // axis ranges (y values, not their log, when log_y)
-  bool log_y = false;
-  std::vector<double> x_ticks, y_ticks;   // labelled tick values (y: decades and 2, 5 when log_y)
-  cv::Rect legend;                    // legend box (empty: no labelled series): inside the plot
-                                      // where it covers no data, else right of the plot, else
-                                      // below the x label (rows), else where it covers least
-  // Image pixel (x right, y down) of a data point: (x0, y0) is the plot's bottom-left pixel,
-  // (x1, y1) its top-right pixel (plot.x + plot.width - 1, plot.y). y must be > 0 when log_y.
-  cv::Point to_pixel(double x, double y) const;
-  cv::Point2d to_pixel_exact(double x, double y) const;  // without rounding
+// Where the data area lies in every image, as fractions of its width and height from the
+// bottom-left corner (the legend is right of it): fixed, so that a data point's pixel is known.
+struct ChartFrame {
+  static constexpr double kLeft = 0.09, kRight = 0.76, kBottom = 0.11, kTop = 0.91;
 };
 
-ChartLayout chart_layout(const LineChart& chart, int width_px = 960, int height_px = 600);
+// Series i's colour, "#rrggbb": Okabe and Ito's colour-blind-safe palette without yellow (7
+// colours: blue, vermillion, bluish green, orange, reddish purple, sky blue, black), repeating
+// with dashed lines from the 8th series on (dotted when the series is also `dashed`).
+std::string chart_series_colour(std::size_t i);
 
-// Ticks at the multiples of the smallest step 1, 2 or 5 x 10^k that gives at most max_ticks of
-// them in [lo, hi] (ends included), ascending. (0, 10, 6): 0 2 4 6 8 10.
-std::vector<double> nice_ticks(double lo, double hi, int max_ticks);
+// Throws std::invalid_argument naming the series when its x and y (or its band) differ in size,
+// naming the chart (its title) when no series has a finite point (positive on a log axis), or an
+// axis range is empty or (log_y) not positive.
+void check_line_chart(const LineChart& chart);
 
-// Decades 10^k in [lo, hi] (lo > 0), every decade or every 2nd, 3rd, 5th, 10th ... so that there
-// are at most max_ticks. (0.8, 2000): 1 10 100 1000.
-std::vector<double> log_ticks(double lo, double hi, int max_ticks = 10);
+// The chart's data as CSV, one row per point, series after series: x, y, lo, hi (empty when the
+// series has no band), series (its legend text, quoted); a non-finite value is written "nan".
+// The numbers are the plotted ones, to 9 significant digits. The label comes last so that a
+// label holding commas or quotes leaves the numeric columns where they are.
+std::string line_chart_csv(const LineChart& chart);
 
-// Colour (BGR) of series i: Okabe-Ito's colour-blind-safe palette without yellow, 7 colours,
-// then repeating.
-cv::Vec3b chart_series_colour(size_t i);
+// The gnuplot script that draws `stem`.csv (line_chart_csv of the same chart, in the script's
+// folder) into `stem`.png and `stem`.svg (width_px x height_px) and `stem`.pdf (the same shape,
+// 10 inches wide). Each series is a range of the CSV's rows (`every`), so no label is parsed.
+std::string line_chart_gnuplot(const LineChart& chart, const std::string& stem, int width_px = 960,
+                               int height_px = 600);
+
+// Writes the chart's CSV and script beside path_png (same name, .csv and .gp) and runs gnuplot
+// there (at most 60 s), which writes path_png, the .svg and the .pdf. Throws as check_line_chart,
+// and std::runtime_error naming the path when its folder does not exist or a file cannot be
+// written, and naming gnuplot and the end of what it said when it fails, is missing or times out.
+void write_line_chart(const LineChart& chart, const std::string& path_png, int width_px = 960,
+                      int height_px = 600);
 
 }  // namespace pbnbv

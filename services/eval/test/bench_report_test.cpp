@@ -119,14 +119,15 @@ TEST_F(BenchReport, FailedScanIsCountedApartAndExplained) {
 
   // The plots in both formats; the coverage plot's title counts the completed scans, each
   // planner has its min-max band; the release's curve (other meshes) is not drawn for these objects.
-  for (const char* f : {"coverage.png", "coverage.svg", "time.png", "time.svg"}) {
+  for (const char* f : {"coverage.png", "coverage.svg", "coverage.pdf", "time.png", "time.svg", "time.pdf"}) {
     EXPECT_GT(fs::file_size(dir_ / f), 1000u) << f;
   }
   std::string svg = read(dir_ / "coverage.svg");
   EXPECT_NE(svg.find("2-3 objects (failed: pbnbv 1 of 3)"), std::string::npos);
   EXPECT_EQ(svg.find("authors' release"), std::string::npos);
+  const std::string gp = read(dir_ / "coverage.gp");  // the script gnuplot drew it with
   size_t bands = 0;
-  for (size_t at = svg.find("fill-opacity="); at != std::string::npos; at = svg.find("fill-opacity=", at + 1)) ++bands;
+  for (size_t at = gp.find("with filledcurves"); at != std::string::npos; at = gp.find("with filledcurves", at + 1)) ++bands;
   EXPECT_EQ(bands, 2u);
   // Not beside the default set either (its 5 meshes were never recorded: no set of ours is the
   // one it was measured on): no curve, no row, no time line; report.md says its figures as context.
