@@ -52,13 +52,14 @@ ScanEvaluation evaluate(const fs::path& out, const CoverageParams& params, const
       if (v.contains("plan") && v["plan"].contains("planner_step_ms")) {
         e.planner_ms.push_back(v["plan"]["planner_step_ms"].get<double>());
       }
-      if (v.value("merged", false)) {
-        const PointCloud frame = read_ply((out / v.at("frame_file").get<std::string>()).string());
+      const std::string frame_file = view_frame_file(v, out / "scan.json");  // its own name, or none
+      if (v.value("merged", false) && !frame_file.empty()) {
+        const PointCloud frame = read_ply((out / frame_file).string());
         coverage.add_cloud(frame);
         points += static_cast<int>(frame.size());
         merged.insert(merged.end(), frame.begin(), frame.end());
       }
-      if (!v.contains("frame_file")) continue;  // the rig never captured this view
+      if (frame_file.empty()) continue;  // the rig never captured this view
       e.coverage_by_view.push_back(coverage.coverage_percent());
       if (observable) e.observable_by_view.push_back(coverage.coverage_percent(*observable));
       e.points_by_view.push_back(points);

@@ -117,11 +117,11 @@ class RegistrationService {
       bus_.publish(channels::kRegisteredCloud, *answer);  // a repeat: answer again
       return;
     }
+    const CaptureResult capture = bus::from_msg(c);  // a malformed cloud throws: rejected by the bus, nothing changed
     if (c.scan_id != scan_id_) {  // a new scan: a new model
       scan_id_ = c.scan_id;
       model_.clear();
     }
-    const CaptureResult capture = bus::from_msg(c);  // a malformed cloud throws: rejected by the bus
     registered_cloud_t out;
     out.scan_id = c.scan_id;
     out.iteration = c.iteration;

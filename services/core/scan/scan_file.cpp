@@ -71,17 +71,30 @@ void write_scan_state(const fs::path& scan_folder, const std::string& state, con
   write_json_atomic(scan, path.string());
 }
 
+std::string view_frame_file(const json& v, const fs::path& scan_json) {
+  if (!v.is_object() || !v.contains("frame_file")) return "";
+  const json& n = v.contains("view") ? v["view"] : json();
+  if (!n.is_number_integer() || n.get<int64_t>() < 0 || n.get<int64_t>() >= kViews.max) {
+    throw std::invalid_argument(scan_json.string() + ": a view entry with a frame_file has no view number 0.." +
+                                std::to_string(kViews.max - 1));
+  }
+  const int view = n.get<int>();
+  const std::string own = "frames/" + view_file(view, "ply");
+  if (v["frame_file"] != own) {
+    throw std::invalid_argument(scan_json.string() + " view " + std::to_string(view + 1) + ": frame_file is not " + own);
+  }
+  return own;
+}
+
 std::vector<MergedFrame> merged_frames(const fs::path& dir, const json& scan) {
   const std::string where = (dir / "scan.json").string();
   std::vector<MergedFrame> frames;
   for (const json& v : scan.value("views", json::array())) {
-    if (!v.is_object() || !v.value("merged", false) || !v.contains("frame_file")) continue;
+    const std::string own = view_frame_file(v, where);
+    if (own.empty() || !v.value("merged", false)) continue;
     MergedFrame f;
-    f.view = v.value("view", -1);
+    f.view = v["view"].get<int>();
     const std::string what = where + " view " + std::to_string(f.view + 1);
-    if (f.view < 0 || f.view >= kViews.max) throw std::invalid_argument(what + ": no view number");
-    const std::string own = "frames/" + view_file(f.view, "ply");
-    if (v["frame_file"] != own) throw std::invalid_argument(what + ": frame_file is not " + own);
     if (v.contains("registration") && v["registration"].contains("registered_object_T_camera")) {
       f.object_T_camera = pose_from_json(v["registration"]["registered_object_T_camera"], what + " registered pose");
     } else if (v.contains("capture")) {

@@ -36,6 +36,11 @@ std::string recorded_state(const std::filesystem::path& scan_folder);
 // was stopped around it). A folder without a record gets one holding only this status.
 void write_scan_state(const std::filesystem::path& scan_folder, const std::string& state, const std::string& message);
 
+// A view entry's frame file: "frames/view_NNN.ply" for its "view" (0 .. kViews.max - 1), or ""
+// when the entry names none. Throws naming `scan_json` and the view when it names any other path:
+// no path is taken from the file.
+std::string view_frame_file(const nlohmann::json& view, const std::filesystem::path& scan_json);
+
 // A merged view's frame as scan.json names it.
 struct MergedFrame {
   int view = 0;

@@ -1,6 +1,5 @@
 #include "core/scan/scan_record.hpp"
 
-#include <chrono>
 
 #include "core/base/format.hpp"
 #include "core/base/version.hpp"
@@ -261,8 +260,9 @@ void ScanRecord::continue_from_folder(const std::string& scan_id) {
   report_["views"] = before.value("views", json::array());
   if (before.contains("plan")) report_["plan"] = before["plan"];
   if (before.contains("status")) report_["status"] = before["status"];
-  if (before.contains("status") && before["status"].is_object()) {
-    model_points_ = before["status"].value("num_points", std::size_t{0});
+  if (before.contains("status") && before["status"].is_object() && before["status"].contains("num_points")) {
+    model_points_ = static_cast<std::size_t>(
+        integer_from_json(before["status"]["num_points"], 0, int64_t{1} << 40, path.string() + " status num_points"));
   }
 }
 

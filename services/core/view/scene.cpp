@@ -165,7 +165,7 @@ std::vector<Scene> load_scan_folder(const std::string& dir, double voxel_m, std:
       const nlohmann::json& v = views[i];
       if (!v.contains("capture")) continue;  // planned, never captured
       taken.push_back(view_pose(v, what));
-      const std::string frame = v.value("frame_file", std::string());
+      const std::string frame = view_frame_file(v, scan_path);  // its own name, or none
       if (v.value("merged", false) && !frame.empty() && fs::exists(root / frame)) {
         const PointCloud f = read_ply((root / frame).string());
         total += f.size();

@@ -82,3 +82,23 @@ TEST_F(ScanFileTest, TheLaunchersWordOnTheStateKeepsTheRecordAndStartsOneWhereNo
 }
 
 }  // namespace
+
+namespace {
+
+// A view entry names its own frame file or none: a planted path (another view's, outside the
+// folder) is refused naming the file and the view, before anything opens it.
+TEST(ViewFrameFile, IsTheViewsOwnOrNone) {
+  const std::filesystem::path where = "/scans/a/scan.json";
+  EXPECT_EQ(view_frame_file(nlohmann::json{{"view", 2}, {"frame_file", "frames/view_003.ply"}}, where), "frames/view_003.ply");
+  EXPECT_EQ(view_frame_file(nlohmann::json{{"view", 2}}, where), "");
+  for (const char* planted : {"../../etc/passwd", "frames/view_001.ply", "/tmp/x.ply"}) {
+    pbnbv::testing::expect_error([&] { view_frame_file(nlohmann::json{{"view", 2}, {"frame_file", planted}}, where); },
+                                 "/scans/a/scan.json view 3: frame_file is not frames/view_003.ply");
+  }
+  pbnbv::testing::expect_error([&] { view_frame_file(nlohmann::json{{"view", -1}, {"frame_file", "frames/view_000.ply"}}, where); },
+                               "/scans/a/scan.json: a view entry with a frame_file has no view number 0..999");
+  pbnbv::testing::expect_error([&] { view_frame_file(nlohmann::json{{"frame_file", "frames/view_001.ply"}}, where); },
+                               "has no view number");
+}
+
+}  // namespace
