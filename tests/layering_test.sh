@@ -32,10 +32,14 @@ check_includes 'opencv2/' "OpenCV" '^services/report/'
 check_includes 'pcl/surface/' "PCL's surface module (marching-cubes tables, Poisson)" '^services/core/surface/'
 
 # scan.json is parsed by core/scan alone (scan_file.cpp: read_scan_json, which checks its format);
-# every other source reads it through that.
+# every other source reads it into its types (scan_record.hpp: read_scan_record), never by key.
 verdict "$(cd "$src" && grep -rnE 'read_json\([^;]*(scan\.json|scan_json|scan_path|replay_of)' services twin \
              --include=*.cpp --include=*.hpp | grep -vE '/(test|bench)/' | grep -v '^services/core/scan/scan_file.cpp:' || true)" \
         "scan.json read outside core/scan/scan_file.cpp (use read_scan_json)" "scan.json read by core/scan/scan_file.cpp only"
+verdict "$(cd "$src" && grep -rn 'read_scan_json(' services twin --include=*.cpp --include=*.hpp | grep -vE '/(test|bench)/' |
+             grep -vE '^services/core/scan/(scan_file|scan_record|scan_record_read)\.(cpp|hpp):' || true)" \
+        "scan.json read by key outside core/scan's record (use read_scan_record)" \
+        "scan.json read into its types (read_scan_record) outside core/scan"
 
 # No library file of core/ over 800 lines: a file that long holds several things.
 verdict "$(cd "$src" && find services/core -name '*.cpp' -o -name '*.hpp' | grep -vE '/(test|bench)/' | xargs wc -l |

@@ -54,18 +54,19 @@ LogContents read_scan_logs(const std::vector<std::string>& paths, const std::str
   return all;
 }
 
-std::vector<std::string> missing_from_log(const LogContents& log, const nlohmann::json& views) {
+std::vector<std::string> missing_from_log(const LogContents& log, const std::vector<ViewMessages>& views) {
   std::vector<std::string> missing;
-  for (const nlohmann::json& v : views) {
-    const int i = v.at("view").get<int>();
+  for (const ViewMessages& v : views) {
+    const int i = v.view;
     const std::string name = "view " + std::to_string(i + 1) + ": ";
-    if (v.contains("capture") && v["capture"].contains("depth_frame_seq")) {
-      const int64_t seq = v["capture"]["depth_frame_seq"].get<int64_t>();
-      if (seq >= 0 && !log.depth_frames.count(seq)) missing.push_back(name + "DEPTH_FRAME " + std::to_string(seq));
+    if (v.captured) {
+      if (v.depth_frame_seq >= 0 && !log.depth_frames.count(v.depth_frame_seq)) {
+        missing.push_back(name + "DEPTH_FRAME " + std::to_string(v.depth_frame_seq));
+      }
       if (!log.clouds.count(i)) missing.push_back(name + "CLOUD");
     }
-    if (v.contains("registration") && !log.registered_clouds.count(i)) missing.push_back(name + "REGISTERED_CLOUD");
-    if (v.contains("map") && !log.voxel_maps.count(i)) missing.push_back(name + "VOXEL_MAP");
+    if (v.registered && !log.registered_clouds.count(i)) missing.push_back(name + "REGISTERED_CLOUD");
+    if (v.mapped && !log.voxel_maps.count(i)) missing.push_back(name + "VOXEL_MAP");
   }
   return missing;
 }

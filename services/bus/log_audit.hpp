@@ -26,10 +26,17 @@ LogContents read_scan_log(const std::string& path, const std::string& scan_id);
 // The same over several files (a restarted lcm-logger goes on in scan.lcmlog.00, .01, ...).
 LogContents read_scan_logs(const std::vector<std::string>& paths, const std::string& scan_id);
 
-// The messages a scan's views (scan.json's "views") say were sent and the log lacks, one line
-// each ("view 3: DEPTH_FRAME 1733069123000042"); empty when the log holds them all. A view
-// expects its DEPTH_FRAME and CLOUD once it has a capture, its REGISTERED_CLOUD once it has a
-// registration, its VOXEL_MAP once it has a map.
-std::vector<std::string> missing_from_log(const LogContents& log, const nlohmann::json& views);
+// What scan.json says of a view's messages (the launcher fills it from the scan's record).
+struct ViewMessages {
+  int view = 0;                  // 0-based
+  bool captured = false;         // it has a capture: its DEPTH_FRAME (when >= 0) and CLOUD
+  int64_t depth_frame_seq = -1;
+  bool registered = false;       // its REGISTERED_CLOUD
+  bool mapped = false;           // its VOXEL_MAP
+};
+
+// The messages a scan's views say were sent and the log lacks, one line each ("view 3:
+// DEPTH_FRAME 1733069123000042"); empty when the log holds them all.
+std::vector<std::string> missing_from_log(const LogContents& log, const std::vector<ViewMessages>& views);
 
 }  // namespace pbnbv::bus

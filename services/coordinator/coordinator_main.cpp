@@ -29,8 +29,7 @@
 #include "core/base/atomic_file.hpp"
 #include "core/base/log.hpp"
 #include "core/io/json.hpp"
-#include "core/scan/scan_comparison.hpp"
-#include "core/scan/scan_file.hpp"
+#include "core/scan/scan_record.hpp"
 #include "core/scan/scan_sequencer.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "pbnbv/arm_status_t.hpp"
@@ -117,7 +116,7 @@ void take(bus::Bus& bus, const char* channel, std::vector<ScanEvent>& inbox) {
 // Runs the scan to its end; returns the process exit code.
 int run(bus::Bus& bus, const ScanSettings& settings, const fs::path& out, bool resume, const std::string& replay_of) {
   ScanSequencer scan(settings, out);
-  if (!replay_of.empty()) scan.replay(recorded_attempts(read_scan_json(replay_of), replay_of), replay_of);
+  if (!replay_of.empty()) scan.replay(recorded_attempts(read_scan_record(replay_of)), replay_of);
   bus.serve_scan(settings.scan_id);
   // Handlers only check and convert (a bad message is rejected by the bus); the sequencer
   // takes the events after each spin, so its own errors are not mistaken for bad messages.

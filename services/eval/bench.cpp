@@ -25,6 +25,7 @@
 #include "core/planning/planner.hpp"
 #include "core/rig/rig.hpp"
 #include "core/scan/scan_file.hpp"
+#include "core/scan/scan_record.hpp"
 #include "core/scan/scan_sequencer.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "core/geometry/views.hpp"
@@ -954,8 +955,10 @@ ObjectRun evaluate_job(const BenchSpec& spec, const Job& j, std::map<std::string
       r.stop_rule_reason = d->reason;
     }
     r.complete = true;
-    const json plan = read_scan_json(j.dir).value("plan", json::object());
-    if (plan.contains("initial_view")) r.initial_view = pose_from_json(plan["initial_view"], "scan.json plan.initial_view").translation();
+    const json plan = read_scan_record(j.dir).plan;
+    if (plan.is_object() && plan.contains("initial_view")) {
+      r.initial_view = pose_from_json(plan["initial_view"], (j.dir / "scan.json").string() + " plan initial_view").translation();
+    }
     if (fs::exists(j.dir / "bench_run.json")) r.wall_s = read_json((j.dir / "bench_run.json").string()).value("wall_s", 0.0);
   } catch (const std::exception& x) {
     r.error = x.what();

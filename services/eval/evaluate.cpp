@@ -12,7 +12,7 @@
 #include "core/io/pcd_file.hpp"
 #include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
-#include "core/scan/scan_file.hpp"
+#include "core/scan/scan_record.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "core/scan/stop_rule.hpp"
 
@@ -31,7 +31,7 @@ json stats_mm(const DistanceStats& s) {
 // evaluate_scan, and evaluate_coverage when `metrics` is null.
 ScanEvaluation evaluate(const fs::path& out, const CoverageParams& params, const std::vector<uint8_t>* observable,
                         const MetricParams* metrics) {
-  const json scan = read_scan_json(out);
+  const RecordedScan scan = read_scan_record(out);  // every field checked, frame files the views' own
   const fs::path mesh_path = out / "object.stl";
   if (!fs::exists(mesh_path)) throw std::runtime_error(mesh_path.string() + " is missing: not a twin scan's output folder");
   const TriangleMesh truth = load_mesh(mesh_path.string());
@@ -42,32 +42,25 @@ ScanEvaluation evaluate(const fs::path& out, const CoverageParams& params, const
                                 std::to_string(coverage.samples().size()) + " coverage samples of " + mesh_path.string());
   }
   ScanEvaluation e;
-  try {
-    e.state = scan.at("status").at("state").get<std::string>();
-    e.views_done = scan.at("status").at("views_done").get<int>();
-    if (scan.contains("stop")) e.stop_reason = scan["stop"].at("reason").get<std::string>();
-    else e.stop_reason = scan.at("status").at("message").get<std::string>();
-    int points = 0;
-    for (const auto& v : scan.at("views")) {
-      if (v.contains("plan") && v["plan"].contains("planner_step_ms")) {
-        e.planner_ms.push_back(v["plan"]["planner_step_ms"].get<double>());
-      }
-      const std::string frame_file = view_frame_file(v, out / "scan.json");  // its own name, or none
-      if (v.value("merged", false) && !frame_file.empty()) {
-        const PointCloud frame = read_ply((out / frame_file).string());
-        coverage.add_cloud(frame);
-        points += static_cast<int>(frame.size());
-        merged.insert(merged.end(), frame.begin(), frame.end());
-      }
-      if (frame_file.empty()) continue;  // the rig never captured this view
-      e.coverage_by_view.push_back(coverage.coverage_percent());
-      if (observable) e.observable_by_view.push_back(coverage.coverage_percent(*observable));
-      e.points_by_view.push_back(points);
+  e.state = scan.status.state;
+  e.views_done = scan.status.views_done;
+  e.stop_reason = scan.stop ? scan.stop->reason : scan.status.message;
+  int points = 0;
+  for (const ViewRecord& v : scan.views) {
+    if (v.plan) e.planner_ms.push_back(planner_step_ms(*v.plan));
+    const std::string frame_file = v.registration ? v.registration->frame_file : std::string();
+    if (frame_file.empty()) continue;  // the rig never captured this view
+    if (v.registration->accepted) {
+      const PointCloud frame = read_ply((out / frame_file).string());
+      coverage.add_cloud(frame);
+      points += static_cast<int>(frame.size());
+      merged.insert(merged.end(), frame.begin(), frame.end());
     }
-    e.new_surface_by_view = new_surface_figures(scan.at("views"));
-  } catch (const json::exception& x) {
-    throw std::runtime_error((out / "scan.json").string() + ": " + x.what());
+    e.coverage_by_view.push_back(coverage.coverage_percent());
+    if (observable) e.observable_by_view.push_back(coverage.coverage_percent(*observable));
+    e.points_by_view.push_back(points);
   }
+  e.new_surface_by_view = new_surface_figures(scan.views);
   if (!metrics) return e;
   const PointCloud cloud = fs::exists(out / "cloud.ply") ? read_ply((out / "cloud.ply").string()) : merged;
   const bool has_mesh = fs::exists(out / "mesh.ply");

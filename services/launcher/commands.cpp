@@ -117,19 +117,15 @@ int run_rig_check(const RigCheckOptions& o) {
 int run_mesh(const MeshOptions& o) {
   const fs::path dir(o.dir);
   // The frames scan.json names as merged, with the camera and point spacing the scan had.
-  const nlohmann::json scan = read_scan_json(dir);
+  const RecordedScan scan = read_scan_record(dir);
   SurfaceSettings s = o.surface;
-  try {
-    const ScanSettings scanned = scan_settings_from_json(scan.at("settings"));
-    s.camera = scanned.camera;
-    s.point_spacing_m = scanned.voxel_m;
-  } catch (const std::exception& e) {
-    throw std::invalid_argument((dir / "scan.json").string() + ": " + e.what());
-  }
+  s.camera = scan.settings.camera;
+  s.point_spacing_m = scan.settings.voxel_m;
   std::vector<SurfaceFrame> frames;
-  for (const MergedFrame& f : merged_frames(dir, scan)) frames.push_back({read_ply(f.file.string()), f.object_T_camera});
-  const nlohmann::json m = to_json(mesh_scan(dir, frames, s, o.stl));
-  write_scan_mesh(dir, m);
+  for (const MergedFrame& f : merged_frames(scan, dir)) frames.push_back({read_ply(f.file.string()), f.object_T_camera});
+  const MeshSummary mesh = mesh_scan(dir, frames, s, o.stl);
+  write_scan_mesh(dir, mesh);
+  const nlohmann::json m = to_json(mesh);
   std::cout << "pbnbv mesh: " << (dir / "mesh.ply").string() << " (and mesh.obj" << (o.stl ? ", mesh.stl" : "") << "): " << m["method"].get<std::string>()
             << ", " << m["vertices"] << " vertices, " << m["triangles"] << " triangles, "
             << (m["watertight"].get<bool>() ? std::string("watertight")

@@ -9,6 +9,7 @@
 #include "core/scan/replay_rig.hpp"
 #include "core/scan/scan_comparison.hpp"
 #include "core/scan/scan_file.hpp"
+#include "core/scan/scan_record.hpp"
 #include "launcher/commands.hpp"
 #include "launcher/scan_processes.hpp"
 #include "launcher/supervise.hpp"
@@ -51,15 +52,15 @@ int run_replay(const ReplayOptions& o, const fs::path& bin) {
                                 "nothing to replay");
   }
   const std::string scan_json = (dir / "scan.json").string();
-  const nlohmann::json recorded = read_scan_json(scan_json);
+  const RecordedScan recorded = read_scan_record(scan_json);  // every field checked
   ScanSettings s = scan_settings_from_json(read_json((dir / "settings.json").string()));
   const std::string recorded_id = s.scan_id;
-  if (recorded.value("settings", nlohmann::json::object()).value("scan_id", "") != recorded_id) {
+  if (recorded.settings.scan_id != recorded_id) {
     throw std::invalid_argument(scan_json + " is not a record of scan " + recorded_id + " (settings.json's)");
   }
   // Everything the replay needs is there before anything starts: the recorded views' poses, and a
   // frame in the log for every view that was captured.
-  const std::vector<std::vector<Pose>> attempts = recorded_attempts(recorded, scan_json);
+  const std::vector<std::vector<Pose>> attempts = recorded_attempts(recorded);
   const bus::RigLog log = bus::read_rig_log(logs, recorded_id);
   const std::vector<RecordedView> views = recorded_views(bus::timeline_of(log));
   const std::size_t played = views.size();
@@ -70,8 +71,8 @@ int run_replay(const ReplayOptions& o, const fs::path& bin) {
     if (lost(views[v].arm) || (!log.turntable_statuses.empty() && lost(views[v].turntable))) readings_lost.push_back(v + 1);
   }
   std::size_t captured = 0;
-  for (const auto& v : recorded.value("views", nlohmann::json::array())) {
-    if (v.contains("capture") && v["capture"].value("status", "") == "ok") ++captured;
+  for (const ViewRecord& v : recorded.views) {
+    if (v.capture && v.capture->ok) ++captured;
   }
   if (played < captured) {
     throw std::invalid_argument(logs.front() + " holds the frames of " + std::to_string(played) + " views, " + scan_json +
@@ -106,11 +107,11 @@ int run_replay(const ReplayOptions& o, const fs::path& bin) {
   const int code = supervise(children, s, out, true, false);
   if (!fs::exists(out / "scan.json")) return code == 0 ? 1 : code;
 
-  nlohmann::json comparison = compare_scans(recorded, read_scan_json(out));
+  nlohmann::json comparison = compare_scans(recorded, read_scan_record(out));
   comparison["original"] = dir.string();
   comparison["replay"] = out.string();
   comparison["readings_lost_in_recording"] = readings_lost;
-  comparison["planner"] = {{"original", recorded["settings"].value("planner", "")}, {"replay", name_of(s.planner)}};
+  comparison["planner"] = {{"original", name_of(recorded.settings.planner)}, {"replay", name_of(s.planner)}};
   write_json_atomic(comparison, (out / "replay.json").string());
   std::cout << "\n" << comparison_table(comparison) << "-> " << (out / "replay.json").string() << std::endl;
   return code;

@@ -12,6 +12,7 @@
 
 #include "bus/bus.hpp"
 #include "bus/log_audit.hpp"
+#include "bus/scan_log_views.hpp"
 #include "bus/rig_log.hpp"
 #include "pbnbv/heartbeat_t.hpp"
 #include "core/base/format.hpp"
@@ -104,13 +105,13 @@ void audit_log(const fs::path& out, const std::string& scan_id) {
   try {
     const std::vector<std::string> files = bus::scan_log_files(out.string());  // scan.lcmlog, .NN after restarts
     const bus::LogContents log = bus::read_scan_logs(files, scan_id);
-    const nlohmann::json scan = read_scan_json(out);
-    const nlohmann::json views = scan.value("views", nlohmann::json::array());
-    const std::vector<std::string> missing = bus::missing_from_log(log, views);
+    const RecordedScan scan = read_scan_record(out);
+    const std::vector<std::string> missing = bus::missing_from_log(log, bus::view_messages(scan));
+    const std::size_t views = scan.views.size();
     if (missing.empty()) {
       std::cout << "scan.lcmlog" << (files.size() > 1 ? " (" + std::to_string(files.size()) + " files)" : "") << ": "
                 << log.events << " messages, every depth frame, cloud, registered cloud and map of the "
-                << views.size() << " views" << std::endl;
+                << views << " views" << std::endl;
       return;
     }
     std::string list;

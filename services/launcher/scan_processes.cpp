@@ -166,10 +166,9 @@ Resumable read_resumable(const fs::path& out) {
   r.launch = launch_settings_from_json(j.at("launch"), settings_file.string());
   const fs::path scan_json = out / "scan.json";
   if (fs::exists(scan_json)) {
-    const nlohmann::json scan = read_scan_json(scan_json);
-    const nlohmann::json recorded = scan.value("settings", nlohmann::json::object()).value("scan_id", nlohmann::json());
-    if (recorded != nlohmann::json(s.scan_id)) {
-      throw std::invalid_argument(where + ": " + scan_json.string() + " is a record of scan " + recorded.dump() + ", " +
+    const std::string recorded = recorded_scan_id(scan_json);
+    if (recorded != s.scan_id) {
+      throw std::invalid_argument(where + ": " + scan_json.string() + " is a record of scan \"" + recorded + "\", " +
                                   settings_file.string() + " of scan \"" + s.scan_id + "\": the folder mixes two scans");
     }
   }

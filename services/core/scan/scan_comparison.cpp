@@ -15,27 +15,13 @@ namespace pbnbv {
 
 namespace {
 
-const json kNull = nullptr;
-
-// j[a][b]... or null.
-const json& at(const json& j, std::initializer_list<const char*> path) {
-  const json* p = &j;
-  for (const char* k : path) {
-    if (!p->is_object() || !p->contains(k)) return kNull;
-    p = &(*p)[k];
-  }
-  return *p;
-}
-
-// The view the planner chose for a recorded view (null: none asked for, or no view chosen): the
-// plan's pose, or, in records written before it was kept, the pose reached as the plan's option 0.
-json planned_pose(const json& view) {
-  const json& plan = at(view, {"plan"});
-  if (!plan.contains("outcome")) return nullptr;  // the initial view
-  if (plan.value("outcome", "") != "view") return plan.value("outcome", "");
-  if (plan.contains("object_T_camera")) return plan["object_T_camera"];
-  if (view.value("option", -1) == 0) return view["requested_object_T_camera"];
-  return nullptr;
+// The view the planner chose for a recorded view: its pose, "stop" or "failed" when it chose
+// none, null when no plan was asked for (the initial view, a ring).
+json planned_pose(const ViewRecord* v) {
+  if (!v || !v->plan) return nullptr;
+  const ViewPlan& p = v->plan->plan;
+  if (p.outcome != PlanOutcome::kView) return to_string(p.outcome);
+  return to_json(p.object_T_camera);
 }
 
 // {"original": a, "replay": b, "same": a == b}
@@ -59,49 +45,46 @@ json pose_difference(const json& a, const json& b, const std::string& what) {
 
 }  // namespace
 
-std::vector<std::vector<Pose>> recorded_attempts(const json& scan, const std::string& file) {
-  std::vector<std::vector<Pose>> attempts;
-  for (const json& v : scan.value("views", json::array())) {
-    const std::string at_view = file + " view " + std::to_string(v.value("view", 0) + 1);
-    std::vector<Pose> poses;
-    for (const json& f : v.value("failed_moves", json::array())) {
-      poses.push_back(pose_from_json(f.at("object_T_camera"), at_view + " failed move"));
-    }
-    if (v.contains("option")) poses.push_back(pose_from_json(v.at("requested_object_T_camera"), at_view + " requested pose"));
-    attempts.push_back(std::move(poses));
-  }
-  return attempts;
-}
-
-json compare_scans(const json& original, const json& replay) {
-  const json& a = at(original, {"views"});
-  const json& b = at(replay, {"views"});
+json compare_scans(const RecordedScan& original, const RecordedScan& replay) {
+  const std::vector<ViewRecord>& a = original.views;
+  const std::vector<ViewRecord>& b = replay.views;
   json views = json::array();
   json differences = json::array();
-  const std::size_t n = std::max(a.is_array() ? a.size() : 0, b.is_array() ? b.size() : 0);
+  const std::size_t n = std::max(a.size(), b.size());
+  // The registration's decision and what it did, the map's counts (null: not in this record).
+  const auto registration = [](const ViewRecord* v) { return v && v->registration ? &*v->registration : nullptr; };
+  const auto accepted = [&](const ViewRecord* v) { return registration(v) ? json(registration(v)->accepted) : json(nullptr); };
+  const auto correction = [&](const ViewRecord* v) -> json {
+    const RegisteredCloud* r = registration(v);
+    if (!r) return nullptr;
+    return {{"translation_mm", r->translation_m * 1e3}, {"rotation_deg", r->rotation_deg}};
+  };
+  const auto registered_pose = [&](const ViewRecord* v) {
+    return registration(v) ? to_json(registration(v)->cloud.object_T_camera) : json(nullptr);
+  };
+  const auto voxels = [](const ViewRecord* v) -> json {
+    if (!v || !v->map) return nullptr;
+    const VoxelMapSummary& m = *v->map;
+    return {{"none", m.num_none}, {"empty", m.num_empty}, {"occupied", m.num_occupied}, {"unknown", m.num_unknown},
+            {"frontier", m.num_frontier}};
+  };
   for (std::size_t i = 0; i < n; ++i) {
-    const json& va = a.is_array() && i < a.size() ? a[i] : kNull;
-    const json& vb = b.is_array() && i < b.size() ? b[i] : kNull;
+    const ViewRecord* va = i < a.size() ? &a[i] : nullptr;
+    const ViewRecord* vb = i < b.size() ? &b[i] : nullptr;
     const std::string name = "view " + std::to_string(i + 1);
     json v = {{"view", i}};
-    v["accepted"] = pair(at(va, {"registration", "accepted"}), at(vb, {"registration", "accepted"}));
-    v["merged"] = pair(at(va, {"merged"}), at(vb, {"merged"}));
-    const auto correction = [](const json& view) -> json {
-      if (!at(view, {"registration"}).is_object()) return nullptr;
-      return {{"translation_mm", view["registration"].value("translation_mm", 0.0)},
-              {"rotation_deg", view["registration"].value("rotation_deg", 0.0)}};
-    };
+    v["accepted"] = pair(accepted(va), accepted(vb));
+    v["merged"] = pair(accepted(va), accepted(vb));  // a view is merged into the model when accepted
     v["correction"] = {{"original", correction(va)}, {"replay", correction(vb)}};
-    v["registered_pose"] = pose_difference(at(va, {"registration", "registered_object_T_camera"}),
-                                           at(vb, {"registration", "registered_object_T_camera"}), name + " registered pose");
-    json voxels = {{"original", at(va, {"map", "voxels"})}, {"replay", at(vb, {"map", "voxels"})}};
-    voxels["same"] = voxels["original"] == voxels["replay"];
-    v["voxels"] = voxels;
+    v["registered_pose"] = pose_difference(registered_pose(va), registered_pose(vb), name + " registered pose");
+    json counts = {{"original", voxels(va)}, {"replay", voxels(vb)}};
+    counts["same"] = counts["original"] == counts["replay"];
+    v["voxels"] = counts;
     v["plan"] = pose_difference(planned_pose(va), planned_pose(vb), name + " plan");
     for (const char* k : {"accepted", "merged", "registered_pose", "voxels", "plan"}) {
       if (!v[k]["same"].get<bool>()) differences.push_back(name + ": " + k + " differs");
     }
-    if (va.is_null() || vb.is_null()) differences.push_back(name + ": only in the " + (va.is_null() ? "replay" : "original"));
+    if (!va || !vb) differences.push_back(name + ": only in the " + (!va ? "replay" : "original"));
     views.push_back(v);
   }
   return {{"views", views}, {"differences", differences}, {"same_decisions", differences.empty()}};

@@ -71,6 +71,13 @@ void write_scan_state(const fs::path& scan_folder, const std::string& state, con
   write_json_atomic(scan, path.string());
 }
 
+std::string recorded_scan_id(const fs::path& scan_json_or_folder) {
+  const json scan = read_scan_json(scan_json_or_folder);
+  const json& settings = scan.contains("settings") ? scan["settings"] : json();
+  if (!settings.is_object() || !settings.contains("scan_id") || !settings["scan_id"].is_string()) return "";
+  return settings["scan_id"].get<std::string>();
+}
+
 std::string view_frame_file(const json& v, const fs::path& scan_json) {
   if (!v.is_object() || !v.contains("frame_file")) return "";
   const json& n = v.contains("view") ? v["view"] : json();
@@ -84,36 +91,6 @@ std::string view_frame_file(const json& v, const fs::path& scan_json) {
     throw std::invalid_argument(scan_json.string() + " view " + std::to_string(view + 1) + ": frame_file is not " + own);
   }
   return own;
-}
-
-std::vector<MergedFrame> merged_frames(const fs::path& dir, const json& scan) {
-  const std::string where = (dir / "scan.json").string();
-  std::vector<MergedFrame> frames;
-  for (const json& v : scan.value("views", json::array())) {
-    const std::string own = view_frame_file(v, where);
-    if (own.empty() || !v.value("merged", false)) continue;
-    MergedFrame f;
-    f.view = v["view"].get<int>();
-    const std::string what = where + " view " + std::to_string(f.view + 1);
-    if (v.contains("registration") && v["registration"].contains("registered_object_T_camera")) {
-      f.object_T_camera = pose_from_json(v["registration"]["registered_object_T_camera"], what + " registered pose");
-    } else if (v.contains("capture")) {
-      f.object_T_camera = pose_from_json(v["capture"].at("camera_object_T_camera"), what + " camera pose");
-    } else {
-      throw std::invalid_argument(what + ": a merged view without a camera pose");
-    }
-    f.file = dir / own;
-    frames.push_back(std::move(f));
-  }
-  if (frames.empty()) throw std::invalid_argument(where + ": no accepted view to mesh");
-  return frames;
-}
-
-void write_scan_mesh(const fs::path& dir, const json& mesh) {
-  const fs::path path = dir / "scan.json";
-  json scan = read_scan_json(path);
-  scan["mesh"] = mesh;
-  write_json_atomic(scan, path.string());
 }
 
 }  // namespace pbnbv

@@ -27,6 +27,10 @@ nlohmann::json read_scan_json(const std::filesystem::path& scan_json_or_folder);
 // format (every format has it): what `pbnbv bench` and `pbnbv scan --resume` ask of a folder
 // before reading it. Throws naming the file when it is missing or unreadable.
 nlohmann::json read_scan_status(const std::filesystem::path& scan_folder);
+// The scan id its settings name ("" when they name none: a record the launcher started with its
+// last word only, write_scan_state), of a record of this format: what `pbnbv scan --resume`
+// checks against the folder's settings.json before anything runs. Throws as read_scan_json.
+std::string recorded_scan_id(const std::filesystem::path& scan_json_or_folder);
 // Its "state" ("running", "done", "stopped", "failed"), or "" when the folder holds no readable
 // record.
 std::string recorded_state(const std::filesystem::path& scan_folder);
@@ -40,20 +44,5 @@ void write_scan_state(const std::filesystem::path& scan_folder, const std::strin
 // when the entry names none. Throws naming `scan_json` and the view when it names any other path:
 // no path is taken from the file.
 std::string view_frame_file(const nlohmann::json& view, const std::filesystem::path& scan_json);
-
-// A merged view's frame as scan.json names it.
-struct MergedFrame {
-  int view = 0;
-  std::filesystem::path file;               // DIR/frames/view_NNN.ply
-  Pose object_T_camera = Pose::Identity();  // the pose its points were placed with
-};
-
-// The merged views of the scan in `dir` whose record is `scan` (read_scan_json), in order. Throws
-// naming the file when a merged view has no pose, names a frame file that is not its own
-// (frames/view_NNN.ply), or no view was merged.
-std::vector<MergedFrame> merged_frames(const std::filesystem::path& dir, const nlohmann::json& scan);
-
-// Sets scan.json's "mesh" in the folder (`pbnbv mesh`, meshing a scan again), written atomically.
-void write_scan_mesh(const std::filesystem::path& dir, const nlohmann::json& mesh);
 
 }  // namespace pbnbv

@@ -1,5 +1,7 @@
 #include "core/scan/scan_record.hpp"
 
+#include <limits>
+
 
 #include "core/base/format.hpp"
 #include "core/base/version.hpp"
@@ -31,7 +33,7 @@ json move_json(const MoveResult& m) {
 }
 
 // scan.json's "capture" of a view that got its CLOUD.
-json capture_json(const CaptureResult& c) {
+json capture_json(const CaptureResult& c, std::size_t num_points) {
   return {{"status", c.ok ? "ok" : "failed"},
           {"request_id", c.request_id},
           {"message", c.message},
@@ -41,7 +43,7 @@ json capture_json(const CaptureResult& c) {
           {"depth_frame_seq", c.depth_frame_seq},
           {"num_valid_pixels", c.num_valid_pixels},
           {"num_cropped", c.num_cropped},
-          {"num_points", c.points.size()}};
+          {"num_points", num_points}};
 }
 
 // scan.json's "registration": the registration service's verdict, in mm and degrees.
@@ -162,7 +164,7 @@ json to_json(const ViewRecord& v) {
     view["time_s"]["capture"] = v.capture->capture_s;
     view["time_s"]["cloud"] = v.capture->process_s;
     view["time_s"]["capture_round_trip"] = v.capture_round_trip_s;
-    view["capture"] = capture_json(*v.capture);
+    view["capture"] = capture_json(*v.capture, v.capture_points);
   }
   if (v.registration) {
     view["registration"] = registration_json(*v.registration);
@@ -228,58 +230,77 @@ json to_json(const ScanStop& s) {
   return j;
 }
 
-ScanRecord::ScanRecord(fs::path out, const ScanSettings& settings)
-    : out_(std::move(out)), views_planned_(settings.views) {
+std::vector<double> new_surface_figures(const std::vector<ViewRecord>& views) {
+  std::vector<double> out;
+  for (const ViewRecord& v : views) {
+    if (!v.registration || v.registration->frame_file.empty()) continue;  // never captured or registered
+    const RegisteredCloud& r = *v.registration;
+    out.push_back(r.accepted && r.new_surface ? r.new_surface->percent_of_model() : std::numeric_limits<double>::quiet_NaN());
+  }
+  return out;
+}
+
+ScanRecord::ScanRecord(fs::path out, const ScanSettings& settings) : out_(std::move(out)) {
   fs::create_directories(out_);
-  report_["format_version"] = kScanFormatVersion;
-  report_["pbnbv_version"] = std::string(pbnbv_version());
-  report_["settings"] = to_json(settings);
-  report_["views"] = json::array();
+  record_.pbnbv_version = std::string(pbnbv_version());
+  record_.settings = settings;
+  record_.status.views_planned = settings.views;
 }
 
 void ScanRecord::set_ring_plan(double radius_m, double elevation_deg) {
-  report_["plan"] = {{"planner", "ring"}, {"radius_m", radius_m}, {"elevation_deg", elevation_deg}};
+  record_.plan = {{"planner", "ring"}, {"radius_m", radius_m}, {"elevation_deg", elevation_deg}};
 }
 
 void ScanRecord::set_next_best_view_plan(const std::string& planner, const Pose& initial_view) {
-  report_["plan"] = {{"planner", planner}, {"initial_view", to_json(initial_view)}};
+  record_.plan = {{"planner", planner}, {"initial_view", to_json(initial_view)}};
+}
+
+void ScanRecord::set_mesh(const MeshSummary& mesh) {
+  record_.mesh = mesh;
+  record_.mesh_error.clear();
+}
+
+void ScanRecord::set_no_mesh(const std::string& why) {
+  record_.mesh.reset();
+  record_.mesh_error = why.empty() ? std::string("no mesh") : why;
 }
 
 void ScanRecord::add_view(const ViewRecord& v, int views_done, double elapsed_s) {
-  report_["views"].push_back(to_json(v));
+  record_.views.push_back(v);
   write("running", "", views_done, elapsed_s);
 }
 
 void ScanRecord::continue_from_folder(const std::string& scan_id) {
   const fs::path path = out_ / "scan.json";
   if (!fs::exists(path)) throw std::invalid_argument("cannot resume: " + path.string() + " does not exist");
-  json before = read_scan_json(path);
-  if (!before.contains("settings") || before["settings"].value("scan_id", "") != scan_id) {
+  const json before = read_scan_json(path);
+  if (!before.contains("settings") || !before["settings"].is_object() || before["settings"].value("scan_id", "") != scan_id) {
     throw std::invalid_argument("cannot resume: " + path.string() + " is not a record of scan " + scan_id);
   }
-  report_["views"] = before.value("views", json::array());
-  if (before.contains("plan")) report_["plan"] = before["plan"];
-  if (before.contains("status")) report_["status"] = before["status"];
-  if (before.contains("status") && before["status"].is_object() && before["status"].contains("num_points")) {
-    model_points_ = static_cast<std::size_t>(
-        integer_from_json(before["status"]["num_points"], 0, int64_t{1} << 40, path.string() + " status num_points"));
-  }
+  RecordedScan r = recorded_scan_from_json(before, path.string());
+  record_.views = std::move(r.views);
+  record_.plan = std::move(r.plan);
+  const int views_planned = record_.status.views_planned;
+  record_.status = r.status;
+  record_.status.views_planned = views_planned;
 }
 
-void ScanRecord::set_stop(const ScanStop& stop) { report_["stop"] = to_json(stop); }
+void ScanRecord::set_stop(const ScanStop& stop) { record_.stop = stop; }
 
-void ScanRecord::set_planning_stopped(const PlanRecord& p) { report_["planning_stopped"] = to_json(p); }
+void ScanRecord::set_planning_stopped(const PlanRecord& p) { record_.planning_stopped = p; }
 
 void ScanRecord::set_replay_of(const std::string& recorded, int views) {
-  report_["replay_of"] = recorded;
-  views_planned_ = views;
+  record_.replay_of = recorded;
+  record_.status.views_planned = views;
 }
 
 void ScanRecord::write(const std::string& state, const std::string& message, int views_done, double elapsed_s) {
-  report_["status"] = {{"state", state},           {"message", message},        {"views_done", views_done},
-                       {"views_planned", views_planned_}, {"elapsed_s", elapsed_s}, {"num_points", model_points_},
-                       {"next_request_id", next_request_id_}, {"answers_refused", answers_refused_}};
-  write_json_atomic(report_, (out_ / "scan.json").string());
+  ScanStatusRecord& s = record_.status;
+  s.state = state;
+  s.message = message;
+  s.views_done = views_done;
+  s.elapsed_s = elapsed_s;
+  write_json_atomic(to_json(record_), (out_ / "scan.json").string());
 }
 
 }  // namespace pbnbv

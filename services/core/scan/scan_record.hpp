@@ -55,7 +55,8 @@ struct ViewRecord {
   bool move_unanswered = false;              // no MOVE_RESULT before the deadline
   std::optional<MoveResult> move;
   bool capture_unanswered = false;           // no CLOUD after every attempt
-  std::optional<CaptureResult> capture;
+  std::optional<CaptureResult> capture;      // its points are not recorded: their count is
+  std::size_t capture_points = 0;            // the capture's points
   std::optional<RegisteredCloud> registration;  // with the files written for the view (frame, depth
                                                 // image) and what it added to the model
   std::optional<VoxelMapSummary> map;
@@ -71,6 +72,32 @@ struct ScanStop {
   nlohmann::json figures;  // what the rule read (surface: its parameters and the window's figures)
 };
 
+// scan.json's "status".
+struct ScanStatusRecord {
+  std::string state;  // "running", "done", "stopped", "failed"
+  std::string message;
+  int views_done = 0, views_planned = 0;
+  double elapsed_s = 0;
+  std::size_t num_points = 0;    // in the model (cloud.ply) after the last view
+  int64_t next_request_id = 1;   // request ids used so far end below this
+  int answers_refused = 0;
+};
+
+// scan.json as a whole, read back into the types it is written from: what a resume, a replay,
+// the view page, evaluate and the bench read (read_scan_record), and what to_json writes again.
+struct RecordedScan {
+  std::string pbnbv_version;        // of the pbnbv that wrote it (format_version is checked on reading)
+  ScanSettings settings;
+  nlohmann::json plan;              // the ring's geometry or the planner and first view (null: none yet)
+  std::vector<ViewRecord> views;
+  std::optional<ScanStop> stop;
+  std::optional<PlanRecord> planning_stopped;
+  std::string replay_of;            // a replay: the recording's scan.json
+  std::optional<MeshSummary> mesh;
+  std::string mesh_error;           // no mesh: why
+  ScanStatusRecord status;
+};
+
 // scan.json's entries for a view, a plan and a stop.
 nlohmann::json to_json(const ViewRecord& v);
 nlohmann::json to_json(const PlanRecord& p);
@@ -78,7 +105,40 @@ nlohmann::json to_json(const ScanStop& s);
 // scan.json's "mesh": file, also, method, vertices, triangles, watertight, boundary_loops,
 // hole_boundary_length_m, area_m2, volume_m3 (null unless watertight), seconds, settings, ...
 nlohmann::json to_json(const MeshSummary& m);
+nlohmann::json to_json(const RecordedScan& r);
 
+// The inverses, each field checked (type, range; a frame or depth file that is not the view's
+// own is refused): std::invalid_argument naming `where` (the file and the entry) and the field.
+ViewRecord view_record_from_json(const nlohmann::json& j, const std::string& where);
+PlanRecord plan_record_from_json(const nlohmann::json& j, const std::string& where);
+ScanStop scan_stop_from_json(const nlohmann::json& j, const std::string& where);
+MeshSummary mesh_summary_from_json(const nlohmann::json& j, const std::string& where);
+RecordedScan recorded_scan_from_json(const nlohmann::json& j, const std::string& where);
+// A scan folder's (or the file's) scan.json through read_scan_json (its format) into its types.
+RecordedScan read_scan_record(const std::filesystem::path& scan_json_or_folder);
+
+// A merged view's frame: its file in the scan's folder and the pose its points were placed with.
+struct MergedFrame {
+  int view = 0;
+  std::filesystem::path file;               // DIR/frames/view_NNN.ply
+  Pose object_T_camera = Pose::Identity();
+};
+// The merged views of the scan recorded in `scan`, folder `dir`, in order. Throws naming the file
+// when no view was merged.
+std::vector<MergedFrame> merged_frames(const RecordedScan& scan, const std::filesystem::path& dir);
+// The poses each recorded view moved to, in order: its failed moves, then the one it reached (a
+// replay moves to them again).
+std::vector<std::vector<Pose>> recorded_attempts(const RecordedScan& scan);
+// Sets the folder's scan.json "mesh" (`pbnbv mesh`, meshing a finished scan again), read and
+// written through its types.
+void write_scan_mesh(const std::filesystem::path& dir, const MeshSummary& mesh);
+
+// What each view added to the model (percent_of_model) for the views the registration answered,
+// NaN where the view was not merged: the figures the surface stop rule reads, in view order.
+std::vector<double> new_surface_figures(const std::vector<ViewRecord>& views);
+
+// The coordinator's scan.json: a RecordedScan kept in memory and written whole (atomically) at
+// every view and at the end. The only writer of scan.json.
 class ScanRecord {
  public:
   // A record of the scan `settings` in folder `out` (created). Nothing is written until the first
@@ -89,9 +149,10 @@ class ScanRecord {
   void set_ring_plan(double radius_m, double elevation_deg);
   void set_next_best_view_plan(const std::string& planner, const Pose& initial_view);
 
-  // scan.json's "mesh": the registration service's answer to the scan's mesh request, or
-  // {"error": why} when there is no mesh (written with the next write).
-  void set_mesh(const nlohmann::json& mesh) { report_["mesh"] = mesh; }
+  // scan.json's "mesh": the registration service's mesh of the scan, or why there is none
+  // (written with the next write).
+  void set_mesh(const MeshSummary& mesh);
+  void set_no_mesh(const std::string& why);
 
   // Appends a view to "views" and writes scan.json with state "running".
   void add_view(const ViewRecord& v, int views_done, double elapsed_s);
@@ -103,26 +164,24 @@ class ScanRecord {
   void write(const std::string& state, const std::string& message, int views_done, double elapsed_s);
 
   // Points in the model (cloud.ply) after the last view: the registration service's count.
-  std::size_t num_points() const { return model_points_; }
-  void set_model_points(std::size_t n) { model_points_ = n; }
+  std::size_t num_points() const { return record_.status.num_points; }
+  void set_model_points(std::size_t n) { record_.status.num_points = n; }
   // Request ids used so far end below this (written in scan.json's status, so that a resumed
   // coordinator never reuses one a service still has an answer for).
-  void set_next_request_id(int64_t id) { next_request_id_ = id; }
+  void set_next_request_id(int64_t id) { record_.status.next_request_id = id; }
   // Answers that carried an outstanding request's id but were refused (a field out of range for
   // what was asked): scan.json's status "answers_refused".
-  void set_answers_refused(int n) { answers_refused_ = n; }
-  // Continues the record in its folder: scan.json as written so far (a resumed scan). Throws naming the file when scan.json is missing or not a scan of `scan_id`.
+  void set_answers_refused(int n) { record_.status.answers_refused = n; }
+  // Continues the record in its folder: scan.json as written so far, read into its types (a
+  // resumed scan). Throws naming the file when scan.json is missing, not a scan of `scan_id`, or
+  // a field of it is not what this pbnbv writes.
   void continue_from_folder(const std::string& scan_id);
-  const nlohmann::json& report() const { return report_; }
+  const RecordedScan& record() const { return record_; }
   std::filesystem::path scan_json_path() const { return out_ / "scan.json"; }
 
  private:
   std::filesystem::path out_;
-  int views_planned_;
-  nlohmann::json report_;
-  std::size_t model_points_ = 0;
-  int64_t next_request_id_ = 1;
-  int answers_refused_ = 0;
+  RecordedScan record_;
 };
 
 }  // namespace pbnbv

@@ -89,70 +89,58 @@ constexpr int64_t kMaxRequestId = int64_t{1} << 62;
 }  // namespace
 
 void ScanSequencer::resume(double now_s) {
-  record_.continue_from_folder(s_.scan_id);
-  const nlohmann::json& report = record_.report();
-  const nlohmann::json views = report.value("views", nlohmann::json::array());
+  record_.continue_from_folder(s_.scan_id);  // read into its types, every field checked
+  const RecordedScan& recorded = record_.record();
   const std::string file = record_.scan_json_path().string();
   int64_t max_id = 0;
-  int entry = 0;
-  for (const nlohmann::json& v : views) {
-    ++entry;
+  for (const ViewRecord& v : recorded.views) {
     // Each entry's view below the scan's view count: a folder that says otherwise was not
     // written by a scan of these settings.
-    const int i = static_cast<int>(integer_from_json(v.is_object() && v.contains("view") ? v["view"] : nlohmann::json(), 0,
-                                                   s_.views - 1, file + " views entry " + std::to_string(entry) + " view"));
-    const std::string at = file + " view " + std::to_string(i + 1);
-    for (const nlohmann::json& f : v.value("failed_moves", nlohmann::json::array())) {
-      if (f.contains("object_T_camera")) done_.excluded.push_back(pose_from_json(f["object_T_camera"], at + " failed move"));
+    const int i = v.view;
+    if (i >= s_.views) {
+      throw std::invalid_argument(file + ": view " + std::to_string(i + 1) + " is beyond the scan's " + std::to_string(s_.views) + " views");
     }
+    for (const FailedMove& f : v.failed_moves) done_.excluded.push_back(f.object_T_camera);
     Pose reached = Pose::Identity();
-    if (v.contains("move") && v["move"].value("status", "") == "reached") {
-      reached = pose_from_json(v["move"].at("reached_object_T_camera"), at + " move");
-      for (int k = 0; k < 6; ++k) done_.joints_rad[k] = v["move"].at("joint_position_rad").at(k).get<double>();
-      done_.turntable_rad = v["move"].value("turntable_angle_rad", 0.0);
+    if (v.move && v.move->status == MoveStatus::kReached) {
+      reached = v.move->reached_object_T_camera;
+      done_.joints_rad = v.move->joint_position_rad;
+      done_.turntable_rad = v.move->turntable_angle_rad;
     }
-    if (v.contains("plan") && v["plan"].contains("first_quality_px") && v["plan"]["first_quality_px"].is_number() &&
-        !std::isfinite(done_.first_quality)) {
-      done_.first_quality = v["plan"]["first_quality_px"].get<double>();
+    if (v.plan && std::isfinite(v.plan->plan.first_quality) && !std::isfinite(done_.first_quality)) {
+      done_.first_quality = v.plan->plan.first_quality;
     }
-    if (v.contains("capture")) {
-      const nlohmann::json& c = v["capture"];
-      if (c.contains("request_id")) {
-        const int64_t id = integer_from_json(c["request_id"], 0, kMaxRequestId, at + " capture request_id");
-        max_id = std::max(max_id, id);
-        capture_request_ = capture_request(i, id, 0);  // the last one stays
-      }
-      if (c.value("status", "") != "ok") done_.excluded.push_back(reached);
+    if (v.capture) {
+      max_id = std::max(max_id, v.capture->request_id);
+      capture_request_ = capture_request(i, v.capture->request_id, 0);  // the last one stays
+      if (!v.capture->ok) done_.excluded.push_back(reached);
     }
-    if (v.contains("map")) {
+    if (v.map) {
       done_.latest_map = i;
       done_.latest_map_request = capture_request_.request_id;
       ++done_.views_done;
-      if (v["map"].value("updated", false)) {
+      if (v.map->updated && v.registration) {
         done_.last_map = i;
-        done_.views_taken.push_back(pose_from_json(v.at("registration").at("registered_object_T_camera"), at + " registration"));
+        done_.views_taken.push_back(v.registration->cloud.object_T_camera);
       } else {
         done_.excluded.push_back(reached);
       }
     }
     next_view_after_ready_ = i + 1;
   }
-  const nlohmann::json status = report.value("status", nlohmann::json::object());
+  const ScanStatusRecord& status = recorded.status;
   // Past every id recorded, with room for those the interrupted view sent but did not record.
-  const int64_t recorded_next = status.contains("next_request_id")
-                                    ? integer_from_json(status["next_request_id"], 0, kMaxRequestId, file + " status next_request_id")
-                                    : 1;
-  done_.next_request_id = std::max<int64_t>(recorded_next, max_id + 1) + 1000;
+  done_.next_request_id = std::max<int64_t>(status.next_request_id, max_id + 1) + 1000;
   record_.set_next_request_id(done_.next_request_id);
-  const double elapsed_s = status.value("elapsed_s", 0.0);
+  const double elapsed_s = status.elapsed_s;
   if (!std::isfinite(elapsed_s) || elapsed_s < 0 || elapsed_s > 1e9) {
     throw std::invalid_argument(file + ": status elapsed_s = " + std::to_string(elapsed_s) + " is not a duration (0..1e9 s)");
   }
   t_start_s_ = now_s - elapsed_s;
-  if (status.value("state", "") == "done") {
+  if (status.state == "done") {
     phase_ = Phase::kFinished;
     state_ = ScanState::kDone;
-    summary_ = "scan already complete: " + status.value("message", std::string()) + " -> " + file;
+    summary_ = "scan already complete: " + status.message + " -> " + file;
     return;
   }
   phase_ = Phase::kWaitingReady;
@@ -218,8 +206,9 @@ void ScanSequencer::tick(double now_s) {
       break;
     case Phase::kMeshing:
       if (awaited_.expired(now_s)) {
-        return meshed({{"error", "the registration service sent no MESH_RESULT in " + fixed(awaited_.deadline_s - awaited_.since_s, 0) +
-                                     " s (the mesh request sent " + std::to_string(awaited_.sends) + " times)"}},
+        return meshed(std::nullopt,
+                      "the registration service sent no MESH_RESULT in " + fixed(awaited_.deadline_s - awaited_.since_s, 0) +
+                          " s (the mesh request sent " + std::to_string(awaited_.sends) + " times)",
                       now_s);
       }
       break;
@@ -355,13 +344,13 @@ void ScanSequencer::on(const VoxelMapSummary& m, double now_s) {
 
 void ScanSequencer::on(const MeshResult& m, double now_s) {
   if (m.scan_id != s_.scan_id || phase_ != Phase::kMeshing || m.request_id != awaited_.request_id) return;
-  if (!m.ok) return meshed({{"error", m.message}}, now_s);
+  if (!m.ok) return meshed(std::nullopt, m.message, now_s);
   const std::size_t merged = std::get<MeshRequest>(*awaited_.request).views.size();
   if (m.mesh.frames > merged) {
     return refuse("MESH_RESULT of request " + std::to_string(m.request_id),
                   "it fused " + std::to_string(m.mesh.frames) + " frames of " + std::to_string(merged) + " asked for");
   }
-  meshed(to_json(m.mesh), now_s);
+  meshed(m.mesh, "", now_s);
 }
 
 void ScanSequencer::on(const EllipsoidSetSummary& e, double /*now_s*/) {
@@ -566,6 +555,9 @@ void ScanSequencer::begin_capture(int64_t not_before_utime, double now_s) {
 
 void ScanSequencer::captured(const CaptureResult& c, double now_s) {
   view_.capture = c;
+  view_.capture_points = c.points.size();
+  view_.capture->points = PointCloud();  // counted; the registration service keeps the points
+  view_.capture->normals.clear();
   view_.capture_round_trip_s = now_s - t_step_s_;
   if (!c.ok) {
     progress("capture failed: " + c.message, true);
@@ -618,7 +610,7 @@ void ScanSequencer::mapped(double now_s) {
                               : reg.refined ? "registered (" + fixed(reg.translation_m * 1e3, 2) + " mm, " +
                                                   fixed(reg.rotation_deg, 2) + " deg)"
                                             : std::string("kinematic pose kept");
-  std::string line = "done: " + std::to_string(view_.capture->points.size()) + " points, " +
+  std::string line = "done: " + std::to_string(view_.capture_points) + " points, " +
                      std::to_string(record_.num_points()) + " in the model; " + verdict + ", " +
                      std::to_string(m.num_frontier) + " frontier voxels; move " +
                      fixed(moved_.move_s + moved_.settle_s, 2) + " s, capture " + fixed(view_.capture->capture_s, 2) +
@@ -632,7 +624,7 @@ void ScanSequencer::mapped(double now_s) {
 
 bool ScanSequencer::stopped_by_surface(double now_s) {
   if (s_.stop_rule != StopRule::kSurface || replay_ || iteration_ + 1 >= s_.views) return false;
-  const std::vector<double> figures = new_surface_figures(record_.report().at("views"));
+  const std::vector<double> figures = new_surface_figures(record_.record().views);
   const std::optional<SurfaceStopDecision> d = surface_stop(figures, s_.surface_rule);
   if (!d) return false;
   nlohmann::json used = to_json(s_.surface_rule);
@@ -676,10 +668,10 @@ void ScanSequencer::begin_mesh(const std::string& message, double now_s) {
   MeshRequest r;
   r.scan_id = s_.scan_id;
   r.request_id = next_request_id();
-  for (const nlohmann::json& v : record_.report().at("views")) {
-    if (v.value("merged", false)) r.views.push_back(v.at("view").get<int>());
+  for (const ViewRecord& v : record_.record().views) {
+    if (v.registration && v.registration->accepted && !v.registration->frame_file.empty()) r.views.push_back(v.view);
   }
-  if (r.views.empty()) return meshed({{"error", "no view was merged into the model: nothing to mesh"}}, now_s);
+  if (r.views.empty()) return meshed(std::nullopt, "no view was merged into the model: nothing to mesh", now_s);
   r.camera = s_.camera;
   r.point_spacing_m = s_.voxel_m;
   set_status(ScanState::kIntegrating, "meshing the scan (" + std::to_string(r.views.size()) + " views)", now_s);
@@ -687,15 +679,17 @@ void ScanSequencer::begin_mesh(const std::string& message, double now_s) {
   send(r, r.request_id, t_.resend_s, now_s + t_.mesh_s, now_s);
 }
 
-void ScanSequencer::meshed(const nlohmann::json& m, double now_s) {
-  record_.set_mesh(m);
-  outputs_.push_back(ProgressLine{
-      m.contains("error") ? "no mesh: " + m["error"].get<std::string>()
-                          : "mesh.ply: " + std::to_string(m["triangles"].get<std::size_t>()) + " triangles, " +
-                                (m["watertight"].get<bool>() ? std::string("watertight")
-                                                             : std::to_string(m["boundary_loops"].get<std::size_t>()) + " holes") +
-                                ", " + fixed(m["seconds"].get<double>(), 2) + " s",
-      true});
+void ScanSequencer::meshed(const std::optional<MeshSummary>& m, const std::string& why_not, double now_s) {
+  if (m) {
+    record_.set_mesh(*m);
+    outputs_.push_back(ProgressLine{"mesh.ply: " + std::to_string(m->triangles) + " triangles, " +
+                                        (m->watertight ? std::string("watertight") : std::to_string(m->boundary_loops) + " holes") +
+                                        ", " + fixed(m->seconds, 2) + " s",
+                                    true});
+  } else {
+    record_.set_no_mesh(why_not);
+    outputs_.push_back(ProgressLine{"no mesh: " + why_not, true});
+  }
   conclude(ScanState::kDone, done_message_, now_s);
 }
 

@@ -207,7 +207,8 @@ class ScanSequencer {
   // Ends the scan; one that is done asks for its mesh first (begin_mesh), then concludes.
   void finish(ScanState state, const std::string& message, double now_s);
   void begin_mesh(const std::string& message, double now_s);
-  void meshed(const nlohmann::json& mesh, double now_s);  // records the mesh (or why none), concludes
+  // Records the mesh, or why there is none, and concludes.
+  void meshed(const std::optional<MeshSummary>& mesh, const std::string& why_not, double now_s);
   void conclude(ScanState state, const std::string& message, double now_s);
 
   void send(const ScanOutput& request, int64_t request_id, double resend_s, double deadline_s, double now_s);

@@ -13,6 +13,7 @@
 
 #include "core/base/version.hpp"
 #include "core/scan/scan_file.hpp"
+#include "core/scan/scan_record.hpp"
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
@@ -82,14 +83,26 @@ class EvaluateCommand : public testing::TempDirTest {
   std::string table_;
 
   // A finished twin scan in miniature in dir_/name: the true mesh, one merged frame, the cloud,
-  // and scan.json holding `record` with that view.
-  fs::path mini_scan(const std::string& name, json record) {
+  // and scan.json recording that view (written through its types), with `patch` merged into it.
+  fs::path mini_scan(const std::string& name, const json& patch) {
     const fs::path scan = dir_ / name;
     fs::create_directories(scan / "frames");
     write_stl_binary(slab(), (scan / "object.stl").string());
     write_ply(grid_2mm_above(), (scan / "frames" / "view_001.ply").string());
     write_ply(grid_2mm_above(), (scan / "cloud.ply").string());
-    record["views"] = {{{"merged", true}, {"frame_file", "frames/view_001.ply"}}};
+    RecordedScan r;
+    r.pbnbv_version = std::string(pbnbv_version());
+    r.settings.scan_id = "mini-0123456789abcdef";
+    ViewRecord v;
+    v.capture = CaptureResult{};
+    v.capture->ok = true;
+    v.registration = RegisteredCloud{};
+    v.registration->accepted = true;
+    v.registration->frame_file = "frames/view_001.ply";
+    v.map = VoxelMapSummary{};
+    r.views = {v};
+    json record = to_json(r);
+    record.merge_patch(patch);
     write_json_atomic(record, (scan / "scan.json").string());
     return scan;
   }

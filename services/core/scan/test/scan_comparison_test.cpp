@@ -1,5 +1,5 @@
-// A replay against its recording, from two hand-written scan.json records: the poses a replay
-// moves to, and every decision compared (accepted, registered pose, voxel counts, planned view).
+// A replay against its recording, from two hand-made records: every decision compared (accepted,
+// registered pose, voxel counts, planned view).
 #include "core/scan/scan_comparison.hpp"
 
 #include <gtest/gtest.h>
@@ -13,57 +13,61 @@ using nlohmann::json;
 
 namespace {
 
-json pose(double x, double y, double z, double angle_z_rad = 0) {
+Pose pose(double x, double y, double z, double angle_z_rad = 0) {
   Pose p = Pose::Identity();
   p.translation() = Eigen::Vector3d(x, y, z);
   p.linear() = Eigen::AngleAxisd(angle_z_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  return to_json(p);
+  return p;
 }
 
-json voxels(int occupied, int frontier) {
-  return {{"occupied", occupied}, {"frontier", frontier}, {"unknown", 300}, {"empty", 400}, {"none", 5}};
+VoxelMapSummary voxels(int occupied, int frontier) {
+  VoxelMapSummary m;
+  m.num_occupied = occupied;
+  m.num_frontier = frontier;
+  m.num_unknown = 300;
+  m.num_empty = 400;
+  m.num_none = 5;
+  return m;
+}
+
+RegisteredCloud registration(bool accepted, double translation_mm, double rotation_deg, const Pose& registered) {
+  RegisteredCloud r;
+  r.accepted = accepted;
+  r.translation_m = translation_mm * 1e-3;
+  r.rotation_deg = rotation_deg;
+  r.cloud.object_T_camera = registered;
+  return r;
 }
 
 // A two-view record: view 1 the initial view, view 2 planned at `planned`, reached at option 1
 // after option 0 failed.
-json record(const json& planned, int occupied_2, bool accepted_2) {
-  json v1 = {{"view", 0},
-             {"plan", {{"planner", "initial view"}}},
-             {"option", 0},
-             {"requested_object_T_camera", pose(0.9, 0, 0.3)},
-             {"registration", {{"accepted", true}, {"translation_mm", 0.0}, {"rotation_deg", 0.0},
-                               {"registered_object_T_camera", pose(0.9, 0, 0.3)}}},
-             {"map", {{"voxels", voxels(20, 10)}}},
-             {"merged", true}};
-  json v2 = {{"view", 1},
-             {"plan", {{"outcome", "view"}, {"object_T_camera", planned}}},
-             {"failed_moves", {{{"option", 0}, {"status", "unreachable"}, {"object_T_camera", planned}}}},
-             {"option", 1},
-             {"requested_object_T_camera", pose(0, 0.9, 0.3)},
-             {"registration", {{"accepted", accepted_2}, {"translation_mm", 1.5}, {"rotation_deg", 0.25},
-                               {"registered_object_T_camera", pose(0, 0.9015, 0.3)}}},
-             {"map", {{"voxels", voxels(occupied_2, 8)}}},
-             {"merged", accepted_2}};
-  return {{"views", {v1, v2}}};
+RecordedScan record(const Pose& planned, int occupied_2, bool accepted_2) {
+  ViewRecord v1;
+  v1.view = 0;
+  v1.initial_view = true;
+  v1.option = 0;
+  v1.requested_object_T_camera = pose(0.9, 0, 0.3);
+  v1.registration = registration(true, 0, 0, pose(0.9, 0, 0.3));
+  v1.map = voxels(20, 10);
+  ViewRecord v2;
+  v2.view = 1;
+  v2.plan = PlanRecord{};
+  v2.plan->plan.outcome = PlanOutcome::kView;
+  v2.plan->plan.object_T_camera = planned;
+  v2.failed_moves = {{0, planned, MoveStatus::kUnreachable, "below the table"}};
+  v2.option = 1;
+  v2.requested_object_T_camera = pose(0, 0.9, 0.3);
+  v2.registration = registration(accepted_2, 1.5, 0.25, pose(0, 0.9015, 0.3));
+  v2.map = voxels(occupied_2, 8);
+  RecordedScan r;
+  r.views = {v1, v2};
+  return r;
 }
 
 }  // namespace
 
-TEST(ScanComparison, TheRecordedPosesAreEachViewsFailedMovesThenTheOneReached) {
-  const std::vector<std::vector<Pose>> a = recorded_attempts(record(pose(0.1, 0.2, 0.9), 30, true), "scan.json");
-  ASSERT_EQ(a.size(), 2u);
-  ASSERT_EQ(a[0].size(), 1u);
-  EXPECT_TRUE(a[0][0].translation().isApprox(Eigen::Vector3d(0.9, 0, 0.3)));
-  ASSERT_EQ(a[1].size(), 2u);
-  EXPECT_TRUE(a[1][0].translation().isApprox(Eigen::Vector3d(0.1, 0.2, 0.9)));
-  EXPECT_TRUE(a[1][1].translation().isApprox(Eigen::Vector3d(0, 0.9, 0.3)));
-  json bad = record(pose(0.1, 0.2, 0.9), 30, true);
-  bad["views"][1]["requested_object_T_camera"].erase("quat_wxyz");
-  pbnbv::testing::expect_error([&] { recorded_attempts(bad, "orig/scan.json"); }, "orig/scan.json view 2 requested pose");
-}
-
 TEST(ScanComparison, TheSameRecordTwiceHasTheSameDecisions) {
-  const json r = record(pose(0.1, 0.2, 0.9), 30, true);
+  const RecordedScan r = record(pose(0.1, 0.2, 0.9), 30, true);
   const json c = compare_scans(r, r);
   EXPECT_TRUE(c["same_decisions"].get<bool>()) << c.dump(2);
   EXPECT_EQ(c["differences"], json::array());
@@ -79,8 +83,8 @@ TEST(ScanComparison, TheSameRecordTwiceHasTheSameDecisions) {
 TEST(ScanComparison, EachDifferingDecisionIsNamedWithItsView) {
   // The replay plans view 2 2 mm further along x and turned 0.001 rad; one more occupied voxel;
   // registration rejects view 2.
-  const json a = record(pose(0.1, 0.2, 0.9), 30, true);
-  const json b = record(pose(0.102, 0.2, 0.9, 0.001), 31, false);
+  const RecordedScan a = record(pose(0.1, 0.2, 0.9), 30, true);
+  const RecordedScan b = record(pose(0.102, 0.2, 0.9, 0.001), 31, false);
   const json c = compare_scans(a, b);
   EXPECT_FALSE(c["same_decisions"].get<bool>());
   EXPECT_EQ(c["differences"], json({"view 2: accepted differs", "view 2: merged differs", "view 2: voxels differs",
@@ -92,7 +96,7 @@ TEST(ScanComparison, EachDifferingDecisionIsNamedWithItsView) {
   EXPECT_TRUE(compare_scans(a, record(pose(0.1 + 0.9e-6, 0.2, 0.9, 0.9e-6), 30, true))["same_decisions"].get<bool>());
   EXPECT_FALSE(compare_scans(a, record(pose(0.1 + 2e-6, 0.2, 0.9), 30, true))["same_decisions"].get<bool>());
   // A view only one of them has.
-  json shorter = a;
-  shorter["views"].erase(1);
+  RecordedScan shorter = a;
+  shorter.views.pop_back();
   EXPECT_EQ(compare_scans(a, shorter)["differences"].back(), "view 2: only in the original");
 }

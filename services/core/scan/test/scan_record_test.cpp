@@ -48,8 +48,8 @@ TEST_F(ScanRecordTest, AViewEntryHasASectionPerStepReached) {
   v.move_round_trip_s = 2.5;
   CaptureResult c;
   c.ok = true;
-  c.points.resize(3);
   v.capture = c;
+  v.capture_points = 3;
   v.capture_round_trip_s = 1;
   json j = to_json(v);
   EXPECT_EQ(j["view"], 2);

@@ -1191,8 +1191,14 @@ TEST_F(ScanSequencerTest, ResumingRefusesNumbersOutOfTheirRange) {
     std::string expected;
   };
   const std::vector<Case> cases = {
-      {[](json& j) { j["views"][1]["view"] = 2147483647; }, "views entry 2 view = 2147483647 is not a whole number in 0..2"},
-      {[](json& j) { j["views"][0]["view"] = 0.5; }, "views entry 1 view = 0.5 is not a whole number in 0..2"},
+      {[](json& j) { j["views"][1]["view"] = 2147483647; }, "views[1] view = 2147483647 is not a whole number in 0..999"},
+      {[](json& j) { j["views"][0]["view"] = 0.5; }, "views[0] view = 0.5 is not a whole number in 0..999"},
+      {[](json& j) {
+         j["views"][1]["view"] = 5;  // within what a scan may have, beyond this one's (its files renamed too)
+         j["views"][1]["frame_file"] = "frames/view_006.ply";
+         j["views"][1]["depth_file"] = "depth/view_006.png";
+       },
+       "view 6 is beyond the scan's 3 views"},
       {[](json& j) { j["views"][1]["capture"]["request_id"] = 9223372036854775807LL; },
        "view 2 capture request_id = 9223372036854775807 is not a whole number in 0..4611686018427387904"},
       {[](json& j) { j["status"]["next_request_id"] = -5; }, "status next_request_id = -5 is not a whole number"},
@@ -1207,6 +1213,104 @@ TEST_F(ScanSequencerTest, ResumingRefusesNumbersOutOfTheirRange) {
     EXPECT_NE(what.find(file), std::string::npos) << what;
     EXPECT_NE(what.find(c.expected), std::string::npos) << what;
   }
+}
+
+}  // namespace
+
+namespace {
+
+// Two JSON documents equal, numbers within a relative 1e-12 (a field written in mm or degrees
+// from m or rad comes back through the inverse unit).
+void expect_same_json(const json& a, const json& b, const std::string& at = "scan.json") {
+  if (a.is_number() && b.is_number()) {
+    const double x = a.get<double>(), y = b.get<double>();
+    EXPECT_LE(std::abs(x - y), 1e-12 * std::max(1.0, std::abs(x))) << at << ": " << x << " != " << y;
+    return;
+  }
+  ASSERT_EQ(a.type_name(), std::string(b.type_name())) << at;
+  if (a.is_object()) {
+    for (auto it = a.begin(); it != a.end(); ++it) {
+      ASSERT_TRUE(b.contains(it.key())) << at << "." << it.key() << " is not read back";
+      expect_same_json(it.value(), b[it.key()], at + "." + it.key());
+    }
+    for (auto it = b.begin(); it != b.end(); ++it) EXPECT_TRUE(a.contains(it.key())) << at << "." << it.key() << " added";
+  } else if (a.is_array()) {
+    ASSERT_EQ(a.size(), b.size()) << at;
+    for (std::size_t i = 0; i < a.size(); ++i) expect_same_json(a[i], b[i], at + "[" + std::to_string(i) + "]");
+  } else {
+    EXPECT_EQ(a, b) << at;
+  }
+}
+
+// scan.json read back into its types and written again is the file as it was, every section of
+// every kind of view: planned (with ellipsoids), a view the rig could not reach first, a rejected
+// registration, a failed capture, the stop, the mesh, the status.
+TEST_F(ScanSequencerTest, TheRecordReadsBackIntoItsTypesAndWritesTheSameFile) {
+  const Pose below = view_from(0.0, 0.0, -0.7);
+  scorer = [&](const PlanRequest& r) { return make_plan(r, r.iteration == 1 ? below : view_from(0, 0.7, 0.3), {view_from(0.7, 0, 0.3)}); };
+  motion = [inner = motion](const MoveRequest& r) {
+    std::optional<MoveResult> m = inner(r);
+    if (r.object_T_camera.translation().z() < 0) {
+      m->status = MoveStatus::kUnreachable;
+      m->reason = "no inverse kinematics solution";
+    }
+    return m;
+  };
+  registration = [inner = registration](const CaptureResult& c) {
+    std::optional<RegisteredCloud> r = inner(c);
+    if (c.iteration == 2) {
+      r->accepted = false;
+      r->reason = "rejected: overlap 0.1";
+    }
+    return r;
+  };
+  camera = [inner = camera](const CaptureRequest& r) {
+    std::optional<CaptureResult> c = inner(r);
+    if (r.iteration == 3) {
+      c->ok = false;
+      c->message = "no DEPTH_FRAME for trigger 12 after 3 tries";
+      c->points.clear();
+    }
+    return c;
+  };
+  start(test_settings("pbnbv", 5));
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0);
+  const json written = scan_json();
+  const RecordedScan r = read_scan_record(dir_);
+  ASSERT_EQ(r.views.size(), 5u);
+  EXPECT_TRUE(r.views[0].initial_view);
+  ASSERT_TRUE(r.views[1].plan.has_value());
+  EXPECT_EQ(r.views[1].failed_moves.size(), 1u);
+  EXPECT_FALSE(r.views[2].registration->accepted);
+  EXPECT_FALSE(r.views[3].capture->ok);
+  EXPECT_EQ(r.views[4].capture_points, 10u);
+  ASSERT_TRUE(r.mesh.has_value());
+  EXPECT_EQ(r.status.state, "done");
+  expect_same_json(written, to_json(r));
+  // What a replay moves to: each view's failed moves, then the option it reached.
+  const std::vector<std::vector<Pose>> attempts = recorded_attempts(r);
+  ASSERT_EQ(attempts.size(), 5u);
+  ASSERT_EQ(attempts[1].size(), 2u);
+  EXPECT_TRUE(attempts[1][0].isApprox(below));
+  EXPECT_TRUE(attempts[1][1].isApprox(view_from(0.7, 0, 0.3)));
+  EXPECT_EQ(attempts[2].size(), 1u);
+  // The merged views' frames, for a mesh: views 0, 1 and 4 (2 rejected, 3 not captured).
+  const std::vector<MergedFrame> merged = merged_frames(r, dir_);
+  ASSERT_EQ(merged.size(), 3u);
+  EXPECT_EQ(merged[2].view, 4);
+  EXPECT_EQ(merged[2].file, dir_ / "frames" / "view_005.ply");
+
+  // A planted frame file is refused naming the file and the view, before anything opens it.
+  json planted = written;
+  planted["views"][1]["frame_file"] = "../../../etc/passwd";
+  write_json_atomic(planted, (dir_ / "scan.json").string());
+  pbnbv::testing::expect_error([&] { read_scan_record(dir_); }, "scan.json views[1] view 2: frame_file is not frames/view_002.ply");
+  // A field of the wrong type is named with its view and section.
+  planted = written;
+  planted["views"][0]["move"]["position_error_m"] = "far";
+  write_json_atomic(planted, (dir_ / "scan.json").string());
+  pbnbv::testing::expect_error([&] { read_scan_record(dir_); }, "views[0] view 1 move position_error_m is not a number");
 }
 
 }  // namespace

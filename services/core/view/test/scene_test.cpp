@@ -12,7 +12,8 @@
 #include "core/io/json.hpp"
 #include "file_test_util.hpp"
 #include "sphere_ellipsoid.hpp"
-#include "core/scan/scan_file.hpp"
+#include "core/base/format.hpp"
+#include "core/scan/scan_record.hpp"
 
 namespace pbnbv {
 namespace {
@@ -127,39 +128,56 @@ TEST(SceneJson, FlatArraysWithTheirCounts) {
 
 class ScanFolder : public testing::TempDirTest {};
 
-nlohmann::json view_entry(int i, const Pose& pose) {
-  nlohmann::json v;
-  v["view"] = i;
-  v["frame_file"] = "frames/view_" + std::to_string(i) + ".ply";
-  v["merged"] = true;
-  v["capture"] = {{"camera_object_T_camera", to_json(pose)}};
-  v["registration"] = {{"accepted", true}, {"registered_object_T_camera", to_json(pose)}};
-  v["map"] = {{"bbox_min_m", {-0.05, -0.05, -0.05}}, {"bbox_max_m", {0.05, 0.05, 0.05}}, {"resolution_m", 0.03}};
+// A view taken from `pose` and merged, its frame frames/view_NNN.ply, its map's B 10 cm wide.
+ViewRecord view_entry(int i, const Pose& pose) {
+  ViewRecord v;
+  v.view = i;
+  v.capture = CaptureResult{};
+  v.capture->ok = true;
+  v.capture->object_T_camera = pose;
+  v.registration = RegisteredCloud{};
+  v.registration->accepted = true;
+  v.registration->cloud.object_T_camera = pose;
+  v.registration->frame_file = "frames/" + view_file(i, "ply");
+  v.map = VoxelMapSummary{};
+  v.map->bbox_min_m = Eigen::Vector3d::Constant(-0.05);
+  v.map->bbox_max_m = Eigen::Vector3d::Constant(0.05);
+  v.map->resolution_m = 0.03;
   return v;
 }
 
 TEST_F(ScanFolder, OneScenePerViewWithTheCloudSoFarAndTheNextPlan) {
   std::filesystem::create_directories(path("frames"));
-  write_ply({{0.01f, 0, 0}, {0.02f, 0, 0}}, path("frames/view_0.ply"));     // 2 points, 1 cm apart
-  write_ply({{0, 0.05f, 0}, {0, 0.06f, 0}, {0, 0.07f, 0}}, path("frames/view_1.ply"));
+  write_ply({{0.01f, 0, 0}, {0.02f, 0, 0}}, path("frames/view_001.ply"));     // 2 points, 1 cm apart
+  write_ply({{0, 0.05f, 0}, {0, 0.06f, 0}, {0, 0.07f, 0}}, path("frames/view_002.ply"));
   const Pose p0(Eigen::Translation3d(0.7, 0, 0));
   const Pose p1(Eigen::Translation3d(0, 0.7, 0));
-  nlohmann::json scan;
-  scan["format_version"] = kScanFormatVersion;
-  scan["settings"] = {{"scan_id", "sphere-1"},
-                      {"camera", {{"width", 1280}, {"height", 720}, {"fx", 696.0}, {"fy", 696.0}, {"cx", 640.0}, {"cy", 360.0}}},
-                      {"planning", {{"candidates", 50}, {"parallels", 5}, {"area", "full"}}}};
-  scan["status"] = {{"state", "done"}, {"message", "view budget reached"}};
-  nlohmann::json v1 = view_entry(1, p1);
-  v1["plan"] = {{"map_of_view", 0},
-                {"candidates", {{"generated", 50}}},
-                {"sphere", {{"radius_m", 0.6 + 0.5 * std::sqrt(3 * 0.1 * 0.1)}}},
-                {"object_T_camera", to_json(p1)},
-                {"view_quality_px", 8114.0},
-                {"ellipsoids", {{"list", {{{"class", "frontier"}, {"centre_m", {0, 0, 0}}, {"semi_axes_m", {0.05, 0.05, 0.05}},
-                                            {"quat_wxyz", {1, 0, 0, 0}}, {"voxels", 4}}}}}}};
-  scan["views"] = {view_entry(0, p0), v1};
-  write_json_atomic(scan, path("scan.json"));
+  RecordedScan scan;
+  scan.pbnbv_version = "test";
+  scan.settings.scan_id = "sphere-1";
+  scan.settings.camera = CameraIntrinsics{1280, 720, 696.0, 696.0, 640.0, 360.0};
+  scan.settings.candidates = 50;
+  scan.settings.parallels = 5;
+  scan.settings.area = CandidateArea::kFullSphere;
+  scan.status.state = "done";
+  scan.status.message = "view budget reached";
+  ViewRecord v1 = view_entry(1, p1);
+  v1.plan = PlanRecord{};
+  v1.plan->map_of_view = 0;
+  v1.plan->plan.iteration = 1;
+  v1.plan->plan.outcome = PlanOutcome::kView;
+  v1.plan->plan.num_candidates = 50;
+  v1.plan->plan.sphere_radius_m = 0.6 + 0.5 * std::sqrt(3 * 0.1 * 0.1);
+  v1.plan->plan.object_T_camera = p1;
+  v1.plan->plan.view_quality = 8114.0;
+  EllipsoidSummary e;
+  e.frontier = true;
+  e.semi_axes_m = Eigen::Vector3d::Constant(0.05);
+  e.num_voxels = 4;
+  v1.plan->ellipsoids = EllipsoidSetSummary{};
+  v1.plan->ellipsoids->ellipsoids = {e};
+  scan.views = {view_entry(0, p0), v1};
+  write_json_atomic(to_json(scan), path("scan.json"));
 
   const std::vector<Scene> s = load_scan_folder(dir_.string(), 0.001, 1000);
   ASSERT_EQ(s.size(), 2u);
