@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/scan/scan_file.hpp"
+#include "core/scan/scan_record.hpp"
 #include "core/io/json.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "pbnbv/arm_command_t.hpp"
@@ -88,8 +89,11 @@ fs::path scan_folder(const std::string& name, const std::string& id) {
   s.object_name = "bunny";
   s.normalisation.extent_m = Eigen::Vector3d::Constant(0.2);
   write_json_atomic(to_json(s), (dir / "settings.json").string());
-  write_json_atomic(json{{"format_version", kScanFormatVersion}, {"settings", {{"scan_id", id}}}, {"views", json::array()}},
-                    (dir / "scan.json").string());
+  RecordedScan record;  // a scan stopped before its first view, written through its types
+  record.pbnbv_version = "test";
+  record.settings = s;
+  record.status.state = "stopped";
+  write_json_atomic(to_json(record), (dir / "scan.json").string());
   return dir;
 }
 

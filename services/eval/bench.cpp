@@ -955,10 +955,8 @@ ObjectRun evaluate_job(const BenchSpec& spec, const Job& j, std::map<std::string
       r.stop_rule_reason = d->reason;
     }
     r.complete = true;
-    const json plan = read_scan_record(j.dir).plan;
-    if (plan.is_object() && plan.contains("initial_view")) {
-      r.initial_view = pose_from_json(plan["initial_view"], (j.dir / "scan.json").string() + " plan initial_view").translation();
-    }
+    const std::optional<ScanPlanHeader> plan = read_scan_record(j.dir).plan;
+    if (plan && plan->planner != "ring") r.initial_view = plan->initial_view.translation();
     if (fs::exists(j.dir / "bench_run.json")) r.wall_s = read_json((j.dir / "bench_run.json").string()).value("wall_s", 0.0);
   } catch (const std::exception& x) {
     r.error = x.what();

@@ -248,11 +248,11 @@ ScanRecord::ScanRecord(fs::path out, const ScanSettings& settings) : out_(std::m
 }
 
 void ScanRecord::set_ring_plan(double radius_m, double elevation_deg) {
-  record_.plan = {{"planner", "ring"}, {"radius_m", radius_m}, {"elevation_deg", elevation_deg}};
+  record_.plan = ScanPlanHeader{"ring", radius_m, elevation_deg, Pose::Identity()};
 }
 
 void ScanRecord::set_next_best_view_plan(const std::string& planner, const Pose& initial_view) {
-  record_.plan = {{"planner", planner}, {"initial_view", to_json(initial_view)}};
+  record_.plan = ScanPlanHeader{planner, 0, 0, initial_view};
 }
 
 void ScanRecord::set_mesh(const MeshSummary& mesh) {

@@ -83,12 +83,20 @@ struct ScanStatusRecord {
   int answers_refused = 0;
 };
 
+// scan.json's "plan": how the views were chosen. The ring: its radius and elevation; a
+// next-best-view planner: its name and the first view.
+struct ScanPlanHeader {
+  std::string planner;                     // "ring", or the planner's name
+  double radius_m = 0, elevation_deg = 0;  // the ring
+  Pose initial_view = Pose::Identity();    // a next-best-view planner's first view
+};
+
 // scan.json as a whole, read back into the types it is written from: what a resume, a replay,
 // the view page, evaluate and the bench read (read_scan_record), and what to_json writes again.
 struct RecordedScan {
   std::string pbnbv_version;        // of the pbnbv that wrote it (format_version is checked on reading)
   ScanSettings settings;
-  nlohmann::json plan;              // the ring's geometry or the planner and first view (null: none yet)
+  std::optional<ScanPlanHeader> plan;  // none until the scan has started
   std::vector<ViewRecord> views;
   std::optional<ScanStop> stop;
   std::optional<PlanRecord> planning_stopped;

@@ -3,6 +3,7 @@
 // error names the file, the view and the field.
 #include <cmath>
 #include <cstdio>
+#include <type_traits>
 #include <stdexcept>
 
 #include "core/base/format.hpp"
@@ -64,6 +65,25 @@ class Fields {
     for (int k = 0; k < 6; ++k) {
       if (!v[k].is_number()) fail(key, "is not 6 numbers");
       out[k] = v[k].get<double>();
+    }
+    return out;
+  }
+  // A list of numbers (null: NaN) or of strings, each checked.
+  template <class T>
+  std::vector<T> list(const char* key) const {
+    const json& v = at(key);
+    if (!v.is_array()) fail(key, "is not a list");
+    std::vector<T> out;
+    for (const json& x : v) {
+      if constexpr (std::is_same_v<T, std::string>) {
+        if (!x.is_string()) fail(key, "holds a value that is not a string");
+        out.push_back(x.get<std::string>());
+      } else if constexpr (std::is_integral_v<T>) {
+        out.push_back(static_cast<T>(integer_from_json(x, INT32_MIN, INT32_MAX, name(key))));
+      } else {
+        if (!x.is_number() && !x.is_null()) fail(key, "holds a value that is not a number");
+        out.push_back(x.is_null() ? std::nan("") : x.get<double>());
+      }
     }
     return out;
   }
@@ -191,7 +211,8 @@ EllipsoidSetSummary ellipsoids_from(const Fields& e, double fit_s) {
     s.semi_axes_m = x.vector3("semi_axes_m");
     const json& q = x.at("quat_wxyz");
     if (!q.is_array() || q.size() != 4) x.fail("quat_wxyz", "is not 4 numbers");
-    for (int i = 0; i < 4; ++i) s.quat_wxyz[static_cast<std::size_t>(i)] = q[static_cast<std::size_t>(i)].get<double>();
+    const std::vector<double> quat = x.list<double>("quat_wxyz");
+    for (std::size_t i = 0; i < 4; ++i) s.quat_wxyz[i] = quat[i];
     s.num_voxels = x.count("voxels");
     r.ellipsoids.push_back(s);
   }
@@ -214,7 +235,7 @@ PlanRecord plan_record_from_json(const json& j, const std::string& where) {
   p.frontier_area_px = f.number("frontier_area_px");
   p.occupied_area_px = f.number("occupied_area_px");
   p.partition = static_cast<int>(f.integer("partition", -1, 1000));
-  p.allowed_sectors = f.at("allowed_sectors").get<std::vector<int>>();
+  p.allowed_sectors = f.list<int>("allowed_sectors");
   p.partition_fallback = f.flag("partition_fallback");
   const Fields sphere = f.object("sphere");
   p.sphere_centre_m = sphere.vector3("centre_m");
@@ -224,7 +245,7 @@ PlanRecord plan_record_from_json(const json& j, const std::string& where) {
   p.num_unreachable = c.count("unreachable");
   p.num_excluded = c.count("excluded");
   p.num_scored = c.count("scored");
-  p.alternative_quality = f.at("alternative_quality_px").get<std::vector<double>>();
+  p.alternative_quality = f.list<double>("alternative_quality_px");
   if (p.outcome == PlanOutcome::kView) p.object_T_camera = f.pose("object_T_camera");
   const Fields t = f.object("time_ms");
   r.map_update_s = t.number("map_update") * 1e-3;
@@ -322,7 +343,7 @@ MeshSummary mesh_summary_from_json(const json& j, const std::string& where) {
   if (method != "tsdf" && method != "poisson") f.fail("method", "is neither 'tsdf' nor 'poisson'");
   m.tsdf = method == "tsdf";
   m.files = {f.text("file")};
-  for (const auto& also : f.at("also").get<std::vector<std::string>>()) m.files.push_back(also);
+  for (const auto& also : f.list<std::string>("also")) m.files.push_back(also);
   m.frames = static_cast<std::size_t>(f.count("frames"));
   m.points = static_cast<std::size_t>(f.integer("points", 0, INT64_MAX));
   m.vertices = static_cast<std::size_t>(f.integer("vertices", 0, INT64_MAX));
@@ -359,7 +380,18 @@ RecordedScan recorded_scan_from_json(const json& j, const std::string& where) {
   } catch (const std::exception& e) {
     throw std::invalid_argument(where + " settings: " + e.what());
   }
-  if (f.has("plan")) r.plan = f.at("plan");
+  if (f.has("plan")) {
+    const Fields p = f.object("plan");
+    ScanPlanHeader h;
+    h.planner = p.text("planner");
+    if (h.planner == "ring") {
+      h.radius_m = p.number("radius_m");
+      h.elevation_deg = p.number("elevation_deg");
+    } else {
+      h.initial_view = p.pose("initial_view");
+    }
+    r.plan = h;
+  }
   const json& views = f.at("views");
   if (!views.is_array()) f.fail("views", "is not a list");
   for (std::size_t k = 0; k < views.size(); ++k) {
@@ -428,7 +460,11 @@ json to_json(const RecordedScan& r) {
   j["settings"] = to_json(r.settings);
   j["views"] = json::array();
   for (const ViewRecord& v : r.views) j["views"].push_back(to_json(v));
-  if (!r.plan.is_null()) j["plan"] = r.plan;
+  if (r.plan && r.plan->planner == "ring") {
+    j["plan"] = {{"planner", "ring"}, {"radius_m", r.plan->radius_m}, {"elevation_deg", r.plan->elevation_deg}};
+  } else if (r.plan) {
+    j["plan"] = {{"planner", r.plan->planner}, {"initial_view", to_json(r.plan->initial_view)}};
+  }
   if (r.stop) j["stop"] = to_json(*r.stop);
   if (r.planning_stopped) j["planning_stopped"] = to_json(*r.planning_stopped);
   if (!r.replay_of.empty()) j["replay_of"] = r.replay_of;

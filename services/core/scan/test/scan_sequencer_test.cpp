@@ -207,6 +207,31 @@ class ScanSequencerTest : public pbnbv::testing::TempDirTest {
     return m;
   };
 
+  // The camera's capture of view `view` fails, saying `why`.
+  void fail_capture(int view, const std::string& why) {
+    camera = [inner = camera, view, why](const CaptureRequest& r) {
+      std::optional<CaptureResult> c = inner(r);
+      if (r.iteration == view) {
+        c->ok = false;
+        c->message = why;
+        c->points.clear();
+      }
+      return c;
+    };
+  }
+
+  // The rig cannot reach a view below the turntable top (z < 0).
+  void unreachable_below() {
+    motion = [inner = motion](const MoveRequest& r) {
+      std::optional<MoveResult> m = inner(r);
+      if (r.object_T_camera.translation().z() < 0) {
+        m->status = MoveStatus::kUnreachable;
+        m->reason = "no inverse kinematics solution";
+      }
+      return m;
+    };
+  }
+
   // What the registration service does with an answer it sends (the real model: frames/,
   // cloud.ply, the new surface), once per capture request.
   void add_to_model(RegisteredCloud& r) {
@@ -450,14 +475,7 @@ TEST_F(ScanSequencerTest, AnUnreachableBestViewIsReplacedByTheNextAlternative) {
   const Pose best = view_from(0.0, 0.0, -0.7);  // from below the table: the rig cannot
   const Pose alternative = view_from(0.7, 0.0, 0.3);
   scorer = [&](const PlanRequest& r) { return make_plan(r, r.iteration == 1 ? best : view_from(0, 0.7, 0.3), {alternative}); };
-  motion = [inner = motion](const MoveRequest& r) {
-    std::optional<MoveResult> m = inner(r);
-    if (r.object_T_camera.translation().z() < 0) {
-      m->status = MoveStatus::kUnreachable;
-      m->reason = "no inverse kinematics solution";
-    }
-    return m;
-  };
+  unreachable_below();
   start(test_settings("pbnbv", 3));
   run();
   ASSERT_EQ(seq_->exit_code(), 0);
@@ -846,15 +864,7 @@ TEST_F(ScanSequencerTest, ARejectedRegistrationIsNotMergedAndItsViewIsExcludedFr
 }
 
 TEST_F(ScanSequencerTest, AFailedCaptureExcludesTheViewAndTheScanGoesOn) {
-  camera = [inner = camera](const CaptureRequest& r) {
-    std::optional<CaptureResult> c = inner(r);
-    if (r.iteration == 0) {
-      c->ok = false;
-      c->message = "no DEPTH_FRAME for trigger 3 after 3 tries";
-      c->points.clear();
-    }
-    return c;
-  };
+  fail_capture(0, "no DEPTH_FRAME for trigger 3 after 3 tries");
   start(test_settings("ring", 2));
   run();
   ASSERT_EQ(seq_->exit_code(), 0);
@@ -1248,14 +1258,7 @@ void expect_same_json(const json& a, const json& b, const std::string& at = "sca
 TEST_F(ScanSequencerTest, TheRecordReadsBackIntoItsTypesAndWritesTheSameFile) {
   const Pose below = view_from(0.0, 0.0, -0.7);
   scorer = [&](const PlanRequest& r) { return make_plan(r, r.iteration == 1 ? below : view_from(0, 0.7, 0.3), {view_from(0.7, 0, 0.3)}); };
-  motion = [inner = motion](const MoveRequest& r) {
-    std::optional<MoveResult> m = inner(r);
-    if (r.object_T_camera.translation().z() < 0) {
-      m->status = MoveStatus::kUnreachable;
-      m->reason = "no inverse kinematics solution";
-    }
-    return m;
-  };
+  unreachable_below();
   registration = [inner = registration](const CaptureResult& c) {
     std::optional<RegisteredCloud> r = inner(c);
     if (c.iteration == 2) {
@@ -1264,15 +1267,7 @@ TEST_F(ScanSequencerTest, TheRecordReadsBackIntoItsTypesAndWritesTheSameFile) {
     }
     return r;
   };
-  camera = [inner = camera](const CaptureRequest& r) {
-    std::optional<CaptureResult> c = inner(r);
-    if (r.iteration == 3) {
-      c->ok = false;
-      c->message = "no DEPTH_FRAME for trigger 12 after 3 tries";
-      c->points.clear();
-    }
-    return c;
-  };
+  fail_capture(3, "no DEPTH_FRAME for trigger 12 after 3 tries");
   start(test_settings("pbnbv", 5));
   run();
   ASSERT_EQ(seq_->exit_code(), 0);
