@@ -59,16 +59,6 @@ std::optional<SurfaceStopDecision> first_surface_stop(const std::vector<double>&
   return std::nullopt;
 }
 
-std::vector<double> new_surface_figures(const nlohmann::json& views) {
-  std::vector<double> out;
-  for (const nlohmann::json& v : views) {
-    if (!v.contains("frame_file")) continue;  // never captured or mapped
-    const bool figure = v.value("merged", false) && v.contains("new_surface") && v["new_surface"].contains("percent_of_model");
-    out.push_back(figure ? v["new_surface"]["percent_of_model"].get<double>() : std::numeric_limits<double>::quiet_NaN());
-  }
-  return out;
-}
-
 nlohmann::json to_json(const SurfaceStopRule& r) {
   return {{"window", r.window}, {"max_new_percent", r.max_new_percent}, {"min_views", r.min_views}};
 }

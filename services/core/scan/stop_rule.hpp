@@ -43,10 +43,6 @@ std::optional<SurfaceStopDecision> surface_stop(const std::vector<double>& new_p
 std::optional<SurfaceStopDecision> first_surface_stop(const std::vector<double>& new_percent_by_view,
                                                       const SurfaceStopRule& rule);
 
-// The rule's figures from scan.json's "views": one per view with a frame (captured and mapped),
-// new_surface.percent_of_model, NaN when the view was not merged or has no figure.
-std::vector<double> new_surface_figures(const nlohmann::json& views);
-
 nlohmann::json to_json(const SurfaceStopRule& r);
 
 }  // namespace pbnbv

@@ -1,5 +1,5 @@
-// The surface stop rule on hand-made per-view curves, and the new-surface figure on planes whose
-// answer is known by hand.
+// The surface stop rule on hand-made per-view curves, and the figures it reads from recorded views
+// (the new-surface count itself: core/perception/test/new_surface_test.cpp).
 #include "core/scan/stop_rule.hpp"
 
 #include <gtest/gtest.h>
@@ -7,19 +7,13 @@
 #include <cmath>
 #include <limits>
 
+#include "core/scan/scan_record.hpp"
+
 using namespace pbnbv;
 
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// A square of points on a 2 mm grid, x in [x0, x0 + 0.1], y in [0, 0.1], at height z: 51 x 51.
-PointCloud plane(float x0, float z) {
-  PointCloud p;
-  for (int i = 0; i <= 50; ++i)
-    for (int j = 0; j <= 50; ++j) p.emplace_back(x0 + 0.002f * i, 0.002f * j, z);
-  return p;
-}
 
 SurfaceStopRule rule(int window, double percent, int min_views) {
   SurfaceStopRule r;
@@ -85,50 +79,18 @@ TEST(StopRule, ParametersOutsideTheirRangeAreNamed) {
     EXPECT_NE(std::string(e.what()).find("--stop-window 0"), std::string::npos) << e.what();
   }
   EXPECT_THROW(surface_stop({1, 2}, rule(2, -1.0, 1)), std::invalid_argument);
-  EXPECT_THROW(new_surface(plane(0, 0), plane(0, 0), 0.0), std::invalid_argument);
 }
 
-TEST(NewSurface, DuplicateAddsNothingAndAPlaneOneCentimetreAwayAddsEverything) {
-  const PointCloud model = plane(0, 0);
-  const NewSurface same = new_surface(model, model, 0.005);
-  EXPECT_EQ(same.frame_points, 2601);
-  EXPECT_EQ(same.model_points, 2601);
-  EXPECT_EQ(same.new_points, 0);
-  EXPECT_DOUBLE_EQ(same.percent_of_model(), 0.0);
-  // 4 mm above: every point within 5 mm of the model.
-  EXPECT_EQ(new_surface(plane(0, 0.004f), model, 0.005).new_points, 0);
-  const NewSurface above = new_surface(plane(0, 0.01f), model, 0.005);
-  EXPECT_EQ(above.new_points, 2601);
-  EXPECT_DOUBLE_EQ(above.percent_of_model(), 100.0);
-  EXPECT_DOUBLE_EQ(above.percent_of_frame(), 100.0);
-}
-
-TEST(NewSurface, HalfOverlappingPlaneCountsTheColumnsBeyondTheRadius) {
-  // The frame spans x in [0.05, 0.15], the model x in [0, 0.1]: columns x = 0.106 ... 0.150 lie
-  // more than 5 mm beyond the model's edge (0.104 is 4 mm from it): 23 columns of 51 points.
-  const NewSurface n = new_surface(plane(0.05f, 0), plane(0, 0), 0.005);
-  EXPECT_EQ(n.new_points, 23 * 51);
-  EXPECT_NEAR(n.percent_of_model(), 100.0 * 1173 / 2601, 1e-9);  // 45.10 %
-  EXPECT_NEAR(n.percent_of_frame(), 100.0 * 23 / 51, 1e-9);
-}
-
-TEST(NewSurface, FirstViewIsAllNew) {
-  const NewSurface n = new_surface(plane(0, 0), {}, 0.005);
-  EXPECT_EQ(n.new_points, 2601);
-  EXPECT_EQ(n.model_points, 0);
-  EXPECT_DOUBLE_EQ(n.percent_of_model(), 100.0);
-}
-
-TEST(NewSurface, FiguresReadBackFromScanJsonViews) {
-  NewSurface n;
-  n.frame_points = 100;
-  n.new_points = 3;
-  n.model_points = 600;
-  n.radius_m = 0.005;
-  const nlohmann::json views = {
-      {{"view", 0}, {"frame_file", "frames/view_001.ply"}, {"merged", true}, {"new_surface", to_json(n)}},
-      {{"view", 1}, {"move", {{"status", "unreachable"}}}},                     // no frame: not counted
-      {{"view", 2}, {"frame_file", "frames/view_003.ply"}, {"merged", false}}};  // rejected: NaN
+TEST(NewSurface, FiguresOfTheRecordedViews) {
+  std::vector<ViewRecord> views(3);
+  views[0].registration = RegisteredCloud{};
+  views[0].registration->accepted = true;
+  views[0].registration->frame_file = "frames/view_001.ply";
+  views[0].registration->new_surface = NewSurface{100, 3, 600, 0.005};
+  views[1].view = 1;  // unreachable: no frame, not counted
+  views[2].view = 2;  // rejected: NaN
+  views[2].registration = RegisteredCloud{};
+  views[2].registration->frame_file = "frames/view_003.ply";
   const std::vector<double> f = new_surface_figures(views);
   ASSERT_EQ(f.size(), 2u);
   EXPECT_DOUBLE_EQ(f[0], 0.5);
