@@ -10,7 +10,6 @@
 // the update time.
 // A view the registration rejected is not integrated (its pose is implausible).
 #include <cstdio>
-#include <deque>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -20,6 +19,7 @@
 
 #include "bus/asked_captures.hpp"
 #include "bus/bus.hpp"
+#include "bus/recent_frames.hpp"
 #include "bus/reply_cache.hpp"
 #include "bus/state_file.hpp"
 #include "bus/service.hpp"
@@ -44,15 +44,8 @@ constexpr std::size_t kAnswersKept = 16;   // maps kept to answer a repeated vie
 class MappingService {
  public:
   MappingService(bus::Bus& bus, const VoxelMapParams& params, const Eigen::AlignedBox3d& working_volume, fs::path out)
-      : bus_(bus), params_(params), working_volume_(working_volume), out_(std::move(out)) {
+      : bus_(bus), params_(params), working_volume_(working_volume), out_(std::move(out)), frames_(bus, kFramesKept) {
     restore();
-    for (const char* channel : {channels::kDepthFrame, channels::kDepthFrameResent}) {
-      bus_.subscribe<depth_frame_t>(channel, [this](const depth_frame_t& f) {
-        if (find_frame(f.seq)) return;  // sent again: kept already
-        frames_.push_back(f);
-        if (frames_.size() > kFramesKept) frames_.pop_front();
-      });
-    }
     bus_.subscribe<capture_request_t>(channels::kCaptureRequest,
                                       [this](const capture_request_t& c) { asked_.heard(c.scan_id, c.request_id); });
     bus_.subscribe<registered_cloud_t>(channels::kRegisteredCloud, [this](const registered_cloud_t& r) { on_view(r); });
@@ -66,7 +59,7 @@ class MappingService {
   void tick() {
     if (!pending_) return;
     // A view registration rejected is not integrated: it needs no frame.
-    if (!pending_->accepted || find_frame(pending_->cloud.depth_frame_seq)) {
+    if (!pending_->accepted || frames_.find(pending_->cloud.depth_frame_seq)) {
       const registered_cloud_t r = std::move(*pending_);
       pending_.reset();
       integrate(r);
@@ -78,11 +71,6 @@ class MappingService {
   }
 
  private:
-  const depth_frame_t* find_frame(int64_t seq) const {
-    for (const auto& f : frames_) if (f.seq == seq) return &f;
-    return nullptr;
-  }
-
   void on_view(const registered_cloud_t& r) {
     // A capture that failed is no view to map: the coordinator goes on to the next view without
     // waiting for a map, and a failed cloud must not become the answer of its view (forged with a
@@ -130,7 +118,7 @@ class MappingService {
     out.request_id = r.request_id;
     out.updated = false;
     out.update_s = 0;
-    const depth_frame_t* frame = find_frame(r.cloud.depth_frame_seq);
+    const depth_frame_t* frame = frames_.find(r.cloud.depth_frame_seq);
     if (!r.accepted) {
       out.message = "not integrated: registration rejected the view (" + r.reason + ")";
     } else if (!frame) {
@@ -226,7 +214,7 @@ class MappingService {
   fs::path out_;
   std::string scan_id_;
   std::optional<VoxelMap> map_;
-  std::deque<depth_frame_t> frames_;
+  bus::RecentFrames frames_;  // the frames waiting for their registered cloud
   std::optional<registered_cloud_t> pending_;
   double pending_deadline_ = 0;
   bool warned_ = false;  // the pending view's late frame was said in the log

@@ -15,7 +15,6 @@
 // by (scan_id, request_id). The mesh is made on a worker thread, so the service's heartbeat goes
 // on while it fuses (seconds).
 #include <chrono>
-#include <deque>
 #include <future>
 #include <iostream>
 #include <sstream>
@@ -24,15 +23,14 @@
 
 #include "bus/asked_captures.hpp"
 #include "bus/bus.hpp"
+#include "bus/recent_frames.hpp"
 #include "bus/state_file.hpp"
-#include "core/io/cloud_file.hpp"
 #include "bus/reply_cache.hpp"
 #include "bus/service.hpp"
 #include "bus/convert_scan.hpp"
 #include "core/perception/perception_options.hpp"
 #include "core/geometry/point_cloud.hpp"
 #include "core/base/log.hpp"
-#include "core/perception/cloud_filter.hpp"
 #include "core/perception/registration.hpp"
 #include "core/scan/scan_options.hpp"
 #include "core/surface/scan_model.hpp"
@@ -56,19 +54,13 @@ class RegistrationService {
   RegistrationService(bus::Bus& bus, const RegistrationParams& params, double model_voxel_m, double new_surface_radius_m,
                       bool off, std::filesystem::path out)
       : bus_(bus), params_(params), off_(off), out_(std::move(out)),
-        model_(bus_.scope().empty() ? std::filesystem::path() : out_, model_voxel_m, new_surface_radius_m) {
+        model_(bus_.scope().empty() ? std::filesystem::path() : out_, model_voxel_m, new_surface_radius_m),
+        frames_(bus, kFramesKept) {
     restore();
     bus_.subscribe<capture_request_t>(channels::kCaptureRequest,
                                       [this](const capture_request_t& c) { asked_.heard(c.scan_id, c.request_id); });
     bus_.subscribe<point_cloud_t>(channels::kCloud, [this](const point_cloud_t& c) { on_cloud(c); });
     bus_.subscribe<mesh_request_t>(channels::kMeshRequest, [this](const mesh_request_t& m) { on_mesh_request(m); });
-    for (const char* channel : {channels::kDepthFrame, channels::kDepthFrameResent}) {
-      bus_.subscribe<depth_frame_t>(channel, [this](const depth_frame_t& f) {
-        for (const auto& kept : frames_) if (kept.seq == f.seq) return;  // sent again: kept already
-        frames_.push_back(f);
-        if (frames_.size() > kFramesKept) frames_.pop_front();
-      });
-    }
   }
 
   // Answers the mesh request whose mesh the worker has finished.
@@ -200,15 +192,15 @@ class RegistrationService {
       out.new_surface_radius_m = u.new_surface->radius_m;
     }
     double seconds = u.seconds;
-    for (const depth_frame_t& f : frames_) {
-      if (f.seq != c.depth_frame_seq || model_.folder().empty()) continue;
+    const depth_frame_t* f = frames_.find(c.depth_frame_seq);
+    if (f && !model_.folder().empty()) {
       const auto t0 = std::chrono::steady_clock::now();
       try {
-        const bus::DecodedFrame d = bus::decode_frame(f);
-        out.depth_file = model_.write_depth(c.iteration, DepthImage{&d.depth_m, d.intrinsics, d.range, f.seq}, pose, merge,
+        const bus::DecodedFrame d = bus::decode_frame(*f);
+        out.depth_file = model_.write_depth(c.iteration, DepthImage{&d.depth_m, d.intrinsics, d.range, f->seq}, pose, merge,
                                             write_depth_png);
       } catch (const std::invalid_argument& e) {
-        log_warn("view " + std::to_string(c.iteration + 1) + ": DEPTH_FRAME " + std::to_string(f.seq) + " not written: " + e.what());
+        log_warn("view " + std::to_string(c.iteration + 1) + ": DEPTH_FRAME " + std::to_string(f->seq) + " not written: " + e.what());
       }
       seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
@@ -244,7 +236,7 @@ class RegistrationService {
   std::filesystem::path out_;
   std::string scan_id_;
   ScanModel model_;
-  std::deque<depth_frame_t> frames_;  // the last depth frames, as received
+  bus::RecentFrames frames_;          // the last depth frames, for DIR/depth/
   std::future<MeshResult> meshing_;   // the mesh being made
   bus::ReplyCache<std::pair<std::string, int64_t>, mesh_result_t> meshes_{kAnswersKept};
   bus::ReplyCache<std::pair<std::string, int64_t>, registered_cloud_t> answers_{kAnswersKept};
