@@ -270,11 +270,11 @@ inline RegisteredCloud from_msg(const registered_cloud_t& m) {
   r.register_s = m.register_s;
   // The files it names are the view's own in the scan's folder, or none: a reader of scan.json
   // opens them, so no other path is taken from the wire.
-  const std::string frame = "frames/" + view_file(m.iteration, "ply");
+  const std::string frame = frame_file_of(m.iteration);
   if (!m.frame_file.empty() && m.frame_file != frame) {
     throw std::invalid_argument("REGISTERED_CLOUD frame_file '" + shown(m.frame_file) + "' is neither '' nor '" + frame + "'");
   }
-  const std::string depth = "depth/" + view_file(m.iteration, "png");
+  const std::string depth = depth_file_of(m.iteration);
   if (!m.depth_file.empty() && m.depth_file != depth) {
     throw std::invalid_argument("REGISTERED_CLOUD depth_file '" + shown(m.depth_file) + "' is neither '' nor '" + depth + "'");
   }

@@ -22,4 +22,10 @@ inline std::string view_file(int view, const char* extension) {
   return fmt::format("view_{:03d}.{}", view + 1, extension);
 }
 
+// A view's files in the scan's folder, as scan.json and REGISTERED_CLOUD name them: its cloud
+// "frames/view_NNN.ply" and its depth image "depth/view_NNN.png". Every reader takes these names
+// and no other path.
+inline std::string frame_file_of(int view) { return "frames/" + view_file(view, "ply"); }
+inline std::string depth_file_of(int view) { return "depth/" + view_file(view, "png"); }
+
 }  // namespace pbnbv

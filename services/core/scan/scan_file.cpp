@@ -86,7 +86,7 @@ std::string view_frame_file(const json& v, const fs::path& scan_json) {
                                 std::to_string(kViews.max - 1));
   }
   const int view = n.get<int>();
-  const std::string own = "frames/" + view_file(view, "ply");
+  const std::string own = frame_file_of(view);
   if (v["frame_file"] != own) {
     throw std::invalid_argument(scan_json.string() + " view " + std::to_string(view + 1) + ": frame_file is not " + own);
   }

@@ -317,8 +317,8 @@ ViewRecord view_record_from_json(const json& j, const std::string& where) {
     v.registration = registration_from(view.object("registration"), view, time);
     v.register_round_trip_s = time.number("register_round_trip");
     if (view.has("frame_file")) view_frame_file(j, where);  // the view's own file, or refused
-    if (view.has("depth_file") && view.text("depth_file") != "depth/" + view_file(v.view, "png")) {
-      view.fail("depth_file", "is not depth/" + view_file(v.view, "png"));
+    if (view.has("depth_file") && view.text("depth_file") != depth_file_of(v.view)) {
+      view.fail("depth_file", "is not " + depth_file_of(v.view));
     }
   }
   if (view.has("map")) {

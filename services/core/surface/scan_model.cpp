@@ -60,10 +60,9 @@ ModelUpdate ScanModel::add_view(int view, const PointCloud& points, std::vector<
     u.normals_from_depth = true;
   }
   if (!folder_.empty()) {
-    const std::string name = view_file(view, "ply");
+    u.frame_file = frame_file_of(view);
     fs::create_directories(folder_ / "frames");
-    write_ply(points, (folder_ / "frames" / name).string(), CloudExtras{normals, {object_T_camera}});
-    u.frame_file = "frames/" + name;
+    write_ply(points, (folder_ / u.frame_file).string(), CloudExtras{normals, {object_T_camera}});
   }
   if (merge) {
     u.new_surface = new_surface(points, points_, radius_m_);
@@ -103,7 +102,7 @@ std::string ScanModel::write_depth(int view, const DepthImage& image, const Pose
   fs::create_directories(folder_ / "depth");
   const std::string png = view_file(view, "png");
   const CameraIntrinsics& k = image.intrinsics;
-  write_png(*image.depth_m, k.width, k.height, (folder_ / "depth" / png).string());
+  write_png(*image.depth_m, k.width, k.height, (folder_ / depth_file_of(view)).string());
   const nlohmann::json intrinsics = {
       {"image", png},
       {"width", k.width},
@@ -121,7 +120,7 @@ std::string ScanModel::write_depth(int view, const DepthImage& image, const Pose
       {"pose_frame", "object"},
       {"registered", registered}};
   write_json_atomic(intrinsics, (folder_ / "depth" / view_file(view, "json")).string());
-  return "depth/" + png;
+  return depth_file_of(view);
 }
 
 }  // namespace pbnbv

@@ -138,7 +138,7 @@ ViewRecord view_entry(int i, const Pose& pose) {
   v.registration = RegisteredCloud{};
   v.registration->accepted = true;
   v.registration->cloud.object_T_camera = pose;
-  v.registration->frame_file = "frames/" + view_file(i, "ply");
+  v.registration->frame_file = frame_file_of(i);
   v.map = VoxelMapSummary{};
   v.map->bbox_min_m = Eigen::Vector3d::Constant(-0.05);
   v.map->bbox_max_m = Eigen::Vector3d::Constant(0.05);
