@@ -1,17 +1,20 @@
 // The registration service on a real bus: a view placed 10 cm off by a wrong kinematic pose is
 // rejected by the registration gates, not merged into the model, and not integrated by the
 // mapping service, which says why; a cloud that answers no capture request heard is taken by
-// neither service.
+// neither service; MESH_REQUESTs are taken only for the model the service holds, the mesh
+// already made is not made again, and a flood of different requests makes three meshes at most.
 // Runs inside a private network namespace (see CMakeLists.txt).
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
+#include <fstream>
 #include <cmath>
 #include <string>
 #include <vector>
 
 #include "bus/convert.hpp"
+#include "core/base/format.hpp"
 #include "core/geometry/mesh.hpp"
 #include "service_suite.hpp"
 
@@ -43,10 +46,9 @@ class RegistrationService : public ServiceSuite {
   }
 };
 
-TEST_F(RegistrationService, AViewTenCentimetresOffIsRejectedAndNotMerged) {
-  // Two views of a scene of three balls: the first defines the model; the second is the same
-  // surface but placed 10 cm off, as a wildly wrong kinematic pose would place it. (Balls, not
-  // boxes: a box shifted along one of its faces still lies on that face's plane.)
+// A scene of three balls (balls, not boxes: a box shifted along one of its faces still lies on
+// that face's plane), as a CLOUD of scan `scan_id`, request and view `id`, shifted by `shift`.
+point_cloud_t balls_cloud(const std::string& scan_id, int64_t id, const Eigen::Vector3d& shift) {
   std::vector<Eigen::Vector3d> pts;
   const std::vector<std::pair<double, Eigen::Vector3d>> balls = {
       {0.06, Eigen::Vector3d(0, 0, 0)}, {0.04, Eigen::Vector3d(0.09, 0.03, 0.02)}, {0.03, Eigen::Vector3d(-0.02, 0.08, 0.05)}};
@@ -54,34 +56,38 @@ TEST_F(RegistrationService, AViewTenCentimetresOffIsRejectedAndNotMerged) {
   for (const auto& [r, c] : balls) {
     for (const auto& p : sample_surface(make_icosphere(r, 3), 8000, seed++)) pts.push_back(p + c);
   }
-  auto cloud_msg = [&](int64_t id, const Eigen::Vector3d& shift) {
-    point_cloud_t c;
-    c.utime = 0;
-    c.scan_id = "registration-gate";
-    c.iteration = static_cast<int32_t>(id);
-    c.request_id = id;
-    c.status = point_cloud_t::kOk;
-    c.frame = "object";
-    double p[3], q[4];
-    pose_to_arrays(look_at_z_up(Eigen::Vector3d(0.8, 0.1, 0.4), Eigen::Vector3d::Zero()), p, q);
-    std::copy(p, p + 3, c.object_T_camera.position_m);
-    std::copy(q, q + 4, c.object_T_camera.quat_wxyz);
-    c.num_joints = 6;
-    c.joint_position_rad.assign(6, 0.0);
-    c.turntable_angle_rad = 0;
-    c.depth_frame_seq = -1;  // no depth frame: the map cannot integrate it either way
-    c.depth_frame_utime = 0;
-    c.num_valid_pixels = c.num_cropped = 0;
-    c.voxel_m = 0.002;
-    c.capture_s = c.process_s = 0;
-    for (const auto& x : pts) {
-      const Eigen::Vector3d y = x + shift;
-      c.points_m.push_back({static_cast<float>(y.x()), static_cast<float>(y.y()), static_cast<float>(y.z())});
-    }
-    c.num_points = static_cast<int32_t>(c.points_m.size());
-    c.num_normals = 0;  // none: the service fits them to the neighbours
-    return c;
-  };
+  point_cloud_t c;
+  c.utime = 0;
+  c.scan_id = scan_id;
+  c.iteration = static_cast<int32_t>(id);
+  c.request_id = id;
+  c.status = point_cloud_t::kOk;
+  c.frame = "object";
+  double p[3], q[4];
+  pose_to_arrays(look_at_z_up(Eigen::Vector3d(0.8, 0.1, 0.4), Eigen::Vector3d::Zero()), p, q);
+  std::copy(p, p + 3, c.object_T_camera.position_m);
+  std::copy(q, q + 4, c.object_T_camera.quat_wxyz);
+  c.num_joints = 6;
+  c.joint_position_rad.assign(6, 0.0);
+  c.turntable_angle_rad = 0;
+  c.depth_frame_seq = -1;  // no depth frame: the map cannot integrate it either way
+  c.depth_frame_utime = 0;
+  c.num_valid_pixels = c.num_cropped = 0;
+  c.voxel_m = 0.002;
+  c.capture_s = c.process_s = 0;
+  for (const auto& x : pts) {
+    const Eigen::Vector3d y = x + shift;
+    c.points_m.push_back({static_cast<float>(y.x()), static_cast<float>(y.y()), static_cast<float>(y.z())});
+  }
+  c.num_points = static_cast<int32_t>(c.points_m.size());
+  c.num_normals = 0;  // none: the service fits them to the neighbours
+  return c;
+}
+
+TEST_F(RegistrationService, AViewTenCentimetresOffIsRejectedAndNotMerged) {
+  // Two views of the balls: the first defines the model; the second is the same surface but placed
+  // 10 cm off, as a wildly wrong kinematic pose would place it.
+  auto cloud_msg = [](int64_t id, const Eigen::Vector3d& shift) { return balls_cloud("registration-gate", id, shift); };
   lcm::LCM& lcm = listener_->lcm();
   ask_capture("registration-gate", 0);
   const point_cloud_t first = cloud_msg(0, Eigen::Vector3d::Zero());
@@ -157,6 +163,114 @@ TEST_F(RegistrationService, CloudsThatAnswerNoCaptureRequestAreNotTaken) {
   lcm.publish("REGISTERED_CLOUD", &r);
   ASSERT_TRUE(listener_->spin_until([] { return listener_->maps.count({"registration-ask", 3}) > 0; }, 10.0));
   EXPECT_EQ((listener_->maps[{"registration-ask", 3}].request_id), 4242);
+  EXPECT_TRUE(all_running());
+}
+
+// The registration service of one scan with its folder, as the launcher starts it.
+class MeshRequests : public ServiceSuite {
+ protected:
+  static constexpr const char* kScan = "registration-mesh";
+  static void SetUpTestSuite() {
+    out_ = fresh_dir("registration-mesh-out");
+    start_suite("registration-mesh", {{"registration", {bin_dir() + "/pbnbv-registration", "--scan", kScan,
+                                                        "--out", out_.string()}}});
+  }
+  static void TearDownTestSuite() { stop_suite(); }
+  static mesh_request_t mesh_request(const std::string& scan_id, int64_t id, double spacing_m) {
+    mesh_request_t m{};
+    m.scan_id = scan_id;
+    m.request_id = id;
+    m.views = {0};
+    m.num_views = 1;
+    m.width = 640;
+    m.height = 480;
+    m.fx = m.fy = 600;
+    m.cx = 320;
+    m.cy = 240;
+    m.point_spacing_m = spacing_m;
+    return m;
+  }
+  // The lines of the service's log that hold `text`.
+  static int log_lines(const std::string& text) {
+    std::ifstream log(dir_ / "registration.log");
+    int n = 0;
+    for (std::string line; std::getline(log, line);) n += line.find(text) != std::string::npos;
+    return n;
+  }
+  static bool log_says(const std::string& text) { return log_lines(text) > 0; }
+  static int meshes_started() { return log_lines("] meshing "); }
+  inline static fs::path out_;
+};
+
+// One view merged, then: a MESH_REQUEST of another scan is not taken; the first
+// request makes mesh.ply; the same request under a new id is answered with the same mesh without
+// making it again; requests that differ (another spacing) make a mesh each until three are made,
+// and every one after is answered "no more" at once. The service stays up and answers throughout.
+TEST_F(MeshRequests, AFloodOfRequestsMakesThreeMeshesAtMost) {
+  lcm::LCM& lcm = listener_->lcm();
+  capture_request_t ask = capture_request(0);
+  ask.scan_id = kScan;
+  lcm.publish("CAPTURE_REQUEST", &ask);
+  listener_->spin_until([] { return false; }, 0.2);
+  const point_cloud_t view = balls_cloud(kScan, 0, Eigen::Vector3d::Zero());
+  lcm.publish("CLOUD", &view);
+  ASSERT_TRUE(listener_->spin_until([] { return listener_->registered.count({kScan, 0}) > 0; }, 20.0));
+  ASSERT_TRUE((listener_->registered[{kScan, 0}].accepted));
+  ASSERT_TRUE(fs::exists(out_ / frame_file_of(0)));
+
+  // A service started for one scan does not take another scan's request (the bus ignores it,
+  // saying so); one started for none holds no folder to mesh in.
+  const mesh_request_t foreign = mesh_request("another-scan", 1, 0.002);
+  lcm.publish("MESH_REQUEST", &foreign);
+  listener_->spin_until([] { return listener_->meshes.count({"another-scan", 1}) > 0; }, 2.0);
+  EXPECT_EQ(listener_->meshes.count({"another-scan", 1}), 0u);
+  EXPECT_TRUE(log_says("ignored a message on MESH_REQUEST of scan 'another-scan' (this process serves scan "
+                       "'registration-mesh' only)"));
+
+  auto answer = [&](int64_t id) -> const mesh_result_t* {
+    listener_->spin_until([&] { return listener_->meshes.count({kScan, id}) > 0; }, 120.0);
+    const auto it = listener_->meshes.find({kScan, id});
+    return it == listener_->meshes.end() ? nullptr : &it->second;
+  };
+  // Each request is sent until it is answered (as the coordinator does): a request that comes
+  // while a mesh is made is asked again later.
+  auto ask_mesh = [&](const mesh_request_t& m) -> const mesh_result_t* {
+    for (int attempt = 0; attempt < 60 && !listener_->meshes.count({m.scan_id, m.request_id}); ++attempt) {
+      lcm.publish("MESH_REQUEST", &m);
+      listener_->spin_until([&] { return listener_->meshes.count({m.scan_id, m.request_id}) > 0; }, 3.0);
+    }
+    return answer(m.request_id);
+  };
+  const mesh_result_t* first = ask_mesh(mesh_request(kScan, 10, 0.002));
+  ASSERT_NE(first, nullptr);
+  ASSERT_EQ(first->status, mesh_result_t::kOk) << first->message;
+  EXPECT_GT(first->triangles, 1000);
+  EXPECT_EQ(first->frames, 1);
+  EXPECT_TRUE(fs::exists(out_ / "mesh.ply"));
+  EXPECT_EQ(meshes_started(), 1);
+
+  const mesh_result_t* again = ask_mesh(mesh_request(kScan, 11, 0.002));
+  ASSERT_NE(again, nullptr);
+  EXPECT_EQ(again->status, mesh_result_t::kOk);
+  EXPECT_EQ(again->triangles, first->triangles);
+  EXPECT_EQ(again->seconds, first->seconds) << "the same mesh's figures, not a new mesh's";
+  EXPECT_EQ(meshes_started(), 1) << "the same mesh asked under a new id is not made again";
+
+  // Ten different requests: two more meshes (three in all), then "no more".
+  int made = 1, refused = 0;
+  for (int k = 0; k < 10; ++k) {
+    const mesh_result_t* r = ask_mesh(mesh_request(kScan, 20 + k, 0.003 + 0.0005 * k));
+    ASSERT_NE(r, nullptr) << "request " << 20 + k << " was not answered";
+    if (r->status == mesh_result_t::kOk) {
+      ++made;
+    } else {
+      ++refused;
+      EXPECT_NE(r->message.find("3 different meshes of this scan made already"), std::string::npos) << r->message;
+    }
+  }
+  EXPECT_EQ(made, 3);
+  EXPECT_EQ(refused, 8);
+  EXPECT_EQ(meshes_started(), 3);
   EXPECT_TRUE(all_running());
 }
 

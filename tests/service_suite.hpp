@@ -22,6 +22,8 @@
 #include "pbnbv/capture_request_t.hpp"
 #include "pbnbv/ellipsoid_set_t.hpp"
 #include "pbnbv/heartbeat_t.hpp"
+#include "pbnbv/mesh_request_t.hpp"
+#include "pbnbv/mesh_result_t.hpp"
 #include "pbnbv/move_request_t.hpp"
 #include "pbnbv/move_result_t.hpp"
 #include "pbnbv/plan_request_t.hpp"
@@ -49,6 +51,7 @@ class Listener {
     lcm_.subscribe("VOXEL_MAP", &Listener::on_raw<voxel_set_t, &Listener::on_map>, this);
     lcm_.subscribe("ELLIPSOIDS", &Listener::on_raw<ellipsoid_set_t, &Listener::on_ellipsoids>, this);
     lcm_.subscribe("VIEW_PLAN", &Listener::on_raw<view_plan_t, &Listener::on_plan>, this);
+    lcm_.subscribe("MESH_RESULT", &Listener::on_raw<mesh_result_t, &Listener::on_mesh>, this);
   }
   lcm::LCM& lcm() { return lcm_; }
   // Handles messages until `done` or the timeout; returns done().
@@ -70,6 +73,7 @@ class Listener {
   std::map<std::pair<std::string, int32_t>, ellipsoid_set_t> ellipsoids;
   std::map<std::pair<std::string, int64_t>, view_plan_t> plans;
   int plan_answers = 0;
+  std::map<std::pair<std::string, int64_t>, mesh_result_t> meshes;
 
  private:
   // Messages pass the message guard before they are decoded, as a service's do (the suites send
@@ -94,6 +98,7 @@ class Listener {
     plans[{m.scan_id, m.request_id}] = m;
     ++plan_answers;
   }
+  void on_mesh(const mesh_result_t& m) { meshes[{m.scan_id, m.request_id}] = m; }
   lcm::LCM lcm_;
 };
 

@@ -17,7 +17,9 @@
 #include <chrono>
 #include <future>
 #include <iostream>
+#include <optional>
 #include <sstream>
+#include <tuple>
 
 #include <filesystem>
 
@@ -47,7 +49,8 @@ using namespace pbnbv;
 namespace {
 
 constexpr std::size_t kAnswersKept = 4;
-constexpr std::size_t kFramesKept = 4;  // depth frames of the last views (a view's comes before its cloud)
+constexpr std::size_t kFramesKept = 4;
+constexpr int kMeshesPerScan = 3;       // different meshes made for one scan at most  // depth frames of the last views (a view's comes before its cloud)
 
 class RegistrationService {
  public:
@@ -73,17 +76,53 @@ class RegistrationService {
                                               : "no mesh: " + out.message);
     bus_.publish(channels::kMeshResult, out);
     meshes_.put({out.scan_id, out.request_id}, out);
+    if (out.status == mesh_result_t::kOk) last_mesh_ = std::make_pair(making_, out);
   }
 
  private:
+  // A mesh costs seconds of CPU and rewrites DIR/mesh.*, so a request is taken only for the model
+  // this service holds, a request for the mesh already made is answered with it (whatever its
+  // request id), and at most kMeshesPerScan different meshes are made for one scan: a flood of
+  // MESH_REQUESTs with new ids or view sets costs an answer each, not a mesh each.
   void on_mesh_request(const mesh_request_t& m) {
     if (const mesh_result_t* answer = meshes_.find({m.scan_id, m.request_id})) {
       bus_.publish(channels::kMeshResult, *answer);  // a repeat: answer again
       return;
     }
-    if (meshing_.valid()) return;  // a repeat while the mesh is made (or another request: asked again later)
     const MeshRequest r = bus::from_msg(m, kViews.max);  // a malformed request throws: rejected by the bus
+    const std::string what = "MESH_REQUEST " + std::to_string(r.request_id) + " of scan '" + r.scan_id + "'";
+    if (r.scan_id != scan_id_) {
+      throw std::invalid_argument(what + ": " + (scan_id_.empty() ? std::string("this service holds no model yet")
+                                                                  : "this service holds the model of scan '" + scan_id_ + "'"));
+    }
+    const MeshKey key = mesh_key(r);
+    if (last_mesh_ && last_mesh_->first == key) {  // the mesh already made: said again under this id
+      mesh_result_t out = last_mesh_->second;
+      out.utime = bus::now_utime();
+      out.request_id = r.request_id;
+      log_info(what + " asks for the mesh made for request " + std::to_string(last_mesh_->second.request_id) +
+               ": answered with it, not made again");
+      bus_.publish(channels::kMeshResult, out);
+      meshes_.put({out.scan_id, out.request_id}, out);
+      return;
+    }
+    if (meshing_.valid()) return;  // a repeat while the mesh is made (or another request: asked again later)
+    if (meshes_made_ >= kMeshesPerScan) {
+      MeshResult refused;
+      refused.scan_id = r.scan_id;
+      refused.request_id = r.request_id;
+      refused.message = what + ": " + std::to_string(kMeshesPerScan) +
+                        " different meshes of this scan made already, no more (a mesh takes seconds of CPU)";
+      log_warn(refused.message);
+      mesh_result_t out = bus::to_msg(refused);
+      out.utime = bus::now_utime();
+      bus_.publish(channels::kMeshResult, out);
+      meshes_.put({out.scan_id, out.request_id}, out);
+      return;
+    }
     bus_.set_scan(r.scan_id, -1);
+    ++meshes_made_;
+    making_ = key;
     log_info("meshing " + std::to_string(r.views.size()) + " views");
     // The mesh reads only the frames' files, which no view changes after the scan's end (a CLOUD
     // that comes while it is made waits for it: on_cloud).
@@ -101,6 +140,21 @@ class RegistrationService {
     });
   }
 
+  // What a mesh is made of: the views, their camera and spacing.
+  using MeshKey = std::tuple<std::vector<int>, int, int, double, double, double, double, double>;
+  static MeshKey mesh_key(const MeshRequest& r) {
+    const CameraIntrinsics& k = r.camera;
+    return {r.views, k.width, k.height, k.fx, k.fy, k.cx, k.cy, r.point_spacing_m};
+  }
+
+  // A new scan's model: its meshes are counted afresh.
+  void start_model(const std::string& scan_id) {
+    scan_id_ = scan_id;
+    model_.clear();
+    meshes_made_ = 0;
+    last_mesh_.reset();
+  }
+
   void on_cloud(const point_cloud_t& c) {
     asked_.require("CLOUD", c.scan_id, c.request_id);  // a cloud nobody asked for is not merged
     bus_.set_scan(c.scan_id, c.iteration);
@@ -110,10 +164,7 @@ class RegistrationService {
       return;
     }
     const CaptureResult capture = bus::from_msg(c);  // a malformed cloud throws: rejected by the bus, nothing changed
-    if (c.scan_id != scan_id_) {  // a new scan: a new model
-      scan_id_ = c.scan_id;
-      model_.clear();
-    }
+    if (c.scan_id != scan_id_) start_model(c.scan_id);  // a new scan: a new model
     registered_cloud_t out;
     out.scan_id = c.scan_id;
     out.iteration = c.iteration;
@@ -238,6 +289,9 @@ class RegistrationService {
   ScanModel model_;
   bus::RecentFrames frames_;          // the last depth frames, for DIR/depth/
   std::future<MeshResult> meshing_;   // the mesh being made
+  MeshKey making_;                    // ... of this
+  int meshes_made_ = 0;               // for scan_id_
+  std::optional<std::pair<MeshKey, mesh_result_t>> last_mesh_;  // the last mesh made for scan_id_
   bus::ReplyCache<std::pair<std::string, int64_t>, mesh_result_t> meshes_{kAnswersKept};
   bus::ReplyCache<std::pair<std::string, int64_t>, registered_cloud_t> answers_{kAnswersKept};
 };
