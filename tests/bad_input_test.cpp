@@ -19,6 +19,7 @@
 #include "core/base/pose.hpp"
 #include "core/io/json.hpp"
 #include "core/io/mesh_file.hpp"
+#include "core/rig/rig.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "process/processes.hpp"
 #include "pbnbv/arm_command_t.hpp"

@@ -31,6 +31,13 @@ check_includes 'mujoco/' "MuJoCo" '^(services/core/rig/|twin/)'
 check_includes 'opencv2/' "OpenCV" '^services/report/'
 check_includes 'pcl/surface/' "PCL's surface module (marching-cubes tables, Poisson)" '^services/core/surface/'
 
+# The scan's layer names a rig kind but uses none of the rig's model or kinematics (those are for
+# the motion and camera sequencing, core/acquisition): pbnbv_scan does not link pbnbv_rig.
+verdict "$(cd "$src" && grep -rln '#include "core/rig/' services/core/scan || true)" \
+        "core/scan includes the rig's model (core/rig/), which it does not link:" "core/scan does not include core/rig"
+verdict "$(grep -E 'target_link_libraries\(pbnbv_scan .*pbnbv_(rig|acquisition)' "$src/services/core/scan/CMakeLists.txt" || true)" \
+        "pbnbv_scan links the rig:" "pbnbv_scan does not link pbnbv_rig"
+
 # scan.json is parsed by core/scan alone (scan_file.cpp: read_scan_json, which checks its format);
 # every other source reads it into its types (scan_record.hpp: read_scan_record), never by key.
 verdict "$(cd "$src" && grep -rnE 'read_json\([^;]*(scan\.json|scan_json|scan_path|replay_of)' services twin \

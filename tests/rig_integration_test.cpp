@@ -11,7 +11,7 @@
 
 #include "core/geometry/mesh.hpp"
 #include "core/io/mesh_file.hpp"
-#include "core/rig/working_volume.hpp"
+#include "core/geometry/working_volume.hpp"
 #include "eval/evaluate.hpp"
 #include "scan_checks.hpp"
 #include "test_util.hpp"

@@ -24,7 +24,7 @@
 #include "core/base/format.hpp"
 #include "core/base/log.hpp"
 #include "core/rig/rig.hpp"
-#include "core/scan/capture_sequencer.hpp"
+#include "core/acquisition/capture_sequencer.hpp"
 #include "pbnbv/depth_trigger_t.hpp"
 
 using namespace pbnbv;

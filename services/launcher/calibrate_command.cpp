@@ -28,8 +28,8 @@
 #include "core/base/units.hpp"
 #include "core/io/json.hpp"
 #include "core/rig/calibration.hpp"
-#include "core/scan/capture_sequencer.hpp"
-#include "core/scan/motion_sequencer.hpp"
+#include "core/acquisition/capture_sequencer.hpp"
+#include "core/acquisition/motion_sequencer.hpp"
 #include "launcher/commands.hpp"
 #include "pbnbv/depth_trigger_t.hpp"
 

@@ -21,7 +21,7 @@
 #include "core/base/format.hpp"
 #include "core/base/log.hpp"
 #include "core/rig/rig.hpp"
-#include "core/scan/motion_sequencer.hpp"
+#include "core/acquisition/motion_sequencer.hpp"
 #include "pbnbv/stop_request_t.hpp"
 
 using namespace pbnbv;

@@ -11,7 +11,7 @@
 #include "bus/convert_rig.hpp"
 #include "core/base/format.hpp"
 #include "core/base/units.hpp"
-#include "core/scan/motion_sequencer.hpp"
+#include "core/acquisition/motion_sequencer.hpp"
 #include "pbnbv/depth_trigger_t.hpp"
 
 namespace pbnbv::rigcheck {

@@ -15,27 +15,11 @@
 
 #include "core/base/pose.hpp"
 #include "core/base/setting.hpp"
-#include "core/rig/working_volume.hpp"
+#include "core/geometry/rig_kind.hpp"
+#include "core/geometry/working_volume.hpp"
 #include "core/geometry/camera_model.hpp"
 
 namespace pbnbv {
-
-enum class RigKind {
-  kArm,   // 6-axis arm + turntable; object on the turntable
-  kFree,  // no arm: a 6-DOF virtual gantry puts the camera anywhere; object floats at origin
-};
-template <>
-struct EnumNames<RigKind> {
-  static constexpr std::string_view what = "rig kind";
-  static constexpr std::array<NamedValue<RigKind>, 2> names{{{RigKind::kArm, "arm"}, {RigKind::kFree, "free"}}};
-};
-// "arm" | "free"; parse_rig_kind throws naming the value and the choices. Inline: a program that
-// only names rig kinds (the coordinator) does not link the rig's model loading (MuJoCo).
-inline std::string to_string(RigKind kind) { return std::string(name_of(kind)); }
-inline RigKind parse_rig_kind(const std::string& s) { return parse_name<RigKind>(s); }
-// The rig option of every program that works with a rig (pbnbv scan, motion, camera, scorer, twin).
-inline constexpr ChoiceSetting<RigKind> kRig{"rig", RigKind::kArm,
-                                             "arm + turntable, or a free-flying camera (the paper's setup)"};
 
 // Lengths of a spherical-wrist 6R arm with the KUKA joint layout (axes z, y, y, x, y, x at
 // zero), metres: base->A2 (a1 forward, d1 up), A2->A3 (a2), A3->wrist (a3 up, d4 forward),

@@ -2,7 +2,7 @@
 // The scan-level settings, each defined once (core/base/setting.hpp): default, allowed range,
 // unit and meaning. With the settings of the lower layers (core/geometry/camera_options.hpp,
 // core/mapping/map_options.hpp, core/perception/perception_options.hpp,
-// core/planning/planning_options.hpp, kRig in core/rig/rig.hpp) they are the table of scan
+// core/planning/planning_options.hpp, kRig in core/geometry/rig_kind.hpp) they are the table of scan
 // options: ScanSettings takes its defaults from them, and `pbnbv scan`, `bench`, `ablate`, the
 // services and the twin declare their options and help text from them.
 #include <array>

@@ -15,7 +15,8 @@
 #include "core/perception/perception_options.hpp"
 #include "core/planning/kinds.hpp"
 #include "core/planning/planning_options.hpp"
-#include "core/rig/rig.hpp"
+#include "core/geometry/rig_kind.hpp"
+#include "core/geometry/working_volume.hpp"
 #include "core/scan/scan_options.hpp"
 #include "core/scan/stop_rule.hpp"
 

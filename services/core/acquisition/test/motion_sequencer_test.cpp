@@ -2,7 +2,7 @@
 // model (models/rig_arm.xml, models/rig_free.xml): every answer, the re-send time, the timeout
 // reasons, the reached pose and its errors against geometry, and rig faults tied to their command
 // by sequence number.
-#include "core/scan/motion_sequencer.hpp"
+#include "core/acquisition/motion_sequencer.hpp"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 // real arm rig model: the reading chosen for a frame's exposure, the 50 ms rule, the wait for
 // readings after the exposure, the retries and the failure message, the not_before rule, and a
 // flat depth frame at a known pose giving points on the plane it shows.
-#include "core/scan/capture_sequencer.hpp"
+#include "core/acquisition/capture_sequencer.hpp"
 
 #include <gtest/gtest.h>
 

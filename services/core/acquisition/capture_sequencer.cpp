@@ -1,4 +1,4 @@
-#include "core/scan/capture_sequencer.hpp"
+#include "core/acquisition/capture_sequencer.hpp"
 
 #include <algorithm>
 #include <fmt/format.h>

@@ -1,4 +1,4 @@
-#include "core/scan/motion_sequencer.hpp"
+#include "core/acquisition/motion_sequencer.hpp"
 
 #include <fmt/format.h>
 

@@ -1,9 +1,8 @@
-// The working volume of an unknown object: its text form, its bounds in the object frame (centred
-// on the volume), the rig file's volume and the one derived from the turntable.
+// The working volume of an unknown object: its text form and its bounds in the object frame
+// (centred on the volume). The rig file's volume: core/rig/test/rig_working_volume_test.cpp.
 #include <gtest/gtest.h>
 
-#include "core/rig/rig.hpp"
-#include "core/rig/working_volume.hpp"
+#include "core/geometry/working_volume.hpp"
 
 using namespace pbnbv;
 
@@ -34,15 +33,4 @@ TEST(WorkingVolume, BadTextIsNamed) {
   EXPECT_EQ(error_of("box:0.2,x,0.2"), "working volume 'box:0.2,x,0.2': 'x' is not a number");
   EXPECT_EQ(error_of("cylinder:0.2,-1"), "working volume 'cylinder:0.2,-1': -1 m is not a size in (0, 3] m");
   EXPECT_EQ(error_of("cylinder:0.2,4"), "working volume 'cylinder:0.2,4': 4 m is not a size in (0, 3] m");
-}
-
-TEST(WorkingVolume, FromTheRigFileOrDerivedFromTheTurntable) {
-  RigModel arm = load_rig(default_rig_path(RigKind::kArm));
-  ASSERT_TRUE(arm.working_volume.has_value());
-  EXPECT_EQ(working_volume_of(arm).to_text(), "cylinder:0.25,0.5");  // models/rig_arm.xml states it
-  EXPECT_DOUBLE_EQ(arm.turntable_radius_m, 0.2);                      // the platter geom
-  arm.working_volume.reset();
-  EXPECT_EQ(working_volume_of(arm).to_text(), "cylinder:0.25,0.5");  // 1.25 x 0.2 m, twice as tall
-  const RigModel free = load_rig(default_rig_path(RigKind::kFree));
-  EXPECT_EQ(working_volume_of(free).to_text(), "cylinder:0.25,0.5");
 }

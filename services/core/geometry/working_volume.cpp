@@ -1,4 +1,4 @@
-#include "core/rig/working_volume.hpp"
+#include "core/geometry/working_volume.hpp"
 
 #include <fmt/format.h>
 

@@ -1,0 +1,29 @@
+#pragma once
+// Which kind of rig a scan runs on, and the rig option of every program that works with a rig.
+// Here, below the rig's model and kinematics (core/rig/rig.hpp), so that what only names a rig
+// kind (the scan's settings, the coordinator) does not depend on them.
+#include <array>
+#include <string>
+#include <string_view>
+
+#include "core/base/setting.hpp"
+
+namespace pbnbv {
+
+enum class RigKind {
+  kArm,   // 6-axis arm + turntable; object on the turntable
+  kFree,  // no arm: a 6-DOF virtual gantry puts the camera anywhere; object floats at origin
+};
+template <>
+struct EnumNames<RigKind> {
+  static constexpr std::string_view what = "rig kind";
+  static constexpr std::array<NamedValue<RigKind>, 2> names{{{RigKind::kArm, "arm"}, {RigKind::kFree, "free"}}};
+};
+// "arm" | "free"; parse_rig_kind throws naming the value and the choices.
+inline std::string to_string(RigKind kind) { return std::string(name_of(kind)); }
+inline RigKind parse_rig_kind(const std::string& s) { return parse_name<RigKind>(s); }
+// The rig option of every program that works with a rig (pbnbv scan, motion, camera, scorer, twin).
+inline constexpr ChoiceSetting<RigKind> kRig{"rig", RigKind::kArm,
+                                             "arm + turntable, or a free-flying camera (the paper's setup)"};
+
+}  // namespace pbnbv
