@@ -258,6 +258,7 @@ inline RegisteredCloud from_msg(const registered_cloud_t& m) {
   r.kinematic_object_T_camera = from_msg(m.kinematic_object_T_camera, "REGISTERED_CLOUD kinematic_object_T_camera");
   r.accepted = m.accepted;
   r.refined = m.refined;
+  r.flagged = m.flagged;
   r.reason = m.reason;
   r.constraint = m.constraint;
   r.correction = from_msg(m.correction, "REGISTERED_CLOUD correction");
@@ -265,6 +266,9 @@ inline RegisteredCloud from_msg(const registered_cloud_t& m) {
   r.rotation_deg = m.rotation_deg;
   r.overlap = m.overlap;
   r.rmse_m = m.rmse_m;
+  r.icp_translation_m = m.icp_translation_m;
+  r.icp_rotation_deg = m.icp_rotation_deg;
+  r.prior_sigmas = m.prior_sigmas;
   r.iterations = m.iterations;
   r.model_points = m.model_points;
   r.register_s = m.register_s;

@@ -6,6 +6,7 @@
 
 #include "core/geometry/camera_options.hpp"
 #include "core/metrics/metrics_options.hpp"
+#include "core/base/units.hpp"
 #include "core/perception/perception_options.hpp"
 #include "eval/objects.hpp"
 #include "rigcheck/rigcheck_options.hpp"
@@ -211,6 +212,8 @@ void CommandLine::declare_scan() {
   cli::add(c, kCloudVoxel, &s.voxel_m)->group(kGroupPlanning);
   cli::add(c, kMapResolution, &s.map_resolution_m)->group(kGroupPlanning);
   cli::add(c, kRegistration, &p.registration)->group(kGroupPlanning);
+  cli::add(c, kPoseSigmaMm, &p.pose_sigma_mm, "twin: from its errors; a real rig: 0.5")->group(kGroupRig);
+  cli::add(c, kPoseSigmaDeg, &p.pose_sigma_deg, "twin: from its errors; a real rig: 0.1")->group(kGroupRig);
 
   cli::add(c, kRig, &s.rig)->group(kGroupRig);
   cli::add_text(c, "rig-model", &p.rig_model,
@@ -408,6 +411,23 @@ void CommandLine::resolve_scan() {
   // paper's simulation): its kinematic poses are exact, so registration is off by default there.
   scan_.registration = p.registration.value_or(s.rig == RigKind::kArm ? OnOff::kOn : OnOff::kOff) == OnOff::kOn;
   scan_.record_log = !p.no_log;
+  // Registration's prior: what the user says of the rig, else on the twin what its errors make
+  // (each a random direction of its size: about size / sqrt(3) per axis; a joint's error turns
+  // the camera and moves it through the arm's reach; the turntable's turns the object under it).
+  if (scan_.external_rig) {
+    s.pose_sigma_m = p.pose_sigma_mm.value_or(kPoseSigmaMm.value) * 1e-3;
+    s.pose_sigma_deg = p.pose_sigma_deg.value_or(kPoseSigmaDeg.value);
+  } else {
+    constexpr double kLeverM = 0.5;  // the arm's reach and the camera's distance to the object, about
+    const double he_m = scan_.hand_eye_error_mm * 1e-3 / std::sqrt(3.0);
+    const double he_rad = deg_to_rad(scan_.hand_eye_error_deg) / std::sqrt(3.0);
+    const double joint_rad = deg_to_rad(scan_.joint_error_deg) * std::sqrt(2.0);  // six joints on three axes
+    const double table_rad = deg_to_rad(scan_.turntable_error_deg) / std::sqrt(3.0);
+    const double rot_rad = std::sqrt(he_rad * he_rad + joint_rad * joint_rad + table_rad * table_rad);
+    const double pos_m = std::sqrt(he_m * he_m + std::pow((joint_rad + table_rad) * kLeverM, 2));
+    s.pose_sigma_m = p.pose_sigma_mm.value_or(std::max(pos_m * 1e3, 0.01)) * 1e-3;  // an exact twin: 10 um,
+    s.pose_sigma_deg = p.pose_sigma_deg.value_or(std::max(rad_to_deg(rot_rad), 0.002));  // 0.002 deg
+  }
   if (scan_.external_rig) {
     // The object is unknown: nothing of the twin's object or of its simulation applies.
     for (const char* twin_only : {"--object", "--size", "--up", "--sim-speed", "--noise-sigma", "--dropout",

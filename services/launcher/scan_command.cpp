@@ -250,7 +250,8 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
   }
   // The model (cloud.ply) at the scan's cloud voxel, its new surface at the stop rule's radius.
   add("registration", {(bin / "pbnbv-registration").string(), "--out", out.string(), "--model-voxel", exact(s.voxel_m),
-                       "--new-surface-radius", exact(s.stop_radius_m)});
+                       "--new-surface-radius", exact(s.stop_radius_m), "--pose-sigma-mm", exact(s.pose_sigma_m * 1e3),
+                       "--pose-sigma-deg", exact(s.pose_sigma_deg)});
   if (!registration) children.back().argv.push_back("--off");
   // The map's working volume: the cloud's crop box, above the turntable top.
   Eigen::Vector3d volume_min = s.crop_min_m;

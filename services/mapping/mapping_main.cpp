@@ -58,8 +58,9 @@ class MappingService {
   // out of the map with an answer that says it was mapped.
   void tick() {
     if (!pending_) return;
-    // A view registration rejected is not integrated: it needs no frame.
-    if (!pending_->accepted || frames_.find(pending_->cloud.depth_frame_seq)) {
+    // A view registration did not merge is not integrated: it needs no frame; nor is one that
+    // names no depth frame (a negative sequence number: there is none to wait for).
+    if (!pending_->accepted || pending_->cloud.depth_frame_seq < 0 || frames_.find(pending_->cloud.depth_frame_seq)) {
       const registered_cloud_t r = std::move(*pending_);
       pending_.reset();
       integrate(r);
@@ -121,6 +122,9 @@ class MappingService {
     const depth_frame_t* frame = frames_.find(r.cloud.depth_frame_seq);
     if (!r.accepted) {
       out.message = "not integrated: registration rejected the view (" + r.reason + ")";
+    } else if (r.cloud.depth_frame_seq < 0) {
+      out.message = "not integrated: the view names no depth frame (depth_frame_seq " +
+                    std::to_string(r.cloud.depth_frame_seq) + ")";
     } else if (!frame) {
       out.message = "not integrated: DEPTH_FRAME " + std::to_string(r.cloud.depth_frame_seq) + " never arrived";
     } else {

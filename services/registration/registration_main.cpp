@@ -7,8 +7,9 @@
 //        view), DIR/cloud.ply (the model), DIR/depth/view_NNN.png and .json, DIR/mesh.ply and
 //        mesh.obj (the surface of the merged views, core/surface/scan_mesh.hpp)
 // Refines each view's pose against the accumulated model of its scan with point-to-plane ICP
-// (core register_frame), starting from the kinematic pose; an implausible alignment is
-// rejected with the reason and the kinematic pose kept, and a rejected view is not merged.
+// (core register_frame), starting from the kinematic pose and weighing ICP's correction against
+// the kinematic pose's uncertainty (--pose-sigma-mm, --pose-sigma-deg); a view whose alignment
+// cannot be trusted is merged at its kinematic pose and flagged, with the reason.
 // It owns the model and what is made of it (core/surface/scan_model.hpp): each view's frame,
 // the merged cloud and what each view added to it (new surface), said in the answer. A
 // restarted service continues the model of its scan from DIR/cloud.ply; answers are idempotent
@@ -173,7 +174,8 @@ class RegistrationService {
     out.kinematic_object_T_camera = c.object_T_camera;
     out.correction = bus::to_msg(Pose::Identity());
     out.translation_m = out.rotation_deg = out.overlap = out.rmse_m = out.register_s = out.constraint = 0;
-    out.refined = false;
+    out.refined = out.flagged = false;
+    out.icp_translation_m = out.icp_rotation_deg = out.prior_sigmas = 0;
     out.iterations = 0;
     out.cloud.num_normals = 0;  // written to the frame's file, not sent on
     out.cloud.normals.clear();
@@ -192,10 +194,14 @@ class RegistrationService {
         r.accepted = true;
         r.reason = "registration off: kinematic pose kept";
       } else {
-        r = register_frame(model_.points(), frame, params_);
+        r = register_frame(model_.points(), frame, params_, kinematic.translation());
       }
       out.accepted = r.accepted;
       out.refined = r.refined;
+      out.flagged = r.flagged;
+      out.icp_translation_m = r.icp_translation_m;
+      out.icp_rotation_deg = r.icp_rotation_deg;
+      out.prior_sigmas = r.prior_sigmas;
       out.constraint = r.constraint;
       out.reason = r.reason;
       out.correction = bus::to_msg(r.correction);
@@ -322,6 +328,9 @@ int main(int argc, char** argv) {
   cli::add(app, Setting<double>{"max-correction-deg", d.max_rotation_deg, 0.01, 45.0, "deg",
                                 "accept: the correction turns the camera at most this much"},
            &p.max_rotation_deg);
+  double pose_sigma_mm = d.prior_translation_m * 1e3;
+  cli::add(app, kPoseSigmaMm, &pose_sigma_mm);
+  cli::add(app, kPoseSigmaDeg, &p.prior_rotation_deg);
   double model_voxel_m = 0;
   cli::add(app, kCloudVoxel.renamed("model-voxel", "the model cloud's downsampling voxel (0: off)"), &model_voxel_m);
   double new_surface_radius_m = kStopRadius.value;
@@ -334,6 +343,7 @@ int main(int argc, char** argv) {
                 "the scan's folder: with --scan, each view's frame (DIR/frames/), depth image (DIR/depth/) and the model "
                 "(DIR/cloud.ply, continued after a restart) are written there", "DIR");
   return bus::run_service("registration", app, argc, argv, 20, [&](bus::Bus& bus) -> std::function<void()> {
+    p.prior_translation_m = pose_sigma_mm * 1e-3;
     auto service = std::make_shared<RegistrationService>(bus, p, model_voxel_m, new_surface_radius_m, off, out);
     log_info("ready");
     return [service] { service->tick(); };

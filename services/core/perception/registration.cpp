@@ -275,12 +275,14 @@ void set_correction(const Eigen::Matrix4d& t_final, RegistrationResult& res, std
 }
 
 // The fit after alignment, on the downsampled frame against the cropped model: res.overlap,
-// res.rmse_m (point-to-plane) and res.constraint; returns the overlap's weakest direction.
+// res.rmse_m (point-to-plane) and res.constraint, and the overlap's pairs (aligned point, model
+// normal); returns the overlap's weakest direction.
 Eigen::Matrix<double, 6, 1> measure_fit(const PointCloud& frame_ds, const Cloud& target, const Tree& tree,
-                                        const RegistrationParams& params, RegistrationResult& res) {
+                                        const RegistrationParams& params, RegistrationResult& res,
+                                        std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& pairs) {
   std::size_t n_overlap = 0;
   double sum_sq = 0;
-  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> pairs;  // aligned point, model normal
+  pairs.clear();  // aligned point, model normal
   if (target.size() >= 3) {
     const float r2 = static_cast<float>(params.overlap_distance_m * params.overlap_distance_m);
     const Eigen::Matrix3f r = res.correction.linear().cast<float>();
@@ -306,12 +308,97 @@ Eigen::Matrix<double, 6, 1> measure_fit(const PointCloud& frame_ds, const Cloud&
   return weakest;
 }
 
-// The verdict: gates on the data (does the view fit the model?) and on the motion (is the
-// correction plausible, did ICP settle?). Where the overlap leaves a direction free, ICP's motion
-// means nothing (it slides, may not converge): the kinematic pose is kept if the view fits the
-// model. Elsewhere every gate counts. Sets res.accepted, res.refined and res.reason.
-void judge(const RegistrationParams& params, const Eigen::Matrix<double, 6, 1>& weakest, const std::string& icp_note,
-           const std::string& dropped_note, RegistrationResult& res) {
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+using Pairs = std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>;
+
+// A rigid motion as a small motion about the point c: its rotation vector, then how far it moves c.
+Vec6 twist_about(const Pose& t, const Eigen::Vector3d& c) {
+  const Eigen::AngleAxisd aa(t.linear());
+  Vec6 d;
+  d << aa.angle() * aa.axis(), t * c - c;
+  return d;
+}
+
+Pose pose_from_twist(const Vec6& d, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d w = d.head<3>();
+  const double angle = w.norm();
+  Pose t = Pose::Identity();
+  if (angle > 0) t.linear() = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
+  t.translation() = c + d.tail<3>() - t.linear() * c;
+  return t;
+}
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& a) {
+  Eigen::Matrix3d m;
+  m << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
+  return m;
+}
+
+// The prior's covariance of a correction about c: the camera turned by dtheta about its own
+// centre p and moved by dt moves c by dt + dtheta x (c - p). The correction is against the model,
+// whose frame carries the kinematic errors of the views before (the first view's placed it): the
+// difference of two poses each off by the prior, twice its variance.
+Mat6 prior_covariance(const RegistrationParams& params, const Eigen::Vector3d& c, const std::optional<Eigen::Vector3d>& camera_m) {
+  const Eigen::Vector3d a = camera_m ? Eigen::Vector3d(c - *camera_m) : Eigen::Vector3d::Zero();
+  Mat6 j = Mat6::Identity();
+  j.bottomLeftCorner<3, 3>() = -skew(a);
+  const double sr = deg_to_rad(std::max(params.prior_rotation_deg, 1e-6));
+  const double st = std::max(params.prior_translation_m, 1e-9);
+  Vec6 var;
+  var << sr * sr, sr * sr, sr * sr, st * st, st * st, st * st;
+  return 2.0 * j * var.asDiagonal() * j.transpose();
+}
+
+// The covariance of ICP's correction about c: the inverse of the point-to-plane information
+// (rows [(x - c) x n, n] over the overlap's pairs, divided by the residual's variance and by the
+// pairs per independent one), plus a floor no fit is better than: min_residual_m in translation,
+// and in rotation the angle it makes over the overlap's RMS radius. Called only where the overlap
+// constrains every direction (the information is invertible).
+Mat6 icp_covariance(const Pairs& pairs, const Eigen::Vector3d& c, double residual_m, const RegistrationParams& params) {
+  Mat6 h = Mat6::Zero();
+  double r2 = 0;
+  for (const auto& [x, n] : pairs) {
+    Vec6 j;
+    j << (x - c).cross(n.normalized()), n.normalized();
+    h += j * j.transpose();
+    r2 += (x - c).squaredNorm();
+  }
+  const double sigma = std::max(residual_m, params.min_residual_m);
+  h /= sigma * sigma * std::max(params.pairs_per_independent, 1.0);
+  const double radius = std::sqrt(r2 / static_cast<double>(std::max<std::size_t>(pairs.size(), 1)));
+  const double floor_t = params.min_residual_m, floor_r = params.min_residual_m / std::max(radius, 1e-3);
+  Vec6 floor;
+  floor << floor_r * floor_r, floor_r * floor_r, floor_r * floor_r, floor_t * floor_t, floor_t * floor_t, floor_t * floor_t;
+  return Mat6(h.inverse()) + Mat6(floor.asDiagonal());
+}
+
+std::string direction_text(const Vec6& weakest) {
+  const bool rotation = weakest.head<3>().norm() > weakest.tail<3>().norm();
+  const Eigen::Vector3d axis = (rotation ? weakest.head<3>() : weakest.tail<3>()).normalized();
+  return std::string(rotation ? "rotation about " : "translation along ") + fmt::format("({:.2f}, ", axis.x()) +
+         fmt::format("{:.2f}, ", axis.y()) + fmt::format("{:.2f})", axis.z());
+}
+
+// Keeps the kinematic pose: the correction undone, its size zero.
+void keep_kinematic(RegistrationResult& res) {
+  res.refined = false;
+  res.correction = Pose::Identity();
+  res.translation_m = 0;
+  res.rotation_deg = 0;
+}
+
+// The verdict. Is ICP's alignment to be trusted (does the view fit the model; did ICP settle on a
+// plausible correction)? Where the overlap leaves a direction free, ICP's motion means nothing (it
+// slides): the kinematic pose is kept, unflagged if the view fits the model. A trusted correction
+// is weighed against the prior: beyond max_prior_sigmas it is not taken (flagged); else the one
+// taken is the prior and ICP's estimate combined by their information. Every view is merged.
+void judge(const RegistrationParams& params, const Vec6& weakest, const Pairs& pairs,
+           const std::optional<Eigen::Vector3d>& camera_m, const std::string& icp_note, const std::string& dropped_note,
+           RegistrationResult& res) {
+  res.accepted = true;
+  res.icp_translation_m = res.translation_m;
+  res.icp_rotation_deg = res.rotation_deg;
   std::vector<std::string> fails, motion_fails;
   if (res.overlap < params.min_overlap) {
     fails.push_back(fmt::format("overlap {:.2f}", res.overlap) + fmt::format(" below {:.2f}", params.min_overlap));
@@ -332,38 +419,59 @@ void judge(const RegistrationParams& params, const Eigen::Matrix<double, 6, 1>& 
   if (!res.converged) motion_fails.push_back("not converged: " + icp_note);
   const bool degenerate = res.constraint < params.min_constraint;
   if (!degenerate) fails.insert(fails.end(), motion_fails.begin(), motion_fails.end());
+  const std::string icp_said =
+      fmt::format("ICP {:.2f} mm, ", res.icp_translation_m * 1e3) + fmt::format("{:.3f} deg", res.icp_rotation_deg);
 
-  if (fails.empty() && degenerate) {
-    // ICP may have slid along the free direction: trust the kinematics instead.
-    const bool rotation = weakest.head<3>().norm() > weakest.tail<3>().norm();
-    const Eigen::Vector3d axis = (rotation ? weakest.head<3>() : weakest.tail<3>()).normalized();
-    res.accepted = true;
-    res.refined = false;
-    res.reason = "kinematic pose kept: the overlap does not constrain the alignment (weakest direction: " +
-                 std::string(rotation ? "rotation about " : "translation along ") +
-                 fmt::format("({:.2f}, ", axis.x()) + fmt::format("{:.2f}, ", axis.y()) + fmt::format("{:.2f})", axis.z()) +
-                 fmt::format(", constraint {:.4f}", res.constraint) + fmt::format(" below {:.4f}", params.min_constraint) +
-                 fmt::format("; ICP would have moved it {:.2f} mm)", res.translation_m * 1e3);
-    res.correction = Pose::Identity();
-    res.translation_m = 0;
-    res.rotation_deg = 0;
-  } else if (fails.empty()) {
-    res.accepted = true;
-    res.refined = true;
-    res.reason = "accepted: " + fmt::format("{:.2f} mm, ", res.translation_m * 1e3) +
-                 fmt::format("{:.3f} deg, ", res.rotation_deg) + fmt::format("overlap {:.2f}, ", res.overlap) +
-                 fmt::format("rmse {:.2f} mm", res.rmse_m * 1e3) + fmt::format(", constraint {:.4f}", res.constraint) + dropped_note;
-  } else {
-    res.accepted = false;
-    res.reason = "rejected: ";
+  if (!fails.empty()) {
+    keep_kinematic(res);
+    res.flagged = true;
+    res.reason = "kinematic pose kept, flagged (alignment not trusted: ";
     for (std::size_t i = 0; i < fails.size(); ++i) res.reason += (i ? "; " : "") + fails[i];
-    res.reason += dropped_note;
+    res.reason += ")" + dropped_note;
+    return;
   }
+  if (degenerate) {
+    res.reason = "kinematic pose kept: the overlap does not constrain the alignment (weakest direction: " +
+                 direction_text(weakest) + fmt::format(", constraint {:.4f}", res.constraint) +
+                 fmt::format(" below {:.4f}", params.min_constraint) +
+                 fmt::format("; ICP would have moved it {:.2f} mm)", res.icp_translation_m * 1e3) + dropped_note;
+    keep_kinematic(res);
+    return;
+  }
+  // ICP's correction about the overlap's centre (where the kinematic pose put it).
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const auto& pr : pairs) centre += pr.first;
+  centre = res.correction.inverse() * Eigen::Vector3d(centre / static_cast<double>(pairs.size()));
+  const Vec6 icp = twist_about(res.correction, centre);
+  // The innovation: ICP's proposal against the kinematic pose, each with its covariance.
+  const Mat6 prior = prior_covariance(params, centre, camera_m);
+  const Mat6 both = prior + icp_covariance(pairs, centre, res.rmse_m, params);
+  const Eigen::LDLT<Mat6> both_ldlt(both);
+  res.prior_sigmas = std::sqrt(std::max(0.0, icp.dot(both_ldlt.solve(icp))));
+  const std::string prior_text = fmt::format("the kinematic pose's sigma {:.2f} mm, ", params.prior_translation_m * 1e3) +
+                                 fmt::format("{:.3f} deg", params.prior_rotation_deg);
+  if (res.prior_sigmas > params.max_prior_sigmas) {
+    keep_kinematic(res);
+    res.flagged = true;
+    res.reason = "kinematic pose kept, flagged (" + icp_said + fmt::format(" is {:.1f} sigma", res.prior_sigmas) +
+                 " of " + prior_text + fmt::format(", above {:.1f})", params.max_prior_sigmas) + dropped_note;
+    return;
+  }
+  // The two combined (a Kalman update from the kinematic pose): prior (prior + icp)^-1 proposal.
+  const Vec6 taken = prior * both_ldlt.solve(icp);
+  res.correction = pose_from_twist(taken, centre);
+  res.translation_m = res.correction.translation().norm();
+  res.rotation_deg = rad_to_deg(rotation_angle_rad(Eigen::Matrix3d::Identity(), res.correction.linear()));
+  res.refined = true;
+  res.reason = "corrected " + fmt::format("{:.2f} mm, ", res.translation_m * 1e3) +
+               fmt::format("{:.3f} deg (", res.rotation_deg) + icp_said + fmt::format(" at {:.1f} sigma of ", res.prior_sigmas) +
+               prior_text + fmt::format("; overlap {:.2f}, ", res.overlap) + fmt::format("rmse {:.2f} mm", res.rmse_m * 1e3) +
+               fmt::format(", constraint {:.4f})", res.constraint) + dropped_note;
 }
 
 // register_frame's steps after the inputs' checks; throws what PCL throws.
 void align_and_judge(const PointCloud& model_ds, const PointCloud& frame_ds, const RegistrationParams& params,
-                     const std::string& dropped_note, RegistrationResult& res) {
+                     const std::optional<Eigen::Vector3d>& camera_m, const std::string& dropped_note, RegistrationResult& res) {
   const double voxel = params.voxel_m;
   // Only the part of the model the frame can reach matters: keep the model points within
   // `margin` (the largest correspondence distance plus room for the normals) of the frame,
@@ -386,16 +494,26 @@ void align_and_judge(const PointCloud& model_ds, const PointCloud& frame_ds, con
     icp_note = "no model points near the frame";
   }
   set_correction(t_final, res, icp_note);
-  const Eigen::Matrix<double, 6, 1> weakest = measure_fit(frame_ds, *target, *tree, params, res);
-  judge(params, weakest, icp_note, dropped_note, res);
+  Pairs pairs;
+  const Vec6 weakest = measure_fit(frame_ds, *target, *tree, params, res, pairs);
+  judge(params, weakest, pairs, camera_m, icp_note, dropped_note, res);
 }
 
 }  // namespace
 
-RegistrationResult register_frame(const PointCloud& model, const PointCloud& frame,
-                                  const RegistrationParams& params) {
+RegistrationResult register_frame(const PointCloud& model, const PointCloud& frame, const RegistrationParams& params,
+                                  const std::optional<Eigen::Vector3d>& camera_m) {
   const auto t0 = Clock::now();
   RegistrationResult res;
+  const std::size_t frame_finite = static_cast<std::size_t>(
+      std::count_if(frame.begin(), frame.end(), [](const Eigen::Vector3f& p) { return p.allFinite(); }));
+  // What is left when ICP cannot run: the view at its kinematic pose, flagged (none: no view).
+  auto kinematic_only = [&](const std::string& why) {
+    res = RegistrationResult{};
+    res.accepted = frame_finite > 0;
+    res.flagged = true;
+    res.reason = (res.accepted ? "kinematic pose kept, flagged (" : "not merged (") + why + ")";
+  };
   try {
     const PointCloud model_f = finite_points(model);
     const PointCloud frame_f = finite_points(frame);
@@ -404,24 +522,24 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
     const PointCloud model_ds = model_f.empty() ? PointCloud() : voxel_downsample(model_f, params.voxel_m);
     const PointCloud frame_ds = model_f.empty() ? PointCloud() : voxel_downsample(frame_f, params.voxel_m);
     const std::size_t min_points = static_cast<std::size_t>(std::max(params.min_points, 3));
-    if (model_f.empty()) {
+    if (frame_f.empty()) {
+      kinematic_only("no finite point in the view" + dropped_note);
+    } else if (model_f.empty()) {
       res.accepted = true;
       res.converged = true;
       res.reason = "first frame: defines the model" + dropped_note;
     } else if (frame_ds.size() < min_points || model_ds.size() < min_points) {
-      res.reason = "rejected: too few points: frame " + std::to_string(frame_ds.size()) + ", model " +
-                   std::to_string(model_ds.size()) + " after " + fmt::format("{:.1f}", params.voxel_m * 1e3) +
-                   " mm downsampling (of " + std::to_string(frame_f.size()) + " and " + std::to_string(model_f.size()) +
-                   " finite points), need " + std::to_string(min_points) + dropped_note;
+      kinematic_only("too few points to align: frame " + std::to_string(frame_ds.size()) + ", model " +
+                     std::to_string(model_ds.size()) + " after " + fmt::format("{:.1f}", params.voxel_m * 1e3) +
+                     " mm downsampling (of " + std::to_string(frame_f.size()) + " and " + std::to_string(model_f.size()) +
+                     " finite points), need " + std::to_string(min_points) + dropped_note);
     } else {
-      align_and_judge(model_ds, frame_ds, params, dropped_note, res);
+      align_and_judge(model_ds, frame_ds, params, camera_m, dropped_note, res);
     }
   } catch (const std::exception& e) {
-    res = RegistrationResult{};
-    res.reason = std::string("rejected: registration failed: ") + e.what();
+    kinematic_only(std::string("registration failed: ") + e.what());
   } catch (...) {
-    res = RegistrationResult{};
-    res.reason = "rejected: registration failed";
+    kinematic_only("registration failed");
   }
   res.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
   return res;

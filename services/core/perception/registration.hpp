@@ -1,7 +1,15 @@
 #pragma once
 // Frame-to-model registration: refines a new frame's pose against the accumulated model with
-// point-to-plane ICP (PCL), starting from the kinematic pose, and gates the result so an
-// implausible alignment is rejected (the kinematic pose is then kept).
+// point-to-plane ICP (PCL), starting from the kinematic pose, and weighs ICP's correction against
+// how well the rig knows that pose. The kinematic pose is a prior with a known uncertainty (1 sigma
+// per axis, from the rig's errors or its calibration); ICP's estimate has the uncertainty of its
+// point-to-plane information matrix and residual. The correction taken is the two combined (each
+// direction weighted by its information: where the overlap pins the pose down better than the rig
+// does, ICP's; where it does not, the kinematics'), so an exact kinematic pose stays exact. A view
+// whose alignment cannot be trusted (too little overlap, a poor fit, ICP not settled, a correction
+// the rig's uncertainty does not allow) is not thrown away: it is placed at its kinematic pose and
+// flagged, with the reason.
+#include <optional>
 #include <string>
 
 #include "core/geometry/point_cloud.hpp"
@@ -13,7 +21,7 @@ struct RegistrationParams {
   double voxel_m = 0.002;                // both clouds downsampled to this for ICP
   double max_correspondence_m = 0.02;    // ICP correspondence distance (coarse-to-fine from here)
   int max_iterations = 60;
-  // Gates: an alignment is accepted only if all hold.
+  // Gates: ICP's alignment is trusted only if all hold (else the kinematic pose, flagged).
   double min_overlap = 0.1;              // share of frame points with a model point within
                                          // overlap_distance_m after alignment
   double overlap_distance_m = 0.003;
@@ -25,17 +33,36 @@ struct RegistrationParams {
   // planes, a sphere) lets ICP slide: below this smallest normalised eigenvalue of the
   // point-to-plane information matrix the view keeps its kinematic pose (still merged).
   double min_constraint = 0.01;
+  // The kinematic pose's uncertainty, 1 sigma per axis: the camera's position and orientation as
+  // the rig's kinematics give them (a calibrated arm: about 0.5 mm and 0.1 deg).
+  double prior_translation_m = 0.0005;
+  double prior_rotation_deg = 0.1;
+  // ICP's correction is not taken when the prior makes it this improbable: its Mahalanobis
+  // distance under the prior (6 degrees of freedom) above this many sigma.
+  double max_prior_sigmas = 5.0;
+  // Neighbouring residuals of ICP are not independent (the model's and the frame's errors are
+  // smooth over a patch): the information of N pairs counts as that of N / this.
+  double pairs_per_independent = 25.0;
+  // The residual below which no ICP fit is believed to be (the model's own sampling), m.
+  double min_residual_m = 0.0001;
 };
 
 struct RegistrationResult {
-  bool accepted = false;      // the view is usable: merge it (with `correction` applied)
-  bool refined = false;       // the correction comes from ICP (false: kinematic pose kept)
-  std::string reason;         // why accepted or rejected, with the figures
+  bool accepted = false;      // the view is merged (with `correction` applied): every view with
+                              // points, the first included
+  bool refined = false;       // a correction was taken (false: kinematic pose kept)
+  bool flagged = false;       // the alignment could not be trusted: kinematic pose kept, `reason`
+                              // says why (not set when the kinematic pose fits the model)
+  std::string reason;         // what was done and why, with the figures
   double constraint = 0;      // smallest normalised eigenvalue of the point-to-plane
                               // information matrix of the overlap (0: a direction is free)
   Pose correction = Pose::Identity();  // object_T_object: registered = correction * kinematic
   double translation_m = 0;   // |correction| translation
   double rotation_deg = 0;    // |correction| rotation angle
+  double icp_translation_m = 0;  // what ICP alone proposed (before the prior), its size
+  double icp_rotation_deg = 0;
+  double prior_sigmas = 0;    // ICP's proposal's Mahalanobis distance from the kinematic pose
+                              // (under the prior's and ICP's covariances together)
   double overlap = 0;         // after alignment
   double rmse_m = 0;          // after alignment
   int iterations = 0;
@@ -43,11 +70,14 @@ struct RegistrationResult {
   double time_s = 0;
 };
 
-// Registers `frame` (already in the object frame by the kinematic pose) to `model`. The first
-// frame of a scan (empty model) is accepted as is. Throws nothing for bad clouds: too few points
-// gives a rejected result saying so.
+// Registers `frame` (already in the object frame by the kinematic pose) to `model`. `camera_m`:
+// the camera's kinematic position in the object frame (the lever of its rotation error; without
+// it, rotations are taken about the overlap's centre). The first frame of a scan (empty model) is
+// accepted as is. Throws nothing for bad clouds: too few points, or a failure inside ICP, keep
+// the kinematic pose, flagged, saying so; only a frame without a finite point is not accepted.
 RegistrationResult register_frame(const PointCloud& model, const PointCloud& frame,
-                                  const RegistrationParams& params);
+                                  const RegistrationParams& params,
+                                  const std::optional<Eigen::Vector3d>& camera_m = std::nullopt);
 
 // Applies a correction to every point.
 PointCloud transform_cloud(const PointCloud& cloud, const Pose& transform);

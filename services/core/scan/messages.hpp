@@ -102,7 +102,8 @@ struct RegisteredCloud {
   CaptureResult cloud;
   Pose kinematic_object_T_camera = Pose::Identity();
   bool accepted = false;                   // merged into the model
-  bool refined = false;                    // the correction comes from ICP
+  bool refined = false;                    // a correction was taken
+  bool flagged = false;                    // merged at the kinematic pose: alignment not trusted
   std::string reason;
   double constraint = 0;                   // 0..1, see registered_cloud_t
   Pose correction = Pose::Identity();      // registered = correction * kinematic
@@ -110,6 +111,9 @@ struct RegisteredCloud {
   double rotation_deg = 0;
   double overlap = 0;
   double rmse_m = 0;
+  double icp_translation_m = 0;            // ICP's proposal, before the prior
+  double icp_rotation_deg = 0;
+  double prior_sigmas = 0;                 // its distance under the kinematic pose's uncertainty
   int iterations = 0;                      // ICP iterations
   int model_points = 0;
   double register_s = 0;

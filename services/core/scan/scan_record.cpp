@@ -50,6 +50,7 @@ json capture_json(const CaptureResult& c, std::size_t num_points) {
 json registration_json(const RegisteredCloud& r) {
   return {{"accepted", r.accepted},
           {"refined", r.refined},
+          {"flagged", r.flagged},
           {"constraint", r.constraint},
           {"reason", r.reason},
           {"correction", to_json(r.correction)},
@@ -57,6 +58,9 @@ json registration_json(const RegisteredCloud& r) {
           {"rotation_deg", r.rotation_deg},
           {"overlap", r.overlap},
           {"rmse_mm", r.rmse_m * 1e3},
+          {"icp_translation_mm", r.icp_translation_m * 1e3},
+          {"icp_rotation_deg", r.icp_rotation_deg},
+          {"prior_sigmas", r.prior_sigmas},
           {"iterations", r.iterations},
           {"registered_object_T_camera", to_json(r.cloud.object_T_camera)},
           {"kinematic_object_T_camera", to_json(r.kinematic_object_T_camera)}};

@@ -161,6 +161,12 @@ RegisteredCloud registration_from(const Fields& g, const Fields& view, const Fie
   r.rotation_deg = g.number("rotation_deg");
   r.overlap = g.number("overlap");
   r.rmse_m = g.number("rmse_mm") * 1e-3;
+  if (g.has("flagged")) {  // written since pbnbv 0.11 (older records: nothing was flagged)
+    r.flagged = g.flag("flagged");
+    r.icp_translation_m = g.number("icp_translation_mm") * 1e-3;
+    r.icp_rotation_deg = g.number("icp_rotation_deg");
+    r.prior_sigmas = g.number("prior_sigmas");
+  }
   r.iterations = g.count("iterations");
   r.cloud.object_T_camera = g.pose("registered_object_T_camera");
   r.kinematic_object_T_camera = g.pose("kinematic_object_T_camera");

@@ -606,7 +606,8 @@ void ScanSequencer::mapped(double now_s) {
   record_.set_model_points(static_cast<std::size_t>(std::max(reg.model_points, 0)));
   ++done_.views_done;
   record_.add_view(view_, done_.views_done, now_s - t_start_s_);
-  const std::string verdict = !reg.accepted ? std::string("registration rejected")
+  const std::string verdict = !reg.accepted ? std::string("not merged")
+                              : reg.flagged ? std::string("kinematic pose kept, flagged (alignment not trusted)")
                               : reg.refined ? "registered (" + fixed(reg.translation_m * 1e3, 2) + " mm, " +
                                                   fixed(reg.rotation_deg, 2) + " deg)"
                                             : std::string("kinematic pose kept");

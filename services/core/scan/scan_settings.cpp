@@ -37,6 +37,7 @@ nlohmann::json to_json(const ScanSettings& s) {
       {"stop_rule", {{"rule", std::string(name_of(s.stop_rule))}, {"window", s.surface_rule.window},
                      {"max_new_percent", s.surface_rule.max_new_percent}, {"min_views", s.surface_rule.min_views},
                      {"radius_m", s.stop_radius_m}}},
+      {"registration", {{"pose_sigma_mm", s.pose_sigma_m * 1e3}, {"pose_sigma_deg", s.pose_sigma_deg}}},
       {"external_rig", s.external_rig},
       {"object", s.working_volume ? nlohmann::json{{"name", s.object_name}, {"working_volume", s.working_volume->to_text()}}
                                   : nlohmann::json{{"name", s.object_name}, {"normalisation", to_json(s.normalisation)}}},
@@ -95,6 +96,10 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
       s.stop_radius_m = r.at("radius_m").get<double>();
     } else {
       s.stop_rule = StopRule::kOff;  // a scan recorded before the rule existed ran without it
+    }
+    if (j.contains("registration")) {  // written since pbnbv 0.11 (before: the defaults)
+      s.pose_sigma_m = j["registration"].at("pose_sigma_mm").get<double>() * 1e-3;
+      s.pose_sigma_deg = j["registration"].at("pose_sigma_deg").get<double>();
     }
     s.external_rig = j.value("external_rig", false);
     s.object_name = j.at("object").at("name").get<std::string>();
@@ -178,6 +183,8 @@ void ScanSettings::validate() const {
   kStopNewSurface.checked(surface_rule.max_new_percent);
   kStopMinViews.checked(surface_rule.min_views);
   kStopRadius.checked(stop_radius_m);
+  kPoseSigmaMm.checked(pose_sigma_m * 1e3);
+  kPoseSigmaDeg.checked(pose_sigma_deg);
   kAlternatives.checked(alternatives);
   kPlannerSeed.checked(seed);
   kCloudVoxel.checked(voxel_m);

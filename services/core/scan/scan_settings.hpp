@@ -38,6 +38,9 @@ struct ScanSettings {
   StopRule stop_rule = kStopRule.value;
   SurfaceStopRule surface_rule;
   double stop_radius_m = kStopRadius.value;  // a point farther than this from the model is new surface
+  // How well the rig knows the camera's pose (registration's prior, 1 sigma per axis).
+  double pose_sigma_m = kPoseSigmaMm.value * 1e-3;
+  double pose_sigma_deg = kPoseSigmaDeg.value;
 
   // The rig's drivers run outside (a physical rig, or a twin started as one): the launcher
   // starts no twin and the object is unknown.
