@@ -44,7 +44,7 @@ struct RegistrationParams {
   // smooth over a patch): the information of N pairs counts as that of N / this.
   double pairs_per_independent = 25.0;
   // The residual below which no ICP fit is believed to be (the model's own sampling), m.
-  double min_residual_m = 0.0001;
+  double min_residual_m = 0.00005;
 };
 
 struct RegistrationResult {

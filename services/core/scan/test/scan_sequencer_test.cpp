@@ -858,7 +858,7 @@ TEST_F(ScanSequencerTest, ARejectedRegistrationIsNotMergedAndItsViewIsExcludedFr
   EXPECT_EQ(seq_->so_far().last_map, 2);
   EXPECT_EQ(seq_->so_far().views_done, 3);
   EXPECT_NE(std::find(lines_.begin(), lines_.end(),
-                      "[view 2/3] done: 10 points, 10 in the model; registration rejected, 5 frontier voxels; "
+                      "[view 2/3] done: 10 points, 10 in the model; not merged, 5 frontier voxels; "
                       "move 1.50 s, capture 0.75 s, register 0.25 s, map 2.00 ms, plan 122.00 ms"),
             lines_.end());
 }
