@@ -70,13 +70,10 @@ class RegistrationService {
   // Answers the mesh request whose mesh the worker has finished.
   void tick() {
     if (!meshing_.valid() || meshing_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
-    mesh_result_t out = bus::to_msg(meshing_.get());
-    out.utime = bus::now_utime();
+    const mesh_result_t out = answer_mesh(bus::to_msg(meshing_.get()));
     log_info(out.status == mesh_result_t::kOk ? "mesh: " + std::to_string(out.triangles) + " triangles (" +
                                                     std::to_string(out.seconds) + " s)"
                                               : "no mesh: " + out.message);
-    bus_.publish(channels::kMeshResult, out);
-    meshes_.put({out.scan_id, out.request_id}, out);
     if (out.status == mesh_result_t::kOk) last_mesh_ = std::make_pair(making_, out);
   }
 
@@ -99,12 +96,10 @@ class RegistrationService {
     const MeshKey key = mesh_key(r);
     if (last_mesh_ && last_mesh_->first == key) {  // the mesh already made: said again under this id
       mesh_result_t out = last_mesh_->second;
-      out.utime = bus::now_utime();
       out.request_id = r.request_id;
       log_info(what + " asks for the mesh made for request " + std::to_string(last_mesh_->second.request_id) +
                ": answered with it, not made again");
-      bus_.publish(channels::kMeshResult, out);
-      meshes_.put({out.scan_id, out.request_id}, out);
+      answer_mesh(out);
       return;
     }
     if (meshing_.valid()) return;  // a repeat while the mesh is made (or another request: asked again later)
@@ -115,10 +110,7 @@ class RegistrationService {
       refused.message = what + ": " + std::to_string(kMeshesPerScan) +
                         " different meshes of this scan made already, no more (a mesh takes seconds of CPU)";
       log_warn(refused.message);
-      mesh_result_t out = bus::to_msg(refused);
-      out.utime = bus::now_utime();
-      bus_.publish(channels::kMeshResult, out);
-      meshes_.put({out.scan_id, out.request_id}, out);
+      answer_mesh(bus::to_msg(refused));
       return;
     }
     bus_.set_scan(r.scan_id, -1);
@@ -139,6 +131,14 @@ class RegistrationService {
       }
       return out;
     });
+  }
+
+  // Publishes a MESH_RESULT (stamped now) and keeps it to answer its request again.
+  mesh_result_t answer_mesh(mesh_result_t out) {
+    out.utime = bus::now_utime();
+    bus_.publish(channels::kMeshResult, out);
+    meshes_.put({out.scan_id, out.request_id}, out);
+    return out;
   }
 
   // What a mesh is made of: the views, their camera and spacing.
