@@ -115,11 +115,19 @@ const Clouds& clouds() {
   return c;
 }
 
+// The frames are off by 5 mm and 1 deg: a prior that allows it, so ICP's correction is taken.
+pbnbv::RegistrationParams perturbed_prior() {
+  pbnbv::RegistrationParams p;
+  p.prior_translation_m = 0.005;
+  p.prior_rotation_deg = 1.0;
+  return p;
+}
+
 void BM_RegisterFrame(benchmark::State& state) {
   const Clouds& c = clouds();
   pbnbv::RegistrationResult r;
   for (auto _ : state) {
-    r = pbnbv::register_frame(c.model, c.frame, pbnbv::RegistrationParams{});
+    r = pbnbv::register_frame(c.model, c.frame, perturbed_prior());
     benchmark::DoNotOptimize(r);
   }
   state.counters["model_pts_ds"] = static_cast<double>(c.model_ds);
@@ -127,7 +135,7 @@ void BM_RegisterFrame(benchmark::State& state) {
   state.counters["model_pts_raw"] = static_cast<double>(c.model.size());
   state.counters["frame_pts_raw"] = static_cast<double>(c.frame.size());
   const Pose err = r.correction * c.perturbation;
-  state.counters["accepted"] = r.accepted;
+  state.counters["refined"] = r.refined;  // the correction was taken (every view is merged)
   state.counters["err_mm"] = err.translation().norm() * 1e3;
   state.counters["err_deg"] = rad_to_deg(rotation_angle_rad(Eigen::Matrix3d::Identity(), err.linear()));
   state.counters["iterations"] = r.iterations;
@@ -142,10 +150,10 @@ void BM_RegisterFramePredownsampled(benchmark::State& state) {
   static const PointCloud frame = pbnbv::voxel_downsample(c.frame, 0.002);
   pbnbv::RegistrationResult r;
   for (auto _ : state) {
-    r = pbnbv::register_frame(model, frame, pbnbv::RegistrationParams{});
+    r = pbnbv::register_frame(model, frame, perturbed_prior());
     benchmark::DoNotOptimize(r);
   }
-  state.counters["accepted"] = r.accepted;
+  state.counters["refined"] = r.refined;  // the correction was taken (every view is merged)
 }
 BENCHMARK(BM_RegisterFramePredownsampled)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 
@@ -172,13 +180,13 @@ void BM_RegisterFrameBunny(benchmark::State& state) {
   const PointCloud frame = pbnbv::transform_cloud(view_of(m, 1500000, dir(45, 50), 30), p);
   pbnbv::RegistrationResult r;
   for (auto _ : state) {
-    r = pbnbv::register_frame(model, frame, pbnbv::RegistrationParams{});
+    r = pbnbv::register_frame(model, frame, perturbed_prior());
     benchmark::DoNotOptimize(r);
   }
   const Pose err = r.correction * p;
   state.counters["model_pts_ds"] = static_cast<double>(pbnbv::voxel_downsample(model, 0.002).size());
   state.counters["frame_pts_ds"] = static_cast<double>(pbnbv::voxel_downsample(frame, 0.002).size());
-  state.counters["accepted"] = r.accepted;
+  state.counters["refined"] = r.refined;  // the correction was taken (every view is merged)
   state.counters["err_mm"] = err.translation().norm() * 1e3;
   state.counters["err_deg"] = rad_to_deg(rotation_angle_rad(Eigen::Matrix3d::Identity(), err.linear()));
 }
