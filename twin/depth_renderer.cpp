@@ -93,6 +93,8 @@ const char* gl_string(GLenum name) {
   return s ? reinterpret_cast<const char*>(s) : "?";
 }
 
+}  // namespace
+
 // Uniform in [0, 1) from the top 53 bits, and a standard normal by the Marsaglia polar method:
 // both written out so a given rng state gives the same noise with any standard library.
 double uniform01(std::mt19937_64& rng) {
@@ -107,8 +109,6 @@ double standard_normal(std::mt19937_64& rng) {
     if (s > 0.0 && s < 1.0) return a * std::sqrt(-2.0 * std::log(s) / s);
   }
 }
-
-}  // namespace
 
 // ------------------------------------------------------------------------------------------------
 // EglContext

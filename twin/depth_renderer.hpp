@@ -70,4 +70,9 @@ struct DepthNoise {
 };
 void apply_depth_noise(DepthImage& image, const DepthNoise& noise, std::mt19937_64& rng);
 
+// Uniform in [0, 1) and standard normal draws, written out so that a given rng state gives the
+// same noise with any standard library.
+double uniform01(std::mt19937_64& rng);
+double standard_normal(std::mt19937_64& rng);
+
 }  // namespace pbnbv::twin

@@ -66,7 +66,8 @@ double ramp_duration_s(double distance, double speed_limit, double accel_limit) 
 }
 
 bool PoseErrorModel::enabled() const {
-  return !hand_eye_error.isApprox(Pose::Identity()) || turntable_offset_rad != 0 || joint_sigma_rad != 0;
+  return !hand_eye_error.isApprox(Pose::Identity()) || turntable_offset_rad != 0 || joint_sigma_rad != 0 ||
+         turntable_backlash_rad != 0;
 }
 
 PoseErrorModel make_pose_error(double hand_eye_m, double hand_eye_rad, double turntable_rad,
@@ -236,7 +237,12 @@ void RigSim::command_turntable(double target_rad, double speed_scale, long seq) 
        << " rad from its setpoint " << turntable_->setpoint[0] << " rad: one command turns it at most one full turn (2 pi)";
     throw OutOfLimits(os.str());
   }
-  start_ramp(*turntable_, {target_rad - errors_.turntable_offset_rad}, speed_scale, seq);
+  // Backlash: the motor reaches the target, the platter stops half the backlash short of it, on
+  // the side it came from.
+  const double motor = target_rad - errors_.turntable_offset_rad;
+  const double motor_now = turntable_->setpoint[0] + turntable_lag_rad_;
+  if (motor != motor_now) turntable_lag_rad_ = (motor > motor_now ? 0.5 : -0.5) * errors_.turntable_backlash_rad;
+  start_ramp(*turntable_, {motor - turntable_lag_rad_}, speed_scale, seq);
 }
 
 Pose RigSim::true_camera_in_object(double object_z_m) const {

@@ -53,6 +53,9 @@ struct PoseErrorModel {
   Pose hand_eye_error = Pose::Identity();  // true flange_T_camera = model's * hand_eye_error
   double turntable_offset_rad = 0;          // reported - true
   double joint_sigma_rad = 0;               // per-command reported - true, standard deviation
+  // The platter stops half of this short of the encoder's angle, against the direction it turned
+  // (reported - true = offset + or - backlash / 2, after the first turn).
+  double turntable_backlash_rad = 0;
   uint64_t seed = 1;
   bool enabled() const;
 };
@@ -117,7 +120,9 @@ class RigSim {
   Vector6d arm_velocity() const;
   // What the rig's encoders report (true + the pose-error model's offsets).
   Vector6d arm_position_reported() const { return arm_position() + joint_offset_; }
-  double turntable_angle_reported() const { return turntable_angle() + errors_.turntable_offset_rad; }
+  double turntable_angle_reported() const { return turntable_angle() + errors_.turntable_offset_rad + turntable_lag_rad_; }
+  // What the backlash leaves between the encoder and the platter now (reported - true - offset).
+  double turntable_lag_rad() const { return turntable_lag_rad_; }
   // True optical-frame camera pose in the true object frame (for evaluation only: the
   // pipeline never sees it).
   Pose true_camera_in_object(double object_z_m) const;
@@ -141,6 +146,7 @@ class RigSim {
   mjData* d_ = nullptr;
   PoseErrorModel errors_;
   Vector6d joint_offset_ = Vector6d::Zero();
+  double turntable_lag_rad_ = 0;
   std::mt19937_64 rng_;
   JointGroup arm_;
   std::optional<JointGroup> turntable_;

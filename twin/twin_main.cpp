@@ -6,6 +6,7 @@
 // The reference driver of the contract, built on the driver library (services/driver; README
 // "Writing a driver"): the checks, faults, statuses and frames are the library's; --fault makes it a faulty one
 // (twin/driver_faults.hpp), for `pbnbv rig-check`'s tests.
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -28,6 +29,8 @@
 #include "core/rig/calibration.hpp"
 #include "core/rig/rig.hpp"
 #include "twin/depth_renderer.hpp"
+#include "twin/sensor_sim.hpp"
+#include "core/geometry/depth_sensor.hpp"
 #include "twin/driver_faults.hpp"
 #include "pbnbv/arm_command_t.hpp"
 #include "pbnbv/arm_status_t.hpp"
@@ -66,10 +69,12 @@ struct TwinOptions {
   CameraIntrinsics k;
   std::optional<double> cx, cy;
   DepthRange range;
+  CameraKind camera = kCamera.value;
   twin::DepthNoise noise;
   int64_t noise_seed = 0;
   double speed = 0;
   double hand_eye_error_mm = 0, hand_eye_error_deg = 0, turntable_error_deg = 0, joint_error_deg = 0;
+  double turntable_backlash_deg = 0;
   int64_t error_seed = 0;
   std::string scope;
   bool raw_depth = false;
@@ -93,6 +98,7 @@ void add_options(CLI::App& app, TwinOptions& o) {
                                       "on the platter's +x axis"),
            &o.object.calibration_sphere_offset_m);
   cli::add_text(app, "model-out", &o.model_out, "where to write the composed model", "PATH");
+  cli::add(app, kCamera, &o.camera);
   cli::add(app, kImageWidth, &o.k.width);
   cli::add(app, kImageHeight, &o.k.height);
   cli::add(app, kFocalX, &o.k.fx);
@@ -111,6 +117,7 @@ void add_options(CLI::App& app, TwinOptions& o) {
   cli::add(app, kHandEyeErrorDeg, &o.hand_eye_error_deg);
   cli::add(app, kTurntableErrorDeg, &o.turntable_error_deg);
   cli::add(app, kJointErrorDeg, &o.joint_error_deg);
+  cli::add(app, kTurntableBacklashDeg, &o.turntable_backlash_deg);
   cli::add(app, kErrorSeed, &o.error_seed);
   cli::add_text(app, "scan", &o.scope,
                 "play the rig of this scan only: commands and triggers of other scans are ignored and counted "
@@ -178,7 +185,9 @@ driver::DepthCamera camera_of(const TwinOptions& o) {
   camera.cy = o.k.cy;
   camera.depth_min_m = o.range.min_m;
   camera.depth_max_m = o.range.max_m;
-  camera.depth_unit_m = kDepthUnitM;
+  // The camera's own unit, as its driver would send it, where its range fits 16 bits in it; else 0.1 mm.
+  const DepthSensorModel& m = depth_sensor_model(o.camera);
+  camera.depth_unit_m = m.depth_unit_m > 0 && o.range.max_m / m.depth_unit_m < 65535 ? m.depth_unit_m : kDepthUnitM;
   camera.compress = !o.raw_depth;
   return camera;
 }
@@ -261,10 +270,17 @@ class Twin {
     bus_.set_state("rendering");
     mj_forward(sim_.model(), sim_.data());
     twin::DepthImage image = renderer_.render(sim_.data());
+    const twin::SensorSimStats sensor = twin::simulate_sensor(image, o_.k, depth_sensor_model(o_.camera), rng_);
+    if (!depth_sensor_model(o_.camera).exact()) {
+      log_info(fmt::format("frame {}: {} of {} readings: {} shadowed, {} flying, {} lost at grazing angles, {} pushed "
+                           "back by multipath, {} dropped",
+                           frame_seq_, name_of(o_.camera), sensor.valid_in, sensor.shadowed, sensor.flying,
+                           sensor.grazing, sensor.multipath, sensor.dropped));
+    }
     if (o_.noise.enabled()) twin::apply_depth_noise(image, o_.noise, rng_);
     driver::Exposure exposure;
     exposure.start_utime = rig_utime(epoch_, sim_.time_s()) + (o_.faulty(DriverFault::kLateExposure) ? 1000000 : 0);
-    const double unit_m = o_.faulty(DriverFault::kDepthUnitMm) ? 1e-3 : kDepthUnitM;
+    const double unit_m = o_.faulty(DriverFault::kDepthUnitMm) ? 1e-3 : camera_.depth_unit_m;
     depth_frame_t f = driver::depth_frame(camera_, driver::depth_counts(image.depth_m, unit_m), exposure, frame_seq_++, t);
     if (o_.faulty(DriverFault::kNoTriggerId)) f.trigger_seq = -1;
     if (truth_.is_open()) append_truth(truth_, f, sim_.true_camera_in_object(o_.object.object_z_m));
@@ -295,7 +311,7 @@ class Twin {
       driver::TurntableReading& t = turntable.emplace();
       t.angle_rad = sim_.turntable_angle_reported();
       t.velocity_rad_s = sim_.turntable_velocity();
-      t.commanded_rad = sim_.turntable().target[0] + errors_.turntable_offset_rad;
+      t.commanded_rad = sim_.turntable().target[0] + errors_.turntable_offset_rad + sim_.turntable_lag_rad();
       t.command_seq = no_echo ? -1 : sim_.turntable().command_seq;
       t.motion = motion_of(sim_, sim_.turntable());
     }
@@ -333,11 +349,15 @@ int main(int argc, char** argv) {
   if (const std::optional<int> code = cli::parse(app, argc, argv, std::cout, std::cerr)) return *code;
   install_stop_handlers();
   try {
+    take_model_defaults(
+        depth_sensor_model(o.camera),
+        [&app](std::string_view name) { return app.get_option("--" + std::string(name))->count() > 0; }, o.k, o.range);
     complete(o);
     const std::string model_path = o.rig.model_path.empty() ? default_rig_path(o.rig.kind) : o.rig.model_path;
     twin::PoseErrorModel errors = twin::make_pose_error(
         o.hand_eye_error_mm * 1e-3, o.hand_eye_error_deg * kPi / 180, o.turntable_error_deg * kPi / 180,
         o.joint_error_deg * kPi / 180, static_cast<uint64_t>(o.error_seed));
+    errors.turntable_backlash_rad = o.turntable_backlash_deg * kPi / 180;
     const RigModel rig = load_rig(model_path);
     // The turntable reports its reading: the platter's true angle plus the model's zero (a
     // calibrated file's pbnbv_turntable_zero) plus the error model's offset.
@@ -352,7 +372,8 @@ int main(int argc, char** argv) {
       std::ostringstream os;
       os << "pose-error model on: hand-eye " << errors.hand_eye_error.translation().norm() * 1e3 << " mm / "
          << r.angle() * 180 / kPi << " deg, turntable " << errors.turntable_offset_rad * 180 / kPi
-         << " deg, joints sigma " << errors.joint_sigma_rad * 180 / kPi << " deg";
+         << " deg, joints sigma " << errors.joint_sigma_rad * 180 / kPi << " deg, turntable backlash "
+         << errors.turntable_backlash_rad * 180 / kPi << " deg";
       log_info(os.str());
     }
     if (o.object.calibration_sphere_radius_m > 0) {
@@ -365,7 +386,8 @@ int main(int argc, char** argv) {
     twin::EglContext egl;
     twin::DepthRenderer renderer(sim.model(), "depth", o.k, o.range);
     log_info("rig '" + rig.arm_name + "' from " + model_path + ", rendering " + std::to_string(o.k.width) + "x" +
-             std::to_string(o.k.height) + " on " + egl.description());
+             std::to_string(o.k.height) + " on " + egl.description() + "; camera: " +
+             std::string(depth_sensor_model(o.camera).label));
     // Statuses name the scan this twin plays the rig of ("" when it obeys every scan, as a real
     // driver does); frames echo the scan of their trigger.
     bus::Bus bus("twin");

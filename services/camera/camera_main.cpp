@@ -97,8 +97,9 @@ class CameraService {
     if (step.result) {
       const CaptureResult& c = *step.result;
       if (!c.ok) bus_.note_error(c.message);
-      log_info(fmt::format("capture {}: {}, {} points (capture {} s, cloud {} s)", c.request_id, c.ok ? "ok" : "FAILED",
-                           c.points.size(), fixed(c.capture_s, 2), fixed(c.process_s, 2)));
+      log_info(fmt::format("capture {}: {}, {} points (capture {} s, cloud {} s){}", c.request_id, c.ok ? "ok" : "FAILED",
+                           c.points.size(), fixed(c.capture_s, 2), fixed(c.process_s, 2),
+                           c.ok && !c.message.empty() ? ": " + c.message : std::string()));
       point_cloud_t out = bus::to_msg(c);
       out.utime = bus::now_utime();
       bus_.publish(channels::kCloud, out);

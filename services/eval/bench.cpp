@@ -74,7 +74,8 @@ std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, con
                      "--views", std::to_string(s.views), "--resolution", exact(s.resolution_m), "--candidates",
                      std::to_string(s.candidates), "--tmax", std::to_string(s.tmax), "--beta", std::to_string(s.beta),
                      "--size", exact(s.size_m), "--seed", std::to_string(s.seed), "--when-done",
-                     std::string(name_of(s.when_done)), "--stop-rule", "off", "--no-log", "--out", out.string()});
+                     std::string(name_of(s.when_done)), "--stop-rule", "off", "--no-log", "--out", out.string(),
+                     "--camera", std::string(name_of(s.camera)), "--rig-errors", std::string(name_of(s.rig_errors))});
   if (const std::optional<Eigen::Vector3d>& first = initial_view ? initial_view : s.initial_view) {
     const Eigen::Vector3d& v = *first;
     a.insert(a.end(), {"--initial-view", exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z())});
@@ -281,6 +282,8 @@ json to_json(const BenchSpec& s) {
   j["initial_view"] = s.initial_view ? json{s.initial_view->x(), s.initial_view->y(), s.initial_view->z()} : json(nullptr);
   j["first_views"] = s.first_views;
   j["first_view_seed"] = kFirstViewSeed;
+  j["camera"] = name_of(s.camera);
+  j["rig_errors"] = name_of(s.rig_errors);
   return j;
 }
 

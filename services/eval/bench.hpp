@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/geometry/depth_sensor.hpp"
 #include "core/geometry/mesh.hpp"
 #include "core/mapping/map_options.hpp"
 #include "core/planning/kinds.hpp"
@@ -63,6 +64,8 @@ struct BenchSpec {
   std::optional<UpAxis> up;                     // none: each object's natural up axis
   int64_t seed = kPlannerSeed.value;            // the random planner's seed
   WhenDone when_done = kWhenDone.value;
+  CameraKind camera = kCamera.value;        // the twin's camera (depth_sensor.hpp)
+  RigErrors rig_errors = kRigErrors.value;  // the twin's rig errors by name
   // The scans spend the whole budget (stop rule off); the summary says where this rule would
   // have stopped each from its recorded per-view figures (it may change in a folder's reruns).
   SurfaceStopRule stop_rule;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cctype>
 #include <stdexcept>
+#include <string>
+#include <tuple>
 
 #include "core/geometry/camera_options.hpp"
 #include "core/metrics/metrics_options.hpp"
@@ -247,8 +249,11 @@ void CommandLine::declare_scan() {
   cli::add(c, kHandEyeErrorDeg, &scan_.hand_eye_error_deg)->group(kGroupRig);
   cli::add(c, kTurntableErrorDeg, &scan_.turntable_error_deg)->group(kGroupRig);
   cli::add(c, kJointErrorDeg, &scan_.joint_error_deg)->group(kGroupRig);
+  cli::add(c, kTurntableBacklashDeg, &scan_.turntable_backlash_deg)->group(kGroupRig);
+  cli::add(c, kRigErrors, &scan_.rig_errors)->group(kGroupRig);
   cli::add(c, kErrorSeed, &scan_.error_seed)->group(kGroupRig);
 
+  cli::add(c, kCamera, &s.camera_model)->group(kGroupCamera);
   cli::add(c, kImageWidth, &s.camera.width)->group(kGroupCamera);
   cli::add(c, kImageHeight, &s.camera.height)->group(kGroupCamera);
   cli::add(c, kFocalX, &s.camera.fx)->group(kGroupCamera);
@@ -290,6 +295,8 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add(c, eval::kFirstViews, &spec->first_views);
   cli::add(c, kPlannerSeed, &spec->seed);
   cli::add(c, kWhenDone, &spec->when_done);
+  cli::add(c, kCamera, &spec->camera);
+  cli::add(c, kRigErrors, &spec->rig_errors);
   // The scans run without a stop rule; the report says where the surface rule would have stopped each.
   cli::add(c, kStopWindow, &spec->stop_rule.window);
   cli::add(c, kStopNewSurface, &spec->stop_rule.max_new_percent);
@@ -405,6 +412,18 @@ void CommandLine::resolve_scan() {
   s.ring_elevation_deg = p.ring_elevation_deg.value_or(s.rig == RigKind::kArm ? kRingElevation.value
                                                                                 : kRingElevationFreeDeg);
   if (p.initial_view) s.initial_view_m = *p.initial_view;
+  const auto given = [this](std::string_view name) { return scan_cmd_->get_option("--" + std::string(name))->count() > 0; };
+  take_model_defaults(depth_sensor_model(s.camera_model), given, s.camera, s.depth_range);
+  // --rig-errors: its figures for the error options not given one by one.
+  const RigErrorFigures rig_errors = rig_error_figures(scan_.rig_errors);
+  for (const auto& [setting, value, target] :
+       {std::tuple{kHandEyeErrorMm, rig_errors.hand_eye_mm, &scan_.hand_eye_error_mm},
+        std::tuple{kHandEyeErrorDeg, rig_errors.hand_eye_deg, &scan_.hand_eye_error_deg},
+        std::tuple{kTurntableErrorDeg, rig_errors.turntable_deg, &scan_.turntable_error_deg},
+        std::tuple{kJointErrorDeg, rig_errors.joint_deg, &scan_.joint_error_deg},
+        std::tuple{kTurntableBacklashDeg, rig_errors.backlash_deg, &scan_.turntable_backlash_deg}}) {
+    if (!given(setting.name)) *target = value;
+  }
   s.camera.cx = p.cx.value_or(s.camera.width / 2.0);
   s.camera.cy = p.cy.value_or(s.camera.height / 2.0);
   // The free rig is the paper's idealised comparison setup (a camera placed exactly, as in the
@@ -422,7 +441,8 @@ void CommandLine::resolve_scan() {
     const double he_m = scan_.hand_eye_error_mm * 1e-3 / std::sqrt(3.0);
     const double he_rad = deg_to_rad(scan_.hand_eye_error_deg) / std::sqrt(3.0);
     const double joint_rad = deg_to_rad(scan_.joint_error_deg) * std::sqrt(2.0);  // six joints on three axes
-    const double table_rad = deg_to_rad(scan_.turntable_error_deg) / std::sqrt(3.0);
+    const double table_rad = std::hypot(deg_to_rad(scan_.turntable_error_deg) / std::sqrt(3.0),
+                                        deg_to_rad(scan_.turntable_backlash_deg) / 2);
     const double rot_rad = std::sqrt(he_rad * he_rad + joint_rad * joint_rad + table_rad * table_rad);
     const double pos_m = std::sqrt(he_m * he_m + std::pow((joint_rad + table_rad) * kLeverM, 2));
     s.pose_sigma_m = p.pose_sigma_mm.value_or(std::max(pos_m * 1e3, 0.01)) * 1e-3;  // an exact twin: 10 um,
@@ -432,7 +452,8 @@ void CommandLine::resolve_scan() {
     // The object is unknown: nothing of the twin's object or of its simulation applies.
     for (const char* twin_only : {"--object", "--size", "--up", "--sim-speed", "--noise-sigma", "--dropout",
                                   "--hand-eye-error-mm", "--hand-eye-error-deg", "--turntable-error-deg",
-                                  "--joint-error-deg", "--error-seed", "--width", "--height", "--fx", "--fy", "--cx",
+                                  "--joint-error-deg", "--turntable-backlash-deg", "--rig-errors", "--camera",
+                                  "--error-seed", "--width", "--height", "--fx", "--fy", "--cx",
                                   "--cy", "--depth-min", "--depth-max"}) {
       if (scan_cmd_->get_option(twin_only)->count() > 0) {
         throw std::invalid_argument(std::string(twin_only) +

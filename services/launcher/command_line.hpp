@@ -100,6 +100,8 @@ struct ScanOptions {
   double hand_eye_error_deg = kHandEyeErrorDeg.value;
   double turntable_error_deg = kTurntableErrorDeg.value;
   double joint_error_deg = kJointErrorDeg.value;
+  double turntable_backlash_deg = kTurntableBacklashDeg.value;
+  RigErrors rig_errors = kRigErrors.value;  // --rig-errors: the figures above where not given one by one
   int64_t error_seed = kErrorSeed.value;
   bool record_log = true;        // not --no-log
   // A rig whose drivers run outside (--external-rig): no twin, an unknown object.

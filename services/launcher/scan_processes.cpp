@@ -73,6 +73,7 @@ LaunchSettings launch_settings_of(const ScanOptions& o) {
   l.hand_eye_error_deg = o.hand_eye_error_deg;
   l.turntable_error_deg = o.turntable_error_deg;
   l.joint_error_deg = o.joint_error_deg;
+  l.turntable_backlash_deg = o.turntable_backlash_deg;
   l.error_seed = o.error_seed;
   return l;
 }
@@ -87,6 +88,7 @@ nlohmann::json to_json(const LaunchSettings& l) {
           {"hand_eye_error_deg", l.hand_eye_error_deg},
           {"turntable_error_deg", l.turntable_error_deg},
           {"joint_error_deg", l.joint_error_deg},
+          {"turntable_backlash_deg", l.turntable_backlash_deg},
           {"error_seed", l.error_seed}};
 }
 
@@ -102,6 +104,9 @@ LaunchSettings launch_settings_from_json(const nlohmann::json& launch, const std
   l.hand_eye_error_deg = launch_value(launch, "hand_eye_error_deg", kHandEyeErrorDeg, file);
   l.turntable_error_deg = launch_value(launch, "turntable_error_deg", kTurntableErrorDeg, file);
   l.joint_error_deg = launch_value(launch, "joint_error_deg", kJointErrorDeg, file);
+  if (launch.contains("turntable_backlash_deg")) {  // since stop 37
+    l.turntable_backlash_deg = launch_value(launch, "turntable_backlash_deg", kTurntableBacklashDeg, file);
+  }
   l.error_seed = launch_value(launch, "error_seed", kErrorSeed, file);
   return l;
 }
@@ -132,6 +137,7 @@ std::vector<process::Child> scan_processes(const ScanSettings& s, const LaunchSe
          "--noise-sigma", exact(l.noise_sigma), "--dropout", exact(l.dropout), "--speed", exact(s.sim_speed),
          "--hand-eye-error-mm", exact(l.hand_eye_error_mm), "--hand-eye-error-deg", exact(l.hand_eye_error_deg),
          "--turntable-error-deg", exact(l.turntable_error_deg), "--joint-error-deg", exact(l.joint_error_deg),
+         "--turntable-backlash-deg", exact(l.turntable_backlash_deg), "--camera", std::string(name_of(s.camera_model)),
          "--error-seed", std::to_string(l.error_seed), "--truth-out", (out / "twin_truth.jsonl").string()},
         s, out));
   }

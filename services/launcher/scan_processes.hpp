@@ -30,6 +30,7 @@ struct LaunchSettings {
   double hand_eye_error_deg = kHandEyeErrorDeg.value;
   double turntable_error_deg = kTurntableErrorDeg.value;
   double joint_error_deg = kJointErrorDeg.value;
+  double turntable_backlash_deg = kTurntableBacklashDeg.value;
   int64_t error_seed = kErrorSeed.value;
 };
 

@@ -28,6 +28,7 @@
 #include "core/base/log.hpp"
 #include "core/mapping/voxel_map.hpp"
 #include "pbnbv/capture_request_t.hpp"
+#include "core/perception/depth_filter.hpp"
 #include "pbnbv/depth_frame_t.hpp"
 #include "pbnbv/registered_cloud_t.hpp"
 #include "pbnbv/voxel_set_t.hpp"
@@ -129,7 +130,9 @@ class MappingService {
       out.message = "not integrated: DEPTH_FRAME " + std::to_string(r.cloud.depth_frame_seq) + " never arrived";
     } else {
       try {
-        const bus::DecodedFrame decoded = bus::decode_frame(*frame);
+        bus::DecodedFrame decoded = bus::decode_frame(*frame);
+        // What the camera service removed from this frame before making its cloud, removed here too.
+        filter_depth(decoded.depth_m, decoded.intrinsics);
         DepthView view;
         view.depth_m = &decoded.depth_m;
         view.intrinsics = decoded.intrinsics;

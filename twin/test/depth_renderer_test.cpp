@@ -6,6 +6,7 @@
 // pixel centre (u, v) is then d = ((u - cx) / fx, (v - cy) / fy, 1), and the planar depth of a
 // hit at t * d is t itself.
 #include "twin/depth_renderer.hpp"
+#include "twin/test/render_scene.hpp"
 
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
@@ -28,66 +29,6 @@ namespace pbnbv::twin {
 namespace {
 
 namespace fs = std::filesystem;
-
-EglContext& egl() {
-  static EglContext context;  // one per process, current on the test thread
-  return context;
-}
-
-// A loaded MJCF model and its data after mj_forward.
-struct Scene {
-  mjModel* model = nullptr;
-  mjData* data = nullptr;
-  explicit Scene(const std::string& xml) {
-    static std::atomic<int> counter{0};
-    const fs::path path = fs::temp_directory_path() /
-                          ("pbnbv_depth_test_" + std::to_string(::getpid()) + "_" +
-                           std::to_string(counter++) + ".xml");
-    {
-      std::ofstream out(path);
-      out << xml;
-    }
-    char error[1000] = "";
-    model = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
-    fs::remove(path);
-    if (!model) throw std::runtime_error(std::string("mj_loadXML: ") + error);
-    data = mj_makeData(model);
-    mj_forward(model, data);
-  }
-  ~Scene() {
-    if (data) mj_deleteData(data);
-    if (model) mj_deleteModel(model);
-  }
-  Scene(const Scene&) = delete;
-  Scene& operator=(const Scene&) = delete;
-};
-
-std::string mjcf(const std::string& world, const std::string& extra = "") {
-  return "<mujoco>\n" + extra +
-         "  <worldbody>\n"
-         "    <body name=\"camera_body\" pos=\"0 0 0\">\n"
-         "      <camera name=\"depth\" quat=\"0 1 0 0\"/>\n"
-         "    </body>\n" +
-         world + "  </worldbody>\n</mujoco>\n";
-}
-
-std::string fmt(double x) {
-  std::ostringstream s;
-  s.precision(12);
-  s << x;
-  return s.str();
-}
-
-// A box whose face z = -h (local) is the plane through p0 with normal R * e_z, facing the camera.
-std::string plane_box(const Eigen::Vector3d& p0, const Eigen::Quaterniond& q,
-                      const std::string& attrs = "") {
-  const double h = 0.01;
-  const Eigen::Vector3d n = q * Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3d c = p0 + h * n;
-  return "    <geom type=\"box\" size=\"10 10 " + fmt(h) + "\" pos=\"" + fmt(c.x()) + " " +
-         fmt(c.y()) + " " + fmt(c.z()) + "\" quat=\"" + fmt(q.w()) + " " + fmt(q.x()) + " " +
-         fmt(q.y()) + " " + fmt(q.z()) + "\" " + attrs + "/>\n";
-}
 
 Eigen::Vector3d ray(const CameraIntrinsics& k, int u, int v) {
   return Eigen::Vector3d((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0);

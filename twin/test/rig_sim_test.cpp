@@ -108,6 +108,29 @@ TEST(RigSim, TurntableTurnsAtItsSpeedLimit) {
   EXPECT_NEAR(sim.turntable_angle(), kPi, 1e-4);
 }
 
+// Backlash 0.2 deg: turning up to 30 deg the platter stops 0.1 deg short (true 29.9, encoder 30);
+// turning back down to 10 deg it stops 0.1 deg above (10.1); a second command in the same
+// direction keeps the same side.
+TEST(RigSim, TheTurntableStopsHalfItsBacklashShortAgainstItsDirection) {
+  const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
+  twin::PoseErrorModel errors;
+  errors.turntable_backlash_rad = 0.2 * kPi / 180;
+  twin::RigSim sim(rig, twin::ObjectPlacement{}, model_out(), errors);
+  const auto turn_to = [&](double deg, long seq) {
+    sim.command_turntable(deg * kPi / 180, 1.0, seq);
+    for (int i = 0; i < 20000 && !sim.settled(sim.turntable()); ++i) sim.step();
+    ASSERT_TRUE(sim.settled(sim.turntable()));
+  };
+  turn_to(30, 1);
+  EXPECT_NEAR(sim.turntable_angle() * 180 / kPi, 29.9, 2e-3);
+  EXPECT_NEAR(sim.turntable_angle_reported() * 180 / kPi, 30.0, 2e-3);
+  turn_to(10, 2);
+  EXPECT_NEAR(sim.turntable_angle() * 180 / kPi, 10.1, 2e-3);
+  EXPECT_NEAR(sim.turntable_angle_reported() * 180 / kPi, 10.0, 2e-3);
+  turn_to(5, 3);
+  EXPECT_NEAR(sim.turntable_angle() * 180 / kPi, 5.1, 2e-3);
+}
+
 TEST(RigSim, TargetOutsideAJointLimitIsRefusedAndTheArmHolds) {
   const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
   twin::RigSim sim(rig, twin::ObjectPlacement{}, model_out());

@@ -1,5 +1,7 @@
 #include "core/acquisition/capture_sequencer.hpp"
 
+#include "core/perception/depth_filter.hpp"
+
 #include <algorithm>
 #include <fmt/format.h>
 
@@ -10,6 +12,7 @@
 
 #include "core/base/format.hpp"
 #include "core/perception/depth_cloud.hpp"
+#include "core/perception/depth_filter.hpp"
 
 namespace pbnbv {
 
@@ -195,9 +198,12 @@ CaptureStep CaptureSequencer::process(const DepthFrame& f) {
       crop.ground_z_m = -r.object_z_m;  // the turntable top in the object frame
       crop.ground_clearance_m = r.ground_clearance_m;
     }
+    // Flying pixels and speckles out first (the mapping service removes the same from the frame).
+    std::vector<float> depth = f.depth_m;
+    const DepthFilterStats filtered = filter_depth(depth, f.intrinsics);
     CloudStats stats;
-    out.points = depth_to_object_cloud(f.depth_m, f.intrinsics, f.range, object_T_camera, crop, r.voxel_m, &stats);
-    out.normals = depth_normals(out.points, f.depth_m, f.intrinsics, object_T_camera);
+    out.points = depth_to_object_cloud(depth, f.intrinsics, f.range, object_T_camera, crop, r.voxel_m, &stats);
+    out.normals = depth_normals(out.points, depth, f.intrinsics, object_T_camera);
     out.object_T_camera = object_T_camera;
     out.joint_position_rad = arm->value;
     out.turntable_angle_rad = turntable;
@@ -209,6 +215,9 @@ CaptureStep CaptureSequencer::process(const DepthFrame& f) {
     if (out.points.empty()) {
       out.message = fmt::format("no points left: {} valid pixels, {} cropped", stats.num_valid_pixels,
                                 stats.num_cropped);
+    } else if (filtered.flying + filtered.speckle_pixels > 0) {
+      out.message = fmt::format("depth filter: {} flying pixels and {} pixels in {} speckles removed", filtered.flying,
+                                filtered.speckle_pixels, filtered.speckles);
     }
   } catch (const std::exception& e) {
     out = blank(r);

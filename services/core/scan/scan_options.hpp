@@ -83,5 +83,41 @@ inline constexpr Setting<double> kJointErrorDeg{"joint-error-deg", 0.0, 0.0, 5.0
                                                 "twin: each joint reports its angle off by N(0, this), new per move"};
 inline constexpr Setting<int64_t> kErrorSeed{"error-seed", 7, 0, int64_t{1} << 40, "",
                                              "seed of the twin's error directions and draws"};
+inline constexpr Setting<double> kTurntableBacklashDeg{
+    "turntable-backlash-deg", 0.0, 0.0, 5.0, "deg",
+    "twin: the platter stops this much short of where its encoder says, against the direction it turned"};
+
+// The twin's rig errors by name, each a set of the figures above (README "Rig errors"):
+//   none          exact kinematics;
+//   calibrated    what `pbnbv calibrate` leaves on an arm with 0.02 deg joint encoder noise (the
+//                 mount 0.47 mm / 0.11 deg off, its measured residual after 24 views), that
+//                 noise, a 0.01 deg turntable zero and 0.05 deg of turntable backlash;
+//   uncalibrated  the rig file's mount 5 mm / 1 deg off and the turntable zero 0.5 deg, with the
+//                 same joint noise and backlash.
+enum class RigErrors { kNone, kCalibrated, kUncalibrated };
+template <>
+struct EnumNames<RigErrors> {
+  static constexpr std::string_view what = "rig errors";
+  static constexpr std::array<NamedValue<RigErrors>, 3> names{
+      {{RigErrors::kNone, "none"}, {RigErrors::kCalibrated, "calibrated"}, {RigErrors::kUncalibrated, "uncalibrated"}}};
+};
+inline constexpr ChoiceSetting<RigErrors> kRigErrors{
+    "rig-errors", RigErrors::kNone,
+    "twin: the rig's kinematic errors by name (none, calibrated, uncalibrated); the error options override its figures"};
+
+struct RigErrorFigures {
+  double hand_eye_mm = 0, hand_eye_deg = 0, turntable_deg = 0, joint_deg = 0, backlash_deg = 0;
+};
+constexpr RigErrorFigures rig_error_figures(RigErrors e) {
+  switch (e) {
+    case RigErrors::kCalibrated:
+      return {0.47, 0.11, 0.01, 0.02, 0.05};
+    case RigErrors::kUncalibrated:
+      return {5.0, 1.0, 0.5, 0.02, 0.05};
+    case RigErrors::kNone:
+      break;
+  }
+  return {};
+}
 
 }  // namespace pbnbv

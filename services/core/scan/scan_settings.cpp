@@ -54,7 +54,7 @@ nlohmann::json to_json(const ScanSettings& s) {
       {"crop", {{"min_m", to_json(s.crop_min_m)}, {"max_m", to_json(s.crop_max_m)},
                 {"ground_clearance_m", s.ground_clearance_m}}},
       {"voxel_m", s.voxel_m},
-      {"camera", {{"width", s.camera.width}, {"height", s.camera.height}, {"fx", s.camera.fx},
+      {"camera", {{"model", name_of(s.camera_model)}, {"width", s.camera.width}, {"height", s.camera.height}, {"fx", s.camera.fx},
                   {"fy", s.camera.fy}, {"cx", s.camera.cx}, {"cy", s.camera.cy},
                   {"depth_min_m", s.depth_range.min_m}, {"depth_max_m", s.depth_range.max_m}}},
       {"speed_scale", s.speed_scale},
@@ -143,6 +143,7 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.ground_clearance_m = j.at("crop").at("ground_clearance_m").get<double>();
     s.voxel_m = j.at("voxel_m").get<double>();
     const auto& c = j.at("camera");
+    if (c.contains("model")) s.camera_model = parse_name<CameraKind>(c.at("model").get<std::string>());  // since stop 37
     s.camera.width = int_at(c, "width", "camera.width");
     s.camera.height = int_at(c, "height", "camera.height");
     s.camera.fx = c.at("fx").get<double>();

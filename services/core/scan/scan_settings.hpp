@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/geometry/camera_model.hpp"
+#include "core/geometry/depth_sensor.hpp"
 #include "core/geometry/mesh.hpp"
 #include "core/io/json.hpp"
 #include "core/mapping/map_options.hpp"
@@ -86,6 +87,7 @@ struct ScanSettings {
   double ground_clearance_m = 0.004;
   double voxel_m = kCloudVoxel.value;  // per-frame and accumulated cloud downsampling
 
+  CameraKind camera_model = kCamera.value;  // the named camera (its noise: depth_sensor.hpp)
   CameraIntrinsics camera;
   DepthRange depth_range;
 
