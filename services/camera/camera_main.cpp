@@ -44,7 +44,11 @@ class CameraService {
  public:
   // Trigger numbers start at the wall clock, so a restarted service never reuses a number a
   // late frame could still answer.
-  CameraService(bus::Bus& bus, const RigModel& rig) : bus_(bus), rig_(rig), sequencer_(rig, bus::now_utime()) {
+  CameraService(bus::Bus& bus, const RigModel& rig, bool depth_filter)
+      : bus_(bus), rig_(rig), sequencer_(rig, bus::now_utime()) {
+    DepthFilterParams filter;
+    filter.enabled = depth_filter;
+    sequencer_.set_depth_filter(filter);
     bus_.subscribe<arm_status_t>(channels::kArmStatus,
                                  [this](const arm_status_t& s) { sequencer_.on_arm_status(bus::from_msg(s)); });
     if (rig_.has_turntable) {
@@ -130,9 +134,13 @@ int main(int argc, char** argv) {
   cli::init(app);
   bus::RigOptions rig_options;
   bus::add_rig_options(app, &rig_options);
+  bool no_depth_filter = false;
+  cli::add_flag(app, "no-depth-filter", &no_depth_filter,
+                "make clouds of the frames as they come, flying pixels and speckles included (pbnbv-mapping's "
+                "--no-depth-filter must agree)");
   return bus::run_service("camera", app, argc, argv, 5, [&](bus::Bus& bus) -> std::function<void()> {
     auto rig = std::make_shared<RigModel>(bus::load_rig(rig_options));
-    auto service = std::make_shared<CameraService>(bus, *rig);
+    auto service = std::make_shared<CameraService>(bus, *rig, !no_depth_filter);
     log_info("ready: hand-eye and kinematics from " + rig->model_path);
     return [rig, service] { service->tick(); };
   });

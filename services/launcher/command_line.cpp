@@ -214,6 +214,7 @@ void CommandLine::declare_scan() {
   cli::add(c, kCloudVoxel, &s.voxel_m)->group(kGroupPlanning);
   cli::add(c, kMapResolution, &s.map_resolution_m)->group(kGroupPlanning);
   cli::add(c, kRegistration, &p.registration)->group(kGroupPlanning);
+  cli::add(c, kDepthFilter, &p.depth_filter)->group(kGroupCamera);
   cli::add(c, kPoseSigmaMm, &p.pose_sigma_mm, "twin: from its errors; a real rig: 0.5")->group(kGroupRig);
   cli::add(c, kPoseSigmaDeg, &p.pose_sigma_deg, "twin: from its errors; a real rig: 0.1")->group(kGroupRig);
 
@@ -414,6 +415,10 @@ void CommandLine::resolve_scan() {
   if (p.initial_view) s.initial_view_m = *p.initial_view;
   const auto given = [this](std::string_view name) { return scan_cmd_->get_option("--" + std::string(name))->count() > 0; };
   take_model_defaults(depth_sensor_model(s.camera_model), given, s.camera, s.depth_range);
+  // The ideal camera makes no flying pixel or speckle: nothing for the filter to take there.
+  s.depth_filter = p.depth_filter.value_or(depth_sensor_model(s.camera_model).exact() && !scan_.external_rig
+                                               ? OnOff::kOff
+                                               : OnOff::kOn) == OnOff::kOn;
   // --rig-errors: its figures for the error options not given one by one.
   const RigErrorFigures rig_errors = rig_error_figures(scan_.rig_errors);
   for (const auto& [setting, value, target] :

@@ -163,7 +163,7 @@ class CommandLine {
   // look-up, before parse() resolves them.
   struct ScanPending {
     std::optional<double> ring_elevation_deg, cx, cy;
-    std::optional<OnOff> registration;
+    std::optional<OnOff> registration, depth_filter;
     std::optional<double> pose_sigma_mm, pose_sigma_deg;
     std::optional<Eigen::Vector3d> initial_view;
     std::string rig_model;  // --rig-model FILE

@@ -247,6 +247,7 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
   if (!on_rig_host) {  // else they run on the rig's computer (pbnbv rig-host)
     add("motion", {(bin / "pbnbv-motion").string(), "--model", s.rig_model_path});
     add("camera", {(bin / "pbnbv-camera").string(), "--model", s.rig_model_path});
+    if (!s.depth_filter) children.back().argv.push_back("--no-depth-filter");
   }
   // The model (cloud.ply) at the scan's cloud voxel, its new surface at the stop rule's radius.
   add("registration", {(bin / "pbnbv-registration").string(), "--out", out.string(), "--model-voxel", exact(s.voxel_m),
@@ -260,6 +261,7 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
   add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", exact(s.map_resolution_m), "--out", out.string(),
                   "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m), "--frontier-empty",
                   std::string(name_of(frontier_empty(s.planner)))});
+  if (!s.depth_filter) children.back().argv.push_back("--no-depth-filter");
   if (uses_ellipsoids(s.planner)) add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
   // The scorer draws each plan into out/plans/ (its own --out: no path comes from the bus).
   if (uses_view_scorer(s.planner)) {

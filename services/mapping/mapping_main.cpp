@@ -44,8 +44,10 @@ constexpr std::size_t kAnswersKept = 16;   // maps kept to answer a repeated vie
 
 class MappingService {
  public:
-  MappingService(bus::Bus& bus, const VoxelMapParams& params, const Eigen::AlignedBox3d& working_volume, fs::path out)
-      : bus_(bus), params_(params), working_volume_(working_volume), out_(std::move(out)), frames_(bus, kFramesKept) {
+  MappingService(bus::Bus& bus, const VoxelMapParams& params, const Eigen::AlignedBox3d& working_volume, fs::path out,
+                 bool depth_filter)
+      : bus_(bus), params_(params), working_volume_(working_volume), out_(std::move(out)), depth_filter_(depth_filter),
+        frames_(bus, kFramesKept) {
     restore();
     bus_.subscribe<capture_request_t>(channels::kCaptureRequest,
                                       [this](const capture_request_t& c) { asked_.heard(c.scan_id, c.request_id); });
@@ -132,7 +134,7 @@ class MappingService {
       try {
         bus::DecodedFrame decoded = bus::decode_frame(*frame);
         // What the camera service removed from this frame before making its cloud, removed here too.
-        filter_depth(decoded.depth_m, decoded.intrinsics);
+        if (depth_filter_) filter_depth(decoded.depth_m, decoded.intrinsics);
         DepthView view;
         view.depth_m = &decoded.depth_m;
         view.intrinsics = decoded.intrinsics;
@@ -219,6 +221,7 @@ class MappingService {
   VoxelMapParams params_;
   Eigen::AlignedBox3d working_volume_;
   fs::path out_;
+  bool depth_filter_ = true;  // the camera service's filter, applied to the same frames
   std::string scan_id_;
   std::optional<VoxelMap> map_;
   bus::RecentFrames frames_;  // the frames waiting for their registered cloud
@@ -243,6 +246,9 @@ int main(int argc, char** argv) {
   cli::add_text(app, "out", &out, "write DIR/maps/view_NNN.ot (OctoMap) and view_NNN.states.ply per view; empty: none", "DIR");
   cli::add_point(app, "volume-min", &volume_min, "working volume's lower corner, object frame, m [unlimited]");
   cli::add_point(app, "volume-max", &volume_max, "working volume's upper corner, object frame, m [unlimited]");
+  bool no_depth_filter = false;
+  cli::add_flag(app, "no-depth-filter", &no_depth_filter,
+                "integrate the frames as they come (the camera service's --no-depth-filter: the same frames)");
   return bus::run_service("mapping", app, argc, argv, 10, [&](bus::Bus& bus) -> std::function<void()> {
     Eigen::AlignedBox3d volume;  // empty: unlimited
     if (volume_min || volume_max) {
@@ -250,7 +256,7 @@ int main(int argc, char** argv) {
                                    volume_max.value_or(Eigen::Vector3d::Constant(1e3)));
       if (volume.isEmpty()) throw std::invalid_argument("--volume-min must be below --volume-max on every axis");
     }
-    auto service = std::make_shared<MappingService>(bus, p, volume, fs::path(out));
+    auto service = std::make_shared<MappingService>(bus, p, volume, fs::path(out), !no_depth_filter);
     log_info("ready: resolution " + std::to_string(p.resolution_m) + " m");
     return [service] { service->tick(); };
   });

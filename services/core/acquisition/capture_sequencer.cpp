@@ -200,7 +200,7 @@ CaptureStep CaptureSequencer::process(const DepthFrame& f) {
     }
     // Flying pixels and speckles out first (the mapping service removes the same from the frame).
     std::vector<float> depth = f.depth_m;
-    const DepthFilterStats filtered = filter_depth(depth, f.intrinsics);
+    const DepthFilterStats filtered = filter_depth(depth, f.intrinsics, filter_);
     CloudStats stats;
     out.points = depth_to_object_cloud(depth, f.intrinsics, f.range, object_T_camera, crop, r.voxel_m, &stats);
     out.normals = depth_normals(out.points, depth, f.intrinsics, object_T_camera);

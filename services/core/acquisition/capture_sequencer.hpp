@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "core/perception/depth_filter.hpp"
 #include "core/rig/rig.hpp"
 #include "core/scan/messages.hpp"
 #include "core/scan/rig_readings.hpp"
@@ -41,6 +42,8 @@ class CaptureSequencer {
   // `first_trigger_seq`: the first trigger's number; pass one a previous run cannot have used
   // (e.g. the wall clock in microseconds), so a late frame never answers a new trigger.
   CaptureSequencer(const RigModel& rig, int64_t first_trigger_seq);
+  // The filter each frame goes through before it becomes a cloud (default: on).
+  void set_depth_filter(const DepthFilterParams& p) { filter_ = p; }
 
   // A status reading; the last kCaptureHistoryUs of rig time are kept.
   void on_arm_status(const ArmReading& reading);
@@ -67,6 +70,7 @@ class CaptureSequencer {
   bool busy() const { return job_.has_value(); }
 
  private:
+  DepthFilterParams filter_;
   template <class T>
   struct Stamped {
     int64_t utime;

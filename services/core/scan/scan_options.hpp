@@ -64,6 +64,12 @@ inline constexpr double kRingElevationFreeDeg = 0.0;
 inline constexpr ChoiceSetting<OnOff> kRegistration{
     "registration", OnOff::kOn, "refine every view's pose by ICP against the model (default: on arm, off free)"};
 
+// The depth filter (core/perception/depth_filter.hpp) in the camera and mapping services.
+inline constexpr ChoiceSetting<OnOff> kDepthFilter{
+    "depth-filter", OnOff::kOn,
+    "remove flying pixels and speckles from each depth frame (default: on, off for the twin's ideal camera, which "
+    "makes neither)"};
+
 // The rig's motion and the twin.
 inline constexpr Setting<double> kSpeedScale{"speed-scale", 1.0, 0.01, 1.0, "", "fraction of the joint speed limits"};
 inline constexpr Setting<double> kSimSpeed{"sim-speed", 4.0, 0.1, 100.0, "",

@@ -38,6 +38,7 @@ nlohmann::json to_json(const ScanSettings& s) {
                      {"max_new_percent", s.surface_rule.max_new_percent}, {"min_views", s.surface_rule.min_views},
                      {"radius_m", s.stop_radius_m}}},
       {"registration", {{"pose_sigma_mm", s.pose_sigma_m * 1e3}, {"pose_sigma_deg", s.pose_sigma_deg}}},
+      {"depth_filter", s.depth_filter},
       {"external_rig", s.external_rig},
       {"object", s.working_volume ? nlohmann::json{{"name", s.object_name}, {"working_volume", s.working_volume->to_text()}}
                                   : nlohmann::json{{"name", s.object_name}, {"normalisation", to_json(s.normalisation)}}},
@@ -102,6 +103,7 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
       s.pose_sigma_deg = j["registration"].at("pose_sigma_deg").get<double>();
     }
     s.external_rig = j.value("external_rig", false);
+    s.depth_filter = j.value("depth_filter", false);  // a scan recorded before the filter ran without it
     s.object_name = j.at("object").at("name").get<std::string>();
     if (j.at("object").contains("working_volume")) {
       s.working_volume = parse_working_volume(j.at("object").at("working_volume").get<std::string>());

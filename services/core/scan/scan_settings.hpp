@@ -42,6 +42,7 @@ struct ScanSettings {
   // How well the rig knows the camera's pose (registration's prior, 1 sigma per axis).
   double pose_sigma_m = kPoseSigmaMm.value * 1e-3;
   double pose_sigma_deg = kPoseSigmaDeg.value;
+  bool depth_filter = true;  // flying pixels and speckles removed from each frame (--depth-filter)
 
   // The rig's drivers run outside (a physical rig, or a twin started as one): the launcher
   // starts no twin and the object is unknown.
