@@ -16,12 +16,24 @@ struct CloudCrop {
   Eigen::AlignedBox3d volume_m;  // working volume, object frame (closed); empty: no limit
   double ground_z_m = -1e9;  // object-frame z of the turntable top; points at or below
   double ground_clearance_m = 0;  // ground_z + clearance are dropped
+  // The turntable top as this frame sees it: a plane fitted to the readings near ground_z (the
+  // kinematic pose's error and the camera's noise move and blur it), and the points within
+  // clearance + 3 sigma of its readings' scatter above it dropped as well.
+  bool fit_ground = true;
 };
 
 struct CloudStats {
   int num_valid_pixels = 0;
   int num_cropped = 0;
+  int ground_points = 0;         // readings the turntable's plane was fitted to (0: no fit)
+  double ground_offset_m = 0;    // the fitted plane's height above ground_z at the object's axis
+  double ground_sigma_m = 0;     // its readings' scatter about it (robust)
 };
+
+// The plane z = a x + b y + c through `points` (object frame), robustly: least squares, then
+// again on the points within 3 robust sigmas (1.4826 x the median absolute residual), three
+// times. Returns false when fewer than 50 points or the plane tilts more than 5 degrees.
+bool fit_ground_plane(const std::vector<Eigen::Vector3d>& points, Eigen::Vector3d* abc, double* sigma_m);
 
 
 // Back-projects every pixel whose depth is finite and inside `range`, maps it with

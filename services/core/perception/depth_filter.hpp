@@ -18,7 +18,7 @@ namespace pbnbv {
 
 struct DepthFilterParams {
   bool enabled = true;
-  double max_incidence_deg = 88.0;  // the steepest surface kept, degrees between ray and normal
+  double max_incidence_deg = 85.0;  // the steepest surface kept, degrees between ray and normal
   int min_region_px = 20;           // smaller connected regions are speckles
 };
 
