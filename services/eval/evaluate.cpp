@@ -1,5 +1,6 @@
 #include "eval/evaluate.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
 #include <fstream>
@@ -29,6 +30,28 @@ json stats_mm(const DistanceStats& s) {
 }
 
 // evaluate_scan, and evaluate_coverage when `metrics` is null.
+// hand_eye.json against twin_rig.json, when the folder has both.
+std::optional<HandEyeCheck> check_hand_eye(const fs::path& out) {
+  if (!fs::exists(out / "hand_eye.json") || !fs::exists(out / "twin_rig.json")) return std::nullopt;
+  const std::string estimate_file = (out / "hand_eye.json").string(), truth_file = (out / "twin_rig.json").string();
+  const json h = read_json(estimate_file), t = read_json(truth_file);
+  const Pose estimate = pose_from_json(h.at("error"), estimate_file + " error");
+  const Pose truth = pose_from_json(t.at("model_flange_T_camera"), truth_file).inverse() *
+                     pose_from_json(t.at("flange_T_camera"), truth_file);
+  const auto deg = [](const Pose& p) { return Eigen::AngleAxisd(p.linear()).angle() * 180.0 / 3.14159265358979323846; };
+  HandEyeCheck c;
+  c.views = h.at("views").get<int>();
+  c.estimate_mm = estimate.translation().norm() * 1e3;
+  c.estimate_deg = deg(estimate);
+  c.true_mm = truth.translation().norm() * 1e3;
+  c.true_deg = deg(truth);
+  c.error_mm = (estimate.translation() - truth.translation()).norm() * 1e3;
+  c.error_deg = deg(truth.inverse() * estimate);
+  c.sigma_mm = h.at("sigma_mm").get<double>();
+  c.sigma_deg = h.at("sigma_deg").get<double>();
+  return c;
+}
+
 ScanEvaluation evaluate(const fs::path& out, const CoverageParams& params, const std::vector<uint8_t>* observable,
                         const MetricParams* metrics) {
   const RecordedScan scan = read_scan_record(out);  // every field checked, frame files the views' own
@@ -61,6 +84,7 @@ ScanEvaluation evaluate(const fs::path& out, const CoverageParams& params, const
     e.points_by_view.push_back(points);
   }
   e.new_surface_by_view = new_surface_figures(scan.views);
+  e.hand_eye = check_hand_eye(out);
   if (!metrics) return e;
   const PointCloud cloud = fs::exists(out / "cloud.ply") ? read_ply((out / "cloud.ply").string()) : merged;
   const bool has_mesh = fs::exists(out / "mesh.ply");
@@ -112,7 +136,15 @@ json to_json(const ScanEvaluation& e, const CoverageParams& params) {
   if (e.cloud_metrics) metrics["cloud"] = to_json(*e.cloud_metrics);
   if (e.mesh_metrics) metrics["mesh"] = to_json(*e.mesh_metrics);
   if (!e.mesh_error.empty()) metrics["mesh"] = {{"error", e.mesh_error}};
+  json hand_eye = nullptr;
+  if (e.hand_eye) {
+    const HandEyeCheck& c = *e.hand_eye;
+    hand_eye = {{"views", c.views},         {"estimate_mm", c.estimate_mm}, {"estimate_deg", c.estimate_deg},
+                {"true_mm", c.true_mm},     {"true_deg", c.true_deg},       {"error_mm", c.error_mm},
+                {"error_deg", c.error_deg}, {"sigma_mm", c.sigma_mm},       {"sigma_deg", c.sigma_deg}};
+  }
   return {{"coverage_by_view", e.coverage_by_view},
+          {"hand_eye", hand_eye},
           {"surface_metrics", metrics},
           {"planner_ms", e.planner_ms},
           {"points_by_view", e.points_by_view},

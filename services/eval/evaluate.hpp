@@ -17,6 +17,16 @@
 
 namespace pbnbv::eval {
 
+// The registration's estimate of the camera mount (hand_eye.json) against the twin's true mount
+// (twin_rig.json): both as errors from the rig file's flange_T_camera.
+struct HandEyeCheck {
+  int views = 0;
+  double estimate_mm = 0, estimate_deg = 0;  // the estimated error's size
+  double true_mm = 0, true_deg = 0;          // the twin's
+  double error_mm = 0, error_deg = 0;        // estimate against truth
+  double sigma_mm = 0, sigma_deg = 0;        // what the estimate says of itself
+};
+
 struct ScanEvaluation {
   std::vector<double> coverage_by_view;  // percent after views 1..n (a view that added nothing
                                          // to the model repeats the previous figure)
@@ -34,6 +44,7 @@ struct ScanEvaluation {
   // when the folder has mesh.ply, the mesh. None when there was no point to evaluate.
   std::optional<SurfaceMetrics> cloud_metrics, mesh_metrics;
   std::string mesh_error;  // why mesh.ply could not be evaluated (unreadable, no faces); the rest stands
+  std::optional<HandEyeCheck> hand_eye;  // a twin scan whose registration estimated the mount
 };
 
 // Evaluates the scan in `out` (scan.json, frames/, object.stl, cloud.ply, mesh.ply when

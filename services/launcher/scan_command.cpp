@@ -382,6 +382,14 @@ void evaluate_against_truth(const ScanSettings& s, const fs::path& out) {
                 << fixed((*m)->recall, 3) << ")" << std::endl;
     }
     if (!e.mesh_error.empty()) std::cerr << "warning: mesh.ply not evaluated: " << e.mesh_error << std::endl;
+    if (e.hand_eye) {
+      const eval::HandEyeCheck& c = *e.hand_eye;
+      std::cout << "camera mount estimated over " << c.views << " views: " << fixed(c.estimate_mm, 2) << " mm, "
+                << fixed(c.estimate_deg, 3) << " deg off the rig file (sigma " << fixed(c.sigma_mm, 2) << " mm, "
+                << fixed(c.sigma_deg, 3) << " deg); the twin's true error " << fixed(c.true_mm, 2) << " mm, "
+                << fixed(c.true_deg, 3) << " deg: the estimate " << fixed(c.error_mm, 2) << " mm, " << fixed(c.error_deg, 3)
+                << " deg from it (hand_eye.json)" << std::endl;
+    }
     if (!e.planner_ms.empty()) {
       std::vector<double> t = e.planner_ms;
       std::sort(t.begin(), t.end());

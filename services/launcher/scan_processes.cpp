@@ -138,7 +138,8 @@ std::vector<process::Child> scan_processes(const ScanSettings& s, const LaunchSe
          "--hand-eye-error-mm", exact(l.hand_eye_error_mm), "--hand-eye-error-deg", exact(l.hand_eye_error_deg),
          "--turntable-error-deg", exact(l.turntable_error_deg), "--joint-error-deg", exact(l.joint_error_deg),
          "--turntable-backlash-deg", exact(l.turntable_backlash_deg), "--camera", std::string(name_of(s.camera_model)),
-         "--error-seed", std::to_string(l.error_seed), "--truth-out", (out / "twin_truth.jsonl").string()},
+         "--error-seed", std::to_string(l.error_seed), "--truth-out", (out / "twin_truth.jsonl").string(),
+         "--truth-rig-out", (out / "twin_rig.json").string()},
         s, out));
   }
   add_services(children, s, out, bin, l.registration, {}, s.external_rig && l.rig_host);

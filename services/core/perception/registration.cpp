@@ -312,22 +312,7 @@ using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 using Pairs = std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>;
 
-// A rigid motion as a small motion about the point c: its rotation vector, then how far it moves c.
-Vec6 twist_about(const Pose& t, const Eigen::Vector3d& c) {
-  const Eigen::AngleAxisd aa(t.linear());
-  Vec6 d;
-  d << aa.angle() * aa.axis(), t * c - c;
-  return d;
-}
 
-Pose pose_from_twist(const Vec6& d, const Eigen::Vector3d& c) {
-  const Eigen::Vector3d w = d.head<3>();
-  const double angle = w.norm();
-  Pose t = Pose::Identity();
-  if (angle > 0) t.linear() = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
-  t.translation() = c + d.tail<3>() - t.linear() * c;
-  return t;
-}
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& a) {
   Eigen::Matrix3d m;
@@ -445,7 +430,8 @@ void judge(const RegistrationParams& params, const Vec6& weakest, const Pairs& p
   const Vec6 icp = twist_about(res.correction, centre);
   // The innovation: ICP's proposal against the kinematic pose, each with its covariance.
   const Mat6 prior = prior_covariance(params, centre, camera_m);
-  const Mat6 both = prior + icp_covariance(pairs, centre, res.rmse_m, params);
+  const Mat6 icp_cov = icp_covariance(pairs, centre, res.rmse_m, params);
+  const Mat6 both = prior + icp_cov;
   const Eigen::LDLT<Mat6> both_ldlt(both);
   res.prior_sigmas = std::sqrt(std::max(0.0, icp.dot(both_ldlt.solve(icp))));
   const std::string prior_text = fmt::format("the kinematic pose's sigma {:.2f} mm, ", params.prior_translation_m * 1e3) +
@@ -457,6 +443,7 @@ void judge(const RegistrationParams& params, const Vec6& weakest, const Pairs& p
                  " of " + prior_text + fmt::format(", above {:.1f})", params.max_prior_sigmas) + dropped_note;
     return;
   }
+  res.icp = IcpProposal{res.correction, centre, icp_cov};
   // The two combined (a Kalman update from the kinematic pose): prior (prior + icp)^-1 proposal.
   const Vec6 taken = prior * both_ldlt.solve(icp);
   res.correction = pose_from_twist(taken, centre);
@@ -543,6 +530,22 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
   }
   res.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
   return res;
+}
+
+Twist twist_about(const Pose& t, const Eigen::Vector3d& c) {
+  const Eigen::AngleAxisd aa(t.linear());
+  Twist d;
+  d << aa.angle() * aa.axis(), t * c - c;
+  return d;
+}
+
+Pose pose_from_twist(const Twist& d, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d w = d.head<3>();
+  const double angle = w.norm();
+  Pose t = Pose::Identity();
+  if (angle > 0) t.linear() = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
+  t.translation() = c + d.tail<3>() - t.linear() * c;
+  return t;
 }
 
 }  // namespace pbnbv

@@ -47,6 +47,21 @@ struct RegistrationParams {
   double min_residual_m = 0.00005;
 };
 
+// A small rigid motion about a point c: its rotation vector, then how far it moves c (the
+// parametrisation of registration's covariances).
+using Twist = Eigen::Matrix<double, 6, 1>;
+using TwistCovariance = Eigen::Matrix<double, 6, 6>;
+Twist twist_about(const Pose& t, const Eigen::Vector3d& c);
+Pose pose_from_twist(const Twist& d, const Eigen::Vector3d& c);
+
+// ICP's own proposal where it was weighed against the prior (not flagged, not degenerate): the
+// correction it found, the point its covariance is about, and that covariance.
+struct IcpProposal {
+  Pose correction = Pose::Identity();
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  TwistCovariance covariance = TwistCovariance::Identity();
+};
+
 struct RegistrationResult {
   bool accepted = false;      // the view is merged (with `correction` applied): every view with
                               // points, the first included
@@ -68,6 +83,7 @@ struct RegistrationResult {
   int iterations = 0;
   bool converged = false;
   double time_s = 0;
+  std::optional<IcpProposal> icp;  // for estimating what is wrong the same way in every view
 };
 
 // Registers `frame` (already in the object frame by the kinematic pose) to `model`. `camera_m`:

@@ -80,6 +80,52 @@ ModelUpdate ScanModel::add_view(int view, const PointCloud& points, std::vector<
   return u;
 }
 
+namespace {
+
+PointCloud moved(const PointCloud& points, const Pose& q) {
+  PointCloud out;
+  out.reserve(points.size());
+  for (const auto& p : points) out.emplace_back((q * p.cast<double>()).cast<float>());
+  return out;
+}
+
+std::vector<Eigen::Vector3f> turned(const std::vector<Eigen::Vector3f>& normals, const Pose& q) {
+  const Eigen::Matrix3f r = q.linear().cast<float>();
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(normals.size());
+  for (const auto& n : normals) out.emplace_back(r * n);
+  return out;
+}
+
+}  // namespace
+
+void ScanModel::move_frame(const Pose& q) {
+  points_ = moved(points_, q);
+  normals_ = turned(normals_, q);
+  for (Pose& pose : poses_) pose = q * pose;
+  if (folder_.empty()) return;
+  write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_});
+  if (fs::is_directory(folder_ / "frames")) {
+    for (const auto& entry : fs::directory_iterator(folder_ / "frames")) {
+      if (entry.path().extension() != ".ply") continue;
+      CloudExtras extras;
+      const PointCloud points = read_ply(entry.path().string(), extras);
+      for (Pose& pose : extras.camera_poses) pose = q * pose;
+      extras.normals = turned(extras.normals, q);
+      write_ply(moved(points, q), entry.path().string(), extras);
+    }
+  }
+  if (fs::is_directory(folder_ / "depth")) {
+    for (const auto& entry : fs::directory_iterator(folder_ / "depth")) {
+      if (entry.path().extension() != ".json") continue;
+      nlohmann::json j = read_json(entry.path().string());
+      if (!j.contains("object_T_camera")) continue;
+      j["object_T_camera"] = to_json(q * pose_from_json(j["object_T_camera"], entry.path().string()));
+      write_json_atomic(j, entry.path().string());
+    }
+  }
+}
+
 MeshSummary ScanModel::mesh(const std::vector<int>& views, const CameraIntrinsics& camera, double point_spacing_m) const {
   if (folder_.empty()) throw std::invalid_argument("no scan folder to mesh in");
   std::vector<SurfaceFrame> frames;

@@ -71,6 +71,12 @@ class ScanModel {
   // frames give no triangles.
   MeshSummary mesh(const std::vector<int>& views, const CameraIntrinsics& camera, double point_spacing_m) const;
 
+  // Moves the model into another frame: new = q * old for its points, normals and camera poses,
+  // and in the folder for cloud.ply, every frames/view_NNN.ply and every depth/view_NNN.json's
+  // pose (the registration service ties the model's frame to the object's this way once the
+  // mount's estimate says where it lies). Throws naming a file it cannot read or write.
+  void move_frame(const Pose& q);
+
   const PointCloud& points() const { return points_; }
   const std::vector<Eigen::Vector3f>& normals() const { return normals_; }
   const std::vector<Pose>& camera_poses() const { return poses_; }

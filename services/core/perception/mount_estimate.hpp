@@ -1,0 +1,72 @@
+#pragma once
+// The camera mount's error, estimated across a scan's views (a hand-eye refinement that improves
+// as the scan goes on). An error that is the same in every view: the camera sits at
+// flange_T_camera * E instead of the rig file's flange_T_camera, so view i's true pose is its
+// kinematic pose K_i times E. The model is built in the first view's kinematic frame (K_1 is
+// taken as exact), so registration finds for view i the correction
+//     D_i = K_1 E^-1 K_1^-1  K_i E K_i^-1          (registered = D_i * kinematic)
+// which, over views seen from different directions, pins E down: a Gauss-Newton fit of E to
+// ICP's proposals, each weighed by its covariance, with the rig's stated pose sigma as a prior.
+// Then:
+//   - the next view's correction is predicted (the registration prior's mean moves there);
+//   - the model's frame is related to the object frame: object = K_1 E K_1^-1 * model (up to a
+//     turn about the turntable's axis, which no view can tell: a turntable zero error turns every
+//     view alike).
+// Plain data and functions; the registration service keeps one per scan.
+#include <Eigen/Core>
+#include <optional>
+#include <vector>
+
+#include "core/base/pose.hpp"
+#include "core/perception/registration.hpp"
+
+namespace pbnbv {
+
+// One view's evidence: its kinematic pose and ICP's proposal for it, expressed against the first
+// view's kinematic frame (the model's frame).
+struct MountObservation {
+  Pose kinematic = Pose::Identity();   // object_T_camera by the rig file
+  IcpProposal proposal;                // registered = proposal.correction * kinematic
+};
+
+struct MountEstimate {
+  Pose error = Pose::Identity();  // E: the true mount is the rig file's times this (camera frame)
+  TwistCovariance covariance = TwistCovariance::Identity();  // of E's twist about the camera centre
+  int views = 0;                  // observations it rests on
+  double sigma_m = 0;             // largest 1-sigma of its translation, m
+  double sigma_deg = 0;           // largest 1-sigma of its rotation, degrees
+  double translation_m() const;
+  double rotation_deg() const;
+};
+
+class MountEstimator {
+ public:
+  // The prior on E: each axis, 1 sigma (the rig's stated pose uncertainty).
+  MountEstimator(double prior_translation_m, double prior_rotation_deg);
+
+  // The first view's kinematic pose (the model's frame). Views before it are not taken.
+  void set_first(const Pose& kinematic);
+  bool has_first() const { return first_.has_value(); }
+  void add(const MountObservation& o);
+  const std::vector<MountObservation>& observations() const { return observations_; }
+  const std::optional<Pose>& first() const { return first_; }
+
+  // The fit (identity with the prior's covariance before any observation).
+  const MountEstimate& estimate() const { return estimate_; }
+  // The correction D_i the estimate predicts for a view at `kinematic`.
+  Pose predicted_correction(const Pose& kinematic) const;
+  // object_T_model: where the model's points lie in the object frame by the estimate.
+  Pose object_T_model() const;
+
+ private:
+  void refit();
+  double prior_t_, prior_r_;
+  std::optional<Pose> first_;
+  std::vector<MountObservation> observations_;
+  MountEstimate estimate_;
+};
+
+// D = K1 E^-1 K1^-1 K E K^-1.
+Pose mount_correction(const Pose& first, const Pose& kinematic, const Pose& error);
+
+}  // namespace pbnbv
