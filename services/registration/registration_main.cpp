@@ -226,7 +226,11 @@ class RegistrationService {
         mount_.set_first(kinematic);  // the model's frame: this view's kinematic one
         r = register_frame(model_.points(), frame, params_, kinematic.translation());
       } else {
-        r = register_predicted(frame, kinematic);
+        // On a worker, the heartbeat going on meanwhile: ICP against a large model of a noisy
+        // camera takes seconds, more on a loaded machine, and a silent service is taken for hung.
+        auto job = std::async(std::launch::async, [&] { return register_predicted(frame, kinematic); });
+        while (job.wait_for(std::chrono::milliseconds(250)) != std::future_status::ready) bus_.keep_alive();
+        r = job.get();
       }
       out.accepted = r.accepted;
       out.refined = r.refined;
