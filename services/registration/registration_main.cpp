@@ -145,6 +145,23 @@ class RegistrationService {
   void tie_model_to_object() {
     const MountEstimate& e = mount_.estimate();
     if (off_ || !mount_.first() || e.views < 2 || e.sigma_m > 1e-3 || e.sigma_deg > 0.2) return;
+    // The views whose alignment was not taken (flagged, or not pinned down by their overlap) were
+    // placed where the estimate put them then, or at their kinematic pose: placed again where it
+    // puts them now.
+    std::vector<int> merged;
+    for (const PlacedView& v : placed_views_) merged.push_back(v.view);
+    for (PlacedView& v : placed_views_) {
+      if (v.refined) continue;
+      const Pose now = mount_.predicted_correction(v.kinematic);
+      const Pose q = applied_ * now * v.correction.inverse() * applied_.inverse();
+      try {
+        model_.move_view(v.view, q, merged);
+        v.correction = now;
+        log_info(fmt::format("view {} placed again by the mount's estimate: moved {:.2f} mm", v.view, q.translation().norm() * 1e3));
+      } catch (const std::exception& ex) {
+        log_warn("view " + std::to_string(v.view) + " not placed again: " + ex.what());
+      }
+    }
     const Pose target = mount_.object_T_model();
     const Pose delta = target * applied_.inverse();
     if (delta.translation().norm() < 1e-6 && Eigen::AngleAxisd(delta.linear()).angle() < 1e-6) return;
@@ -181,6 +198,7 @@ class RegistrationService {
     model_.clear();
     mount_ = MountEstimator(params_.prior_translation_m, params_.prior_rotation_deg);
     applied_ = Pose::Identity();
+    placed_views_.clear();
     meshes_made_ = 0;
     last_mesh_.reset();
   }
@@ -257,6 +275,11 @@ class RegistrationService {
         pose = r.correction * kinematic;
         out.cloud.object_T_camera = bus::to_msg(pose);
         for (std::size_t i = 0; i < placed.size(); ++i) out.cloud.points_m[i] = {placed[i].x(), placed[i].y(), placed[i].z()};
+      }
+      if (!off_ && r.accepted) {
+        // Each merged view's placing, in the first view's frame, for placing it again at the end.
+        placed_views_.push_back({c.iteration, kinematic, applied_.inverse() * r.correction, r.refined || placed_views_.empty()});
+        save_mount();
       }
       add_to_model(c, placed, std::move(normals), pose, r.accepted, out);
       std::ostringstream os;
@@ -339,6 +362,12 @@ class RegistrationService {
                      {"covariance", cov}});
     }
     j["observations"] = obs;
+    nlohmann::json placed = nlohmann::json::array();
+    for (const PlacedView& v : placed_views_) {
+      placed.push_back({{"view", v.view}, {"kinematic", to_json(v.kinematic)}, {"correction", to_json(v.correction)},
+                        {"refined", v.refined}});
+    }
+    j["placed_views"] = placed;  // in the first view's frame
     write_json_atomic(j, (out_ / "hand_eye.json").string());
   }
 
@@ -362,10 +391,16 @@ class RegistrationService {
         if (!m.proposal.covariance.allFinite()) throw std::invalid_argument(path.string() + ": a covariance that is not finite");
         mount_.add(m);
       }
+      for (const auto& v : j.value("placed_views", nlohmann::json::array())) {
+        placed_views_.push_back({v.at("view").get<int>(), pose_from_json(v.at("kinematic"), path.string() + " placed view"),
+                                 pose_from_json(v.at("correction"), path.string() + " placed view"),
+                                 v.at("refined").get<bool>()});
+      }
     } catch (const std::exception& e) {
       log_warn("the mount estimate is not continued (" + std::string(e.what()) + "): it starts again from the next view");
       mount_ = MountEstimator(params_.prior_translation_m, params_.prior_rotation_deg);
       applied_ = Pose::Identity();
+      placed_views_.clear();
     }
   }
 
@@ -431,6 +466,13 @@ class RegistrationService {
   ScanModel model_;
   MountEstimator mount_{params_.prior_translation_m, params_.prior_rotation_deg};  // for scan_id_
   Pose applied_ = Pose::Identity();  // the model's frame: the first view's kinematic one moved by this
+  struct PlacedView {
+    int view;
+    Pose kinematic;
+    Pose correction;  // registered = correction * kinematic, in the first view's frame
+    bool refined;     // by ICP (or the first view): kept as it is
+  };
+  std::vector<PlacedView> placed_views_;
   bus::RecentFrames frames_;          // the last depth frames, for DIR/depth/
   std::future<MeshResult> meshing_;   // the mesh being made
   MeshKey making_;                    // ... of this

@@ -126,6 +126,39 @@ void ScanModel::move_frame(const Pose& q) {
   }
 }
 
+void ScanModel::move_view(int view, const Pose& q, const std::vector<int>& merged) {
+  if (folder_.empty()) throw std::invalid_argument("no scan folder: a view cannot be placed again");
+  const fs::path file = folder_ / frame_file_of(view);
+  CloudExtras extras;
+  const PointCloud points = read_ply(file.string(), extras);
+  for (Pose& pose : extras.camera_poses) pose = q * pose;
+  extras.normals = turned(extras.normals, q);
+  write_ply(moved(points, q), file.string(), extras);
+  const fs::path depth = folder_ / "depth" / view_file(view, "json");
+  if (fs::exists(depth)) {
+    nlohmann::json j = read_json(depth.string());
+    if (j.contains("object_T_camera")) {
+      j["object_T_camera"] = to_json(q * pose_from_json(j["object_T_camera"], depth.string()));
+      write_json_atomic(j, depth.string());
+    }
+  }
+  PointCloud all;
+  std::vector<Eigen::Vector3f> all_normals;
+  std::vector<Pose> poses;
+  for (const int v : merged) {
+    CloudExtras e;
+    const PointCloud p = read_ply((folder_ / frame_file_of(v)).string(), e);
+    all.insert(all.end(), p.begin(), p.end());
+    e.normals.resize(p.size(), Eigen::Vector3f::Zero());
+    all_normals.insert(all_normals.end(), e.normals.begin(), e.normals.end());
+    if (!e.camera_poses.empty()) poses.push_back(e.camera_poses.front());
+  }
+  points_ = voxel_downsample(all, voxel_m_);
+  normals_ = voxel_normals(all, all_normals, points_, voxel_m_);
+  poses_ = poses;
+  write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_});
+}
+
 MeshSummary ScanModel::mesh(const std::vector<int>& views, const CameraIntrinsics& camera, double point_spacing_m) const {
   if (folder_.empty()) throw std::invalid_argument("no scan folder to mesh in");
   std::vector<SurfaceFrame> frames;

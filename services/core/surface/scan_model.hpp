@@ -76,6 +76,10 @@ class ScanModel {
   // pose (the registration service ties the model's frame to the object's this way once the
   // mount's estimate says where it lies). Throws naming a file it cannot read or write.
   void move_frame(const Pose& q);
+  // Moves one view's frame (frames/view_NNN.ply: points, normals, pose; depth/view_NNN.json's
+  // pose) by q, then rebuilds the merged cloud from the frames of `merged` (in order) and
+  // rewrites cloud.ply: a view placed again once its pose is known better. Needs a folder.
+  void move_view(int view, const Pose& q, const std::vector<int>& merged);
 
   const PointCloud& points() const { return points_; }
   const std::vector<Eigen::Vector3f>& normals() const { return normals_; }
