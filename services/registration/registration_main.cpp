@@ -56,6 +56,7 @@ namespace {
 
 constexpr std::size_t kAnswersKept = 4;
 constexpr std::size_t kFramesKept = 4;
+constexpr double kMountMinOverlap = 0.5;  // alignments that inform the mount's estimate
 constexpr int kMeshesPerScan = 3;       // different meshes made for one scan at most  // depth frames of the last views (a view's comes before its cloud)
 
 class RegistrationService {
@@ -141,10 +142,10 @@ class RegistrationService {
 
   // At the scan's end, the model (cloud.ply, the frames and their poses, the depth images' poses)
   // is moved from the first view's kinematic frame to the object frame where the mount's
-  // estimate puts it, once that estimate is sure to a millimetre and 0.2 degrees (else it stays).
+  // estimate puts it, once that estimate rests on 4 consistent views and is sure to a millimetre and 0.2 degrees
+  // (else it stays).
   void tie_model_to_object() {
-    const MountEstimate& e = mount_.estimate();
-    if (off_ || !mount_.first() || e.views < 2 || e.sigma_m > 1e-3 || e.sigma_deg > 0.2) return;
+    if (off_ || !mount_.trusted(4)) return;
     // The views whose alignment was not taken (flagged, or not pinned down by their overlap) were
     // placed where the estimate put them then, or at their kinematic pose: placed again where it
     // puts them now.
@@ -298,7 +299,10 @@ class RegistrationService {
   // pose, goes into the estimate; the correction answered is against the kinematic pose.
   RegistrationResult register_predicted(const PointCloud& frame, const Pose& kinematic) {
     // In the model's frame now: the first view's kinematic one, moved by applied_.
-    const Pose predicted = applied_ * mount_.predicted_correction(kinematic);
+    // The estimate is used once it is sure (3 consistent views, 1 mm / 0.2 deg): an early one
+    // resting on a view that slid would lead the next ones astray.
+    const bool use = mount_.trusted(3);
+    const Pose predicted = applied_ * (use ? mount_.predicted_correction(kinematic) : Pose::Identity());
     RegistrationResult r = register_frame(model_.points(), transform_cloud(frame, predicted), params_,
                                           (predicted * kinematic).translation());
     const Pose total = r.correction * predicted;
@@ -306,7 +310,8 @@ class RegistrationService {
     r.correction = total;
     r.translation_m = total.translation().norm();
     r.rotation_deg = rad_to_deg(Eigen::AngleAxisd(total.linear()).angle());
-    if (r.icp) {
+    // Only well-overlapped alignments inform it (a view that sees little of the model may slide).
+    if (r.icp && r.overlap >= kMountMinOverlap) {
       MountObservation o;
       o.kinematic = kinematic;
       o.proposal = *r.icp;
@@ -316,10 +321,12 @@ class RegistrationService {
       mount_.add(o);
     }
     if (mount_.estimate().views > 0) {
-      r.reason += fmt::format("; from the mount estimate's pose ({:.2f} mm from the kinematic one; mount ", predicted_mm) +
+      r.reason += (use ? fmt::format("; from the mount estimate's pose ({:.2f} mm from the kinematic one; mount ", predicted_mm)
+                       : std::string("; mount estimate not used yet (")) +
                   fmt::format("{:.2f} mm, ", mount_.estimate().translation_m() * 1e3) +
-                  fmt::format("{:.3f} deg off the rig file's over {} views", mount_.estimate().rotation_deg(),
-                              mount_.estimate().views) + ")";
+                  fmt::format("{:.3f} deg off the rig file's over {} views, ", mount_.estimate().rotation_deg(),
+                              mount_.estimate().views) +
+                  fmt::format("{} left out", mount_.estimate().outliers) + ")";
     }
     save_mount();
     return r;
@@ -345,6 +352,7 @@ class RegistrationService {
     j["what"] = "the camera mount's error estimated across the scan's views: true flange_T_camera = the rig file's "
                 "* error (README 'Rig errors')";
     j["views"] = e.views;
+    j["outliers"] = e.outliers;
     j["error"] = to_json(e.error);
     j["error_mm"] = e.translation_m() * 1e3;
     j["error_deg"] = e.rotation_deg();

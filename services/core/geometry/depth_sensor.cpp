@@ -30,6 +30,26 @@ DepthRange range(double min_m, double max_m) {
   return r;
 }
 
+// An Intel RealSense D4xx depth module at 1280 x 720, 87 deg wide (the D400 datasheet): RMS error
+// z^2 * subpixel / (f * baseline) with subpixel 0.08; the right imager, `baseline_m` right of the
+// left (the depth's reference), casts the shadows; flying pixels, grazing loss and dropout ours.
+DepthSensorModel active_stereo(CameraKind kind, std::string_view label, double baseline_m, const DepthRange& r,
+                               double depth_unit_m) {
+  DepthSensorModel s;
+  s.kind = kind;
+  s.label = label;
+  s.principle = DepthPrinciple::kActiveStereo;
+  s.intrinsics = pinhole(1280, 720, focal_for_fov(1280, 87.0));
+  s.range = r;
+  s.noise_per_m2 = 0.08 / (s.intrinsics.fx * baseline_m);
+  s.depth_unit_m = depth_unit_m;
+  s.shadow_baseline_m = baseline_m;
+  s.flying_pixels = 0.3;
+  s.grazing_limit_deg = 75;
+  s.dropout = 0.005;
+  return s;
+}
+
 // The figures and where they come from: docs/cameras.md.
 std::array<DepthSensorModel, 5> make_models() {
   std::array<DepthSensorModel, 5> m;
@@ -43,33 +63,13 @@ std::array<DepthSensorModel, 5> make_models() {
   // 7-50 cm (D400 datasheet 337029); the D435's 87 deg field of view (not confirmed for the D405).
   // Stereo RMS error = z^2 * subpixel / (f * baseline), subpixel 0.08 (Intel's tuning paper and
   // its author); depth unit 0.1 mm (librealsense's default for the D405).
-  DepthSensorModel& d405 = m[1];
-  d405.kind = CameraKind::kD405;
-  d405.label = "Intel RealSense D405 (active stereo, 18 mm baseline)";
-  d405.principle = DepthPrinciple::kActiveStereo;
-  d405.intrinsics = pinhole(1280, 720, focal_for_fov(1280, 87.0));
-  d405.range = range(0.10, 1.0);
-  d405.noise_per_m2 = 0.08 / (d405.intrinsics.fx * 0.018);
-  d405.depth_unit_m = 1e-4;
-  d405.shadow_baseline_m = 0.018;
-  d405.flying_pixels = 0.3;
-  d405.grazing_limit_deg = 75;
-  d405.dropout = 0.005;
+  m[1] = active_stereo(CameraKind::kD405, "Intel RealSense D405 (active stereo, 18 mm baseline)", 0.018, range(0.10, 1.0),
+                       1e-4);
 
   // Intel RealSense D435: 1280 x 720 at 87 x 58 deg, 50 mm baseline, Min-Z 280 mm at 1280 x 720,
   // ideal range 0.3-3 m (datasheet 337029); the same RMS formula; depth unit 1 mm (librealsense).
-  DepthSensorModel& d435 = m[2];
-  d435.kind = CameraKind::kD435;
-  d435.label = "Intel RealSense D435 (active stereo, 50 mm baseline)";
-  d435.principle = DepthPrinciple::kActiveStereo;
-  d435.intrinsics = pinhole(1280, 720, focal_for_fov(1280, 87.0));
-  d435.range = range(0.28, 3.0);
-  d435.noise_per_m2 = 0.08 / (d435.intrinsics.fx * 0.050);
-  d435.depth_unit_m = 1e-3;
-  d435.shadow_baseline_m = 0.050;
-  d435.flying_pixels = 0.3;
-  d435.grazing_limit_deg = 75;
-  d435.dropout = 0.005;
+  m[2] = active_stereo(CameraKind::kD435, "Intel RealSense D435 (active stereo, 50 mm baseline)", 0.050, range(0.28, 3.0),
+                       1e-3);
 
   // Microsoft Azure Kinect DK, NFOV unbinned (hardware specification: 640 x 576, 75 x 65 deg,
   // 0.5-3.86 m, random error std. dev. <= 17 mm, systematic < 11 mm + 0.1 % of distance; depth in

@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 
 namespace pbnbv {
@@ -53,6 +54,10 @@ Pose MountEstimator::object_T_model() const {
 // Gauss-Newton on E's twist e: residual per view twist_about(D_obs D(e)^-1, c) (ICP's proposal
 // against the one predicted, about the overlap's centre), weighed by ICP's covariance there;
 // the prior N(0, diag(r^2, t^2)) on e. Jacobians by central differences.
+bool MountEstimator::trusted(int min_views) const {
+  return first_ && estimate_.views >= min_views && estimate_.sigma_m <= 1e-3 && estimate_.sigma_deg <= 0.2;
+}
+
 void MountEstimator::refit() {
   Twist prior_var;
   prior_var << prior_r_ * prior_r_, prior_r_ * prior_r_, prior_r_ * prior_r_, prior_t_ * prior_t_, prior_t_ * prior_t_,
@@ -60,35 +65,59 @@ void MountEstimator::refit() {
   const TwistCovariance prior_info = prior_var.cwiseInverse().asDiagonal();
   std::vector<TwistCovariance> weights;
   for (const MountObservation& o : observations_) weights.push_back(o.proposal.covariance.inverse());
-  Twist e = Twist::Zero();
-  TwistCovariance h = prior_info;
   const auto residual = [&](const MountObservation& o, const Twist& x) -> Twist {
     const Pose d = mount_correction(*first_, o.kinematic, error_of(x));
     return twist_about(o.proposal.correction * d.inverse(), o.proposal.centre);
   };
-  for (int iteration = 0; iteration < 8 && first_ && !observations_.empty(); ++iteration) {
-    h = prior_info;
-    Twist g = prior_info * e;  // gradient of the prior's term
-    for (std::size_t i = 0; i < observations_.size(); ++i) {
-      const Twist r = residual(observations_[i], e);
-      Eigen::Matrix<double, 6, 6> j;
-      for (int k = 0; k < 6; ++k) {
-        const double step = k < 3 ? 1e-6 : 1e-7;
-        Twist plus = e, minus = e;
-        plus[k] += step;
-        minus[k] -= step;
-        j.col(k) = (residual(observations_[i], plus) - residual(observations_[i], minus)) / (2 * step);
+  std::vector<char> used(observations_.size(), 1);
+  Twist e = Twist::Zero();
+  TwistCovariance h = prior_info;
+  int outliers = 0;
+  for (;;) {
+    e = Twist::Zero();
+    for (int iteration = 0; iteration < 8 && first_; ++iteration) {
+      h = prior_info;
+      Twist g = prior_info * e;  // gradient of the prior's term
+      for (std::size_t i = 0; i < observations_.size(); ++i) {
+        if (!used[i]) continue;
+        const Twist r = residual(observations_[i], e);
+        Eigen::Matrix<double, 6, 6> j;
+        for (int k = 0; k < 6; ++k) {
+          const double step = k < 3 ? 1e-6 : 1e-7;
+          Twist plus = e, minus = e;
+          plus[k] += step;
+          minus[k] -= step;
+          j.col(k) = (residual(observations_[i], plus) - residual(observations_[i], minus)) / (2 * step);
+        }
+        h += j.transpose() * weights[i] * j;
+        g += j.transpose() * weights[i] * r;
       }
-      h += j.transpose() * weights[i] * j;
-      g += j.transpose() * weights[i] * r;
+      const Twist delta = -h.ldlt().solve(g);
+      e += delta;
+      if (delta.head<3>().norm() < 1e-9 && delta.tail<3>().norm() < 1e-9) break;
     }
-    const Twist delta = -h.ldlt().solve(g);
-    e += delta;
-    if (delta.head<3>().norm() < 1e-9 && delta.tail<3>().norm() < 1e-9) break;
+    // The worst observation beyond 4 sigma (its residual against its own covariance) is left out
+    // and the rest fitted again; at least two are kept.
+    int used_count = 0, worst = -1;
+    double worst_sigmas = 4.0;
+    for (std::size_t i = 0; i < observations_.size(); ++i) {
+      if (!used[i]) continue;
+      ++used_count;
+      const Twist r = residual(observations_[i], e);
+      const double sigmas = std::sqrt(std::max(0.0, r.dot(weights[i] * r)));
+      if (sigmas > worst_sigmas) {
+        worst_sigmas = sigmas;
+        worst = static_cast<int>(i);
+      }
+    }
+    if (worst < 0 || used_count <= 2) break;
+    used[static_cast<std::size_t>(worst)] = 0;
+    ++outliers;
   }
   estimate_.error = error_of(e);
   estimate_.covariance = h.inverse();
-  estimate_.views = static_cast<int>(observations_.size());
+  estimate_.views = static_cast<int>(std::count(used.begin(), used.end(), 1));
+  estimate_.outliers = outliers;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> rot(estimate_.covariance.topLeftCorner<3, 3>());
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> tra(estimate_.covariance.bottomRightCorner<3, 3>());
   estimate_.sigma_deg = std::sqrt(std::max(0.0, rot.eigenvalues().maxCoeff())) * 180.0 / kPi;

@@ -32,7 +32,8 @@ struct MountObservation {
 struct MountEstimate {
   Pose error = Pose::Identity();  // E: the true mount is the rig file's times this (camera frame)
   TwistCovariance covariance = TwistCovariance::Identity();  // of E's twist about the camera centre
-  int views = 0;                  // observations it rests on
+  int views = 0;                  // observations it rests on (the consistent ones)
+  int outliers = 0;               // observations left out: more than 4 sigma from the fit of the rest
   double sigma_m = 0;             // largest 1-sigma of its translation, m
   double sigma_deg = 0;           // largest 1-sigma of its rotation, degrees
   double translation_m() const;
@@ -51,8 +52,13 @@ class MountEstimator {
   const std::vector<MountObservation>& observations() const { return observations_; }
   const std::optional<Pose>& first() const { return first_; }
 
-  // The fit (identity with the prior's covariance before any observation).
+  // The fit (identity with the prior's covariance before any observation). Observations that
+  // disagree with the others (an alignment that slid to a wrong fit: its residual more than 4
+  // sigma) are left out, the worst first, and the rest fitted again.
   const MountEstimate& estimate() const { return estimate_; }
+  // Sure enough to be used: at least `min_views` consistent observations and its sigma within
+  // 1 mm and 0.2 degrees.
+  bool trusted(int min_views = 3) const;
   // The correction D_i the estimate predicts for a view at `kinematic`.
   Pose predicted_correction(const Pose& kinematic) const;
   // object_T_model: where the model's points lie in the object frame by the estimate.

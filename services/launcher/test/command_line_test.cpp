@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -94,6 +96,42 @@ TEST(LauncherCommandLine, FreeRigDefaultsAndDependentDefaults) {
   CommandLine x;
   ASSERT_EQ(parse(x, {"scan", "--up", "x"}).code, std::nullopt);
   EXPECT_EQ(x.scan().up, UpAxis::kX);
+}
+
+// A named camera gives its image and range where the options do not; --rig-errors its figures
+// where the error options do not; the depth filter is on unless the camera is the ideal one.
+TEST(LauncherCommandLine, ACameraAndRigErrorsByName) {
+  CommandLine line;
+  ASSERT_EQ(parse(line, {"scan"}).code, std::nullopt);
+  EXPECT_EQ(line.scan().settings.camera_model, CameraKind::kIdeal);
+  EXPECT_FALSE(line.scan().settings.depth_filter);
+  EXPECT_DOUBLE_EQ(line.scan().hand_eye_error_mm, 0.0);
+
+  CommandLine d435;
+  const Parsed p = parse(d435, {"scan", "--camera", "d435", "--fx", "700", "--rig-errors", "uncalibrated",
+                                "--hand-eye-error-mm", "2"});
+  ASSERT_EQ(p.code, std::nullopt) << p.err;
+  const ScanOptions& o = d435.scan();
+  EXPECT_EQ(o.settings.camera_model, CameraKind::kD435);
+  EXPECT_EQ(o.settings.camera.width, 1280);
+  EXPECT_DOUBLE_EQ(o.settings.camera.fx, 700.0);                   // given
+  EXPECT_NEAR(o.settings.camera.fy, 640 / std::tan(43.5 * M_PI / 180), 1e-9);  // the model's: 87 deg wide
+  EXPECT_DOUBLE_EQ(o.settings.depth_range.min_m, 0.28);
+  EXPECT_TRUE(o.settings.depth_filter);
+  EXPECT_DOUBLE_EQ(o.hand_eye_error_mm, 2.0);  // given
+  EXPECT_DOUBLE_EQ(o.hand_eye_error_deg, 1.0);  // uncalibrated
+  EXPECT_DOUBLE_EQ(o.turntable_error_deg, 0.5);
+  EXPECT_DOUBLE_EQ(o.joint_error_deg, 0.02);
+  EXPECT_DOUBLE_EQ(o.turntable_backlash_deg, 0.05);
+
+  CommandLine bad;
+  const Parsed b = parse(bad, {"scan", "--camera", "kinect2"});
+  EXPECT_EQ(b.code, 2);
+  EXPECT_NE(b.err.find("--camera"), std::string::npos) << b.err;
+  CommandLine external;
+  const Parsed e = parse(external, {"scan", "--external-rig", "--rig-errors", "calibrated"});
+  EXPECT_EQ(e.code, 2);
+  EXPECT_NE(e.err.find("--rig-errors does not apply to --external-rig"), std::string::npos) << e.err;
 }
 
 TEST(LauncherCommandLine, TheRigFileDecidesTheKindOfRig) {
