@@ -17,6 +17,7 @@
 // on while it fuses (seconds).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <future>
 #include <iostream>
@@ -147,12 +148,13 @@ class RegistrationService {
   void tie_model_to_object() {
     if (off_ || !mount_.trusted(4)) return;
     // The views whose alignment was not taken (flagged, or not pinned down by their overlap) were
-    // placed where the estimate put them then, or at their kinematic pose: placed again where it
-    // puts them now.
+    // placed where the estimate put them then, or at their kinematic pose, and those whose
+    // alignment the estimate left out as slid were placed wrong: placed again where it puts them.
     std::vector<int> merged;
     for (const PlacedView& v : placed_views_) merged.push_back(v.view);
+    const std::vector<int>& slid = mount_.outlier_views();
     for (PlacedView& v : placed_views_) {
-      if (v.refined) continue;
+      if (v.refined && std::find(slid.begin(), slid.end(), v.view) == slid.end()) continue;
       const Pose now = mount_.predicted_correction(v.kinematic);
       const Pose q = applied_ * now * v.correction.inverse() * applied_.inverse();
       try {
@@ -247,7 +249,7 @@ class RegistrationService {
       } else {
         // On a worker, the heartbeat going on meanwhile: ICP against a large model of a noisy
         // camera takes seconds, more on a loaded machine, and a silent service is taken for hung.
-        auto job = std::async(std::launch::async, [&] { return register_predicted(frame, kinematic); });
+        auto job = std::async(std::launch::async, [&] { return register_predicted(c.iteration, frame, kinematic); });
         while (job.wait_for(std::chrono::milliseconds(250)) != std::future_status::ready) bus_.keep_alive();
         r = job.get();
       }
@@ -297,7 +299,7 @@ class RegistrationService {
   // Registers a view from where the mount's estimate so far puts it (the kinematic pose when
   // nothing is known yet): the prior's mean moves there. ICP's proposal, against the kinematic
   // pose, goes into the estimate; the correction answered is against the kinematic pose.
-  RegistrationResult register_predicted(const PointCloud& frame, const Pose& kinematic) {
+  RegistrationResult register_predicted(int view, const PointCloud& frame, const Pose& kinematic) {
     // In the model's frame now: the first view's kinematic one, moved by applied_.
     // The estimate is used once it is sure (3 consistent views, 1 mm / 0.2 deg): an early one
     // resting on a view that slid would lead the next ones astray.
@@ -313,6 +315,7 @@ class RegistrationService {
     // Only well-overlapped alignments inform it (a view that sees little of the model may slide).
     if (r.icp && r.overlap >= kMountMinOverlap) {
       MountObservation o;
+      o.view = view;
       o.kinematic = kinematic;
       o.proposal = *r.icp;
       o.proposal.correction = applied_.inverse() * r.icp->correction * predicted;
@@ -364,7 +367,8 @@ class RegistrationService {
     nlohmann::json obs = nlohmann::json::array();
     for (const MountObservation& o : mount_.observations()) {
       std::vector<double> cov(o.proposal.covariance.data(), o.proposal.covariance.data() + 36);
-      obs.push_back({{"kinematic", to_json(o.kinematic)},
+      obs.push_back({{"view", o.view},
+                     {"kinematic", to_json(o.kinematic)},
                      {"correction", to_json(o.proposal.correction)},
                      {"centre_m", to_json(o.proposal.centre)},
                      {"covariance", cov}});
@@ -390,6 +394,7 @@ class RegistrationService {
       }
       for (const auto& o : j.at("observations")) {
         MountObservation m;
+        m.view = o.value("view", -1);
         m.kinematic = pose_from_json(o.at("kinematic"), path.string() + " observation");
         m.proposal.correction = pose_from_json(o.at("correction"), path.string() + " observation");
         m.proposal.centre = vec3_from_json(o.at("centre_m"), path.string() + " observation");

@@ -118,6 +118,10 @@ void MountEstimator::refit() {
   estimate_.covariance = h.inverse();
   estimate_.views = static_cast<int>(std::count(used.begin(), used.end(), 1));
   estimate_.outliers = outliers;
+  outlier_views_.clear();
+  for (std::size_t i = 0; i < observations_.size(); ++i) {
+    if (!used[i]) outlier_views_.push_back(observations_[i].view);
+  }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> rot(estimate_.covariance.topLeftCorner<3, 3>());
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> tra(estimate_.covariance.bottomRightCorner<3, 3>());
   estimate_.sigma_deg = std::sqrt(std::max(0.0, rot.eigenvalues().maxCoeff())) * 180.0 / kPi;

@@ -25,6 +25,7 @@ namespace pbnbv {
 // One view's evidence: its kinematic pose and ICP's proposal for it, expressed against the first
 // view's kinematic frame (the model's frame).
 struct MountObservation {
+  int view = -1;                       // which view (for saying which were left out)
   Pose kinematic = Pose::Identity();   // object_T_camera by the rig file
   IcpProposal proposal;                // registered = proposal.correction * kinematic
 };
@@ -59,6 +60,8 @@ class MountEstimator {
   // Sure enough to be used: at least `min_views` consistent observations and its sigma within
   // 1 mm and 0.2 degrees.
   bool trusted(int min_views = 3) const;
+  // The views whose observations the fit left out (their alignment slid: placed wrong).
+  const std::vector<int>& outlier_views() const { return outlier_views_; }
   // The correction D_i the estimate predicts for a view at `kinematic`.
   Pose predicted_correction(const Pose& kinematic) const;
   // object_T_model: where the model's points lie in the object frame by the estimate.
@@ -70,6 +73,7 @@ class MountEstimator {
   std::optional<Pose> first_;
   std::vector<MountObservation> observations_;
   MountEstimate estimate_;
+  std::vector<int> outlier_views_;
 };
 
 // D = K1 E^-1 K1^-1 K E K^-1.

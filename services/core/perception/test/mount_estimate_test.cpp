@@ -54,9 +54,9 @@ TEST(MountEstimate, ExactProposalsGiveTheMountErrorBack) {
   const std::vector<Pose> views = ring_views();
   MountEstimator m(0.005 / std::sqrt(3.0), 1.0 / std::sqrt(3.0));
   m.set_first(views[0]);
-  m.add({views[1], exact_proposal(views[0], views[1], truth, 1e-4, 0.01)});
+  m.add({1, views[1], exact_proposal(views[0], views[1], truth, 1e-4, 0.01)});
   EXPECT_GT(m.estimate().sigma_m, 5e-4);
-  for (std::size_t i = 2; i < views.size(); ++i) m.add({views[i], exact_proposal(views[0], views[i], truth, 1e-4, 0.01)});
+  for (std::size_t i = 2; i < views.size(); ++i) m.add({static_cast<int>(i), views[i], exact_proposal(views[0], views[i], truth, 1e-4, 0.01)});
   const MountEstimate& e = m.estimate();
   EXPECT_EQ(e.views, 9);
   EXPECT_LT((e.error.translation() - truth.translation()).norm(), 1e-5);
@@ -83,7 +83,7 @@ TEST(MountEstimate, NoisyProposalsGiveItWithinTheirScatter) {
     Twist noise;
     noise << 0.03 * kDeg * n(rng), 0.03 * kDeg * n(rng), 0.03 * kDeg * n(rng), 2e-4 * n(rng), 2e-4 * n(rng), 2e-4 * n(rng);
     p.correction = pose_from_twist(noise, p.centre) * p.correction;
-    m.add({views[i], p});
+    m.add({static_cast<int>(i), views[i], p});
   }
   const MountEstimate& e = m.estimate();
   const double t_err = (e.error.translation() - truth.translation()).norm();
@@ -109,10 +109,11 @@ TEST(MountEstimate, ProposalsThatSlidAreLeftOut) {
       slide.linear() = Eigen::AngleAxisd(2 * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix();
       p.correction = slide * p.correction;
     }
-    m.add({views[i], p});
+    m.add({static_cast<int>(i), views[i], p});
   }
   const MountEstimate& e = m.estimate();
   EXPECT_EQ(e.outliers, 2);
+  EXPECT_EQ(m.outlier_views(), (std::vector<int>{2, 6}));
   EXPECT_EQ(e.views, 7);
   EXPECT_LT((e.error.translation() - truth.translation()).norm(), 1e-4);
   EXPECT_LT(angle_deg(e.error, truth), 0.01);
@@ -126,7 +127,7 @@ TEST(MountEstimate, TheModelsFrameIsTiedBackToTheObjects) {
   const std::vector<Pose> views = ring_views();
   MountEstimator m(0.005, 1.0);
   m.set_first(views[0]);
-  for (std::size_t i = 1; i < views.size(); ++i) m.add({views[i], exact_proposal(views[0], views[i], truth, 1e-4, 0.01)});
+  for (std::size_t i = 1; i < views.size(); ++i) m.add({static_cast<int>(i), views[i], exact_proposal(views[0], views[i], truth, 1e-4, 0.01)});
   const Eigen::Vector3d p_object(0.05, -0.02, 0.08);
   const Pose true_first = views[0] * truth;
   const Eigen::Vector3d p_model = views[0] * (true_first.inverse() * p_object);
