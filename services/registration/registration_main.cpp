@@ -282,8 +282,8 @@ class RegistrationService {
       if (!off_ && r.accepted) {
         // Each merged view's placing, in the first view's frame, for placing it again at the end.
         placed_views_.push_back({c.iteration, kinematic, applied_.inverse() * r.correction, r.refined || placed_views_.empty()});
-        save_mount();
       }
+      save_mount();  // the estimate and the placings with this view (hand_eye.json, once per view)
       add_to_model(c, placed, std::move(normals), pose, r.accepted, out);
       std::ostringstream os;
       os << "view " << c.iteration << ": " << r.reason << " (" << r.time_s * 1e3 << " ms)";
@@ -331,7 +331,6 @@ class RegistrationService {
                               mount_.estimate().views) +
                   fmt::format("{} left out", mount_.estimate().outliers) + ")";
     }
-    save_mount();
     return r;
   }
 

@@ -97,6 +97,23 @@ std::vector<Eigen::Vector3f> turned(const std::vector<Eigen::Vector3f>& normals,
   return out;
 }
 
+// A frame file (points, normals, camera pose) moved by q, rewritten in place.
+void move_frame_file(const fs::path& file, const Pose& q) {
+  CloudExtras extras;
+  const PointCloud points = read_ply(file.string(), extras);
+  for (Pose& pose : extras.camera_poses) pose = q * pose;
+  extras.normals = turned(extras.normals, q);
+  write_ply(moved(points, q), file.string(), extras);
+}
+
+// A depth image's JSON: its camera pose moved by q (a file without one is left as it is).
+void move_depth_pose(const fs::path& file, const Pose& q) {
+  nlohmann::json j = read_json(file.string());
+  if (!j.contains("object_T_camera")) return;
+  j["object_T_camera"] = to_json(q * pose_from_json(j["object_T_camera"], file.string()));
+  write_json_atomic(j, file.string());
+}
+
 }  // namespace
 
 void ScanModel::move_frame(const Pose& q) {
@@ -107,41 +124,21 @@ void ScanModel::move_frame(const Pose& q) {
   write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_});
   if (fs::is_directory(folder_ / "frames")) {
     for (const auto& entry : fs::directory_iterator(folder_ / "frames")) {
-      if (entry.path().extension() != ".ply") continue;
-      CloudExtras extras;
-      const PointCloud points = read_ply(entry.path().string(), extras);
-      for (Pose& pose : extras.camera_poses) pose = q * pose;
-      extras.normals = turned(extras.normals, q);
-      write_ply(moved(points, q), entry.path().string(), extras);
+      if (entry.path().extension() == ".ply") move_frame_file(entry.path(), q);
     }
   }
   if (fs::is_directory(folder_ / "depth")) {
     for (const auto& entry : fs::directory_iterator(folder_ / "depth")) {
-      if (entry.path().extension() != ".json") continue;
-      nlohmann::json j = read_json(entry.path().string());
-      if (!j.contains("object_T_camera")) continue;
-      j["object_T_camera"] = to_json(q * pose_from_json(j["object_T_camera"], entry.path().string()));
-      write_json_atomic(j, entry.path().string());
+      if (entry.path().extension() == ".json") move_depth_pose(entry.path(), q);
     }
   }
 }
 
 void ScanModel::move_view(int view, const Pose& q, const std::vector<int>& merged) {
   if (folder_.empty()) throw std::invalid_argument("no scan folder: a view cannot be placed again");
-  const fs::path file = folder_ / frame_file_of(view);
-  CloudExtras extras;
-  const PointCloud points = read_ply(file.string(), extras);
-  for (Pose& pose : extras.camera_poses) pose = q * pose;
-  extras.normals = turned(extras.normals, q);
-  write_ply(moved(points, q), file.string(), extras);
+  move_frame_file(folder_ / frame_file_of(view), q);
   const fs::path depth = folder_ / "depth" / view_file(view, "json");
-  if (fs::exists(depth)) {
-    nlohmann::json j = read_json(depth.string());
-    if (j.contains("object_T_camera")) {
-      j["object_T_camera"] = to_json(q * pose_from_json(j["object_T_camera"], depth.string()));
-      write_json_atomic(j, depth.string());
-    }
-  }
+  if (fs::exists(depth)) move_depth_pose(depth, q);
   PointCloud all;
   std::vector<Eigen::Vector3f> all_normals;
   std::vector<Pose> poses;
