@@ -147,24 +147,7 @@ class RegistrationService {
   // (else it stays).
   void tie_model_to_object() {
     if (off_ || !mount_.trusted(4)) return;
-    // The views whose alignment was not taken (flagged, or not pinned down by their overlap) were
-    // placed where the estimate put them then, or at their kinematic pose, and those whose
-    // alignment the estimate left out as slid were placed wrong: placed again where it puts them.
-    std::vector<int> merged;
-    for (const PlacedView& v : placed_views_) merged.push_back(v.view);
-    const std::vector<int>& slid = mount_.outlier_views();
-    for (PlacedView& v : placed_views_) {
-      if (v.refined && std::find(slid.begin(), slid.end(), v.view) == slid.end()) continue;
-      const Pose now = mount_.predicted_correction(v.kinematic);
-      const Pose q = applied_ * now * v.correction.inverse() * applied_.inverse();
-      try {
-        model_.move_view(v.view, q, merged);
-        v.correction = now;
-        log_info(fmt::format("view {} placed again by the mount's estimate: moved {:.2f} mm", v.view, q.translation().norm() * 1e3));
-      } catch (const std::exception& ex) {
-        log_warn("view " + std::to_string(v.view) + " not placed again: " + ex.what());
-      }
-    }
+    place_again_where_misplaced();
     const Pose target = mount_.object_T_model();
     const Pose delta = target * applied_.inverse();
     if (delta.translation().norm() < 1e-6 && Eigen::AngleAxisd(delta.linear()).angle() < 1e-6) return;
@@ -202,6 +185,7 @@ class RegistrationService {
     mount_ = MountEstimator(params_.prior_translation_m, params_.prior_rotation_deg);
     applied_ = Pose::Identity();
     placed_views_.clear();
+    mount_views_.clear();
     meshes_made_ = 0;
     last_mesh_.reset();
   }
@@ -245,11 +229,17 @@ class RegistrationService {
         r.reason = "registration off: kinematic pose kept";
       } else if (model_.points().empty() || !mount_.has_first()) {
         mount_.set_first(kinematic);  // the model's frame: this view's kinematic one
+        mount_views_.clear();
+        keep_for_mount(c.iteration, kinematic, frame, capture.normals);
         r = register_frame(model_.points(), frame, params_, kinematic.translation());
       } else {
         // On a worker, the heartbeat going on meanwhile: ICP against a large model of a noisy
         // camera takes seconds, more on a loaded machine, and a silent service is taken for hung.
-        auto job = std::async(std::launch::async, [&] { return register_predicted(c.iteration, frame, kinematic); });
+        auto job = std::async(std::launch::async, [&] {
+          keep_for_mount(c.iteration, kinematic, frame, capture.normals);
+          fit_mount_to_views();
+          return register_predicted(c.iteration, frame, kinematic);
+        });
         while (job.wait_for(std::chrono::milliseconds(250)) != std::future_status::ready) bus_.keep_alive();
         r = job.get();
       }
@@ -334,6 +324,82 @@ class RegistrationService {
     return r;
   }
 
+  // A view's points and normals (object frame by its kinematic pose) kept in its camera frame,
+  // thinned to a few thousand, for fitting the mount to the views' agreement.
+  void keep_for_mount(int view, const Pose& kinematic, const PointCloud& frame, const std::vector<Eigen::Vector3f>& normals) {
+    if (normals.size() != frame.size()) return;
+    constexpr std::size_t kKept = 4000;
+    const std::size_t step = std::max<std::size_t>(1, frame.size() / kKept);
+    MountView v;
+    v.view = view;
+    v.kinematic = kinematic;
+    const Pose camera_T_object = kinematic.inverse();
+    const Eigen::Matrix3f turn = camera_T_object.linear().cast<float>();
+    for (std::size_t i = 0; i < frame.size(); i += step) {
+      v.points.push_back((camera_T_object * frame[i].cast<double>()).cast<float>());
+      v.normals.push_back(turn * normals[i]);
+    }
+    mount_views_.push_back(std::move(v));
+  }
+
+  // The mount fitted to the views' clouds at once (mount_from_views), from the last fit, once three
+  // views are in: from then on it is the estimate (ICP's proposals say which views slid).
+  void fit_mount_to_views() {
+    if (mount_views_.size() < 3) return;
+    const MountEstimate e = mount_from_views(mount_views_, mount_.estimate().error, params_.prior_translation_m,
+                                             params_.prior_rotation_deg);
+    if (e.views < 3) return;
+    mount_.set_from_views(e);
+    place_again_where_misplaced();
+    log_info(fmt::format("the mount fitted to {} views' clouds: {:.2f} mm, {:.3f} deg off the rig file's ", e.views,
+                         e.translation_m() * 1e3, e.rotation_deg()) +
+             fmt::format("(sigma {:.2f} mm, {:.3f} deg)", e.sigma_m * 1e3, e.sigma_deg));
+  }
+
+  // Views placed where the mount's estimate says they are not, placed again where it puts them:
+  // those whose alignment was not taken (flagged, or not pinned down by their overlap: placed at
+  // their kinematic pose, or where an earlier estimate put them), those whose proposal the
+  // estimate left out as slid, and those placed more than 5 sigma from where it puts them (an
+  // alignment that slid on too little overlap to inform the estimate), sigma being the
+  // estimate's and a view's own (per_view_covariance) together, at the view's points' centre.
+  void place_again_where_misplaced() {
+    if (off_ || !mount_.trusted(3)) return;
+    std::vector<int> merged;
+    for (const PlacedView& v : placed_views_) merged.push_back(v.view);
+    const std::vector<int>& slid = mount_.outlier_views();
+    const MountEstimate& e = mount_.estimate();
+    const double sigma_t = std::hypot(0.3e-3, e.sigma_m), sigma_r = std::hypot(deg_to_rad(0.03), deg_to_rad(e.sigma_deg));
+    for (PlacedView& v : placed_views_) {
+      const Pose now = mount_.predicted_correction(v.kinematic);
+      double sigmas = 0;
+      if (v.refined) {
+        const auto seen = std::find_if(mount_views_.begin(), mount_views_.end(), [&](const MountView& m) { return m.view == v.view; });
+        Eigen::Vector3d centre = v.kinematic.translation();
+        if (seen != mount_views_.end() && !seen->points.empty()) {
+          Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+          for (const auto& p : seen->points) sum += p.cast<double>();
+          centre = v.correction * (v.kinematic * (sum / static_cast<double>(seen->points.size())));
+        }
+        const Twist d = twist_about(now * v.correction.inverse(), centre);
+        sigmas = std::sqrt(d.head<3>().squaredNorm() / (sigma_r * sigma_r) + d.tail<3>().squaredNorm() / (sigma_t * sigma_t));
+        const bool left_out = std::find(slid.begin(), slid.end(), v.view) != slid.end();
+        if (v.view == placed_views_.front().view || (!left_out && sigmas <= 5.0)) continue;
+      }
+      const Pose q = applied_ * now * v.correction.inverse() * applied_.inverse();
+      // (moves of less than 0.05 mm and 0.006 degrees are not worth rewriting the model for)
+      if (q.translation().norm() < 5e-5 && Eigen::AngleAxisd(q.linear()).angle() < 1e-4) continue;
+      try {
+        model_.move_view(v.view, q, merged);
+        log_info(fmt::format("view {} placed again by the mount's estimate: moved {:.2f} mm", v.view, q.translation().norm() * 1e3) +
+                 (v.refined ? fmt::format(" (its alignment {:.1f} sigma off it)", sigmas) : std::string()));
+        v.correction = now;
+        v.refined = false;  // placed by the estimate: placed again as it improves
+      } catch (const std::exception& ex) {
+        log_warn("view " + std::to_string(v.view) + " not placed again: " + ex.what());
+      }
+    }
+  }
+
   // What moves a view's pose besides the mount (joint encoders, turntable backlash): each view's
   // proposal is that uncertain beyond ICP's own covariance (a calibrated arm's size: 0.3 mm,
   // 0.03 degrees per axis).
@@ -360,6 +426,7 @@ class RegistrationService {
     j["error_deg"] = e.rotation_deg();
     j["sigma_mm"] = e.sigma_m * 1e3;
     j["sigma_deg"] = e.sigma_deg;
+    j["fitted_to"] = mount_.from_views() ? "the views' clouds (each view against the others)" : "ICP's proposals";
     j["object_T_model"] = to_json(mount_.object_T_model());
     j["first_kinematic"] = to_json(*mount_.first());
     j["applied_object_T_model"] = to_json(applied_);  // what cloud.ply, frames/ and depth/ were moved by
@@ -408,11 +475,21 @@ class RegistrationService {
                                  pose_from_json(v.at("correction"), path.string() + " placed view"),
                                  v.at("refined").get<bool>()});
       }
+      // The views' clouds as their camera saw them, from their frames, and the fit to them again.
+      for (const PlacedView& v : placed_views_) {
+        MountView m;
+        m.view = v.view;
+        m.kinematic = v.kinematic;
+        model_.view_in_camera_frame(v.view, m.points, m.normals);
+        mount_views_.push_back(std::move(m));
+      }
+      fit_mount_to_views();
     } catch (const std::exception& e) {
       log_warn("the mount estimate is not continued (" + std::string(e.what()) + "): it starts again from the next view");
       mount_ = MountEstimator(params_.prior_translation_m, params_.prior_rotation_deg);
       applied_ = Pose::Identity();
       placed_views_.clear();
+      mount_views_.clear();
     }
   }
 
@@ -485,6 +562,7 @@ class RegistrationService {
     bool refined;     // by ICP (or the first view): kept as it is
   };
   std::vector<PlacedView> placed_views_;
+  std::vector<MountView> mount_views_;  // the merged views in their camera frames, for the mount's fit
   bus::RecentFrames frames_;          // the last depth frames, for DIR/depth/
   std::future<MeshResult> meshing_;   // the mesh being made
   MeshKey making_;                    // ... of this

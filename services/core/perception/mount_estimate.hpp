@@ -12,6 +12,9 @@
 //   - the model's frame is related to the object frame: object = K_1 E K_1^-1 * model (up to a
 //     turn about the turntable's axis, which no view can tell: a turntable zero error turns every
 //     view alike).
+// The proposals of single alignments slide when the mount is far off (an uncalibrated one puts
+// views 10-20 mm apart): mount_from_views fits E to the views' clouds themselves instead, every
+// view against every other at once (E moves them all), which a view's own alignment cannot do.
 // Plain data and functions; the registration service keeps one per scan.
 #include <Eigen/Core>
 #include <optional>
@@ -53,6 +56,11 @@ class MountEstimator {
   const std::vector<MountObservation>& observations() const { return observations_; }
   const std::optional<Pose>& first() const { return first_; }
 
+  // A fit of E from the views' clouds (mount_from_views): from then on it is the estimate, and
+  // the proposals only tell which views slid (more than 4 sigma from it).
+  void set_from_views(const MountEstimate& e);
+  bool from_views() const { return from_views_.has_value(); }
+
   // The fit (identity with the prior's covariance before any observation). Observations that
   // disagree with the others (an alignment that slid to a wrong fit: its residual more than 4
   // sigma) are left out, the worst first, and the rest fitted again.
@@ -72,11 +80,46 @@ class MountEstimator {
   double prior_t_, prior_r_;
   std::optional<Pose> first_;
   std::vector<MountObservation> observations_;
+  std::optional<MountEstimate> from_views_;
   MountEstimate estimate_;
   std::vector<int> outlier_views_;
 };
 
 // D = K1 E^-1 K1^-1 K E K^-1.
 Pose mount_correction(const Pose& first, const Pose& kinematic, const Pose& error);
+
+// One view for mount_from_views: its points and their unit normals in the camera frame (the
+// normals facing the camera; a zero normal: none), and its kinematic pose (object_T_camera by the
+// rig file).
+struct MountView {
+  int view = -1;
+  Pose kinematic = Pose::Identity();
+  PointCloud points;
+  std::vector<Eigen::Vector3f> normals;
+};
+
+struct MountFitParams {
+  // Correspondences farther apart than this are not paired: coarse to fine, each stage iterated
+  // to convergence (the first must exceed how far apart the mount error puts the views).
+  std::vector<double> correspondence_m = {0.04, 0.02, 0.01, 0.005};
+  int iterations_per_stage = 8;
+  double max_normal_angle_deg = 30.0;  // pairs whose normals disagree more are not paired
+  int points_per_view = 1500;          // each view's points thinned to about this many
+  int min_points = 50;                 // views with fewer are left out
+  // As in registration, neighbouring residuals are not independent: N pairs inform as N / this
+  // (fewer than ICP's 25: the points are thinned to a few millimetres apart).
+  double pairs_per_independent = 4.0;
+  double min_residual_m = 0.0002;      // the residual sigma is taken as at least this
+};
+
+// E fitted to the views' agreement: each view's points placed by K_i E lie on the surfaces of the
+// other views placed by K_j E (point-to-plane, every ordered pair of views, Gauss-Newton on E's
+// twist about the camera centre, starting from `start`), with the prior N(identity, the rig's
+// stated sigma per axis). Directions no pair pins down (E's turn about the axis of a turntable
+// that alone moved the camera) stay at the prior's. The covariance is the fit's: its information
+// from the pairs at the final residual sigma, plus the prior's. `views` counts the views that
+// were paired with another. Fewer than two usable views: the start, with the prior's covariance.
+MountEstimate mount_from_views(const std::vector<MountView>& views, const Pose& start, double prior_translation_m,
+                               double prior_rotation_deg, const MountFitParams& params = {});
 
 }  // namespace pbnbv

@@ -156,6 +156,20 @@ void ScanModel::move_view(int view, const Pose& q, const std::vector<int>& merge
   write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_});
 }
 
+void ScanModel::view_in_camera_frame(int view, PointCloud& points, std::vector<Eigen::Vector3f>& normals) const {
+  if (folder_.empty()) throw std::invalid_argument("no scan folder: view " + std::to_string(view) + " has no file");
+  const fs::path file = folder_ / frame_file_of(view);
+  CloudExtras extras;
+  points = read_ply(file.string(), extras);
+  if (extras.camera_poses.size() != 1) throw std::invalid_argument(file.string() + ": no camera pose in its header");
+  const Pose camera_T_object = extras.camera_poses.front().inverse();
+  const Eigen::Matrix3f turn = camera_T_object.linear().cast<float>();
+  for (auto& p : points) p = (camera_T_object * p.cast<double>()).cast<float>();
+  normals = std::move(extras.normals);
+  normals.resize(points.size(), Eigen::Vector3f::Zero());
+  for (auto& n : normals) n = turn * n;
+}
+
 MeshSummary ScanModel::mesh(const std::vector<int>& views, const CameraIntrinsics& camera, double point_spacing_m) const {
   if (folder_.empty()) throw std::invalid_argument("no scan folder to mesh in");
   std::vector<SurfaceFrame> frames;

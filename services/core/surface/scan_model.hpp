@@ -81,6 +81,11 @@ class ScanModel {
   // rewrites cloud.ply: a view placed again once its pose is known better. Needs a folder.
   void move_view(int view, const Pose& q, const std::vector<int>& merged);
 
+  // A view's frame as written (frames/view_NNN.ply), taken back into its camera frame by the
+  // pose in its header: its points and normals as the camera saw them (a restarted service's
+  // mount estimate refits to them). Throws naming the file when there is none or it has no pose.
+  void view_in_camera_frame(int view, PointCloud& points, std::vector<Eigen::Vector3f>& normals) const;
+
   const PointCloud& points() const { return points_; }
   const std::vector<Eigen::Vector3f>& normals() const { return normals_; }
   const std::vector<Pose>& camera_poses() const { return poses_; }
