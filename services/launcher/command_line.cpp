@@ -414,6 +414,10 @@ void CommandLine::resolve_scan() {
                                                                                 : kRingElevationFreeDeg);
   if (p.initial_view) s.initial_view_m = *p.initial_view;
   const auto given = [this](std::string_view name) { return scan_cmd_->get_option("--" + std::string(name))->count() > 0; };
+  // The twin plays the camera the rig file names (pbnbv_camera_model) unless --camera says another.
+  if (!scan_.external_rig && !given(kCamera.name) && rig && rig->camera && rig->camera->model) {
+    s.camera_model = *rig->camera->model;
+  }
   take_model_defaults(depth_sensor_model(s.camera_model), given, s.camera, s.depth_range);
   // The ideal camera makes no flying pixel or speckle: nothing for the filter to take there.
   s.depth_filter = p.depth_filter.value_or(depth_sensor_model(s.camera_model).exact() && !scan_.external_rig

@@ -208,65 +208,103 @@ MountEstimate mount_from_views(const std::vector<MountView>& views, const Pose& 
     fit.push_back(std::move(f));
   }
 
-  MountEstimate out;
-  out.error = start;
-  out.covariance = prior_info.inverse();
+  // E is fitted alone; its covariance then counts each view's own small pose error (joints,
+  // backlash: view i sits at K_i E D_i, D_i with the per-view prior), fitted alongside at the
+  // solution and marginalised out, so that a direction the pairs pin down only as well as the
+  // views' own errors allow is not claimed better than that.
+  const std::size_t n = fit.size();
+  const double view_t = std::max(params.per_view_translation_m, 1e-7);
+  const double view_r = std::max(params.per_view_rotation_deg, 1e-5) * kPi / 180.0;
+  Twist view_var;
+  view_var << view_r * view_r, view_r * view_r, view_r * view_r, view_t * view_t, view_t * view_t, view_t * view_t;
+  const TwistCovariance view_info = view_var.cwiseInverse().asDiagonal();
   const double cos_max = std::cos(params.max_normal_angle_deg * kPi / 180.0);
-  TwistCovariance info_pairs = TwistCovariance::Zero();
-  double residual_var = params.min_residual_m * params.min_residual_m;
-  std::vector<char> paired(fit.size(), 0);
-  for (std::size_t stage = 0; stage < params.correspondence_m.size() && fit.size() >= 2; ++stage) {
-    const float max_d2 = static_cast<float>(params.correspondence_m[stage] * params.correspondence_m[stage]);
-    for (int iteration = 0; iteration < params.iterations_per_stage; ++iteration) {
-      TwistCovariance h = TwistCovariance::Zero();
-      Twist g = Twist::Zero();
-      double sum_r2 = 0;
-      long pairs = 0;
-      std::fill(paired.begin(), paired.end(), 0);
-      const Pose e_inv = out.error.inverse();
-      for (std::size_t i = 0; i < fit.size(); ++i) {
-        for (std::size_t j = 0; j < fit.size(); ++j) {
-          if (i == j) continue;
-          const Pose m = e_inv * fit[j].kinematic.inverse() * fit[i].kinematic * out.error;
-          const Eigen::Matrix3d rm = m.linear();
-          const Eigen::Matrix3d rm_minus_i = rm - Eigen::Matrix3d::Identity();
-          long found = 0;
-          for (std::size_t a = 0; a < fit[i].points.size(); ++a) {
-            const Eigen::Vector3d p = fit[i].points[a].cast<double>();
-            const Eigen::Vector3d y = m * p;
-            float d2 = 0;
-            const int b = fit[j].index->nearest(y.cast<float>(), max_d2, d2);
-            if (b < 0) continue;
-            const Eigen::Vector3d n = fit[j].normals[static_cast<std::size_t>(b)].cast<double>();
-            if (n.dot(rm * fit[i].normals[a].cast<double>()) < cos_max) continue;
-            const double r = n.dot(y - fit[j].points[static_cast<std::size_t>(b)].cast<double>());
-            Twist jac;
-            jac.head<3>() = (-(rm * skew(p)) + skew(y)).transpose() * n;
-            jac.tail<3>() = rm_minus_i.transpose() * n;
-            // Huber weight beyond a third of the stage's distance: a wrong pair pulls less.
-            const double k = params.correspondence_m[stage] / 3;
-            const double w = std::abs(r) <= k ? 1.0 : k / std::abs(r);
-            h += w * jac * jac.transpose();
-            g += w * jac * r;
-            sum_r2 += w * r * r;
-            ++pairs;
-            ++found;
+  Pose error = start;
+  std::vector<char> paired(n, 0);
+  // The point-to-plane normal equations at `error` for pairs closer than `max_m`: over E's step
+  // alone (6), or, `full`, over E's and every view's own (6 + 6 n). Returns the pairs' count and
+  // their mean weighted squared residual.
+  const auto accumulate = [&](double max_m, bool full, Eigen::MatrixXd& h, Eigen::VectorXd& g, double& mean_r2) {
+    const int dim = full ? 6 + 6 * static_cast<int>(n) : 6;
+    h = Eigen::MatrixXd::Zero(dim, dim);
+    g = Eigen::VectorXd::Zero(dim);
+    const float max_d2 = static_cast<float>(max_m * max_m);
+    const double huber = max_m / 3;  // beyond it a pair pulls less
+    double sum_r2 = 0;
+    long pairs = 0;
+    std::fill(paired.begin(), paired.end(), 0);
+    const Pose e_inv = error.inverse();
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = 0; j < n; ++j) {
+        if (i == j) continue;
+        const Pose m = e_inv * fit[j].kinematic.inverse() * fit[i].kinematic * error;  // camera i -> camera j
+        const Eigen::Matrix3d rm = m.linear();
+        const Eigen::Matrix3d rm_minus_i = rm - Eigen::Matrix3d::Identity();
+        const int at[3] = {0, 6 + 6 * static_cast<int>(i), 6 + 6 * static_cast<int>(j)};
+        long found = 0;
+        for (std::size_t k = 0; k < fit[i].points.size(); ++k) {
+          const Eigen::Vector3d p = fit[i].points[k].cast<double>();
+          const Eigen::Vector3d y = m * p;
+          float d2 = 0;
+          const int b = fit[j].index->nearest(y.cast<float>(), max_d2, d2);
+          if (b < 0) continue;
+          const Eigen::Vector3d nj = fit[j].normals[static_cast<std::size_t>(b)].cast<double>();
+          if (nj.dot(rm * fit[i].normals[k].cast<double>()) < cos_max) continue;
+          const double r = nj.dot(y - fit[j].points[static_cast<std::size_t>(b)].cast<double>());
+          // d y / d(view i's step) = R_M [-[p]x | I], d y / d(view j's step) = [[y]x | -I]; E's
+          // step moves both views: their sum.
+          Eigen::Matrix<double, 18, 1> jac;
+          jac.segment<3>(6) = (-(rm * skew(p))).transpose() * nj;
+          jac.segment<3>(9) = rm.transpose() * nj;
+          jac.segment<3>(12) = skew(y).transpose() * nj;
+          jac.segment<3>(15) = -nj;
+          jac.segment<3>(0) = jac.segment<3>(6) + jac.segment<3>(12);
+          jac.segment<3>(3) = rm_minus_i.transpose() * nj;
+          const double w = std::abs(r) <= huber ? 1.0 : huber / std::abs(r);
+          for (int u = 0; u < (full ? 3 : 1); ++u) {
+            g.segment<6>(at[u]) += w * r * jac.segment<6>(6 * u);
+            for (int v = 0; v < (full ? 3 : 1); ++v) {
+              h.block<6, 6>(at[u], at[v]) += w * jac.segment<6>(6 * u) * jac.segment<6>(6 * v).transpose();
+            }
           }
-          if (found > 0) paired[i] = paired[j] = 1;
+          sum_r2 += w * r * r;
+          ++pairs;
+          ++found;
         }
+        if (found > 0) paired[i] = paired[j] = 1;
       }
-      if (pairs < 6) break;
-      residual_var = std::max(sum_r2 / static_cast<double>(pairs), params.min_residual_m * params.min_residual_m);
-      const double scale = 1.0 / (residual_var * params.pairs_per_independent);
-      info_pairs = h * scale;
-      const Twist now = twist_about(out.error, Eigen::Vector3d::Zero());
-      const TwistCovariance total = info_pairs + prior_info;
-      const Twist delta = -total.ldlt().solve(g * scale + prior_info * now);
-      out.error = out.error * pose_from_twist(delta, Eigen::Vector3d::Zero());
+    }
+    mean_r2 = pairs > 0 ? sum_r2 / static_cast<double>(pairs) : 0;
+    return pairs;
+  };
+  Eigen::MatrixXd h;
+  Eigen::VectorXd g;
+  double mean_r2 = 0;
+  double last_m = 0;
+  for (std::size_t stage = 0; stage < params.correspondence_m.size() && n >= 2; ++stage) {
+    for (int iteration = 0; iteration < params.iterations_per_stage; ++iteration) {
+      if (accumulate(params.correspondence_m[stage], false, h, g, mean_r2) < 6) break;
+      last_m = params.correspondence_m[stage];
+      const double scale =
+          1.0 / (std::max(mean_r2, params.min_residual_m * params.min_residual_m) * params.pairs_per_independent);
+      const TwistCovariance total = h * scale + prior_info;
+      const Twist delta = -total.ldlt().solve(g * scale + prior_info * twist_about(error, Eigen::Vector3d::Zero()));
+      if (!delta.allFinite()) break;
+      error = error * pose_from_twist(delta, Eigen::Vector3d::Zero());
       if (delta.head<3>().norm() < 1e-7 && delta.tail<3>().norm() < 1e-7) break;
     }
   }
-  out.covariance = (info_pairs + prior_info).inverse();
+  MountEstimate out;
+  out.error = error;
+  out.covariance = prior_info.inverse();
+  if (last_m > 0 && accumulate(last_m, true, h, g, mean_r2) >= 6) {
+    Eigen::MatrixXd info = h / (std::max(mean_r2, params.min_residual_m * params.min_residual_m) * params.pairs_per_independent);
+    info.topLeftCorner<6, 6>() += prior_info;
+    for (std::size_t i = 0; i < n; ++i) info.block<6, 6>(6 + 6 * static_cast<int>(i), 6 + 6 * static_cast<int>(i)) += view_info;
+    out.covariance = info.inverse().topLeftCorner<6, 6>();  // E's, the views' own errors marginalised
+  } else {
+    std::fill(paired.begin(), paired.end(), 0);
+  }
   out.views = static_cast<int>(std::count(paired.begin(), paired.end(), 1));
   set_sigmas(out);
   return out;

@@ -110,12 +110,17 @@ struct MountFitParams {
   // (fewer than ICP's 25: the points are thinned to a few millimetres apart).
   double pairs_per_independent = 4.0;
   double min_residual_m = 0.0002;      // the residual sigma is taken as at least this
+  // Each view's own pose error beyond the mount's (joint encoders, turntable backlash), 1 sigma
+  // per axis: fitted alongside E, so that E's sigma counts it.
+  double per_view_translation_m = 0.0003;
+  double per_view_rotation_deg = 0.03;
 };
 
 // E fitted to the views' agreement: each view's points placed by K_i E lie on the surfaces of the
 // other views placed by K_j E (point-to-plane, every ordered pair of views, Gauss-Newton on E's
 // twist about the camera centre, starting from `start`), with the prior N(identity, the rig's
-// stated sigma per axis). Directions no pair pins down (E's turn about the axis of a turntable
+// stated sigma per axis), and each view's own small pose error fitted alongside (the per-view
+// prior) so that E's covariance counts what the views' errors leave uncertain. Directions no pair pins down (E's turn about the axis of a turntable
 // that alone moved the camera) stay at the prior's. The covariance is the fit's: its information
 // from the pairs at the final residual sigma, plus the prior's. `views` counts the views that
 // were paired with another. Fewer than two usable views: the start, with the prior's covariance.

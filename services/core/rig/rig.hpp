@@ -18,6 +18,7 @@
 #include "core/geometry/rig_kind.hpp"
 #include "core/geometry/working_volume.hpp"
 #include "core/geometry/camera_model.hpp"
+#include "core/geometry/depth_sensor.hpp"
 
 namespace pbnbv {
 
@@ -31,11 +32,14 @@ struct ArmGeometry {
 // The depth camera the rig carries, as its rig file states it (optional): what a driver's
 // DEPTH_FRAME must match (pbnbv rig-check). MJCF:
 //   <custom><numeric name="pbnbv_camera" data="width height fx fy cx cy depth_min depth_max"/>
-//           <text name="pbnbv_camera_id" data="SERIAL"/></custom>   (the id is optional)
+//           <text name="pbnbv_camera_id" data="SERIAL"/>            (the id is optional)
+//           <text name="pbnbv_camera_model" data="d435"/></custom>   (optional: the twin plays
+//                                                  this camera, core/geometry/depth_sensor.hpp)
 struct RigCamera {
   CameraIntrinsics intrinsics;  // pixels
   DepthRange range;             // metres, planar depth
   std::string id;               // the camera's serial / id; "" = any
+  std::optional<CameraKind> model;  // the named camera (its image and depth errors in the twin)
 };
 
 // One joint of the arm's serial chain, as the MJCF body tree gives it (all joints at zero).

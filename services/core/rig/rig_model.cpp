@@ -33,6 +33,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/base/enum_names.hpp"
 #include "core/base/install_paths.hpp"
 #include "core/base/format.hpp"
 #include "core/base/units.hpp"
@@ -68,6 +69,9 @@ std::optional<RigCamera> read_camera(const mjModel* m, const std::string& path) 
   const int id_text = mj_name2id(m, mjOBJ_TEXT, "pbnbv_camera_id");
   if (mj_name2id(m, mjOBJ_NUMERIC, "pbnbv_camera") < 0) {
     if (id_text >= 0) fail(path, "pbnbv_camera_id is given without <custom><numeric name=\"pbnbv_camera\">");
+    if (mj_name2id(m, mjOBJ_TEXT, "pbnbv_camera_model") >= 0) {
+      fail(path, "pbnbv_camera_model is given without <custom><numeric name=\"pbnbv_camera\">");
+    }
     return std::nullopt;
   }
   const std::vector<double> v = custom_numeric(m, path, "pbnbv_camera", 8);
@@ -88,6 +92,15 @@ std::optional<RigCamera> read_camera(const mjModel* m, const std::string& path) 
     fail(path, std::string("pbnbv_camera (data=\"width height fx fy cx cy depth_min depth_max\"): ") + e.what());
   }
   if (id_text >= 0) c.id = std::string(m->text_data + m->text_adr[id_text]);
+  const int model_text = mj_name2id(m, mjOBJ_TEXT, "pbnbv_camera_model");
+  if (model_text >= 0) {
+    const std::string name(m->text_data + m->text_adr[model_text]);
+    c.model = find_name<CameraKind>(name);
+    if (!c.model) {
+      fail(path, "pbnbv_camera_model \"" + name.substr(0, 64) + "\" is not a camera pbnbv knows (" +
+                     choices_of<CameraKind>() + ")");
+    }
+  }
   return c;
 }
 

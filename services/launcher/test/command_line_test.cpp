@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 namespace fs = std::filesystem;
 
 namespace pbnbv::launcher {
@@ -156,6 +158,32 @@ TEST(LauncherCommandLine, TheRigFileDecidesTheKindOfRig) {
     EXPECT_EQ(p.code, 2);
     EXPECT_NE(p.err.find("--rig-model: rig model /no/such/rig.xml: cannot open the file"), std::string::npos) << p.err;
   }
+}
+
+// A rig file that names its camera (pbnbv_camera_model): the twin plays it, with its image and
+// range, unless --camera names another.
+TEST(LauncherCommandLine, TheRigFileNamesTheCamera) {
+  std::ifstream in(default_rig_path(RigKind::kArm));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string xml = text.str();
+  const std::string needle = "<numeric name=\"pbnbv_camera\"";
+  ASSERT_NE(xml.find(needle), std::string::npos);
+  xml.insert(xml.find(needle), "<text name=\"pbnbv_camera_model\" data=\"azure-kinect-nfov\"/>");
+  const std::string file =
+      (fs::temp_directory_path() / ("pbnbv-command-line-test-rig-" + std::to_string(::getpid()) + ".xml")).string();
+  std::ofstream(file) << xml;
+  CommandLine line;
+  const Parsed p = parse(line, {"scan", "--rig-model", file});
+  CommandLine over;
+  const Parsed q = parse(over, {"scan", "--rig-model", file, "--camera", "d405"});
+  fs::remove(file);
+  ASSERT_EQ(p.code, std::nullopt) << p.err;
+  EXPECT_EQ(line.scan().settings.camera_model, CameraKind::kAzureKinectNfov);
+  EXPECT_EQ(line.scan().settings.camera.width, 640);
+  EXPECT_EQ(line.scan().settings.camera.height, 576);
+  ASSERT_EQ(q.code, std::nullopt) << q.err;
+  EXPECT_EQ(over.scan().settings.camera_model, CameraKind::kD405);
 }
 
 TEST(LauncherCommandLine, ASettingsFileSetsOptionsAndTheCommandLineOverridesIt) {

@@ -62,6 +62,28 @@ TEST(RigCamera, OptionalAndWithAnId) {
   EXPECT_EQ(rig.camera->intrinsics.cx, 320.5);
   EXPECT_EQ(rig.camera->range.max_m, 4);
   EXPECT_EQ(rig.camera->id, "D435-123456");
+  EXPECT_FALSE(rig.camera->model.has_value());
+}
+
+// <text name="pbnbv_camera_model">: the camera the twin plays, by the names --camera takes.
+TEST(RigCamera, ANamedCameraModel) {
+  EXPECT_FALSE(load_rig(default_rig_path(RigKind::kArm)).camera->model.has_value());
+  const RigModel rig = load_rig(arm_rig_with(
+      "rig_camera_model.xml",
+      "<numeric name=\"pbnbv_camera\" data=\"1280 720 674.4 674.4 640 360 0.28 3\"/>"
+      "<text name=\"pbnbv_camera_model\" data=\"d435\"/>"));
+  ASSERT_TRUE(rig.camera->model.has_value());
+  EXPECT_EQ(*rig.camera->model, CameraKind::kD435);
+  using testing::expect_error;
+  const std::string unknown = arm_rig_with(
+      "rig_camera_unknown_model.xml",
+      "<numeric name=\"pbnbv_camera\" data=\"1280 720 696 696 640 360 0.1 3\"/>"
+      "<text name=\"pbnbv_camera_model\" data=\"d455\"/>");
+  expect_error([&] { load_rig(unknown); },
+               "rig model " + unknown + ": pbnbv_camera_model \"d455\" is not a camera pbnbv knows (ideal, d405, d435, "
+               "azure-kinect-nfov or structured-light)");
+  const std::string lonely = arm_rig_with("rig_camera_lonely_model.xml", "<text name=\"pbnbv_camera_model\" data=\"d435\"/>");
+  expect_error([&] { load_rig(lonely); }, "pbnbv_camera_model is given without");
 }
 
 TEST(RigCamera, BadValuesNameTheFileAndTheValue) {
