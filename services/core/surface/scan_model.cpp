@@ -134,11 +134,15 @@ void ScanModel::move_frame(const Pose& q) {
   }
 }
 
-void ScanModel::move_view(int view, const Pose& q, const std::vector<int>& merged) {
+void ScanModel::move_view(int view, const Pose& q, const std::vector<int>& merged) { move_views({{view, q}}, merged); }
+
+void ScanModel::move_views(const std::vector<std::pair<int, Pose>>& moves, const std::vector<int>& merged) {
   if (folder_.empty()) throw std::invalid_argument("no scan folder: a view cannot be placed again");
-  move_frame_file(folder_ / frame_file_of(view), q);
-  const fs::path depth = folder_ / "depth" / view_file(view, "json");
-  if (fs::exists(depth)) move_depth_pose(depth, q);
+  for (const auto& [view, q] : moves) {
+    move_frame_file(folder_ / frame_file_of(view), q);
+    const fs::path depth = folder_ / "depth" / view_file(view, "json");
+    if (fs::exists(depth)) move_depth_pose(depth, q);
+  }
   PointCloud all;
   std::vector<Eigen::Vector3f> all_normals;
   std::vector<Pose> poses;

@@ -11,6 +11,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/base/pose.hpp"
@@ -80,6 +81,8 @@ class ScanModel {
   // pose) by q, then rebuilds the merged cloud from the frames of `merged` (in order) and
   // rewrites cloud.ply: a view placed again once its pose is known better. Needs a folder.
   void move_view(int view, const Pose& q, const std::vector<int>& merged);
+  // Several views moved (each by its own q), then cloud.ply rebuilt once.
+  void move_views(const std::vector<std::pair<int, Pose>>& moves, const std::vector<int>& merged);
 
   // A view's frame as written (frames/view_NNN.ply), taken back into its camera frame by the
   // pose in its header: its points and normals as the camera saw them (a restarted service's

@@ -123,6 +123,43 @@ TEST_F(ScanModelTest, ARestartedModelContinuesFromCloudPly) {
   EXPECT_FALSE(ScanModel(dir_ / "none", 0.002, 0.005).restore()) << "no cloud.ply: nothing to continue";
 }
 
+// Two views placed again at once (a view 10 mm along x, another turned 90 degrees about z): their
+// frames' points, normals and poses move, the third stays, cloud.ply is the three frames merged
+// again; each frame taken back into its camera frame is what the camera saw, moved or not.
+TEST_F(ScanModelTest, ViewsPlacedAgainMoveTheirFramesAndTheMergedCloud) {
+  ScanModel model(dir_, 0.0, 0.005);
+  const Pose camera = look_at_z_up(Eigen::Vector3d(0.5, 0, 0), Eigen::Vector3d::Zero());
+  const std::vector<Eigen::Vector3f> up{Eigen::Vector3f(1, 0, 0)};
+  model.add_view(0, {Eigen::Vector3f(0.01f, 0, 0)}, up, camera, true);
+  model.add_view(1, {Eigen::Vector3f(0.02f, 0, 0)}, up, camera, true);
+  model.add_view(2, {Eigen::Vector3f(0.03f, 0, 0)}, up, camera, true);
+  Pose shift = Pose::Identity();
+  shift.translation() = Eigen::Vector3d(0.01, 0, 0);
+  Pose turn = Pose::Identity();
+  turn.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  model.move_views({{0, shift}, {2, turn}}, {0, 1, 2});
+  CloudExtras e0, e2;
+  const PointCloud f0 = read_ply((dir_ / "frames/view_001.ply").string(), e0);
+  const PointCloud f2 = read_ply((dir_ / "frames/view_003.ply").string(), e2);
+  EXPECT_NEAR(f0[0].x(), 0.02f, 1e-6f);
+  EXPECT_NEAR(f2[0].y(), 0.03f, 1e-6f);  // (0.03, 0, 0) turned to (0, 0.03, 0)
+  EXPECT_NEAR(e2.normals[0].y(), 1.0f, 1e-6f);
+  EXPECT_TRUE(e0.camera_poses[0].isApprox(shift * camera, 1e-9));
+  const PointCloud merged = read_ply((dir_ / "cloud.ply").string());
+  ASSERT_EQ(merged.size(), 3u);
+  EXPECT_EQ(model.points().size(), 3u);
+  PointCloud seen;
+  std::vector<Eigen::Vector3f> normals;
+  for (int v : {0, 1, 2}) {
+    model.view_in_camera_frame(v, seen, normals);
+    ASSERT_EQ(seen.size(), 1u);
+    const Eigen::Vector3d expected = camera.inverse() * Eigen::Vector3d(0.01 * (v + 1), 0, 0);
+    EXPECT_NEAR((seen[0].cast<double>() - expected).norm(), 0.0, 1e-6) << "view " << v;
+    EXPECT_NEAR((normals[0].cast<double>() - camera.linear().transpose() * Eigen::Vector3d::UnitX()).norm(), 0.0, 1e-6);
+  }
+  EXPECT_ANY_THROW(model.view_in_camera_frame(7, seen, normals));  // no such frame
+}
+
 TEST(ScanModel, WithoutAFolderNothingIsWritten) {
   ScanModel model({}, 0.002, 0.005);
   const ModelUpdate u = model.add_view(0, {Eigen::Vector3f(0.01f, 0, 0)}, {}, Pose::Identity(), true);
