@@ -75,6 +75,9 @@ point_cloud_t balls_cloud(const std::string& scan_id, int64_t id, const Eigen::V
   c.num_valid_pixels = c.num_cropped = 0;
   c.voxel_m = 0.002;
   c.capture_s = c.process_s = 0;
+  c.ground_points = 0;
+  c.ground_z_m = c.ground_sigma_m = 0;
+  std::fill(c.ground_abc, c.ground_abc + 3, 0.0);
   for (const auto& x : pts) {
     const Eigen::Vector3d y = x + shift;
     c.points_m.push_back({static_cast<float>(y.x()), static_cast<float>(y.y()), static_cast<float>(y.z())});

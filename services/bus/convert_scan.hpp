@@ -188,6 +188,10 @@ inline point_cloud_t to_msg(const CaptureResult& c) {
   m.voxel_m = c.voxel_m;
   m.capture_s = c.capture_s;
   m.process_s = c.process_s;
+  m.ground_points = c.ground_points;
+  m.ground_z_m = c.ground_z_m;
+  for (int i = 0; i < 3; ++i) m.ground_abc[i] = c.ground_abc[i];
+  m.ground_sigma_m = c.ground_sigma_m;
   m.num_points = static_cast<int32_t>(c.points.size());
   m.points_m.resize(c.points.size());
   for (std::size_t i = 0; i < c.points.size(); ++i) m.points_m[i] = {c.points[i].x(), c.points[i].y(), c.points[i].z()};
@@ -217,6 +221,25 @@ inline CaptureResult from_msg(const point_cloud_t& m) {
   c.voxel_m = m.voxel_m;
   c.capture_s = m.capture_s;
   c.process_s = m.process_s;
+  // The turntable top's plane: used only with readings behind it, then finite, within the 5
+  // degrees of tilt the camera service fits and a plausible height and scatter.
+  if (m.ground_points < 0 || m.ground_points > m.num_valid_pixels) {
+    throw std::invalid_argument("CLOUD ground_points = " + std::to_string(m.ground_points) + " is not in [0, num_valid_pixels = " +
+                                std::to_string(m.num_valid_pixels) + "]");
+  }
+  if (m.ground_points > 0) {
+    const Eigen::Vector3d abc(m.ground_abc[0], m.ground_abc[1], m.ground_abc[2]);
+    if (!abc.allFinite() || std::hypot(abc.x(), abc.y()) > 0.1 || !(std::abs(m.ground_z_m) < 10) ||
+        !(std::abs(abc.z() - m.ground_z_m) < 1) || !(m.ground_sigma_m >= 0 && m.ground_sigma_m < 1)) {
+      throw std::invalid_argument("CLOUD ground plane (ground_abc, ground_z_m, ground_sigma_m) is not a turntable top: "
+                                  "a slope over 0.1, a height 1 m off its place or more than 10 m out, or a scatter "
+                                  "outside [0, 1) m");
+    }
+    c.ground_points = m.ground_points;
+    c.ground_z_m = m.ground_z_m;
+    c.ground_abc = abc;
+    c.ground_sigma_m = m.ground_sigma_m;
+  }
   c.points.reserve(m.points_m.size());
   for (std::size_t i = 0; i < m.points_m.size(); ++i) {
     const Eigen::Vector3f p(m.points_m[i][0], m.points_m[i][1], m.points_m[i][2]);

@@ -211,6 +211,10 @@ CaptureStep CaptureSequencer::process(const DepthFrame& f) {
     out.depth_frame_utime = f.utime;
     out.num_valid_pixels = stats.num_valid_pixels;
     out.num_cropped = stats.num_cropped;
+    out.ground_points = stats.ground_points;
+    out.ground_z_m = crop.ground_z_m > -1e8 ? crop.ground_z_m : 0;
+    out.ground_abc = stats.ground_abc;
+    out.ground_sigma_m = stats.ground_sigma_m;
     out.ok = true;
     if (out.points.empty()) {
       out.message = fmt::format("no points left: {} valid pixels, {} cropped", stats.num_valid_pixels,

@@ -49,6 +49,7 @@ PointCloud depth_to_object_cloud(const std::vector<float>& depth_m, const Camera
     s.ground_points = static_cast<int>(ground.size());
     s.ground_offset_m = abc.z() - crop.ground_z_m;
     s.ground_sigma_m = sigma;
+    s.ground_abc = abc;
   }
   PointCloud cloud;
   cloud.reserve(kept.size());

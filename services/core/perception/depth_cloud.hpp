@@ -28,6 +28,7 @@ struct CloudStats {
   int ground_points = 0;         // readings the turntable's plane was fitted to (0: no fit)
   double ground_offset_m = 0;    // the fitted plane's height above ground_z at the object's axis
   double ground_sigma_m = 0;     // its readings' scatter about it (robust)
+  Eigen::Vector3d ground_abc = Eigen::Vector3d::Zero();  // the plane: z = a x + b y + c
 };
 
 // The plane z = a x + b y + c through `points` (object frame), robustly: least squares, then

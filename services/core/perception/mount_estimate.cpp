@@ -64,7 +64,10 @@ Pose MountEstimator::object_T_model() const {
 // against the one predicted, about the overlap's centre), weighed by ICP's covariance there;
 // the prior N(0, diag(r^2, t^2)) on e. Jacobians by central differences.
 bool MountEstimator::trusted(int min_views) const {
-  return first_ && estimate_.views >= min_views && estimate_.sigma_m <= 1e-3 && estimate_.sigma_deg <= 0.2;
+  if (!first_ || estimate_.views < min_views) return false;
+  const double sigma_r = estimate_.sigma_deg * kPi / 180.0;
+  return (estimate_.sigma_m <= 1e-3 && estimate_.sigma_deg <= 0.2) ||
+         (estimate_.sigma_m <= 0.5 * prior_t_ && sigma_r <= 0.5 * prior_r_);
 }
 
 // Sigma per axis of a twist covariance: the largest over rotation (degrees) and translation (m).
@@ -166,6 +169,7 @@ struct FitView {
   PointCloud points;
   std::vector<Eigen::Vector3f> normals;
   std::unique_ptr<NeighbourIndex> index;
+  const MountView* source = nullptr;
 };
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
@@ -197,6 +201,7 @@ MountEstimate mount_from_views(const std::vector<MountView>& views, const Pose& 
     const std::size_t step = std::max<std::size_t>(1, usable / static_cast<std::size_t>(std::max(params.points_per_view, 1)));
     FitView f;
     f.kinematic = v.kinematic;
+    f.source = &v;
     std::size_t k = 0;
     for (std::size_t i = 0; i < v.points.size(); ++i) {
       if (!v.points[i].allFinite() || v.normals[i].squaredNorm() <= 0.25f) continue;
@@ -277,6 +282,47 @@ MountEstimate mount_from_views(const std::vector<MountView>& views, const Pose& 
     mean_r2 = pairs > 0 ? sum_r2 / static_cast<double>(pairs) : 0;
     return pairs;
   };
+  // The turntable tops: view i's, placed by K_i E, level (its normal's x and y in the object frame
+  // zero) at its height (the point's z), each residual weighed by what the plane's fit leaves
+  // uncertain (its scatter over the readings, neighbours counted as in the pairs) plus the view's
+  // own pose error. Added to normal equations already scaled (over E alone, or `full`).
+  const auto add_ground = [&](bool full, Eigen::MatrixXd& h, Eigen::VectorXd& g) {
+    const Eigen::Vector3d ez = Eigen::Vector3d::UnitZ();
+    for (std::size_t i = 0; i < n; ++i) {
+      const MountView& v = *fit[i].source;
+      if (v.ground_points < params.min_points || !v.ground_normal.allFinite() || !v.ground_point.allFinite()) continue;
+      const double sight = std::abs(v.ground_normal.dot(v.ground_point.normalized()));
+      if (!(sight >= std::sin(params.min_ground_elevation_deg * kPi / 180.0))) continue;
+      const Pose t = fit[i].kinematic * error;
+      const Eigen::Matrix3d r = t.linear();
+      const double readings = static_cast<double>(v.ground_points) / params.pairs_per_independent;
+      const double s2 = std::max(v.ground_sigma_m * v.ground_sigma_m, params.min_residual_m * params.min_residual_m) / readings;
+      const double floor_r = params.ground_tilt_floor_deg * kPi / 180.0;
+      const double tilt_var = s2 / (params.ground_extent_m * params.ground_extent_m) + view_r * view_r + floor_r * floor_r;
+      const double height_var = s2 + view_t * view_t;
+      const Eigen::Vector3d n_o = r * v.ground_normal;
+      // d(R exp(w) n)/dw = -R [n]x; the height: d(e_z . T exp(xi) p)/dxi = e_z . R [-[p]x | I].
+      Eigen::Matrix<double, 3, 6> jac = Eigen::Matrix<double, 3, 6>::Zero();
+      const Eigen::Matrix3d dn = -(r * skew(v.ground_normal));
+      jac.block<1, 3>(0, 0) = dn.row(0);
+      jac.block<1, 3>(1, 0) = dn.row(1);
+      jac.block<1, 3>(2, 0) = ez.transpose() * (-(r * skew(v.ground_point)));
+      jac.block<1, 3>(2, 3) = ez.transpose() * r;
+      const Eigen::Vector3d res(n_o.x(), n_o.y(), (t * v.ground_point).z() - v.ground_z_m);
+      const Eigen::Vector3d w(1 / tilt_var, 1 / tilt_var, 1 / height_var);
+      const Eigen::Matrix<double, 6, 6> hh = jac.transpose() * w.asDiagonal() * jac;
+      const Twist gg = jac.transpose() * w.asDiagonal() * res;
+      const int at = 6 + 6 * static_cast<int>(i);
+      h.topLeftCorner<6, 6>() += hh;
+      g.head<6>() += gg;
+      if (full) {
+        h.block<6, 6>(0, at) += hh;
+        h.block<6, 6>(at, 0) += hh;
+        h.block<6, 6>(at, at) += hh;
+        g.segment<6>(at) += gg;
+      }
+    }
+  };
   Eigen::MatrixXd h;
   Eigen::VectorXd g;
   double mean_r2 = 0;
@@ -287,8 +333,11 @@ MountEstimate mount_from_views(const std::vector<MountView>& views, const Pose& 
       last_m = params.correspondence_m[stage];
       const double scale =
           1.0 / (std::max(mean_r2, params.min_residual_m * params.min_residual_m) * params.pairs_per_independent);
-      const TwistCovariance total = h * scale + prior_info;
-      const Twist delta = -total.ldlt().solve(g * scale + prior_info * twist_about(error, Eigen::Vector3d::Zero()));
+      Eigen::MatrixXd hs = h * scale;
+      Eigen::VectorXd gs = g * scale;
+      add_ground(false, hs, gs);
+      const TwistCovariance total = hs + prior_info;
+      const Twist delta = -total.ldlt().solve(gs + prior_info * twist_about(error, Eigen::Vector3d::Zero()));
       if (!delta.allFinite()) break;
       error = error * pose_from_twist(delta, Eigen::Vector3d::Zero());
       if (delta.head<3>().norm() < 1e-7 && delta.tail<3>().norm() < 1e-7) break;
@@ -299,6 +348,8 @@ MountEstimate mount_from_views(const std::vector<MountView>& views, const Pose& 
   out.covariance = prior_info.inverse();
   if (last_m > 0 && accumulate(last_m, true, h, g, mean_r2) >= 6) {
     Eigen::MatrixXd info = h / (std::max(mean_r2, params.min_residual_m * params.min_residual_m) * params.pairs_per_independent);
+    Eigen::VectorXd unused = Eigen::VectorXd::Zero(info.rows());
+    add_ground(true, info, unused);
     info.topLeftCorner<6, 6>() += prior_info;
     for (std::size_t i = 0; i < n; ++i) info.block<6, 6>(6 + 6 * static_cast<int>(i), 6 + 6 * static_cast<int>(i)) += view_info;
     out.covariance = info.inverse().topLeftCorner<6, 6>();  // E's, the views' own errors marginalised

@@ -66,7 +66,8 @@ class MountEstimator {
   // sigma) are left out, the worst first, and the rest fitted again.
   const MountEstimate& estimate() const { return estimate_; }
   // Sure enough to be used: at least `min_views` consistent observations and its sigma within
-  // 1 mm and 0.2 degrees.
+  // 1 mm and 0.2 degrees, or within half the prior's (it knows the mount twice as well as the
+  // rig file does: an uncalibrated rig's 4 mm / 0.65 deg halved).
   bool trusted(int min_views = 3) const;
   // The views whose observations the fit left out (their alignment slid: placed wrong).
   const std::vector<int>& outlier_views() const { return outlier_views_; }
@@ -96,6 +97,16 @@ struct MountView {
   Pose kinematic = Pose::Identity();
   PointCloud points;
   std::vector<Eigen::Vector3f> normals;
+  // The turntable top as the view saw it, in the camera frame (a unit normal towards the camera
+  // and a point on it), the object-frame height it truly has, and the readings it was fitted to
+  // and their scatter; ground_points 0: not seen. It tells the camera's tilt in every view, which
+  // the clouds' agreement alone pins down only loosely (a turn about the object with the matching
+  // shift moves the surface little).
+  int ground_points = 0;
+  Eigen::Vector3d ground_normal = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d ground_point = Eigen::Vector3d::Zero();
+  double ground_z_m = 0;
+  double ground_sigma_m = 0;
 };
 
 struct MountFitParams {
@@ -114,10 +125,20 @@ struct MountFitParams {
   // per axis: fitted alongside E, so that E's sigma counts it.
   double per_view_translation_m = 0.0003;
   double per_view_rotation_deg = 0.03;
+  // The turntable top's readings span about this far from the point given (the lever of its tilt).
+  double ground_extent_m = 0.1;
+  // A turntable top seen flatter than this (the angle between the line of sight to its point and
+  // its plane) is not used: a D435 at 1 m put its tilt 0.2-1.0 degrees off at 13-15 degrees, 0.02
+  // to 0.15 degrees off at 21-76 (bunny, uncalibrated mount, against the twin's true poses).
+  double min_ground_elevation_deg = 20.0;
+  // What a plane's tilt is never known better than (its readings' errors are not independent: the
+  // depth unit, noise growing with depth): the same measurement's 0.15 degrees.
+  double ground_tilt_floor_deg = 0.1;
 };
 
 // E fitted to the views' agreement: each view's points placed by K_i E lie on the surfaces of the
-// other views placed by K_j E (point-to-plane, every ordered pair of views, Gauss-Newton on E's
+// other views placed by K_j E, and each view's turntable top, placed by K_i E, lies level at its
+// height (point-to-plane, every ordered pair of views, Gauss-Newton on E's
 // twist about the camera centre, starting from `start`), with the prior N(identity, the rig's
 // stated sigma per axis), and each view's own small pose error fitted alongside (the per-view
 // prior) so that E's covariance counts what the views' errors leave uncertain. Directions no pair pins down (E's turn about the axis of a turntable

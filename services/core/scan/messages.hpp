@@ -85,6 +85,11 @@ struct CaptureResult {
   int num_cropped = 0;
   double voxel_m = 0;
   double capture_s = 0, process_s = 0;
+  // The turntable top's plane as the frame saw it (point_cloud_t): z = a x + b y + c.
+  int ground_points = 0;                   // 0: no fit
+  double ground_z_m = 0;
+  Eigen::Vector3d ground_abc = Eigen::Vector3d::Zero();
+  double ground_sigma_m = 0;
   PointCloud points;                       // object frame, m
   // One unit normal per point, object frame, facing the camera, from the depth image's
   // neighbourhood (zero where none was found); empty: none sent.
