@@ -297,7 +297,7 @@ MountEstimate mount_from_views(const std::vector<MountView>& views, const Pose& 
       const Eigen::Matrix3d r = t.linear();
       const double readings = static_cast<double>(v.ground_points) / params.pairs_per_independent;
       const double s2 = std::max(v.ground_sigma_m * v.ground_sigma_m, params.min_residual_m * params.min_residual_m) / readings;
-      const double floor_r = params.ground_tilt_floor_deg * kPi / 180.0;
+      const double floor_r = std::max(v.ground_sigma_m, params.min_residual_m) / params.ground_tilt_lever_m;
       const double tilt_var = s2 / (params.ground_extent_m * params.ground_extent_m) + view_r * view_r + floor_r * floor_r;
       const double height_var = s2 + view_t * view_t;
       const Eigen::Vector3d n_o = r * v.ground_normal;

@@ -131,9 +131,10 @@ struct MountFitParams {
   // its plane) is not used: a D435 at 1 m put its tilt 0.2-1.0 degrees off at 13-15 degrees, 0.02
   // to 0.15 degrees off at 21-76 (bunny, uncalibrated mount, against the twin's true poses).
   double min_ground_elevation_deg = 20.0;
-  // What a plane's tilt is never known better than (its readings' errors are not independent: the
-  // depth unit, noise growing with depth): the same measurement's 0.15 degrees.
-  double ground_tilt_floor_deg = 0.1;
+  // A plane's tilt is never known better than its readings' scatter over this lever (their errors
+  // are not independent: the depth unit, noise growing with depth): the same measurement's tilt
+  // errors of up to 0.15 degrees came with 1-3 mm of scatter.
+  double ground_tilt_lever_m = 0.75;
 };
 
 // E fitted to the views' agreement: each view's points placed by K_i E lie on the surfaces of the
