@@ -119,8 +119,10 @@ double cloud_to_surface_mm(const fs::path& out, const fs::path& mesh_path, doubl
 // The point of calibrating: the twin plays the original rig file with the mount and zero errors
 // (as the hardware would), the pipeline scans as an external rig with the original file, then with
 // the calibrated one. As scanned (no view's error removed), the bunny's registered cloud lies
-// 7.5 mm from its true surface with the original file (README, Figures) and within 0.5 mm with the
-// calibrated one.
+// within 0.5 mm of its true surface with the calibrated file (measured 0.013 mm). With the
+// original file it lay 7.5 mm off until registration fitted the mount to the views' clouds and
+// turntable tops: now 0.45 mm (asserted within 1.5 mm), still more than five times the calibrated
+// file's.
 TEST(CalibrationIntegration, AScanWithTheCalibratedFileLiesOnTheTrueSurface) {
   const std::string errors = "--hand-eye-error-mm 5 --hand-eye-error-deg 1 --turntable-error-deg 0.5";
   const fs::path dir = fresh_dir("calibrate-scan");
@@ -155,6 +157,7 @@ TEST(CalibrationIntegration, AScanWithTheCalibratedFileLiesOnTheTrueSurface) {
   std::cout << "10-view bunny ring on the twin with a 5 mm / 1 deg mount and 0.5 deg zero error, as scanned: cloud to "
                "true surface median "
             << before_mm << " mm with the original rig file, " << after_mm << " mm with the calibrated one\n";
-  EXPECT_GT(before_mm, 3.0);
+  EXPECT_LE(before_mm, 1.5);
   EXPECT_LE(after_mm, 0.5);
+  EXPECT_LT(5 * after_mm, before_mm) << "calibrating should still beat the fit across the views";
 }
