@@ -9,7 +9,11 @@
 // Refines each view's pose against the accumulated model of its scan with point-to-plane ICP
 // (core register_frame), starting from the kinematic pose and weighing ICP's correction against
 // the kinematic pose's uncertainty (--pose-sigma-mm, --pose-sigma-deg); a view whose alignment
-// cannot be trusted is merged at its kinematic pose and flagged, with the reason.
+// cannot be trusted is merged at its kinematic pose and flagged, with the reason. The camera
+// mount's error, the same in every view, is fitted to all views' clouds and turntable tops at once
+// (core mount_from_views, DIR/hand_eye.json); once it is sure, views are registered from where it
+// puts them, misplaced ones placed again, and at the scan's end the model is moved into the
+// object frame.
 // It owns the model and what is made of it (core/surface/scan_model.hpp): each view's frame,
 // the merged cloud and what each view added to it (new surface), said in the answer. A
 // restarted service continues the model of its scan from DIR/cloud.ply; answers are idempotent
