@@ -392,7 +392,9 @@ class RegistrationService {
     for (const PlacedView& v : placed_views_) merged.push_back(v.view);
     const std::vector<int>& slid = mount_.outlier_views();
     const MountEstimate& e = mount_.estimate();
-    const double sigma_t = std::hypot(0.3e-3, e.sigma_m), sigma_r = std::hypot(deg_to_rad(0.03), deg_to_rad(e.sigma_deg));
+    const TwistCovariance own = per_view_covariance();
+    const double sigma_t = std::sqrt(own(3, 3) + e.sigma_m * e.sigma_m);
+    const double sigma_r = std::sqrt(own(0, 0) + std::pow(deg_to_rad(e.sigma_deg), 2));
     std::vector<std::pair<int, Pose>> moves;
     std::vector<std::pair<PlacedView*, Pose>> placed;
     std::string said;

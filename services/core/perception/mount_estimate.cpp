@@ -172,12 +172,6 @@ struct FitView {
   const MountView* source = nullptr;
 };
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
 }  // namespace
 
 // Residual of a pair (p of view i, q with normal n of view j, both in their camera frames):

@@ -314,11 +314,15 @@ using Pairs = std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>;
 
 
 
+}  // namespace
+
 Eigen::Matrix3d skew(const Eigen::Vector3d& a) {
   Eigen::Matrix3d m;
   m << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
   return m;
 }
+
+namespace {
 
 // The prior's covariance of a correction about c: the camera turned by dtheta about its own
 // centre p and moved by dt moves c by dt + dtheta x (c - p). The correction is against the model,

@@ -50,6 +50,8 @@ struct RegistrationParams {
 // A small rigid motion about a point c: its rotation vector, then how far it moves c (the
 // parametrisation of registration's covariances).
 using Twist = Eigen::Matrix<double, 6, 1>;
+// [a]x: the matrix of the cross product a x (.).
+Eigen::Matrix3d skew(const Eigen::Vector3d& a);
 using TwistCovariance = Eigen::Matrix<double, 6, 6>;
 Twist twist_about(const Pose& t, const Eigen::Vector3d& c);
 Pose pose_from_twist(const Twist& d, const Eigen::Vector3d& c);
