@@ -73,7 +73,7 @@ std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, con
                      std::string(name_of(s.rig)), "--area", std::string(name_of(s.area)),
                      "--views", std::to_string(s.views), "--resolution", exact(s.resolution_m), "--candidates",
                      std::to_string(s.candidates), "--tmax", std::to_string(s.tmax), "--beta", std::to_string(s.beta),
-                     "--size", exact(s.size_m), "--seed", std::to_string(s.seed), "--when-done",
+                     "--size", exact(s.size_m), "--working-distance", exact(s.working_distance_m), "--seed", std::to_string(s.seed), "--when-done",
                      std::string(name_of(s.when_done)), "--stop-rule", "off", "--no-log", "--out", out.string(),
                      "--camera", std::string(name_of(s.camera)), "--rig-errors", std::string(name_of(s.rig_errors))});
   if (const std::optional<Eigen::Vector3d>& first = initial_view ? initial_view : s.initial_view) {
@@ -257,6 +257,7 @@ void BenchSpec::validate() const {
   kTMax.checked(tmax);
   kSectors.checked(beta);
   kObjectSize.checked(size_m);
+  kWorkingDistance.checked(working_distance_m);
   kPlannerSeed.checked(seed);
   kJobs.checked(jobs);
   kFirstViews.checked(first_views);
@@ -275,7 +276,7 @@ json to_json(const BenchSpec& s) {
   json j = {{"objects", s.objects}, {"planners", planners}, {"rig", std::string(name_of(s.rig))},
             {"area", std::string(name_of(s.area))}, {"views", s.views},
             {"resolution_m", s.resolution_m}, {"candidates", s.candidates}, {"tmax", s.tmax}, {"beta", s.beta},
-            {"size_m", s.size_m}, {"up", s.up ? std::string(name_of(*s.up)) : std::string("per object")}, {"seed", s.seed},
+            {"size_m", s.size_m}, {"working_distance_m", s.working_distance_m}, {"up", s.up ? std::string(name_of(*s.up)) : std::string("per object")}, {"seed", s.seed},
             {"when_done", std::string(name_of(s.when_done))}, {"stop_rule", to_json(s.stop_rule)},
             {"coverage", {{"samples", s.coverage.num_samples}, {"seed", s.coverage.seed}, {"radius_m", s.coverage.radius_m}}},
             {"surface_metrics", to_json(s.metrics)}};
@@ -291,9 +292,11 @@ std::vector<Eigen::Vector3d> first_view_directions(const BenchSpec& s) {
   return uniform_sphere_points(std::max(0, s.first_views - 1), 1.0, s.area == CandidateArea::kHemisphere, kFirstViewSeed);
 }
 
-double default_first_view_distance(const std::string& object, double size_m, std::optional<UpAxis> up) {
+double default_first_view_distance(const std::string& object, double size_m, double working_distance_m,
+                                   std::optional<UpAxis> up) {
   ObjectSpec o = resolve_object(object);
   ScanSettings s;
+  s.working_distance_m = working_distance_m;
   s.normalisation = normalise_mesh(o.mesh, size_m, up.value_or(o.up));
   return views_known_at_start(s).front().translation().norm();
 }
@@ -761,7 +764,7 @@ std::vector<Job> plan_jobs(const BenchSpec& spec) {
     double distance = 0;  // of the object's default first view, for the drawn ones
     if (!directions.empty()) {
       try {
-        distance = default_first_view_distance(object, spec.size_m, spec.up);
+        distance = default_first_view_distance(object, spec.size_m, spec.working_distance_m, spec.up);
       } catch (const std::exception& e) {
         throw std::invalid_argument("--first-views " + std::to_string(spec.first_views) + ": the first views of '" + object +
                                     "' lie at its default first view's distance, which needs the object: " + e.what());

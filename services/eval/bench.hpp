@@ -61,6 +61,7 @@ struct BenchSpec {
   std::optional<Eigen::Vector3d> initial_view;  // none: the scan's default first view
   int first_views = kFirstViews.value;          // first views per object (1: the default one only)
   double size_m = kObjectSize.value;
+  double working_distance_m = kWorkingDistance.value;  // d_c: suit it to the camera's range (d405: 0.25 m)
   std::optional<UpAxis> up;                     // none: each object's natural up axis
   int64_t seed = kPlannerSeed.value;            // the random planner's seed
   WhenDone when_done = kWhenDone.value;
@@ -88,8 +89,10 @@ nlohmann::json to_json(const BenchSpec& s);
 // half for --area hemi; the same for every object and planner, so runs compare across planners.
 std::vector<Eigen::Vector3d> first_view_directions(const BenchSpec& s);
 // The distance from the object centre of the scan's default first view of `object` (loaded and
-// normalised as its scans are: --size, --up or its own up axis): views_known_at_start's.
-double default_first_view_distance(const std::string& object, double size_m, std::optional<UpAxis> up);
+// normalised as its scans are: --size, --up or its own up axis; --working-distance):
+// views_known_at_start's.
+double default_first_view_distance(const std::string& object, double size_m, double working_distance_m,
+                                   std::optional<UpAxis> up);
 // A run's folder below DIR/<planner>/ (and its name in summary.json and the report): the
 // object's name for the default first view, <name>-fv<k> for the first view k >= 2.
 std::string run_folder(const std::string& name, int first_view);

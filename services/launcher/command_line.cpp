@@ -290,6 +290,7 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add(c, kTMax, &spec->tmax);
   cli::add(c, kSectors, &spec->beta);
   cli::add(c, kObjectSize, &spec->size_m);
+  cli::add(c, kWorkingDistance, &spec->working_distance_m);
   cli::add(c, kUp, &spec->up);
   cli::add_point(c, "initial-view", &spec->initial_view,
                  "first camera position, object frame, m [the scan's default first view]");

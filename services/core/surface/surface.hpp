@@ -3,7 +3,8 @@
 //   - TSDF fusion: each frame's points are splatted into a depth image of its camera (nearest
 //     point per pixel, a pixel about as wide as the frames' point spacing), every voxel near the
 //     frame's points gets the point-to-plane distance to its pixel's point (the normal from the
-//     image neighbours' points, turned to the camera; along the ray where there is none),
+//     image neighbours' points, turned to the camera, the neighbours as many pixels apart as the
+//     frame's measured depth noise needs (tsdf_frame_noise); along the ray where there is none),
 //     truncated and averaged over the frames; marching cubes (PCL's tables) extracts the zero
 //     level where every corner was seen. Unseen surface stays open (holes).
 //   - Poisson (PCL) on all the frames' points with their normals (k nearest neighbours, turned to
@@ -42,7 +43,21 @@ struct SurfaceStats {
   std::size_t frames = 0, points = 0;
   std::size_t voxels = 0;   // TSDF voxels allocated
   int image_scale = 1;      // TSDF: camera pixels per depth-image pixel (median over frames)
+  double depth_noise_m = 0; // TSDF: the frames' measured depth noise (median over frames)
+  int normal_step = 1;      // TSDF: the normals' neighbours this many depth-image pixels apart (median)
 };
+
+// A frame's depth noise as the TSDF measures it on the frame's own depth image (the splat): the
+// median absolute second difference of three neighbouring depths along a row, over 6^(1/2)
+// (robust: depth edges and missing pixels left out; a smooth surface's curvature adds little);
+// and the step its normals take: neighbours at least 4 sigma apart (a normal tilted by noise by
+// 1/4 rad at most), 1 to 8 pixels; 1 for an exact camera.
+struct FrameNoise {
+  double sigma_m = 0;  // the measured depth noise (0: too few neighbouring pixels to tell)
+  double pixel_m = 0;  // a depth-image pixel's width at the frame's median depth
+  int normal_step = 1;
+};
+FrameNoise tsdf_frame_noise(const SurfaceFrame& f, const SurfaceSettings& s);
 
 // The mesh of the frames by `s.method`, triangles counter-clockwise seen from outside (the
 // cameras' side). Throws std::invalid_argument when there are no points or a setting is bad.

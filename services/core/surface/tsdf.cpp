@@ -16,6 +16,11 @@ namespace {
 
 constexpr int kBlock = 8;  // voxels per block edge
 constexpr int kBlockVoxels = kBlock * kBlock * kBlock;
+// A normal's neighbours lie at least this many sigmas of the frame's depth noise apart (tilt
+// <= 1/4 rad), at most kMaxNormalStep splat pixels. Chosen on the tune half with a D435: steps of
+// 1, 2, 3 and 5 pixels at ~1.3 mm noise and 2 mm pixels; 3 (= ceil(4 x 1.3 / 2)) was best.
+constexpr double kNormalBaselineSigmas = 4.0;
+constexpr int kMaxNormalStep = 8;
 
 // Grid coordinates packed into one key (20 bits each, offset so negatives fit; bits 60-61 free
 // for an edge's axis).
@@ -66,10 +71,35 @@ SplatImage splat(const SurfaceFrame& f, const CameraIntrinsics& k, int scale) {
   return im;
 }
 
-// A unit normal per point from its splat neighbours (the cross product of the differences to the
-// points left/right and above/below, either side when one is missing), turned to the camera;
-// zero where the neighbours are missing or farther than `max_step_m` (a depth edge).
-std::vector<Eigen::Vector3f> image_normals(const SurfaceFrame& f, const SplatImage& im, double max_step_m) {
+// The frame's depth noise, measured on its own splat: the second difference of the depths of
+// three neighbours in a row, z(u-1) - 2 z(u) + z(u+1), is 6^(1/2) sigma of noise on a smooth
+// surface (a surface's curvature adds little at a pixel's spacing); its median absolute value over
+// the frame, steps across depth edges (beyond `max_step_m`) left out, gives sigma robustly. An
+// exact camera reads close to 0. Returns the sigma in m, 0 when there are too few triples.
+double measured_depth_noise(const SurfaceFrame& f, const SplatImage& im, double max_step_m) {
+  const Pose camera_T_object = f.object_T_camera.inverse();
+  std::vector<float> z(im.index.size(), std::numeric_limits<float>::quiet_NaN());
+  for (std::size_t p = 0; p < im.index.size(); ++p)
+    if (im.index[p] >= 0) z[p] = float((camera_T_object * f.points[im.index[p]].cast<double>()).z());
+  std::vector<float> second;
+  for (int v = 0; v < im.height; ++v)
+    for (int u = 1; u + 1 < im.width; ++u) {
+      const std::size_t p = std::size_t(v) * im.width + u;
+      const float a = z[p - 1], b = z[p], c = z[p + 1];
+      if (!(std::abs(a - b) < max_step_m) || !(std::abs(c - b) < max_step_m)) continue;  // NaN fails too
+      second.push_back(std::abs(a - 2 * b + c));
+    }
+  if (second.size() < 100) return 0;
+  std::nth_element(second.begin(), second.begin() + second.size() / 2, second.end());
+  return 1.4826 * second[second.size() / 2] / std::sqrt(6.0);
+}
+
+// A unit normal per point from its splat neighbours `step` pixels away (the cross product of the
+// differences to the points left/right and above/below, either side when one is missing), turned
+// to the camera; zero where the neighbours are missing or farther than `max_step_m` (a depth edge).
+// A noisy camera's normals need the wider step: at one pixel the noise tilts them at random.
+std::vector<Eigen::Vector3f> image_normals(const SurfaceFrame& f, const SplatImage& im, int step,
+                                           double max_step_m) {
   std::vector<Eigen::Vector3f> n(f.points.size(), Eigen::Vector3f::Zero());
   const float step2 = float(max_step_m * max_step_m);
   const Eigen::Vector3f eye = f.object_T_camera.translation().cast<float>();
@@ -90,7 +120,7 @@ std::vector<Eigen::Vector3f> image_normals(const SurfaceFrame& f, const SplatIma
       const int i = at(u, v);
       if (i < 0) continue;
       Eigen::Vector3f du, dv;
-      if (!across(u, v, 1, 0, f.points[i], du) || !across(u, v, 0, 1, f.points[i], dv)) continue;
+      if (!across(u, v, step, 0, f.points[i], du) || !across(u, v, 0, step, f.points[i], dv)) continue;
       Eigen::Vector3f c = du.cross(dv);
       const float l = c.norm();
       if (!(l > 0)) continue;
@@ -102,17 +132,39 @@ std::vector<Eigen::Vector3f> image_normals(const SurfaceFrame& f, const SplatIma
 
 // Camera pixels per splat pixel: a splat pixel about as wide as the points' spacing at the
 // frame's median depth.
-int image_scale(const SurfaceFrame& f, const SurfaceSettings& s) {
-  if (s.point_spacing_m <= 0 || f.points.empty()) return 1;
+double median_depth(const SurfaceFrame& f) {
+  if (f.points.empty()) return 0;
   const Pose camera_T_object = f.object_T_camera.inverse();
   std::vector<double> z;
   for (std::size_t i = 0; i < f.points.size(); i += 16) z.push_back((camera_T_object * f.points[i].cast<double>()).z());
   std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
-  const double pixel_m = z[z.size() / 2] / s.camera.fx;
+  return z[z.size() / 2];
+}
+
+int image_scale(const SurfaceFrame& f, const SurfaceSettings& s) {
+  if (s.point_spacing_m <= 0 || f.points.empty()) return 1;
+  const double pixel_m = median_depth(f) / s.camera.fx;
   return std::max(1, int(std::lround(s.point_spacing_m / pixel_m)));
 }
 
+// The frame's measured noise and its normals' step: neighbours at least kNormalBaselineSigmas x
+// the noise apart, so that noise tilts a normal by a quarter radian at most (1 pixel for an exact
+// camera).
+FrameNoise frame_noise(const SurfaceFrame& f, const SplatImage& im, double trunc) {
+  FrameNoise n;
+  n.pixel_m = median_depth(f) / im.fx;
+  n.sigma_m = measured_depth_noise(f, im, 2.0 * trunc);
+  n.normal_step = n.pixel_m > 0 ? std::clamp(int(std::ceil(kNormalBaselineSigmas * n.sigma_m / n.pixel_m)), 1, kMaxNormalStep) : 1;
+  return n;
+}
+
 }  // namespace
+
+FrameNoise tsdf_frame_noise(const SurfaceFrame& f, const SurfaceSettings& s) {
+  s.validate();
+  if (f.points.empty()) return {};
+  return frame_noise(f, splat(f, s.camera, image_scale(f, s)), s.truncation_voxels * s.voxel_m);
+}
 
 void SurfaceSettings::validate() const {
   kMeshVoxel.checked(voxel_m);
@@ -176,10 +228,11 @@ std::vector<std::vector<int>> allocate_blocks(const std::vector<SurfaceFrame>& f
 
 // One frame into the blocks it touches, in parallel: each voxel's signed distance to the frame's
 // surface (its splat at `scale` camera pixels a splat pixel), truncated, averaged with the weights.
-void integrate_frame(const SurfaceFrame& f, const SurfaceSettings& s, int scale, double v, double trunc,
-                     const std::vector<int>& touched, BlockGrid& grid) {
+FrameNoise integrate_frame(const SurfaceFrame& f, const SurfaceSettings& s, int scale, double v, double trunc,
+                           const std::vector<int>& touched, BlockGrid& grid) {
   const SplatImage im = splat(f, s.camera, scale);
-  const std::vector<Eigen::Vector3f> normals = image_normals(f, im, 2.0 * trunc);
+  const FrameNoise noise = frame_noise(f, im, trunc);
+  const std::vector<Eigen::Vector3f> normals = image_normals(f, im, noise.normal_step, 2.0 * trunc * noise.normal_step);
   const Pose camera_T_object = f.object_T_camera.inverse();
   parallel_for(touched.size(), [&](std::size_t begin, std::size_t end, int) {
     for (std::size_t bi = begin; bi < end; ++bi) {
@@ -214,6 +267,7 @@ void integrate_frame(const SurfaceFrame& f, const SurfaceSettings& s, int scale,
           }
     }
   }, 16);
+  return noise;
 }
 
 TriangleMesh extract_surface(const BlockGrid& grid, double v) {
@@ -306,12 +360,15 @@ TriangleMesh fuse_tsdf(const std::vector<SurfaceFrame>& frames, const SurfaceSet
   BlockGrid grid;
   const std::vector<std::vector<int>> frame_blocks = allocate_blocks(frames, v, trunc, num_points, grid);
   // Integration, frame by frame, blocks in parallel.
-  std::vector<int> scales;
+  std::vector<int> scales, steps;
+  std::vector<double> sigmas;
   for (std::size_t fi = 0; fi < frames.size(); ++fi) {
     if (frames[fi].points.empty()) continue;
     const int scale = image_scale(frames[fi], s);
     scales.push_back(scale);
-    integrate_frame(frames[fi], s, scale, v, trunc, frame_blocks[fi], grid);
+    const FrameNoise n = integrate_frame(frames[fi], s, scale, v, trunc, frame_blocks[fi], grid);
+    sigmas.push_back(n.sigma_m);
+    steps.push_back(n.normal_step);
   }
   TriangleMesh mesh = extract_surface(grid, v);
   if (stats) {
@@ -319,8 +376,13 @@ TriangleMesh fuse_tsdf(const std::vector<SurfaceFrame>& frames, const SurfaceSet
     stats->points = num_points;
     stats->voxels = grid.blocks.size() * kBlockVoxels;
     if (!scales.empty()) {
-      std::nth_element(scales.begin(), scales.begin() + scales.size() / 2, scales.end());
-      stats->image_scale = scales[scales.size() / 2];
+      auto median = [](auto& x) {
+        std::nth_element(x.begin(), x.begin() + x.size() / 2, x.end());
+        return x[x.size() / 2];
+      };
+      stats->image_scale = median(scales);
+      stats->depth_noise_m = median(sigmas);
+      stats->normal_step = median(steps);
     }
   }
   return mesh;

@@ -146,7 +146,9 @@ TEST(BenchStatistics, RunFoldersAndFirstViews) {
   // normalised box's diagonal; the built-in box 1.2 x 1.0 x 0.8 scaled to a 0.3 m shortest edge
   // is 0.45 x 0.375 x 0.3 m.
   const double half_diagonal = 0.5 * std::sqrt(0.45 * 0.45 + 0.375 * 0.375 + 0.3 * 0.3);
-  EXPECT_NEAR(default_first_view_distance("box", 0.3, std::nullopt), 0.6 + half_diagonal, 1e-9);
+  EXPECT_NEAR(default_first_view_distance("box", 0.3, 0.6, std::nullopt), 0.6 + half_diagonal, 1e-9);
+  // A closer camera (a short-range one: --working-distance 0.25) starts 0.35 m nearer.
+  EXPECT_NEAR(default_first_view_distance("box", 0.3, 0.25, std::nullopt), 0.25 + half_diagonal, 1e-9);
 }
 
 TEST(BenchStatistics, FirstViewsAreRangeCheckedAndExcludeAFixedInitialView) {
