@@ -4,9 +4,12 @@
 coverage.json (coverage, cloud and mesh metrics at 5 mm, the hand-eye check) and a second
 evaluation of its mesh and cloud at 2 mm (`pbnbv evaluate --threshold 0.002`).
 
-    make_table.py PBNBV_BINARY BENCH_DIR... > table.md
+    make_table.py [--remesh] PBNBV_BINARY BENCH_DIR... > table.md
 
-Figures are means over the objects of each run's figure (medians and p95s included)."""
+Figures are means over the objects of each run's figure (medians and p95s included). --remesh
+builds each run's mesh again with this binary first (`pbnbv mesh RUN`: the same frames and poses,
+today's surface code) and takes the mesh's figures at 5 mm from a fresh evaluation too, so rows
+run before a change of the mesher compare with rows run after it."""
 import json
 import os
 import statistics
@@ -14,13 +17,21 @@ import subprocess
 import sys
 
 
-def evaluate_2mm(pbnbv, run):
-    out = os.path.join(run, "metrics-2mm.json")
+REMESH = False
+
+
+def evaluate(pbnbv, run, threshold_mm):
+    out = os.path.join(run, "metrics-%dmm.json" % threshold_mm)
     if not os.path.exists(out):
-        subprocess.run([pbnbv, "evaluate", run, "--threshold", "0.002", "--json", out], check=True,
-                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        subprocess.run([pbnbv, "evaluate", run, "--threshold", "%g" % (threshold_mm / 1000.0), "--json", out],
+                       check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     with open(out) as f:
         return json.load(f)
+
+
+def mesh_figures(two):
+    mesh = [x for x in two["models"] if x["model"] == "mesh"]
+    return mesh[0] if mesh else None
 
 
 def row(pbnbv, bench):
@@ -37,6 +48,13 @@ def row(pbnbv, bench):
         sm = c["surface_metrics"]
         if "cloud" not in sm or "mesh" not in sm or "f_score" not in sm["mesh"]:
             continue
+        if REMESH:
+            subprocess.run([pbnbv, "mesh", run], check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            for t in (2, 5):
+                if os.path.exists(os.path.join(run, "metrics-%dmm.json" % t)):
+                    os.remove(os.path.join(run, "metrics-%dmm.json" % t))
+            five = mesh_figures(evaluate(pbnbv, run, 5))
+            sm = dict(sm, mesh={"f_score": five["f_score"], "precision": five["precision"]})
         cov.append(c["coverage_by_view"][-1])
         acc_med.append(sm["cloud"]["accuracy"]["median_mm"])
         acc_p95.append(sm["cloud"]["accuracy"]["p95_mm"])
@@ -44,9 +62,8 @@ def row(pbnbv, bench):
         f5c.append(sm["cloud"]["f_score"])
         f5m.append(sm["mesh"]["f_score"])
         p5m.append(sm["mesh"]["precision"])
-        two = evaluate_2mm(pbnbv, run)
-        mesh2 = [x for x in two["models"] if x["model"] == "mesh"]
-        f2m.append(mesh2[0]["f_score"] if mesh2 else float("nan"))
+        mesh2 = mesh_figures(evaluate(pbnbv, run, 2))
+        f2m.append(mesh2["f_score"] if mesh2 else float("nan"))
         if c.get("hand_eye"):
             hand.append((c["hand_eye"]["error_mm"], c["hand_eye"]["error_deg"]))
     m = statistics.mean
@@ -58,7 +75,11 @@ def row(pbnbv, bench):
 
 
 def main():
-    pbnbv, benches = sys.argv[1], sys.argv[2:]
+    global REMESH
+    args = sys.argv[1:]
+    if args and args[0] == "--remesh":
+        REMESH, args = True, args[1:]
+    pbnbv, benches = args[0], args[1:]
     print("| camera | rig errors | objects | coverage after view 10 (%) | cloud accuracy median / p95 (mm) "
           "| cloud completeness median (mm) | cloud F at 5 mm | mesh F at 5 mm | mesh F at 2 mm "
           "| mesh precision at 5 mm | hand-eye estimate from the truth (mean) |")
