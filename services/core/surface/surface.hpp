@@ -50,8 +50,8 @@ struct SurfaceStats {
 // A frame's depth noise as the TSDF measures it on the frame's own depth image (the splat): the
 // median absolute second difference of three neighbouring depths along a row, over 6^(1/2)
 // (robust: depth edges and missing pixels left out; a smooth surface's curvature adds little);
-// and the step its normals take: neighbours at least 4 sigma apart (a normal tilted by noise by
-// 1/4 rad at most), 1 to 8 pixels; 1 for an exact camera.
+// and the step its normals take: neighbours at least 4 sigma apart (noise tilts a normal by about
+// a quarter radian), 1 to 8 pixels; 1 for an exact camera.
 struct FrameNoise {
   double sigma_m = 0;  // the measured depth noise (0: too few neighbouring pixels to tell)
   double pixel_m = 0;  // a depth-image pixel's width at the frame's median depth
