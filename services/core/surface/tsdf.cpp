@@ -132,8 +132,7 @@ std::vector<Eigen::Vector3f> image_normals(const SurfaceFrame& f, const SplatIma
   return n;
 }
 
-// Camera pixels per splat pixel: a splat pixel about as wide as the points' spacing at the
-// frame's median depth.
+// The median depth of a frame's points (every 16th), along its camera's axis; 0 without points.
 double median_depth(const SurfaceFrame& f) {
   if (f.points.empty()) return 0;
   const Pose camera_T_object = f.object_T_camera.inverse();
@@ -143,6 +142,8 @@ double median_depth(const SurfaceFrame& f) {
   return z[z.size() / 2];
 }
 
+// Camera pixels per splat pixel: a splat pixel about as wide as the points' spacing at the
+// frame's median depth.
 int image_scale(const SurfaceFrame& f, const SurfaceSettings& s) {
   if (s.point_spacing_m <= 0 || f.points.empty()) return 1;
   const double pixel_m = median_depth(f) / s.camera.fx;
@@ -150,7 +151,7 @@ int image_scale(const SurfaceFrame& f, const SurfaceSettings& s) {
 }
 
 // The frame's measured noise and its normals' step: neighbours at least kNormalBaselineSigmas x
-// the noise apart, so that noise tilts a normal by a quarter radian at most (1 pixel for an exact
+// the noise apart, so that noise tilts a normal by about a quarter radian (1 pixel for an exact
 // camera).
 FrameNoise frame_noise(const SurfaceFrame& f, const SplatImage& im, double trunc) {
   FrameNoise n;
