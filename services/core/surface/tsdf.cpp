@@ -44,7 +44,8 @@ int local_index(int x, int y, int z) { return (z * kBlock + y) * kBlock + x; }
 struct SplatImage {
   int width = 0, height = 0;
   double fx = 0, fy = 0, cx = 0, cy = 0;
-  std::vector<int> index;  // point per pixel, -1: none
+  std::vector<int> index;    // point per pixel, -1: none
+  std::vector<float> depth;  // that point's depth along the camera's axis, m; infinity: none
 };
 
 SplatImage splat(const SurfaceFrame& f, const CameraIntrinsics& k, int scale) {
@@ -56,7 +57,7 @@ SplatImage splat(const SurfaceFrame& f, const CameraIntrinsics& k, int scale) {
   im.cx = (k.cx + 0.5) / scale - 0.5;
   im.cy = (k.cy + 0.5) / scale - 0.5;
   im.index.assign(std::size_t(im.width) * im.height, -1);
-  std::vector<float> depth(im.index.size(), std::numeric_limits<float>::infinity());
+  im.depth.assign(im.index.size(), std::numeric_limits<float>::infinity());
   const Pose camera_T_object = f.object_T_camera.inverse();
   for (std::size_t i = 0; i < f.points.size(); ++i) {
     const Eigen::Vector3d q = camera_T_object * f.points[i].cast<double>();
@@ -65,8 +66,8 @@ SplatImage splat(const SurfaceFrame& f, const CameraIntrinsics& k, int scale) {
     const int v = int(std::lround(im.fy * q.y() / q.z() + im.cy));
     if (u < 0 || v < 0 || u >= im.width || v >= im.height) continue;
     const std::size_t p = std::size_t(v) * im.width + u;
-    if (q.z() < depth[p]) {
-      depth[p] = float(q.z());
+    if (q.z() < im.depth[p]) {
+      im.depth[p] = float(q.z());
       im.index[p] = int(i);
     }
   }
@@ -78,17 +79,14 @@ SplatImage splat(const SurfaceFrame& f, const CameraIntrinsics& k, int scale) {
 // surface (a surface's curvature adds little at a pixel's spacing); its median absolute value over
 // the frame, steps across depth edges (beyond `max_step_m`) left out, gives sigma robustly. An
 // exact camera reads close to 0. Returns the sigma in m, 0 when there are too few triples.
-double measured_depth_noise(const SurfaceFrame& f, const SplatImage& im, double max_step_m) {
-  const Pose camera_T_object = f.object_T_camera.inverse();
-  std::vector<float> z(im.index.size(), std::numeric_limits<float>::quiet_NaN());
-  for (std::size_t p = 0; p < im.index.size(); ++p)
-    if (im.index[p] >= 0) z[p] = float((camera_T_object * f.points[im.index[p]].cast<double>()).z());
+double measured_depth_noise(const SplatImage& im, double max_step_m) {
+  const std::vector<float>& z = im.depth;
   std::vector<float> second;
   for (int v = 0; v < im.height; ++v)
     for (int u = 1; u + 1 < im.width; ++u) {
       const std::size_t p = std::size_t(v) * im.width + u;
       const float a = z[p - 1], b = z[p], c = z[p + 1];
-      if (!(std::abs(a - b) < max_step_m) || !(std::abs(c - b) < max_step_m)) continue;  // NaN fails too
+      if (!(std::abs(a - b) < max_step_m) || !(std::abs(c - b) < max_step_m)) continue;  // an empty pixel fails too
       second.push_back(std::abs(a - 2 * b + c));
     }
   if (second.size() < 100) return 0;
@@ -156,7 +154,7 @@ int image_scale(const SurfaceFrame& f, const SurfaceSettings& s) {
 FrameNoise frame_noise(const SurfaceFrame& f, const SplatImage& im, double trunc) {
   FrameNoise n;
   n.pixel_m = median_depth(f) / im.fx;
-  n.sigma_m = measured_depth_noise(f, im, 2.0 * trunc);
+  n.sigma_m = measured_depth_noise(im, 2.0 * trunc);
   n.normal_step = n.pixel_m > 0 ? std::clamp(int(std::ceil(kNormalBaselineSigmas * n.sigma_m / n.pixel_m)), 1, kMaxNormalStep) : 1;
   return n;
 }
