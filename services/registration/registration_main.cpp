@@ -10,10 +10,10 @@
 // (core register_frame), starting from the kinematic pose and weighing ICP's correction against
 // the kinematic pose's uncertainty (--pose-sigma-mm, --pose-sigma-deg); a view whose alignment
 // cannot be trusted is merged at its kinematic pose and flagged, with the reason. The camera
-// mount's error, the same in every view, is fitted to all views' clouds and turntable tops at once
-// (core mount_from_views, DIR/hand_eye.json); once it is sure, views are registered from where it
-// puts them, misplaced ones placed again, and at the scan's end the model is moved into the
-// object frame.
+// mount's error, the same in every view, is fitted to all views' clouds at once, each view's own
+// small error alongside (core mount_from_views, DIR/hand_eye.json); once it is sure, views are
+// registered from where it puts them, misplaced ones placed again, and at the scan's end the
+// model is moved into the object frame.
 // It owns the model and what is made of it (core/surface/scan_model.hpp): each view's frame,
 // the merged cloud and what each view added to it (new surface), said in the answer. A
 // restarted service continues the model of its scan from DIR/cloud.ply; answers are idempotent
@@ -330,8 +330,6 @@ class RegistrationService {
 
   // A view's points and normals (object frame by its kinematic pose) kept in its camera frame,
   // thinned to a few thousand, for fitting the mount to the views' agreement.
-  // With it, the turntable top's plane as the frame saw it (the camera service's fit), in the
-  // camera frame.
   void keep_for_mount(const CaptureResult& capture) {
     const PointCloud& frame = capture.points;
     const std::vector<Eigen::Vector3f>& normals = capture.normals;
@@ -348,14 +346,6 @@ class RegistrationService {
     for (std::size_t i = 0; i < frame.size(); i += step) {
       v.points.push_back((camera_T_object * frame[i].cast<double>()).cast<float>());
       v.normals.push_back(turn * normals[i]);
-    }
-    if (capture.ground_points > 0) {
-      const Eigen::Vector3d& abc = capture.ground_abc;  // z = a x + b y + c, object frame by the kinematics
-      v.ground_points = capture.ground_points;
-      v.ground_sigma_m = capture.ground_sigma_m;
-      v.ground_z_m = capture.ground_z_m;
-      v.ground_normal = camera_T_object.linear() * Eigen::Vector3d(-abc.x(), -abc.y(), 1.0).normalized();
-      v.ground_point = camera_T_object * Eigen::Vector3d(0, 0, abc.z());  // on the turntable's axis
     }
     mount_views_.push_back(std::move(v));
   }
@@ -482,13 +472,6 @@ class RegistrationService {
                         {"refined", v.refined}});
     }
     j["placed_views"] = placed;  // in the first view's frame
-    nlohmann::json ground = nlohmann::json::array();  // each view's turntable top, camera frame
-    for (const MountView& v : mount_views_) {
-      if (v.ground_points <= 0) continue;
-      ground.push_back({{"view", v.view}, {"points", v.ground_points}, {"sigma_m", v.ground_sigma_m}, {"z_m", v.ground_z_m},
-                        {"normal", to_json(v.ground_normal)}, {"point_m", to_json(v.ground_point)}});
-    }
-    j["turntable_tops"] = ground;
     write_json_atomic(j, (out_ / "hand_eye.json").string());
   }
 
@@ -525,22 +508,6 @@ class RegistrationService {
         m.kinematic = v.kinematic;
         model_.view_in_camera_frame(v.view, m.points, m.normals);
         mount_views_.push_back(std::move(m));
-      }
-      for (const auto& g : j.value("turntable_tops", nlohmann::json::array())) {
-        const int view = g.at("view").get<int>();
-        for (MountView& m : mount_views_) {
-          if (m.view != view) continue;
-          m.ground_points = std::clamp(g.at("points").get<int>(), 0, 100000000);
-          m.ground_sigma_m = g.at("sigma_m").get<double>();
-          m.ground_z_m = g.at("z_m").get<double>();
-          m.ground_normal = vec3_from_json(g.at("normal"), path.string() + " turntable_tops normal");
-          m.ground_point = vec3_from_json(g.at("point_m"), path.string() + " turntable_tops point_m");
-          if (!(m.ground_sigma_m >= 0 && m.ground_sigma_m < 1) || !std::isfinite(m.ground_z_m) ||
-              std::abs(m.ground_normal.norm() - 1) > 1e-3) {
-            throw std::invalid_argument(path.string() + ": turntable_tops of view " + std::to_string(view) +
-                                        ": a scatter outside [0, 1) m, a height that is not finite or a normal that is not a unit vector");
-          }
-        }
       }
       fit_mount_to_views();
     } catch (const std::exception& e) {

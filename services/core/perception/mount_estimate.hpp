@@ -97,16 +97,6 @@ struct MountView {
   Pose kinematic = Pose::Identity();
   PointCloud points;
   std::vector<Eigen::Vector3f> normals;
-  // The turntable top as the view saw it, in the camera frame (a unit normal towards the camera
-  // and a point on it), the object-frame height it truly has, and the readings it was fitted to
-  // and their scatter; ground_points 0: not seen. It tells the camera's tilt in every view, which
-  // the clouds' agreement alone pins down only loosely (a turn about the object with the matching
-  // shift moves the surface little).
-  int ground_points = 0;
-  Eigen::Vector3d ground_normal = Eigen::Vector3d::UnitZ();
-  Eigen::Vector3d ground_point = Eigen::Vector3d::Zero();
-  double ground_z_m = 0;
-  double ground_sigma_m = 0;
 };
 
 struct MountFitParams {
@@ -122,30 +112,23 @@ struct MountFitParams {
   double pairs_per_independent = 4.0;
   double min_residual_m = 0.0002;      // the residual sigma is taken as at least this
   // Each view's own pose error beyond the mount's (joint encoders, turntable backlash), 1 sigma
-  // per axis: fitted alongside E, so that E's sigma counts it.
+  // per axis: the prior on the D_i fitted alongside E.
   double per_view_translation_m = 0.0003;
   double per_view_rotation_deg = 0.03;
-  // The turntable top's readings span about this far from the point given (the lever of its tilt).
-  double ground_extent_m = 0.1;
-  // A turntable top seen flatter than this (the angle between the line of sight to its point and
-  // its plane) is not used: a D435 at 1 m put its tilt 0.2-1.0 degrees off at 13-15 degrees, 0.02
-  // to 0.15 degrees off at 21-76 (bunny, uncalibrated mount, against the twin's true poses).
-  double min_ground_elevation_deg = 20.0;
-  // A plane's tilt is never known better than its readings' scatter over this lever (their errors
-  // are not independent: the depth unit, noise growing with depth): the same measurement's tilt
-  // errors of up to 0.15 degrees came with 1-3 mm of scatter.
-  double ground_tilt_lever_m = 0.75;
 };
 
-// E fitted to the views' agreement: each view's points placed by K_i E lie on the surfaces of the
-// other views placed by K_j E, and each view's turntable top, placed by K_i E, lies level at its
-// height (point-to-plane, every ordered pair of views, Gauss-Newton on E's
-// twist about the camera centre, starting from `start`), with the prior N(identity, the rig's
-// stated sigma per axis), and each view's own small pose error fitted alongside (the per-view
-// prior) so that E's covariance counts what the views' errors leave uncertain. Directions no pair pins down (E's turn about the axis of a turntable
-// that alone moved the camera) stay at the prior's. The covariance is the fit's: its information
-// from the pairs at the final residual sigma, plus the prior's. `views` counts the views that
-// were paired with another. Fewer than two usable views: the start, with the prior's covariance.
+// E fitted to the views' agreement: each view's points, placed by K_i E D_i, lie on the surfaces of
+// the other views placed by K_j E D_j (point-to-plane, every ordered pair of views, Gauss-Newton on
+// the twists of E and of every view's own small pose error D_i about the camera centre, starting
+// from `start`), with the prior N(identity, the rig's stated sigma per axis) on E and the per-view
+// prior on each D_i. Fitting the D_i alongside keeps what single views' errors leave between the
+// clouds out of E. Directions no pair pins down (E's turn about the axis of a turntable that alone
+// moved the camera) stay at the prior's. The covariance is E's in the joint fit (the D_i
+// marginalised): the pairs' information at the final residual sigma, plus the priors. `views`
+// counts the views that were paired with another. Fewer than two usable views: the start, with the
+// prior's covariance.
+// (The turntable top each view sees is not used: on objects wider than the platter or standing on
+// a flat base, the readings near its height are the object's, 1-4 degrees and up to 23 mm off.)
 MountEstimate mount_from_views(const std::vector<MountView>& views, const Pose& start, double prior_translation_m,
                                double prior_rotation_deg, const MountFitParams& params = {});
 
