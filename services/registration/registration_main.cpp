@@ -368,11 +368,14 @@ class RegistrationService {
     place_again_where_misplaced(3e-4, 0.03);  // during the scan: what matters to the next alignments
   }
 
-  // Views placed where the mount's estimate says they are not, placed again where it puts them:
-  // those whose alignment was not taken (flagged, or not pinned down by their overlap: placed at
-  // their kinematic pose, or where an earlier estimate put them), those whose proposal the
-  // estimate left out as slid, and those placed more than 5 sigma from where it puts them (an
-  // alignment that slid on too little overlap to inform the estimate), sigma being the
+  // Views placed again where the mount's estimate puts them. Every view the clouds' fit paired
+  // with another goes where that fit put it (the mount and the view's own error, fitted over all
+  // views at once: on the tune half's finished scans 0.37 mm from the truth at the object against
+  // 0.65 mm for ICP against the growing model, d435 calibrated, slid views left aside). Of the
+  // others, those whose alignment was not taken (flagged, or not pinned down by their overlap:
+  // placed at their kinematic pose, or where an earlier estimate put them), those whose proposal
+  // the estimate left out as slid, and those placed more than 5 sigma from where the mount puts
+  // them (an alignment that slid on too little overlap to inform the estimate), sigma being the
   // estimate's and a view's own (per_view_covariance) together, at the view's points' centre.
   // Moves smaller than `min_move_m` (at the view's camera) and `min_move_deg` are left for later
   // (rewriting the model costs a read of every frame). cloud.ply is rebuilt once.
@@ -389,9 +392,10 @@ class RegistrationService {
     std::vector<std::pair<PlacedView*, Pose>> placed;
     std::string said;
     for (PlacedView& v : placed_views_) {
-      const Pose now = mount_.predicted_correction(v.kinematic);
+      const std::optional<Pose> fitted = mount_.fitted_correction(v.view, v.kinematic);
+      const Pose now = fitted ? *fitted : mount_.predicted_correction(v.kinematic);
       double sigmas = 0;
-      if (v.refined) {
+      if (v.refined && !fitted) {
         const auto seen = std::find_if(mount_views_.begin(), mount_views_.end(), [&](const MountView& m) { return m.view == v.view; });
         Eigen::Vector3d centre = v.kinematic.translation();
         if (seen != mount_views_.end() && !seen->points.empty()) {
@@ -411,7 +415,7 @@ class RegistrationService {
       moves.emplace_back(v.view, q);
       placed.emplace_back(&v, now);
       said += fmt::format("{}view {} {:.2f} mm", said.empty() ? "" : ", ", v.view, moved_m * 1e3) +
-              (v.refined ? fmt::format(" (its alignment {:.1f} sigma off)", sigmas) : std::string());
+              (fitted ? std::string() : v.refined ? fmt::format(" (its alignment {:.1f} sigma off)", sigmas) : std::string(" (mount only)"));
     }
     if (moves.empty()) return;
     try {

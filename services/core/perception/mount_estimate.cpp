@@ -55,6 +55,14 @@ Pose MountEstimator::predicted_correction(const Pose& kinematic) const {
   return mount_correction(*first_, kinematic, estimate_.error);
 }
 
+std::optional<Pose> MountEstimator::fitted_correction(int view, const Pose& kinematic) const {
+  if (!first_ || !from_views_) return std::nullopt;
+  for (const auto& [id, own] : estimate_.view_errors) {
+    if (id == view) return mount_correction(*first_, kinematic, estimate_.error) * kinematic * own * kinematic.inverse();
+  }
+  return std::nullopt;
+}
+
 Pose MountEstimator::object_T_model() const {
   if (!first_) return Pose::Identity();
   return *first_ * estimate_.error * first_->inverse();
@@ -165,6 +173,7 @@ namespace {
 
 // A view thinned for the fit: every k-th point with a normal, and an index over its points.
 struct FitView {
+  int view = -1;
   Pose kinematic;
   PointCloud points;
   std::vector<Eigen::Vector3f> normals;
@@ -195,6 +204,7 @@ MountEstimate mount_from_views(const std::vector<MountView>& views, const Pose& 
     if (usable < static_cast<std::size_t>(std::max(params.min_points, 3))) continue;
     const std::size_t step = std::max<std::size_t>(1, usable / static_cast<std::size_t>(std::max(params.points_per_view, 1)));
     FitView f;
+    f.view = v.view;
     f.kinematic = v.kinematic;
     std::size_t k = 0;
     for (std::size_t i = 0; i < v.points.size(); ++i) {
@@ -318,6 +328,9 @@ MountEstimate mount_from_views(const std::vector<MountView>& views, const Pose& 
     std::fill(paired.begin(), paired.end(), 0);
   }
   out.views = static_cast<int>(std::count(paired.begin(), paired.end(), 1));
+  for (std::size_t i = 0; i < n; ++i) {
+    if (paired[i]) out.view_errors.emplace_back(fit[i].view, own[i]);
+  }
   set_sigmas(out);
   return out;
 }

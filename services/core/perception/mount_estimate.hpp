@@ -18,6 +18,7 @@
 // Plain data and functions; the registration service keeps one per scan.
 #include <Eigen/Core>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "core/base/pose.hpp"
@@ -40,6 +41,8 @@ struct MountEstimate {
   int outliers = 0;               // observations left out: more than 4 sigma from the fit of the rest
   double sigma_m = 0;             // largest 1-sigma of its translation, m
   double sigma_deg = 0;           // largest 1-sigma of its rotation, degrees
+  // mount_from_views: each paired view's own error D_i as fitted alongside (view i at K_i E D_i).
+  std::vector<std::pair<int, Pose>> view_errors;
   double translation_m() const;
   double rotation_deg() const;
 };
@@ -73,6 +76,10 @@ class MountEstimator {
   const std::vector<int>& outlier_views() const { return outlier_views_; }
   // The correction D_i the estimate predicts for a view at `kinematic`.
   Pose predicted_correction(const Pose& kinematic) const;
+  // The correction that places a view where the clouds' fit put it: the mount's, and the view's
+  // own error as fitted alongside (K_1 E^-1 K_1^-1 K E D K^-1). None for a view the fit did not
+  // pair with another, or before a fit to the clouds.
+  std::optional<Pose> fitted_correction(int view, const Pose& kinematic) const;
   // object_T_model: where the model's points lie in the object frame by the estimate.
   Pose object_T_model() const;
 
