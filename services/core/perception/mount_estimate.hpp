@@ -14,7 +14,9 @@
 //     view alike).
 // The proposals of single alignments slide when the mount is far off (an uncalibrated one puts
 // views 10-20 mm apart): mount_from_views fits E to the views' clouds themselves instead, every
-// view against every other at once (E moves them all), which a view's own alignment cannot do.
+// view against every other at once (E moves them all), which a view's own alignment cannot do,
+// with each view's own small error (joints, backlash) fitted alongside: where the fit puts every
+// view (fitted_correction) is a multi-view alignment the registration service places them by.
 // Plain data and functions; the registration service keeps one per scan.
 #include <Eigen/Core>
 #include <optional>
