@@ -68,7 +68,7 @@ Pose MountEstimator::object_T_model() const {
   return *first_ * estimate_.error * first_->inverse();
 }
 
-// Gauss-Newton on E's twist e: residual per view twist_about(D_obs D(e)^-1, c) (ICP's proposal
+// Gauss-Newton on E's twist e: residual per view twist_about(C_obs C(e)^-1, c) (ICP's proposal
 // against the one predicted, about the overlap's centre), weighed by ICP's covariance there;
 // the prior N(0, diag(r^2, t^2)) on e. Jacobians by central differences.
 bool MountEstimator::trusted(int min_views) const {

@@ -4,7 +4,7 @@
 // flange_T_camera * E instead of the rig file's flange_T_camera, so view i's true pose is its
 // kinematic pose K_i times E. The model is built in the first view's kinematic frame (K_1 is
 // taken as exact), so registration finds for view i the correction
-//     D_i = K_1 E^-1 K_1^-1  K_i E K_i^-1          (registered = D_i * kinematic)
+//     C_i = K_1 E^-1 K_1^-1  K_i E K_i^-1          (registered = C_i * kinematic)
 // which, over views seen from different directions, pins E down: a Gauss-Newton fit of E to
 // ICP's proposals, each weighed by its covariance, with the rig's stated pose sigma as a prior.
 // Then:
@@ -76,7 +76,7 @@ class MountEstimator {
   bool trusted(int min_views = 3) const;
   // The views whose observations the fit left out (their alignment slid: placed wrong).
   const std::vector<int>& outlier_views() const { return outlier_views_; }
-  // The correction D_i the estimate predicts for a view at `kinematic`.
+  // The correction C_i the estimate predicts for a view at `kinematic`.
   Pose predicted_correction(const Pose& kinematic) const;
   // The correction that places a view where the clouds' fit put it: the mount's, and the view's
   // own error as fitted alongside (K_1 E^-1 K_1^-1 K E D K^-1). None for a view the fit did not
@@ -95,7 +95,7 @@ class MountEstimator {
   std::vector<int> outlier_views_;
 };
 
-// D = K1 E^-1 K1^-1 K E K^-1.
+// C = K1 E^-1 K1^-1 K E K^-1.
 Pose mount_correction(const Pose& first, const Pose& kinematic, const Pose& error);
 
 // One view for mount_from_views: its points and their unit normals in the camera frame (the
