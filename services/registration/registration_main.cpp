@@ -372,12 +372,12 @@ class RegistrationService {
   // with another goes where that fit put it (the mount and the view's own error, fitted over all
   // views at once: replayed on the tune half's finished scans, d435 calibrated, 0.32 mm from the
   // truth at the object against 0.65 mm for ICP against the growing model, on the 11 objects where
-  // no alignment slid). Of the
-  // others, those whose alignment was not taken (flagged, or not pinned down by their overlap:
-  // placed at their kinematic pose, or where an earlier estimate put them), those whose proposal
-  // the estimate left out as slid, and those placed more than 5 sigma from where the mount puts
-  // them (an alignment that slid on too little overlap to inform the estimate), sigma being the
-  // estimate's and a view's own (per_view_covariance) together, at the view's points' centre.
+  // no alignment slid). Of the others, those whose alignment was not taken (flagged, or not
+  // pinned down by their overlap: placed at their kinematic pose, or where an earlier estimate put
+  // them), those whose proposal the estimate left out as slid, and those placed more than 5 sigma
+  // from where the mount puts them (an alignment that slid on too little overlap to inform the
+  // estimate), sigma being the estimate's and a view's own (per_view_covariance) together, at the
+  // view's points' centre.
   // Moves smaller than `min_move_m` (at the view's camera) and `min_move_deg` are left for later
   // (rewriting the model costs a read of every frame). cloud.ply is rebuilt once.
   void place_again_by_the_estimate(double min_move_m, double min_move_deg) {

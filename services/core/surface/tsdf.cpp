@@ -141,19 +141,19 @@ double median_depth(const SurfaceFrame& f) {
 }
 
 // Camera pixels per splat pixel: a splat pixel about as wide as the points' spacing at the
-// frame's median depth.
-int image_scale(const SurfaceFrame& f, const SurfaceSettings& s) {
+// frame's median depth (median_depth(f), computed once per frame by the caller).
+int image_scale(const SurfaceFrame& f, double depth_m, const SurfaceSettings& s) {
   if (s.point_spacing_m <= 0 || f.points.empty()) return 1;
-  const double pixel_m = median_depth(f) / s.camera.fx;
+  const double pixel_m = depth_m / s.camera.fx;
   return std::max(1, int(std::lround(s.point_spacing_m / pixel_m)));
 }
 
 // The frame's measured noise and its normals' step: neighbours at least kNormalBaselineSigmas x
 // the noise apart, so that noise tilts a normal by about a quarter radian (1 pixel for an exact
 // camera).
-FrameNoise frame_noise(const SurfaceFrame& f, const SplatImage& im, double trunc) {
+FrameNoise frame_noise(const SplatImage& im, double depth_m, double trunc) {
   FrameNoise n;
-  n.pixel_m = median_depth(f) / im.fx;
+  n.pixel_m = depth_m / im.fx;
   n.sigma_m = measured_depth_noise(im, 2.0 * trunc);
   n.normal_step = n.pixel_m > 0 ? std::clamp(int(std::ceil(kNormalBaselineSigmas * n.sigma_m / n.pixel_m)), 1, kMaxNormalStep) : 1;
   return n;
@@ -164,7 +164,8 @@ FrameNoise frame_noise(const SurfaceFrame& f, const SplatImage& im, double trunc
 FrameNoise tsdf_frame_noise(const SurfaceFrame& f, const SurfaceSettings& s) {
   s.validate();
   if (f.points.empty()) return {};
-  return frame_noise(f, splat(f, s.camera, image_scale(f, s)), s.truncation_voxels * s.voxel_m);
+  const double depth_m = median_depth(f);
+  return frame_noise(splat(f, s.camera, image_scale(f, depth_m, s)), depth_m, s.truncation_voxels * s.voxel_m);
 }
 
 void SurfaceSettings::validate() const {
@@ -228,11 +229,12 @@ std::vector<std::vector<int>> allocate_blocks(const std::vector<SurfaceFrame>& f
 }
 
 // One frame into the blocks it touches, in parallel: each voxel's signed distance to the frame's
-// surface (its splat at `scale` camera pixels a splat pixel), truncated, averaged with the weights.
-FrameNoise integrate_frame(const SurfaceFrame& f, const SurfaceSettings& s, int scale, double v, double trunc,
-                           const std::vector<int>& touched, BlockGrid& grid) {
+// surface (its splat at `scale` camera pixels a splat pixel, its points' median depth `depth_m`),
+// truncated, averaged with the weights.
+FrameNoise integrate_frame(const SurfaceFrame& f, const SurfaceSettings& s, int scale, double depth_m, double v,
+                           double trunc, const std::vector<int>& touched, BlockGrid& grid) {
   const SplatImage im = splat(f, s.camera, scale);
-  const FrameNoise noise = frame_noise(f, im, trunc);
+  const FrameNoise noise = frame_noise(im, depth_m, trunc);
   const std::vector<Eigen::Vector3f> normals = image_normals(f, im, noise.normal_step, 2.0 * trunc * noise.normal_step);
   const Pose camera_T_object = f.object_T_camera.inverse();
   parallel_for(touched.size(), [&](std::size_t begin, std::size_t end, int) {
@@ -365,9 +367,10 @@ TriangleMesh fuse_tsdf(const std::vector<SurfaceFrame>& frames, const SurfaceSet
   std::vector<double> sigmas;
   for (std::size_t fi = 0; fi < frames.size(); ++fi) {
     if (frames[fi].points.empty()) continue;
-    const int scale = image_scale(frames[fi], s);
+    const double depth_m = median_depth(frames[fi]);
+    const int scale = image_scale(frames[fi], depth_m, s);
     scales.push_back(scale);
-    const FrameNoise n = integrate_frame(frames[fi], s, scale, v, trunc, frame_blocks[fi], grid);
+    const FrameNoise n = integrate_frame(frames[fi], s, scale, depth_m, v, trunc, frame_blocks[fi], grid);
     sigmas.push_back(n.sigma_m);
     steps.push_back(n.normal_step);
   }

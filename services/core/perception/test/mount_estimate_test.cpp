@@ -264,7 +264,7 @@ TEST(MountEstimate, EachViewsOwnErrorStaysOutOfTheMount) {
     const Pose truth_v = kinematic[static_cast<std::size_t>(v)] * truth * own[static_cast<std::size_t>(v)];
     const auto off = [&](const Pose& placed) {
       double worst = 0;
-      for (const Eigen::Vector3d x : {Eigen::Vector3d(0.06, 0, 0.05), Eigen::Vector3d(0, 0.06, 0.1), Eigen::Vector3d(-0.06, 0, 0)}) {
+      for (const Eigen::Vector3d& x : {Eigen::Vector3d(0.06, 0, 0.05), Eigen::Vector3d(0, 0.06, 0.1), Eigen::Vector3d(-0.06, 0, 0)}) {
         worst = std::max(worst, (placed * (truth_v.inverse() * x) - x).norm());
       }
       return worst;
