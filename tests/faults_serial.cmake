@@ -8,7 +8,7 @@
 #   the hostile-traffic case (2026-12-04, -j2) the logger lost one CLOUD (9 of 10) under the load.
 # Their cost is the lowest: ctest starts a RUN_SERIAL test only when nothing else is running, so
 # they wait for the end of the run either way.
-set_tests_properties(Faults.AKilledLoggerGoesOnInASecondFileThatHoldsEveryMessage
+set_tests_properties(Faults.AKilledLoggerGoesOnInASecondFileAndTheAuditSaysWhatItLacks
                      Faults.TheMainJobsLogHoldsEveryMessageOfItsScan
                      PROPERTIES RUN_SERIAL TRUE COST 0)
 # The longest case that shares the machine (about 1.5 minutes: four 10-view scans) starts first.

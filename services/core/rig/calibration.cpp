@@ -7,6 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <pugixml.hpp>
+
 namespace pbnbv {
 
 namespace {
@@ -158,14 +160,6 @@ std::string fmt17(double v) {
   return os.str();
 }
 
-// Removes attribute `name="..."` from a tag's text.
-void erase_attribute(std::string& tag, const std::string& name) {
-  const std::string key = " " + name + "=\"";
-  const auto a = tag.find(key);
-  if (a == std::string::npos) return;
-  const auto b = tag.find('"', a + key.size());
-  tag.erase(a, b + 1 - a);
-}
 
 }  // namespace
 
@@ -314,34 +308,66 @@ RigCalibration solve_rig_calibration(const RigModel& rig, const Eigen::Vector3d&
 
 std::string calibrated_rig_xml(const std::string& xml, const std::string& path, const Pose& flange_T_camera,
                                double turntable_zero_rad) {
-  std::string out = xml;
-  // The camera body's opening tag: pose attributes replaced by pos and quat.
-  const auto start = out.find("<body name=\"camera_optical\"");
-  if (start == std::string::npos) throw std::runtime_error(path + ": no <body name=\"camera_optical\"> to calibrate");
-  const auto end = out.find('>', start);
-  std::string tag = out.substr(start, end - start);
-  const bool self_closing = !tag.empty() && tag.back() == '/';
-  if (self_closing) tag.pop_back();
-  for (const char* a : {"pos", "quat", "xyaxes", "zaxis", "axisangle", "euler"}) erase_attribute(tag, a);
+  // Parsed as XML (comments and whitespace kept, written back as they were): a comment or a
+  // string that only looks like an element is never edited.
+  pugi::xml_document doc;
+  const pugi::xml_parse_result parsed =
+      doc.load_buffer(xml.data(), xml.size(), pugi::parse_default | pugi::parse_comments | pugi::parse_ws_pcdata |
+                                                  pugi::parse_declaration | pugi::parse_doctype);
+  if (!parsed) {
+    throw std::runtime_error(path + ": not well-formed XML at byte " + std::to_string(parsed.offset) + " (" +
+                             parsed.description() + ")");
+  }
+  pugi::xml_node root = doc.child("mujoco");
+  if (!root) throw std::runtime_error(path + ": no <mujoco> element at the top");
+  pugi::xml_node camera = root.find_node([](const pugi::xml_node& n) {
+    return std::string(n.name()) == "body" && std::string(n.attribute("name").value()) == "camera_optical";
+  });
+  if (!camera) throw std::runtime_error(path + ": no <body name=\"camera_optical\"> to calibrate");
+  // Its pose: every way MJCF can give an orientation removed, pos and quat written.
+  for (const char* a : {"pos", "quat", "xyaxes", "zaxis", "axisangle", "euler"}) camera.remove_attribute(a);
   const Eigen::Vector3d t = flange_T_camera.translation();
   Eigen::Quaterniond q(flange_T_camera.linear());
   q.normalize();
   if (q.w() < 0) q.coeffs() *= -1;
-  tag += " pos=\"" + fmt17(t.x()) + " " + fmt17(t.y()) + " " + fmt17(t.z()) + "\" quat=\"" + fmt17(q.w()) + " " +
-         fmt17(q.x()) + " " + fmt17(q.y()) + " " + fmt17(q.z()) + "\"";
-  if (self_closing) tag += "/";
-  out.replace(start, end - start, tag);
-  // The turntable's zero: replaced when present, else added to <custom>.
-  const std::string numeric = "<numeric name=\"pbnbv_turntable_zero\" data=\"" + fmt17(turntable_zero_rad) + "\"/>";
-  const auto z = out.find("<numeric name=\"pbnbv_turntable_zero\"");
-  if (z != std::string::npos) {
-    out.replace(z, out.find("/>", z) + 2 - z, numeric);
-  } else {
-    const auto c = out.find("<custom>");
-    if (c == std::string::npos) throw std::runtime_error(path + ": no <custom> section for pbnbv_turntable_zero");
-    out.insert(c + 8, "\n    <!-- pbnbv calibrate: the turntable's reading at the platter's zero, rad -->\n    " + numeric);
+  pugi::xml_attribute pos = camera.insert_attribute_after("pos", camera.attribute("name"));
+  pos.set_value((fmt17(t.x()) + " " + fmt17(t.y()) + " " + fmt17(t.z())).c_str());
+  camera.insert_attribute_after("quat", pos)
+      .set_value((fmt17(q.w()) + " " + fmt17(q.x()) + " " + fmt17(q.y()) + " " + fmt17(q.z())).c_str());
+  // The turntable's zero: replaced where it is, else added to the first <custom> (made when the
+  // file has none).
+  pugi::xml_node zero = root.find_node([](const pugi::xml_node& n) {
+    return std::string(n.name()) == "numeric" && std::string(n.attribute("name").value()) == "pbnbv_turntable_zero" &&
+           std::string(n.parent().name()) == "custom";
+  });
+  if (!zero) {
+    pugi::xml_node custom = root.child("custom");
+    if (!custom) {
+      custom = root.append_child("custom");
+      custom.append_child(pugi::node_pcdata).set_value("\n  ");
+      root.append_child(pugi::node_pcdata).set_value("\n");
+    }
+    // Indented as the section's first child is (or two spaces deeper than the section).
+    const pugi::xml_node first = custom.first_child();
+    const std::string indent = first.type() == pugi::node_pcdata ? first.value() : std::string("\n    ");
+    custom.prepend_child(pugi::node_pcdata).set_value(indent.c_str());
+    zero = custom.prepend_child("numeric");
+    custom.prepend_child(pugi::node_pcdata).set_value(indent.c_str());
+    custom.prepend_child(pugi::node_comment).set_value(" pbnbv calibrate: the turntable's reading at the platter's zero, rad ");
+    custom.prepend_child(pugi::node_pcdata).set_value(indent.c_str());
+    zero.append_attribute("name").set_value("pbnbv_turntable_zero");
+    zero.append_attribute("data");
   }
-  return out;
+  if (!zero.attribute("data")) zero.append_attribute("data");
+  zero.attribute("data").set_value(fmt17(turntable_zero_rad).c_str());
+  // Top-level nodes (the declaration, header comments, <mujoco>) one per line, as pugixml keeps
+  // no whitespace between them.
+  std::ostringstream out;
+  for (const pugi::xml_node& n : doc.children()) {
+    n.print(out, "", pugi::format_raw);
+    out << "\n";
+  }
+  return out.str();
 }
 
 }  // namespace pbnbv

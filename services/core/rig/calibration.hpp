@@ -97,8 +97,10 @@ RigCalibration solve_rig_calibration(const RigModel& rig, const Eigen::Vector3d&
                                      const CalibrationSolveOptions& options = {});
 
 // The rig file's MJCF text with the body camera_optical's pose replaced by `flange_T_camera`
-// and <custom><numeric name="pbnbv_turntable_zero"> set. Throws std::runtime_error naming
-// `path` when the text has no camera_optical body or no <custom> section.
+// and <custom><numeric name="pbnbv_turntable_zero"> set (the section made when there is none),
+// edited as XML: comments, whitespace and every other element written back as they were. Throws
+// std::runtime_error naming `path` when the text is not well-formed XML (with the byte and the
+// reason), has no <mujoco> root or no camera_optical body.
 std::string calibrated_rig_xml(const std::string& xml, const std::string& path, const Pose& flange_T_camera,
                                double turntable_zero_rad);
 

@@ -160,25 +160,72 @@ TEST_F(Calibration, TooFewFramesAreRefused) {
   EXPECT_THROW(solve_rig_calibration(model_, sphere_.centre_in_mount(), observations(3, 0, 4)), std::invalid_argument);
 }
 
-TEST_F(Calibration, TheCalibratedFileLoadsWithTheNewMountAndZero) {
-  std::ifstream in(model_.model_path);
+std::string read_file_text(const std::string& path) {
+  std::ifstream in(path);
   std::stringstream ss;
   ss << in.rdbuf();
-  const std::string xml = calibrated_rig_xml(ss.str(), model_.model_path, truth_.flange_T_camera, 0.01);
-  const auto path = std::filesystem::temp_directory_path() / ("calibrated_rig_" + std::to_string(::getpid()) + ".xml");
-  std::ofstream(path) << xml;
-  const RigModel r = load_rig(path.string());
-  std::filesystem::remove(path);
-  EXPECT_LT((r.flange_T_camera.translation() - truth_.flange_T_camera.translation()).norm(), 1e-12);
-  EXPECT_LT(rotation_angle_rad(r.flange_T_camera.linear(), truth_.flange_T_camera.linear()), 1e-9);
-  EXPECT_DOUBLE_EQ(r.turntable_zero_rad, 0.01);
-  // A reading equal to the zero puts the platter at its zero; the object turns with the rest.
-  EXPECT_TRUE(object_in_world(r, 0.01, 0).isApprox(model_.world_T_turntable, 1e-12));
-  EXPECT_TRUE(object_in_world(r, 0.01 + 0.3, 0).isApprox(object_in_world(model_, 0.3, 0), 1e-12));
-  // Calibrating a calibrated file replaces the zero, never adds a second one.
-  const std::string again = calibrated_rig_xml(xml, path.string(), truth_.flange_T_camera, 0.02);
-  EXPECT_EQ(again.find("pbnbv_turntable_zero"), again.rfind("pbnbv_turntable_zero"));
-  EXPECT_NE(again.find("data=\"0.02\""), std::string::npos);
+  return ss.str();
+}
+
+// Every shipped arm rig file (the UR5e's header comment names a <custom> section: the file must
+// be edited as XML, not as text) calibrates into a file MuJoCo loads, with the new mount and zero,
+// everything else as it was: the comments byte for byte, the other bodies' poses.
+TEST_F(Calibration, EveryShippedRigFileLoadsWithTheNewMountAndZero) {
+  for (const std::string file : {"rig_arm.xml", "rig_ur5e.xml"}) {
+    const std::string source = std::filesystem::path(default_rig_path(RigKind::kArm)).parent_path() / file;
+    const RigModel before = load_rig(source);
+    const std::string text = read_file_text(source);
+    const std::string xml = calibrated_rig_xml(text, source, truth_.flange_T_camera, 0.01);
+    // The header comment, up to <mujoco, is untouched.
+    const auto head = text.find("<mujoco");
+    ASSERT_NE(head, std::string::npos) << file;
+    EXPECT_EQ(xml.substr(0, xml.find("<mujoco")), text.substr(0, head)) << file;
+    // Next to the original (its includes and meshes resolve the same way).
+    const std::string path = source + ".calibrated-" + std::to_string(::getpid()) + ".xml";
+    std::ofstream(path) << xml;
+    RigModel r;
+    ASSERT_NO_THROW(r = load_rig(path)) << file << ":\n" << xml.substr(0, 2000);
+    std::filesystem::remove(path);
+    EXPECT_LT((r.flange_T_camera.translation() - truth_.flange_T_camera.translation()).norm(), 1e-12) << file;
+    EXPECT_LT(rotation_angle_rad(r.flange_T_camera.linear(), truth_.flange_T_camera.linear()), 1e-9) << file;
+    EXPECT_DOUBLE_EQ(r.turntable_zero_rad, 0.01) << file;
+    EXPECT_TRUE(r.world_T_turntable.isApprox(before.world_T_turntable, 1e-12)) << file;
+    EXPECT_EQ(r.joint_names, before.joint_names) << file;
+    // A reading equal to the zero puts the platter at its zero; the object turns with the rest.
+    EXPECT_TRUE(object_in_world(r, 0.01, 0).isApprox(before.world_T_turntable, 1e-12)) << file;
+    EXPECT_TRUE(object_in_world(r, 0.01 + 0.3, 0).isApprox(object_in_world(before, 0.3, 0), 1e-12)) << file;
+    // Calibrating a calibrated file replaces the zero, never adds a second one.
+    const std::string again = calibrated_rig_xml(xml, path, truth_.flange_T_camera, 0.02);
+    EXPECT_EQ(again.find("name=\"pbnbv_turntable_zero\""), again.rfind("name=\"pbnbv_turntable_zero\"")) << file;
+    EXPECT_NE(again.find("data=\"0.02\""), std::string::npos) << file;
+  }
+}
+
+// Elements named in comments are left alone; a file with no <custom> section gets one; a file that
+// is not XML, or has no camera body, is refused with its name and the reason.
+TEST(CalibratedRigXml, CommentsAreNotElementsAndBrokenFilesAreNamed) {
+  const std::string xml =
+      "<!-- <custom> and <body name=\"camera_optical\" pos=\"9 9 9\"> in a comment -->\n"
+      "<mujoco>\n  <worldbody>\n    <body name=\"camera_optical\" pos=\"1 2 3\" euler=\"0 0 1\"/>\n  </worldbody>\n"
+      "</mujoco>\n";
+  const std::string out = calibrated_rig_xml(xml, "mine.xml", Pose::Identity(), 0.5);
+  EXPECT_EQ(out.substr(0, out.find("<mujoco")), xml.substr(0, xml.find("<mujoco")));
+  EXPECT_NE(out.find("<body name=\"camera_optical\" pos=\"0 0 0\" quat=\"1 0 0 0\"/>"), std::string::npos) << out;
+  EXPECT_EQ(out.find("euler"), std::string::npos) << out;
+  EXPECT_NE(out.find("<custom>"), out.rfind("<custom>")) << out;  // the comment's and the new section's
+  EXPECT_NE(out.find("<numeric name=\"pbnbv_turntable_zero\" data=\"0.5\"/>"), std::string::npos) << out;
+  try {
+    calibrated_rig_xml("<mujoco><worldbody></mujoco>", "broken.xml", Pose::Identity(), 0.0);
+    ADD_FAILURE() << "a file that is not well-formed was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("broken.xml: not well-formed XML"), std::string::npos) << e.what();
+  }
+  try {
+    calibrated_rig_xml("<mujoco><worldbody/></mujoco>", "nocam.xml", Pose::Identity(), 0.0);
+    ADD_FAILURE() << "a file without a camera body was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("nocam.xml: no <body name=\"camera_optical\">"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
