@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <stdexcept>
 
 #include "core/base/version.hpp"
@@ -118,6 +120,105 @@ std::string mismatch_message(const std::vector<CLI::App*>& chain, const std::str
   return what;
 }
 
+// The name of the validator detail::takes() adds for `k`.
+const char* kind_name(detail::ValueKind k) {
+  using detail::ValueKind;
+  switch (k) {
+    case ValueKind::kNumber: return "takes:number";
+    case ValueKind::kText: return "takes:text";
+    case ValueKind::kList: return "takes:list";
+    case ValueKind::kPoint: return "takes:point";
+    case ValueKind::kBool: return "takes:bool";
+  }
+  return "takes:text";
+}
+
+// What `o` takes from a settings file (detail::takes); text when unmarked.
+detail::ValueKind kind_of(CLI::Option* o) {
+  using detail::ValueKind;
+  for (const ValueKind k : {ValueKind::kNumber, ValueKind::kList, ValueKind::kPoint, ValueKind::kBool}) {
+    try {
+      if (o->get_validator(kind_name(k)) != nullptr) return k;
+    } catch (const CLI::Error&) {
+    }
+  }
+  return ValueKind::kText;
+}
+
+// TOML's type of a value as written: a quoted string, an array, true/false, else a number (a
+// bare word, which TOML does not allow, counts as text).
+enum class Written { kString, kArray, kBool, kNumber, kBare };
+
+Written written(const std::string& raw) {
+  if (raw.empty()) return Written::kBare;
+  if (raw[0] == '"' || raw[0] == '\'') return Written::kString;
+  if (raw[0] == '[') return Written::kArray;
+  std::string word = raw.substr(0, raw.find_first_of(" \t#"));
+  if (word == "true" || word == "false") return Written::kBool;
+  double number = 0;
+  std::string plain;
+  for (const char c : word) {
+    if (c != '_') plain += c;  // TOML allows 1_000
+  }
+  return detail::parse_number(plain, &number) ? Written::kNumber : Written::kBare;
+}
+
+const char* written_name(Written w) {
+  switch (w) {
+    case Written::kString: return "a string";
+    case Written::kArray: return "an array";
+    case Written::kBool: return "true/false";
+    case Written::kNumber: return "a number";
+    case Written::kBare: return "a bare word";
+  }
+  return "?";
+}
+
+// The raw value text of each top-level `name = value` line of a TOML file (what follows the '=',
+// trimmed), for the types CLI11's reader does not keep ("3" and 3 both reach it as 3).
+std::map<std::string, std::string> raw_values(const std::string& path) {
+  std::map<std::string, std::string> out;
+  std::ifstream in(path);
+  std::string line;
+  bool in_section = false;
+  while (std::getline(in, line)) {
+    const std::size_t first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#') continue;
+    if (line[first] == '[') {
+      in_section = true;
+      continue;
+    }
+    const std::size_t eq = line.find('=');
+    if (in_section || eq == std::string::npos) continue;
+    std::string key = line.substr(first, eq - first);
+    key.erase(key.find_last_not_of(" \t") + 1);
+    if (key.size() >= 2 && (key.front() == '"' || key.front() == '\'') && key.back() == key.front()) {
+      key = key.substr(1, key.size() - 2);
+    }
+    const std::size_t v = line.find_first_not_of(" \t", eq + 1);
+    out[key] = v == std::string::npos ? "" : line.substr(v);
+  }
+  return out;
+}
+
+// "" when a value written as `w` suits an option taking `k`; else what the option takes.
+std::string mismatch(detail::ValueKind k, Written w) {
+  using detail::ValueKind;
+  switch (k) {
+    case ValueKind::kNumber:
+      return w == Written::kNumber ? "" : "a number (unquoted)";
+    case ValueKind::kText:
+      return w == Written::kString ? "" : "a quoted string";
+    case ValueKind::kList:
+      return w == Written::kArray || w == Written::kString ? "" : "an array of quoted names, or one \"a,b\" string";
+    case ValueKind::kPoint:
+      return w == Written::kArray || w == Written::kString ? "" : "an array of three numbers [x, y, z]";
+    case ValueKind::kBool:
+      return w == Written::kBool ? "" : "true or false (unquoted)";
+  }
+  return "";
+}
+
 }  // namespace
 
 namespace detail {
@@ -177,6 +278,11 @@ std::optional<Eigen::Vector3d> parse_point(const std::string& text) {
     if (!parse_number(parts[i], &p[i])) return std::nullopt;
   }
   return p;
+}
+
+CLI::Option* takes(CLI::Option* o, ValueKind kind) {
+  o->check(CLI::Validator([](std::string&) { return std::string(); }, "", kind_name(kind)));
+  return o;
 }
 
 CLI::Option* finish(CLI::Option* o, const std::string& type) {
@@ -252,6 +358,7 @@ void apply_settings_file(CLI::App& command, const std::string& path) {
   } catch (const CLI::Error& e) {
     throw std::invalid_argument(where + ": " + e.what());
   }
+  const std::map<std::string, std::string> raw = raw_values(path);
   for (const CLI::ConfigItem& item : items) {
     // CLI11 marks the start and end of a [section] with the names "++" and "--".
     if (!item.parents.empty() || item.name == "++" || item.name == "--") {
@@ -264,6 +371,15 @@ void apply_settings_file(CLI::App& command, const std::string& path) {
     CLI::Option* o = command.get_option_no_throw(name);
     if (o == nullptr || name == kSettingsFileOption || name == "--help" || name == "--version") {
       throw std::invalid_argument(where + ": unknown setting '" + item.name + "'" + did_you_mean(command, item.name, ""));
+    }
+    const auto line = raw.find(item.name);
+    if (line != raw.end()) {
+      const Written w = written(line->second);
+      const std::string wanted = mismatch(kind_of(o), w);
+      if (!wanted.empty()) {
+        throw std::invalid_argument(where + ": " + item.name + " = " + line->second + ": " + written_name(w) +
+                                    " where " + item.name + " takes " + wanted);
+      }
     }
     if (o->count() > 0) continue;  // the command line wins
     std::string value;
@@ -297,6 +413,7 @@ CLI::Option* add_words(CLI::App& app, const std::string& name, std::vector<std::
         return detail::split_list(text).empty() ? "'" + text + "' lists nothing" : "";
       },
       ""));
+  detail::takes(o, detail::ValueKind::kList);
   return detail::finish(o, type);
 }
 
@@ -311,12 +428,14 @@ CLI::Option* add_point(CLI::App& app, const std::string& name, std::optional<Eig
         return detail::parse_point(text) ? "" : "'" + text + "' is not three numbers x,y,z";
       },
       ""));
+  detail::takes(o, detail::ValueKind::kPoint);
   return detail::finish(o, "x,y,z");
 }
 
 CLI::Option* add_flag(CLI::App& app, const std::string& name, bool* target, const std::string& help) {
   *target = false;
-  return app.add_flag("--" + name, *target, help)->multi_option_policy(CLI::MultiOptionPolicy::Throw);
+  return detail::takes(app.add_flag("--" + name, *target, help), detail::ValueKind::kBool)
+      ->multi_option_policy(CLI::MultiOptionPolicy::Throw);
 }
 
 }  // namespace pbnbv::cli

@@ -58,6 +58,13 @@ std::optional<Eigen::Vector3d> parse_point(const std::string& text);
 std::vector<std::string> split_list(const std::string& text, char separator = ',');
 CLI::Option* finish(CLI::Option* o, const std::string& type);
 
+// What a settings file may give an option (TOML's own types): a number, a string (a name, a
+// path, a choice), a list (an array of strings, or one string "a,b"), a point (an array of three
+// numbers, or one string "x,y,z"), true or false.
+enum class ValueKind { kNumber, kText, kList, kPoint, kBool };
+// Marks `o` as taking `kind` (a validator that passes everything, named for the kind).
+CLI::Option* takes(CLI::Option* o, ValueKind kind);
+
 // "" when `text` is a number of T inside the setting's range; else why not.
 template <typename T>
 std::string check_number(const Setting<T>& s, const std::string& text) {
@@ -130,6 +137,7 @@ CLI::Option* add(CLI::App& app, const Setting<T>& s, T* target) {
       "--" + std::string(s.name), [target](const std::string& text) { *target = detail::to_number<T>(text); },
       detail::described(s, fmt::format("{}", s.value), true));
   o->check(CLI::Validator([s](std::string& text) { return detail::check_number(s, text); }, ""));
+  detail::takes(o, detail::ValueKind::kNumber);
   return detail::finish(o, detail::type_name(s.unit, std::is_integral_v<T>));
 }
 
@@ -142,6 +150,7 @@ CLI::Option* add(CLI::App& app, const Setting<T>& s, std::optional<T>* target, c
       "--" + std::string(s.name), [target](const std::string& text) { *target = detail::to_number<T>(text); },
       detail::described(s, default_text, false));
   o->check(CLI::Validator([s](std::string& text) { return detail::check_number(s, text); }, ""));
+  detail::takes(o, detail::ValueKind::kNumber);
   return detail::finish(o, detail::type_name(s.unit, std::is_integral_v<T>));
 }
 
@@ -153,6 +162,7 @@ CLI::Option* add(CLI::App& app, const ChoiceSetting<E>& s, E* target) {
       "--" + std::string(s.name), [target](const std::string& text) { *target = parse_name<E>(text); },
       fmt::format("{} [{}]", s.help, name_of(s.value)));
   o->check(CLI::Validator([](std::string& text) { return detail::check_choice<E>(text); }, ""));
+  detail::takes(o, detail::ValueKind::kText);
   return detail::finish(o, detail::type_of_choice<E>());
 }
 
@@ -164,6 +174,7 @@ CLI::Option* add(CLI::App& app, const ChoiceSetting<E>& s, std::optional<E>* tar
       "--" + std::string(s.name), [target](const std::string& text) { *target = parse_name<E>(text); },
       std::string(s.help));
   o->check(CLI::Validator([](std::string& text) { return detail::check_choice<E>(text); }, ""));
+  detail::takes(o, detail::ValueKind::kText);
   return detail::finish(o, detail::type_of_choice<E>());
 }
 
@@ -196,6 +207,7 @@ CLI::Option* add_list(CLI::App& app, const std::string& name, std::vector<E>* ta
         return "";
       },
       ""));
+  detail::takes(o, detail::ValueKind::kList);
   return detail::finish(o, detail::type_of_choice<E>() + ",...");
 }
 

@@ -157,6 +157,18 @@ TEST(Options, ASettingsFileIsCheckedLikeTheCommandLine) {
   EXPECT_NE(error("range", "views = 3000\n").find("--views: 3000 is outside its range [1, 1000]"), std::string::npos);
   EXPECT_NE(error("choice", "colour = \"pink\"\n").find("unknown colour 'pink'"), std::string::npos);
   EXPECT_NE(error("section", "[scan]\nviews = 3\n").find("[scan]: sections are not read"), std::string::npos);
+  // A value of the wrong TOML type names the file, the key and what it takes.
+  EXPECT_NE(error("quoted", "views = \"3\"\n").find("views = \"3\": a string where views takes a number (unquoted)"),
+            std::string::npos);
+  EXPECT_NE(error("flag", "quiet = \"yes\"\n").find("quiet = \"yes\": a string where quiet takes true or false"),
+            std::string::npos);
+  EXPECT_NE(error("flag-number", "quiet = 1\n").find("quiet = 1: a number where quiet takes true or false"),
+            std::string::npos);
+  EXPECT_NE(error("choice-bare", "colour = 3\n").find("colour = 3: a number where colour takes a quoted string"),
+            std::string::npos);
+  EXPECT_NE(error("point", "point = 0.9\n").find("point = 0.9: a number where point takes an array of three numbers"),
+            std::string::npos);
+  EXPECT_NE(error("size", "size = true\n").find("size = true: true/false where size takes a number"), std::string::npos);
   Program p(true);
   EXPECT_EQ(p.parse({"--config", "/nonexistent/pbnbv.toml"}), std::optional<int>(2));
   EXPECT_NE(p.err_text.str().find("--config /nonexistent/pbnbv.toml: no such file"), std::string::npos);
