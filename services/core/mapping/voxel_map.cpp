@@ -43,7 +43,7 @@
 #include "core/mapping/voxel_map.hpp"
 #include "core/mapping/state_colour.hpp"
 
-#include <octomap/ColorOcTree.h>
+#include <octomap/OcTree.h>
 
 #include "core/base/atomic_file.hpp"
 #include "core/base/format.hpp"
@@ -632,7 +632,7 @@ MapUpdateResult VoxelMap::integrate(const DepthView& view) {
 }
 
 void VoxelMap::write_octomap(const std::string& path) const {
-  octomap::ColorOcTree tree(params_.resolution_m);
+  octomap::OcTree tree(params_.resolution_m);
   const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
   int64_t lin = 0;
   for (int z = 0; z < nz; ++z) {
@@ -647,8 +647,6 @@ void VoxelMap::write_octomap(const std::string& path) const {
         if (!tree.coordToKeyChecked(octomap::point3d(c.x(), c.y(), c.z()), key)) continue;
         // lazy_eval: no pruning while inserting, so every voxel is its own leaf.
         tree.updateNode(key, s == VoxelState::kOccupied, true);
-        const Rgb colour = state_colour(s);  // the one palette (state_colour.hpp)
-        tree.setNodeColor(key, colour.r, colour.g, colour.b);
       }
     }
   }

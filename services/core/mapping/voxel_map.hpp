@@ -129,10 +129,10 @@ class VoxelMap {
   // sample lattice of the projection (or the reference's ray stride). Diagnostics.
   int last_ray_stride_px() const { return last_stride_px_; }
 
-  // Writes the map as an OctoMap ColorOcTree (.ot, viewable in octovis) that OctoMap's consumers
-  // read right: Occupied voxels as occupied nodes, Empty voxels as free nodes, each coloured by
-  // its state (state_colour.hpp: the palette the plan figures use too); Unknown, Frontier and
-  // None voxels are not in the tree (unknown space: search() returns null).
+  // Writes the map as a plain OctoMap OcTree (.ot: octovis, octomap_server's default type,
+  // MoveIt's "OcTree" id and compare_octrees read it): Occupied voxels as occupied nodes, Empty
+  // voxels as free nodes; Unknown, Frontier and None voxels are not in the tree (unknown space:
+  // search() returns null). The five states are in write_states_ply's file.
   void write_octomap(const std::string& path) const;
   // Writes every cell of B with its state, the five states kept: a binary little-endian PLY of
   // cell centres (float x y z, object frame, m), `uchar state` (0 None, 1 Empty, 2 Occupied,
