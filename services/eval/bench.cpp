@@ -1,5 +1,6 @@
 // The benchmark and the ablations (bench.hpp).
 #include "eval/bench.hpp"
+#include "core/base/version.hpp"
 
 #include <sys/utsname.h>
 #include <unistd.h>
@@ -661,6 +662,7 @@ std::vector<HalfSummary> summarise_halves(const BenchSpec& spec, const std::vect
 
 json to_json(const BenchResult& r) {
   json j;
+  j["pbnbv_version"] = std::string(pbnbv_version());
   std::vector<std::string> order;
   for (const auto& p : r.planners) {
     order.emplace_back(name_of(p.planner));

@@ -1,4 +1,5 @@
 #include "eval/evaluate.hpp"
+#include "core/base/version.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -143,7 +144,8 @@ json to_json(const ScanEvaluation& e, const CoverageParams& params) {
                 {"true_mm", c.true_mm},     {"true_deg", c.true_deg},       {"error_mm", c.error_mm},
                 {"error_deg", c.error_deg}, {"sigma_mm", c.sigma_mm},       {"sigma_deg", c.sigma_deg}};
   }
-  return {{"coverage_by_view", e.coverage_by_view},
+  return {{"pbnbv_version", std::string(pbnbv_version())},
+          {"coverage_by_view", e.coverage_by_view},
           {"hand_eye", hand_eye},
           {"surface_metrics", metrics},
           {"planner_ms", e.planner_ms},

@@ -177,6 +177,7 @@ CommandLine::CommandLine()
   cli::add(*mesh_cmd_, kPoissonDepth, &mesh_.surface.poisson_depth);
   cli::add(*mesh_cmd_, kMeshFillHoles, &mesh_.surface.fill_holes_m);
   cli::add_flag(*mesh_cmd_, "stl", &mesh_.stl, "also write mesh.stl (binary)");
+  cli::add(*mesh_cmd_, kMeshUnits, &mesh_.units);
 
   help_cmd_ = cli::add_command(app_, "help", "this usage (pbnbv help COMMAND: that command's options)");
   help_cmd_->add_option("command", help_topic_, "the command to describe");

@@ -83,6 +83,7 @@ struct MeshOptions {
   std::string dir;
   SurfaceSettings surface;
   bool stl = false;  // --stl: mesh.stl too
+  LengthUnit units = LengthUnit::kMetre;  // --units: of mesh.obj and mesh.stl
 };
 
 // What `pbnbv scan` was asked for: the object, the scan's settings (ScanSettings, before the

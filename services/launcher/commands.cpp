@@ -123,10 +123,11 @@ int run_mesh(const MeshOptions& o) {
   s.point_spacing_m = scan.settings.voxel_m;
   std::vector<SurfaceFrame> frames;
   for (const MergedFrame& f : merged_frames(scan, dir)) frames.push_back({read_ply(f.file.string()), f.object_T_camera});
-  const MeshSummary mesh = mesh_scan(dir, frames, s, o.stl);
+  const MeshSummary mesh = mesh_scan(dir, frames, s, o.stl, o.units);
   write_scan_mesh(dir, mesh);
   const nlohmann::json m = to_json(mesh);
-  std::cout << "pbnbv mesh: " << (dir / "mesh.ply").string() << " (and mesh.obj" << (o.stl ? ", mesh.stl" : "") << "): " << m["method"].get<std::string>()
+  std::cout << "pbnbv mesh: " << (dir / "mesh.ply").string() << " (and mesh.obj" << (o.stl ? ", mesh.stl" : "")
+            << (o.units == LengthUnit::kMillimetre ? " in millimetres" : "") << "): " << m["method"].get<std::string>()
             << ", " << m["vertices"] << " vertices, " << m["triangles"] << " triangles, "
             << (m["watertight"].get<bool>() ? std::string("watertight")
                                             : std::to_string(m["boundary_loops"].get<std::size_t>()) + " boundary loops (" +

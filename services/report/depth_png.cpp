@@ -9,7 +9,12 @@
 
 namespace pbnbv {
 
-void write_depth_png(const std::vector<float>& depth_m, int width, int height, const std::string& path) {
+void write_depth_png(const std::vector<float>& depth_m, int width, int height, int units_per_metre,
+                     const std::string& path) {
+  if (units_per_metre <= 0) {
+    throw std::invalid_argument("write_depth_png: " + path + ": depth scale " + std::to_string(units_per_metre) +
+                                " units per metre (must be positive)");
+  }
   if (width <= 0 || height <= 0 || depth_m.size() != static_cast<std::size_t>(width) * height) {
     throw std::invalid_argument("write_depth_png: " + path + ": " + std::to_string(depth_m.size()) +
                                 " depths for a " + std::to_string(width) + " x " + std::to_string(height) + " image");
@@ -18,8 +23,9 @@ void write_depth_png(const std::vector<float>& depth_m, int width, int height, c
   for (int v = 0; v < height; ++v) {
     auto* row = image.ptr<uint16_t>(v);
     for (int u = 0; u < width; ++u) {
-      const double mm = std::round(static_cast<double>(depth_m[static_cast<std::size_t>(v) * width + u]) * 1000.0);
-      row[u] = (std::isfinite(mm) && mm > 0.0 && mm <= 65535.0) ? static_cast<uint16_t>(mm) : 0;
+      const double units =
+          std::round(static_cast<double>(depth_m[static_cast<std::size_t>(v) * width + u]) * units_per_metre);
+      row[u] = (std::isfinite(units) && units > 0.0 && units <= 65535.0) ? static_cast<uint16_t>(units) : 0;
     }
   }
   // Atomically: a reader never sees half an image, a full disk leaves no part of one.

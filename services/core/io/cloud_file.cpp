@@ -1,5 +1,6 @@
 // Point cloud files: read by CGAL's point-set PLY reader, written by our own (see write_ply).
 #include "core/io/cloud_file.hpp"
+#include "core/base/version.hpp"
 #include "core/io/json.hpp"
 
 #include <CGAL/IO/read_ply_points.h>
@@ -52,7 +53,7 @@ void write_ply(const PointCloud& cloud, const std::string& path, const CloudExtr
     throw std::invalid_argument(fmt::format("{}: {}: {} normals for {} points", ctx, path, extras.normals.size(), cloud.size()));
   }
   std::string out =
-      "ply\nformat binary_little_endian 1.0\ncomment written by pbnbv\ncomment units metres\n"
+      "ply\nformat binary_little_endian 1.0\ncomment written by pbnbv " + std::string(pbnbv_version()) + "\ncomment units metres\n"
       "comment frame object (the scan's object frame: object.obj's normalised mesh frame, z up; on the arm rig it "
       "turns with the turntable)\n"
       "comment camera_pose_format x y z qw qx qy qz (camera optical frame, x right y down z forward, in the object "

@@ -11,6 +11,7 @@
 // a mesh is loaded once by each process that needs it: at most about a tenth of a second per
 // scan for the largest default mesh, against 800 lines of parsers of our own.
 #include "core/io/mesh_file.hpp"
+#include "core/base/version.hpp"
 #include "core/base/atomic_file.hpp"
 
 #include <CGAL/IO/OBJ.h>
@@ -319,12 +320,32 @@ TriangleMesh load_mesh(const std::string& path) {
   return m;
 }
 
-void write_stl_binary(const TriangleMesh& mesh, const std::string& path) {
+const char* unit_symbol(LengthUnit unit) { return unit == LengthUnit::kMillimetre ? "mm" : "m"; }
+
+LengthUnit parse_length_unit(const std::string& text) {
+  if (text == "m") return LengthUnit::kMetre;
+  if (text == "mm") return LengthUnit::kMillimetre;
+  throw std::invalid_argument("unknown length unit '" + text + "' (expected m or mm)");
+}
+
+namespace {
+double scale_of(LengthUnit unit) { return unit == LengthUnit::kMillimetre ? 1000.0 : 1.0; }
+const char* unit_name(LengthUnit unit) { return unit == LengthUnit::kMillimetre ? "millimetres" : "metres"; }
+
+void append_number(std::string& out, double v) {
+  char num[64];
+  const auto r = std::to_chars(num, num + sizeof(num), v);  // shortest round-trip form
+  out.append(num, r.ptr);
+}
+}  // namespace
+
+void write_stl_binary(const TriangleMesh& mesh, const std::string& path, LengthUnit unit) {
   const char* ctx = "write_stl_binary";
   if (mesh.triangles.size() > 0xffffffffull) fail(ctx, path, "too many triangles for STL");
+  const double scale = scale_of(unit);
   std::string out;
   out.reserve(84 + 50 * mesh.triangles.size());
-  std::string header = "binary STL written by pbnbv";
+  std::string header = "binary STL written by pbnbv " + std::string(pbnbv_version()) + ", units " + unit_name(unit);
   header.resize(80, ' ');
   out += header;
   auto put_u32 = [&](uint32_t u) {
@@ -349,7 +370,7 @@ void write_stl_binary(const TriangleMesh& mesh, const std::string& path) {
     if (len > 0.0) nrm /= len;
     for (int k = 0; k < 3; ++k) put_f32(static_cast<float>(nrm[k]));
     for (const Eigen::Vector3d* v : {&a, &b, &c}) {
-      for (int k = 0; k < 3; ++k) put_f32(static_cast<float>((*v)[k]));
+      for (int k = 0; k < 3; ++k) put_f32(static_cast<float>((*v)[k] * scale));
     }
     out.push_back(0);
     out.push_back(0);
@@ -361,29 +382,46 @@ void write_stl_binary(const TriangleMesh& mesh, const std::string& path) {
   }
 }
 
-void write_obj(const TriangleMesh& mesh, const std::string& path) {
+void write_obj(const TriangleMesh& mesh, const std::string& path, const std::vector<Eigen::Vector3d>& normals,
+               LengthUnit unit) {
   const char* ctx = "write_obj";
+  if (!normals.empty() && normals.size() != mesh.vertices.size()) {
+    throw std::invalid_argument(std::string(ctx) + ": " + path + ": " + std::to_string(normals.size()) +
+                                " normals for " + std::to_string(mesh.vertices.size()) + " vertices");
+  }
+  const double scale = scale_of(unit);
   std::string out;
-  out.reserve(40 * mesh.vertices.size() + 24 * mesh.triangles.size() + 64);
-  out += "# written by pbnbv\n";
-  char num[64];
+  out.reserve(40 * mesh.vertices.size() * (normals.empty() ? 1 : 2) + 24 * mesh.triangles.size() + 128);
+  out += "# written by pbnbv " + std::string(pbnbv_version()) + "\n# units " + unit_name(unit) + "\n";
   for (const auto& v : mesh.vertices) {
     out += 'v';
     for (int k = 0; k < 3; ++k) {
       out += ' ';
-      auto r = std::to_chars(num, num + sizeof(num), v[k]);  // shortest round-trip form
-      out.append(num, r.ptr);
+      append_number(out, v[k] * scale);
+    }
+    out += '\n';
+  }
+  for (const auto& n : normals) {
+    out += "vn";
+    for (int k = 0; k < 3; ++k) {
+      out += ' ';
+      append_number(out, n[k]);
     }
     out += '\n';
   }
   const long long nv = static_cast<long long>(mesh.vertices.size());
+  char num[32];
   for (const auto& t : mesh.triangles) {
     out += 'f';
     for (int k = 0; k < 3; ++k) {
       if (t[k] < 0 || t[k] >= nv) fail(ctx, path, "triangle index out of range");
       out += ' ';
-      auto r = std::to_chars(num, num + sizeof(num), t[k] + 1);
+      const auto r = std::to_chars(num, num + sizeof(num), t[k] + 1);
       out.append(num, r.ptr);
+      if (!normals.empty()) {
+        out += "//";
+        out.append(num, r.ptr);
+      }
     }
     out += '\n';
   }

@@ -41,6 +41,7 @@
 //     The first frame does not apply this rule: its B is the enlarged AABB (paper: "first frame
 //     ...; later frames grow"), so the first B's diagonal is exactly the doubled one.
 #include "core/mapping/voxel_map.hpp"
+#include "core/base/version.hpp"
 #include "core/mapping/state_colour.hpp"
 
 #include <octomap/OcTree.h>
@@ -659,7 +660,8 @@ void VoxelMap::write_octomap(const std::string& path) const {
 void VoxelMap::write_states_ply(const std::string& path) const {
   const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
   const int64_t n = int64_t(nx) * ny * nz;
-  std::string out = "ply\nformat binary_little_endian 1.0\ncomment written by pbnbv: voxel map cell centres\n"
+  std::string out = "ply\nformat binary_little_endian 1.0\ncomment written by pbnbv " + std::string(pbnbv_version()) +
+                    ": voxel map cell centres\n"
                     "comment units metres, frame object (the normalised object frame)\n"
                     "comment resolution_m " + exact(params_.resolution_m) +
                     "\ncomment state 0 none, 1 empty, 2 occupied, 3 unknown, 4 frontier\nelement vertex " +

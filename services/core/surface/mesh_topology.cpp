@@ -1,4 +1,5 @@
 #include "core/surface/mesh_topology.hpp"
+#include "core/base/version.hpp"
 #include "core/base/atomic_file.hpp"
 
 #include <cstdio>
@@ -167,7 +168,7 @@ void write_mesh_ply(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>
   }
   std::ostringstream out;
   {
-    out << "ply\nformat binary_little_endian 1.0\ncomment written by pbnbv\n"
+    out << "ply\nformat binary_little_endian 1.0\ncomment written by pbnbv " << pbnbv_version() << "\n"
         << "comment units metres, object frame (scan.json); triangles counter-clockwise seen from outside\n"
         << "element vertex " << mesh.vertices.size() << "\n"
         << "property float x\nproperty float y\nproperty float z\n"

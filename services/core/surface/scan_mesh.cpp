@@ -18,7 +18,7 @@ constexpr std::size_t kMinComponentTriangles = 50;
 }  // namespace
 
 MeshSummary mesh_scan(const fs::path& dir, const std::vector<SurfaceFrame>& frames, const SurfaceSettings& settings,
-                      bool with_stl) {
+                      bool with_stl, LengthUnit unit) {
   const auto t0 = std::chrono::steady_clock::now();
   SurfaceStats stats;
   TriangleMesh mesh = build_surface(frames, settings, &stats);
@@ -26,9 +26,10 @@ MeshSummary mesh_scan(const fs::path& dir, const std::vector<SurfaceFrame>& fram
   const std::size_t filled = fill_small_holes(mesh, settings.fill_holes_m);
   if (mesh.triangles.empty()) throw std::runtime_error(dir.string() + ": the mesh has no triangles");
   const MeshTopology t = mesh_topology(mesh);
-  write_mesh_ply(mesh, vertex_normals(mesh), (dir / "mesh.ply").string());
-  write_obj(mesh, (dir / "mesh.obj").string());
-  if (with_stl) write_stl_binary(mesh, (dir / "mesh.stl").string());
+  const std::vector<Eigen::Vector3d> normals = vertex_normals(mesh);
+  write_mesh_ply(mesh, normals, (dir / "mesh.ply").string());
+  write_obj(mesh, (dir / "mesh.obj").string(), normals, unit);
+  if (with_stl) write_stl_binary(mesh, (dir / "mesh.stl").string(), unit);
   MeshSummary m;
   m.tsdf = settings.method == MeshMethod::kTsdf;
   m.files = {"mesh.ply", "mesh.obj"};

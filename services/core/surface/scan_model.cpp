@@ -1,5 +1,7 @@
 #include "core/surface/scan_model.hpp"
+#include "core/base/version.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -114,7 +116,48 @@ void move_depth_pose(const fs::path& file, const Pose& q) {
   write_json_atomic(j, file.string());
 }
 
+// The depth images' scale (units per metre): 0.1 mm, the pipeline's resolution, where the camera's
+// range fits 16 bits (6.5535 m), else 1 mm.
+int depth_png_scale(const DepthRange& range) { return range.max_m <= 6.5535 ? 10000 : 1000; }
+
+// Open3D's column-major 3x3 intrinsic matrix.
+nlohmann::json intrinsic_matrix(const CameraIntrinsics& k) { return {k.fx, 0.0, 0.0, 0.0, k.fy, 0.0, k.cx, k.cy, 1.0}; }
+
 }  // namespace
+
+void ScanModel::write_trajectory() const {
+  if (folder_.empty() || !fs::is_directory(folder_ / "depth")) return;
+  std::vector<fs::path> views;
+  for (const auto& entry : fs::directory_iterator(folder_ / "depth")) {
+    if (entry.path().extension() == ".json" && entry.path().stem().string().rfind("view_", 0) == 0) views.push_back(entry.path());
+  }
+  std::sort(views.begin(), views.end());
+  nlohmann::json parameters = nlohmann::json::array();
+  nlohmann::json names = nlohmann::json::array();
+  for (const fs::path& file : views) {
+    const nlohmann::json j = read_json(file.string());
+    if (!j.contains("object_T_camera")) continue;
+    // Open3D's extrinsic: the world (here the object frame) into the camera, column-major 4x4.
+    const Eigen::Matrix4d extrinsic = pose_from_json(j["object_T_camera"], file.string()).inverse().matrix();
+    std::vector<double> columns(extrinsic.data(), extrinsic.data() + 16);
+    const CameraIntrinsics k{j.at("width").get<int>(), j.at("height").get<int>(), j.at("fx").get<double>(),
+                             j.at("fy").get<double>(), j.at("cx").get<double>(), j.at("cy").get<double>()};
+    parameters.push_back({{"class_name", "PinholeCameraParameters"},
+                          {"extrinsic", columns},
+                          {"intrinsic", {{"width", k.width}, {"height", k.height}, {"intrinsic_matrix", intrinsic_matrix(k)}}},
+                          {"version_major", 1},
+                          {"version_minor", 0}});
+    names.push_back("depth/" + file.filename().string());
+  }
+  const nlohmann::json trajectory = {{"class_name", "PinholeCameraTrajectory"},
+                                     {"parameters", parameters},
+                                     {"version_major", 1},
+                                     {"version_minor", 0},
+                                     {"pbnbv_version", std::string(pbnbv_version())},
+                                     {"pbnbv_views", names},
+                                     {"pbnbv_frame", "object (the extrinsics map it into each camera)"}};
+  write_json_atomic(trajectory, (folder_ / "trajectory.json").string());
+}
 
 void ScanModel::move_frame(const Pose& q) {
   points_ = moved(points_, q);
@@ -132,6 +175,7 @@ void ScanModel::move_frame(const Pose& q) {
       if (entry.path().extension() == ".json") move_depth_pose(entry.path(), q);
     }
   }
+  write_trajectory();
 }
 
 void ScanModel::move_view(int view, const Pose& q, const std::vector<int>& merged) { move_views({{view, q}}, merged); }
@@ -143,6 +187,7 @@ void ScanModel::move_views(const std::vector<std::pair<int, Pose>>& moves, const
     const fs::path depth = folder_ / "depth" / view_file(view, "json");
     if (fs::exists(depth)) move_depth_pose(depth, q);
   }
+  write_trajectory();
   PointCloud all;
   std::vector<Eigen::Vector3f> all_normals;
   std::vector<Pose> poses;
@@ -196,7 +241,8 @@ std::string ScanModel::write_depth(int view, const DepthImage& image, const Pose
   fs::create_directories(folder_ / "depth");
   const std::string png = view_file(view, "png");
   const CameraIntrinsics& k = image.intrinsics;
-  write_png(*image.depth_m, k.width, k.height, (folder_ / depth_file_of(view)).string());
+  const int scale = depth_png_scale(image.range);
+  write_png(*image.depth_m, k.width, k.height, scale, (folder_ / depth_file_of(view)).string());
   const nlohmann::json intrinsics = {
       {"image", png},
       {"width", k.width},
@@ -205,7 +251,8 @@ std::string ScanModel::write_depth(int view, const DepthImage& image, const Pose
       {"fy", k.fy},
       {"cx", k.cx},
       {"cy", k.cy},
-      {"depth_scale", 1000},
+      {"intrinsic_matrix", intrinsic_matrix(k)},
+      {"depth_scale", scale},
       {"depth_units", "value / depth_scale = planar depth along the optical axis, m; 0 = no reading"},
       {"depth_min_m", image.range.min_m},
       {"depth_max_m", image.range.max_m},
@@ -214,6 +261,7 @@ std::string ScanModel::write_depth(int view, const DepthImage& image, const Pose
       {"pose_frame", "object"},
       {"registered", registered}};
   write_json_atomic(intrinsics, (folder_ / "depth" / view_file(view, "json")).string());
+  write_trajectory();
   return depth_file_of(view);
 }
 

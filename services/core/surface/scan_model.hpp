@@ -58,12 +58,21 @@ class ScanModel {
   ModelUpdate add_view(int view, const PointCloud& points, std::vector<Eigen::Vector3f> normals,
                        const Pose& object_T_camera, bool merge);
 
-  // Writes the view's depth image as depth/view_NNN.png (with `write_png`: 16-bit, millimetres)
-  // and depth/view_NNN.json beside it (the intrinsics, depth scale, range, frame number and the
-  // camera pose, `registered` or kinematic). Returns "depth/view_NNN.png".
-  using PngWriter = std::function<void(const std::vector<float>& depth_m, int width, int height, const std::string& path)>;
+  // Writes the view's depth image as depth/view_NNN.png (with `write_png`: 16-bit, in units of
+  // 1 / depth_scale m: 0.1 mm where the camera's range fits 16 bits, else 1 mm) and
+  // depth/view_NNN.json beside it (the intrinsics, also as Open3D's intrinsic_matrix, the depth
+  // scale, range, frame number and the camera pose, `registered` or kinematic), and rewrites
+  // trajectory.json. Returns "depth/view_NNN.png".
+  using PngWriter = std::function<void(const std::vector<float>& depth_m, int width, int height, int units_per_metre,
+                                       const std::string& path)>;
   std::string write_depth(int view, const DepthImage& image, const Pose& object_T_camera, bool registered,
                           const PngWriter& write_png) const;
+
+  // Writes trajectory.json: every depth image's camera as Open3D's PinholeCameraTrajectory
+  // (read_pinhole_camera_trajectory; extrinsic = the object frame into the camera, column-major,
+  // with the intrinsics), in view order, the views' file names in pbnbv_views. Kept up to date
+  // by write_depth and when views move.
+  void write_trajectory() const;
 
   // Meshes the frames of `views` (frames/view_NNN.ply in the folder, each with its camera pose
   // from the header; `camera` the camera that took them, `point_spacing_m` their downsampling

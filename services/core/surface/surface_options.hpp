@@ -3,6 +3,7 @@
 // voxel and truncation, Poisson's octree depth.
 #include "core/base/enum_names.hpp"
 #include "core/base/setting.hpp"
+#include "core/io/mesh_file.hpp"
 
 namespace pbnbv {
 
@@ -13,6 +14,15 @@ struct EnumNames<MeshMethod> {
   static constexpr std::array<NamedValue<MeshMethod>, 2> names{
       {{MeshMethod::kTsdf, "tsdf"}, {MeshMethod::kPoisson, "poisson"}}};
 };
+
+template <>
+struct EnumNames<LengthUnit> {
+  static constexpr std::string_view what = "length unit";
+  static constexpr std::array<NamedValue<LengthUnit>, 2> names{{{LengthUnit::kMetre, "m"}, {LengthUnit::kMillimetre, "mm"}}};
+};
+
+inline constexpr ChoiceSetting<LengthUnit> kMeshUnits{
+    "units", LengthUnit::kMetre, "length unit of mesh.obj and mesh.stl: m (the scan's) or mm (CAD tools')"};
 
 inline constexpr ChoiceSetting<MeshMethod> kMeshMethod{
     "mesh-method", MeshMethod::kTsdf,

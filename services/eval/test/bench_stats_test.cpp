@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/base/version.hpp"
 #include "eval/bench.hpp"
 
 namespace fs = std::filesystem;
@@ -226,6 +227,7 @@ TEST(BenchStatistics, HalvesSummaryJsonAndReport) {
   EXPECT_EQ(objects_text(r), "5-6 of 6 runs (3 objects x 2 first views; failed: raycast 1)");
 
   const json j = to_json(r);
+  EXPECT_EQ(j["pbnbv_version"], std::string(pbnbv_version()));  // summary.json names its writer
   EXPECT_EQ(j["first_views"], 2);
   EXPECT_EQ(j["first_view_directions"].size(), 1u);
   EXPECT_EQ(j["pbnbv"]["runs_complete"], 6);

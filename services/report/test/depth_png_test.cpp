@@ -24,7 +24,7 @@ TEST(DepthPng, APlaneAtAKnownDepthReadsBackInMillimetres) {
   depth[6 * w + 6] = 70.0f;
   const std::string path =
       (std::filesystem::temp_directory_path() / ("pbnbv_depth_" + std::to_string(::getpid()) + ".png")).string();
-  write_depth_png(depth, w, h, path);
+  write_depth_png(depth, w, h, 1000, path);
   int rw = 0, rh = 0;
   const std::vector<uint16_t> mm = read_depth_png(path, rw, rh);
   std::filesystem::remove(path);
@@ -44,8 +44,23 @@ TEST(DepthPng, APlaneAtAKnownDepthReadsBackInMillimetres) {
     }
   }
   EXPECT_EQ(wrong, 0);
-  EXPECT_THROW(write_depth_png(depth, w + 1, h, path), std::invalid_argument);
+  EXPECT_THROW(write_depth_png(depth, w + 1, h, 1000, path), std::invalid_argument);
+  EXPECT_THROW(write_depth_png(depth, w, h, 0, path), std::invalid_argument);
   EXPECT_THROW(read_depth_png(path, rw, rh), std::runtime_error);  // removed above
+}
+
+// At the pipeline's 0.1 mm (10000 units per metre): 0.6123 m reads 6123, a step of 0.1 mm is
+// one unit, and 6.5535 m is the last depth that fits.
+TEST(DepthPng, TenthsOfAMillimetreKeepTheStepsThePipelineResolves) {
+  const int w = 4, h = 1;
+  const std::vector<float> depth = {0.6123f, 0.6124f, 6.5535f, 6.6f};
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("pbnbv_depth_tenths_" + std::to_string(::getpid()) + ".png")).string();
+  write_depth_png(depth, w, h, 10000, path);
+  int rw = 0, rh = 0;
+  const std::vector<uint16_t> units = read_depth_png(path, rw, rh);
+  std::filesystem::remove(path);
+  EXPECT_EQ(units, (std::vector<uint16_t>{6123, 6124, 65535, 0}));
 }
 
 }  // namespace

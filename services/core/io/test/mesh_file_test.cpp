@@ -557,6 +557,43 @@ TEST_F(MeshFiles, WriteStlRoundTripsToFloatPrecision) {
   EXPECT_NE(std::string(head, 5), "solid");
 }
 
+// A sphere's normals are its radial directions: written as vn lines and v//vn faces, read back by
+// the reader with the same vertices and faces; in millimetres every coordinate is 1000 times the
+// metres', the normals unchanged, and the comments say which.
+TEST_F(MeshFiles, ObjWithNormalsInMillimetres) {
+  const TriangleMesh m = make_icosphere(0.25, 2);
+  std::vector<Eigen::Vector3d> normals;
+  for (const auto& v : m.vertices) normals.push_back(v.normalized());
+  const std::string p = path("ico_mm.obj");
+  write_obj(m, p, normals, LengthUnit::kMillimetre);
+  const TriangleMesh r = load_mesh(p);
+  ASSERT_EQ(r.vertices.size(), m.vertices.size());
+  EXPECT_EQ(r.triangles, m.triangles);
+  for (size_t i = 0; i < m.vertices.size(); ++i) EXPECT_LT((r.vertices[i] - 1000.0 * m.vertices[i]).norm(), 1e-9) << i;
+  std::ifstream in(p);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("# units millimetres\n"), std::string::npos);
+  EXPECT_NE(text.find("# written by pbnbv "), std::string::npos);
+  std::size_t vn = 0;
+  for (std::size_t at = text.find("\nvn "); at != std::string::npos; at = text.find("\nvn ", at + 1)) ++vn;
+  EXPECT_EQ(vn, m.vertices.size());
+  const auto& t = m.triangles.front();
+  const std::string face = "\nf " + std::to_string(t[0] + 1) + "//" + std::to_string(t[0] + 1) + " " +
+                           std::to_string(t[1] + 1) + "//" + std::to_string(t[1] + 1) + " " + std::to_string(t[2] + 1) +
+                           "//" + std::to_string(t[2] + 1) + "\n";
+  EXPECT_NE(text.find(face), std::string::npos) << face;
+  EXPECT_THROW(write_obj(m, p, std::vector<Eigen::Vector3d>(3), LengthUnit::kMetre), std::invalid_argument);
+  // The STL in millimetres: 1000 times, to float precision.
+  const std::string q = path("ico_mm.stl");
+  write_stl_binary(m, q, LengthUnit::kMillimetre);
+  const TriangleMesh s = load_mesh(q);
+  ASSERT_EQ(s.triangles.size(), m.triangles.size());
+  const Eigen::Vector3d& a = m.vertices[m.triangles[0][0]];
+  EXPECT_LT((s.vertices[s.triangles[0][0]] - 1000.0 * a).norm(), 1e-4);
+  EXPECT_EQ(parse_length_unit("mm"), LengthUnit::kMillimetre);
+  EXPECT_THROW(parse_length_unit("cm"), std::invalid_argument);
+}
+
 TEST_F(MeshFiles, WriteToMissingDirectoryThrowsWithPath) {
   const std::string p = path("no/such/dir/x.stl");
   expect_error([&] { write_stl_binary(make_box(Eigen::Vector3d(1, 1, 1)), p); }, {p});

@@ -86,8 +86,10 @@ TEST_F(ScanModelTest, FramesCarryTheirNormalsTheCameraPoseAndTheDepthImage) {
   const std::vector<float> depth(64 * 48, 0.5f);
   std::vector<std::string> written;
   const std::string file = model.write_depth(0, DepthImage{&depth, k, DepthRange{0.1, 2.0}, 7}, pose, true,
-                                             [&](const std::vector<float>& d, int w, int h, const std::string& path) {
+                                             [&](const std::vector<float>& d, int w, int h, int scale,
+                                                 const std::string& path) {
                                                EXPECT_EQ(d.size(), static_cast<std::size_t>(w * h));
+                                               EXPECT_EQ(scale, 10000);  // 0.1 mm: the range (2 m) fits
                                                written.push_back(path);
                                              });
   EXPECT_EQ(file, "depth/view_001.png");
@@ -99,10 +101,22 @@ TEST_F(ScanModelTest, FramesCarryTheirNormalsTheCameraPoseAndTheDepthImage) {
   EXPECT_EQ(j["height"], 48);
   EXPECT_EQ(j["fx"], 50.0);
   EXPECT_EQ(j["cy"], 24.0);
-  EXPECT_EQ(j["depth_scale"], 1000);
+  EXPECT_EQ(j["depth_scale"], 10000);
+  // Open3D's intrinsic matrix, column-major: fx 0 0 | 0 fy 0 | cx cy 1.
+  EXPECT_EQ(j["intrinsic_matrix"], json({50.0, 0.0, 0.0, 0.0, 50.0, 0.0, k.cx, 24.0, 1.0}));
   EXPECT_EQ(j["depth_frame_seq"], 7);
   EXPECT_EQ(j["registered"], true);
   EXPECT_TRUE(pose_from_json(j["object_T_camera"], "object_T_camera").isApprox(pose, 1e-12));
+  // The trajectory: one camera, its extrinsic the inverse of the pose (column-major).
+  const json t = read_json((dir_ / "trajectory.json").string());
+  EXPECT_EQ(t["class_name"], "PinholeCameraTrajectory");
+  ASSERT_EQ(t["parameters"].size(), 1u);
+  const std::vector<double> e = t["parameters"][0]["extrinsic"].get<std::vector<double>>();
+  ASSERT_EQ(e.size(), 16u);
+  const Eigen::Matrix4d extrinsic = Eigen::Map<const Eigen::Matrix4d>(e.data());
+  EXPECT_TRUE((pose.matrix() * extrinsic).isIdentity(1e-12)) << extrinsic;
+  EXPECT_EQ(t["parameters"][0]["intrinsic"]["intrinsic_matrix"], j["intrinsic_matrix"]);
+  EXPECT_EQ(t["pbnbv_views"], json({"depth/view_001.json"}));
 }
 
 TEST_F(ScanModelTest, ARestartedModelContinuesFromCloudPly) {
