@@ -88,7 +88,7 @@ TEST(Faults, TwoScansAtOnceOnOneBusEachKeepTheirOwnObject) {
     std::cout << out.filename().string() << " with another scan on the bus: " << d.n << " points, median " << d.median * 1e3
               << " mm, 95th percentile " << d.p95 * 1e3 << " mm from its own surface; " << ignored_lines(out)
               << " log lines on ignored messages\n";
-    EXPECT_LT(d.median, 0.1e-3) << out;  // 0.008 mm alone (README)
+    EXPECT_LT(d.median, 0.1e-3) << out;  // 0.008 mm alone (docs/benchmark.md)
     EXPECT_LT(d.p95, 0.5e-3) << out;     // one point in 20 of the other object would break this
     EXPECT_GT(ignored_lines(out), 0) << "the other scan's traffic never reached " << out << "'s services?";
   }

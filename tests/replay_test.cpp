@@ -115,8 +115,8 @@ TEST(Replay, ARecordedScanReplayedMakesTheSameDecisions) {
   EXPECT_EQ(s.replay_scan["stop"]["rule"], "replay");
   EXPECT_EQ(s.replay_scan["replay_of"], (original / "scan.json").string());
   ASSERT_EQ(s.replay_scan["views"].size(), 3u);
-  // A recording whose log lost the readings at an exposure cannot be replayed exactly (README,
-  // Replay): this one must be complete.
+  // A recording whose log lost the readings at an exposure cannot be replayed exactly (docs/replay.md,
+  // "Replay"): this one must be complete.
   EXPECT_EQ(s.comparison["readings_lost_in_recording"], json::array());
   EXPECT_TRUE(s.comparison["same_decisions"].get<bool>())
       << s.comparison["differences"].dump(2) << "\nviews whose readings the recording lost: "

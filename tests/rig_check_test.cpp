@@ -168,7 +168,7 @@ TEST_F(RigCheck, PassesOnTheTwin) {
   EXPECT_GT(o.turntable_commands, 0);
 }
 
-// The README's driver skeleton (examples/driver_skeleton: the driver library, an ideal rig in
+// The driver contract's skeleton (docs/driver-contract.md; examples/driver_skeleton: the driver library, an ideal rig in
 // software) passes every passive check against the shipped rig file: statuses, rates, both
 // clocks, joint names, a frame answering its trigger with the rig file's camera and its exposure
 // on the status clock. (Its frames show a wall 1 m away, not the rig: the active checks compare

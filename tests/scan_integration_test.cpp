@@ -73,7 +73,7 @@ TEST(ScanIntegration, SphereOnTheArmRigLiesOnTheTrueSurface) {
   std::cout << "sphere, arm rig: " << d.n << " points, median distance " << d.median * 1e3
             << " mm, 95th percentile " << d.p95 * 1e3 << " mm\n";
   EXPECT_GT(d.n, 5000u);
-  // Measured 0.008-0.012 mm median, 0.026-0.035 mm p95 (README): five times that, so that a
+  // Measured 0.008-0.012 mm median, 0.026-0.035 mm p95 (docs/benchmark.md): five times that, so that a
   // regression of the pipeline's accuracy fails here.
   EXPECT_LE(d.median, 0.04e-3);
   EXPECT_LE(d.p95, 0.15e-3);
@@ -91,7 +91,7 @@ TEST(ScanIntegration, SphereOnTheArmRigLiesOnTheTrueSurface) {
 // within 5 mm / 0.3 deg, well inside the 5 mm / 1 deg it starts from) and moves the model into the
 // object frame, where it lies within 1.5 mm of the true surface (median; measured 0.62 mm, p95 1.6
 // mm): the turn about the object the estimate leaves loose moves the surface little.
-// Without the estimate the README measured 7 mm.
+// Without the estimate docs/benchmark.md measured 7 mm.
 TEST(ScanIntegration, AnUncalibratedMountIsEstimatedAcrossTheViews) {
   const fs::path out = scan_and_check("bunny-uncalibrated", "--object bunny --rig arm --planner pbnbv --rig-errors uncalibrated", 10);
   const auto coverage = read_json_file(out / "coverage.json");
@@ -117,7 +117,7 @@ TEST(ScanIntegration, BoxOnTheArmRigLiesOnTheTrueSurface) {
   std::cout << "box, arm rig: " << d.n << " points, median distance " << d.median * 1e3
             << " mm, 95th percentile " << d.p95 * 1e3 << " mm\n";
   EXPECT_GT(d.n, 5000u);
-  // Measured 0.008-0.012 mm median, 0.026-0.035 mm p95 (README): five times that, so that a
+  // Measured 0.008-0.012 mm median, 0.026-0.035 mm p95 (docs/benchmark.md): five times that, so that a
   // regression of the pipeline's accuracy fails here.
   EXPECT_LE(d.median, 0.04e-3);
   EXPECT_LE(d.p95, 0.15e-3);

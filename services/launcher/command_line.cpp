@@ -21,7 +21,7 @@ namespace {
 
 const char* const kObjectHelp =
     "mesh file (.obj .stl .off .ply) or a known object: any of the tuning set's 30 (bunny, teapot, armadillo, ...; "
-    "README, fetched by ./scripts/setup), sphere, box";
+    "docs/benchmark.md; fetched by ./scripts/setup), sphere, box";
 
 // Option groups of `pbnbv scan --help`.
 const char* const kGroupObject = "Object";
@@ -115,7 +115,7 @@ CommandLine::CommandLine()
 
   import_urdf_cmd_ = cli::add_command(app_, "import-urdf",
                                       "an arm's URDF as MJCF (MuJoCo's URDF compiler), the first step of a rig file "
-                                      "(README 'Bring your own rig')");
+                                      "(docs/real-rig.md, 'Bring your own rig')");
   import_urdf_cmd_->add_option("urdf", import_urdf_.urdf, "the arm's URDF file")->required()->type_name("FILE");
   cli::add_text(*import_urdf_cmd_, "out", &import_urdf_.out, "the MJCF to write [the URDF's name with .xml]", "FILE");
   rig_check_cmd_ = cli::add_command(app_, "rig-check",
@@ -221,7 +221,7 @@ void CommandLine::declare_scan() {
 
   cli::add(c, kRig, &s.rig)->group(kGroupRig);
   cli::add_text(c, "rig-model", &p.rig_model,
-                "the rig's MJCF file (README 'Bring your own rig'); its kind decides --rig [models/rig_<rig>.xml]", "FILE")
+                "the rig's MJCF file (docs/real-rig.md, 'Bring your own rig'); its kind decides --rig [models/rig_<rig>.xml]", "FILE")
       ->group(kGroupRig);
   cli::add_flag(c, "external-rig", &scan_.external_rig,
                 "the rig's drivers run outside (a physical rig, or a twin started on its own): start no twin; the object "

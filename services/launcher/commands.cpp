@@ -91,7 +91,7 @@ int run_import_urdf(const ImportUrdfOptions& o) {
   }
   std::cout << "next: put its bodies under the \"base\" body of a copy of models/rig_arm.xml, name the last body "
                "\"flange\", keep \"camera_optical\" under it, set the <custom> limits and home; then pbnbv rig-check "
-               "and pbnbv scan --external-rig --dry-run (README, 'Bring your own rig')"
+               "and pbnbv scan --external-rig --dry-run (docs/real-rig.md, 'Bring your own rig')"
             << std::endl;
   return 0;
 }

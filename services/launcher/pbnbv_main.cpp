@@ -19,6 +19,7 @@
 #include <iostream>
 #include <vector>
 
+#include "core/base/install_paths.hpp"
 #include "launcher/command_line.hpp"
 #include "launcher/commands.hpp"
 
@@ -27,7 +28,7 @@ namespace fs = std::filesystem;
 
 int main(int argc, char** argv) {
   if (argc > 1 && std::string(argv[1]) == "view") {  // pbnbv-view has its own command line
-    const std::string view = (fs::read_symlink("/proc/self/exe").parent_path() / "pbnbv-view").string();
+    const std::string view = (fs::path(services_dir()) / "pbnbv-view").string();
     std::vector<char*> args = {const_cast<char*>(view.c_str())};
     for (int i = 2; i < argc; ++i) args.push_back(argv[i]);
     args.push_back(nullptr);
@@ -42,7 +43,7 @@ int main(int argc, char** argv) {
   try {
     switch (line.command()) {
       case launcher::Command::kScan:
-        return launcher::run_scan(line.scan(), self.parent_path());
+        return launcher::run_scan(line.scan(), services_dir());
       case launcher::Command::kBench:
         return launcher::run_bench(line.bench(), self);
       case launcher::Command::kAblate:
@@ -56,11 +57,11 @@ int main(int argc, char** argv) {
       case launcher::Command::kImportUrdf:
         return launcher::run_import_urdf(line.import_urdf());
       case launcher::Command::kRigHost:
-        return launcher::run_rig_host(line.rig_host(), self.parent_path());
+        return launcher::run_rig_host(line.rig_host(), services_dir());
       case launcher::Command::kRigCheck:
         return launcher::run_rig_check(line.rig_check());
       case launcher::Command::kReplay:
-        return launcher::run_replay(line.replay(), self.parent_path());
+        return launcher::run_replay(line.replay(), services_dir());
       case launcher::Command::kEvaluate:
         return launcher::run_evaluate(line.evaluate(), std::cout);
       case launcher::Command::kMesh:

@@ -449,7 +449,7 @@ class RegistrationService {
     const MountEstimate& e = mount_.estimate();
     nlohmann::json j;
     j["what"] = "the camera mount's error estimated across the scan's views: true flange_T_camera = the rig file's "
-                "* error (README 'Rig errors')";
+                "* error (docs/configuration.md, 'Cameras and rig errors')";
     j["views"] = e.views;
     j["outliers"] = e.outliers;
     j["error"] = to_json(e.error);

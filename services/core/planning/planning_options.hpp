@@ -40,7 +40,7 @@ inline constexpr Setting<double> kWorkingDistance{"working-distance", 0.6, 0.15,
                                                   "camera to the object's bounding sphere (d_c)"};
 inline constexpr Setting<double> kStopFraction{
     "stop-fraction", 0.0, 0.0, 1.0, "",
-    "stop when the best view quality F falls below this times the first planned view's F (0: never; README says why)"};
+    "stop when the best view quality F falls below this times the first planned view's F (0: never; docs/scan.md says why)"};
 inline constexpr Setting<int> kAlternatives{"alternatives", 5, 0, 100, "",
                                             "next-best views tried when the rig cannot reach the best"};
 inline constexpr Setting<int64_t> kMixtureSeed{"seed", 1, 0, int64_t{1} << 30, "",

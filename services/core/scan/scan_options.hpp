@@ -26,7 +26,7 @@ inline constexpr Setting<double> kObjectSize{"size", 0.3, 0.01, 2.0, "m",
                                              "shortest bounding-box edge after normalisation"};
 inline constexpr ChoiceSetting<UpAxis> kUp{"up", UpAxis::kZ,
                                            "which axis of the mesh file points up (default: the object's own: "
-                                           "each known object's, README; z for a mesh file)"};
+                                           "each known object's, docs/benchmark.md; z for a mesh file)"};
 
 // The views.
 inline constexpr Setting<int> kViews{"views", 10, 1, 1000, "", "at most this many views"};
@@ -35,7 +35,7 @@ inline constexpr Setting<int> kViews{"views", 10, 1, 1000, "", "at most this man
 // --stop-window views each added less than --stop-new-surface percent new surface (points farther
 // than --stop-radius from the model before them, relative to the model), after at least
 // --stop-min-views views. Defaults tuned on half the default object set, arm rig, 20 views: the
-// largest saving with every object within 0.5 points of its 20-view coverage (README "When a
+// largest saving with every object within 0.5 points of its 20-view coverage (docs/scan.md "When a
 // scan stops": 7 views in a row under 0.05 %; a shorter window stops before late gains).
 enum class StopRule : uint8_t { kOff, kSurface };
 template <>
@@ -93,7 +93,7 @@ inline constexpr Setting<double> kTurntableBacklashDeg{
     "turntable-backlash-deg", 0.0, 0.0, 5.0, "deg",
     "twin: the platter stops this much short of where its encoder says, against the direction it turned"};
 
-// The twin's rig errors by name, each a set of the figures above (README "Rig errors"):
+// The twin's rig errors by name, each a set of the figures above (docs/configuration.md "Cameras and rig errors"):
 //   none          exact kinematics;
 //   calibrated    what `pbnbv calibrate` leaves on an arm with 0.02 deg joint encoder noise (the
 //                 mount 0.47 mm / 0.11 deg off, its measured residual after 24 views), that
