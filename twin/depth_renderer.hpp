@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/geometry/camera_model.hpp"
+#include "core/geometry/lens_distortion.hpp"
 
 namespace pbnbv::twin {
 
@@ -59,6 +60,14 @@ class DepthRenderer {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// The image of a camera `k` with the lens `d` from `pinhole`, rendered with `k_pinhole`
+// (pinhole_cover(k, d): every ray the lens brings in), resampled by distort_depth.
+DepthImage through_lens(const DepthImage& pinhole, const CameraIntrinsics& k_pinhole, const CameraIntrinsics& k,
+                        const LensDistortion& d);
+
+// "k1,k2,p1,p2,k3" as a lens; throws std::invalid_argument naming `what` and the text otherwise.
+LensDistortion parse_distortion(const std::string& text, const std::string& what);
 
 // Optional sensor noise, off by default: Gaussian with standard deviation
 // sigma_per_m * depth (depth-proportional), and each valid pixel dropped (set to 0) with

@@ -81,6 +81,9 @@ struct TwinOptions {
   std::string truth_path;
   std::vector<twin::DriverFault> faults;
   std::string truth_rig_path;
+  std::string distortion_text;  // --distortion k1,k2,p1,p2,k3 ("": the rig file's camera's, else none)
+  LensDistortion distortion;    // the lens frames are taken through (main fills it in)
+  CameraIntrinsics render_k;    // what the renderer draws: k, or the pinhole image covering the lens's
 
   bool faulty(twin::DriverFault f) const { return twin::has_fault(faults, f); }
 };
@@ -131,6 +134,10 @@ void add_options(CLI::App& app, TwinOptions& o) {
                 "play a faulty driver, for pbnbv rig-check's tests: slow-status (20 Hz), no-seq-echo, depth-unit-mm "
                 "(counts in mm, unit field 0.1 mm), no-trigger-id, ignore-limits (executes out-of-limit commands), "
                 "utime-backwards, late-exposure (frames stamped 1 s late)");
+  cli::add_text(app, "distortion", &o.distortion_text,
+                "render through this lens: Brown-Conrady k1,k2,p1,p2,k3 (OpenCV's order); the frames say so "
+                "(default: the rig file's pbnbv_camera_distortion, else none)",
+                "K1,K2,P1,P2,K3");
   cli::add_text(app, "truth-rig-out", &o.truth_rig_path,
                 "write the true hand-eye transform and turntable zero to this JSON file (evaluation only)", "PATH");
 }
@@ -185,6 +192,7 @@ driver::DepthCamera camera_of(const TwinOptions& o) {
   camera.cy = o.k.cy;
   camera.depth_min_m = o.range.min_m;
   camera.depth_max_m = o.range.max_m;
+  camera.distortion = o.distortion.coefficients();
   // The camera's own unit, as its driver would send it, where its range fits 16 bits in it; else 0.1 mm.
   const DepthSensorModel& m = depth_sensor_model(o.camera);
   camera.depth_unit_m = m.depth_unit_m > 0 && o.range.max_m / m.depth_unit_m < 65535 ? m.depth_unit_m : kDepthUnitM;
@@ -270,7 +278,9 @@ class Twin {
     bus_.set_state("rendering");
     mj_forward(sim_.model(), sim_.data());
     twin::DepthImage image = renderer_.render(sim_.data());
-    const twin::SensorSimStats sensor = twin::simulate_sensor(image, o_.k, depth_sensor_model(o_.camera), rng_);
+    const twin::SensorSimStats sensor = twin::simulate_sensor(image, o_.render_k, depth_sensor_model(o_.camera), rng_);
+    // Through the lens: the pinhole image that covers it resampled into the camera's own image.
+    if (!o_.distortion.none()) image = twin::through_lens(image, o_.render_k, o_.k, o_.distortion);
     if (!depth_sensor_model(o_.camera).exact()) {
       log_info(fmt::format("frame {}: {} of {} readings: {} shadowed, {} flying, {} lost at grazing angles, {} pushed "
                            "back by multipath, {} dropped",
@@ -359,6 +369,10 @@ int main(int argc, char** argv) {
         o.joint_error_deg * kPi / 180, static_cast<uint64_t>(o.error_seed));
     errors.turntable_backlash_rad = o.turntable_backlash_deg * kPi / 180;
     const RigModel rig = load_rig(model_path);
+    o.distortion = o.distortion_text.empty() ? (rig.camera ? rig.camera->distortion : LensDistortion{})
+                                             : twin::parse_distortion(o.distortion_text, "--distortion");
+    o.distortion.validate(o.k, "--distortion");
+    o.render_k = o.distortion.none() ? o.k : pinhole_cover(o.k, o.distortion);
     // The turntable reports its reading: the platter's true angle plus the model's zero (a
     // calibrated file's pbnbv_turntable_zero) plus the error model's offset.
     const double turntable_error_rad = errors.turntable_offset_rad;
@@ -384,9 +398,14 @@ int main(int argc, char** argv) {
       sim.model()->vis.quality.numstacks = 256;
     }
     twin::EglContext egl;
-    twin::DepthRenderer renderer(sim.model(), "depth", o.k, o.range);
+    twin::DepthRenderer renderer(sim.model(), "depth", o.render_k, o.range);
+    const std::string lens =
+        o.distortion.none() ? std::string()
+                            : fmt::format(" through a lens (k1 {} k2 {} p1 {} p2 {} k3 {}: {}x{} rendered, resampled)",
+                                          o.distortion.k1, o.distortion.k2, o.distortion.p1, o.distortion.p2,
+                                          o.distortion.k3, o.render_k.width, o.render_k.height);
     log_info("rig '" + rig.arm_name + "' from " + model_path + ", rendering " + std::to_string(o.k.width) + "x" +
-             std::to_string(o.k.height) + " on " + egl.description() + "; camera: " +
+             std::to_string(o.k.height) + lens + " on " + egl.description() + "; camera: " +
              std::string(depth_sensor_model(o.camera).label));
     // Statuses name the scan this twin plays the rig of ("" when it obeys every scan, as a real
     // driver does); frames echo the scan of their trigger.

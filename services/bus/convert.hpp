@@ -10,6 +10,7 @@
 #include "bus/depth_codec.hpp"
 #include "bus/message_guard.hpp"
 #include "core/geometry/camera_model.hpp"
+#include "core/geometry/lens_distortion.hpp"
 #include "core/base/pose.hpp"
 #include "pbnbv/depth_frame_t.hpp"
 #include "pbnbv/pose_t.hpp"
@@ -55,22 +56,26 @@ inline void require_range(double x, double lo, double hi, const std::string& wha
 }
 
 // A DEPTH_FRAME as the core library takes it: its camera model, its range, planar depth in
-// metres (0 = no return).
+// metres (0 = no return) as the pinhole camera `intrinsics` sees it (a distorted image resampled),
+// and the lens the frame said it was taken through.
 struct DecodedFrame {
   CameraIntrinsics intrinsics;
   DepthRange range;
   std::vector<float> depth_m;
+  LensDistortion distortion;  // as sent; depth_m is already undistorted
 };
 
-// Throws std::invalid_argument naming the bad field (intrinsics, range, encoding, size, depth
-// unit).
+// Throws std::invalid_argument naming the bad field (intrinsics, range, distortion, encoding,
+// size, depth unit).
 inline DecodedFrame decode_frame(const depth_frame_t& f) {
   DecodedFrame d;
   d.intrinsics = CameraIntrinsics{f.width, f.height, f.fx, f.fy, f.cx, f.cy};
   d.range = DepthRange{f.depth_min_m, f.depth_max_m};
+  d.distortion = LensDistortion{f.distortion[0], f.distortion[1], f.distortion[2], f.distortion[3], f.distortion[4]};
   try {
     d.intrinsics.validate();
     d.range.validate();
+    d.distortion.validate(d.intrinsics, "distortion");
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument("DEPTH_FRAME " + std::to_string(f.seq) + ": " + e.what());
   }
@@ -86,6 +91,7 @@ inline DecodedFrame decode_frame(const depth_frame_t& f) {
     throw std::invalid_argument("DEPTH_FRAME " + std::to_string(f.seq) + " encoding = " + std::to_string(f.encoding) +
                                 " is not one of its constants (0 raw, 1 zlib)");
   }
+  d.depth_m = undistort_depth(d.depth_m, d.intrinsics, d.distortion);
   return d;
 }
 

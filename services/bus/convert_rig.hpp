@@ -98,6 +98,7 @@ inline DepthFrame from_msg(const depth_frame_t& m) {
   f.intrinsics = d.intrinsics;
   f.range = d.range;
   f.depth_m = std::move(d.depth_m);
+  f.distortion = d.distortion;
   return f;
 }
 

@@ -154,6 +154,7 @@ depth_frame_t depth_frame(const DepthCamera& camera, const std::vector<uint16_t>
   f.depth_min_m = camera.depth_min_m;
   f.depth_max_m = camera.depth_max_m;
   f.depth_unit_m = camera.depth_unit_m;
+  for (int i = 0; i < 5; ++i) f.distortion[i] = camera.distortion[static_cast<std::size_t>(i)];
   std::vector<uint8_t> raw(2 * pixels);
   for (std::size_t i = 0; i < pixels; ++i) {  // little-endian, whatever the host
     raw[2 * i] = static_cast<uint8_t>(counts[i] & 0xff);

@@ -4,6 +4,7 @@
 // accepted command echoed and a refused one reported by its fault code; a command checked as the
 // contract says before anything moves; a depth image as the DEPTH_FRAME that answers a trigger,
 // stamped with its exposure. No bus here: rig_driver.hpp puts these on LCM.
+#include <array>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -117,6 +118,7 @@ struct DepthCamera {
   double depth_min_m = 0;                 // valid range: other readings are reported as 0
   double depth_max_m = 0;
   double depth_unit_m = 1e-4;  // metres per count (0.1 mm: up to 6.55 m)
+  std::array<double, 5> distortion{};  // k1 k2 p1 p2 k3 of the images as sent (0: pinhole images)
   bool compress = true;        // zlib (kEncodingZlib), else raw counts
 };
 

@@ -120,6 +120,12 @@ CheckLine check_trigger_answered(const std::optional<DepthFrame>& frame, int64_t
                           fixed(deadline_s, 1), trigger_seq));
 }
 
+// "none", or "k1 -0.35 k2 0.15 p1 0.0012 p2 -0.0018 k3 -0.03".
+static std::string distortion_text(const LensDistortion& d) {
+  if (d.none()) return "none";
+  return fmt::format("k1 {} k2 {} p1 {} p2 {} k3 {}", exact(d.k1), exact(d.k2), exact(d.p1), exact(d.p2), exact(d.k3));
+}
+
 std::vector<CheckLine> check_frame_against_camera(const DepthFrame& f, const std::optional<RigCamera>& camera) {
   const CameraIntrinsics& k = f.intrinsics;
   const std::string size = fmt::format("{}x{}", k.width, k.height);
@@ -129,6 +135,7 @@ std::vector<CheckLine> check_frame_against_camera(const DepthFrame& f, const std
   if (!camera) {
     const char* why = "the rig file states no camera (<custom> pbnbv_camera)";
     return {line("frame size", true, size, why), line("frame intrinsics", true, intrinsics, why),
+            line("frame lens distortion", true, distortion_text(f.distortion), why),
             line("frame depth range", true, range, why), line("camera id", true, id, why)};
   }
   const RigCamera& c = *camera;
@@ -150,6 +157,21 @@ std::vector<CheckLine> check_frame_against_camera(const DepthFrame& f, const std
                                    exact(c.intrinsics.cy))));
   } else {
     out.push_back(line("frame intrinsics", true, intrinsics, "as the rig file"));
+  }
+  // The lens: what the frames say they came through is what the rig file says the camera has (a
+  // driver that rectifies sends zeros, and its rig file must say none).
+  bool lens_off = false;
+  for (int i = 0; i < 5; ++i) {
+    const double a = f.distortion.coefficients()[static_cast<std::size_t>(i)];
+    const double b = c.distortion.coefficients()[static_cast<std::size_t>(i)];
+    lens_off = lens_off || std::abs(a - b) > 1e-6 + 1e-3 * std::abs(b);
+  }
+  if (lens_off) {
+    out.push_back(line("frame lens distortion", false, distortion_text(f.distortion),
+                       "the frames' lens disagrees with the rig file's pbnbv_camera_distortion " +
+                           distortion_text(c.distortion) + ": the images would be undistorted with the wrong model"));
+  } else {
+    out.push_back(line("frame lens distortion", true, distortion_text(f.distortion), "as the rig file"));
   }
   if (off(f.range.min_m, c.range.min_m) || off(f.range.max_m, c.range.max_m)) {
     out.push_back(line("frame depth range", false, range,

@@ -18,6 +18,7 @@
 #include "core/geometry/rig_kind.hpp"
 #include "core/geometry/working_volume.hpp"
 #include "core/geometry/camera_model.hpp"
+#include "core/geometry/lens_distortion.hpp"
 #include "core/geometry/depth_sensor.hpp"
 
 namespace pbnbv {
@@ -40,6 +41,8 @@ struct RigCamera {
   DepthRange range;             // metres, planar depth
   std::string id;               // the camera's serial / id; "" = any
   std::optional<CameraKind> model;  // the named camera (its image and depth errors in the twin)
+  LensDistortion distortion;        // <custom><numeric name="pbnbv_camera_distortion" data="k1 k2
+                                    // p1 p2 k3"> (OpenCV's order): the lens its frames come through
 };
 
 // One joint of the arm's serial chain, as the MJCF body tree gives it (all joints at zero).

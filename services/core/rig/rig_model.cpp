@@ -72,6 +72,9 @@ std::optional<RigCamera> read_camera(const mjModel* m, const std::string& path) 
     if (mj_name2id(m, mjOBJ_TEXT, "pbnbv_camera_model") >= 0) {
       fail(path, "pbnbv_camera_model is given without <custom><numeric name=\"pbnbv_camera\">");
     }
+    if (mj_name2id(m, mjOBJ_NUMERIC, "pbnbv_camera_distortion") >= 0) {
+      fail(path, "pbnbv_camera_distortion is given without <custom><numeric name=\"pbnbv_camera\">");
+    }
     return std::nullopt;
   }
   const std::vector<double> v = custom_numeric(m, path, "pbnbv_camera", 8);
@@ -90,6 +93,15 @@ std::optional<RigCamera> read_camera(const mjModel* m, const std::string& path) 
     c.range.validate();
   } catch (const std::invalid_argument& e) {
     fail(path, std::string("pbnbv_camera (data=\"width height fx fy cx cy depth_min depth_max\"): ") + e.what());
+  }
+  if (mj_name2id(m, mjOBJ_NUMERIC, "pbnbv_camera_distortion") >= 0) {
+    const std::vector<double> d = custom_numeric(m, path, "pbnbv_camera_distortion", 5);
+    c.distortion = LensDistortion{d[0], d[1], d[2], d[3], d[4]};
+    try {
+      c.distortion.validate(c.intrinsics, "pbnbv_camera_distortion (data=\"k1 k2 p1 p2 k3\")");
+    } catch (const std::invalid_argument& e) {
+      fail(path, e.what());
+    }
   }
   if (id_text >= 0) c.id = std::string(m->text_data + m->text_adr[id_text]);
   const int model_text = mj_name2id(m, mjOBJ_TEXT, "pbnbv_camera_model");

@@ -9,6 +9,7 @@
 
 #include "core/base/pose.hpp"
 #include "core/geometry/camera_model.hpp"
+#include "core/geometry/lens_distortion.hpp"
 
 namespace pbnbv {
 
@@ -81,7 +82,8 @@ struct DepthFrame {
   int64_t trigger_seq = -1; // the DEPTH_TRIGGER it answers
   CameraIntrinsics intrinsics;
   DepthRange range;
-  std::vector<float> depth_m;
+  std::vector<float> depth_m;  // pinhole: resampled when the frame came through a lens
+  LensDistortion distortion;   // the lens the frame said it was taken through
 };
 
 }  // namespace pbnbv

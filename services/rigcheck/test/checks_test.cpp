@@ -76,10 +76,21 @@ TEST(Checks, FrameAgainstTheRigFilesCamera) {
   EXPECT_FALSE(small[0].passed);
   EXPECT_EQ(small[0].detail, "frame size 320x720 disagrees with the rig file's camera 1280x720");
   EXPECT_FALSE(small[1].passed);  // cx 160 is not 640
-  EXPECT_TRUE(small[2].passed);
+  EXPECT_TRUE(small[2].passed);   // no lens in either
+  EXPECT_TRUE(small[3].passed);
+  // A driver that sends its lens where the rig file says none (or another lens): the images would
+  // be undistorted with the wrong model.
+  f.distortion = LensDistortion{-0.05, 0.01, 0, 0, 0};
+  const CheckLine lens = check_frame_against_camera(f, c)[2];
+  EXPECT_EQ(lens.check, "frame lens distortion");
+  EXPECT_FALSE(lens.passed);
+  EXPECT_EQ(lens.figure, "k1 -0.05 k2 0.01 p1 0 p2 0 k3 0");
+  EXPECT_NE(lens.detail.find("disagrees with the rig file's pbnbv_camera_distortion none"), std::string::npos) << lens.detail;
+  c.distortion = f.distortion;
+  EXPECT_TRUE(check_frame_against_camera(f, c)[2].passed);
   c.id = "D435-1";
   f.camera_id = "D435-2";
-  EXPECT_FALSE(check_frame_against_camera(f, c)[3].passed);
+  EXPECT_FALSE(check_frame_against_camera(f, c)[4].passed);
   // A rig file without a camera: nothing to compare, every line passes saying so.
   for (const CheckLine& l : check_frame_against_camera(f, std::nullopt)) EXPECT_TRUE(l.passed);
 }

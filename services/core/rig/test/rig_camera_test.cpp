@@ -3,6 +3,8 @@
 // error naming the file and the value.
 #include <gtest/gtest.h>
 
+#include <array>
+
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -84,6 +86,27 @@ TEST(RigCamera, ANamedCameraModel) {
                "azure-kinect-nfov or structured-light)");
   const std::string lonely = arm_rig_with("rig_camera_lonely_model.xml", "<text name=\"pbnbv_camera_model\" data=\"d435\"/>");
   expect_error([&] { load_rig(lonely); }, "pbnbv_camera_model is given without");
+}
+
+// <numeric name="pbnbv_camera_distortion" data="k1 k2 p1 p2 k3">: the lens the camera's frames come
+// through; none unless given; a lens that folds the image over is refused with the file's name.
+TEST(RigCamera, ALensDistortion) {
+  EXPECT_TRUE(load_rig(default_rig_path(RigKind::kArm)).camera->distortion.none());
+  const RigModel rig = load_rig(arm_rig_with(
+      "rig_camera_lens.xml",
+      "<numeric name=\"pbnbv_camera\" data=\"640 576 504 504 320 288 0.5 3.86\"/>"
+      "<numeric name=\"pbnbv_camera_distortion\" data=\"-0.3 0.1 0.001 -0.002 -0.02\"/>"));
+  EXPECT_EQ(rig.camera->distortion.coefficients(), (std::array<double, 5>{-0.3, 0.1, 0.001, -0.002, -0.02}));
+  using testing::expect_error;
+  const std::string folded = arm_rig_with(
+      "rig_camera_folded_lens.xml",
+      "<numeric name=\"pbnbv_camera\" data=\"640 576 300 300 320 288 0.5 3.86\"/>"
+      "<numeric name=\"pbnbv_camera_distortion\" data=\"-1.5 0 0 0 0\"/>");
+  expect_error([&] { load_rig(folded); }, "rig model " + folded + ": pbnbv_camera_distortion (data=\"k1 k2 p1 p2 k3\"): "
+                                          "distortion k1 k2 k3 = -1.5 0 0 fold the image over");
+  const std::string lonely =
+      arm_rig_with("rig_camera_lonely_lens.xml", "<numeric name=\"pbnbv_camera_distortion\" data=\"0 0 0 0 0\"/>");
+  expect_error([&] { load_rig(lonely); }, "pbnbv_camera_distortion is given without");
 }
 
 TEST(RigCamera, BadValuesNameTheFileAndTheValue) {
