@@ -91,7 +91,7 @@ inline DecodedFrame decode_frame(const depth_frame_t& f) {
     throw std::invalid_argument("DEPTH_FRAME " + std::to_string(f.seq) + " encoding = " + std::to_string(f.encoding) +
                                 " is not one of its constants (0 raw, 1 zlib)");
   }
-  d.depth_m = undistort_depth(d.depth_m, d.intrinsics, d.distortion);
+  if (!d.distortion.none()) d.depth_m = undistort_depth(d.depth_m, d.intrinsics, d.distortion);
   return d;
 }
 
