@@ -40,15 +40,46 @@ CheckLine check_status_rate(const std::string& channel, const std::vector<Status
   if (samples.size() < 2) {
     return line(check, false, fmt::format("{} messages", samples.size()), "too few statuses to measure a rate");
   }
-  const double span = samples.back().received_s - samples.front().received_s;
-  const double hz = span > 0 ? (samples.size() - 1) / span : 0;
+  const std::size_t n = samples.size();
+  const double driver_span = 1e-6 * static_cast<double>(samples.back().driver_utime - samples.front().driver_utime);
+  const double host_span = samples.back().received_s - samples.front().received_s;
+  if (!(driver_span > 0)) {
+    return line(check, false, fmt::format("{} messages", n),
+                "driver_utime does not advance over the window: no rate can be measured on the driver's clock");
+  }
+  double driver_gap = 0, host_gap = 0;
+  for (std::size_t i = 1; i < n; ++i) {
+    driver_gap = std::max(driver_gap, 1e-6 * static_cast<double>(samples[i].driver_utime - samples[i - 1].driver_utime));
+    host_gap = std::max(host_gap, samples[i].received_s - samples[i - 1].received_s);
+  }
+  const double hz = static_cast<double>(n - 1) / driver_span;
   const std::string figure = fixed(hz, 1) + " Hz";
+  const std::string measured = fmt::format("{} statuses over {} s of the driver's clock", n, fixed(driver_span, 2));
   if (hz < kMinStatusRateHz) {
     return line(check, false, figure,
-                fmt::format("slow status: {} Hz is below the contract's {} Hz ({} messages in {} s)", fixed(hz, 1),
-                            fixed(kMinStatusRateHz, 0), samples.size(), fixed(span, 2)));
+                fmt::format("slow status: {} Hz is below the contract's {} Hz ({})", fixed(hz, 1),
+                            fixed(kMinStatusRateHz, 0), measured));
   }
-  return line(check, true, figure, fmt::format(">= {} Hz", fixed(kMinStatusRateHz, 0)));
+  if (driver_gap > kMaxStatusGapS) {
+    return line(check, false, figure,
+                fmt::format("a hole in the stream: {} ms between two statuses on the driver's clock (at most {} ms; {})",
+                            fixed(1e3 * driver_gap, 0), fixed(1e3 * kMaxStatusGapS, 0), measured));
+  }
+  if (host_gap > kMaxStatusGapS) {
+    return line(check, false, figure,
+                fmt::format("a stalled stream: nothing received for {} ms (at most {} ms) although the driver's clock "
+                            "shows no hole: the host or the network held the statuses back ({})",
+                            fixed(1e3 * host_gap, 0), fixed(1e3 * kMaxStatusGapS, 0), measured));
+  }
+  std::string detail = fmt::format(">= {} Hz on the driver's clock ({})", fixed(kMinStatusRateHz, 0), measured);
+  if (host_span < driver_span * 2.0 / 3.0) {
+    detail += fmt::format("; received in bursts: they reached this host within {} s ({} Hz on its clock), so the "
+                          "readings the motion executor acts on can be up to a burst old (longest wait {} ms); a "
+                          "twin faster than real time (--speed) does this by design",
+                          fixed(host_span, 2), fixed(host_span > 0 ? static_cast<double>(n - 1) / host_span : 0, 0),
+                          fixed(1e3 * host_gap, 0));
+  }
+  return line(check, true, figure, detail);
 }
 
 CheckLine check_clocks_increase(const std::string& channel, const std::vector<StatusSample>& samples) {

@@ -15,6 +15,7 @@ namespace pbnbv::rigcheck {
 
 // The contract's figures the checks hold a driver to (README "Writing a driver").
 inline constexpr double kMinStatusRateHz = 50.0;  // ARM_STATUS / TURNTABLE_STATUS
+inline constexpr double kMaxStatusGapS = 0.25;    // the longest a status stream may go quiet
 // Exposure times may lead the newest status, or trail the status before the trigger, by this
 // much (a few status periods at 50 Hz).
 inline constexpr double kExposureSlackS = 0.06;
@@ -55,7 +56,14 @@ struct DriverSample {
 DriverSample sample_of(const ArmReading& r, double received_s);
 DriverSample sample_of(const TurntableReading& r, double received_s);
 
-// `channel` arrives at kMinStatusRateHz or faster (receive times over the window).
+// `channel` is published at kMinStatusRateHz or faster, measured on the driver's own clock
+// (driver_utime) over the window: the host's reception times say when the network and the
+// scheduler delivered the statuses, not when the device produced them (a twin at --speed 20, or
+// statuses queued and delivered together, read thousands of Hz on the host's clock). Fails also
+// when the driver's clock shows a hole of more than kMaxStatusGapS between two statuses, or when
+// the host received nothing for longer than that (a stalled stream). Statuses that arrive in
+// bursts (received in less than two thirds of the time they span on the driver's clock) are named
+// in the detail with what that means: readings up to the burst's length old.
 CheckLine check_status_rate(const std::string& channel, const std::vector<StatusSample>& samples);
 // utime and driver_utime both strictly increase from one status to the next.
 CheckLine check_clocks_increase(const std::string& channel, const std::vector<StatusSample>& samples);

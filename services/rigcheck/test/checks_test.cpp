@@ -23,12 +23,44 @@ bool names(const CheckLine& l, const std::string& what) { return l.detail.find(w
 TEST(Checks, StatusRateAgainstFiftyHertz) {
   const CheckLine fast = check_status_rate("ARM_STATUS", statuses(101, 0.01, 10000));
   EXPECT_TRUE(fast.passed);
-  EXPECT_EQ(fast.figure, "100.0 Hz");  // 100 intervals in 1 s
+  EXPECT_EQ(fast.figure, "100.0 Hz");  // 100 intervals in 1 s of the driver's clock
+  EXPECT_FALSE(names(fast, "bursts")) << fast.detail;
   const CheckLine slow = check_status_rate("ARM_STATUS", statuses(21, 0.05, 50000));
   EXPECT_FALSE(slow.passed);
   EXPECT_EQ(slow.figure, "20.0 Hz");
   EXPECT_TRUE(names(slow, "slow status")) << slow.detail;
   EXPECT_FALSE(check_status_rate("ARM_STATUS", statuses(1, 0.01, 10000)).passed);
+}
+
+// The review's case: statuses produced at 20 Hz on the driver's clock but delivered together (a
+// loaded host, or a twin faster than real time): 21 statuses received within 0.3 ms read 64,000 Hz
+// on the host's clock. The rate is the driver's: 20 Hz, a failure.
+TEST(Checks, ABurstIsMeasuredOnTheDriversClock) {
+  const CheckLine burst = check_status_rate("ARM_STATUS", statuses(21, 0.000015, 50000));
+  EXPECT_FALSE(burst.passed);
+  EXPECT_EQ(burst.figure, "20.0 Hz");
+  // 100 Hz on the driver's clock, received 20 times faster (a twin at --speed 20): passes, and says
+  // the statuses came in bursts and what that means.
+  const CheckLine fast = check_status_rate("ARM_STATUS", statuses(101, 0.0005, 10000));
+  EXPECT_TRUE(fast.passed) << fast.detail;
+  EXPECT_EQ(fast.figure, "100.0 Hz");
+  EXPECT_TRUE(names(fast, "received in bursts")) << fast.detail;
+  EXPECT_TRUE(names(fast, "2000 Hz on its clock")) << fast.detail;
+  // 100 Hz on average but a 400 ms hole on the driver's clock: a failure naming the hole.
+  std::vector<StatusSample> hole = statuses(101, 0.01, 10000);
+  for (std::size_t i = 50; i < hole.size(); ++i) {
+    hole[i].driver_utime += 400000;
+    hole[i].received_s += 0.4;
+  }
+  const CheckLine gap = check_status_rate("ARM_STATUS", hole);
+  EXPECT_FALSE(gap.passed);
+  EXPECT_TRUE(names(gap, "a hole in the stream: 410 ms")) << gap.detail;
+  // Steady on the driver's clock, but nothing received for 300 ms: a stalled stream.
+  std::vector<StatusSample> stall = statuses(101, 0.01, 10000);
+  for (std::size_t i = 60; i < stall.size(); ++i) stall[i].received_s += 0.3;
+  const CheckLine stalled = check_status_rate("ARM_STATUS", stall);
+  EXPECT_FALSE(stalled.passed);
+  EXPECT_TRUE(names(stalled, "a stalled stream: nothing received for 310 ms")) << stalled.detail;
 }
 
 TEST(Checks, ClocksMustStrictlyIncrease) {
