@@ -69,7 +69,7 @@ class MappingService {
       integrate(r);
     } else if (!warned_ && bus::now_s() > pending_deadline_) {
       warned_ = true;
-      log_warn("view " + std::to_string(pending_->iteration) + ": DEPTH_FRAME " + std::to_string(pending_->cloud.depth_frame_seq) +
+      log_warn("view " + std::to_string(pending_->iteration + 1) + ": DEPTH_FRAME " + std::to_string(pending_->cloud.depth_frame_seq) +
                " has not come in " + fixed(kFrameWaitS, 0) + " s; waiting for it to be sent again");
     }
   }
@@ -95,8 +95,8 @@ class MappingService {
     if (pending_ && pending_->scan_id == r.scan_id && r.iteration < pending_->iteration) {
       // Another capture of an earlier view, late: nobody waits for it any more (the coordinator
       // asks for the current view only), and settling the later view now would leave it out.
-      log_info("view " + std::to_string(r.iteration) + " (request " + std::to_string(r.request_id) + ") came while view " +
-               std::to_string(pending_->iteration) + " waits for its depth frame: not integrated");
+      log_info("view " + std::to_string(r.iteration + 1) + " (request " + std::to_string(r.request_id) + ") came while view " +
+               std::to_string(pending_->iteration + 1) + " waits for its depth frame: not integrated");
       return;
     }
     if (pending_) {  // a newer view arrived: settle the older one now
@@ -189,7 +189,7 @@ class MappingService {
     map_ = VoxelMap::restore(read_text(state_path("mapping.map").string()), params_, state_path("mapping.map").string());
     scan_id_ = last->scan_id;
     answers_.put({last->scan_id, last->iteration, last->request_id}, *last);
-    log_info("continuing the map of scan " + scan_id_ + " after view " + std::to_string(last->iteration) + " from " +
+    log_info("continuing the map of scan " + scan_id_ + " after view " + std::to_string(last->iteration + 1) + " from " +
              state_path("mapping.map").string());
   }
 

@@ -415,7 +415,7 @@ class RegistrationService {
       if (moved_m < min_move_m && Eigen::AngleAxisd(q.linear()).angle() < deg_to_rad(min_move_deg)) continue;
       moves.emplace_back(v.view, q);
       placed.emplace_back(&v, now);
-      said += fmt::format("{}view {} {:.2f} mm", said.empty() ? "" : ", ", v.view, moved_m * 1e3) +
+      said += fmt::format("{}view {} {:.2f} mm", said.empty() ? "" : ", ", v.view + 1, moved_m * 1e3) +
               (fitted ? std::string() : v.refined ? fmt::format(" (its alignment {:.1f} sigma off)", sigmas) : std::string(" (mount only)"));
     }
     if (moves.empty()) return;
