@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # `pbnbv view` in headless Chromium (run inside scripts/netns-run: the scan, the view and the
 # browser share a private loopback; the browser is driven by tests/view_screenshot.py). Live: a short twin scan (sphere, free rig, 200 candidates)
-# with `pbnbv view` following it; once a plan has come, /api/scene must hold cloud points, the
-# plan's 200 candidates and a chosen view, and the page's screenshot must show the cloud's colour
-# over an area and the chosen view's marker colour. Then `pbnbv view DIR` on the finished folder:
-# one scene per view taken, the same counts, and the same two colours in its screenshot.
+# with `pbnbv view` following it; once a plan has come, /api/scene must hold cloud points with
+# their normals, the plan's 200 candidates, a chosen view and the ground; a plain
+# `chromium --headless --screenshot` (no driver, no waiting: it shoots at the load event) must
+# show the scene, and the driven page's screenshot too: the cloud shaded (many levels of its
+# colour), the chosen view's colour and the ground grid, with the side column beside the canvas,
+# not over it. Then `pbnbv view DIR` on the finished folder, its cloud.ply given a colour per
+# point: one scene per view taken, the same counts, the cloud drawn in that colour, shaded.
 set -euo pipefail
 SRC=${PBNBV_SOURCE_DIR:?}; BIN=${PBNBV_BIN_DIR:?}
 PY=/usr/bin/python3   # Debian's, with python3-opencv (scripts/test installs it)
@@ -34,24 +37,76 @@ json_check() {  # URL EXPR
 }
 
 # Screenshot of URL into PNG once the page has drawn its scene (view_screenshot.py: headless
-# Chromium through chromedriver, software WebGL; at most 120 s).
-screenshot() {  # URL PNG
-  timeout -k 5 150 "$PY" "$SRC/tests/view_screenshot.py" "$1" "$2" 120 || fail "no screenshot of $1"
+# Chromium through chromedriver, software WebGL, 1280 x 800; at most 120 s), and with LAYOUT_JSON
+# what the page reports of its layout there.
+screenshot() {  # URL PNG [LAYOUT_JSON]
+  timeout -k 5 150 "$PY" "$SRC/tests/view_screenshot.py" "$1" "$2" 120 ${3:+"$3"} || fail "no screenshot of $1"
 }
 
-# Pixels of the cloud's colour (#00c8ff) and of the chosen view's (#ff00ff), each within 12 per
-# channel, above the legend (the bottom 60 rows, whose swatches have the same colours); at least
-# MIN_CLOUD and MIN_CHOSEN of them.
-check_pixels() {  # PNG MIN_CLOUD MIN_CHOSEN
-  "$PY" - "$@" <<'PY' || fail "screenshot $1 does not show the cloud and the chosen view"
+# A plain headless screenshot of URL into PNG: the command a user would type (as root, Chromium
+# needs --no-sandbox), without a driver or --virtual-time-budget: it is taken at the load event,
+# so the page must have drawn its scene by then.
+plain_screenshot() {  # URL PNG
+  HOME="$tmp" timeout -k 5 90 chromium --headless --no-sandbox --screenshot="$2" --window-size=1280,800 "$1" \
+    >"$tmp/chromium.out" 2>&1 || { tail -5 "$tmp/chromium.out"; fail "chromium --headless --screenshot of $1 failed"; }
+  [ -s "$2" ] || fail "chromium --headless --screenshot of $1 wrote no $2"
+}
+
+# What a screenshot shows in the 3-D scene: the window but the side column (the right 300 px,
+# index.html). The cloud's pixels: the base colour R,G,B scaled by one light level (each channel
+# within 6 + 4 % of the brightest), at least MIN_CLOUD of them in at least MIN_SHADES levels (the
+# old flat, unlit cloud had one); at least MIN_CHOSEN of the chosen view's #ff00ff (within 12);
+# at least 3000 of the grid's lines (#343434, #5a5a5a, within 3); and, with NOT_BASE, fewer than
+# 30 pixels of that other base colour (a cloud drawn in its own colours has no cyan left).
+check_scene() {  # PNG R,G,B MIN_CLOUD MIN_SHADES MIN_CHOSEN [NOT_R,G,B]
+  "$PY" - "$@" <<'PY' || fail "screenshot $1 does not show the scene: the shaded cloud, the chosen view and the grid"
 import sys, cv2, numpy as np
-img = cv2.imread(sys.argv[1])  # BGR
+img = cv2.imread(sys.argv[1])
 if img is None: sys.exit("cannot read " + sys.argv[1])
-img = img[:-60]
-def count(bgr): return int(np.all(np.abs(img.astype(int) - np.array(bgr)) <= 12, axis=2).sum())
-cloud, chosen = count((255, 200, 0)), count((255, 0, 255))
-print(f"{sys.argv[1]}: {cloud} cloud pixels (need {sys.argv[2]}), {chosen} chosen-view pixels (need {sys.argv[3]})")
-sys.exit(0 if cloud >= int(sys.argv[2]) and chosen >= int(sys.argv[3]) else 1)
+img = img[:, :img.shape[1] - 300, ::-1].astype(int)  # the scene, RGB
+rgb = lambda t: np.array([int(x) for x in t.split(",")])
+def cloud(base):
+    top = int(np.argmax(base))
+    level = img[..., top] / base[top]
+    near = np.all(np.abs(img - level[..., None] * base) <= 6 + 0.04 * img[..., top:top + 1], axis=2) & (img[..., top] >= 40)
+    return int(near.sum()), len(np.unique(img[..., top][near]))
+near = lambda c, tol: int(np.all(np.abs(img - np.array(c)) <= tol, axis=2).sum())
+n, shades = cloud(rgb(sys.argv[2]))
+chosen = near((255, 0, 255), 12)
+grid = near((0x34,) * 3, 3) + near((0x5a,) * 3, 3)
+print(f"{sys.argv[1]}: {n} cloud pixels (need {sys.argv[3]}) in {shades} shades (need {sys.argv[4]}), "
+      f"{chosen} chosen-view pixels (need {sys.argv[5]}), {grid} grid pixels (need 3000)")
+ok = n >= int(sys.argv[3]) and shades >= int(sys.argv[4]) and chosen >= int(sys.argv[5]) and grid >= 3000
+if len(sys.argv) > 6:
+    other = cloud(rgb(sys.argv[6]))[0]
+    print(f"  {other} pixels of {sys.argv[6]} (need fewer than 30)")
+    ok = ok and other < 30
+sys.exit(0 if ok else 1)
+PY
+}
+
+# The driven page's layout (view_screenshot.py's LAYOUT_JSON) against the scene served (SCENE_JSON):
+# the side column and the canvas do not overlap, the info panel is in the side column, the canvas
+# takes at least half the width and the whole height; the grid has 10 cm cells on the scene's
+# ground and its legend says so; the cloud has its normals, and its colours iff COLOURED (0/1).
+check_layout() {  # LAYOUT_JSON SCENE_JSON COLOURED
+  "$PY" - "$@" <<'PY' || fail "the page's layout or grid ($1)"
+import json, sys
+l, s, coloured = json.load(open(sys.argv[1])), json.load(open(sys.argv[2])), sys.argv[3] == "1"
+c, side, info, w, v = l["canvas"], l["side"], l["info"], l["window"], l["view"]
+print(f"layout: canvas {c}, side {side}, info {info}, window {w}; grid {v and v['grid']}; cloud {v and v['cloud']}")
+area = lambda a, b: max(0, min(a["right"], b["right"]) - max(a["left"], b["left"])) * \
+                   max(0, min(a["bottom"], b["bottom"]) - max(a["top"], b["top"]))
+assert info and area(c, info) == 0, f"the info panel covers {info and area(c, info)} px² of the canvas"
+assert side and v, "no side column, or no window.pbnbvView"
+assert area(c, side) == 0, f"the side column covers {area(c, side)} px² of the canvas"
+assert side["left"] <= info["left"] and info["right"] <= side["right"], "the info panel is not in the side column"
+assert c["right"] - c["left"] >= 0.5 * w["width"] and c["bottom"] - c["top"] >= w["height"] - 1, "the canvas is too small"
+g = v["grid"]
+assert g and g["cell_m"] == 0.1 and g["lines"] >= 10, "no 10 cm grid"
+assert s["ground"] is not None and abs(g["z_m"] - s["ground"]["z_m"]) < 1e-6, "the grid is not on the scene's ground"
+assert "10 cm" in (l["scale_text"] or ""), "the legend does not give the grid's cell"
+assert v["cloud"]["normals"] and v["cloud"]["colours"] == coloured, "the cloud's normals or colours are not drawn"
 PY
 }
 
@@ -82,13 +137,21 @@ PY
 wait_for 300 live_scene_with_plan || fail "no scene with a cloud and a plan within 300 s"
 view=$("$PY" -c "import json; print(json.load(open('$tmp/live.json'))['view'])")
 "$PY" - "$tmp/live.json" $CANDIDATES <<'PY' || fail "live scene counts"
-import json, sys
+import json, math, sys
 j = json.load(open(sys.argv[1])); n = int(sys.argv[2])
 print(f"live view {j['view']}: {j['cloud_points']} cloud points drawn of {j['cloud_points_total']}, "
       f"{len(j['candidates'])} candidates (plan: {j['plan_candidates']}), {len(j['ellipsoids'])} ellipsoids, "
       f"{j['frontier_voxels']} frontier voxels, {len(j['views_taken'])} views taken")
 ok = j['cloud_points'] > 0 and len(j['cloud']) == 3 * j['cloud_points'] and len(j['candidates']) == n \
      and j['plan_candidates'] == n and len(j['views_taken']) == j['view'] and len(j['ellipsoids']) >= 1
+# The cloud's normals (fitted to each view's points live): one per point, nearly all found, unit
+# (127); no colours; the grid's ground (the free rig: the working volume's floor) below the cloud.
+nn = j['cloud_normals']
+found = sum(1 for i in range(0, len(nn), 3) if 120 <= math.hypot(*nn[i:i + 3]) <= 134)
+g = j['ground']
+print(f"normals: {found} of {j['cloud_points']} points; colours: {len(j['cloud_colours'])}; ground {g}")
+ok = ok and len(nn) == 3 * j['cloud_points'] and found >= 0.9 * j['cloud_points'] and j['cloud_colours'] == [] \
+     and g is not None and 'free rig' in g['what'] and min(j['cloud'][2::3]) >= g['z_m']
 # The page's F, computed again from the plan's request, map and ellipsoids, is the plan's F at
 # the chosen view (one of the candidates).
 import math
@@ -109,8 +172,14 @@ ok = ok and math.dist(near['pose']['position_m'], c) < 1e-6
 sys.exit(0 if ok else 1)
 PY
 # The scene of that view stays as it was once the scan moves on (the latest may have no plan yet).
-screenshot "http://127.0.0.1:$PORT/?view=$view" "$tmp/live.png"
-check_pixels "$tmp/live.png" 300 50
+# The plain headless screenshot first (the page draws before its load event), then the driven one.
+t0=$(date +%s)
+plain_screenshot "http://127.0.0.1:$PORT/?view=$view" "$tmp/plain.png"
+echo "plain chromium --headless --screenshot: $(( $(date +%s) - t0 )) s"
+check_scene "$tmp/plain.png" 0,200,255 300 20 50
+screenshot "http://127.0.0.1:$PORT/?view=$view" "$tmp/live.png" "$tmp/live-layout.json"
+check_scene "$tmp/live.png" 0,200,255 300 20 50
+check_layout "$tmp/live-layout.json" "$tmp/live.json" 0
 if [ -n "${PBNBV_VIEW_SCREENSHOT:-}" ]; then cp "$tmp/live.png" "$PBNBV_VIEW_SCREENSHOT"; fi
 
 deadline=$(( $(date +%s) + 300 ))
@@ -121,7 +190,22 @@ done
 wait $scan_pid || fail "the scan failed"
 kill "${pids[0]}"; wait "${pids[0]}" 2>/dev/null || true
 
-# --- a finished scan folder
+# --- a finished scan folder, its cloud.ply given a colour per point (a PLY's red green blue:
+# what pbnbv's own cloud.ply does not carry yet), the same green for every point
+"$PY" - "$tmp/scan/cloud.ply" <<'PY' || fail "cannot colour cloud.ply"
+import sys, numpy as np
+path = sys.argv[1]
+d = open(path, "rb").read()
+end = d.index(b"end_header\n") + len(b"end_header\n")
+head = d[:end].decode().split("\n")
+n = int(next(l for l in head if l.startswith("element vertex")).split()[2])
+assert "format binary_little_endian 1.0" in head and head[-3] == "property float nz", head
+rec = np.zeros(n, dtype=[("xyz_n", "<f4", 6), ("rgb", "u1", 3)])
+rec["xyz_n"] = np.frombuffer(d[end:end + 24 * n], dtype="<f4").reshape(n, 6)
+rec["rgb"] = (60, 220, 0)
+head[-2:-2] = ["property uchar red", "property uchar green", "property uchar blue"]
+open(path, "wb").write("\n".join(head).encode() + rec.tobytes())
+PY
 PORT=8766
 "$BIN/pbnbv" view "$tmp/scan" --port $PORT >"$tmp/view-dir.log" 2>&1 &
 pids+=($!)
@@ -160,6 +244,25 @@ with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/views", timeout=3) as 
     assert r.status == 200
 print(f"pbnbv view: answered in {time.time() - t0:.2f} s beside 20 idle connections")
 PYEOF
-screenshot "http://127.0.0.1:$PORT/?view=1" "$tmp/dir.png"
-check_pixels "$tmp/dir.png" 300 50
+# The cloud's colours and normals from cloud.ply; the grid's ground; a scene not changed since the
+# revision the page shows is answered 204; the page carries its first scene.
+curl -sf --max-time 10 "http://127.0.0.1:$PORT/api/scene?view=1" -o "$tmp/dir.json" || fail "no scene of view 1"
+"$PY" - "$tmp/dir.json" <<'PY' || fail "view 1 of the folder: not cloud.ply's colours and normals, or no ground"
+import json, math, sys
+j = json.load(open(sys.argv[1])); n = j["cloud_points"]; c = j["cloud_colours"]; nn = j["cloud_normals"]
+found = sum(1 for i in range(0, len(nn), 3) if 120 <= math.hypot(*nn[i:i + 3]) <= 134)
+print(f"folder view 1: {n} points, {len(c) // 3} colours, {found} normals, ground {j['ground']}")
+sys.exit(0 if c == [60, 220, 0] * n and len(nn) == 3 * n and found >= 0.9 * n and j["ground"] is not None else 1)
+PY
+rev=$("$PY" -c "import json; print(json.load(open('$tmp/dir.json'))['revision'])")
+code=$(curl -s -o /dev/null -w '%{http_code}' "http://127.0.0.1:$PORT/api/scene?view=1&since=$rev")
+[ "$code" = 204 ] || fail "an unchanged scene (since=$rev) was answered $code, not 204"
+curl -sf --max-time 10 "http://127.0.0.1:$PORT/?view=1" | "$PY" -c "
+import json, re, sys
+m = re.search(r'<script type=\"application/json\" id=\"initial\">(.*?)</script>', sys.stdin.read(), re.S)
+j = json.loads(m.group(1)); sys.exit(0 if j['scene']['view'] == 1 and j['scene']['cloud_points'] > 0 else 1)" \
+  || fail "the page of view 1 does not carry its scene"
+screenshot "http://127.0.0.1:$PORT/?view=1" "$tmp/dir.png" "$tmp/dir-layout.json"
+check_scene "$tmp/dir.png" 60,220,0 300 20 50 0,200,255
+check_layout "$tmp/dir-layout.json" "$tmp/dir.json" 1
 echo "pbnbv view: live and folder scenes drawn ($taken views)"

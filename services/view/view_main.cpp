@@ -6,8 +6,19 @@
 //   DIR:    a finished scan folder (core/view load_scan_folder), no bus.
 // The candidates' F is computed again here (core/view score_candidates) from the plan's request,
 // map and ellipsoids: the scorer publishes only the chosen view and its alternatives.
+// Besides core/view's scene, the page gets the drawn cloud's normals (to shade it) and colours
+// (when the cloud has any), where the grid goes (the turntable top), and a revision per scene;
+// the page's HTML carries the scene it opens on, so it draws before its load event (a plain
+// headless screenshot shows the scan).
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -22,10 +33,16 @@
 #include "core/base/install_paths.hpp"
 #include "core/base/log.hpp"
 #include "core/base/signals.hpp"
+#include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
 #include "core/perception/cloud_filter.hpp"
+#include "core/perception/depth_cloud.hpp"
+#include "core/perception/neighbours.hpp"
+#include "core/scan/scan_record.hpp"
+#include "core/view/cloud_look.hpp"
 #include "core/view/scene.hpp"
 #include "core/view/view_options.hpp"
+#include "pbnbv/capture_request_t.hpp"
 #include "pbnbv/ellipsoid_set_t.hpp"
 #include "pbnbv/plan_request_t.hpp"
 #include "pbnbv/registered_cloud_t.hpp"
@@ -45,15 +62,32 @@ const char* state_name(int8_t s) {
   return s >= 0 && s < 8 ? names[s] : "unknown";
 }
 
-// The scenes served: one per view number; live, the latest is updated as messages arrive.
+// Where the page lays its ground grid: an object-frame z and what is there.
+struct Ground {
+  double z_m = 0;
+  std::string what;
+  bool operator==(const Ground& o) const { return z_m == o.z_m && what == o.what; }
+};
+
+// The scenes served: one per view number; live, the latest is updated as messages arrive. Each
+// has a revision (from one counter: a scene put again, or the ground moved, gets a new one), so
+// that the page, which sends the revision it shows, is told "unchanged" (204) instead of sent the
+// scene again.
 class SceneStore {
  public:
-  std::string scene(int view) {
+  enum class Found { kScene, kUnchanged, kMissing };
+  // The JSON of view `view` (< 0: the latest) into `body`, unless its revision is `since` (> 0).
+  Found scene(int view, uint64_t since, std::string& body) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (scenes_.empty()) return scene_json(Scene{}).dump();
+    if (scenes_.empty()) {
+      body = json_of(Entry{}).dump();
+      return Found::kScene;
+    }
     auto it = view < 0 ? std::prev(scenes_.end()) : scenes_.find(view);
-    if (it == scenes_.end()) return {};
-    return scene_json(it->second).dump();
+    if (it == scenes_.end()) return Found::kMissing;
+    if (since > 0 && it->second.revision == since) return Found::kUnchanged;
+    body = json_of(it->second).dump();
+    return Found::kScene;
   }
   std::string views() {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -61,19 +95,60 @@ class SceneStore {
     for (const auto& [v, s] : scenes_) j["views"].push_back(v);
     return j.dump();
   }
-  void put(const Scene& s) {
+  void put(const Scene& s, const CloudLook& look) {
     std::lock_guard<std::mutex> lock(mutex_);
-    scenes_[s.view] = s;
+    scenes_[s.view] = Entry{s, look, ++revision_};
+  }
+  void set_ground(const std::optional<Ground>& g) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (g == ground_) return;
+    ground_ = g;
+    for (auto& [v, e] : scenes_) e.revision = ++revision_;
   }
   void clear() {
     std::lock_guard<std::mutex> lock(mutex_);
     scenes_.clear();
+    ground_.reset();
   }
   bool live_ = false;
 
  private:
+  struct Entry {
+    Scene scene;
+    CloudLook look;
+    uint64_t revision = 0;
+  };
+  // core/view's scene JSON and what this server adds: `revision`; `cloud_normals`, flat nx, ny, nz
+  // per drawn point as whole numbers -127..127 (127: 1; 0 0 0: none) or [] when there are none;
+  // `cloud_colours`, flat r, g, b 0..255 per drawn point or [] when the cloud has none; `ground`,
+  // {"z_m", "what"} or null while unknown.
+  nlohmann::json json_of(const Entry& e) const {
+    nlohmann::json j = scene_json(e.scene);
+    j["revision"] = e.revision;
+    const std::size_t n = e.scene.cloud.size();
+    std::vector<int> normals, colours;
+    if (e.look.normals.size() == n) {
+      normals.reserve(3 * n);
+      for (const Eigen::Vector3f& v : e.look.normals) {
+        for (int c = 0; c < 3; ++c) {
+          normals.push_back(std::isfinite(v[c]) ? static_cast<int>(std::lround(std::clamp(v[c], -1.0f, 1.0f) * 127.0f)) : 0);
+        }
+      }
+    }
+    if (e.look.colours.size() == n) {
+      colours.reserve(3 * n);
+      for (const Rgb& c : e.look.colours) colours.insert(colours.end(), {c[0], c[1], c[2]});
+    }
+    j["cloud_normals"] = normals;
+    j["cloud_colours"] = colours;
+    j["ground"] = ground_ ? nlohmann::json{{"z_m", ground_->z_m}, {"what", ground_->what}} : nlohmann::json(nullptr);
+    return j;
+  }
+
   std::mutex mutex_;
-  std::map<int, Scene> scenes_;
+  std::map<int, Entry> scenes_;
+  std::optional<Ground> ground_;
+  uint64_t revision_ = 0;
 };
 
 // Live: the scene of the scan followed, from its messages.
@@ -90,6 +165,7 @@ class LiveScene {
       if (follows(m.scan_id)) requests_.put(m.request_id, m);
     });
     bus.subscribe<view_plan_t>(channels::kViewPlan, [this](const view_plan_t& m) { on_plan(m); });
+    bus.subscribe<capture_request_t>(channels::kCaptureRequest, [this](const capture_request_t& m) { on_capture(m); });
   }
 
  private:
@@ -98,7 +174,16 @@ class LiveScene {
   static bool view_in_range(int iteration) { return iteration >= 0 && iteration < 1000; }
   static constexpr std::size_t kRequestsKept = 16;
 
-  void publish() { store_.put(scene_); }
+  void publish() { store_.put(scene_, look_); }
+
+  // Where the grid goes, from the capture request: on the arm rig the object frame's origin is
+  // object_z_m above the turntable top; on the free rig (object_z_m 0) there is no turntable and
+  // the grid is the working volume's floor.
+  void on_capture(const capture_request_t& m) {
+    if (!follows(m.scan_id) || !std::isfinite(m.object_z_m) || !std::isfinite(m.crop_min_m[2])) return;
+    store_.set_ground(m.object_z_m > 0 ? Ground{-m.object_z_m, "the turntable top"}
+                                       : Ground{m.crop_min_m[2], "the working volume's floor (free rig)"});
+  }
 
   void on_status(const scan_status_t& m) {
     if (m.scan_id.empty()) return;
@@ -109,6 +194,8 @@ class LiveScene {
       scene_ = Scene{};
       scene_.scan_id = m.scan_id;
       merged_.clear();
+      merged_normals_.clear();
+      look_ = CloudLook{};
       taken_.clear();
       maps_.clear();
       ellipsoids_.clear();
@@ -134,10 +221,23 @@ class LiveScene {
     scene_.views_taken.clear();
     for (const auto& [i, p] : taken_) scene_.views_taken.push_back(p);
     if (m.accepted) {
-      for (const auto& p : m.cloud.points_m) merged_.emplace_back(p[0], p[1], p[2]);
+      // REGISTERED_CLOUD carries no normals (the registration service writes them to its
+      // frames/): fitted here to the view's own points, facing its camera, as the registration
+      // service fits them when a CLOUD has none, and averaged per voxel as the model grows.
+      PointCloud view;
+      view.reserve(m.cloud.points_m.size());
+      for (const auto& p : m.cloud.points_m) view.emplace_back(p[0], p[1], p[2]);
+      std::vector<Eigen::Vector3f> normals =
+          view.size() >= 3 ? neighbour_normals(view, taken_[m.iteration].translation(), 12)
+                           : std::vector<Eigen::Vector3f>(view.size(), Eigen::Vector3f::Zero());
+      merged_.insert(merged_.end(), view.begin(), view.end());
+      merged_normals_.insert(merged_normals_.end(), normals.begin(), normals.end());
       scene_.cloud_points_total += m.cloud.points_m.size();
-      merged_ = voxel_downsample(merged_, voxel_m_);
+      const PointCloud all = std::move(merged_);
+      merged_ = voxel_downsample(all, voxel_m_);
+      merged_normals_ = voxel_normals(all, merged_normals_, merged_, voxel_m_);
       scene_.cloud = decimate_cloud(merged_, voxel_m_, max_points_);
+      look_ = look_from(scene_.cloud, merged_, NeighbourIndex(merged_), merged_normals_, {}, std::max(0.02f, static_cast<float>(4 * voxel_m_)));
     }
     publish();
   }
@@ -192,13 +292,61 @@ class LiveScene {
   double voxel_m_;
   std::size_t max_points_;
   Scene scene_;
+  CloudLook look_;  // of scene_.cloud
   PointCloud merged_;
+  std::vector<Eigen::Vector3f> merged_normals_;  // one per point of merged_ (zero: none)
   std::map<int, Pose> taken_;
   std::map<int, Eigen::AlignedBox3d> maps_;
   std::map<int, std::vector<Ellipsoid>> ellipsoids_;
   bus::ReplyCache<int64_t, plan_request_t> requests_{kRequestsKept};  // the last few: a plan follows its request
   int64_t last_plan_ = -1;
 };
+
+// A finished scan folder's scenes, each with its cloud's look: the normals (and colours, when it
+// has any) of DIR/cloud.ply, the merged model, nearest point by point; normals fitted to the drawn
+// points where cloud.ply is missing or has none. The grid: on the arm rig the turntable top
+// (settings.object_z_m below the origin), on the free rig the working volume's floor.
+void load_folder(const std::string& dir, double voxel_m, std::size_t max_points, SceneStore& store) {
+  const std::vector<Scene> scenes = load_scan_folder(dir, voxel_m, max_points);
+  const fs::path model = fs::path(dir) / "cloud.ply";
+  PointCloud from;
+  CloudExtras extras;
+  std::vector<Rgb> colours;
+  if (fs::exists(model)) {
+    try {
+      from = read_ply(model.string(), extras);
+      colours = read_ply_colours(model, from.size());
+    } catch (const std::exception& e) {
+      log_warn(std::string("pbnbv view: the normals of cloud.ply are not used: ") + e.what());
+      from.clear();
+      extras = CloudExtras{};
+    }
+  }
+  // Zero normals ("none found") are as good as none when every one is zero.
+  const bool file_normals = !extras.normals.empty() &&
+                            std::any_of(extras.normals.begin(), extras.normals.end(), [](const Eigen::Vector3f& n) { return !n.isZero(); });
+  std::optional<NeighbourIndex> index;
+  if (file_normals || !colours.empty()) index.emplace(from);
+  for (const Scene& s : scenes) {
+    CloudLook look;
+    if (index) {
+      look = look_from(s.cloud, from, *index, file_normals ? extras.normals : std::vector<Eigen::Vector3f>{}, colours,
+                       std::max(0.02f, static_cast<float>(4 * voxel_m)));
+    }
+    if (look.normals.empty()) look.normals = fitted_normals(s.cloud);
+    store.put(s, look);
+  }
+  try {
+    const ScanSettings settings = read_scan_record(dir).settings;
+    if (settings.rig == RigKind::kArm && settings.object_z_m > 0) {
+      store.set_ground(Ground{-settings.object_z_m, "the turntable top"});
+    } else {
+      store.set_ground(Ground{settings.crop_min_m.z(), "the working volume's floor (free rig)"});
+    }
+  } catch (const std::exception& e) {
+    log_warn(std::string("pbnbv view: no ground from scan.json's settings: ") + e.what());
+  }
+}
 
 std::string read_file(const fs::path& p) { return read_text(p.string()); }
 
@@ -246,7 +394,25 @@ void harden(httplib::Server& server) {
   });
 }
 
-// The page, its script, three.js and the two API routes (the views, a view's scene).
+// The view a request asks for (?view=N; -1: the latest), or nullopt after answering 400.
+std::optional<int> view_param(const httplib::Request& req, httplib::Response& res) {
+  if (!req.has_param("view")) return -1;
+  try {
+    return std::stoi(req.get_param_value("view"));
+  } catch (const std::exception&) {
+    res.status = 400;
+    res.set_content("view must be a whole number, got '" + req.get_param_value("view").substr(0, 100) + "'", "text/plain");
+    return std::nullopt;
+  }
+}
+
+// The element of index.html that receives the page's first state.
+constexpr const char* kInitialSlot = R"(<script type="application/json" id="initial">null</script>)";
+
+// The page, its script, three.js and the two API routes (the views, a view's scene). The page
+// comes with its first state in its HTML: {"views": /api/views, "scene": the scene of ?view=N (the
+// latest without) or null, "view": N}, so that it draws before its load event; a scene that has
+// not changed since the revision the page shows (?since=R) is answered 204, without a body.
 void add_routes(httplib::Server& server, const fs::path& web, SceneStore& store) {
   // Every handler keeps what it reads by value (the store by pointer: it outlives the server).
   const fs::path three = web / "three";
@@ -258,31 +424,69 @@ void add_routes(httplib::Server& server, const fs::path& web, SceneStore& store)
     }
     res.set_content(read_file(p), type);
   };
-  server.Get("/", [file, web](const httplib::Request&, httplib::Response& res) { file(res, web / "index.html", "text/html"); });
+  server.Get("/", [web, st](const httplib::Request& req, httplib::Response& res) {
+    const fs::path page = web / "index.html";
+    if (!fs::is_regular_file(page)) {
+      res.status = 404;
+      return;
+    }
+    const std::optional<int> view = view_param(req, res);
+    if (!view) return;
+    std::string html = read_file(page);
+    std::string scene;
+    const bool found = st->scene(*view, 0, scene) == SceneStore::Found::kScene;
+    std::string state = R"({"views":)" + st->views() + R"(,"view":)" + std::to_string(*view) + R"(,"scene":)" +
+                        (found ? scene : std::string("null")) + "}";
+    // Inside <script> only "</script" or "<!--" could end or upset the element: JSON has '<' in
+    // strings only, where \u003c means the same.
+    std::string escaped;
+    escaped.reserve(state.size());
+    for (const char c : state) {
+      if (c == '<') {
+        escaped += "\\u003c";
+      } else {
+        escaped += c;
+      }
+    }
+    const std::string slot = kInitialSlot;
+    if (const std::size_t at = html.find(slot); at != std::string::npos) {
+      html.replace(at, slot.size(), R"(<script type="application/json" id="initial">)" + escaped + "</script>");
+    }
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(html, "text/html");
+  });
   server.Get("/view.js", [file, web](const httplib::Request&, httplib::Response& res) { file(res, web / "view.js", "text/javascript"); });
   server.Get(R"(/three/([A-Za-z0-9_.]+\.js))", [file, three](const httplib::Request& req, httplib::Response& res) {
     file(res, three / req.matches[1].str(), "text/javascript");
   });
   server.Get("/api/views", [st](const httplib::Request&, httplib::Response& res) { res.set_content(st->views(), "application/json"); });
   server.Get("/api/scene", [st](const httplib::Request& req, httplib::Response& res) {
-    int view = -1;
-    if (req.has_param("view")) {
+    const std::optional<int> view = view_param(req, res);
+    if (!view) return;
+    uint64_t since = 0;
+    if (req.has_param("since")) {
       try {
-        view = std::stoi(req.get_param_value("view"));
+        since = std::stoull(req.get_param_value("since"));
       } catch (const std::exception&) {
         res.status = 400;
-        res.set_content("view must be a whole number, got '" + req.get_param_value("view") + "'", "text/plain");
+        res.set_content("since must be a revision number, got '" + req.get_param_value("since").substr(0, 100) + "'", "text/plain");
         return;
       }
     }
-    std::string body = st->scene(view);
-    if (body.empty()) {
-      res.status = 404;
-      res.set_content("no view " + std::to_string(view), "text/plain");
-      return;
-    }
+    std::string body;
     res.set_header("Cache-Control", "no-store");
-    res.set_content(body, "application/json");
+    switch (st->scene(*view, since, body)) {
+      case SceneStore::Found::kMissing:
+        res.status = 404;
+        res.set_content("no view " + std::to_string(*view), "text/plain");
+        return;
+      case SceneStore::Found::kUnchanged:
+        res.status = 204;
+        return;
+      case SceneStore::Found::kScene:
+        res.set_content(body, "application/json");
+        return;
+    }
   });
 }
 
@@ -321,7 +525,7 @@ int main(int argc, char** argv) {
     SceneStore store;
     store.live_ = dir.empty();
     if (!dir.empty()) {
-      for (const Scene& s : load_scan_folder(dir, voxel_m, static_cast<std::size_t>(max_points))) store.put(s);
+      load_folder(dir, voxel_m, static_cast<std::size_t>(max_points), store);
     }
     httplib::Server server;
     harden(server);
