@@ -72,6 +72,11 @@ CheckLine check_status_rate(const std::string& channel, const std::vector<Status
                             fixed(1e3 * host_gap, 0), fixed(1e3 * kMaxStatusGapS, 0), measured));
   }
   std::string detail = fmt::format(">= {} Hz on the driver's clock ({})", fixed(kMinStatusRateHz, 0), measured);
+  if (driver_gap > kNamedStatusGapS) {
+    // A loaded host (a twin that falls behind and catches up) or a busy controller: the motion
+    // executor's readings are that old at worst.
+    detail += fmt::format("; longest hole {} ms on the driver's clock", fixed(1e3 * driver_gap, 0));
+  }
   if (host_span < driver_span * 2.0 / 3.0) {
     detail += fmt::format("; received in bursts: they reached this host within {} s ({} Hz on its clock), so the "
                           "readings the motion executor acts on can be up to a burst old (longest wait {} ms); a "

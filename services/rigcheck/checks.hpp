@@ -15,7 +15,8 @@ namespace pbnbv::rigcheck {
 
 // The contract's figures the checks hold a driver to (README "Writing a driver").
 inline constexpr double kMinStatusRateHz = 50.0;  // ARM_STATUS / TURNTABLE_STATUS
-inline constexpr double kMaxStatusGapS = 0.25;    // the longest a status stream may go quiet
+inline constexpr double kMaxStatusGapS = 1.0;     // the longest a status stream may go quiet
+inline constexpr double kNamedStatusGapS = 0.1;   // a shorter hole is said in the line, not failed
 // Exposure times may lead the newest status, or trail the status before the trigger, by this
 // much (a few status periods at 50 Hz).
 inline constexpr double kExposureSlackS = 0.06;
