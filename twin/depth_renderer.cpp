@@ -24,8 +24,6 @@
 #include <GL/gl.h>
 
 #include <algorithm>
-#include <array>
-#include <cstdlib>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -447,23 +445,6 @@ DepthImage through_lens(const DepthImage& pinhole, const CameraIntrinsics& k_pin
   out.height = k.height;
   out.depth_m = distort_depth(pinhole.depth_m, k_pinhole, k, d);
   return out;
-}
-
-LensDistortion parse_distortion(const std::string& text, const std::string& what) {
-  std::array<double, 5> c{};
-  std::size_t start = 0;
-  for (int i = 0; i < 5; ++i) {
-    const std::size_t comma = text.find(',', start);
-    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    char* end = nullptr;
-    c[static_cast<std::size_t>(i)] = std::strtod(part.c_str(), &end);
-    const bool last = i == 4;
-    if (part.empty() || end != part.c_str() + part.size() || (last != (comma == std::string::npos))) {
-      throw std::invalid_argument(what + " '" + text + "' is not five numbers k1,k2,p1,p2,k3");
-    }
-    start = comma + 1;
-  }
-  return LensDistortion::from(c);
 }
 
 void apply_depth_noise(DepthImage& image, const DepthNoise& noise, std::mt19937_64& rng) {

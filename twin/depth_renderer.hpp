@@ -66,9 +66,6 @@ class DepthRenderer {
 DepthImage through_lens(const DepthImage& pinhole, const CameraIntrinsics& k_pinhole, const CameraIntrinsics& k,
                         const LensDistortion& d);
 
-// "k1,k2,p1,p2,k3" as a lens; throws std::invalid_argument naming `what` and the text otherwise.
-LensDistortion parse_distortion(const std::string& text, const std::string& what);
-
 // Optional sensor noise, off by default: Gaussian with standard deviation
 // sigma_per_m * depth (depth-proportional), and each valid pixel dropped (set to 0) with
 // probability `dropout`.

@@ -369,8 +369,13 @@ int main(int argc, char** argv) {
         o.joint_error_deg * kPi / 180, static_cast<uint64_t>(o.error_seed));
     errors.turntable_backlash_rad = o.turntable_backlash_deg * kPi / 180;
     const RigModel rig = load_rig(model_path);
-    o.distortion = o.distortion_text.empty() ? (rig.camera ? rig.camera->distortion : LensDistortion{})
-                                             : twin::parse_distortion(o.distortion_text, "--distortion");
+    if (o.distortion_text.empty()) {
+      o.distortion = rig.camera ? rig.camera->distortion : LensDistortion{};
+    } else {
+      const std::optional<std::vector<double>> c = cli::detail::parse_numbers(o.distortion_text, 5);
+      if (!c) throw std::invalid_argument("--distortion '" + o.distortion_text + "' is not five numbers k1,k2,p1,p2,k3");
+      o.distortion = LensDistortion{(*c)[0], (*c)[1], (*c)[2], (*c)[3], (*c)[4]};
+    }
     o.distortion.validate(o.k, "--distortion");
     o.render_k = o.distortion.none() ? o.k : pinhole_cover(o.k, o.distortion);
     // The turntable reports its reading: the platter's true angle plus the model's zero (a

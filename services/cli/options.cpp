@@ -263,7 +263,7 @@ std::vector<std::string> split_list(const std::string& text, char separator) {
   return out;
 }
 
-std::optional<Eigen::Vector3d> parse_point(const std::string& text) {
+std::optional<std::vector<double>> parse_numbers(const std::string& text, std::size_t count) {
   std::vector<std::string> parts;
   std::size_t start = 0;
   while (true) {
@@ -272,12 +272,18 @@ std::optional<Eigen::Vector3d> parse_point(const std::string& text) {
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
-  if (parts.size() != 3) return std::nullopt;
-  Eigen::Vector3d p;
-  for (int i = 0; i < 3; ++i) {
-    if (!parse_number(parts[i], &p[i])) return std::nullopt;
+  if (parts.size() != count) return std::nullopt;
+  std::vector<double> v(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!parse_number(parts[i], &v[i])) return std::nullopt;
   }
-  return p;
+  return v;
+}
+
+std::optional<Eigen::Vector3d> parse_point(const std::string& text) {
+  const std::optional<std::vector<double>> v = parse_numbers(text, 3);
+  if (!v) return std::nullopt;
+  return Eigen::Vector3d((*v)[0], (*v)[1], (*v)[2]);
 }
 
 CLI::Option* takes(CLI::Option* o, ValueKind kind) {

@@ -54,6 +54,8 @@ bool parse_number(const std::string& text, double* v);
 std::string type_name(std::string_view unit, bool integral);
 // "x,y,z" -> three finite numbers; std::nullopt otherwise.
 std::optional<Eigen::Vector3d> parse_point(const std::string& text);
+// "a,b,...": exactly `count` finite numbers, the whole text; std::nullopt otherwise.
+std::optional<std::vector<double>> parse_numbers(const std::string& text, std::size_t count);
 // "a,b,,c" -> {"a", "b", "c"} (empty parts dropped).
 std::vector<std::string> split_list(const std::string& text, char separator = ',');
 CLI::Option* finish(CLI::Option* o, const std::string& type);

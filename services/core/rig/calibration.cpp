@@ -160,7 +160,6 @@ std::string fmt17(double v) {
   return os.str();
 }
 
-
 }  // namespace
 
 SphereFit fit_sphere_known_radius(const std::vector<Eigen::Vector3d>& points, double radius_m,
@@ -356,7 +355,6 @@ std::string calibrated_rig_xml(const std::string& xml, const std::string& path, 
     custom.prepend_child(pugi::node_comment).set_value(" pbnbv calibrate: the turntable's reading at the platter's zero, rad ");
     custom.prepend_child(pugi::node_pcdata).set_value(indent.c_str());
     zero.append_attribute("name").set_value("pbnbv_turntable_zero");
-    zero.append_attribute("data");
   }
   if (!zero.attribute("data")) zero.append_attribute("data");
   zero.attribute("data").set_value(fmt17(turntable_zero_rad).c_str());
