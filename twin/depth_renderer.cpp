@@ -26,6 +26,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -252,6 +253,45 @@ struct DepthRenderer::Impl {
   std::vector<float> raw;  // bottom-up depth buffer as read back
 };
 
+namespace {
+
+// The scene camera `cam` (its pose) with the pinhole frustum of `k` at the near plane, pixel
+// centres at integer (u, v):
+//   left = -n (cx + 0.5) / fx,  right = n (W - cx - 0.5) / fx,
+//   top  =  n (cy + 0.5) / fy,  bottom = n (cy + 0.5 - H) / fy   (GL y up, image v down).
+// mjr_render sets left/right = center -/+ 0.5 W / H (top - bottom) = center -/+ n W / (2 fx).
+mjvGLCamera pinhole_camera(mjvGLCamera cam, const CameraIntrinsics& k, double near_m, double far_m) {
+  const double n = near_m;
+  cam.frustum_near = static_cast<float>(near_m);
+  cam.frustum_far = static_cast<float>(far_m);
+  cam.frustum_top = static_cast<float>(n * (k.cy + 0.5) / k.fy);
+  cam.frustum_bottom = static_cast<float>(n * (k.cy + 0.5 - k.height) / k.fy);
+  cam.frustum_center = static_cast<float>(n * (k.width - 1.0 - 2.0 * k.cx) / (2.0 * k.fx));
+  return cam;
+}
+
+// The scene camera moved by depth_T_colour in its own optical frame (x right, y down, z forward:
+// MuJoCo's camera looks along `forward` with `up` up, so right = forward x up).
+mjvGLCamera moved_camera(mjvGLCamera cam, const Pose& depth_T_colour) {
+  const Eigen::Vector3d pos(cam.pos[0], cam.pos[1], cam.pos[2]);
+  const Eigen::Vector3d forward(cam.forward[0], cam.forward[1], cam.forward[2]);
+  const Eigen::Vector3d up(cam.up[0], cam.up[1], cam.up[2]);
+  Eigen::Matrix3d world_R_depth;
+  world_R_depth.col(0) = forward.cross(up);
+  world_R_depth.col(1) = -up;
+  world_R_depth.col(2) = forward;
+  const Eigen::Vector3d p = pos + world_R_depth * depth_T_colour.translation();
+  const Eigen::Matrix3d world_R_colour = world_R_depth * depth_T_colour.linear();
+  for (int i = 0; i < 3; ++i) {
+    cam.pos[i] = static_cast<float>(p[i]);
+    cam.forward[i] = static_cast<float>(world_R_colour(i, 2));
+    cam.up[i] = static_cast<float>(-world_R_colour(i, 1));
+  }
+  return cam;
+}
+
+}  // namespace
+
 DepthRenderer::DepthRenderer(mjModel* model, const std::string& camera_name,
                              const CameraIntrinsics& k, const DepthRange& range)
     : impl_(std::make_unique<Impl>()) {
@@ -389,19 +429,10 @@ DepthImage DepthRenderer::render(mjData* data) {
   for (int f = 0; f < mjNRNDFLAG; ++f) scn.flags[f] = 0;
   scn.flags[mjRND_CULL_FACE] = 1;
 
-  // The pinhole frustum at the near plane, pixel centres at integer (u, v):
-  //   left = -n (cx + 0.5) / fx,  right = n (W - cx - 0.5) / fx,
-  //   top  =  n (cy + 0.5) / fy,  bottom = n (cy + 0.5 - H) / fy   (GL y up, image v down).
-  // mjr_render sets left/right = center -/+ 0.5 W / H (top - bottom) = center -/+ n W / (2 fx).
-  mjvGLCamera cam = mjv_averageCamera(&scn.camera[0], &scn.camera[1]);
-  const double n = s.near_m;
-  cam.frustum_near = static_cast<float>(s.near_m);
-  cam.frustum_far = static_cast<float>(s.far_m);
-  cam.frustum_top = static_cast<float>(n * (k.cy + 0.5) / k.fy);
-  cam.frustum_bottom = static_cast<float>(n * (k.cy + 0.5 - k.height) / k.fy);
-  cam.frustum_center = static_cast<float>(n * (k.width - 1.0 - 2.0 * k.cx) / (2.0 * k.fx));
+  const mjvGLCamera cam = pinhole_camera(mjv_averageCamera(&scn.camera[0], &scn.camera[1]), k, s.near_m, s.far_m);
   scn.camera[0] = cam;
   scn.camera[1] = cam;
+  const double n = s.near_m;
 
   const mjrRect viewport = {0, 0, k.width, k.height};
   mjr_setBuffer(mjFB_OFFSCREEN, &s.context);
@@ -434,6 +465,61 @@ DepthImage DepthRenderer::render(mjData* data) {
     }
   }
   return image;
+}
+
+std::vector<uint8_t> DepthRenderer::render_colour(mjData* data, const CameraIntrinsics& kc, const Pose& depth_T_colour) {
+  if (!data) throw std::invalid_argument("DepthRenderer::render_colour: data is null");
+  kc.validate();
+  Impl& s = *impl_;
+  if (kc.width > s.k.width || kc.height > s.k.height) {
+    throw std::invalid_argument("DepthRenderer::render_colour: a " + std::to_string(kc.width) + "x" +
+                                std::to_string(kc.height) + " colour image is larger than the " +
+                                std::to_string(s.k.width) + "x" + std::to_string(s.k.height) + " depth image");
+  }
+  if (kc.fx != kc.fy) throw std::invalid_argument("DepthRenderer::render_colour: fx != fy (MuJoCo 2.2.2 renders square pixels)");
+  if (eglGetCurrentContext() == EGL_NO_CONTEXT) {
+    throw std::runtime_error("DepthRenderer::render_colour: no EGL context is current on this thread");
+  }
+  mjvScene& scn = s.scene;
+  mjv_updateScene(s.model, data, &s.option, &s.perturb, &s.camera, mjCAT_STATIC | mjCAT_DYNAMIC, &scn);
+  // Model geoms only, as they look (colour, material, texture); the lights kept, no shadows,
+  // reflections or skybox (nothing there is black, as a camera sees an unlit background).
+  int kept = 0;
+  for (int i = 0; i < scn.ngeom; ++i) {
+    mjvGeom g = scn.geoms[i];
+    if (g.objtype != mjOBJ_GEOM || g.category == mjCAT_DECOR || g.rgba[3] <= 0.0f) continue;
+    g.label[0] = '\0';
+    g.reflectance = 0.0f;
+    scn.geoms[kept++] = g;
+  }
+  scn.ngeom = kept;
+  scn.stereo = mjSTEREO_NONE;
+  scn.enabletransform = 0;
+  scn.framewidth = 0;
+  for (int f = 0; f < mjNRNDFLAG; ++f) scn.flags[f] = 0;
+  scn.flags[mjRND_CULL_FACE] = 1;
+  const mjvGLCamera cam =
+      pinhole_camera(moved_camera(mjv_averageCamera(&scn.camera[0], &scn.camera[1]), depth_T_colour), kc, s.near_m, s.far_m);
+  scn.camera[0] = cam;
+  scn.camera[1] = cam;
+  const mjrRect viewport = {0, 0, kc.width, kc.height};
+  mjr_setBuffer(mjFB_OFFSCREEN, &s.context);
+  mjr_render(viewport, &scn, &s.context);
+  std::vector<uint8_t> bottom_up(static_cast<std::size_t>(kc.width) * kc.height * 3);
+  mjr_readPixels(bottom_up.data(), nullptr, viewport, &s.context);
+  const GLenum gl_error = glGetError();
+  if (gl_error != GL_NO_ERROR) {
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), "OpenGL error 0x%04X", static_cast<unsigned>(gl_error));
+    throw std::runtime_error(std::string("DepthRenderer::render_colour: ") + buf);
+  }
+  const std::size_t row = static_cast<std::size_t>(kc.width) * 3;
+  std::vector<uint8_t> rgb(bottom_up.size());
+  for (int v = 0; v < kc.height; ++v) {
+    std::memcpy(rgb.data() + static_cast<std::size_t>(v) * row,
+                bottom_up.data() + static_cast<std::size_t>(kc.height - 1 - v) * row, row);
+  }
+  return rgb;
 }
 
 // ------------------------------------------------------------------------------------------------

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/base/pose.hpp"
 #include "core/geometry/camera_model.hpp"
 #include "core/geometry/lens_distortion.hpp"
 
@@ -55,6 +56,13 @@ class DepthRenderer {
 
   // Renders the scene as in `data` (positions must be current: mj_forward or mj_kinematics).
   DepthImage render(mjData* data);
+
+  // The colour image (R G B, row 0 at the top) a colour sensor with the pinhole `kc`, at
+  // depth_T_colour from this camera's optical frame, takes of the scene as in `data`: the geoms'
+  // own colours, materials and textures, lit by the model's lights and headlight, no shadows;
+  // black where nothing is drawn. Throws std::invalid_argument when kc is larger than the depth
+  // image (the offscreen buffer is sized for it) or fx != fy.
+  std::vector<uint8_t> render_colour(mjData* data, const CameraIntrinsics& kc, const Pose& depth_T_colour);
 
  private:
   struct Impl;

@@ -1,9 +1,12 @@
 #include "twin/rig_sim.hpp"
 
+#include "core/io/mesh_file.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -34,6 +37,49 @@ void replace_marker(std::string& xml, const std::string& marker, const std::stri
 }
 }  // namespace
 
+std::vector<ObjectColourPart> split_by_colour(const TriangleMesh& mesh, const std::vector<Rgb>& vertex_colours,
+                                              const std::string& dir, const std::string& stem, int levels) {
+  if (vertex_colours.size() != mesh.vertices.size()) {
+    throw std::invalid_argument("split_by_colour: " + std::to_string(vertex_colours.size()) + " colours for " +
+                                std::to_string(mesh.vertices.size()) + " vertices");
+  }
+  if (levels < 1 || levels > 256) throw std::invalid_argument("split_by_colour: levels must be in [1, 256]");
+  struct Group {
+    TriangleMesh mesh;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  };
+  std::map<int, Group> groups;  // by quantised colour
+  for (const Eigen::Vector3i& t : mesh.triangles) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const Rgb& v = vertex_colours[static_cast<std::size_t>(t[k])];
+      c += Eigen::Vector3d(v[0], v[1], v[2]) / 3.0;
+    }
+    int key = 0;
+    for (int k = 0; k < 3; ++k) key = key * levels + std::min(levels - 1, static_cast<int>(c[k] * levels / 256.0));
+    Group& g = groups[key];
+    g.sum += c;
+    const int base = static_cast<int>(g.mesh.vertices.size());
+    for (int k = 0; k < 3; ++k) g.mesh.vertices.push_back(mesh.vertices[static_cast<std::size_t>(t[k])]);
+    g.mesh.triangles.emplace_back(base, base + 1, base + 2);
+  }
+  std::vector<Group*> order;
+  for (auto& [key, g] : groups) order.push_back(&g);
+  std::stable_sort(order.begin(), order.end(),
+                   [](const Group* a, const Group* b) { return a->mesh.triangles.size() > b->mesh.triangles.size(); });
+  std::vector<ObjectColourPart> parts;
+  for (const Group* g : order) {
+    ObjectColourPart part;
+    part.mesh_path = stem + "_colour_" + std::to_string(parts.size()) + ".stl";
+    part.triangles = g->mesh.triangles.size();
+    const Eigen::Vector3d mean = g->sum / (255.0 * static_cast<double>(part.triangles));
+    part.rgb = {mean.x(), mean.y(), mean.z()};
+    write_stl_binary(g->mesh, (std::filesystem::path(dir) / part.mesh_path).string());
+    parts.push_back(part);
+  }
+  return parts;
+}
+
 std::string compose_model_xml(const std::string& rig_xml_path, const ObjectPlacement& object) {
   std::string xml = read_text(rig_xml_path);
   std::string asset, geom;
@@ -41,9 +87,18 @@ std::string compose_model_xml(const std::string& rig_xml_path, const ObjectPlace
     asset = "<mesh name=\"pbnbv_object\" file=\"" + object.mesh_path + "\"/>";
     std::ostringstream g;
     g.precision(17);
-    // Rendered (group 0) and collides with the arm like the real object would.
-    g << "<geom name=\"object\" type=\"mesh\" mesh=\"pbnbv_object\" pos=\"0 0 "
-      << object.object_z_m << "\" group=\"0\" rgba=\"0.8 0.75 0.6 1\" mass=\"0.5\"/>";
+    // Rendered (group 0) and collides with the arm like the real object would; with colour parts
+    // it only collides (group 3) and the parts, which do not collide, are drawn in its place.
+    const bool parts = !object.colour_parts.empty();
+    g << "<geom name=\"object\" type=\"mesh\" mesh=\"pbnbv_object\" pos=\"0 0 " << object.object_z_m
+      << "\" group=\"" << (parts ? 3 : 0) << "\" rgba=\"0.8 0.75 0.6 1\" mass=\"0.5\"/>";
+    for (std::size_t i = 0; i < object.colour_parts.size(); ++i) {
+      const ObjectColourPart& part = object.colour_parts[i];
+      asset += "<mesh name=\"pbnbv_object_colour_" + std::to_string(i) + "\" file=\"" + part.mesh_path + "\"/>";
+      g << "<geom name=\"object_colour_" << i << "\" type=\"mesh\" mesh=\"pbnbv_object_colour_" << i
+        << "\" pos=\"0 0 " << object.object_z_m << "\" group=\"0\" contype=\"0\" conaffinity=\"0\" mass=\"1e-6\" rgba=\""
+        << part.rgb[0] << " " << part.rgb[1] << " " << part.rgb[2] << " 1\"/>";
+    }
     geom = g.str();
   }
   if (object.calibration_sphere_radius_m > 0) {

@@ -10,16 +10,26 @@
 #include <optional>
 #include <random>
 #include <stdexcept>
+#include <array>
 #include <string>
 #include <vector>
 
 #include "core/base/pose.hpp"
+#include "core/geometry/colour_image.hpp"
+#include "core/geometry/mesh.hpp"
 #include "core/rig/rig.hpp"
 
 namespace pbnbv::twin {
 
 // The object as the twin places it: a mesh already in the normalised object frame, whose
 // frame sits object_z_m above the turntable top (free rig: at the world origin).
+// A part of the object drawn in its own colour (MuJoCo 2.2.2 draws a mesh in one colour).
+struct ObjectColourPart {
+  std::string mesh_path;              // binary STL, in the composed model's folder
+  std::array<double, 3> rgb{};        // 0..1
+  std::size_t triangles = 0;
+};
+
 struct ObjectPlacement {
   std::string mesh_path;  // binary STL or OBJ in the object frame; "" = empty rig
   double object_z_m = 0;
@@ -27,7 +37,17 @@ struct ObjectPlacement {
   // its centre above the platter's +x axis, this far from the turntable axis (the mark).
   double calibration_sphere_radius_m = 0;
   double calibration_sphere_offset_m = 0;
+  // Drawn instead of the mesh, which then only collides (group 3): its faces in their colours
+  // (split_by_colour). Empty: the mesh is drawn in one colour.
+  std::vector<ObjectColourPart> colour_parts;
 };
+
+// A mesh with a colour per vertex as parts of one colour each: its faces grouped by their
+// vertices' mean colour quantised to `levels` steps per channel, each group written as binary STL
+// `<stem>_colour_N.stl` in `dir`, its colour the mean of its faces'. Largest group first.
+// Throws std::invalid_argument when the colours are not one per vertex.
+std::vector<ObjectColourPart> split_by_colour(const TriangleMesh& mesh, const std::vector<Rgb>& vertex_colours,
+                                              const std::string& dir, const std::string& stem, int levels = 4);
 
 // Reads the rig's MJCF text and returns it with the object's asset and geom (and the calibration
 // sphere's geom, a native MuJoCo sphere) inserted at the PBNBV_OBJECT_ASSET / PBNBV_OBJECT_GEOM

@@ -9,6 +9,8 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -20,12 +22,15 @@
 #include <thread>
 
 #include "bus/bus.hpp"
+#include "bus/colour_codec.hpp"
 #include "bus/convert.hpp"
 #include "bus/rig_options.hpp"
 #include "cli/options.hpp"
 #include "core/scan/scan_options.hpp"
 #include "core/base/log.hpp"
+#include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
+#include "core/io/mesh_file.hpp"
 #include "core/rig/calibration.hpp"
 #include "core/rig/rig.hpp"
 #include "twin/depth_renderer.hpp"
@@ -84,6 +89,9 @@ struct TwinOptions {
   std::string distortion_text;  // --distortion k1,k2,p1,p2,k3 ("": the rig file's camera's, else none)
   LensDistortion distortion;    // the lens frames are taken through (main fills it in)
   CameraIntrinsics render_k;    // what the renderer draws: k, or the pinhole image covering the lens's
+  bool no_colour = false;       // frames without their colour image
+  std::string colour_offset_text;  // --colour-offset x,y,z mm
+  Pose depth_T_colour = Pose::Identity();  // the colour sensor in the depth sensor's optical frame
 
   bool faulty(twin::DriverFault f) const { return twin::has_fault(faults, f); }
 };
@@ -138,6 +146,13 @@ void add_options(CLI::App& app, TwinOptions& o) {
                 "render through this lens: Brown-Conrady k1,k2,p1,p2,k3 (OpenCV's order); the frames say so "
                 "(default: the rig file's pbnbv_camera_distortion, else none)",
                 "K1,K2,P1,P2,K3");
+  cli::add_flag(app, "no-colour", &o.no_colour,
+                "send depth frames without their colour image (default: each frame carries the colour image the "
+                "camera took with it, JPEG, or raw R G B with --raw-depth)");
+  cli::add_text(app, "colour-offset", &o.colour_offset_text,
+                "where the colour sensor sits in the depth sensor's optical frame (x right, y down, z forward), mm: "
+                "a camera with two sensors, e.g. 15,0,0 (default 0,0,0: colour registered to depth)",
+                "X,Y,Z");
   cli::add_text(app, "truth-rig-out", &o.truth_rig_path,
                 "write the true hand-eye transform and turntable zero to this JSON file (evaluation only)", "PATH");
 }
@@ -150,6 +165,15 @@ void complete(TwinOptions& o) {
       throw std::invalid_argument("--mesh " + o.object.mesh_path + " does not exist");
     }
   }
+  if (!o.colour_offset_text.empty()) {
+    const std::optional<std::vector<double>> c = cli::detail::parse_numbers(o.colour_offset_text, 3);
+    if (!c || std::abs((*c)[0]) > 200 || std::abs((*c)[1]) > 200 || std::abs((*c)[2]) > 200) {
+      throw std::invalid_argument("--colour-offset '" + o.colour_offset_text +
+                                  "' is not three numbers x,y,z in mm, each within 200 mm");
+    }
+    o.depth_T_colour = Pose::Identity();
+    o.depth_T_colour.translation() = Eigen::Vector3d((*c)[0], (*c)[1], (*c)[2]) * 1e-3;
+  }
   o.k.cx = o.cx.value_or(o.k.width / 2.0);
   o.k.cy = o.cy.value_or(o.k.height / 2.0);
   o.k.validate();
@@ -160,6 +184,27 @@ void complete(TwinOptions& o) {
                                 " m at --calibration-sphere-offset " + std::to_string(o.object.calibration_sphere_offset_m) +
                                 " m reaches beyond the platter (radius 0.2 m)");
   }
+}
+
+// A PLY object (MuJoCo 2.2.2 reads STL and OBJ only) as binary STL beside the composed model,
+// and, when its vertices have colours, its faces split into parts of one colour each, drawn in
+// them (twin/rig_sim.hpp). Other meshes are given to MuJoCo as they are.
+void prepare_object_mesh(TwinOptions& o) {
+  namespace fs = std::filesystem;
+  std::string ext = fs::path(o.object.mesh_path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (o.object.mesh_path.empty() || ext != ".ply") return;
+  const std::string source = fs::path(o.object.mesh_path).filename().string();
+  const TriangleMesh mesh = load_mesh(o.object.mesh_path);
+  const std::vector<Rgb> colours = read_ply_colours(o.object.mesh_path, mesh.vertices.size());
+  const fs::path dir = fs::absolute(o.model_out).parent_path();
+  const std::string stem = fs::path(o.model_out).stem().string() + "_object";
+  write_stl_binary(mesh, (dir / (stem + ".stl")).string());
+  o.object.mesh_path = (dir / (stem + ".stl")).string();
+  if (colours.empty()) return;
+  o.object.colour_parts = twin::split_by_colour(mesh, colours, dir.string(), stem);
+  log_info(fmt::format("object in {} colours (from the vertex colours of {})", o.object.colour_parts.size(),
+                       source));
 }
 
 // --truth-rig-out: the true hand-eye transform and turntable zero, for the calibration's tests.
@@ -292,6 +337,14 @@ class Twin {
     exposure.start_utime = rig_utime(epoch_, sim_.time_s()) + (o_.faulty(DriverFault::kLateExposure) ? 1000000 : 0);
     const double unit_m = o_.faulty(DriverFault::kDepthUnitMm) ? 1e-3 : camera_.depth_unit_m;
     depth_frame_t f = driver::depth_frame(camera_, driver::depth_counts(image.depth_m, unit_m), exposure, frame_seq_++, t);
+    if (!o_.no_colour) {
+      // The colour sensor exposes with the depth sensor; its image is a pinhole one.
+      ColourImage colour;
+      colour.intrinsics = o_.k;
+      colour.depth_T_colour = o_.depth_T_colour;
+      colour.rgb = renderer_.render_colour(sim_.data(), o_.k, o_.depth_T_colour);
+      bus::set_colour(f, colour, f.utime, o_.raw_depth ? depth_frame_t::kColourRgb8 : depth_frame_t::kColourJpeg);
+    }
     if (o_.faulty(DriverFault::kNoTriggerId)) f.trigger_seq = -1;
     if (truth_.is_open()) append_truth(truth_, f, sim_.true_camera_in_object(o_.object.object_z_m));
     bus_.set_state("idle");
@@ -363,6 +416,7 @@ int main(int argc, char** argv) {
         depth_sensor_model(o.camera),
         [&app](std::string_view name) { return app.get_option("--" + std::string(name))->count() > 0; }, o.k, o.range);
     complete(o);
+    prepare_object_mesh(o);
     const std::string model_path = o.rig.model_path.empty() ? default_rig_path(o.rig.kind) : o.rig.model_path;
     twin::PoseErrorModel errors = twin::make_pose_error(
         o.hand_eye_error_mm * 1e-3, o.hand_eye_error_deg * kPi / 180, o.turntable_error_deg * kPi / 180,

@@ -5,6 +5,7 @@
 // message and the field.
 #include <string>
 
+#include "bus/colour_codec.hpp"
 #include "bus/convert.hpp"
 #include "bus/rig_log.hpp"
 #include "core/scan/replay_rig.hpp"
@@ -85,7 +86,8 @@ inline turntable_command_t to_msg(const TurntableCommand& c) {
   return m;
 }
 
-// Throws naming the bad field (intrinsics, range, size, depth unit), as decode_frame.
+// Throws naming the bad field (intrinsics, range, size, depth unit, colour), as decode_frame and
+// decode_colour.
 inline DepthFrame from_msg(const depth_frame_t& m) {
   DecodedFrame d = decode_frame(m);
   DepthFrame f;
@@ -99,6 +101,7 @@ inline DepthFrame from_msg(const depth_frame_t& m) {
   f.range = d.range;
   f.depth_m = std::move(d.depth_m);
   f.distortion = d.distortion;
+  f.colour = decode_colour(m);
   return f;
 }
 

@@ -198,6 +198,11 @@ inline point_cloud_t to_msg(const CaptureResult& c) {
   m.num_normals = static_cast<int32_t>(c.normals.size());
   m.normals.resize(c.normals.size());
   for (std::size_t i = 0; i < c.normals.size(); ++i) m.normals[i] = {c.normals[i].x(), c.normals[i].y(), c.normals[i].z()};
+  m.num_colours = static_cast<int32_t>(c.colours.size());
+  m.colours.resize(c.colours.size());
+  for (std::size_t i = 0; i < c.colours.size(); ++i) {
+    m.colours[i] = {c.colours[i][0], c.colours[i][1], c.colours[i][2]};
+  }
   return m;
 }
 
@@ -260,6 +265,15 @@ inline CaptureResult from_msg(const point_cloud_t& m) {
                                   std::to_string(norm) + ")");
     }
     c.normals.push_back(n);
+  }
+  // Colours: none, or one per point.
+  if (!m.colours.empty() && m.colours.size() != m.points_m.size()) {
+    throw std::invalid_argument("CLOUD num_colours = " + std::to_string(m.colours.size()) + ": neither 0 nor num_points (" +
+                                std::to_string(m.points_m.size()) + ")");
+  }
+  c.colours.reserve(m.colours.size());
+  for (const auto& rgb : m.colours) {
+    c.colours.push_back({rgb[0], rgb[1], rgb[2]});
   }
   return c;
 }

@@ -248,6 +248,10 @@ int64_t frame_bytes(int64_t pixels) {
   return static_cast<int64_t>(compressBound(static_cast<uLong>(2 * pixels)));
 }
 
+// The bytes of a frame's colour image of `pixels` pixels: raw R G B (a JPEG of it is smaller but
+// for its headers on a tiny image; 64 kB covers those).
+int64_t colour_bytes(int64_t pixels) { return 3 * pixels + 64 * kKiB; }
+
 }  // namespace
 
 const MessageSchema* find_schema(std::string_view type_name) {
@@ -258,9 +262,10 @@ const MessageSchema* find_schema(std::string_view type_name) {
 int64_t DecodeLimits::max_message_bytes(std::string_view type_name) const {
   // Room for a message's scalars and strings around its arrays.
   constexpr int64_t kSmall = 64 * kKiB;
-  if (type_name == "depth_frame_t") return frame_bytes(max_frame_pixels) + kSmall;
-  // A cloud has at most one point (12 bytes) and one normal (12 bytes) per pixel of its frame.
-  if (type_name == "point_cloud_t" || type_name == "registered_cloud_t") return 24 * max_frame_pixels + kSmall;
+  if (type_name == "depth_frame_t") return frame_bytes(max_frame_pixels) + colour_bytes(max_frame_pixels) + kSmall;
+  // A cloud has at most one point (12 bytes), one normal (12 bytes) and one colour (3 bytes) per
+  // pixel of its frame.
+  if (type_name == "point_cloud_t" || type_name == "registered_cloud_t") return 27 * max_frame_pixels + kSmall;
   // Every cell of B, a byte each, plus its occupied and frontier centres: a B of 400^3 cells.
   if (type_name == "voxel_set_t") return 256 * kMiB;
   // Poses of the views taken and excluded (up to 1000 views each), candidates' alternatives and
@@ -271,7 +276,10 @@ int64_t DecodeLimits::max_message_bytes(std::string_view type_name) const {
 
 int64_t DecodeLimits::max_elements(std::string_view type_name, std::string_view field) const {
   if (type_name == "depth_frame_t" && field == "depth") return frame_bytes(max_frame_pixels);
-  if (type_name == "point_cloud_t" && (field == "points_m" || field == "normals")) return 3 * max_frame_pixels;
+  if (type_name == "depth_frame_t" && field == "colour") return colour_bytes(max_frame_pixels);
+  if (type_name == "point_cloud_t" && (field == "points_m" || field == "normals" || field == "colours")) {
+    return 3 * max_frame_pixels;
+  }
   return -1;
 }
 
@@ -322,6 +330,15 @@ MessageCheck check_message(const void* data, int64_t size, std::string_view type
     if (width > 0 && height > 0 && width * height > limits.max_frame_pixels) {
       c.reason = type + " is " + std::to_string(width) + " x " + std::to_string(height) + " = " +
                  std::to_string(width * height) + " pixels, the contract allows at most " +
+                 std::to_string(limits.max_frame_pixels);
+      return c;
+    }
+    const int cw_at = member_index(s, "colour_width"), ch_at = member_index(s, "colour_height");
+    const int64_t cw = cw_at < 0 ? 0 : w.top_value(static_cast<std::size_t>(cw_at));
+    const int64_t ch = ch_at < 0 ? 0 : w.top_value(static_cast<std::size_t>(ch_at));
+    if (cw > 0 && ch > 0 && cw * ch > limits.max_frame_pixels) {
+      c.reason = type + "'s colour image is " + std::to_string(cw) + " x " + std::to_string(ch) + " = " +
+                 std::to_string(cw * ch) + " pixels, the contract allows at most " +
                  std::to_string(limits.max_frame_pixels);
       return c;
     }

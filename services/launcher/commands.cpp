@@ -122,7 +122,11 @@ int run_mesh(const MeshOptions& o) {
   s.camera = scan.settings.camera;
   s.point_spacing_m = scan.settings.voxel_m;
   std::vector<SurfaceFrame> frames;
-  for (const MergedFrame& f : merged_frames(scan, dir)) frames.push_back({read_ply(f.file.string()), f.object_T_camera});
+  for (const MergedFrame& f : merged_frames(scan, dir)) {
+    CloudExtras extras;
+    PointCloud points = read_ply(f.file.string(), extras);
+    frames.push_back({std::move(points), f.object_T_camera, std::move(extras.colours)});
+  }
   const MeshSummary mesh = mesh_scan(dir, frames, s, o.stl, o.units);
   write_scan_mesh(dir, mesh);
   const nlohmann::json m = to_json(mesh);

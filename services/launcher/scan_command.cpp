@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <csignal>
+#include <cctype>
 #include <ctime>
 #include <iostream>
 #include <map>
@@ -19,7 +20,9 @@
 #include "core/base/signals.hpp"
 #include "core/geometry/mesh.hpp"
 #include "core/io/json.hpp"
+#include "core/io/cloud_file.hpp"
 #include "core/io/mesh_file.hpp"
+#include "core/surface/mesh_topology.hpp"
 #include "core/scan/scan_file.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/objects.hpp"
@@ -282,6 +285,18 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
   add("coordinator", coordinator, true);
 }
 
+namespace {
+
+// The per-vertex colours of an object's mesh file (PLY red green blue), or none.
+std::vector<Rgb> object_colours(const eval::ObjectSpec& object) {
+  std::string ext = fs::path(object.source).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".ply" || !fs::is_regular_file(object.source)) return {};
+  return read_ply_colours(object.source, object.mesh.vertices.size());
+}
+
+}  // namespace
+
 int resume_scan(const fs::path& dir, const fs::path& bin);
 int run_external_scan(const ScanOptions& o, const fs::path& bin);
 
@@ -309,6 +324,10 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
   const std::string stl = (out / "object.stl").string();
   write_stl_binary(mesh, stl);
   write_obj(mesh, (out / "object.obj").string());
+  // A mesh with vertex colours (PLY) is also written with them, for the twin to draw it in them.
+  if (const std::vector<Rgb> colours = object_colours(object); !colours.empty()) {
+    write_mesh_ply(mesh, vertex_normals(mesh), (out / "object.ply").string(), colours);
+  }
   const LaunchSettings launch = launch_settings_of(o);
   write_scan_settings(s, launch, out);
 

@@ -129,7 +129,8 @@ std::vector<process::Child> scan_processes(const ScanSettings& s, const LaunchSe
   if (!s.external_rig) {
     children.push_back(scan_process(
         "twin",
-        {(bin / "pbnbv-twin").string(), "--model", s.rig_model_path, "--mesh", (out / "object.stl").string(),
+        {(bin / "pbnbv-twin").string(), "--model", s.rig_model_path, "--mesh",
+         (out / (fs::exists(out / "object.ply") ? "object.ply" : "object.stl")).string(),
          "--object-z", exact(s.object_z_m), "--model-out", (out / "twin_model.xml").string(),
          "--width", std::to_string(s.camera.width), "--height", std::to_string(s.camera.height),
          "--fx", exact(s.camera.fx), "--fy", exact(s.camera.fy), "--cx", exact(s.camera.cx), "--cy", exact(s.camera.cy),

@@ -33,6 +33,7 @@
 
 #include "bus/asked_captures.hpp"
 #include "bus/bus.hpp"
+#include "bus/colour_codec.hpp"
 #include "bus/recent_frames.hpp"
 #include "bus/state_file.hpp"
 #include "bus/reply_cache.hpp"
@@ -217,6 +218,8 @@ class RegistrationService {
     out.iterations = 0;
     out.cloud.num_normals = 0;  // written to the frame's file, not sent on
     out.cloud.normals.clear();
+    out.cloud.num_colours = 0;  // so are the colours
+    out.cloud.colours.clear();
     out.normals = registered_cloud_t::kNormalsDepthImage;
     out.frame_points = out.model_points_before = 0;
     out.new_points = -1;
@@ -278,7 +281,7 @@ class RegistrationService {
         placed_views_.push_back({c.iteration, kinematic, applied_.inverse() * r.correction, r.refined || placed_views_.empty()});
       }
       save_mount();  // the estimate and the placings with this view (hand_eye.json, once per view)
-      add_to_model(c, placed, std::move(normals), pose, r.accepted, out);
+      add_to_model(c, placed, std::move(normals), capture.colours, pose, r.accepted, out);
       std::ostringstream os;
       os << "view " << c.iteration << ": " << r.reason << " (" << r.time_s * 1e3 << " ms)";
       log_info(os.str());
@@ -526,10 +529,10 @@ class RegistrationService {
 
   // The view into the model (and, with a folder, its frame, its depth image and cloud.ply); what
   // it added goes into the answer.
-  void add_to_model(const point_cloud_t& c, const PointCloud& placed, std::vector<Eigen::Vector3f> normals, const Pose& pose,
-                    bool merge, registered_cloud_t& out) {
+  void add_to_model(const point_cloud_t& c, const PointCloud& placed, std::vector<Eigen::Vector3f> normals,
+                    const std::vector<Rgb>& colours, const Pose& pose, bool merge, registered_cloud_t& out) {
     const std::size_t before = model_.points().size();
-    const ModelUpdate u = model_.add_view(c.iteration, placed, std::move(normals), pose, merge);
+    const ModelUpdate u = model_.add_view(c.iteration, placed, std::move(normals), pose, merge, colours);
     out.frame_file = u.frame_file;
     out.normals = u.normals_from_depth ? registered_cloud_t::kNormalsDepthImage : registered_cloud_t::kNormalsNeighbours;
     if (u.new_surface) {
@@ -544,8 +547,17 @@ class RegistrationService {
       const auto t0 = std::chrono::steady_clock::now();
       try {
         const bus::DecodedFrame d = bus::decode_frame(*f);
+        std::optional<ScanModel::ColourFile> colour;
+        if (std::optional<ColourImage> image = bus::decode_colour(*f)) {
+          colour.emplace();
+          colour->jpeg = f->colour_encoding == depth_frame_t::kColourJpeg
+                             ? f->colour
+                             : bus::encode_jpeg(image->rgb, image->intrinsics.width, image->intrinsics.height);
+          image->rgb.clear();
+          colour->camera = std::move(*image);
+        }
         out.depth_file = model_.write_depth(c.iteration, DepthImage{&d.depth_m, d.intrinsics, d.range, f->seq}, pose, merge,
-                                            write_depth_png);
+                                            write_depth_png, colour ? &*colour : nullptr);
       } catch (const std::invalid_argument& e) {
         log_warn("view " + std::to_string(c.iteration + 1) + ": DEPTH_FRAME " + std::to_string(f->seq) + " not written: " + e.what());
       }

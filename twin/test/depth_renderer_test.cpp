@@ -24,7 +24,10 @@
 
 #include "core/geometry/camera_model.hpp"
 #include "core/base/units.hpp"
+#include "bus/colour_codec.hpp"
 #include "bus/convert.hpp"
+#include "bus/convert_rig.hpp"
+#include "core/geometry/colour_image.hpp"
 #include "driver/rig_contract.hpp"
 
 namespace pbnbv::twin {
@@ -376,6 +379,81 @@ TEST(DepthRendererTest, ThroughAStrongLensThePipelineSeesAFlatPlane) {
   EXPECT_GT(n, static_cast<long>(0.95 * k.width * k.height));
   EXPECT_LT(worst_mm, 0.2);
   EXPECT_GT(naive_mm, 10.0);
+}
+
+// A two-coloured object, red for x > 0 and blue for x < 0 (two boxes side by side, 0.5 m ahead),
+// seen by a colour sensor 15 mm to the right of the depth sensor, sent as a DEPTH_FRAME with its
+// JPEG and decoded as the camera service does: every point more than 2 mm from the seam takes its
+// own half's colour (those within 5 mm of the outline left out: JPEG's half-resolution chroma
+// blurs the outline's pixels into the black background, as a real camera's does; raw R G B
+// gives every point its colour). Ignoring where the colour sensor sits, the points within 15 mm
+// left of the seam would read the red of the points 15 mm to their right (the test can fail).
+TEST(DepthRendererTest, ATwoColouredObjectComesOutWithTheColoursOnTheRightHalves) {
+  egl();
+  const std::string boxes =
+      "    <geom type=\"box\" size=\"0.05 0.05 0.01\" pos=\"0.05 0 0.51\" rgba=\"0.9 0.1 0.1 1\"/>\n"
+      "    <geom type=\"box\" size=\"0.05 0.05 0.01\" pos=\"-0.05 0 0.51\" rgba=\"0.1 0.1 0.9 1\"/>\n";
+  Scene scene(mjcf(boxes));
+  CameraIntrinsics k;
+  k.width = 320;
+  k.height = 240;
+  k.fx = k.fy = 300;
+  k.cx = 160;
+  k.cy = 120;
+  DepthRenderer renderer(scene.model, "depth", k, DepthRange{});
+  const DepthImage depth = renderer.render(scene.data);
+  ColourImage colour;
+  colour.intrinsics = k;
+  colour.depth_T_colour.translation() = Eigen::Vector3d(0.015, 0, 0);
+  colour.rgb = renderer.render_colour(scene.data, k, colour.depth_T_colour);
+  driver::DepthCamera camera;
+  camera.width = k.width;
+  camera.height = k.height;
+  camera.fx = k.fx;
+  camera.fy = k.fy;
+  camera.cx = k.cx;
+  camera.cy = k.cy;
+  camera.depth_min_m = 0.1;
+  camera.depth_max_m = 3.0;
+  depth_trigger_t trigger{};
+  trigger.seq = 1;
+  depth_frame_t frame = driver::depth_frame(camera, driver::depth_counts(depth.depth_m, 1e-4), driver::Exposure{}, 1, trigger);
+  bus::set_colour(frame, colour, frame.utime, depth_frame_t::kColourJpeg);
+  const DepthFrame decoded = bus::from_msg(frame);
+  ASSERT_TRUE(decoded.colour);
+  PointCloud points;
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      const float z = decoded.depth_m[static_cast<std::size_t>(v) * k.width + u];
+      if (z > 0) points.push_back(back_project(k, u, v, z).cast<float>());
+    }
+  }
+  const auto count = [&](const std::vector<Rgb>& c, auto&& in, auto&& ok) {
+    long n = 0, good = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (!in(points[i].x()) || std::abs(points[i].x()) > 0.095f || std::abs(points[i].y()) > 0.045f) continue;
+      ++n;
+      good += ok(c[i]) ? 1 : 0;
+    }
+    return std::make_pair(n, good);
+  };
+  const auto red = [](const Rgb& c) { return c[0] > 2 * c[2]; };
+  const auto blue = [](const Rgb& c) { return c[2] > 2 * c[0]; };
+  const std::vector<Rgb> c = point_colours(points, *decoded.colour, Pose::Identity());
+  const auto [nr, r] = count(c, [](float x) { return x > 0.002f; }, red);
+  const auto [nb, b] = count(c, [](float x) { return x < -0.002f; }, blue);
+  std::printf("colour: %ld of %ld points right of the seam red, %ld of %ld left of it blue\n", r, nr, b, nb);
+  EXPECT_GT(nr, 2800);  // 60 x 60 pixels a half, less the outline's
+  EXPECT_GT(nb, 2800);
+  EXPECT_EQ(r, nr);
+  EXPECT_EQ(b, nb);
+  // The colour sensor taken to be where the depth sensor is: the band left of the seam reads red.
+  ColourImage misplaced = *decoded.colour;
+  misplaced.depth_T_colour = Pose::Identity();
+  const std::vector<Rgb> wrong = point_colours(points, misplaced, Pose::Identity());
+  const auto [nband, red_band] = count(wrong, [](float x) { return x < -0.003f && x > -0.012f; }, red);
+  EXPECT_GT(nband, 250);  // 9 mm = 5.4 pixels wide, 54 rows
+  EXPECT_EQ(red_band, nband);
 }
 
 // ------------------------------------------------------------------------------------------------

@@ -213,6 +213,48 @@ TEST(RigSim, ObjectIsInsertedAtTheMarkersAndAMissingMarkerIsNamed) {
 // The composed model names the object's mesh relative to itself: a scan folder copied elsewhere
 // (and the original removed) loads in MuJoCo with the object's 12 triangles; a mesh from outside
 // the model's folder is copied beside it first.
+// A mesh with a colour per vertex (two unit boxes side by side, red and blue) is drawn as one part
+// per colour: 12 triangles each, the box's colour, written beside the model, and the composed model
+// loads with the whole mesh colliding (group 3) and the parts drawn (group 0) without colliding.
+TEST(RigSim, AColouredMeshIsDrawnInItsColours) {
+  const auto dir = std::filesystem::temp_directory_path() / ("rig_sim_colour_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  TriangleMesh mesh = make_box(Eigen::Vector3d(0.05, 0.05, 0.05));
+  const std::size_t n = mesh.vertices.size();
+  TriangleMesh other = make_box(Eigen::Vector3d(0.05, 0.05, 0.05));
+  for (auto& v : mesh.vertices) v.x() += 0.025;
+  for (auto& v : other.vertices) v.x() -= 0.025;
+  mesh.vertices.insert(mesh.vertices.end(), other.vertices.begin(), other.vertices.end());
+  for (const auto& t : other.triangles) mesh.triangles.push_back(t + Eigen::Vector3i::Constant(static_cast<int>(n)));
+  std::vector<Rgb> colours(n, Rgb{230, 20, 20});
+  colours.resize(2 * n, Rgb{20, 20, 230});
+  const std::vector<twin::ObjectColourPart> parts = twin::split_by_colour(mesh, colours, dir.string(), "object");
+  ASSERT_EQ(parts.size(), 2u);
+  EXPECT_EQ(parts[0].triangles, 12u);
+  EXPECT_EQ(parts[1].triangles, 12u);
+  const auto is = [](const twin::ObjectColourPart& p, double r, double b) {
+    return std::abs(p.rgb[0] - r / 255) < 1e-9 && std::abs(p.rgb[2] - b / 255) < 1e-9;
+  };
+  EXPECT_TRUE((is(parts[0], 230, 20) && is(parts[1], 20, 230)) || (is(parts[0], 20, 230) && is(parts[1], 230, 20)));
+  EXPECT_EQ(load_mesh((dir / parts[0].mesh_path).string()).triangles.size(), 12u);
+  const std::string stl = (dir / "object.stl").string();
+  write_stl_binary(mesh, stl);
+  twin::ObjectPlacement placement{stl, 0.1};
+  placement.colour_parts = parts;
+  const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
+  twin::RigSim sim(rig, placement, (dir / "model.xml").string());
+  const int whole = mj_name2id(sim.model(), mjOBJ_GEOM, "object");
+  const int part = mj_name2id(sim.model(), mjOBJ_GEOM, "object_colour_1");
+  ASSERT_GE(whole, 0);
+  ASSERT_GE(part, 0);
+  EXPECT_EQ(sim.model()->geom_group[whole], 3);
+  EXPECT_EQ(sim.model()->geom_group[part], 0);
+  EXPECT_EQ(sim.model()->geom_contype[part], 0);
+  EXPECT_EQ(sim.model()->geom_conaffinity[part], 0);
+  EXPECT_THROW(twin::split_by_colour(mesh, {Rgb{1, 2, 3}}, dir.string(), "object"), std::invalid_argument);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(RigSim, TheModelLoadsFromACopiedFolder) {
   namespace fs = std::filesystem;
   const fs::path root = fs::temp_directory_path() / ("rig_sim_copy_" + std::to_string(::getpid()));

@@ -162,14 +162,17 @@ TEST(MessageSchemas, HoldEveryTypeOfTheContractOnce) {
   EXPECT_EQ(bus::message_schemas().size(), 22u);
   const MessageSchema* s = bus::find_schema("depth_frame_t");
   ASSERT_NE(s, nullptr);
-  ASSERT_EQ(s->fields.size(), 20u);  // constants are not encoded, not listed
-  EXPECT_EQ(s->fields.back().name, "depth");
-  EXPECT_EQ(s->fields.back().kind, FieldKind::kByte);
-  ASSERT_EQ(s->fields.back().dims.size(), 1u);
-  EXPECT_EQ(s->fields[static_cast<std::size_t>(s->fields.back().dims[0].count_field)].name, "num_bytes");
+  ASSERT_EQ(s->fields.size(), 32u);  // constants are not encoded, not listed
+  EXPECT_EQ(s->fields[19].name, "depth");
+  EXPECT_EQ(s->fields[19].kind, FieldKind::kByte);
+  ASSERT_EQ(s->fields[19].dims.size(), 1u);
+  EXPECT_EQ(s->fields[static_cast<std::size_t>(s->fields[19].dims[0].count_field)].name, "num_bytes");
+  EXPECT_EQ(s->fields.back().name, "colour");
+  EXPECT_EQ(s->fields[static_cast<std::size_t>(s->fields.back().dims[0].count_field)].name, "colour_num_bytes");
   const MessageSchema* cloud = bus::find_schema("point_cloud_t");
   ASSERT_NE(cloud, nullptr);
-  ASSERT_EQ(cloud->fields.back().dims.size(), 2u);  // normals[num_normals][3]
+  ASSERT_EQ(cloud->fields.back().dims.size(), 2u);  // colours[num_colours][3]
+  EXPECT_EQ(cloud->fields.back().name, "colours");
   EXPECT_EQ(cloud->fields.back().dims[1].fixed, 3);
   EXPECT_EQ(bus::find_schema("pbnbv_t"), nullptr);
 }
@@ -360,6 +363,27 @@ TEST(MessageGuard, AFrameIsHeldToTheLargestImage) {
   // The twin's 1280 x 720 passes.
   bytes = encoded(small_frame(1280, 720, "s"));
   EXPECT_TRUE(check<depth_frame_t>(bytes, bytes.size()).ok);
+  // Its colour image is held to the same: 5000 x 5000 declared over a few bytes of JPEG.
+  f = small_frame(2, 2, "s");
+  f.colour_width = f.colour_height = 5000;
+  f.colour_encoding = depth_frame_t::kColourJpeg;
+  f.colour = {0xFF, 0xD8, 0xFF, 0xD9};
+  f.colour_num_bytes = 4;
+  bytes = encoded(f);
+  c = check<depth_frame_t>(bytes, bytes.size());
+  EXPECT_FALSE(c.ok);
+  EXPECT_NE(c.reason.find("depth_frame_t's colour image is 5000 x 5000 = 25000000 pixels, the contract allows at most "
+                          "16777216"),
+            std::string::npos)
+      << c.reason;
+  // And its bytes: 20 x 20 x 3 + 64 kB is the most a 100-pixel camera's colour image may take.
+  f = small_frame(2, 2, "s");
+  f.colour.assign(300 + 64 * 1024 + 1, 0);
+  f.colour_num_bytes = static_cast<int32_t>(f.colour.size());
+  bytes = encoded(f);
+  c = check<depth_frame_t>(bytes, bytes.size(), limits);
+  EXPECT_FALSE(c.ok);
+  EXPECT_NE(c.reason.find("depth_frame_t.colour claims 65837 bytes"), std::string::npos) << c.reason;
 }
 
 TEST(MessageGuard, TheScanIdIsReadWithoutDecoding) {
@@ -396,8 +420,13 @@ TEST(MessageGuard, HundredByteFramesClaimingTwoGigabytesAreRefusedOnTheBus) {
   bus::Bus b("guard-test");
   int handled = 0;
   b.subscribe<depth_frame_t>(channels::kDepthFrame, [&](const depth_frame_t&) { ++handled; });
-  std::vector<uint8_t> bytes = encoded(small_frame(1, 1, ""));
-  bytes.resize(bytes.size() - 2);  // no image: num_bytes is the last field
+  depth_frame_t f = small_frame(1, 1, "");
+  f.depth.clear();
+  f.num_bytes = 0;
+  std::vector<uint8_t> bytes = encoded(f);
+  // Cut after num_bytes: no image and none of the colour fields after it (an empty colour image's
+  // 149 bytes: size 8, intrinsics 32, lens 40, pose 56, utime 8, encoding 1, num_bytes 4).
+  bytes.resize(bytes.size() - 149);
   set_int(&bytes, bytes.size() - 4, 2147483647, 4);
   ASSERT_LT(bytes.size(), 180u);  // 163: the header alone (with the lens's 5 doubles)
   const int64_t rss_before = status_kb("VmRSS"), peak_before = status_kb("VmHWM");

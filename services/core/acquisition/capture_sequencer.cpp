@@ -204,6 +204,7 @@ CaptureStep CaptureSequencer::process(const DepthFrame& f) {
     CloudStats stats;
     out.points = depth_to_object_cloud(depth, f.intrinsics, f.range, object_T_camera, crop, r.voxel_m, &stats);
     out.normals = depth_normals(out.points, depth, f.intrinsics, object_T_camera);
+    if (f.colour) out.colours = point_colours(out.points, *f.colour, object_T_camera);
     out.object_T_camera = object_T_camera;
     out.joint_position_rad = arm->value;
     out.turntable_angle_rad = turntable;

@@ -52,6 +52,10 @@ void write_ply(const PointCloud& cloud, const std::string& path, const CloudExtr
   if (normals && extras.normals.size() != cloud.size()) {
     throw std::invalid_argument(fmt::format("{}: {}: {} normals for {} points", ctx, path, extras.normals.size(), cloud.size()));
   }
+  const bool colours = !extras.colours.empty();
+  if (colours && extras.colours.size() != cloud.size()) {
+    throw std::invalid_argument(fmt::format("{}: {}: {} colours for {} points", ctx, path, extras.colours.size(), cloud.size()));
+  }
   std::string out =
       "ply\nformat binary_little_endian 1.0\ncomment written by pbnbv " + std::string(pbnbv_version()) + "\ncomment units metres\n"
       "comment frame object (the scan's object frame: object.obj's normalised mesh frame, z up; on the arm rig it "
@@ -66,9 +70,10 @@ void write_ply(const PointCloud& cloud, const std::string& path, const CloudExtr
   }
   out += "element vertex " + std::to_string(cloud.size()) + "\nproperty float x\nproperty float y\nproperty float z\n";
   if (normals) out += "property float nx\nproperty float ny\nproperty float nz\n";
+  if (colours) out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   out += "end_header\n";
   const std::size_t header = out.size();
-  const std::size_t stride = normals ? 24 : 12;
+  const std::size_t stride = (normals ? 24 : 12) + (colours ? 3 : 0);
   out.resize(header + stride * cloud.size());
   char* dst = &out[header];
   auto put = [&dst](const Eigen::Vector3f& v) {
@@ -84,6 +89,10 @@ void write_ply(const PointCloud& cloud, const std::string& path, const CloudExtr
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     put(cloud[i]);
     if (normals) put(extras.normals[i]);
+    if (colours) {
+      std::memcpy(dst, extras.colours[i].data(), 3);
+      dst += 3;
+    }
   }
   // Atomically (temporary file + rename): a reader, or a process restarted after a crash, never
   // sees half a cloud.
@@ -145,7 +154,116 @@ PointCloud read_ply(const std::string& path, CloudExtras& extras) {
     cloud.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
     if (has_normals) extras.normals.emplace_back(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
   }
+  extras.colours = read_ply_colours(path, cloud.size());
   return cloud;
+}
+
+std::vector<Rgb> read_ply_colours(const std::filesystem::path& path, std::size_t points) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("ply", 0) != 0) return {};
+  struct Property {
+    std::string type, name;
+  };
+  std::string format;
+  std::vector<Property> props;
+  std::size_t count = 0;
+  bool seen_vertex = false, in_vertex = false;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream ls(line);
+    std::string word;
+    ls >> word;
+    if (word == "format") {
+      ls >> format;
+    } else if (word == "element") {
+      std::string name;
+      std::size_t n = 0;
+      ls >> name >> n;
+      in_vertex = name == "vertex" && !seen_vertex;
+      if (in_vertex) {
+        seen_vertex = true;
+        count = n;
+      } else if (!seen_vertex && n > 0) {
+        return {};
+      }
+    } else if (word == "property" && in_vertex) {
+      Property p;
+      ls >> p.type >> p.name;
+      if (p.type == "list") return {};
+      props.push_back(p);
+    } else if (word == "end_header") {
+      break;
+    }
+  }
+  if (!seen_vertex || count != points || count == 0) return {};
+  static const char* const kChannels[3] = {"red", "green", "blue"};
+  int channel[3] = {-1, -1, -1};
+  for (std::size_t i = 0; i < props.size(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      if (props[i].name == kChannels[c]) channel[c] = static_cast<int>(i);
+    }
+  }
+  if (channel[0] < 0 || channel[1] < 0 || channel[2] < 0) return {};
+  const auto size_of = [](const std::string& t) -> std::size_t {
+    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+    if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" || t == "float32") return 4;
+    if (t == "double" || t == "float64") return 8;
+    return 0;
+  };
+  // A channel's value on 0..255 from the number read, by its type.
+  const auto to_byte = [](const std::string& t, double v) -> uint8_t {
+    if (t == "float" || t == "float32" || t == "double" || t == "float64") v *= 255.0;
+    if (t == "ushort" || t == "uint16") v /= 257.0;
+    if (!std::isfinite(v)) return 0;
+    return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0, 255.0)));
+  };
+  std::vector<Rgb> out(count);
+  if (format == "ascii") {
+    for (std::size_t i = 0; i < count; ++i) {
+      if (!std::getline(in, line)) return {};
+      std::istringstream ls(line);
+      std::vector<double> v(props.size());
+      for (double& x : v) {
+        if (!(ls >> x)) return {};
+      }
+      for (int c = 0; c < 3; ++c) out[i][c] = to_byte(props[channel[c]].type, v[channel[c]]);
+    }
+    return out;
+  }
+  if (format != "binary_little_endian") return {};
+  std::size_t stride = 0;
+  std::vector<std::size_t> offset;
+  for (const Property& p : props) {
+    const std::size_t n = size_of(p.type);
+    if (n == 0) return {};
+    offset.push_back(stride);
+    stride += n;
+  }
+  std::vector<char> data(stride * count);
+  if (!in.read(data.data(), static_cast<std::streamsize>(data.size()))) return {};
+  const auto number = [](const std::string& t, const char* at) -> double {
+    const auto get = [at](auto v) {
+      std::memcpy(&v, at, sizeof v);
+      return static_cast<double>(v);
+    };
+    if (t == "char" || t == "int8") return get(int8_t{});
+    if (t == "uchar" || t == "uint8") return get(uint8_t{});
+    if (t == "short" || t == "int16") return get(int16_t{});
+    if (t == "ushort" || t == "uint16") return get(uint16_t{});
+    if (t == "int" || t == "int32") return get(int32_t{});
+    if (t == "uint" || t == "uint32") return get(uint32_t{});
+    if (t == "float" || t == "float32") return get(float{});
+    return get(double{});
+  };
+  for (std::size_t i = 0; i < count; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      const Property& p = props[static_cast<std::size_t>(channel[c])];
+      out[i][c] = to_byte(p.type, number(p.type, data.data() + i * stride + offset[static_cast<std::size_t>(channel[c])]));
+    }
+  }
+  return out;
 }
 
 }  // namespace pbnbv

@@ -166,31 +166,55 @@ std::vector<Eigen::Vector3f> neighbour_normals(const PointCloud& points, const E
   return s.normals;
 }
 
+namespace {
+
+struct VoxelKey {
+  int64_t x, y, z;
+  bool operator==(const VoxelKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct VoxelKeyHash {
+  std::size_t operator()(const VoxelKey& k) const {
+    return std::hash<int64_t>()(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL);
+  }
+};
+VoxelKey voxel_key(const Eigen::Vector3f& p, double voxel_m) {
+  return VoxelKey{static_cast<int64_t>(std::floor(p.x() / voxel_m)), static_cast<int64_t>(std::floor(p.y() / voxel_m)),
+                  static_cast<int64_t>(std::floor(p.z() / voxel_m))};
+}
+
+}  // namespace
+
 std::vector<Eigen::Vector3f> voxel_normals(const PointCloud& points, const std::vector<Eigen::Vector3f>& normals,
                                            const PointCloud& downsampled, double voxel_m) {
-  struct Key {
-    int64_t x, y, z;
-    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
-  };
-  struct Hash {
-    std::size_t operator()(const Key& k) const {
-      return std::hash<int64_t>()(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL);
-    }
-  };
-  auto key_of = [voxel_m](const Eigen::Vector3f& p) {
-    return Key{static_cast<int64_t>(std::floor(p.x() / voxel_m)), static_cast<int64_t>(std::floor(p.y() / voxel_m)),
-                static_cast<int64_t>(std::floor(p.z() / voxel_m))};
-  };
-  std::unordered_map<Key, Eigen::Vector3f, Hash> sums;
+  std::unordered_map<VoxelKey, Eigen::Vector3f, VoxelKeyHash> sums;
   for (std::size_t i = 0; i < points.size() && i < normals.size(); ++i) {
     if (!points[i].allFinite() || normals[i].isZero()) continue;
-    auto [it, added] = sums.try_emplace(key_of(points[i]), Eigen::Vector3f::Zero());
+    auto [it, added] = sums.try_emplace(voxel_key(points[i], voxel_m), Eigen::Vector3f::Zero());
     it->second += normals[i];
   }
   std::vector<Eigen::Vector3f> out(downsampled.size(), Eigen::Vector3f::Zero());
   for (std::size_t i = 0; i < downsampled.size(); ++i) {
-    const auto it = sums.find(key_of(downsampled[i]));
+    const auto it = sums.find(voxel_key(downsampled[i], voxel_m));
     if (it != sums.end() && it->second.norm() > 0.0f) out[i] = it->second.normalized();
+  }
+  return out;
+}
+
+std::vector<Rgb> voxel_colours(const PointCloud& points, const std::vector<Rgb>& colours, const PointCloud& downsampled,
+                               double voxel_m) {
+  if (!(voxel_m > 0)) return colours;  // nothing was merged: one colour per point as it came
+  std::unordered_map<VoxelKey, Eigen::Vector4d, VoxelKeyHash> sums;  // r g b count
+  for (std::size_t i = 0; i < points.size() && i < colours.size(); ++i) {
+    if (!points[i].allFinite()) continue;
+    auto [it, added] = sums.try_emplace(voxel_key(points[i], voxel_m), Eigen::Vector4d::Zero());
+    it->second += Eigen::Vector4d(colours[i][0], colours[i][1], colours[i][2], 1.0);
+  }
+  std::vector<Rgb> out(downsampled.size(), kNoColour);
+  for (std::size_t i = 0; i < downsampled.size(); ++i) {
+    const auto it = sums.find(voxel_key(downsampled[i], voxel_m));
+    if (it == sums.end()) continue;
+    const Eigen::Vector4d& s = it->second;
+    for (int c = 0; c < 3; ++c) out[i][static_cast<std::size_t>(c)] = static_cast<uint8_t>(std::lround(s[c] / s[3]));
   }
   return out;
 }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/geometry/camera_model.hpp"
+#include "core/geometry/colour_image.hpp"
 #include "core/geometry/point_cloud.hpp"
 #include "core/base/pose.hpp"
 
@@ -62,5 +63,10 @@ std::vector<Eigen::Vector3f> neighbour_normals(const PointCloud& points, const E
 // `downsampled` (zero normals are left out; a voxel without any gets a zero normal).
 std::vector<Eigen::Vector3f> voxel_normals(const PointCloud& points, const std::vector<Eigen::Vector3f>& normals,
                                            const PointCloud& downsampled, double voxel_m);
+
+// The colours of `points` averaged into the voxels of voxel_downsample(points, voxel_m) =
+// `downsampled`, channel by channel (a voxel without any gets kNoColour).
+std::vector<Rgb> voxel_colours(const PointCloud& points, const std::vector<Rgb>& colours, const PointCloud& downsampled,
+                               double voxel_m);
 
 }  // namespace pbnbv

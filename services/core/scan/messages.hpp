@@ -12,6 +12,7 @@
 
 #include "core/base/pose.hpp"
 #include "core/geometry/camera_model.hpp"
+#include "core/geometry/colour_image.hpp"
 #include "core/geometry/mesh_summary.hpp"
 #include "core/geometry/point_cloud.hpp"
 #include "core/perception/new_surface.hpp"
@@ -94,6 +95,8 @@ struct CaptureResult {
   // One unit normal per point, object frame, facing the camera, from the depth image's
   // neighbourhood (zero where none was found); empty: none sent.
   std::vector<Eigen::Vector3f> normals;
+  // One colour per point from the frame's colour image; empty: the frame had none.
+  std::vector<Rgb> colours;
 };
 
 // ---- What the coordinator sends and receives besides moves and captures ----------------------

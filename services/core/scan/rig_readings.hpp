@@ -4,11 +4,13 @@
 // decoded depth frame (DEPTH_FRAME). The bus translates them to and from the LCM messages
 // (bus/convert_rig.hpp); the motion and capture sequencers of this library work on these alone.
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/base/pose.hpp"
 #include "core/geometry/camera_model.hpp"
+#include "core/geometry/colour_image.hpp"
 #include "core/geometry/lens_distortion.hpp"
 
 namespace pbnbv {
@@ -84,6 +86,7 @@ struct DepthFrame {
   DepthRange range;
   std::vector<float> depth_m;  // pinhole: resampled when the frame came through a lens
   LensDistortion distortion;   // the lens the frame said it was taken through
+  std::optional<ColourImage> colour;  // the colour image taken with it, when the camera has one
 };
 
 }  // namespace pbnbv

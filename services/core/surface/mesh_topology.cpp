@@ -161,9 +161,14 @@ std::size_t remove_small_components(TriangleMesh& mesh, std::size_t min_triangle
   return removed;
 }
 
-void write_mesh_ply(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, const std::string& path) {
+void write_mesh_ply(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, const std::string& path,
+                    const std::vector<Rgb>& colours) {
   if (normals.size() != mesh.vertices.size()) {
     throw std::invalid_argument(path + ": " + std::to_string(normals.size()) + " normals for " +
+                                std::to_string(mesh.vertices.size()) + " vertices");
+  }
+  if (!colours.empty() && colours.size() != mesh.vertices.size()) {
+    throw std::invalid_argument(path + ": " + std::to_string(colours.size()) + " colours for " +
                                 std::to_string(mesh.vertices.size()) + " vertices");
   }
   std::ostringstream out;
@@ -173,12 +178,14 @@ void write_mesh_ply(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>
         << "element vertex " << mesh.vertices.size() << "\n"
         << "property float x\nproperty float y\nproperty float z\n"
         << "property float nx\nproperty float ny\nproperty float nz\n"
+        << (colours.empty() ? "" : "property uchar red\nproperty uchar green\nproperty uchar blue\n")
         << "element face " << mesh.triangles.size() << "\n"
         << "property list uchar int vertex_indices\nend_header\n";
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
       const float f[6] = {float(mesh.vertices[i].x()), float(mesh.vertices[i].y()), float(mesh.vertices[i].z()),
                           float(normals[i].x()),       float(normals[i].y()),       float(normals[i].z())};
       out.write(reinterpret_cast<const char*>(f), sizeof f);
+      if (!colours.empty()) out.write(reinterpret_cast<const char*>(colours[i].data()), 3);
     }
     for (const auto& tri : mesh.triangles) {
       const unsigned char n = 3;

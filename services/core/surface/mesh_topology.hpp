@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "core/geometry/colour_image.hpp"
 #include "core/geometry/mesh.hpp"
 
 namespace pbnbv {
@@ -32,10 +33,11 @@ std::vector<Eigen::Vector3d> vertex_normals(const TriangleMesh& mesh);
 // unused vertices are dropped. Returns the number of triangles removed.
 std::size_t remove_small_components(TriangleMesh& mesh, std::size_t min_triangles);
 
-// Binary little-endian PLY: float x y z nx ny nz per vertex, faces as vertex_indices lists, a
-// comment giving units and frame. Written atomically (temporary file + rename); throws naming
-// the path on error.
+// Binary little-endian PLY: float x y z nx ny nz per vertex (and uchar red green blue with
+// `colours`, one per vertex), faces as vertex_indices lists, a comment giving units and frame.
+// Written atomically (temporary file + rename); throws naming the path on error, and
+// std::invalid_argument when normals or colours are not one per vertex.
 void write_mesh_ply(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals,
-                    const std::string& path);
+                    const std::string& path, const std::vector<Rgb>& colours = {});
 
 }  // namespace pbnbv

@@ -1,10 +1,12 @@
 #include "core/surface/scan_mesh.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 
 #include "core/base/enum_names.hpp"
 #include "core/io/mesh_file.hpp"
+#include "core/perception/neighbours.hpp"
 #include "core/surface/mesh_topology.hpp"
 
 namespace fs = std::filesystem;
@@ -15,6 +17,29 @@ namespace pbnbv {
 namespace {
 // Fragments smaller than this are noise (a few stray points' surface), not the object.
 constexpr std::size_t kMinComponentTriangles = 50;
+
+// Each vertex's colour: that of the nearest coloured frame point within 3 point spacings (at
+// least 3 mm), kNoColour beyond. Empty when no frame has colours.
+std::vector<Rgb> vertex_colours(const TriangleMesh& mesh, const std::vector<SurfaceFrame>& frames, double spacing_m) {
+  PointCloud points;
+  std::vector<Rgb> colours;
+  for (const SurfaceFrame& f : frames) {
+    if (f.colours.size() != f.points.size()) continue;
+    points.insert(points.end(), f.points.begin(), f.points.end());
+    colours.insert(colours.end(), f.colours.begin(), f.colours.end());
+  }
+  if (points.empty()) return {};
+  const NeighbourIndex index(points);
+  const float reach = static_cast<float>(std::max(0.003, 3 * spacing_m));
+  std::vector<Rgb> out(mesh.vertices.size(), kNoColour);
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    float d2 = 0;
+    const int k = index.nearest(mesh.vertices[i].cast<float>(), reach * reach, d2);
+    if (k >= 0) out[i] = colours[static_cast<std::size_t>(k)];
+  }
+  return out;
+}
+
 }  // namespace
 
 MeshSummary mesh_scan(const fs::path& dir, const std::vector<SurfaceFrame>& frames, const SurfaceSettings& settings,
@@ -27,7 +52,7 @@ MeshSummary mesh_scan(const fs::path& dir, const std::vector<SurfaceFrame>& fram
   if (mesh.triangles.empty()) throw std::runtime_error(dir.string() + ": the mesh has no triangles");
   const MeshTopology t = mesh_topology(mesh);
   const std::vector<Eigen::Vector3d> normals = vertex_normals(mesh);
-  write_mesh_ply(mesh, normals, (dir / "mesh.ply").string());
+  write_mesh_ply(mesh, normals, (dir / "mesh.ply").string(), vertex_colours(mesh, frames, settings.point_spacing_m));
   write_obj(mesh, (dir / "mesh.obj").string(), normals, unit);
   if (with_stl) write_stl_binary(mesh, (dir / "mesh.stl").string(), unit);
   MeshSummary m;

@@ -27,6 +27,7 @@ ScanModel::ScanModel(fs::path folder, double voxel_m, double new_surface_radius_
 void ScanModel::clear() {
   points_.clear();
   normals_.clear();
+  colours_.clear();
   poses_.clear();
 }
 
@@ -37,6 +38,7 @@ bool ScanModel::restore() {
   points_ = read_ply(path.string(), extras);
   poses_ = extras.camera_poses;
   normals_ = extras.normals;
+  colours_ = extras.colours;
   if (normals_.size() != points_.size()) {
     // A cloud.ply written before normals were: fit them to the neighbours, facing away from the
     // cloud's centre (the cameras look at the object from outside).
@@ -50,9 +52,13 @@ bool ScanModel::restore() {
 }
 
 ModelUpdate ScanModel::add_view(int view, const PointCloud& points, std::vector<Eigen::Vector3f> normals,
-                                const Pose& object_T_camera, bool merge) {
+                                const Pose& object_T_camera, bool merge, const std::vector<Rgb>& colours) {
   const auto t0 = std::chrono::steady_clock::now();
   ModelUpdate u;
+  if (!colours.empty() && colours.size() != points.size()) {
+    throw std::invalid_argument("view " + std::to_string(view + 1) + ": " + std::to_string(colours.size()) +
+                                " colours for " + std::to_string(points.size()) + " points");
+  }
   if (normals.empty() && !points.empty()) {
     normals = neighbour_normals(points, object_T_camera.translation());
   } else if (normals.size() != points.size()) {
@@ -64,7 +70,7 @@ ModelUpdate ScanModel::add_view(int view, const PointCloud& points, std::vector<
   if (!folder_.empty()) {
     u.frame_file = frame_file_of(view);
     fs::create_directories(folder_ / "frames");
-    write_ply(points, (folder_ / u.frame_file).string(), CloudExtras{normals, {object_T_camera}});
+    write_ply(points, (folder_ / u.frame_file).string(), CloudExtras{normals, {object_T_camera}, colours});
   }
   if (merge) {
     u.new_surface = new_surface(points, points_, radius_m_);
@@ -73,10 +79,22 @@ ModelUpdate ScanModel::add_view(int view, const PointCloud& points, std::vector<
     std::vector<Eigen::Vector3f> grown_normals = normals_;
     grown_normals.resize(points_.size(), Eigen::Vector3f::Zero());
     grown_normals.insert(grown_normals.end(), normals.begin(), normals.end());
+    const bool coloured = !colours_.empty() || !colours.empty();
+    std::vector<Rgb> grown_colours;
+    if (coloured) {
+      grown_colours = colours_;
+      grown_colours.resize(points_.size(), kNoColour);
+      if (colours.empty()) {
+        grown_colours.resize(grown.size(), kNoColour);
+      } else {
+        grown_colours.insert(grown_colours.end(), colours.begin(), colours.end());
+      }
+    }
     points_ = voxel_downsample(grown, voxel_m_);
     normals_ = voxel_normals(grown, grown_normals, points_, voxel_m_);
+    if (coloured) colours_ = voxel_colours(grown, grown_colours, points_, voxel_m_);
     poses_.push_back(object_T_camera);
-    if (!folder_.empty()) write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_});
+    if (!folder_.empty()) write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_, colours_});
   }
   u.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return u;
@@ -164,7 +182,7 @@ void ScanModel::move_frame(const Pose& q) {
   normals_ = turned(normals_, q);
   for (Pose& pose : poses_) pose = q * pose;
   if (folder_.empty()) return;
-  write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_});
+  write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_, colours_});
   if (fs::is_directory(folder_ / "frames")) {
     for (const auto& entry : fs::directory_iterator(folder_ / "frames")) {
       if (entry.path().extension() == ".ply") move_frame_file(entry.path(), q);
@@ -190,6 +208,8 @@ void ScanModel::move_views(const std::vector<std::pair<int, Pose>>& moves, const
   write_trajectory();
   PointCloud all;
   std::vector<Eigen::Vector3f> all_normals;
+  std::vector<Rgb> all_colours;
+  bool coloured = false;
   std::vector<Pose> poses;
   for (const int v : merged) {
     CloudExtras e;
@@ -197,12 +217,16 @@ void ScanModel::move_views(const std::vector<std::pair<int, Pose>>& moves, const
     all.insert(all.end(), p.begin(), p.end());
     e.normals.resize(p.size(), Eigen::Vector3f::Zero());
     all_normals.insert(all_normals.end(), e.normals.begin(), e.normals.end());
+    coloured = coloured || !e.colours.empty();
+    e.colours.resize(p.size(), kNoColour);
+    all_colours.insert(all_colours.end(), e.colours.begin(), e.colours.end());
     if (!e.camera_poses.empty()) poses.push_back(e.camera_poses.front());
   }
   points_ = voxel_downsample(all, voxel_m_);
   normals_ = voxel_normals(all, all_normals, points_, voxel_m_);
+  colours_ = coloured ? voxel_colours(all, all_colours, points_, voxel_m_) : std::vector<Rgb>{};
   poses_ = poses;
-  write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_});
+  write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_, colours_});
 }
 
 void ScanModel::view_in_camera_frame(int view, PointCloud& points, std::vector<Eigen::Vector3f>& normals) const {
@@ -227,7 +251,7 @@ MeshSummary ScanModel::mesh(const std::vector<int>& views, const CameraIntrinsic
     CloudExtras extras;
     PointCloud points = read_ply(file.string(), extras);
     if (extras.camera_poses.size() != 1) throw std::invalid_argument(file.string() + ": no camera pose in its header");
-    frames.push_back({std::move(points), extras.camera_poses.front()});
+    frames.push_back({std::move(points), extras.camera_poses.front(), std::move(extras.colours)});
   }
   SurfaceSettings s;
   s.camera = camera;
@@ -236,7 +260,7 @@ MeshSummary ScanModel::mesh(const std::vector<int>& views, const CameraIntrinsic
 }
 
 std::string ScanModel::write_depth(int view, const DepthImage& image, const Pose& object_T_camera, bool registered,
-                                   const PngWriter& write_png) const {
+                                   const PngWriter& write_png, const ColourFile* colour) const {
   if (folder_.empty() || !image.depth_m) return "";
   fs::create_directories(folder_ / "depth");
   const std::string png = view_file(view, "png");
@@ -260,7 +284,26 @@ std::string ScanModel::write_depth(int view, const DepthImage& image, const Pose
       {"object_T_camera", to_json(object_T_camera)},
       {"pose_frame", "object"},
       {"registered", registered}};
-  write_json_atomic(intrinsics, (folder_ / "depth" / view_file(view, "json")).string());
+  nlohmann::json j = intrinsics;
+  if (colour && !colour->jpeg.empty()) {
+    fs::create_directories(folder_ / "colour");
+    const std::string jpg = view_file(view, "jpg");
+    write_text_atomic(std::string(colour->jpeg.begin(), colour->jpeg.end()), (folder_ / "colour" / jpg).string());
+    const ColourImage& c = colour->camera;
+    const CameraIntrinsics& ck = c.intrinsics;
+    const std::array<double, 5> d = c.distortion.coefficients();
+    j["colour"] = {{"image", "../colour/" + jpg},
+                   {"width", ck.width},
+                   {"height", ck.height},
+                   {"fx", ck.fx},
+                   {"fy", ck.fy},
+                   {"cx", ck.cx},
+                   {"cy", ck.cy},
+                   {"intrinsic_matrix", intrinsic_matrix(ck)},
+                   {"distortion_k1_k2_p1_p2_k3", d},
+                   {"depth_T_colour", to_json(c.depth_T_colour)}};
+  }
+  write_json_atomic(j, (folder_ / "depth" / view_file(view, "json")).string());
   write_trajectory();
   return depth_file_of(view);
 }

@@ -16,6 +16,7 @@
 
 #include "core/base/pose.hpp"
 #include "core/geometry/camera_model.hpp"
+#include "core/geometry/colour_image.hpp"
 #include "core/geometry/mesh_summary.hpp"
 #include "core/geometry/point_cloud.hpp"
 #include "core/perception/new_surface.hpp"
@@ -52,21 +53,30 @@ class ScanModel {
 
   // Adds view `view`: `points` (object frame, the registered ones when accepted) with `normals`
   // (one per point, zero where none was found; empty: fitted here to the nearest points, facing
-  // the camera) seen from object_T_camera. Writes frames/view_NNN.ply; when `merge`, counts its
-  // new surface against the model before it, merges it and writes cloud.ply. Throws
-  // std::invalid_argument when the normals are neither empty nor one per point.
+  // the camera) and `colours` (one per point; empty: none) seen from object_T_camera. Writes
+  // frames/view_NNN.ply; when `merge`, counts its new surface against the model before it, merges
+  // it and writes cloud.ply (coloured once any merged view had colours: each voxel the mean of its
+  // points', kNoColour where only views without colour saw it). Throws std::invalid_argument when
+  // the normals or colours are neither empty nor one per point.
   ModelUpdate add_view(int view, const PointCloud& points, std::vector<Eigen::Vector3f> normals,
-                       const Pose& object_T_camera, bool merge);
+                       const Pose& object_T_camera, bool merge, const std::vector<Rgb>& colours = {});
 
   // Writes the view's depth image as depth/view_NNN.png (with `write_png`: 16-bit, in units of
   // 1 / depth_scale m: 0.1 mm where the camera's range fits 16 bits, else 1 mm) and
   // depth/view_NNN.json beside it (the intrinsics, also as Open3D's intrinsic_matrix, the depth
   // scale, range, frame number and the camera pose, `registered` or kinematic), and rewrites
   // trajectory.json. Returns "depth/view_NNN.png".
+  // With `colour` (the frame's colour image as a JPEG and its camera), also writes it as
+  // colour/view_NNN.jpg and gives its camera in the JSON's "colour" (size, intrinsics, lens,
+  // depth_T_colour, the colour camera's pose in the object frame).
   using PngWriter = std::function<void(const std::vector<float>& depth_m, int width, int height, int units_per_metre,
                                        const std::string& path)>;
+  struct ColourFile {
+    ColourImage camera;          // its rgb is not used
+    std::vector<uint8_t> jpeg;   // the image
+  };
   std::string write_depth(int view, const DepthImage& image, const Pose& object_T_camera, bool registered,
-                          const PngWriter& write_png) const;
+                          const PngWriter& write_png, const ColourFile* colour = nullptr) const;
 
   // Writes trajectory.json: every depth image's camera as Open3D's PinholeCameraTrajectory
   // (read_pinhole_camera_trajectory; extrinsic = the object frame into the camera, column-major,
@@ -100,6 +110,7 @@ class ScanModel {
 
   const PointCloud& points() const { return points_; }
   const std::vector<Eigen::Vector3f>& normals() const { return normals_; }
+  const std::vector<Rgb>& colours() const { return colours_; }  // empty, or one per point
   const std::vector<Pose>& camera_poses() const { return poses_; }
   const std::filesystem::path& folder() const { return folder_; }
 
@@ -109,6 +120,7 @@ class ScanModel {
   double radius_m_;
   PointCloud points_;
   std::vector<Eigen::Vector3f> normals_;  // one per point (zero: none)
+  std::vector<Rgb> colours_;              // empty (no merged view had colours), or one per point
   std::vector<Pose> poses_;               // the merged views' camera poses, in order
 };
 

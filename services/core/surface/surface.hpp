@@ -14,6 +14,7 @@
 
 #include "core/base/pose.hpp"
 #include "core/geometry/camera_model.hpp"
+#include "core/geometry/colour_image.hpp"
 #include "core/geometry/mesh.hpp"
 #include "core/geometry/point_cloud.hpp"
 #include "core/surface/surface_options.hpp"
@@ -24,6 +25,7 @@ namespace pbnbv {
 struct SurfaceFrame {
   PointCloud points;
   Pose object_T_camera = Pose::Identity();
+  std::vector<Rgb> colours;  // one per point, or empty (none): the mesh's vertex colours come from them
 };
 
 struct SurfaceSettings {

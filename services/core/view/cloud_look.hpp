@@ -7,12 +7,11 @@
 #include <filesystem>
 #include <vector>
 
+#include "core/geometry/colour_image.hpp"
 #include "core/geometry/point_cloud.hpp"
 #include "core/perception/neighbours.hpp"
 
 namespace pbnbv {
-
-using Rgb = std::array<uint8_t, 3>;
 
 // How the page shades the drawn cloud (Scene::cloud): a unit normal per drawn point (zero: none
 // found) and, when the cloud has colours, a colour per drawn point; either may be empty (none).
@@ -30,12 +29,5 @@ std::vector<Eigen::Vector3f> fitted_normals(const PointCloud& points);
 // `from` nearest to it within max_m (none: a zero normal and mid grey).
 CloudLook look_from(const PointCloud& drawn, const PointCloud& from, const NeighbourIndex& index,
                     const std::vector<Eigen::Vector3f>& normals, const std::vector<Rgb>& colours, float max_m);
-
-// The per-point colours of a PLY cloud: its vertex element's `red`, `green` and `blue` (uchar as
-// they are, ushort scaled to 0..255, float and double read as 0..1), in the order of read_ply's
-// points. Empty when the file has none, when its vertex count is not `points`, or when its layout
-// is not one followed here (big-endian, a list property in the vertex element, another element
-// with data before it). The binary form is read as this machine's little-endian.
-std::vector<Rgb> read_ply_colours(const std::filesystem::path& path, std::size_t points);
 
 }  // namespace pbnbv

@@ -166,5 +166,31 @@ TEST(CloudFile, NormalsAndCameraPosesRoundTrip) {
   fs::remove(path);
 }
 
+// Colours go out as uchar red green blue after the normals, and come back exactly.
+TEST(CloudFile, ColoursRoundTrip) {
+  const fs::path path = fs::temp_directory_path() / ("pbnbv_cloud_colours_" + std::to_string(::getpid()) + ".ply");
+  const PointCloud points = {Eigen::Vector3f(0.1f, 0.2f, 0.3f), Eigen::Vector3f(-0.1f, 0, 0.05f)};
+  CloudExtras extras;
+  extras.normals = {Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(1, 0, 0)};
+  extras.colours = {Rgb{255, 0, 7}, Rgb{1, 128, 254}};
+  write_ply(points, path.string(), extras);
+  std::ifstream in(path, std::ios::binary);
+  std::string file((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t end = file.find("end_header\n") + 11;
+  EXPECT_NE(file.find("property float nz\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header"),
+            std::string::npos);
+  EXPECT_EQ(file.size() - end, 2u * 27u);  // 6 floats and 3 bytes a point
+  EXPECT_EQ(static_cast<unsigned char>(file[end + 24]), 255);
+  EXPECT_EQ(static_cast<unsigned char>(file[end + 26]), 7);
+  CloudExtras back;
+  const PointCloud read = read_ply(path.string(), back);
+  ASSERT_EQ(read.size(), 2u);
+  EXPECT_EQ(back.colours, extras.colours);
+  EXPECT_EQ(back.normals[1], extras.normals[1]);
+  extras.colours.pop_back();
+  EXPECT_THROW(write_ply(points, path.string(), extras), std::invalid_argument);
+  fs::remove(path);
+}
+
 }  // namespace
 }  // namespace pbnbv
