@@ -227,6 +227,7 @@ class Twin {
   void run() {
     driver::RigDriver::Options options;
     options.any_speed_scale = true;  // RigSim refuses a speed scale outside (0, 1] (or clamps it: ignore-limits)
+    options.no_turntable = !sim_.has_turntable();
     driver::RigDriver rig_driver(bus_, handlers(), options);
     wall0_ = bus::now_s();
     sim0_ = sim_.time_s();
