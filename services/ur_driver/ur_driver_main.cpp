@@ -142,8 +142,8 @@ class UrDriver {
                                                       kStepTimeoutS, [this] { publish_lost(); });
     const driver::rtde::UrControlVersion& v = client_->version();
     log_info("RTDE: connected to " + client_->address() + ", URControl " + std::to_string(v.major) + "." +
-             std::to_string(v.minor) + "." + std::to_string(v.bugfix) + "." + std::to_string(v.build) + ", " +
-             std::to_string(o_.frequency_hz) + " Hz");
+             std::to_string(v.minor) + "." + std::to_string(v.bugfix) + "." + std::to_string(v.build) +
+             fmt::format(", {:g} Hz", o_.frequency_hz));
     Command standing = sent_;
     standing.sent.hold = true;  // the number unchanged: the program starts with nothing to do
     write_registers(standing);

@@ -27,9 +27,9 @@ TEST(Rtde, RequestsAreTheBytesOfTheProtocol) {
   EXPECT_EQ(encode(get_urcontrol_version()), (Bytes{0x00, 0x03, 0x76}));
   EXPECT_EQ(encode(start()), (Bytes{0x00, 0x03, 0x53}));
   EXPECT_EQ(encode(pause()), (Bytes{0x00, 0x03, 0x50}));
-  // 125 Hz = 0x405F400000000000, then the names.
+  // 3 + 8 + 18 = 29 bytes: 125 Hz = 0x405F400000000000, then the names.
   EXPECT_EQ(encode(setup_outputs(125, {"timestamp", "actual_q"})),
-            (Bytes{0x00, 0x1e, 0x4f, 0x40, 0x5f, 0x40, 0, 0, 0, 0, 0, 't', 'i', 'm', 'e', 's', 't', 'a', 'm', 'p', ',',
+            (Bytes{0x00, 0x1d, 0x4f, 0x40, 0x5f, 0x40, 0, 0, 0, 0, 0, 't', 'i', 'm', 'e', 's', 't', 'a', 'm', 'p', ',',
                    'a', 'c', 't', 'u', 'a', 'l', '_', 'q'}));
   EXPECT_EQ(encode(setup_inputs({"input_int_register_0"})).size(), 3u + 20u);
   EXPECT_THROW(setup_inputs({}), std::invalid_argument);
