@@ -145,7 +145,7 @@ std::vector<Program> programs() {
         {"--host h", "--rig-model is required"},
         {"--host h --rig-model r.xml --port 0", "--port: 0 is outside its range [1, 65535]"},
         {"--host h --rig-model r.xml --frequency 1000", "--frequency: 1000 is outside its range [10, 500] Hz"},
-        {"--host h --hots h", "unknown option --hots (did you mean --host?)"},
+        {"--host h --rig-model r.xml --hots h", "unknown option --hots (did you mean --host?)"},
         {"--host 127.0.0.1 --rig-model /nonexistent-pbnbv-rig.xml", "/nonexistent-pbnbv-rig.xml"}},
        "--script-port"},
       {"pbnbv-twin",
