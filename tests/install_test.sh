@@ -24,7 +24,8 @@ for lib in liblcm1 libmujoco2.2.2 liboctomap1.9 liblcm-bin; do
 done
 dpkg-deb -x "$deb" "$R"
 P="$R/usr"
-[ "$(ls "$P/bin")" = pbnbv ] || fail "P/bin holds more than pbnbv: $(ls "$P/bin" | tr '\n' ' ')"
+# The user's programs: pbnbv and the UR arm driver (pbnbv-ur-driver).
+[ "$(ls "$P/bin" | tr '\n' ' ')" = "pbnbv pbnbv-ur-driver " ] || fail "P/bin holds other than pbnbv and pbnbv-ur-driver: $(ls "$P/bin" | tr '\n' ' ')"
 for f in pbnbv-twin pbnbv-motion pbnbv-camera pbnbv-registration pbnbv-mapping pbnbv-coordinator \
          pbnbv-ellipsoids pbnbv-scorer pbnbv-replay-rig pbnbv-view; do
   [ -x "$P/libexec/pbnbv/$f" ] || fail "$P/libexec/pbnbv/$f is missing"

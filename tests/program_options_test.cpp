@@ -139,6 +139,20 @@ std::vector<Program> programs() {
         {"--mesh-file x.stl", "unknown option --mesh-file (did you mean --mesh?)"},
         {"--fault slow", "--fault: unknown driver fault 'slow' (expected slow-status, no-seq-echo"}},
        "--hand-eye-error-mm MM"},
+      {"pbnbv-ur-driver",
+       "",
+       {{"--rig-model r.xml", "--host is required"},
+        {"--host h", "--rig-model is required"},
+        {"--host h --rig-model r.xml --port 0", "--port: 0 is outside its range [1, 65535]"},
+        {"--host h --rig-model r.xml --frequency 1000", "--frequency: 1000 is outside its range [10, 500] Hz"},
+        {"--host h --rig-model r.xml --hots h", "unknown option --hots (did you mean --host?)"},
+        {"--host 127.0.0.1 --rig-model /nonexistent-pbnbv-rig.xml", "/nonexistent-pbnbv-rig.xml"}},
+       "--script-port"},
+      {"pbnbv-twin",
+       "",
+       {{"--fault rtde-drop", "--fault rtde-drop is a UR controller's: it needs --rtde-port"},
+        {"--rtde-port 30004 --ur-script-port 30004", "--rtde-port and --ur-script-port are both 30004"}},
+       "--rtde-port"},
   };
 }
 

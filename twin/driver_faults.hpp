@@ -17,6 +17,9 @@ enum class DriverFault {
   kIgnoreLimits,    // out-of-limit arm targets and bad turntable commands are executed
   kUtimeBackwards,  // every 20th status is stamped 50 ms before the previous one
   kLateExposure,    // frames are stamped 1 s after the rig time of their exposure
+  // As a UR controller (--rtde-port):
+  kRtdeDrop,        // the RTDE connection is closed once, 2 s of rig time after the first move starts
+  kProtectiveStop,  // the second move stops halfway in a protective stop (safety mode 3) and stays there
 };
 
 inline bool has_fault(const std::vector<DriverFault>& faults, DriverFault f) {
@@ -29,7 +32,7 @@ namespace pbnbv {
 template <>
 struct EnumNames<twin::DriverFault> {
   static constexpr std::string_view what = "driver fault";
-  static constexpr std::array<NamedValue<twin::DriverFault>, 7> names{{
+  static constexpr std::array<NamedValue<twin::DriverFault>, 9> names{{
       {twin::DriverFault::kSlowStatus, "slow-status"},
       {twin::DriverFault::kNoSeqEcho, "no-seq-echo"},
       {twin::DriverFault::kDepthUnitMm, "depth-unit-mm"},
@@ -37,6 +40,8 @@ struct EnumNames<twin::DriverFault> {
       {twin::DriverFault::kIgnoreLimits, "ignore-limits"},
       {twin::DriverFault::kUtimeBackwards, "utime-backwards"},
       {twin::DriverFault::kLateExposure, "late-exposure"},
+      {twin::DriverFault::kRtdeDrop, "rtde-drop"},
+      {twin::DriverFault::kProtectiveStop, "protective-stop"},
   }};
 };
 }  // namespace pbnbv

@@ -3,6 +3,9 @@
 //   in:  ARM_COMMAND, TURNTABLE_COMMAND, DEPTH_TRIGGER
 //   out: ARM_STATUS, TURNTABLE_STATUS (every 10 ms of rig time), DEPTH_FRAME (per trigger),
 //        HEARTBEAT
+// With --rtde-port it plays a Universal Robots controller for the arm instead (pbnbv-ur-driver
+// speaks for the arm on the bus; twin/ur_controller.hpp): RTDE and the driver's program in, the
+// controller's state out; the turntable and the camera stay on the bus.
 // The reference driver of the contract, built on the driver library (services/driver; README
 // "Writing a driver"): the checks, faults, statuses and frames are the library's; --fault makes it a faulty one
 // (twin/driver_faults.hpp), for `pbnbv rig-check`'s tests.
@@ -44,6 +47,8 @@
 #include "pbnbv/turntable_command_t.hpp"
 #include "pbnbv/turntable_status_t.hpp"
 #include "twin/rig_sim.hpp"
+#include "twin/ur_controller.hpp"
+#include "driver/ur_arm.hpp"
 #include "driver/rig_driver.hpp"
 #include "core/base/units.hpp"
 
@@ -85,6 +90,8 @@ struct TwinOptions {
   bool raw_depth = false;
   std::string truth_path;
   std::vector<twin::DriverFault> faults;
+  int64_t rtde_port = 0;         // 0: the arm on the bus; else a UR controller's RTDE port
+  int64_t ur_script_port = driver::ur::kScriptPort;
   std::string truth_rig_path;
   std::string distortion_text;  // --distortion k1,k2,p1,p2,k3 ("": the rig file's camera's, else none)
   LensDistortion distortion;    // the lens frames are taken through (main fills it in)
@@ -141,7 +148,16 @@ void add_options(CLI::App& app, TwinOptions& o) {
   cli::add_list(app, "fault", &o.faults,
                 "play a faulty driver, for pbnbv rig-check's tests: slow-status (20 Hz), no-seq-echo, depth-unit-mm "
                 "(counts in mm, unit field 0.1 mm), no-trigger-id, ignore-limits (executes out-of-limit commands), "
-                "utime-backwards, late-exposure (frames stamped 1 s late)");
+                "utime-backwards, late-exposure (frames stamped 1 s late); with --rtde-port: rtde-drop (the RTDE "
+                "connection closed once, 2 s after the first move starts), protective-stop (the second move stops "
+                "halfway in a protective stop, safety mode 3, and stays there)");
+  cli::add(app, Setting<int64_t>{"rtde-port", 0, 0, 65535, "",
+                                 "play a Universal Robots controller for the arm: RTDE on 127.0.0.1 at this port for "
+                                 "pbnbv-ur-driver (no ARM_COMMAND / ARM_STATUS on the bus; 0: the arm on the bus)"},
+           &o.rtde_port);
+  cli::add(app, Setting<int64_t>{"ur-script-port", driver::ur::kScriptPort, 1, 65535, "",
+                                 "with --rtde-port: take the driver's URScript program on 127.0.0.1 at this port"},
+           &o.ur_script_port);
   cli::add_text(app, "distortion", &o.distortion_text,
                 "render through this lens: Brown-Conrady k1,k2,p1,p2,k3 (OpenCV's order); the frames say so "
                 "(default: the rig file's pbnbv_camera_distortion, else none)",
@@ -178,6 +194,14 @@ void complete(TwinOptions& o) {
   o.k.cy = o.cy.value_or(o.k.height / 2.0);
   o.k.validate();
   o.range.validate();
+  if (o.rtde_port > 0 && o.rtde_port == o.ur_script_port) {
+    throw std::invalid_argument("--rtde-port and --ur-script-port are both " + std::to_string(o.rtde_port));
+  }
+  for (const twin::DriverFault f : {twin::DriverFault::kRtdeDrop, twin::DriverFault::kProtectiveStop}) {
+    if (o.faulty(f) && o.rtde_port == 0) {
+      throw std::invalid_argument("--fault " + std::string(name_of(f)) + " is a UR controller's: it needs --rtde-port");
+    }
+  }
   if (o.object.calibration_sphere_radius_m > 0 &&
       o.object.calibration_sphere_radius_m + o.object.calibration_sphere_offset_m > 0.2) {
     throw std::invalid_argument("--calibration-sphere " + std::to_string(o.object.calibration_sphere_radius_m) +
@@ -272,6 +296,8 @@ class Twin {
   void run() {
     driver::RigDriver::Options options;
     options.any_speed_scale = true;  // RigSim refuses a speed scale outside (0, 1] (or clamps it: ignore-limits)
+    options.no_turntable = !sim_.has_turntable();
+    if (o_.rtde_port > 0) ur_ = std::make_unique<twin::UrController>(o_.rtde_port, o_.ur_script_port);
     driver::RigDriver rig_driver(bus_, handlers(), options);
     wall0_ = bus::now_s();
     sim0_ = sim_.time_s();
@@ -280,6 +306,7 @@ class Twin {
     while (!stop_requested()) {
       bus_.spin_once(0);
       sim_.step();
+      if (ur_) serve_ur();
       if (sim_.time_s() + 1e-12 < next_status) continue;
       next_status += status_period_s;
       publish_statuses(rig_driver);
@@ -290,19 +317,87 @@ class Twin {
   }
 
  private:
+  // As a UR controller: the RTDE client's requests answered, the program's part played (a new
+  // command number in the registers starts the move or the hold and is echoed), the faults
+  // played, and the controller's state streamed.
+  void serve_ur() {
+    ur_->poll();
+    if (ur_->take_program()) start_program();
+    const driver::ur::Registers& r = ur_->registers();
+    if (program_running_ && safety_mode_ == driver::ur::kSafetyModeNormal && r.number != done_) follow(r);
+    if (stop_at_s_ >= 0 && sim_.time_s() >= stop_at_s_) {
+      stop_at_s_ = -1;
+      sim_.hold_arm(sim_.arm().command_seq);
+      safety_mode_ = driver::ur::kSafetyModeProtectiveStop;
+      log_warn("playing a protective stop (safety mode 3) halfway through move " + std::to_string(done_));
+    }
+    if (drop_at_s_ >= 0 && sim_.time_s() >= drop_at_s_) {
+      drop_at_s_ = -1;
+      ur_->drop("playing a dropped connection (--fault rtde-drop)");
+    }
+    ur_->stream(sim_.time_s(), ur_state());
+    ur_->poll();  // sends it now
+  }
+
+  // A program (re)started: the number standing in the registers counts as done, and a move in
+  // progress stops, as when a controller replaces its running program.
+  void start_program() {
+    program_running_ = true;
+    done_ = echo_ = ur_->registers().number;
+    if (sim_.moving(sim_.arm())) sim_.hold_arm(sim_.arm().command_seq);
+  }
+
+  // The program's part for a new command number: echo it, then hold or move (as movej would).
+  void follow(const driver::ur::Registers& r) {
+    done_ = echo_ = r.number;
+    if (r.stop) return sim_.hold_arm(r.number);
+    try {
+      sim_.command_arm(Eigen::Map<const Vector6d>(r.target.data()), r.speed_scale, r.number);
+    } catch (const std::exception& e) {
+      log_warn("the program's move " + std::to_string(r.number) + " failed: " + e.what() + ": program stopped");
+      program_running_ = false;
+      return;
+    }
+    ++moves_;
+    if (moves_ == 1 && o_.faulty(twin::DriverFault::kRtdeDrop)) drop_at_s_ = sim_.time_s() + 2.0;
+    if (moves_ == 2 && o_.faulty(twin::DriverFault::kProtectiveStop)) {
+      stop_at_s_ = sim_.arm().t0 + 0.5 * (sim_.arm().t1 - sim_.arm().t0);
+    }
+  }
+
+  // The controller's state as RTDE reports it (timestamp: rig time).
+  driver::ur::State ur_state() const {
+    driver::ur::State s;
+    s.timestamp_s = sim_.time_s();
+    const Vector6d q = sim_.arm_position_reported(), qd = sim_.arm_velocity();
+    const Vector6d offset = q - sim_.arm_position();
+    for (int i = 0; i < 6; ++i) {
+      s.q[i] = q[i];
+      s.qd[i] = qd[i];
+      s.target_q[i] = sim_.arm().setpoint[i] + offset[i];
+    }
+    s.robot_mode = driver::ur::kRobotModeRunning;
+    s.safety_mode = safety_mode_;
+    s.runtime_state = program_running_ ? driver::ur::kRuntimePlaying : 1;  // 1: stopped
+    s.echo = echo_;
+    return s;
+  }
+
   driver::RigDriver::Handlers handlers() {
     driver::RigDriver::Handlers h;
-    h.move_arm = [this](const driver::ArmTarget& t) {
-      try {
-        if (t.hold) {
-          sim_.hold_arm(t.seq);
-        } else {
-          sim_.command_arm(Eigen::Map<const Vector6d>(t.position_rad.data()), t.speed_scale, t.seq);
+    if (!ur_) {  // with --rtde-port pbnbv-ur-driver owns the arm
+      h.move_arm = [this](const driver::ArmTarget& t) {
+        try {
+          if (t.hold) {
+            sim_.hold_arm(t.seq);
+          } else {
+            sim_.command_arm(Eigen::Map<const Vector6d>(t.position_rad.data()), t.speed_scale, t.seq);
+          }
+        } catch (const twin::OutOfLimits& e) {
+          throw driver::OutOfLimits(e.what());
         }
-      } catch (const twin::OutOfLimits& e) {
-        throw driver::OutOfLimits(e.what());
-      }
-    };
+      };
+    }
     if (sim_.has_turntable()) {
       h.turn_table = [this](const driver::TurntableTarget& t) {
         try {
@@ -378,6 +473,10 @@ class Twin {
       t.command_seq = no_echo ? -1 : sim_.turntable().command_seq;
       t.motion = motion_of(sim_, sim_.turntable());
     }
+    if (ur_) {
+      if (turntable) rig_driver.publish_statuses(stamp, std::nullopt, turntable);
+      return;
+    }
     rig_driver.publish_statuses(stamp, arm, turntable);
   }
 
@@ -397,6 +496,14 @@ class Twin {
   // Pacing reference: rig time runs at `speed` x wall time from here (reset after a render,
   // which stops the clock of the rig while it runs).
   double wall0_ = 0, sim0_ = 0;
+  // --rtde-port: the controller, and the program's part the twin plays.
+  std::unique_ptr<twin::UrController> ur_;
+  bool program_running_ = false;
+  int32_t done_ = 0;   // the command number last acted on
+  int32_t echo_ = 0;   // output_int_register_0
+  int32_t safety_mode_ = driver::ur::kSafetyModeNormal;
+  int moves_ = 0;
+  double stop_at_s_ = -1, drop_at_s_ = -1;  // rig time of a fault to play (-1: none)
 };
 
 }  // namespace

@@ -44,7 +44,9 @@ TEST_F(RigDriverTest, RefusalsAreLatchedByCodeAndAcceptedCommandsEchoed) {
     cam.depth_max_m = 2;
     return depth_frame(cam, {1000, 2000}, Exposure{42, 0}, 1, t);
   };
-  RigDriver driver(bus, h, RigDriver::Options{});
+  RigDriver::Options options;
+  options.no_turntable = true;  // an arm-and-camera rig: its turntable commands are refused
+  RigDriver driver(bus, h, options);
   std::vector<arm_status_t> statuses;
   std::vector<depth_frame_t> frames;
   bus.subscribe<arm_status_t>(channels::kArmStatus, [&](const arm_status_t& s) { statuses.push_back(s); });
@@ -120,6 +122,74 @@ TEST_F(RigDriverTest, RefusalsAreLatchedByCodeAndAcceptedCommandsEchoed) {
   EXPECT_EQ(frames[0].trigger_seq, 31);
   EXPECT_EQ(frames[0].scan_id, "s");
   EXPECT_EQ(driver.statuses_published(), 3);
+}
+
+// A driver owning the arm only (pbnbv-ur-driver): it publishes ARM_STATUS alone, leaves the
+// turntable's commands and the triggers to the other driver (no refusal, no frame), and a drive
+// fault is reported ahead of a refused command's until it is cleared.
+TEST_F(RigDriverTest, AnArmOnlyDriverOwnsTheArmAlone) {
+  bus::Bus bus("driver-test");
+  std::vector<ArmTarget> moves;
+  RigDriver::Handlers h;
+  h.move_arm = [&](const ArmTarget& t) { moves.push_back(t); };
+  RigDriver driver(bus, h, RigDriver::Options{});
+  EXPECT_TRUE(driver.owns_arm());
+  EXPECT_FALSE(driver.owns_turntable());
+  EXPECT_FALSE(driver.owns_camera());
+  int arm_statuses = 0, turntable_statuses = 0, frames = 0;
+  arm_status_t last{};
+  bus.subscribe<arm_status_t>(channels::kArmStatus, [&](const arm_status_t& s) { ++arm_statuses; last = s; });
+  bus.subscribe<turntable_status_t>(channels::kTurntableStatus, [&](const turntable_status_t&) { ++turntable_statuses; });
+  bus.subscribe<depth_frame_t>(channels::kDepthFrame, [&](const depth_frame_t&) { ++frames; });
+  lcm::LCM& lcm = bus.raw();
+
+  turntable_command_t tc{};
+  tc.seq = 8;
+  tc.speed_scale = 1;
+  lcm.publish(channels::kTurntableCommand, &tc);
+  depth_trigger_t trigger{};
+  trigger.seq = 31;
+  lcm.publish(channels::kDepthTrigger, &trigger);
+  arm_command_t c{};
+  c.seq = 4;
+  c.mode = arm_command_t::kModePosition;
+  c.num_joints = 6;
+  c.joint_position_rad.assign(6, 0.2);
+  c.speed_scale = 0.5;
+  lcm.publish(channels::kArmCommand, &c);
+  EXPECT_TRUE(spin_until(bus, [&] { return !moves.empty(); }));
+  for (int i = 0; i < 10; ++i) bus.spin_once(5);  // the turntable command and the trigger, had they been heard
+  EXPECT_FALSE(driver.turntable_fault().active());
+  EXPECT_EQ(frames, 0);
+  EXPECT_EQ(bus.rejected(), 0);
+
+  ArmReading reading;
+  reading.joint_names = {"a1", "a2", "a3", "a4", "a5", "a6"};
+  reading.position_rad = reading.velocity_rad_s = reading.commanded_rad = std::vector<double>(6, 0.0);
+  reading.command_seq = 4;
+  reading.motion = Motion::kMoving;
+  driver.publish_statuses(Stamp{1000, 10}, reading, std::nullopt);
+  EXPECT_TRUE(spin_until(bus, [&] { return arm_statuses == 1; }));
+  EXPECT_EQ(last.mode, arm_status_t::kModeMoving);
+  EXPECT_THROW(driver.publish_statuses(Stamp{1001, 11}, std::nullopt, TurntableReading{}), std::invalid_argument);
+
+  driver.set_arm_drive_fault("protective stop (safety mode 3)");
+  driver.publish_statuses(Stamp{1002, 12}, reading, std::nullopt);
+  EXPECT_TRUE(spin_until(bus, [&] { return arm_statuses == 2; }));
+  EXPECT_EQ(last.mode, arm_status_t::kModeFault);
+  EXPECT_EQ(last.fault_code, arm_status_t::kFaultDriver);
+  EXPECT_EQ(last.fault, "protective stop (safety mode 3)");
+  driver.set_arm_drive_fault("");
+  driver.publish_statuses(Stamp{1003, 13}, reading, std::nullopt);
+  EXPECT_TRUE(spin_until(bus, [&] { return arm_statuses == 3; }));
+  EXPECT_EQ(last.mode, arm_status_t::kModeMoving);
+  EXPECT_EQ(last.fault_code, arm_status_t::kFaultNone);
+  EXPECT_EQ(turntable_statuses, 0);
+}
+
+TEST_F(RigDriverTest, ADriverWithoutHandlersIsRefused) {
+  bus::Bus bus("driver-test");
+  EXPECT_THROW(RigDriver(bus, RigDriver::Handlers{}, RigDriver::Options{}), std::invalid_argument);
 }
 
 }  // namespace
