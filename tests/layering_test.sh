@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The dependency direction between layers, beyond what the include directories already enforce
 # at compile time (see pbnbv_library in CMakeLists.txt): only the rig library and the twin see
-# MuJoCo, only the report library draws with OpenCV, only the surface library meshes with PCL's
+# MuJoCo, only the report library draws with OpenCV (and the bus's colour codec codes JPEG with it), only the surface library meshes with PCL's
 # surface module, and the processes that need neither do not load them (ldd: the coordinator,
 # which writes scan.json and nothing else, loads none of MuJoCo, PCL and OpenCV); scan.json is
 # parsed in one place; no core file is over 800 lines.
@@ -28,7 +28,7 @@ check_includes() {  # <pattern> <what> <allowed path regex>
   verdict "$hits" "$2 is included outside its layer by" "$2 only in $3"
 }
 check_includes 'mujoco/' "MuJoCo" '^(services/core/rig/|twin/)'
-check_includes 'opencv2/' "OpenCV" '^services/report/'
+check_includes 'opencv2/' "OpenCV" '^(services/report/|services/bus/colour_codec\.cpp)'
 check_includes 'pcl/surface/' "PCL's surface module (marching-cubes tables, Poisson)" '^services/core/surface/'
 
 # The scan's layer names a rig kind but uses none of the rig's model or kinematics (those are for

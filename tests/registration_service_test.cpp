@@ -56,7 +56,7 @@ point_cloud_t balls_cloud(const std::string& scan_id, int64_t id, const Eigen::V
   for (const auto& [r, c] : balls) {
     for (const auto& p : sample_surface(make_icosphere(r, 3), 8000, seed++)) pts.push_back(p + c);
   }
-  point_cloud_t c;
+  point_cloud_t c{};
   c.utime = 0;
   c.scan_id = scan_id;
   c.iteration = static_cast<int32_t>(id);

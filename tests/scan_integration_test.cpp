@@ -132,7 +132,8 @@ TEST(ScanIntegration, BoxOnTheArmRigLiesOnTheTrueSurface) {
 // and 99 % of the mesh's vertices (measured 99.95-100 % and 99.75-99.87 %: the rest lie on the
 // outline, where JPEG's half-resolution chroma blurs the object into the background, and on the
 // mesh's edges beyond the seen surface). colour/view_NNN.jpg holds each view's colour image, its
-// camera in depth/view_NNN.json.
+// camera in depth/view_NNN.json. With --units mm, mesh.obj is in millimetres (mesh.ply stays in
+// metres): the same vertices x 1000.
 TEST(ScanIntegration, ATwoColouredObjectComesOutInItsColours) {
   const fs::path dir = fresh_dir("two-coloured-object");
   const fs::path ply = dir / "two.ply";
@@ -168,7 +169,8 @@ TEST(ScanIntegration, ATwoColouredObjectComesOutInItsColours) {
         << faces << "\nproperty list uchar int vertex_indices\nend_header\n"
         << v.str() << f.str();
   }
-  const fs::path out = scan_and_check("two-coloured-scan", "--object " + ply.string() + " --rig arm --planner ring", 3);
+  const fs::path out =
+      scan_and_check("two-coloured-scan", "--object " + ply.string() + " --rig arm --planner ring --units mm", 3);
   EXPECT_TRUE(fs::exists(out / "object.ply"));  // the normalised object with its colours, for the twin
   const auto halves = [](const PointCloud& points, const std::vector<Rgb>& colours, double share, const char* what) {
     ASSERT_EQ(colours.size(), points.size()) << what << " has no colours";
@@ -202,6 +204,16 @@ TEST(ScanIntegration, ATwoColouredObjectComesOutInItsColours) {
   ASSERT_TRUE(depth_json.contains("colour")) << depth_json.dump(2);
   EXPECT_EQ(depth_json["colour"]["image"], "../colour/view_001.jpg");
   EXPECT_EQ(depth_json["colour"]["width"], depth_json["width"]);
+  // --units mm: mesh.obj says so and is mesh.ply x 1000 (the object is 10 cm across: 50 mm from its centre).
+  std::ifstream obj(out / "mesh.obj");
+  const std::string text((std::istreambuf_iterator<char>(obj)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("# units millimetres\n"), std::string::npos);
+  const TriangleMesh mm = load_mesh((out / "mesh.obj").string());
+  Eigen::Vector3d lo_mm, hi_mm, lo_m, hi_m;
+  mesh_bounds(mm, lo_mm, hi_mm);
+  mesh_bounds(load_mesh((out / "mesh.ply").string()), lo_m, hi_m);
+  EXPECT_LT((hi_mm - 1000 * hi_m).norm(), 1e-3) << hi_mm.transpose() << " vs " << hi_m.transpose();
+  EXPECT_GT(hi_mm.x(), 40.0);
 }
 
 TEST(ScanIntegration, SphereOnTheFreeRigLiesOnTheTrueSurface) {

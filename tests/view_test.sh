@@ -190,8 +190,8 @@ done
 wait $scan_pid || fail "the scan failed"
 kill "${pids[0]}"; wait "${pids[0]}" 2>/dev/null || true
 
-# --- a finished scan folder, its cloud.ply given a colour per point (a PLY's red green blue:
-# what pbnbv's own cloud.ply does not carry yet), the same green for every point
+# --- a finished scan folder, its cloud.ply's colours (the twin's camera sends colour: the object's
+# own, shaded) all made the same green, which the page must draw
 "$PY" - "$tmp/scan/cloud.ply" <<'PY' || fail "cannot colour cloud.ply"
 import sys, numpy as np
 path = sys.argv[1]
@@ -199,12 +199,12 @@ d = open(path, "rb").read()
 end = d.index(b"end_header\n") + len(b"end_header\n")
 head = d[:end].decode().split("\n")
 n = int(next(l for l in head if l.startswith("element vertex")).split()[2])
-assert "format binary_little_endian 1.0" in head and head[-3] == "property float nz", head
-rec = np.zeros(n, dtype=[("xyz_n", "<f4", 6), ("rgb", "u1", 3)])
-rec["xyz_n"] = np.frombuffer(d[end:end + 24 * n], dtype="<f4").reshape(n, 6)
+assert "format binary_little_endian 1.0" in head and head[-3] == "property uchar blue", head
+assert head[-6] == "property float nz", head
+rec = np.frombuffer(d[end:end + 27 * n], dtype=[("xyz_n", "<f4", 6), ("rgb", "u1", 3)]).copy()
+assert len(set(map(tuple, rec["rgb"][:1000]))) > 1, "the twin's colours are shaded, not one colour"
 rec["rgb"] = (60, 220, 0)
-head[-2:-2] = ["property uchar red", "property uchar green", "property uchar blue"]
-open(path, "wb").write("\n".join(head).encode() + rec.tobytes())
+open(path, "wb").write(d[:end] + rec.tobytes())
 PY
 PORT=8766
 "$BIN/pbnbv" view "$tmp/scan" --port $PORT >"$tmp/view-dir.log" 2>&1 &

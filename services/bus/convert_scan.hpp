@@ -169,7 +169,7 @@ inline CaptureRequest from_msg(const capture_request_t& m) {
 }
 
 inline point_cloud_t to_msg(const CaptureResult& c) {
-  point_cloud_t m;
+  point_cloud_t m{};
   m.utime = 0;
   m.scan_id = c.scan_id;
   m.iteration = c.iteration;

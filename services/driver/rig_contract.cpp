@@ -137,7 +137,8 @@ depth_frame_t depth_frame(const DepthCamera& camera, const std::vector<uint16_t>
     throw std::invalid_argument("depth_frame: " + std::to_string(counts.size()) + " counts for a " +
                                 std::to_string(camera.width) + "x" + std::to_string(camera.height) + " camera");
   }
-  depth_frame_t f;
+  depth_frame_t f{};  // every field zero: no colour image (bus::set_colour adds one)
+  f.depth_T_colour.quat_wxyz[0] = 1;  // the identity, for a reader of the message
   f.utime = exposure.start_utime + exposure.duration_us / 2;
   f.exposure_start_utime = exposure.start_utime;
   f.exposure_us = exposure.duration_us;

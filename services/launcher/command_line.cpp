@@ -215,6 +215,7 @@ void CommandLine::declare_scan() {
   cli::add(c, kCloudVoxel, &s.voxel_m)->group(kGroupPlanning);
   cli::add(c, kMapResolution, &s.map_resolution_m)->group(kGroupPlanning);
   cli::add(c, kRegistration, &p.registration)->group(kGroupPlanning);
+  cli::add(c, kMeshUnits, &scan_.mesh_units)->group(kGroupPlanning);
   cli::add(c, kDepthFilter, &p.depth_filter)->group(kGroupCamera);
   cli::add(c, kPoseSigmaMm, &p.pose_sigma_mm, "twin: from its errors; a real rig: 0.5")->group(kGroupRig);
   cli::add(c, kPoseSigmaDeg, &p.pose_sigma_deg, "twin: from its errors; a real rig: 0.1")->group(kGroupRig);

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/io/mesh_file.hpp"
 #include "cli/options.hpp"
 #include "core/metrics/surface_metrics.hpp"
 #include "core/rig/calibration.hpp"
@@ -105,6 +106,7 @@ struct ScanOptions {
   RigErrors rig_errors = kRigErrors.value;  // --rig-errors: the figures above where not given one by one
   int64_t error_seed = kErrorSeed.value;
   bool record_log = true;        // not --no-log
+  LengthUnit mesh_units = LengthUnit::kMetre;  // --units: mesh.obj's (and `pbnbv mesh --stl`'s) length unit
   // A rig whose drivers run outside (--external-rig): no twin, an unknown object.
   bool external_rig = false;
   std::string working_volume;    // --working-volume: "cylinder:R,H" | "box:X,Y,Z" ("": the rig file's)

@@ -243,7 +243,8 @@ process::Child scan_process(const std::string& name, std::vector<std::string> ar
 }
 
 void add_services(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, const fs::path& bin,
-                  bool registration, const std::vector<std::string>& coordinator_extra, bool on_rig_host) {
+                  bool registration, const std::vector<std::string>& coordinator_extra, bool on_rig_host,
+                  LengthUnit mesh_units) {
   auto add = [&](const std::string& name, std::vector<std::string> argv, bool progress = false) {
     children.push_back(scan_process(name, std::move(argv), s, out, progress));
   };
@@ -257,6 +258,7 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
                        "--new-surface-radius", exact(s.stop_radius_m), "--pose-sigma-mm", exact(s.pose_sigma_m * 1e3),
                        "--pose-sigma-deg", exact(s.pose_sigma_deg)});
   if (!registration) children.back().argv.push_back("--off");
+  if (mesh_units != LengthUnit::kMetre) children.back().argv.insert(children.back().argv.end(), {"--units", unit_symbol(mesh_units)});
   // The map's working volume: the cloud's crop box, above the turntable top.
   Eigen::Vector3d volume_min = s.crop_min_m;
   if (s.rig == RigKind::kArm) volume_min.z() = std::max(volume_min.z(), -s.object_z_m + s.ground_clearance_m);

@@ -75,6 +75,7 @@ LaunchSettings launch_settings_of(const ScanOptions& o) {
   l.joint_error_deg = o.joint_error_deg;
   l.turntable_backlash_deg = o.turntable_backlash_deg;
   l.error_seed = o.error_seed;
+  l.mesh_units = o.mesh_units;
   return l;
 }
 
@@ -89,7 +90,8 @@ nlohmann::json to_json(const LaunchSettings& l) {
           {"turntable_error_deg", l.turntable_error_deg},
           {"joint_error_deg", l.joint_error_deg},
           {"turntable_backlash_deg", l.turntable_backlash_deg},
-          {"error_seed", l.error_seed}};
+          {"error_seed", l.error_seed},
+          {"mesh_units", unit_symbol(l.mesh_units)}};
 }
 
 LaunchSettings launch_settings_from_json(const nlohmann::json& launch, const std::string& file) {
@@ -108,6 +110,15 @@ LaunchSettings launch_settings_from_json(const nlohmann::json& launch, const std
     l.turntable_backlash_deg = launch_value(launch, "turntable_backlash_deg", kTurntableBacklashDeg, file);
   }
   l.error_seed = launch_value(launch, "error_seed", kErrorSeed, file);
+  if (launch.contains("mesh_units")) {  // since 0.11
+    const nlohmann::json& u = launch["mesh_units"];
+    try {
+      if (!u.is_string()) throw std::invalid_argument("not a string");
+      l.mesh_units = parse_length_unit(u.get<std::string>());
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(file + ": launch.mesh_units = " + u.dump() + " is not \"m\" or \"mm\"");
+    }
+  }
   return l;
 }
 
@@ -143,7 +154,7 @@ std::vector<process::Child> scan_processes(const ScanSettings& s, const LaunchSe
          "--truth-rig-out", (out / "twin_rig.json").string()},
         s, out));
   }
-  add_services(children, s, out, bin, l.registration, {}, s.external_rig && l.rig_host);
+  add_services(children, s, out, bin, l.registration, {}, s.external_rig && l.rig_host, l.mesh_units);
   return children;
 }
 

@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/io/mesh_file.hpp"
 #include "core/scan/scan_options.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "process/processes.hpp"
@@ -32,6 +33,7 @@ struct LaunchSettings {
   double joint_error_deg = kJointErrorDeg.value;
   double turntable_backlash_deg = kTurntableBacklashDeg.value;
   int64_t error_seed = kErrorSeed.value;
+  LengthUnit mesh_units = LengthUnit::kMetre;  // mesh.obj's length unit (--units)
 };
 
 LaunchSettings launch_settings_of(const ScanOptions& o);

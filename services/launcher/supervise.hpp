@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "core/io/mesh_file.hpp"
 #include "bus/bus.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "process/processes.hpp"
@@ -24,10 +25,12 @@ process::Child scan_process(const std::string& name, std::vector<std::string> ar
 // The services after the rig's driver: motion, camera (unless `on_rig_host`: they run on the rig's
 // computer, pbnbv rig-host), registration (off: `registration` false), mapping, the ellipsoid fitter
 // and the view scorer as the planner needs, the coordinator last (its argv ending with
-// `coordinator_extra`). Every service is given the scan's rig file (--model).
+// `coordinator_extra`). Every service is given the scan's rig file (--model); the registration
+// service writes mesh.obj in `mesh_units`.
 void add_services(std::vector<process::Child>& children, const ScanSettings& s, const std::filesystem::path& out,
                   const std::filesystem::path& bin, bool registration,
-                  const std::vector<std::string>& coordinator_extra = {}, bool on_rig_host = false);
+                  const std::vector<std::string>& coordinator_extra = {}, bool on_rig_host = false,
+                  LengthUnit mesh_units = LengthUnit::kMetre);
 
 // Starts `children` (the coordinator last), keeps them running (restarts, hang detection) until
 // the coordinator ends or the user stops the scan, stops them all, and reports: scan.json's final

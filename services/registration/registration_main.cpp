@@ -48,6 +48,7 @@
 #include "core/base/units.hpp"
 #include "core/scan/scan_options.hpp"
 #include "core/surface/scan_model.hpp"
+#include "core/surface/surface_options.hpp"
 #include "pbnbv/capture_request_t.hpp"
 #include "pbnbv/depth_frame_t.hpp"
 #include "pbnbv/mesh_request_t.hpp"
@@ -68,8 +69,8 @@ constexpr int kMeshesPerScan = 3;       // different meshes made for one scan at
 class RegistrationService {
  public:
   RegistrationService(bus::Bus& bus, const RegistrationParams& params, double model_voxel_m, double new_surface_radius_m,
-                      bool off, std::filesystem::path out)
-      : bus_(bus), params_(params), off_(off), out_(std::move(out)),
+                      bool off, std::filesystem::path out, LengthUnit mesh_units)
+      : bus_(bus), params_(params), off_(off), out_(std::move(out)), mesh_units_(mesh_units),
         model_(bus_.scope().empty() ? std::filesystem::path() : out_, model_voxel_m, new_surface_radius_m),
         frames_(bus, kFramesKept) {
     restore();
@@ -137,7 +138,7 @@ class RegistrationService {
       out.scan_id = r.scan_id;
       out.request_id = r.request_id;
       try {
-        out.mesh = model_.mesh(r.views, r.camera, r.point_spacing_m);
+        out.mesh = model_.mesh(r.views, r.camera, r.point_spacing_m, mesh_units_);
         out.ok = true;
       } catch (const std::exception& e) {
         out.message = e.what();
@@ -594,6 +595,7 @@ class RegistrationService {
   RegistrationParams params_;
   bool off_;
   std::filesystem::path out_;
+  LengthUnit mesh_units_;  // mesh.obj's
   std::string scan_id_;
   ScanModel model_;
   MountEstimator mount_{params_.prior_translation_m, params_.prior_rotation_deg};  // for scan_id_
@@ -651,13 +653,15 @@ int main(int argc, char** argv) {
            &new_surface_radius_m);
   bool off = false;
   cli::add_flag(app, "off", &off, "pass every view through with its kinematic pose (no ICP)");
+  LengthUnit mesh_units = kMeshUnits.value;
+  cli::add(app, kMeshUnits, &mesh_units);
   std::string out;
   cli::add_text(app, "out", &out,
                 "the scan's folder: with --scan, each view's frame (DIR/frames/), depth image (DIR/depth/) and the model "
                 "(DIR/cloud.ply, continued after a restart) are written there", "DIR");
   return bus::run_service("registration", app, argc, argv, 20, [&](bus::Bus& bus) -> std::function<void()> {
     p.prior_translation_m = pose_sigma_mm * 1e-3;
-    auto service = std::make_shared<RegistrationService>(bus, p, model_voxel_m, new_surface_radius_m, off, out);
+    auto service = std::make_shared<RegistrationService>(bus, p, model_voxel_m, new_surface_radius_m, off, out, mesh_units);
     log_info("ready");
     return [service] { service->tick(); };
   });

@@ -162,6 +162,18 @@ static std::string distortion_text(const LensDistortion& d) {
   return fmt::format("k1 {} k2 {} p1 {} p2 {} k3 {}", exact(d.k1), exact(d.k2), exact(d.p1), exact(d.p2), exact(d.k3));
 }
 
+// The frame's colour image, for the user to see what the pipeline will colour points with (colour
+// is optional: never a failure).
+static CheckLine colour_line(const DepthFrame& f) {
+  if (!f.colour) return line("frame colour", true, "none", "depth only: clouds and meshes come out without colour");
+  const ColourImage& c = *f.colour;
+  const double baseline_mm = c.depth_T_colour.translation().norm() * 1e3;
+  return line("frame colour", true, fmt::format("{}x{}", c.intrinsics.width, c.intrinsics.height),
+              fmt::format("fx {} fy {} cx {} cy {}, lens {}, colour sensor {} mm from the depth sensor",
+                          exact(c.intrinsics.fx), exact(c.intrinsics.fy), exact(c.intrinsics.cx),
+                          exact(c.intrinsics.cy), distortion_text(c.distortion), fixed(baseline_mm, 1)));
+}
+
 std::vector<CheckLine> check_frame_against_camera(const DepthFrame& f, const std::optional<RigCamera>& camera) {
   const CameraIntrinsics& k = f.intrinsics;
   const std::string size = fmt::format("{}x{}", k.width, k.height);
@@ -172,7 +184,7 @@ std::vector<CheckLine> check_frame_against_camera(const DepthFrame& f, const std
     const char* why = "the rig file states no camera (<custom> pbnbv_camera)";
     return {line("frame size", true, size, why), line("frame intrinsics", true, intrinsics, why),
             line("frame lens distortion", true, distortion_text(f.distortion), why),
-            line("frame depth range", true, range, why), line("camera id", true, id, why)};
+            line("frame depth range", true, range, why), line("camera id", true, id, why), colour_line(f)};
   }
   const RigCamera& c = *camera;
   std::vector<CheckLine> out;
@@ -221,6 +233,7 @@ std::vector<CheckLine> check_frame_against_camera(const DepthFrame& f, const std
   } else {
     out.push_back(line("camera id", true, id, c.id.empty() ? "the rig file names none" : "as the rig file"));
   }
+  out.push_back(colour_line(f));
   return out;
 }
 

@@ -37,6 +37,9 @@ class Recorder {
     subs_.push_back(bus.raw().subscribe(channels::kArmStatus, &Recorder::on_raw<arm_status_t, &Recorder::on_arm>, this));
     subs_.push_back(bus.raw().subscribe(channels::kTurntableStatus,
                                         &Recorder::on_raw<turntable_status_t, &Recorder::on_turntable>, this));
+    // Statuses queued while the checker is busy (LCM keeps 30 by default: 15 ms of a twin's at
+    // 20x), so that a hole in the rates is the driver's, not the checker's.
+    for (lcm::Subscription* s : subs_) s->setQueueCapacity(bus::Bus::kStatusQueue);
     subs_.push_back(bus.raw().subscribe(channels::kDepthFrame, &Recorder::on_raw<depth_frame_t, &Recorder::on_frame>, this));
   }
   ~Recorder() {
@@ -58,9 +61,24 @@ class Recorder {
   int64_t wanted_trigger = -1;
   int frames_seen = 0;
   int64_t last_trigger_seen = -1;
+  // The frame answering wanted_trigger as received, and decoded (decode_answer) once the status
+  // window is over: decoding it (inflating the depth, undistorting it, decoding its colour JPEG)
+  // takes tens of milliseconds, in which a twin at 20x real time sends hundreds of statuses that
+  // the socket buffer cannot hold, and the rates would show a hole the checker made.
+  std::optional<depth_frame_t> answer;
   std::optional<DepthFrame> frame;
   double frame_received_s = 0;
   int64_t status_after_utime = 0;  // newest ARM_STATUS utime heard within 0.1 s of the frame
+
+  // The answer decoded into `frame`, or its error into frame_error.
+  void decode_answer() {
+    if (!answer || frame || !frame_error.empty()) return;
+    try {
+      frame = bus::from_msg(*answer);
+    } catch (const std::exception& e) {
+      frame_error = e.what();
+    }
+  }
 
  private:
   // A message that fails the guard or does not decode is dropped, as LCM's typed subscriptions
@@ -78,7 +96,7 @@ class Recorder {
       arm = r;
       arm_names = m->joint_names;
       arm_samples.push_back(sample_of(r, now));
-      if (frame && now <= frame_received_s + 0.1) status_after_utime = std::max(status_after_utime, m->utime);
+      if (answer && now <= frame_received_s + 0.1) status_after_utime = std::max(status_after_utime, m->utime);
     } catch (const std::exception& e) {
       if (arm_error.empty()) arm_error = e.what();
     }
@@ -95,17 +113,13 @@ class Recorder {
     }
   }
   void on_frame(const lcm::ReceiveBuffer*, const std::string&, const depth_frame_t* m) {
-    if (wanted_trigger < 0 || frame) return;
+    if (wanted_trigger < 0 || answer) return;
     ++frames_seen;
     last_trigger_seen = m->trigger_seq;
     if (m->trigger_seq != wanted_trigger) return;
-    try {
-      frame = bus::from_msg(*m);
-      frame_received_s = bus::now_s();
-      status_after_utime = arm ? arm->utime : 0;
-    } catch (const std::exception& e) {
-      if (frame_error.empty()) frame_error = e.what();
-    }
+    answer = *m;
+    frame_received_s = bus::now_s();
+    status_after_utime = arm ? arm->utime : 0;
   }
 
   bus::Bus& bus_;
@@ -152,14 +166,15 @@ PreflightResult run_preflight(Recorder& r, bus::Bus& bus, const RigModel& rig, d
   while (true) {
     const double now = bus::now_s();
     const bool window_done = !any_status || now - tw >= kRateWindowS;
-    if ((window_done && r.frame && now - r.frame_received_s >= 0.1) || now - tw >= deadline_s) break;
-    if (!r.frame && now - last_send >= kTriggerRepeatS) {
+    if ((window_done && r.answer && now - r.frame_received_s >= 0.1) || now - tw >= deadline_s) break;
+    if (!r.answer && now - last_send >= kTriggerRepeatS) {
       trigger.utime = bus::now_utime();
       bus.publish(channels::kDepthTrigger, trigger);
       last_send = now;
     }
     r.spin(5);
   }
+  r.decode_answer();
 
   out.lines.push_back(heard("ARM_STATUS", "arm", r.arm.has_value(), statuses_after, deadline_s, r.arm_error));
   if (r.arm) {

@@ -53,7 +53,7 @@ BENCHMARK(BM_CheckFullDepthFrame);
 void BM_DecodeFullDepthFrame(benchmark::State& state) {
   const std::vector<uint8_t> bytes = full_frame();
   for (auto _ : state) {
-    depth_frame_t f;
+    depth_frame_t f{};
     benchmark::DoNotOptimize(f.decode(bytes.data(), 0, static_cast<int>(bytes.size())));
   }
 }

@@ -243,7 +243,8 @@ void ScanModel::view_in_camera_frame(int view, PointCloud& points, std::vector<E
   for (auto& n : normals) n = turn * n;
 }
 
-MeshSummary ScanModel::mesh(const std::vector<int>& views, const CameraIntrinsics& camera, double point_spacing_m) const {
+MeshSummary ScanModel::mesh(const std::vector<int>& views, const CameraIntrinsics& camera, double point_spacing_m,
+                            LengthUnit unit) const {
   if (folder_.empty()) throw std::invalid_argument("no scan folder to mesh in");
   std::vector<SurfaceFrame> frames;
   for (const int v : views) {
@@ -256,7 +257,7 @@ MeshSummary ScanModel::mesh(const std::vector<int>& views, const CameraIntrinsic
   SurfaceSettings s;
   s.camera = camera;
   s.point_spacing_m = point_spacing_m;
-  return mesh_scan(folder_, frames, s);
+  return mesh_scan(folder_, frames, s, false, unit);
 }
 
 std::string ScanModel::write_depth(int view, const DepthImage& image, const Pose& object_T_camera, bool registered,

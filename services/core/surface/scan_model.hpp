@@ -17,6 +17,7 @@
 #include "core/base/pose.hpp"
 #include "core/geometry/camera_model.hpp"
 #include "core/geometry/colour_image.hpp"
+#include "core/io/mesh_file.hpp"
 #include "core/geometry/mesh_summary.hpp"
 #include "core/geometry/point_cloud.hpp"
 #include "core/perception/new_surface.hpp"
@@ -89,7 +90,9 @@ class ScanModel {
   // voxel) into mesh.ply and mesh.obj in the folder (core/surface/scan_mesh.hpp). Throws naming
   // the file or the cause when there is no folder, a frame is missing or unreadable, or the
   // frames give no triangles.
-  MeshSummary mesh(const std::vector<int>& views, const CameraIntrinsics& camera, double point_spacing_m) const;
+  // mesh.obj in `unit` (mesh.ply stays in metres).
+  MeshSummary mesh(const std::vector<int>& views, const CameraIntrinsics& camera, double point_spacing_m,
+                   LengthUnit unit = LengthUnit::kMetre) const;
 
   // Moves the model into another frame: new = q * old for its points, normals and camera poses,
   // and in the folder for cloud.ply, every frames/view_NNN.ply and every depth/view_NNN.json's

@@ -135,6 +135,18 @@ TEST(Checks, FrameAgainstTheRigFilesCamera) {
   EXPECT_FALSE(check_frame_against_camera(f, c)[4].passed);
   // A rig file without a camera: nothing to compare, every line passes saying so.
   for (const CheckLine& l : check_frame_against_camera(f, std::nullopt)) EXPECT_TRUE(l.passed);
+  // Colour is shown, never judged: none, or the colour image's size, camera and place.
+  EXPECT_EQ(check_frame_against_camera(f, c).back().check, "frame colour");
+  EXPECT_EQ(check_frame_against_camera(f, c).back().figure, "none");
+  ColourImage colour;
+  colour.intrinsics = CameraIntrinsics{640, 360, 460, 460, 320, 180};
+  colour.depth_T_colour.translation() = Eigen::Vector3d(0.015, 0, 0);
+  colour.rgb.assign(640 * 360 * 3, 0);
+  f.colour = colour;
+  const CheckLine seen = check_frame_against_camera(f, c).back();
+  EXPECT_TRUE(seen.passed);
+  EXPECT_EQ(seen.figure, "640x360");
+  EXPECT_EQ(seen.detail, "fx 460 fy 460 cx 320 cy 180, lens none, colour sensor 15.0 mm from the depth sensor");
 }
 
 TEST(Checks, DepthsOutsideTheFramesRangeMeanAWrongUnit) {
