@@ -52,7 +52,7 @@ TEST_F(ScanRecordTest, AViewEntryHasASectionPerStepReached) {
   v.capture_points = 3;
   v.capture_round_trip_s = 1;
   json j = to_json(v);
-  EXPECT_EQ(j["view"], 2);
+  EXPECT_EQ(j["view"], 3);  // view 2 (0-based) is the third: counted from 1 in the file
   EXPECT_EQ(j["option"], 1);
   EXPECT_NEAR(j["requested_object_T_camera"]["position_m"][0].get<double>(), 0.6, 1e-12);
   EXPECT_EQ(j["failed_moves"][0]["status"], "unreachable");
@@ -94,7 +94,9 @@ TEST_F(ScanRecordTest, APlanEntryTimesThePlannerStepAsThePaperDoes) {
   EXPECT_EQ(j["time_ms"]["ellipsoid_fit"], 125.0);
   EXPECT_EQ(j["figure"], "plans/view_005.png");  // iteration 4 is the fifth view
   EXPECT_EQ(j["outcome"], "view");
-  EXPECT_EQ(j["map_of_view"], 3);
+  EXPECT_EQ(j["map_of_view"], 4);  // counted from 1 as "view"
+  p.map_of_view = -1;
+  EXPECT_EQ(to_json(p)["map_of_view"], 0);  // not known
   EXPECT_NE(j.dump().find("\"first_quality_px\":null"), std::string::npos) << "NaN is written as null";
   EXPECT_EQ(j["ellipsoids"]["list"].size(), 0u);
 }
