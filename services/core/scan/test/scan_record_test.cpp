@@ -9,6 +9,7 @@
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
 #include "core/base/pose.hpp"
+#include "error_message.hpp"
 #include "file_test_util.hpp"
 
 using namespace pbnbv;
@@ -73,6 +74,24 @@ TEST_F(ScanRecordTest, AViewEntryHasASectionPerStepReached) {
   j = to_json(lost);
   EXPECT_EQ(j["move"], json({{"status", "no_answer"}, {"reason", "no MOVE_RESULT from the motion executor"}}));
   EXPECT_FALSE(j.contains("time_s"));
+}
+
+// scan.json counts views from 1 (format 2), as view_001 is the first view's file; the record keeps
+// them 0-based. A view 0 is refused naming the field and the range.
+TEST_F(ScanRecordTest, TheFirstViewIsWrittenAsView1AndReadBackAs0) {
+  ViewRecord first;
+  first.view = 0;
+  const json j = to_json(first);
+  EXPECT_EQ(j["view"], 1);
+  EXPECT_EQ(view_record_from_json(j, "DIR/scan.json views[0]").view, 0);
+  ViewRecord last;
+  last.view = 999;
+  EXPECT_EQ(to_json(last)["view"], 1000);
+  EXPECT_EQ(view_record_from_json(to_json(last), "DIR/scan.json views[999]").view, 999);
+  pbnbv::testing::expect_error([] { view_record_from_json(json{{"view", 0}}, "DIR/scan.json views[0]"); },
+                               "DIR/scan.json views[0] view = 0 is not a whole number in 1..1000");
+  pbnbv::testing::expect_error([] { view_record_from_json(json{{"view", 1001}}, "DIR/scan.json views[0]"); },
+                               "DIR/scan.json views[0] view = 1001 is not a whole number in 1..1000");
 }
 
 TEST_F(ScanRecordTest, APlanEntryTimesThePlannerStepAsThePaperDoes) {
