@@ -352,7 +352,7 @@ TEST(Faults, AKilledLauncherLeavesNoProcessBehindAndTheScanResumes) {
   EXPECT_EQ(done["status"]["state"], "done");
   EXPECT_EQ(done["status"]["views_done"], 8);
   ASSERT_EQ(done["views"].size(), 8u);
-  for (int i = 0; i < 8; ++i) EXPECT_EQ(done["views"][i]["view"], i);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(done["views"][i]["view"], i + 1);  // counted from 1
   // The uninterrupted scan, for comparison.
   const fs::path whole = out.parent_path() / "whole";
   ASSERT_EQ(run_command(netns_run() + " " + scan_command(whole, "--object sphere --planner ring --views 8 --sim-speed 20"))
@@ -469,7 +469,7 @@ TEST(Faults, AResumedCopyCompletesInTheCopyAndLeavesTheOriginalAlone) {
   EXPECT_EQ(done["status"]["views_done"], 10);
   EXPECT_TRUE(fs::exists(copy / "plans" / "view_010.png")) << "the last plan's figure, drawn into the copy";
   ASSERT_EQ(done["views"].size(), 10u);
-  for (int i = 0; i < 10; ++i) EXPECT_EQ(done["views"][i]["view"], i);
+  for (int i = 0; i < 10; ++i) EXPECT_EQ(done["views"][i]["view"], i + 1);
   std::cout << "original stopped after " << before << " views; its copy resumed to "
             << done["status"]["views_done"] << " views, the original unchanged\n";
 }

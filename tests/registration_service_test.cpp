@@ -184,7 +184,7 @@ class MeshRequests : public ServiceSuite {
     mesh_request_t m{};
     m.scan_id = scan_id;
     m.request_id = id;
-    m.views = {0};
+    m.views = {1};  // view 1: the capture of iteration 0
     m.num_views = 1;
     m.width = 640;
     m.height = 480;

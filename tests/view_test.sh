@@ -219,6 +219,9 @@ json_check "http://127.0.0.1:$PORT/api/scene?view=1" \
 json_check "http://127.0.0.1:$PORT/api/scene?view=$taken" "len(j['views_taken']) == $taken and j['chosen'] is None" \
   || fail "the last view of the folder: not $taken views taken, or a plan after the last view"
 curl -s -o /dev/null -w '%{http_code}' "http://127.0.0.1:$PORT/api/scene?view=99" | grep -q 404 || fail "view 99 is not a 404"
+# Views count from 1: a folder has no view 0, and a view that is no view number is a 400.
+curl -s -o /dev/null -w '%{http_code}' "http://127.0.0.1:$PORT/api/scene?view=0" | grep -q 404 || fail "view 0 of a folder is not a 404"
+curl -s -o /dev/null -w '%{http_code}' "http://127.0.0.1:$PORT/api/scene?view=-2" | grep -q 400 || fail "view -2 is not a 400"
 # Hostile clients: another site's Host (DNS rebinding) is refused; a 4 MB body is refused before
 # it is buffered (the server's memory stays within 16 MB of before); twenty connections that send
 # nothing leave the page answering.

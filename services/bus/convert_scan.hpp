@@ -509,7 +509,9 @@ inline mesh_request_t to_msg(const MeshRequest& r) {
   m.scan_id = r.scan_id;
   m.request_id = r.request_id;
   m.num_views = static_cast<int32_t>(r.views.size());
-  m.views.assign(r.views.begin(), r.views.end());
+  // The message counts views from 1 (as scan.json and the files: view 1's frame is view_001.ply);
+  // MeshRequest keeps them 0-based.
+  for (const int v : r.views) m.views.push_back(v + 1);
   m.width = r.camera.width;
   m.height = r.camera.height;
   m.fx = r.camera.fx;
@@ -520,8 +522,9 @@ inline mesh_request_t to_msg(const MeshRequest& r) {
   return m;
 }
 
-// Throws naming the field when a view is outside 0..max_views-1 or out of order, the camera is
-// not one, or the spacing is outside [0, 0.05] m.
+// The message's views (counted from 1) 0-based in the MeshRequest. Throws naming the field when a
+// view is outside 1..max_views or out of order, the camera is not one, or the spacing is outside
+// [0, 0.05] m.
 inline MeshRequest from_msg(const mesh_request_t& m, int max_views) {
   MeshRequest r;
   r.scan_id = m.scan_id;
@@ -531,12 +534,12 @@ inline MeshRequest from_msg(const mesh_request_t& m, int max_views) {
                                 std::to_string(max_views));
   }
   for (std::size_t i = 0; i < m.views.size(); ++i) {
-    if (m.views[i] < 0 || m.views[i] >= max_views || (i > 0 && m.views[i] <= m.views[i - 1])) {
+    if (m.views[i] < 1 || m.views[i] > max_views || (i > 0 && m.views[i] <= m.views[i - 1])) {
       throw std::invalid_argument("MESH_REQUEST views[" + std::to_string(i) + "] = " + std::to_string(m.views[i]) +
-                                  ": the views are 0.." + std::to_string(max_views - 1) + ", ascending");
+                                  ": the views are 1.." + std::to_string(max_views) + ", ascending");
     }
+    r.views.push_back(m.views[i] - 1);
   }
-  r.views.assign(m.views.begin(), m.views.end());
   r.camera = CameraIntrinsics{m.width, m.height, m.fx, m.fy, m.cx, m.cy};
   try {
     r.camera.validate();

@@ -198,7 +198,7 @@ std::pair<double, double> mm_deg(const Pose& a, const Pose& b) {
   return {(a.translation() - b.translation()).norm() * 1e3, rotation_angle_rad(a.linear(), b.linear()) / kDeg};
 }
 
-// View i of the calibration: moved to, captured, the sphere fitted in the camera frame; `frame`
+// View i of the calibration (0-based; view i + 1 in its record, console and report): moved to, captured, the sphere fitted in the camera frame; `frame`
 // records what happened (and why a view was skipped). Throws when the rig's drivers or the camera
 // fell silent.
 std::optional<SphereObservation> observe_view(CalibrationRun& run, const CalibrateOptions& o, const Pose& view,
@@ -213,11 +213,11 @@ std::optional<SphereObservation> observe_view(CalibrationRun& run, const Calibra
   m.timeout_s = kMoveTimeoutS;
   const MoveResult moved = run.move(m, o.status_wait_s);
   if (moved.status == MoveStatus::kRigSilent) {
-    throw std::runtime_error("view " + std::to_string(i) + ": the rig's drivers fell silent for more than " +
+    throw std::runtime_error("view " + std::to_string(i + 1) + ": the rig's drivers fell silent for more than " +
                              fixed(o.status_wait_s, 1) + " s (--status-wait): " + moved.reason);
   }
   if (moved.status != MoveStatus::kReached) {
-    std::cerr << "pbnbv calibrate: view " << i << " skipped: " << to_string(moved.status) << ": " << moved.reason
+    std::cerr << "pbnbv calibrate: view " << i + 1 << " skipped: " << to_string(moved.status) << ": " << moved.reason
               << std::endl;
     frame["skipped"] = std::string(to_string(moved.status)) + ": " + moved.reason;
     return std::nullopt;
@@ -236,10 +236,10 @@ std::optional<SphereObservation> observe_view(CalibrationRun& run, const Calibra
   const CaptureResult cap = run.capture(c);
   if (!cap.ok) {
     if (cap.message.find("no frame") != std::string::npos || cap.depth_frame_seq < 0) {
-      throw std::runtime_error("view " + std::to_string(i) + ": no depth frame (DEPTH_FRAME from the camera driver): " +
+      throw std::runtime_error("view " + std::to_string(i + 1) + ": no depth frame (DEPTH_FRAME from the camera driver): " +
                                cap.message);
     }
-    std::cerr << "pbnbv calibrate: view " << i << " skipped: the sphere is not in the frame (" << cap.message << ")"
+    std::cerr << "pbnbv calibrate: view " << i + 1 << " skipped: the sphere is not in the frame (" << cap.message << ")"
               << std::endl;
     frame["skipped"] = "capture: " + cap.message;
     return std::nullopt;
@@ -256,12 +256,12 @@ std::optional<SphereObservation> observe_view(CalibrationRun& run, const Calibra
   frame["points"] = points.size();
   frame["fit"] = {{"ok", fit.ok}, {"inliers", fit.inliers}, {"rms_mm", fit.rms_m * 1e3}, {"cap_spread", fit.cap_spread}};
   if (!fit.ok) {
-    std::cerr << "pbnbv calibrate: view " << i << " skipped: the sphere is not seen (" << fit.why << ")" << std::endl;
+    std::cerr << "pbnbv calibrate: view " << i + 1 << " skipped: the sphere is not seen (" << fit.why << ")" << std::endl;
     frame["skipped"] = "sphere fit: " + fit.why;
     return std::nullopt;
   }
   frame["fit"]["centre_in_camera_m"] = to_json(fit.centre);
-  std::cout << fmt::format("  view {:2}: turntable {:7} deg, sphere fitted to {} points (rms {} mm)", i,
+  std::cout << fmt::format("  view {:2}: turntable {:7} deg, sphere fitted to {} points (rms {} mm)", i + 1,
                            fixed(cap.turntable_angle_rad / kDeg, 1), fit.inliers, fixed(fit.rms_m * 1e3, 3))
             << std::endl;
   return SphereObservation{cap.joint_position_rad, cap.turntable_angle_rad, fit.centre};
@@ -391,7 +391,7 @@ int run_calibrate(const CalibrateOptions& o) {
             << std::endl;
   int64_t request_id = bus::now_utime();
   for (std::size_t i = 0; i < views.size(); ++i) {
-    json frame = {{"view", i}, {"requested_object_T_camera", to_json(views[i])}};
+    json frame = {{"view", i + 1}, {"requested_object_T_camera", to_json(views[i])}};  // counted from 1
     if (const std::optional<SphereObservation> seen = observe_view(run, o, views[i], i, request_id, frame)) {
       frame["observation"] = observations.size();
       observations.push_back(*seen);

@@ -447,7 +447,8 @@ class RegistrationService {
 
   // DIR/hand_eye.json: the mount's estimate (E: the camera sits at the rig file's flange_T_camera
   // times this), its sigma, the views it rests on, where the model lies in the object frame, and
-  // the observations (a restarted service continues from them).
+  // the observations (a restarted service continues from them). Its views are counted from 1, as
+  // scan.json's and the files' (view_001 is view 1); the service keeps them 0-based.
   void save_mount() const {
     if (out_.empty() || bus_.scope().empty() || !mount_.first()) return;
     const MountEstimate& e = mount_.estimate();
@@ -468,7 +469,7 @@ class RegistrationService {
     nlohmann::json obs = nlohmann::json::array();
     for (const MountObservation& o : mount_.observations()) {
       std::vector<double> cov(o.proposal.covariance.data(), o.proposal.covariance.data() + 36);
-      obs.push_back({{"view", o.view},
+      obs.push_back({{"view", o.view + 1},
                      {"kinematic", to_json(o.kinematic)},
                      {"correction", to_json(o.proposal.correction)},
                      {"centre_m", to_json(o.proposal.centre)},
@@ -477,7 +478,7 @@ class RegistrationService {
     j["observations"] = obs;
     nlohmann::json placed = nlohmann::json::array();
     for (const PlacedView& v : placed_views_) {
-      placed.push_back({{"view", v.view}, {"kinematic", to_json(v.kinematic)}, {"correction", to_json(v.correction)},
+      placed.push_back({{"view", v.view + 1}, {"kinematic", to_json(v.kinematic)}, {"correction", to_json(v.correction)},
                         {"refined", v.refined}});
     }
     j["placed_views"] = placed;  // in the first view's frame
@@ -495,7 +496,9 @@ class RegistrationService {
       }
       for (const auto& o : j.at("observations")) {
         MountObservation m;
-        m.view = o.value("view", -1);
+        // Counted from 1 in the file; 0 (or none): an observation of no view named.
+        m.view = static_cast<int>(integer_from_json(o.contains("view") ? o.at("view") : nlohmann::json(0), 0, kViews.max,
+                                                    path.string() + " observations view")) - 1;
         m.kinematic = pose_from_json(o.at("kinematic"), path.string() + " observation");
         m.proposal.correction = pose_from_json(o.at("correction"), path.string() + " observation");
         m.proposal.centre = vec3_from_json(o.at("centre_m"), path.string() + " observation");
@@ -506,7 +509,8 @@ class RegistrationService {
         mount_.add(m);
       }
       for (const auto& v : j.value("placed_views", nlohmann::json::array())) {
-        placed_views_.push_back({v.at("view").get<int>(), pose_from_json(v.at("kinematic"), path.string() + " placed view"),
+        const int view = static_cast<int>(integer_from_json(v.at("view"), 1, kViews.max, path.string() + " placed_views view")) - 1;
+        placed_views_.push_back({view, pose_from_json(v.at("kinematic"), path.string() + " placed view"),
                                  pose_from_json(v.at("correction"), path.string() + " placed view"),
                                  v.at("refined").get<bool>()});
       }

@@ -1,6 +1,8 @@
 // pbnbv-view (`pbnbv view`): the scan in 3-D in a browser. A small HTTP server on 127.0.0.1 serves
 // one page (web/) and its data as JSON (/api/scene?view=N, /api/views); the page draws it with
-// three.js (served from build/web/three, fetched by scripts/setup from the npm registry).
+// three.js (served from build/web/three, fetched by scripts/setup from the npm registry). Views
+// count from 1 live and from a folder alike, as the files and scan.json: view N's scene is the
+// scan after its Nth view (live, view 0 is the scene before the first).
 //   live:   in:  SCAN_STATUS, REGISTERED_CLOUD, VOXEL_MAP, ELLIPSOIDS, PLAN_REQUEST, VIEW_PLAN
 //           follows the scan given by --scan, else the latest scan heard on SCAN_STATUS.
 //   DIR:    a finished scan folder (core/view load_scan_folder), no bus.
@@ -394,16 +396,21 @@ void harden(httplib::Server& server) {
   });
 }
 
-// The view a request asks for (?view=N; -1: the latest), or nullopt after answering 400.
+// The view a request asks for (?view=N, counted from 1; -1: the latest, without), or nullopt after
+// answering 400.
 std::optional<int> view_param(const httplib::Request& req, httplib::Response& res) {
   if (!req.has_param("view")) return -1;
+  const std::string text = req.get_param_value("view");
   try {
-    return std::stoi(req.get_param_value("view"));
+    std::size_t used = 0;
+    const int view = std::stoi(text, &used);
+    if (used == text.size() && view >= 0 && view <= 1000) return view;
   } catch (const std::exception&) {
-    res.status = 400;
-    res.set_content("view must be a whole number, got '" + req.get_param_value("view").substr(0, 100) + "'", "text/plain");
-    return std::nullopt;
   }
+  res.status = 400;
+  res.set_content("view must be a whole number in 1..1000 (0: before the first view, live), got '" + text.substr(0, 100) + "'",
+                  "text/plain");
+  return std::nullopt;
 }
 
 // The element of index.html that receives the page's first state.

@@ -259,13 +259,16 @@ TEST(ConvertScan, MeshRequestsAndResultsAreChecked) {
   q.camera = CameraIntrinsics{320, 180, 200, 200, 160, 90};
   q.point_spacing_m = 0.002;
   mesh_request_t qm = bus::to_msg(q);
+  EXPECT_EQ(qm.views, (std::vector<int32_t>{1, 3, 6}));  // the message counts from 1
   const MeshRequest back = bus::from_msg(qm, 1000);
   EXPECT_EQ(back.views, q.views);
   EXPECT_EQ(back.camera.cx, 160.0);
-  qm.views = {0, 2, 2};
-  expect_error([&] { bus::from_msg(qm, 1000); }, "MESH_REQUEST views[2] = 2: the views are 0..999, ascending");
-  qm.views = {1000};
-  expect_error([&] { bus::from_msg(qm, 1000); }, "MESH_REQUEST views[0] = 1000");
+  qm.views = {1, 3, 3};
+  expect_error([&] { bus::from_msg(qm, 1000); }, "MESH_REQUEST views[2] = 3: the views are 1..1000, ascending");
+  qm.views = {1001};
+  expect_error([&] { bus::from_msg(qm, 1000); }, "MESH_REQUEST views[0] = 1001");
+  qm.views = {0};
+  expect_error([&] { bus::from_msg(qm, 1000); }, "MESH_REQUEST views[0] = 0: the views are 1..1000, ascending");
   qm.views = {};
   expect_error([&] { bus::from_msg(qm, 1000); }, "MESH_REQUEST num_views = 0 is outside 1..1000");
   qm = bus::to_msg(q);

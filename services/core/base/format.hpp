@@ -15,8 +15,8 @@ inline std::string exact(double x) { return fmt::format("{}", x); }
 // x with `digits` decimals: fixed(2.345, 1) -> "2.3".
 inline std::string fixed(double x, int digits = 1) { return fmt::format("{:.{}f}", x, digits); }
 
-// A per-view file name of a scan's folder for the view with scan.json's "view" (counted from 0)
-// `view`: files count views from 1, as the titles and progress lines do, so view_file(0, "ply")
+// A per-view file name of a scan's folder for the view with the 0-based iteration `view` (scan.json's
+// "view" is view + 1): files count views from 1, as scan.json, the titles and progress lines do, so view_file(0, "ply")
 // -> "view_001.ply" is the first view's file and view_file(3, "png") -> "view_004.png" the fourth's.
 inline std::string view_file(int view, const char* extension) {
   return fmt::format("view_{:03d}.{}", view + 1, extension);

@@ -138,7 +138,7 @@ struct RegisteredCloud {
 struct MeshRequest {
   std::string scan_id;
   int64_t request_id = 0;
-  std::vector<int> views;           // the merged views, 0-based, ascending
+  std::vector<int> views;           // the merged views, 0-based, ascending (MESH_REQUEST's count from 1)
   CameraIntrinsics camera;          // the frames' camera
   double point_spacing_m = 0;       // their downsampling voxel
 };

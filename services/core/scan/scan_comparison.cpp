@@ -72,7 +72,7 @@ json compare_scans(const RecordedScan& original, const RecordedScan& replay) {
     const ViewRecord* va = i < a.size() ? &a[i] : nullptr;
     const ViewRecord* vb = i < b.size() ? &b[i] : nullptr;
     const std::string name = "view " + std::to_string(i + 1);
-    json v = {{"view", i}};
+    json v = {{"view", i + 1}};
     v["accepted"] = pair(accepted(va), accepted(vb));
     v["merged"] = pair(accepted(va), accepted(vb));  // a view is merged into the model when accepted
     v["correction"] = {{"original", correction(va)}, {"replay", correction(vb)}};
@@ -121,7 +121,7 @@ std::string comparison_table(const json& c) {
     const json& vox = v["voxels"];
     const std::string voxels = vox["same"].get<bool>() ? counts(vox["original"]) + " same"
                                                        : counts(vox["original"]) + " vs " + counts(vox["replay"]);
-    t += fmt::format("{:<5} {:<11} {:<27} {:<19} {:<34} {}\n", v["view"].get<int>() + 1, accepted, correction,
+    t += fmt::format("{:<5} {:<11} {:<27} {:<19} {:<34} {}\n", v["view"].get<int>(), accepted, correction,
                      diff(v["registered_pose"]), voxels, diff(v["plan"]));
   }
   t += c["same_decisions"].get<bool>() ? "same decisions in every view\n"

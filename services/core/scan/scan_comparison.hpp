@@ -17,7 +17,7 @@ namespace pbnbv {
 inline constexpr double kSameViewPositionM = 1e-6;
 inline constexpr double kSameViewAngleRad = 1e-6;
 
-// replay.json: {"views": [per view: "view" (0-based), "accepted", "merged", "correction",
+// replay.json: {"views": [per view: "view" (from 1, as scan.json's), "accepted", "merged", "correction",
 // "registered_pose", "voxels", "plan"; each with the original's and the replay's value and
 // whether they agree], "same_decisions", "differences": [what differs, one line each]}.
 nlohmann::json compare_scans(const RecordedScan& original, const RecordedScan& replay);

@@ -81,14 +81,14 @@ std::string recorded_scan_id(const fs::path& scan_json_or_folder) {
 std::string view_frame_file(const json& v, const fs::path& scan_json) {
   if (!v.is_object() || !v.contains("frame_file")) return "";
   const json& n = v.contains("view") ? v["view"] : json();
-  if (!n.is_number_integer() || n.get<int64_t>() < 0 || n.get<int64_t>() >= kViews.max) {
-    throw std::invalid_argument(scan_json.string() + ": a view entry with a frame_file has no view number 0.." +
-                                std::to_string(kViews.max - 1));
+  if (!n.is_number_integer() || n.get<int64_t>() < 1 || n.get<int64_t>() > kViews.max) {
+    throw std::invalid_argument(scan_json.string() + ": a view entry with a frame_file has no view number 1.." +
+                                std::to_string(kViews.max));
   }
-  const int view = n.get<int>();
-  const std::string own = frame_file_of(view);
+  const int view = n.get<int>();  // counted from 1, as the file's name
+  const std::string own = frame_file_of(view - 1);
   if (v["frame_file"] != own) {
-    throw std::invalid_argument(scan_json.string() + " view " + std::to_string(view + 1) + ": frame_file is not " + own);
+    throw std::invalid_argument(scan_json.string() + " view " + std::to_string(view) + ": frame_file is not " + own);
   }
   return own;
 }

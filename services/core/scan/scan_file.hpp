@@ -12,14 +12,15 @@
 
 namespace pbnbv {
 
-// The format of scan.json this pbnbv writes and reads. 1: the first with a version (pbnbv 0.11);
-// a record without format_version was written by pbnbv 0.10 or older.
-inline constexpr int kScanFormatVersion = 1;
+// The format of scan.json this pbnbv writes and reads. 1: the first with a version (pbnbv 0.11),
+// views[].view counted from 0; 2: views[].view counted from 1, as the files (view_001) and the
+// console count them. A record without format_version was written by pbnbv 0.10 or older.
+inline constexpr int kScanFormatVersion = 2;
 
 // scan.json (a path to the file, or to the scan folder holding it) parsed and checked: a JSON
 // object of format kScanFormatVersion. Throws std::invalid_argument naming the file for a missing
 // or unreadable file, and for another format, naming both formats and the pbnbv that wrote it:
-//   "DIR/scan.json: format 2 (written by pbnbv 0.12.0); this pbnbv (0.11.0) reads format 1 only".
+//   "DIR/scan.json: format 1 (written by pbnbv 0.11.0); this pbnbv (0.12.0) reads format 2 only".
 nlohmann::json read_scan_json(const std::filesystem::path& scan_json_or_folder);
 
 // scan.json's "status" object (state, message, views_done, views_planned, ...), of a record of any
@@ -39,8 +40,8 @@ std::string recorded_state(const std::filesystem::path& scan_folder);
 // was stopped around it). A folder without a record gets one holding only this status.
 void write_scan_state(const std::filesystem::path& scan_folder, const std::string& state, const std::string& message);
 
-// A view entry's frame file: "frames/view_NNN.ply" for its "view" (0 .. kViews.max - 1), or ""
-// when the entry names none. Throws naming `scan_json` and the view when it names any other path:
+// A view entry's frame file: "frames/view_NNN.ply" for its "view" N (counted from 1: 1 ..
+// kViews.max, NNN = N), or "" when the entry names none. Throws naming `scan_json` and the view when it names any other path:
 // no path is taken from the file.
 std::string view_frame_file(const nlohmann::json& view, const std::filesystem::path& scan_json);
 

@@ -107,7 +107,7 @@ json to_json(const PlanRecord& r) {
             {"outcome", to_string(p.outcome)},
             {"reason", p.reason},
             {"ranking", name_of(p.ranking)},
-            {"map_of_view", r.map_of_view},
+            {"map_of_view", r.map_of_view + 1},  // counted from 1 as "view" (0: not known)
             {"view_quality_px", p.view_quality},
             {"first_quality_px", p.first_quality},
             {"frontier_area_px", p.frontier_area_px},
@@ -135,7 +135,7 @@ json to_json(const PlanRecord& r) {
 }
 
 json to_json(const ViewRecord& v) {
-  json view = {{"view", v.view}};
+  json view = {{"view", v.view + 1}};  // counted from 1 in the file (format 2), as view_001 is the first
   if (v.initial_view) {
     view["plan"] = {{"planner", "initial view"}};
   } else if (v.plan) {

@@ -25,7 +25,7 @@ namespace pbnbv {
 // The plan a view came from: the scorer's answer and the map and ellipsoids it was made from.
 struct PlanRecord {
   ViewPlan plan;
-  int map_of_view = -1;                              // the view whose map the plan used
+  int map_of_view = -1;                              // the view whose map the plan used (0-based; -1 not known)
   double map_update_s = 0;                           // that map's update time (0: not known)
   std::optional<EllipsoidSetSummary> ellipsoids;     // fitted to that map (pbnbv)
 };

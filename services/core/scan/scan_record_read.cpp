@@ -235,7 +235,7 @@ PlanRecord plan_record_from_json(const json& j, const std::string& where) {
   p.outcome = enum_named(f, "outcome", kOutcomes);
   p.reason = f.text("reason");
   p.ranking = parse_name<Ranking>(f.text("ranking"));
-  r.map_of_view = static_cast<int>(f.integer("map_of_view", -1, INT32_MAX));
+  r.map_of_view = static_cast<int>(f.integer("map_of_view", 0, kViews.max)) - 1;  // from 1 as "view"; 0: not known
   p.view_quality = f.number("view_quality_px");
   p.first_quality = f.number("first_quality_px");
   p.frontier_area_px = f.number("frontier_area_px");
@@ -275,7 +275,7 @@ PlanRecord plan_record_from_json(const json& j, const std::string& where) {
 ViewRecord view_record_from_json(const json& j, const std::string& where) {
   const Fields f(j, where);
   ViewRecord v;
-  v.view = static_cast<int>(f.integer("view", 0, kViews.max - 1));
+  v.view = static_cast<int>(f.integer("view", 1, kViews.max)) - 1;  // counted from 1 in the file (format 2)
   const Fields view(j, where + " view " + std::to_string(v.view + 1));
   const json no_times = json::object();
   const Fields time(f.has("time_s") ? f.at("time_s") : no_times, view.where() + " time_s");

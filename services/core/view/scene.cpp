@@ -164,7 +164,7 @@ std::vector<Scene> load_scan_folder(const std::string& dir, double voxel_m, std:
       for (const Ellipsoid& e : ell) s.ellipsoids.push_back(ellipsoid_mesh(e));
       const int map_view = plan.map_of_view < 0 ? static_cast<int>(i) : plan.map_of_view;
       if (static_cast<std::size_t>(map_view) >= views.size() || !views[static_cast<std::size_t>(map_view)].map) {
-        throw std::runtime_error(pw + " map_of_view " + std::to_string(map_view) + " names no view with a map");
+        throw std::runtime_error(pw + " map_of_view " + std::to_string(map_view + 1) + " names no view with a map");
       }
       const VoxelMapSummary& m = *views[static_cast<std::size_t>(map_view)].map;
       const Eigen::AlignedBox3d box(m.bbox_min_m, m.bbox_max_m);

@@ -263,14 +263,14 @@ TEST_F(EvaluateCommand, BadInputIsNamed) {
   }
 }
 
-// A scan folder whose scan.json is of another format (here format 2, as a later pbnbv might write)
+// A scan folder whose scan.json is of another format (here format 3, as a later pbnbv might write)
 // is refused by `pbnbv evaluate` and `pbnbv mesh` naming the file, both formats and the writer;
 // nothing is written into the folder.
 TEST_F(EvaluateCommand, AFolderOfAnotherScanFormatIsRefusedNamingBothFormats) {
   const fs::path scan =
-      mini_scan("later", {{"format_version", 2}, {"pbnbv_version", "0.12.0"}, {"status", {{"state", "done"}}}});
-  const std::string expected = (scan / "scan.json").string() + ": format 2 (written by pbnbv 0.12.0); this pbnbv (" +
-                               std::string(pbnbv_version()) + ") reads format 1 only";
+      mini_scan("later", {{"format_version", 3}, {"pbnbv_version", "0.13.0"}, {"status", {{"state", "done"}}}});
+  const std::string expected = (scan / "scan.json").string() + ": format 3 (written by pbnbv 0.13.0); this pbnbv (" +
+                               std::string(pbnbv_version()) + ") reads format 2 only";
   using pbnbv::testing::error_message;
   EvaluateOptions e;
   e.target = scan.string();

@@ -305,7 +305,7 @@ function draw(s) {
   const q = s.candidates.map((c) => c.quality_px);
   const look = window.pbnbvView.cloud;
   document.getElementById('info').innerHTML =
-    `<b>${escapeHtml(s.scan_id) || 'waiting for a scan...'}</b><br>view ${s.view}<br>${escapeHtml(s.status)}<br>` +
+    `<b>${escapeHtml(s.scan_id) || 'waiting for a scan...'}</b><br>${s.view > 0 ? `view ${s.view}` : 'no view yet'}<br>${escapeHtml(s.status)}<br>` +
     (s.coverage_percent !== null ? `coverage ${s.coverage_percent.toFixed(1)} %<br>` : '') +
     `cloud ${f(s.cloud_points_total)} points (${f(s.cloud_points)} drawn` +
     (s.cloud_points > 0 ? `, ${look.colours ? 'its colours' : 'cyan'}${look.normals ? ' shaded by normals' : ', no normals'}` : '') +

@@ -43,16 +43,19 @@ TEST_F(ScanFileTest, ARecordOfThisVersionIsReadBack) {
 
 TEST_F(ScanFileTest, AnotherFormatIsRefusedNamingBothFormatsAndTheWriter) {
   const std::string mine = std::string(pbnbv_version());
-  write_json_atomic({{"format_version", 2}, {"pbnbv_version", "0.12.0"}, {"status", {{"state", "done"}}}}, path());
-  EXPECT_EQ(refusal(), path() + ": format 2 (written by pbnbv 0.12.0); this pbnbv (" + mine + ") reads format 1 only");
+  write_json_atomic({{"format_version", 3}, {"pbnbv_version", "0.13.0"}, {"status", {{"state", "done"}}}}, path());
+  EXPECT_EQ(refusal(), path() + ": format 3 (written by pbnbv 0.13.0); this pbnbv (" + mine + ") reads format 2 only");
+  // Format 1 counted views from 0: refused, not read one view off.
+  write_json_atomic({{"format_version", 1}, {"pbnbv_version", "0.11.0"}, {"views", {{{"view", 0}}}}}, path());
+  EXPECT_EQ(refusal(), path() + ": format 1 (written by pbnbv 0.11.0); this pbnbv (" + mine + ") reads format 2 only");
   write_json_atomic({{"format_version", 0}}, path());
-  EXPECT_EQ(refusal(), path() + ": format 0 (written by an unknown pbnbv); this pbnbv (" + mine + ") reads format 1 only");
+  EXPECT_EQ(refusal(), path() + ": format 0 (written by an unknown pbnbv); this pbnbv (" + mine + ") reads format 2 only");
   write_json_atomic({{"settings", json::object()}, {"status", {{"state", "done"}}}}, path());
   EXPECT_EQ(refusal(), path() + ": a record without format_version (written by pbnbv 0.10 or older); this pbnbv (" + mine +
-                           ") reads format 1 only");
+                           ") reads format 2 only");
   // The state of a record of any format is still read (a bench rerun skips complete scans).
   EXPECT_EQ(recorded_state(dir_), "done");
-  write_json_atomic({{"format_version", "1"}}, path());
+  write_json_atomic({{"format_version", "2"}}, path());
   EXPECT_NE(refusal().find("format_version"), std::string::npos) << refusal();
   write_json_atomic(json::array({1, 2}), path());
   EXPECT_EQ(refusal(), path() + ": not a scan record (expected a JSON object)");
@@ -85,18 +88,24 @@ TEST_F(ScanFileTest, TheLaunchersWordOnTheStateKeepsTheRecordAndStartsOneWhereNo
 
 namespace {
 
-// A view entry names its own frame file or none: a planted path (another view's, outside the
-// folder) is refused naming the file and the view, before anything opens it.
+// A view entry names its own frame file or none: view N (counted from 1) is frames/view_NNN.ply.
+// A planted path (another view's, outside the folder) is refused naming the file and the view,
+// before anything opens it.
 TEST(ViewFrameFile, IsTheViewsOwnOrNone) {
   const std::filesystem::path where = "/scans/a/scan.json";
-  EXPECT_EQ(view_frame_file(nlohmann::json{{"view", 2}, {"frame_file", "frames/view_003.ply"}}, where), "frames/view_003.ply");
-  EXPECT_EQ(view_frame_file(nlohmann::json{{"view", 2}}, where), "");
-  for (const char* planted : {"../../etc/passwd", "frames/view_001.ply", "/tmp/x.ply"}) {
-    pbnbv::testing::expect_error([&] { view_frame_file(nlohmann::json{{"view", 2}, {"frame_file", planted}}, where); },
+  EXPECT_EQ(view_frame_file(nlohmann::json{{"view", 3}, {"frame_file", "frames/view_003.ply"}}, where), "frames/view_003.ply");
+  EXPECT_EQ(view_frame_file(nlohmann::json{{"view", 1}, {"frame_file", "frames/view_001.ply"}}, where), "frames/view_001.ply");
+  EXPECT_EQ(view_frame_file(nlohmann::json{{"view", 1000}, {"frame_file", "frames/view_1000.ply"}}, where), "frames/view_1000.ply");
+  EXPECT_EQ(view_frame_file(nlohmann::json{{"view", 3}}, where), "");
+  for (const char* planted : {"../../etc/passwd", "frames/view_002.ply", "/tmp/x.ply"}) {
+    pbnbv::testing::expect_error([&] { view_frame_file(nlohmann::json{{"view", 3}, {"frame_file", planted}}, where); },
                                  "/scans/a/scan.json view 3: frame_file is not frames/view_003.ply");
   }
-  pbnbv::testing::expect_error([&] { view_frame_file(nlohmann::json{{"view", -1}, {"frame_file", "frames/view_000.ply"}}, where); },
-                               "/scans/a/scan.json: a view entry with a frame_file has no view number 0..999");
+  for (const int outside : {0, -1, 1001}) {
+    pbnbv::testing::expect_error(
+        [&] { view_frame_file(nlohmann::json{{"view", outside}, {"frame_file", "frames/view_000.ply"}}, where); },
+        "/scans/a/scan.json: a view entry with a frame_file has no view number 1..1000");
+  }
   pbnbv::testing::expect_error([&] { view_frame_file(nlohmann::json{{"frame_file", "frames/view_001.ply"}}, where); },
                                "has no view number");
 }

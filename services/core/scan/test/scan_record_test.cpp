@@ -9,6 +9,7 @@
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
 #include "core/base/pose.hpp"
+#include "error_message.hpp"
 #include "file_test_util.hpp"
 
 using namespace pbnbv;
@@ -52,7 +53,7 @@ TEST_F(ScanRecordTest, AViewEntryHasASectionPerStepReached) {
   v.capture_points = 3;
   v.capture_round_trip_s = 1;
   json j = to_json(v);
-  EXPECT_EQ(j["view"], 2);
+  EXPECT_EQ(j["view"], 3);  // view 2 (0-based) is the third: counted from 1 in the file
   EXPECT_EQ(j["option"], 1);
   EXPECT_NEAR(j["requested_object_T_camera"]["position_m"][0].get<double>(), 0.6, 1e-12);
   EXPECT_EQ(j["failed_moves"][0]["status"], "unreachable");
@@ -75,6 +76,24 @@ TEST_F(ScanRecordTest, AViewEntryHasASectionPerStepReached) {
   EXPECT_FALSE(j.contains("time_s"));
 }
 
+// scan.json counts views from 1 (format 2), as view_001 is the first view's file; the record keeps
+// them 0-based. A view 0 is refused naming the field and the range.
+TEST_F(ScanRecordTest, TheFirstViewIsWrittenAsView1AndReadBackAs0) {
+  ViewRecord first;
+  first.view = 0;
+  const json j = to_json(first);
+  EXPECT_EQ(j["view"], 1);
+  EXPECT_EQ(view_record_from_json(j, "DIR/scan.json views[0]").view, 0);
+  ViewRecord last;
+  last.view = 999;
+  EXPECT_EQ(to_json(last)["view"], 1000);
+  EXPECT_EQ(view_record_from_json(to_json(last), "DIR/scan.json views[999]").view, 999);
+  pbnbv::testing::expect_error([] { view_record_from_json(json{{"view", 0}}, "DIR/scan.json views[0]"); },
+                               "DIR/scan.json views[0] view = 0 is not a whole number in 1..1000");
+  pbnbv::testing::expect_error([] { view_record_from_json(json{{"view", 1001}}, "DIR/scan.json views[0]"); },
+                               "DIR/scan.json views[0] view = 1001 is not a whole number in 1..1000");
+}
+
 TEST_F(ScanRecordTest, APlanEntryTimesThePlannerStepAsThePaperDoes) {
   PlanRecord p;
   p.plan.iteration = 4;
@@ -94,7 +113,9 @@ TEST_F(ScanRecordTest, APlanEntryTimesThePlannerStepAsThePaperDoes) {
   EXPECT_EQ(j["time_ms"]["ellipsoid_fit"], 125.0);
   EXPECT_EQ(j["figure"], "plans/view_005.png");  // iteration 4 is the fifth view
   EXPECT_EQ(j["outcome"], "view");
-  EXPECT_EQ(j["map_of_view"], 3);
+  EXPECT_EQ(j["map_of_view"], 4);  // counted from 1 as "view"
+  p.map_of_view = -1;
+  EXPECT_EQ(to_json(p)["map_of_view"], 0);  // not known
   EXPECT_NE(j.dump().find("\"first_quality_px\":null"), std::string::npos) << "NaN is written as null";
   EXPECT_EQ(j["ellipsoids"]["list"].size(), 0u);
 }

@@ -382,7 +382,7 @@ TEST_F(ScanSequencerTest, ThreeViewRingScanEndToEnd) {
   ASSERT_EQ(scan["views"].size(), 3u);
   for (int k = 0; k < 3; ++k) {
     const json& v = scan["views"][k];
-    EXPECT_EQ(v["view"], k);
+    EXPECT_EQ(v["view"], k + 1);  // counted from 1, as view_001
     EXPECT_FALSE(v.contains("plan"));
     EXPECT_EQ(v["option"], 0);
     EXPECT_EQ(v["move"]["status"], "reached");
@@ -518,7 +518,7 @@ TEST_F(ScanSequencerTest, AnUnreachableBestViewIsReplacedByTheNextAlternative) {
   // The plan as recorded: from the map of view 0, with that map's and the ellipsoids' times.
   const json& plan = v1["plan"];
   EXPECT_EQ(plan["outcome"], "view");
-  EXPECT_EQ(plan["map_of_view"], 0);
+  EXPECT_EQ(plan["map_of_view"], 1);  // counted from 1
   EXPECT_EQ(plan["candidates"], json({{"generated", 800}, {"unreachable", 40}, {"excluded", 0}, {"scored", 760}}));
   EXPECT_EQ(plan["figure"], "plans/view_002.png");
   EXPECT_NEAR(plan["planner_step_ms"].get<double>(), 2.0 + 20.0 + 100.0, 1e-9);
@@ -708,7 +708,7 @@ TEST_F(ScanSequencerTest, APlannerStopEndsTheScanDoneWithItsReason) {
   EXPECT_EQ(scan["status"]["views_done"], 1);
   EXPECT_EQ(scan["stop"], json({{"reason", "no frontier ellipsoid remains"}, {"after_views", 1}, {"rule", "planner"}}));
   EXPECT_EQ(scan["planning_stopped"]["outcome"], "stop");
-  EXPECT_EQ(scan["planning_stopped"]["map_of_view"], 0);
+  EXPECT_EQ(scan["planning_stopped"]["map_of_view"], 1);
   EXPECT_EQ(scan["views"].size(), 1u);
   EXPECT_EQ(seq_->summary().rfind("scan complete: no frontier ellipsoid remains: 1 of 5 views, 10 points", 0), 0u)
       << seq_->summary();
@@ -1133,7 +1133,7 @@ TEST_F(ScanSequencerTest, AStoppedScanResumesFromItsFolderWithTheNextView) {
   EXPECT_EQ(done["status"]["state"], "done");
   EXPECT_EQ(done["status"]["views_done"], 3);
   ASSERT_EQ(done["views"].size(), 3u);
-  EXPECT_EQ(done["views"][2]["view"], 2);
+  EXPECT_EQ(done["views"][2]["view"], 3);
   // The new plan: for view 3 (iteration 2), from the two views taken, with the first quality.
   ASSERT_GT(plans_.size(), plans_before);
   const PlanRequest& p = plans_[plans_before].second;
@@ -1201,10 +1201,13 @@ TEST_F(ScanSequencerTest, ResumingRefusesNumbersOutOfTheirRange) {
     std::string expected;
   };
   const std::vector<Case> cases = {
-      {[](json& j) { j["views"][1]["view"] = 2147483647; }, "views[1] view = 2147483647 is not a whole number in 0..999"},
-      {[](json& j) { j["views"][0]["view"] = 0.5; }, "views[0] view = 0.5 is not a whole number in 0..999"},
+      {[](json& j) { j["views"][1]["view"] = 2147483647; }, "views[1] view = 2147483647 is not a whole number in 1..1000"},
+      {[](json& j) { j["views"][0]["view"] = 0.5; }, "views[0] view = 0.5 is not a whole number in 1..1000"},
+      // Views count from 1 (format 2): a 0 is refused, naming the field and the range.
+      {[](json& j) { j["views"][0]["view"] = 0; }, "views[0] view = 0 is not a whole number in 1..1000"},
+      {[](json& j) { j["views"][1]["plan"]["map_of_view"] = 1001; }, "map_of_view = 1001 is not a whole number in 0..1000"},
       {[](json& j) {
-         j["views"][1]["view"] = 5;  // within what a scan may have, beyond this one's (its files renamed too)
+         j["views"][1]["view"] = 6;  // within what a scan may have, beyond this one's (its files renamed too)
          j["views"][1]["frame_file"] = "frames/view_006.ply";
          j["views"][1]["depth_file"] = "depth/view_006.png";
        },
