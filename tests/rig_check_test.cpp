@@ -48,13 +48,6 @@ class Listener {
   lcm::LCM lcm_;
 };
 
-std::string read_file(const fs::path& p) {
-  std::ifstream f(p);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 // The arm rig's file with the camera the tests' twin renders (320 x 180, f = 174 px: the
 // default camera at a quarter of the size, so frames render quickly).
 fs::path small_camera_rig(const fs::path& dir) {

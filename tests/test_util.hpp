@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <sys/wait.h>
 #include <signal.h>
@@ -38,6 +40,14 @@ inline std::string env_or(const char* name, const std::string& fallback) {
 inline std::string bin_dir() { return env_or("PBNBV_BIN_DIR", PBNBV_TEST_BIN_DIR); }
 inline std::string source_dir() { return env_or("PBNBV_SOURCE_DIR", PBNBV_TEST_SOURCE_DIR); }
 inline std::string netns_run() { return source_dir() + "/scripts/netns-run"; }
+
+// A text file's contents ("" when it cannot be read).
+inline std::string read_file(const std::filesystem::path& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
 
 // A fresh empty folder under the system temp dir.
 // An empty folder for one test, /tmp/pbnbv-test-NAME-PID. Folders of the same NAME left by earlier

@@ -62,13 +62,6 @@ class Bus {
   lcm::LCM lcm_;
 };
 
-std::string read_file(const fs::path& p) {
-  std::ifstream f(p);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 class UrDriver : public ::testing::Test {
  protected:
   void SetUp() override {

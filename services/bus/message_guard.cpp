@@ -324,24 +324,19 @@ MessageCheck check_message(const void* data, int64_t size, std::string_view type
   // image (decode_frame) inflates to.
   if (type_name == "depth_frame_t") {
     const MessageSchema& s = message_schemas()[static_cast<std::size_t>(index)];
-    const int width_at = member_index(s, "width"), height_at = member_index(s, "height");
-    const int64_t width = width_at < 0 ? 0 : w.top_value(static_cast<std::size_t>(width_at));
-    const int64_t height = height_at < 0 ? 0 : w.top_value(static_cast<std::size_t>(height_at));
-    if (width > 0 && height > 0 && width * height > limits.max_frame_pixels) {
-      c.reason = type + " is " + std::to_string(width) + " x " + std::to_string(height) + " = " +
-                 std::to_string(width * height) + " pixels, the contract allows at most " +
-                 std::to_string(limits.max_frame_pixels);
-      return c;
-    }
-    const int cw_at = member_index(s, "colour_width"), ch_at = member_index(s, "colour_height");
-    const int64_t cw = cw_at < 0 ? 0 : w.top_value(static_cast<std::size_t>(cw_at));
-    const int64_t ch = ch_at < 0 ? 0 : w.top_value(static_cast<std::size_t>(ch_at));
-    if (cw > 0 && ch > 0 && cw * ch > limits.max_frame_pixels) {
-      c.reason = type + "'s colour image is " + std::to_string(cw) + " x " + std::to_string(ch) + " = " +
-                 std::to_string(cw * ch) + " pixels, the contract allows at most " +
-                 std::to_string(limits.max_frame_pixels);
-      return c;
-    }
+    // "" when the image the members `w_name` x `h_name` declare is within the contract's largest.
+    const auto too_large = [&](const char* w_name, const char* h_name, const std::string& what) -> std::string {
+      const int w_at = member_index(s, w_name), h_at = member_index(s, h_name);
+      const int64_t width = w_at < 0 ? 0 : w.top_value(static_cast<std::size_t>(w_at));
+      const int64_t height = h_at < 0 ? 0 : w.top_value(static_cast<std::size_t>(h_at));
+      if (width <= 0 || height <= 0 || width * height <= limits.max_frame_pixels) return "";
+      return what + " is " + std::to_string(width) + " x " + std::to_string(height) + " = " +
+             std::to_string(width * height) + " pixels, the contract allows at most " +
+             std::to_string(limits.max_frame_pixels);
+    };
+    c.reason = too_large("width", "height", type);
+    if (c.reason.empty()) c.reason = too_large("colour_width", "colour_height", type + "'s colour image");
+    if (!c.reason.empty()) return c;
   }
   c.ok = true;
   c.has_scope = w.has_scope();

@@ -324,6 +324,20 @@ TEST(DepthRendererTest, BackProjectedPixelsLieOnThePlane) {
   EXPECT_LT(max_dist_mm, 1.0);
 }
 
+// The driver library's camera for a test frame of `k` (range 0.1..3 m), as a driver sends it.
+driver::DepthCamera contract_camera(const CameraIntrinsics& k) {
+  driver::DepthCamera camera;
+  camera.width = k.width;
+  camera.height = k.height;
+  camera.fx = k.fx;
+  camera.fy = k.fy;
+  camera.cx = k.cx;
+  camera.cy = k.cy;
+  camera.depth_min_m = 0.1;
+  camera.depth_max_m = 3.0;
+  return camera;
+}
+
 // A strongly distorted camera (k1 -0.35: a wide time-of-flight lens's order, stronger) in the twin:
 // the pinhole image covering the lens rendered, resampled through it, sent as a DEPTH_FRAME that
 // says so (0.1 mm counts), decoded as every service decodes it (undistorted): the tilted plane's
@@ -343,15 +357,7 @@ TEST(DepthRendererTest, ThroughAStrongLensThePipelineSeesAFlatPlane) {
   const CameraIntrinsics cover = pinhole_cover(k, lens);
   DepthRenderer renderer(scene.model, "depth", cover, DepthRange{});
   const DepthImage seen = through_lens(renderer.render(scene.data), cover, k, lens);
-  driver::DepthCamera camera;
-  camera.width = k.width;
-  camera.height = k.height;
-  camera.fx = k.fx;
-  camera.fy = k.fy;
-  camera.cx = k.cx;
-  camera.cy = k.cy;
-  camera.depth_min_m = 0.1;
-  camera.depth_max_m = 3.0;
+  driver::DepthCamera camera = contract_camera(k);
   camera.distortion = lens.coefficients();
   depth_trigger_t trigger{};
   trigger.seq = 1;
@@ -406,15 +412,7 @@ TEST(DepthRendererTest, ATwoColouredObjectComesOutWithTheColoursOnTheRightHalves
   colour.intrinsics = k;
   colour.depth_T_colour.translation() = Eigen::Vector3d(0.015, 0, 0);
   colour.rgb = renderer.render_colour(scene.data, k, colour.depth_T_colour);
-  driver::DepthCamera camera;
-  camera.width = k.width;
-  camera.height = k.height;
-  camera.fx = k.fx;
-  camera.fy = k.fy;
-  camera.cx = k.cx;
-  camera.cy = k.cy;
-  camera.depth_min_m = 0.1;
-  camera.depth_max_m = 3.0;
+  driver::DepthCamera camera = contract_camera(k);
   depth_trigger_t trigger{};
   trigger.seq = 1;
   depth_frame_t frame = driver::depth_frame(camera, driver::depth_counts(depth.depth_m, 1e-4), driver::Exposure{}, 1, trigger);
