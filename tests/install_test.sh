@@ -15,7 +15,9 @@ trap '[ -n "${KEEP_INSTALL:-}" ] || rm -rf "$T"' EXIT
 fail() { echo "install test: $*" >&2; exit 1; }
 
 R="$T/root"
-(cd "$BUILD" && cpack -G DEB -B "$T/pkg" >"$T/cpack.log" 2>&1) || { tail -20 "$T/cpack.log"; fail "cpack -G DEB failed"; }
+# gzip rather than the release's xz: the same package, made in a fraction of the time.
+(cd "$BUILD" && cpack -G DEB -D CPACK_DEBIAN_COMPRESSION_TYPE=gzip -B "$T/pkg" >"$T/cpack.log" 2>&1) \
+  || { tail -20 "$T/cpack.log"; fail "cpack -G DEB failed"; }
 deb=$(ls "$T"/pkg/pbnbv_*_amd64.deb 2>/dev/null | head -1)
 [ -n "$deb" ] || fail "cpack made no pbnbv_*.deb: $(ls "$T/pkg")"
 depends=$(dpkg-deb -f "$deb" Depends)

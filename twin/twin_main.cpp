@@ -97,6 +97,8 @@ struct TwinOptions {
   LensDistortion distortion;    // the lens frames are taken through (main fills it in)
   CameraIntrinsics render_k;    // what the renderer draws: k, or the pinhole image covering the lens's
   bool no_colour = false;       // frames without their colour image
+  double colour_scale = 0.5;    // the colour image's size against the depth image's
+  CameraIntrinsics colour_k;    // the colour sensor's (main fills it in)
   std::string colour_offset_text;  // --colour-offset x,y,z mm
   Pose depth_T_colour = Pose::Identity();  // the colour sensor in the depth sensor's optical frame
 
@@ -165,6 +167,10 @@ void add_options(CLI::App& app, TwinOptions& o) {
   cli::add_flag(app, "no-colour", &o.no_colour,
                 "send depth frames without their colour image (default: each frame carries the colour image the "
                 "camera took with it, JPEG, or raw R G B with --raw-depth)");
+  cli::add(app, Setting<double>{"colour-scale", 0.5, 0.25, 1.0, "",
+                                "the colour image's size against the depth image's (its own intrinsics: the depth "
+                                "camera's scaled; 0.5 renders a quarter of the pixels)"},
+           &o.colour_scale);
   cli::add_text(app, "colour-offset", &o.colour_offset_text,
                 "where the colour sensor sits in the depth sensor's optical frame (x right, y down, z forward), mm: "
                 "a camera with two sensors, e.g. 15,0,0 (default 0,0,0: colour registered to depth)",
@@ -192,7 +198,14 @@ void complete(TwinOptions& o) {
   }
   o.k.cx = o.cx.value_or(o.k.width / 2.0);
   o.k.cy = o.cy.value_or(o.k.height / 2.0);
+  // The colour sensor: the depth camera's view at colour_scale (pixel centres at integers, so the
+  // principal point scales about -0.5).
+  const double s = o.colour_scale;
+  o.colour_k = CameraIntrinsics{std::max(1, static_cast<int>(std::lround(o.k.width * s))),
+                                std::max(1, static_cast<int>(std::lround(o.k.height * s))), o.k.fx * s, o.k.fy * s,
+                                (o.k.cx + 0.5) * s - 0.5, (o.k.cy + 0.5) * s - 0.5};
   o.k.validate();
+  o.colour_k.validate();
   o.range.validate();
   if (o.rtde_port > 0 && o.rtde_port == o.ur_script_port) {
     throw std::invalid_argument("--rtde-port and --ur-script-port are both " + std::to_string(o.rtde_port));
@@ -435,9 +448,9 @@ class Twin {
     if (!o_.no_colour) {
       // The colour sensor exposes with the depth sensor; its image is a pinhole one.
       ColourImage colour;
-      colour.intrinsics = o_.k;
+      colour.intrinsics = o_.colour_k;
       colour.depth_T_colour = o_.depth_T_colour;
-      colour.rgb = renderer_.render_colour(sim_.data(), o_.k, o_.depth_T_colour);
+      colour.rgb = renderer_.render_colour(sim_.data(), o_.colour_k, o_.depth_T_colour);
       bus::set_colour(f, colour, f.utime, o_.raw_depth ? depth_frame_t::kColourRgb8 : depth_frame_t::kColourJpeg);
     }
     if (o_.faulty(DriverFault::kNoTriggerId)) f.trigger_seq = -1;

@@ -51,7 +51,7 @@ std::optional<std::pair<int, int>> jpeg_size(const std::vector<uint8_t>& b) {
   return std::nullopt;
 }
 
-std::optional<ColourImage> decode_colour(const depth_frame_t& f) {
+std::optional<ColourImage> colour_camera(const depth_frame_t& f) {
   if (f.colour_encoding == depth_frame_t::kColourNone) return std::nullopt;
   const std::string what = "DEPTH_FRAME " + std::to_string(f.seq) + " colour";
   ColourImage c;
@@ -68,6 +68,7 @@ std::optional<ColourImage> decode_colour(const depth_frame_t& f) {
   }
   c.distortion = LensDistortion::from({f.colour_distortion[0], f.colour_distortion[1], f.colour_distortion[2],
                                        f.colour_distortion[3], f.colour_distortion[4]});
+  c.distortion.validate(c.intrinsics, what + " distortion");
   c.depth_T_colour = pose_from_arrays(f.depth_T_colour.position_m, f.depth_T_colour.quat_wxyz, what + " depth_T_colour");
   const std::size_t want = static_cast<std::size_t>(f.colour_width) * f.colour_height * 3;
   if (f.colour_encoding == depth_frame_t::kColourRgb8) {
@@ -76,7 +77,6 @@ std::optional<ColourImage> decode_colour(const depth_frame_t& f) {
                                   std::to_string(f.colour_width) + " x " + std::to_string(f.colour_height) +
                                   " image (" + std::to_string(want) + " wanted)");
     }
-    c.rgb = f.colour;
   } else if (f.colour_encoding == depth_frame_t::kColourJpeg) {
     const std::optional<std::pair<int, int>> size = jpeg_size(f.colour);
     if (!size) throw std::invalid_argument(what + " (jpeg): the bytes are not a JPEG with a frame header");
@@ -85,18 +85,30 @@ std::optional<ColourImage> decode_colour(const depth_frame_t& f) {
                                   std::to_string(size->second) + ", the frame says " + std::to_string(f.colour_width) +
                                   " x " + std::to_string(f.colour_height));
     }
+  } else {
+    throw std::invalid_argument(what + "_encoding = " + std::to_string(f.colour_encoding) +
+                                " is not one of its constants (0 none, 1 rgb8, 2 jpeg)");
+  }
+  return c;
+}
+
+std::optional<ColourImage> decode_colour(const depth_frame_t& f) {
+  std::optional<ColourImage> c = colour_camera(f);
+  if (!c) return c;
+  const std::string what = "DEPTH_FRAME " + std::to_string(f.seq) + " colour";
+  const std::size_t want = static_cast<std::size_t>(f.colour_width) * f.colour_height * 3;
+  if (f.colour_encoding == depth_frame_t::kColourRgb8) {
+    c->rgb = f.colour;
+  } else {
     const cv::Mat bgr = cv::imdecode(f.colour, cv::IMREAD_COLOR);
     if (bgr.empty() || bgr.cols != f.colour_width || bgr.rows != f.colour_height) {
       throw std::invalid_argument(what + " (jpeg) does not decode");
     }
     cv::Mat rgb;
     cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-    c.rgb.assign(rgb.data, rgb.data + want);
-  } else {
-    throw std::invalid_argument(what + "_encoding = " + std::to_string(f.colour_encoding) +
-                                " is not one of its constants (0 none, 1 rgb8, 2 jpeg)");
+    c->rgb.assign(rgb.data, rgb.data + want);
   }
-  c.validate(what);
+  c->validate(what);
   return c;
 }
 

@@ -19,6 +19,11 @@ std::vector<uint8_t> encode_jpeg(const std::vector<uint8_t>& rgb, int width, int
 // bytes are not a JPEG or end before one.
 std::optional<std::pair<int, int>> jpeg_size(const std::vector<uint8_t>& jpeg);
 
+// The camera of the colour image a frame carries, its pixels not decoded (rgb empty; nullopt:
+// colour_encoding kColourNone): what writing the image as it came needs. Checked as decode_colour
+// checks it, but for the JPEG's decoding.
+std::optional<ColourImage> colour_camera(const depth_frame_t& f);
+
 // The colour image a frame carries (nullopt: colour_encoding kColourNone). Throws
 // std::invalid_argument naming the frame and the bad field: the colour camera model, the pose,
 // an unknown encoding, a size that is not the declared image's, a JPEG that does not decode.

@@ -553,13 +553,13 @@ class RegistrationService {
       try {
         const bus::DecodedFrame d = bus::decode_frame(*f);
         std::optional<ScanModel::ColourFile> colour;
-        if (std::optional<ColourImage> image = bus::decode_colour(*f)) {
+        // The JPEG as it came (raw R G B encoded): its camera is all that is read of it.
+        if (std::optional<ColourImage> camera = bus::colour_camera(*f)) {
           colour.emplace();
           colour->jpeg = f->colour_encoding == depth_frame_t::kColourJpeg
                              ? f->colour
-                             : bus::encode_jpeg(image->rgb, image->intrinsics.width, image->intrinsics.height);
-          image->rgb.clear();
-          colour->camera = std::move(*image);
+                             : bus::encode_jpeg(f->colour, camera->intrinsics.width, camera->intrinsics.height);
+          colour->camera = std::move(*camera);
         }
         out.depth_file = model_.write_depth(c.iteration, DepthImage{&d.depth_m, d.intrinsics, d.range, f->seq}, pose, merge,
                                             write_depth_png, colour ? &*colour : nullptr);
