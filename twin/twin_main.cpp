@@ -207,6 +207,12 @@ void complete(TwinOptions& o) {
   o.k.validate();
   o.colour_k.validate();
   o.range.validate();
+  if (o.rtde_port > 0 && o.speed != 1.0) {
+    throw std::invalid_argument("--rtde-port with --speed " + std::to_string(o.speed) +
+                                ": a UR controller's clock runs at real time (pbnbv-ur-driver puts its timestamps on "
+                                "the host's clock, where the camera's frames are), so the twin playing one runs at "
+                                "--speed 1");
+  }
   if (o.rtde_port > 0 && o.rtde_port == o.ur_script_port) {
     throw std::invalid_argument("--rtde-port and --ur-script-port are both " + std::to_string(o.rtde_port));
   }

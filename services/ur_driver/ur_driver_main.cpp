@@ -3,13 +3,15 @@
 // driver owns the turntable and the camera). It talks RTDE to the controller (port 30004) and
 // sends it once per connection the program that moves the arm from the input registers
 // (driver/ur_arm.hpp, on the secondary interface, port 30002). Every data package becomes an
-// ARM_STATUS (host clock at reception, the controller's timestamp as driver_utime); a safety
+// ARM_STATUS (utime: the controller's timestamp on the host's clock, offset at the connection's first
+// package; driver_utime: the controller's timestamp); a safety
 // stop or a lost connection is the status's kFaultDriver; the driver reconnects by itself and
 // never clears a protective stop. docs/real-rig.md, "Universal Robots e-Series".
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -193,14 +195,20 @@ class UrDriver {
     }
     rig_driver_.set_arm_drive_fault(fault);
     const int64_t driver_us = std::llround(s.timestamp_s * 1e6);
-    publish(ur::reading_of(s, sent_.sent, rig_.joint_names), driver_us);
+    // The reading's time on the host's clock: the controller's timestamp moved by the offset
+    // between the clocks taken at the connection's first package (its transport delay, under a
+    // millisecond on the rig's network), so that the readings keep the controller's own spacing
+    // (a loaded host receives them in bursts) and a twin playing the controller at --speed N,
+    // whose camera stamps frames on its own rig clock, stays on that clock.
+    if (!clock_offset_us_) clock_offset_us_ = bus::now_utime() - driver_us;
+    publish(ur::reading_of(s, sent_.sent, rig_.joint_names), driver_us, driver_us + *clock_offset_us_);
   }
 
   // Publishes with both clocks strictly increasing (a reconnected controller's clock is floored
   // at the last stamp).
-  void publish(const driver::ArmReading& reading, int64_t driver_us) {
+  void publish(const driver::ArmReading& reading, int64_t driver_us, int64_t host_us) {
     driver::Stamp stamp;
-    stamp.utime = std::max(bus::now_utime(), last_stamp_.utime + 1);
+    stamp.utime = std::max(host_us, last_stamp_.utime + 1);
     stamp.driver_utime = std::max(driver_us, last_stamp_.driver_utime + 1);
     last_stamp_ = stamp;
     last_publish_s_ = bus::now_s();
@@ -214,12 +222,13 @@ class UrDriver {
     rig_driver_.set_arm_drive_fault(lost_text());
     driver::ArmReading r = ur::reading_of(state_, sent_.sent, rig_.joint_names);
     std::fill(r.velocity_rad_s.begin(), r.velocity_rad_s.end(), 0.0);
-    const int64_t elapsed_us = bus::now_utime() - last_stamp_.utime;
-    publish(r, last_stamp_.driver_utime + elapsed_us);
+    const int64_t elapsed_us = std::max<int64_t>(0, std::llround((bus::now_s() - last_publish_s_) * 1e6));
+    publish(r, last_stamp_.driver_utime + elapsed_us, last_stamp_.utime + elapsed_us);
   }
 
   void lose(const std::string& why) {
     client_.reset();
+    clock_offset_us_.reset();  // the next connection's first package sets it again
     lost_why_ = why;
     lost_at_s_ = bus::now_s();
     backoff_s_ = kFirstBackoffS;
@@ -271,6 +280,7 @@ class UrDriver {
   ur::State state_;
   bool have_state_ = false;
   driver::Stamp last_stamp_;
+  std::optional<int64_t> clock_offset_us_;  // host utime - controller time, this connection's
   double last_publish_s_ = 0, last_data_s_ = 0;
   double lost_at_s_ = -1, next_attempt_s_ = 0, backoff_s_ = kFirstBackoffS;
   std::string lost_why_;
