@@ -56,20 +56,15 @@ std::optional<ColourImage> colour_camera(const depth_frame_t& f) {
   const std::string what = "DEPTH_FRAME " + std::to_string(f.seq) + " colour";
   ColourImage c;
   c.intrinsics = CameraIntrinsics{f.colour_width, f.colour_height, f.colour_fx, f.colour_fy, f.colour_cx, f.colour_cy};
-  try {
-    c.intrinsics.validate();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(what + " intrinsics: " + e.what());
-  }
+  c.distortion = LensDistortion::from({f.colour_distortion[0], f.colour_distortion[1], f.colour_distortion[2],
+                                       f.colour_distortion[3], f.colour_distortion[4]});
+  c.depth_T_colour = pose_from_arrays(f.depth_T_colour.position_m, f.depth_T_colour.quat_wxyz, what + " depth_T_colour");
+  c.validate_camera(what);
   if (static_cast<int64_t>(f.colour_width) * f.colour_height > kMaxFramePixels) {
     throw std::invalid_argument(what + " image " + std::to_string(f.colour_width) + " x " +
                                 std::to_string(f.colour_height) + " exceeds the contract's " +
                                 std::to_string(kMaxFramePixels) + " pixels");
   }
-  c.distortion = LensDistortion::from({f.colour_distortion[0], f.colour_distortion[1], f.colour_distortion[2],
-                                       f.colour_distortion[3], f.colour_distortion[4]});
-  c.distortion.validate(c.intrinsics, what + " distortion");
-  c.depth_T_colour = pose_from_arrays(f.depth_T_colour.position_m, f.depth_T_colour.quat_wxyz, what + " depth_T_colour");
   const std::size_t want = static_cast<std::size_t>(f.colour_width) * f.colour_height * 3;
   if (f.colour_encoding == depth_frame_t::kColourRgb8) {
     if (f.colour.size() != want) {
@@ -108,8 +103,7 @@ std::optional<ColourImage> decode_colour(const depth_frame_t& f) {
     cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
     c->rgb.assign(rgb.data, rgb.data + want);
   }
-  c->validate(what);
-  return c;
+  return c;  // its camera checked by colour_camera, its size by the checks above
 }
 
 void set_colour(depth_frame_t& f, const ColourImage& image, int64_t utime, int8_t encoding, int jpeg_quality) {

@@ -5,7 +5,7 @@
 
 namespace pbnbv {
 
-void ColourImage::validate(const std::string& what) const {
+void ColourImage::validate_camera(const std::string& what) const {
   try {
     intrinsics.validate();
   } catch (const std::invalid_argument& e) {
@@ -16,6 +16,10 @@ void ColourImage::validate(const std::string& what) const {
   if (!depth_T_colour.matrix().allFinite() || !(r.transpose() * r).isIdentity(1e-6) || r.determinant() < 0) {
     throw std::invalid_argument(what + " depth_T_colour is not a rigid transform");
   }
+}
+
+void ColourImage::validate(const std::string& what) const {
+  validate_camera(what);
   const std::size_t want = static_cast<std::size_t>(intrinsics.width) * intrinsics.height * 3;
   if (rgb.size() != want) {
     throw std::invalid_argument(what + ": " + std::to_string(rgb.size()) + " bytes of colour for a " +

@@ -27,8 +27,9 @@ struct ColourImage {
   std::vector<uint8_t> rgb;         // width * height * 3, R G B, row-major, row 0 at the top
 
   // Throws std::invalid_argument naming `what` and the bad field: intrinsics, lens, a pose that
-  // is not rigid, or rgb not width * height * 3 bytes.
+  // is not rigid (validate_camera), or rgb not width * height * 3 bytes.
   void validate(const std::string& what) const;
+  void validate_camera(const std::string& what) const;
 };
 
 // The colour of each point (object frame) of a frame the depth sensor took at object_T_depth:
