@@ -115,11 +115,6 @@ std::string compose_model_xml(const std::string& rig_xml_path, const ObjectPlace
   return xml;
 }
 
-double ramp_duration_s(double distance, double speed_limit, double accel_limit) {
-  if (!(distance > 1e-9)) return 0.0;  // already there (up to numerical noise): no ramp
-  return std::max(1.5 * distance / speed_limit, std::sqrt(6.0 * distance / accel_limit));
-}
-
 bool PoseErrorModel::enabled() const {
   return !hand_eye_error.isApprox(Pose::Identity()) || turntable_offset_rad != 0 || joint_sigma_rad != 0 ||
          turntable_backlash_rad != 0;
@@ -191,9 +186,8 @@ RigSim::RigSim(const RigModel& rig, const ObjectPlacement& object,
   // no view is lost to the rig). Only the arm rig has contacts.
   if (rig.kind == RigKind::kFree) m_->opt.disableflags |= mjDSBL_CONTACT;
   teleport_ = rig.kind == RigKind::kFree;
-  std::vector<double> speeds(rig.qd_max.data(), rig.qd_max.data() + 6);
-  arm_ = make_group(rig.joint_names, speeds);
-  if (rig.has_turntable) turntable_ = make_group({"turntable"}, {rig.turntable_qd_max});
+  arm_ = make_group(rig.joint_names, {rig.qd_max.data(), rig.qd_max.data() + 6}, {rig.qdd_max.data(), rig.qdd_max.data() + 6});
+  if (rig.has_turntable) turntable_ = make_group({"turntable"}, {rig.turntable_qd_max}, {rig.turntable_qdd_max});
   // Start at home, holding.
   for (int i = 0; i < 6; ++i) {
     d_->qpos[arm_.qpos_adr[i]] = rig.q_home[i];
@@ -207,8 +201,8 @@ RigSim::~RigSim() {
   if (m_) mj_deleteModel(m_);
 }
 
-JointGroup RigSim::make_group(const std::vector<std::string>& joints,
-                              const std::vector<double>& speeds) {
+JointGroup RigSim::make_group(const std::vector<std::string>& joints, const std::vector<double>& speeds,
+                              const std::vector<double>& accelerations) {
   JointGroup g;
   for (std::size_t i = 0; i < joints.size(); ++i) {
     const int j = mj_name2id(m_, mjOBJ_JOINT, joints[i].c_str());
@@ -223,6 +217,7 @@ JointGroup RigSim::make_group(const std::vector<std::string>& joints,
     g.dof_adr.push_back(m_->jnt_dofadr[j]);
     g.actuator.push_back(act);
     g.speed_limit.push_back(speeds.at(i));
+    g.accel_limit.push_back(accelerations.at(i));
     const bool limited = m_->jnt_limited[j];
     g.lower.push_back(limited ? m_->jnt_range[2 * j] : -1e9);
     g.upper.push_back(limited ? m_->jnt_range[2 * j + 1] : 1e9);
@@ -255,12 +250,12 @@ void RigSim::start_ramp(JointGroup& g, const std::vector<double>& target, double
       throw OutOfLimits(os.str());
     }
   }
-  // Synchronised smoothstep ramp: the slowest joint sets the duration (none when teleporting).
+  // Synchronised smoothstep ramp: the slowest joint sets the duration (none when teleporting);
+  // the services' rig-time model (core/rig: arm_move_s) is this.
   double duration = 0;
   for (std::size_t i = 0; i < target.size() && !teleport_; ++i) {
-    const double v = g.speed_limit[i] * speed_scale;
-    duration = std::max(duration, ramp_duration_s(std::abs(target[i] - g.setpoint[i]), v,
-                                                  kAccelerationPerSpeed * v));
+    duration = std::max(duration, ramp_duration_s(std::abs(target[i] - g.setpoint[i]), g.speed_limit[i] * speed_scale,
+                                                  g.accel_limit[i] * speed_scale));
   }
   g.start = g.setpoint;
   g.target = target;

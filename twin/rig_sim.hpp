@@ -55,14 +55,6 @@ std::vector<ObjectColourPart> split_by_colour(const TriangleMesh& mesh, const st
 // when a marker is missing.
 std::string compose_model_xml(const std::string& rig_xml_path, const ObjectPlacement& object);
 
-// Acceleration limit of every joint, as a multiple of its speed limit per second (the twin's
-// stand-in for the drive's acceleration limit: full speed within about half a second).
-constexpr double kAccelerationPerSpeed = 4.0;
-
-// Duration of a smoothstep ramp over `distance` whose peak speed (1.5 x mean) stays within
-// `speed_limit` and peak acceleration (6 distance / T^2) within `accel_limit`.
-double ramp_duration_s(double distance, double speed_limit, double accel_limit);
-
 // How the twin's kinematics differ from the rig model the services use, so that kinematic
 // camera poses are wrong the way a real rig's are (off by default):
 //  - the true hand-eye transform is the model's times a fixed error (in the camera frame);
@@ -100,6 +92,7 @@ struct JointGroup {
   std::vector<int> dof_adr;    // addresses in qvel
   std::vector<int> actuator;   // position actuator per joint
   std::vector<double> speed_limit;  // per joint, rad/s (m/s)
+  std::vector<double> accel_limit;  // per joint, rad/s^2 (m/s^2)
   std::vector<double> lower, upper; // joint limits
   std::vector<std::string> names;
   // Ramp state: the setpoint follows a cubic (smoothstep) profile from start to target over
@@ -160,7 +153,8 @@ class RigSim {
  private:
   void start_ramp(JointGroup& g, const std::vector<double>& target, double speed_scale, long seq);
   void advance_ramp(JointGroup& g);
-  JointGroup make_group(const std::vector<std::string>& joints, const std::vector<double>& speeds);
+  JointGroup make_group(const std::vector<std::string>& joints, const std::vector<double>& speeds,
+                        const std::vector<double>& accelerations);
 
   mjModel* m_ = nullptr;
   mjData* d_ = nullptr;

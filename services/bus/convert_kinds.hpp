@@ -7,6 +7,8 @@
 #include <utility>
 
 #include "core/planning/kinds.hpp"
+#include "core/geometry/rig_kind.hpp"
+#include "pbnbv/move_request_t.hpp"
 #include "pbnbv/plan_request_t.hpp"
 #include "pbnbv/view_plan_t.hpp"
 
@@ -60,6 +62,19 @@ inline int8_t ranking_to_msg(Ranking r) {
 
 inline Ranking ranking_from_msg(int8_t value, const std::string& field) {
   return kinds_internal::from_constant(kinds_internal::kRankings, value, field);
+}
+
+static_assert(static_cast<int>(TurntableChoice::kPreferred) == plan_request_t::kPreferredAzimuth &&
+              static_cast<int>(TurntableChoice::kLeastTurn) == plan_request_t::kLeastTurn &&
+              move_request_t::kPreferredAzimuth == plan_request_t::kPreferredAzimuth &&
+              move_request_t::kLeastTurn == plan_request_t::kLeastTurn);
+
+// A turntable_choice field (MOVE_REQUEST's, PLAN_REQUEST's): one of its constants, else throws naming `what`.
+inline TurntableChoice turntable_choice_from_msg(int8_t v, const std::string& what) {
+  if (v != plan_request_t::kPreferredAzimuth && v != plan_request_t::kLeastTurn) {
+    throw std::invalid_argument(what + " = " + std::to_string(v) + " is not one of its constants (0 preferred azimuth, 1 least turn)");
+  }
+  return static_cast<TurntableChoice>(v);
 }
 
 }  // namespace pbnbv::bus

@@ -86,6 +86,8 @@ inline PlanInput plan_input_from_msg(const plan_request_t& r) {
   require_range(r.working_distance_m, kWorkingDistance.min, kWorkingDistance.max, "PLAN_REQUEST working_distance_m");
   require_range(r.num_alternatives, kAlternatives.min, kAlternatives.max, "PLAN_REQUEST num_alternatives");
   require_range(r.stop_fraction, kStopFraction.min, kStopFraction.max, "PLAN_REQUEST stop_fraction");
+  require_range(r.seconds_per_point, kSecondsPerPoint.min, kSecondsPerPoint.max, "PLAN_REQUEST seconds_per_point");
+  in.combined.seconds_per_point = r.seconds_per_point > 0 ? r.seconds_per_point : kMotionSecondsPerPoint;
   if (!std::isnan(r.first_quality)) require_range(r.first_quality, -1e12, 1e12, "PLAN_REQUEST first_quality");
   if (r.num_parallels > r.num_candidates) throw std::invalid_argument("PLAN_REQUEST num_parallels exceeds num_candidates");
   in.candidates.num_views = r.num_candidates;
@@ -123,6 +125,7 @@ inline std::string reachability_key(const plan_request_t& r, const Eigen::Aligne
       << r.object_z_m << ' ' << r.turntable_angle_rad;
   for (int k = 0; k < 6; ++k) key << ' ' << r.joint_position_rad[k];
   for (int k = 0; k < 3; ++k) key << ' ' << r.keepout_min_m[k] << ' ' << r.keepout_max_m[k];
+  key << ' ' << static_cast<int>(r.turntable_choice);
   return key.str();
 }
 

@@ -64,6 +64,7 @@ inline move_request_t to_msg(const MoveRequest& r) {
   m.speed_scale = r.speed_scale;
   m.timeout_s = r.timeout_s;
   m.plan_only = r.plan_only;
+  m.turntable_choice = static_cast<int8_t>(r.turntable_choice);
   return m;
 }
 
@@ -81,6 +82,7 @@ inline MoveRequest from_msg(const move_request_t& m) {
   require_range(m.timeout_s, 0.1, 3600.0, "MOVE_REQUEST timeout_s");
   r.timeout_s = m.timeout_s;
   r.plan_only = m.plan_only;
+  r.turntable_choice = turntable_choice_from_msg(m.turntable_choice, "MOVE_REQUEST turntable_choice");
   return r;
 }
 
@@ -106,6 +108,8 @@ inline move_result_t to_msg(const MoveResult& r) {
   m.settle_s = r.settle_s;
   m.rig_motion_s = r.rig_motion_s;
   m.settled_utime = r.settled_utime;
+  m.route = r.route;
+  m.path_s = r.path_s;
   return m;
 }
 
@@ -132,6 +136,11 @@ inline MoveResult from_msg(const move_result_t& m) {
   r.settle_s = m.settle_s;
   r.rig_motion_s = m.rig_motion_s;
   r.settled_utime = m.settled_utime;
+  r.route = m.route;
+  if (!(m.path_s >= 0 && m.path_s < 1e6)) {
+    throw std::invalid_argument("MOVE_RESULT path_s = " + std::to_string(m.path_s) + " is not a time in [0, 1e6) s");
+  }
+  r.path_s = m.path_s;
   return r;
 }
 
@@ -440,6 +449,8 @@ inline plan_request_t to_msg(const PlanRequest& r) {
   m.turntable_angle_rad = r.turntable_angle_rad;
   m.object_z_m = r.object_z_m;
   box_to_arrays(r.keepout, m.keepout_min_m, m.keepout_max_m);
+  m.turntable_choice = static_cast<int8_t>(r.turntable_choice);
+  m.seconds_per_point = r.seconds_per_point;
   return m;
 }
 

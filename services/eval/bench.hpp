@@ -65,6 +65,8 @@ struct BenchSpec {
   std::optional<UpAxis> up;                     // none: each object's natural up axis
   int64_t seed = kPlannerSeed.value;            // the random planner's seed
   WhenDone when_done = kWhenDone.value;
+  Motion motion = kMotion.value;
+  double seconds_per_point = kSecondsPerPoint.value;
   CameraKind camera = kCamera.value;        // the twin's camera (depth_sensor.hpp)
   RigErrors rig_errors = kRigErrors.value;  // the twin's rig errors by name
   // The scans spend the whole budget (stop rule off); the summary says where this rule would

@@ -54,6 +54,8 @@ std::string command_of(const BenchSpec& s) {
   if (s.size_m != kObjectSize.value) os << " --size " << s.size_m;
   if (s.up) os << " --up " << name_of(*s.up);
   if (s.when_done != kWhenDone.value) os << " --when-done " << name_of(s.when_done);
+  if (s.motion != kMotion.value) os << " --motion " << name_of(s.motion);
+  if (s.seconds_per_point != kSecondsPerPoint.value) os << " --seconds-per-point " << s.seconds_per_point;
   if (s.stop_rule.window != kStopWindow.value) os << " --stop-window " << s.stop_rule.window;
   if (s.stop_rule.max_new_percent != kStopNewSurface.value) os << " --stop-new-surface " << s.stop_rule.max_new_percent;
   if (s.stop_rule.min_views != kStopMinViews.value) os << " --stop-min-views " << s.stop_rule.min_views;

@@ -206,6 +206,8 @@ void CommandLine::declare_scan() {
   cli::add(c, kStopMinViews, &s.surface_rule.min_views)->group(kGroupPlanning);
   cli::add(c, kStopRadius, &s.stop_radius_m)->group(kGroupPlanning);
   cli::add(c, kWhenDone, &s.when_done)->group(kGroupPlanning);
+  cli::add(c, kMotion, &s.motion)->group(kGroupPlanning);
+  cli::add(c, kSecondsPerPoint, &s.seconds_per_point)->group(kGroupPlanning);
   cli::add_point(c, "initial-view", &p.initial_view,
                  "first camera position, object frame, m; looks at the origin [the ring's view at --ring-elevation, "
                  "azimuth 0]")
@@ -299,6 +301,8 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add(c, eval::kFirstViews, &spec->first_views);
   cli::add(c, kPlannerSeed, &spec->seed);
   cli::add(c, kWhenDone, &spec->when_done);
+  cli::add(c, kMotion, &spec->motion);
+  cli::add(c, kSecondsPerPoint, &spec->seconds_per_point);
   cli::add(c, kCamera, &spec->camera);
   cli::add(c, kRigErrors, &spec->rig_errors);
   // The scans run without a stop rule; the report says where the surface rule would have stopped each.

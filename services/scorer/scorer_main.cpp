@@ -77,7 +77,7 @@ class ScorerService {
     const ellipsoid_set_t* ell = needs_ellipsoids ? ellipsoids_.find(r.scan_id, r.map_iteration, r.map_request_id) : nullptr;
     if (map && !pending_->reachable && r.check_reachability) {
       try {
-        pending_->reachable = reachability(r, *map);
+        pending_->reachable = reachability(r, *map, &pending_->move_time_s);
       } catch (const std::exception& e) {  // from any worker of the check: this request fails
         fail(std::string("reachability check failed: ") + e.what());
         return;
@@ -100,6 +100,7 @@ class ScorerService {
     double received_s = 0;
     double deadline_s = 0;
     std::optional<std::vector<bool>> reachable;
+    std::vector<double> move_time_s;  // per candidate, from the reachability check (NaN: unreachable)
     double reachability_s = 0;
     RaycastParams raycast;  // planner "raycast"
     VisibilityParams visibility;  // planner "oracle"
@@ -161,7 +162,7 @@ class ScorerService {
 
   // The reachability of every candidate for B of this map, on the workers of core/base/parallel.hpp
   // (one MuJoCo checker each: a checker is not thread-safe).
-  std::vector<bool> reachability(const plan_request_t& r, const voxel_set_t& map) {
+  std::vector<bool> reachability(const plan_request_t& r, const voxel_set_t& map, std::vector<double>* move_time_s) {
     const auto t0 = std::chrono::steady_clock::now();
     const Eigen::AlignedBox3d box = bus::bbox_of(map);
     const std::vector<Pose> cands = candidate_views(box, pending_->input.candidates);
@@ -170,6 +171,7 @@ class ScorerService {
     const std::string key = bus::reachability_key(r, box);
     if (key == reach_key_) {
       pending_->reachability_s = 0;
+      *move_time_s = move_cache_;
       return reach_cache_;
     }
     Vector6d q;
@@ -182,15 +184,24 @@ class ScorerService {
     const int workers = worker_count(cands.size(), kCandidatesPerWorker);
     while (checkers_.size() < static_cast<std::size_t>(workers)) checkers_.push_back(std::make_unique<ReachabilityChecker>(rig_));
     std::vector<uint8_t> reachable(cands.size(), 0);
+    std::vector<double> times(cands.size(), std::numeric_limits<double>::quiet_NaN());
+    const RigState from{q, r.turntable_angle_rad};
+    const TurntableChoice choice = bus::turntable_choice_from_msg(r.turntable_choice, "PLAN_REQUEST turntable_choice");
     parallel_for(cands.size(), [&](std::size_t begin, std::size_t end, int w) {
       const std::vector<Pose> part(cands.begin() + begin, cands.begin() + end);
+      checkers_[w]->set_turntable_choice(choice);
       const std::vector<ViewSolution> s = checkers_[w]->solve_batch(part, q, r.turntable_angle_rad, keepout, r.object_z_m);
-      for (std::size_t i = 0; i < s.size(); ++i) reachable[begin + i] = s[i].reachable ? 1 : 0;
+      for (std::size_t i = 0; i < s.size(); ++i) {
+        reachable[begin + i] = s[i].reachable ? 1 : 0;
+        if (s[i].reachable) times[begin + i] = move_s(rig_, from, {s[i].q, s[i].turntable_rad});
+      }
     }, kCandidatesPerWorker, workers);
     const std::vector<bool> ok(reachable.begin(), reachable.end());
     pending_->reachability_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     reach_key_ = key;
     reach_cache_ = ok;
+    move_cache_ = times;
+    *move_time_s = std::move(times);
     return ok;
   }
 
@@ -225,7 +236,11 @@ class ScorerService {
       } else if (p.planner == PlannerKind::kOracle) {
         result = plan_oracle(p.input, truth_->mesh, truth_->samples, p.visibility);
       } else {
-        if (combined_ranking(p.planner)) p.input.grid = &grid.emplace(bus::grid_from_msg(map));
+        if (combined_ranking(p.planner)) {
+          p.input.grid = &grid.emplace(bus::grid_from_msg(map));
+          // Motion-aware (the scan's --motion): the rig's time to each candidate weighs against it.
+          if (r.seconds_per_point > 0 && p.reachable) p.input.move_time_s = p.move_time_s;
+        }
         result = plan_pbnbv(p.input);
       }
       bus::fill_answer(out, result);
@@ -289,6 +304,7 @@ class ScorerService {
   std::optional<Pending> pending_;
   std::string reach_key_;                 // the candidate set of the last reachability check
   std::vector<bool> reach_cache_;
+  std::vector<double> move_cache_;
   bus::ReplyCache<std::pair<std::string, int64_t>, view_plan_t> answers_{kAnswersKept};
 };
 

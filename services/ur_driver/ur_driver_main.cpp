@@ -35,9 +35,8 @@ constexpr double kDataTimeoutS = 1.0;      // no data package for this long: the
 constexpr double kFirstBackoffS = 0.5;     // reconnect after this, doubling up to kMaxBackoffS
 constexpr double kMaxBackoffS = 2.0;
 constexpr double kWriteTimeoutS = 0.1;     // input registers
-// movej's acceleration at speed scale 1, as a multiple of its speed per second (full speed in a
-// quarter of a second; the twin's ramps use the same, twin/rig_sim.hpp).
-constexpr double kAccelerationPerSpeed = 4.0;
+// movej's acceleration at speed scale 1: pbnbv::kAccelerationPerSpeed (core/rig/rig.hpp) times
+// its speed per second, the rig-time model's default (full speed in a quarter of a second).
 
 struct Options {
   std::string host;

@@ -51,7 +51,7 @@ TEST(RigSim, ArmMovesWithinSpeedLimitsArrivesTogetherAndSettles) {
   ASSERT_TRUE(sim.settled(sim.arm())) << "not settled after " << t << " s";
   // The smooth ramp's duration is set by a1 (the longer move): by its speed limit (peak speed
   // 1.5 x mean) or its acceleration limit (peak 6 x distance / T^2), whichever is slower.
-  const double ramp = twin::ramp_duration_s(0.6, rig.qd_max[0], twin::kAccelerationPerSpeed * rig.qd_max[0]);
+  const double ramp = ramp_duration_s(0.6, rig.qd_max[0], rig.qdd_max[0]);
   EXPECT_GE(t, ramp) << "arrived faster than a1's limits allow";
   EXPECT_LE(t, ramp + 0.3) << "took far longer than the ramp: the servo lags";
   EXPECT_LE(max_speed[0], rig.qd_max[0] * 1.05);
@@ -71,8 +71,8 @@ TEST(RigSim, HalfSpeedTakesTwiceAsLong) {
   half.command_arm(target, 0.5, 1);
   const double t_full = run_until_settled(full, full.arm(), 30.0);
   const double t_half = run_until_settled(half, half.arm(), 30.0);
-  const double v = rig.qd_max[0], a = twin::kAccelerationPerSpeed * v;
-  EXPECT_NEAR(t_half - t_full, twin::ramp_duration_s(1.0, v / 2, a / 2) - twin::ramp_duration_s(1.0, v, a), 0.05);
+  const double v = rig.qd_max[0], a = rig.qdd_max[0];
+  EXPECT_NEAR(t_half - t_full, ramp_duration_s(1.0, v / 2, a / 2) - ramp_duration_s(1.0, v, a), 0.05);
 }
 
 // One command turns the turntable at most one full turn from its setpoint: 1e6 rad (eleven days
@@ -92,7 +92,7 @@ TEST(RigSim, TurntableTurnsAtItsSpeedLimit) {
   // Half a turn is long enough to be limited by speed, not acceleration: the peak speed is the
   // limit and the ramp takes 1.5 x distance / limit.
   sim.command_turntable(kPi, 1.0, 1);
-  const double ramp = twin::ramp_duration_s(kPi, rig.turntable_qd_max, twin::kAccelerationPerSpeed * rig.turntable_qd_max);
+  const double ramp = ramp_duration_s(kPi, rig.turntable_qd_max, rig.turntable_qdd_max);
   EXPECT_DOUBLE_EQ(ramp, 1.5 * kPi / rig.turntable_qd_max);
   double max_speed = 0;
   const double t0 = sim.time_s();
@@ -327,8 +327,8 @@ void moves_between_hemisphere_views(const RigModel& rig) {
       ASSERT_TRUE(sol.reachable) << sol.reason;
       double ramp = 0;
       for (int j = 0; j < 6; ++j) {
-        ramp = std::max(ramp, twin::ramp_duration_s(std::abs(sol.q[j] - sim.arm().setpoint[j]), rig.qd_max[j],
-                                                    twin::kAccelerationPerSpeed * rig.qd_max[j]));
+        ramp = std::max(ramp, ramp_duration_s(std::abs(sol.q[j] - sim.arm().setpoint[j]), rig.qd_max[j],
+                                                    rig.qdd_max[j]));
       }
       // The same target twice: no motion, no instability.
       if (moves % 4 == 3) sim.command_arm(sim.arm_position(), 1.0, ++moves);

@@ -152,6 +152,7 @@ TEST(ConvertPlanning, TheReachabilityKeyCoversEveryFieldItDependsOn) {
       {"object_z_m", [](plan_request_t& r) { r.object_z_m += 1e-9; }},
       {"keepout_min_m", [](plan_request_t& r) { r.keepout_min_m[2] -= 1e-9; }},
       {"keepout_max_m", [](plan_request_t& r) { r.keepout_max_m[1] += 1e-9; }},
+      {"turntable_choice", [](plan_request_t& r) { r.turntable_choice = 1 - r.turntable_choice; }},
   };
   const char* const kChosenAfter = "the planner chooses among the reachable candidates after the check";
   const char* const kRigCamera = "the check's line of sight runs from the rig file's camera, not the request's intrinsics";
@@ -172,6 +173,7 @@ TEST(ConvertPlanning, TheReachabilityKeyCoversEveryFieldItDependsOn) {
       {"stop_fraction", {[](plan_request_t& r) { r.stop_fraction += 0.1; }, kChosenAfter}},
       {"spread_when_done", {[](plan_request_t& r) { r.spread_when_done = !r.spread_when_done; }, kChosenAfter}},
       {"first_quality", {[](plan_request_t& r) { r.first_quality = 3; }, kChosenAfter}},
+      {"seconds_per_point", {[](plan_request_t& r) { r.seconds_per_point += 1; }, kChosenAfter}},
       {"depth_min_m", {[](plan_request_t& r) { r.depth_min_m += 0.01; }, kRigCamera}},
       {"depth_max_m", {[](plan_request_t& r) { r.depth_max_m += 0.01; }, kRigCamera}},
       {"width_px", {[](plan_request_t& r) { r.width_px += 2; }, kRigCamera}},

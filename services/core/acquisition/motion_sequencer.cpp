@@ -76,12 +76,18 @@ MotionStep MotionSequencer::on_request(const MoveRequest& r, double now_s) {
     return step;
   }
   const auto t0 = std::chrono::steady_clock::now();
+  checker_.set_turntable_choice(r.turntable_choice);
   const ViewSolution solution = checker_.solve(r.object_T_camera, arm_.joint_position_rad, turntable_.angle_rad,
                                                r.keepout, r.object_z_m);
+  RigPath path;
+  if (solution.reachable) {
+    path = checker_.plan_path({arm_.joint_position_rad, turntable_.angle_rad}, {solution.q, solution.turntable_rad},
+                              r.keepout, r.object_z_m);
+  }
   const double plan_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!solution.reachable) {
+  if (!solution.reachable || !path.clear) {
     result.status = MoveStatus::kUnreachable;
-    result.reason = solution.reason;
+    result.reason = solution.reachable ? path.reason : solution.reason;
     result.plan_s = plan_s;
     step.result = result;
     step.keep_result = true;
@@ -92,6 +98,8 @@ MotionStep MotionSequencer::on_request(const MoveRequest& r, double now_s) {
     result.joint_target_rad = solution.q;
     result.turntable_target_rad = solution.turntable_rad;
     result.plan_s = plan_s;
+    result.route = path.route;
+    result.path_s = path_s(rig_, {arm_.joint_position_rad, turntable_.angle_rad}, path.stops, r.speed_scale);
     step.result = result;
     step.keep_result = true;
     return step;
@@ -99,6 +107,8 @@ MotionStep MotionSequencer::on_request(const MoveRequest& r, double now_s) {
   Job job;
   job.request = r;
   job.solution = solution;
+  job.path = path;
+  job.from = {arm_.joint_position_rad, turntable_.angle_rad};
   job.plan_s = plan_s;
   job.arm_seq = job.turntable_seq = next_seq_++;
   job.t_commanded = now_s + plan_s;  // the commands leave once the plan is made
@@ -114,13 +124,13 @@ MotionStep MotionSequencer::send_commands(Job& job, double now_s) const {
   MotionStep step;
   ArmCommand a;
   a.seq = job.arm_seq;
-  a.joint_position_rad = job.solution.q;
+  a.joint_position_rad = target(job).q;
   a.speed_scale = job.request.speed_scale;
   step.arm_command = a;
   if (rig_.has_turntable) {
     TurntableCommand t;
     t.seq = job.turntable_seq;
-    t.angle_rad = job.solution.turntable_rad;
+    t.angle_rad = target(job).turntable_rad;
     t.speed_scale = job.request.speed_scale;
     step.turntable_command = t;
   }
@@ -128,10 +138,10 @@ MotionStep MotionSequencer::send_commands(Job& job, double now_s) const {
   return step;
 }
 
-// Every joint, and the turntable, within kMotionWithinToleranceRad of the job's targets.
+// Every joint, and the turntable, within kMotionWithinToleranceRad of the current stop's targets.
 bool MotionSequencer::within_tolerance(const Job& job) const {
-  if ((arm_.joint_position_rad - job.solution.q).cwiseAbs().maxCoeff() > kMotionWithinToleranceRad) return false;
-  return !rig_.has_turntable || std::abs(turntable_.angle_rad - job.solution.turntable_rad) <= kMotionWithinToleranceRad;
+  if ((arm_.joint_position_rad - target(job).q).cwiseAbs().maxCoeff() > kMotionWithinToleranceRad) return false;
+  return !rig_.has_turntable || std::abs(turntable_.angle_rad - target(job).turntable_rad) <= kMotionWithinToleranceRad;
 }
 
 // Why the job is not done at its deadline: a silent status, an unacknowledged command, or how
@@ -151,13 +161,16 @@ std::string MotionSequencer::timeout_reason(const Job& job, double now_s) const 
   if (turntable && turntable_.command_seq != job.turntable_seq) {
     return why + fmt::format("TURNTABLE_STATUS never acknowledged command seq {}", job.turntable_seq);
   }
-  const Vector6d err = (arm_.joint_position_rad - job.solution.q).cwiseAbs();
+  if (job.stop + 1 < job.path.stops.size()) {
+    why += fmt::format("at stop {} of {} of the detour ({}): ", job.stop + 1, job.path.stops.size(), job.path.route);
+  }
+  const Vector6d err = (arm_.joint_position_rad - target(job).q).cwiseAbs();
   int worst = 0;
   err.maxCoeff(&worst);
   why += fmt::format("joint {} is {} rad from its target", rig_.joint_names.at(worst), fmt::format("{:.4g}", err[worst]));
   if (turntable) {
     why += fmt::format(", turntable {} rad from its target",
-                       fmt::format("{:.4g}", std::abs(turntable_.angle_rad - job.solution.turntable_rad)));
+                       fmt::format("{:.4g}", std::abs(turntable_.angle_rad - target(job).turntable_rad)));
   }
   if (arm_.mode != RigMode::kSettled && arm_.mode != RigMode::kIdle) why += ", arm not settled";
   if (turntable && turntable_.mode != RigMode::kSettled && turntable_.mode != RigMode::kIdle) {
@@ -197,6 +210,14 @@ MotionStep MotionSequencer::tick(double now_s) {
     step.warnings.push_back(warning);
   }
   const bool acknowledged = arm_acknowledged && turntable_acknowledged;
+  if (acknowledged && within_tolerance(job) && job.stop + 1 < job.path.stops.size()) {
+    // A detour's stop reached: on to the next (new sequence numbers: a new command).
+    ++job.stop;
+    job.arm_seq = job.turntable_seq = next_seq_++;
+    MotionStep next = send_commands(job, now_s);
+    next.warnings = step.warnings;
+    return next;
+  }
   const bool within = acknowledged && within_tolerance(job);
   if (within && job.t_within < 0) job.t_within = now_s;
   const bool settled = (arm_.mode == RigMode::kSettled || arm_.mode == RigMode::kIdle) &&
@@ -238,6 +259,8 @@ MotionStep MotionSequencer::finish(MoveStatus status, const std::string& reason,
   result.settle_s = job.t_within >= 0 ? now_s - job.t_within : 0;
   result.rig_motion_s = (arm_.utime - job.rig_utime_commanded) * 1e-6;
   result.settled_utime = arm_.utime;
+  result.route = job.path.route;
+  result.path_s = path_s(rig_, job.from, job.path.stops, job.request.speed_scale);
   job_.reset();
   MotionStep step;
   step.result = result;

@@ -1,7 +1,9 @@
 #pragma once
 // The motion executor's sequencing, without a bus: a MoveRequest (a camera pose in the object
 // frame) is split into a turntable angle and an arm configuration (ReachabilityChecker: IK,
-// joint limits, collisions); the arm and the turntable are commanded with increasing sequence
+// joint limits, collisions), and a collision-free path to it is planned from where the rig
+// stands (ReachabilityChecker::plan_path: the direct move, or a detour through stops, each
+// reached before the next is commanded); the arm and the turntable are commanded with increasing sequence
 // numbers; a command the status has not acknowledged is re-sent; the move ends when both
 // readings acknowledge their command, are within tolerance of the targets and settled, when a
 // driver reports a fault on the command, or at the request's deadline with a reason naming what
@@ -84,6 +86,9 @@ class MotionSequencer {
   struct Job {
     MoveRequest request;
     ViewSolution solution;
+    RigPath path;              // its stops; the last is the solution's
+    RigState from;             // the readings when the move was planned
+    std::size_t stop = 0;      // the stop being moved to
     int64_t arm_seq = -1;
     int64_t turntable_seq = -1;
     double plan_s = 0;
@@ -96,6 +101,7 @@ class MotionSequencer {
 
   MotionStep send_commands(Job& job, double now_s) const;
   bool within_tolerance(const Job& job) const;
+  const RigState& target(const Job& job) const { return job.path.stops.at(job.stop); }
   std::string timeout_reason(const Job& job, double now_s) const;
   MoveResult blank_result(const MoveRequest& r) const;
   MotionStep finish(MoveStatus status, const std::string& reason, double now_s);

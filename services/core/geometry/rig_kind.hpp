@@ -3,6 +3,7 @@
 // Here, below the rig's model and kinematics (core/rig/rig.hpp), so that what only names a rig
 // kind (the scan's settings, the coordinator) does not depend on them.
 #include <array>
+#include <cstdint>
 #include <string>
 #include <string_view>
 
@@ -22,6 +23,16 @@ struct EnumNames<RigKind> {
 // "arm" | "free"; parse_rig_kind throws naming the value and the choices.
 inline std::string to_string(RigKind kind) { return std::string(name_of(kind)); }
 inline RigKind parse_rig_kind(const std::string& s) { return parse_name<RigKind>(s); }
+// How the reachability check chooses a view's turntable angle (arm rig).
+//  kPreferred: the angle bringing the view to the arm's preferred azimuth, or when that fails the
+//    nearest of azimuth offsets +-15 ... +-90 deg (the paper's rig: the turntable turns every view
+//    to the arm).
+//  kLeastTurn: the same angles and, when the view lies within +-90 deg of the preferred azimuth as
+//    the turntable stands, the current angle, tried in order of how far the turntable turns: the
+//    arm reaches round the object as far as it can before the turntable turns (the turntable,
+//    60 deg/s against the arm's 180-360 deg/s, is the slow part of a move).
+enum class TurntableChoice : uint8_t { kPreferred, kLeastTurn };
+
 // The rig option of every program that works with a rig (pbnbv scan, motion, camera, scorer, twin).
 inline constexpr ChoiceSetting<RigKind> kRig{"rig", RigKind::kArm,
                                              "arm + turntable, or a free-flying camera (the paper's setup)"};

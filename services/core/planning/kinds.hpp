@@ -29,6 +29,12 @@ enum class CandidateArea : uint8_t { kHemisphere, kFullSphere };
 // stop, or spend the remaining views on the candidates farthest from every view taken.
 enum class WhenDone : uint8_t { kStop, kSpread };
 
+// How the arm rig's moves are chosen for what they cost (`--motion`): kAware, the turntable turns
+// only as far as the arm cannot reach round the object (core/rig TurntableChoice::kLeastTurn);
+// kPlain, the view is turned to the arm's preferred azimuth every time (the paper's rig); kAuto,
+// aware for every planner but pbnbv-paper (kept as the paper has it).
+enum class Motion : uint8_t { kAuto, kAware, kPlain };
+
 // What a plan ranks its candidates by, i.e. what the quality of its chosen view and alternatives
 // means: PB-NBV's F in pixels, ray casting's unobserved voxels, the oracle's unseen true surface
 // samples, nothing (random), or - for a view that fills the largest gap once nothing is left to
@@ -65,6 +71,13 @@ struct EnumNames<Ranking> {
                                                              {Ranking::kRandom, "random"},
                                                              {Ranking::kGapAngle, "gap_deg"},
                                                              {Ranking::kCombined, "combined"}}};
+};
+
+template <>
+struct EnumNames<Motion> {
+  static constexpr std::string_view what = "motion";
+  static constexpr std::array<NamedValue<Motion>, 3> names{
+      {{Motion::kAuto, "auto"}, {Motion::kAware, "aware"}, {Motion::kPlain, "plain"}}};
 };
 
 template <>

@@ -247,13 +247,28 @@ static PlanResult rank_combined(const PlanInput& in, PlanResult r, const std::ve
                             ray = scaled_over(r.rays, shortlist);
   for (int i : pool) r.scores[i].quality = 0;
   for (int i : shortlist) r.scores[i].quality = f[i] + g[i] + ray[i];
+  if (!in.move_time_s.empty()) {
+    if (in.move_time_s.size() != n) {
+      throw std::invalid_argument("motion-aware ranking: " + std::to_string(in.move_time_s.size()) + " move times for " +
+                                  std::to_string(n) + " candidates");
+    }
+    if (!(c.seconds_per_point > 0)) throw std::invalid_argument("motion-aware ranking: seconds_per_point must be positive");
+    r.move_time_s = in.move_time_s;
+    for (int i : shortlist) {
+      if (!(in.move_time_s[i] >= 0)) {
+        throw std::invalid_argument("motion-aware ranking: candidate " + std::to_string(i) + "'s move time is not a time");
+      }
+      r.scores[i].quality -= in.move_time_s[i] / c.seconds_per_point;
+    }
+  }
   r.ranking = Ranking::kCombined;
   rank_pool(in, r, shortlist);
   const int k = r.chosen;
   std::ostringstream os;
   os << "combined " << r.scores[k].quality << " of 3 (F " << r.f_px[k] << " px" << (has_f ? "" : ": no frontier ellipsoid")
-     << ", gap " << r.gap_deg[k] << " deg, rays " << r.rays[k] << ") over a shortlist of " << shortlist.size() << " of "
-     << r.num_scored << " scored";
+     << ", gap " << r.gap_deg[k] << " deg, rays " << r.rays[k];
+  if (!r.move_time_s.empty()) os << ", less " << r.move_time_s[k] << " s to reach / " << c.seconds_per_point << " s per point";
+  os << ") over a shortlist of " << shortlist.size() << " of " << r.num_scored << " scored";
   r.reason = os.str();
   r.outcome = PlanResult::Outcome::kView;
   return r;

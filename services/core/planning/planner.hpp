@@ -57,10 +57,16 @@ std::vector<Pose> candidate_views(const Eigen::AlignedBox3d& bbox, const Candida
 //    saturating at saturation_m (raycast.hpp).
 // The shortlist is the top `shortlist` candidates by F and the top `shortlist` by the gap (within
 // the partition's allowed sectors), so the rays are cast for at most 2 x shortlist candidates.
+//
+// Motion-aware (PlanInput::move_time_s given): each candidate's rig time to reach it from where the
+// rig stands is charged against its combined score, one point per `seconds_per_point` seconds, so
+// that of two equally good views the quicker one is taken, and a view twice as far away must be
+// that much better.
 struct CombinedRanking {
   int shortlist = kShortlistPerTerm;
   double saturation_m = kRaySaturationM;
   double ray_cell_m = kRayCellM;
+  double seconds_per_point = kMotionSecondsPerPoint;
 };
 
 struct PlanInput {
@@ -101,6 +107,10 @@ struct PlanInput {
   // candidate (candidate_views(bbox, candidates), so a caller may compute it ahead), or empty:
   // all reachable.
   std::function<std::vector<bool>(const std::vector<Pose>&)> reachable;
+  // Motion-aware planning (the combined ranking only): per candidate (candidate_views order), the
+  // rig's time to reach it from where it stands, s (core/rig move_s); empty: every view costs the
+  // same. Its size must be the candidates' (else std::invalid_argument).
+  std::vector<double> move_time_s;
 };
 
 struct PlanResult {
@@ -128,6 +138,7 @@ struct PlanResult {
   // The combined ranking's terms per candidate (empty otherwise): F in pixels (0 without a Frontier
   // ellipsoid), the gap in degrees, the ray term (0 off the shortlist).
   std::vector<double> f_px, gap_deg, rays;
+  std::vector<double> move_time_s;  // motion-aware: the rig time charged against each candidate, s
   double candidates_s = 0, reachability_s = 0, scoring_s = 0;  // wall time per stage
 
   const ViewScore* chosen_score() const { return chosen >= 0 ? &scores[chosen] : nullptr; }

@@ -23,6 +23,10 @@ inline constexpr ChoiceSetting<WhenDone> kWhenDone{
     "when-done", WhenDone::kSpread,
     "when the map has nothing left to aim at (no frontier ellipsoid; raycast: no unobserved voxel in view): "
     "stop, or spend the remaining views filling the largest gaps between the views taken"};
+inline constexpr ChoiceSetting<Motion> kMotion{
+    "motion", Motion::kAuto,
+    "arm rig: aware (the turntable turns only as far as the arm cannot reach round the object), plain (every view "
+    "turned to the arm, the paper's rig), or auto (aware for every planner but pbnbv-paper)"};
 
 // pbnbv's combined ranking (docs/method.md "Beyond the paper", departure 4; chosen on the tune half of
 // the tuning set, planner.hpp CombinedRanking): the shortlist's size per term, the ray term's
@@ -30,6 +34,12 @@ inline constexpr ChoiceSetting<WhenDone> kWhenDone{
 inline constexpr int kShortlistPerTerm = 40;
 inline constexpr double kRaySaturationM = 0.24;
 inline constexpr double kRayCellM = 0.03;
+// Motion-aware: the rig time that one point of the combined ranking (of 3) is worth, s.
+inline constexpr double kMotionSecondsPerPoint = 4.0;
+inline constexpr Setting<double> kSecondsPerPoint{
+    "seconds-per-point", kMotionSecondsPerPoint, 0.0, 1000.0, "s",
+    "motion-aware ranking (pbnbv, --motion aware): the rig time one point of the combined score (of 3) is worth; 0: "
+    "time does not enter the ranking"};
 
 inline constexpr Setting<int> kCandidates{"candidates", 800, 1, 100000, "", "candidate views per plan (N)"};
 inline constexpr Setting<int> kParallels{"parallels", 24, 1, 1000, "",

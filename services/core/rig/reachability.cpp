@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <stdexcept>
 
 #include "core/base/format.hpp"
@@ -35,8 +36,16 @@ struct ReachabilityChecker::Impl {
                                      // fixed by the flange pose alone)
   bool have_neighbour = false;  // solve_batch: the previous candidate's solution seeds the next
   Vector6d neighbour = Vector6d::Zero();
+  // Per arm joint: the farthest any geom it carries (up to the next joint, then through it)
+  // reaches from a point on its axis, m: a point's path over a straight joint-space move is at
+  // most sum |dq_i| * lever[i] long.
+  std::array<double, 6> lever{};
+  TurntableChoice choice = TurntableChoice::kPreferred;
 
-  void set_keepout(const Eigen::AlignedBox3d& box, double object_z_m) {
+  // The keep-out box, placed in the object frame (on the platter: it turns with the turntable).
+  // `turning`: the box as the turntable sweeps it through any angle, i.e. the cylinder about the
+  // turntable axis through its farthest corner (same height).
+  void set_keepout(const Eigen::AlignedBox3d& box, double object_z_m, bool turning = false) {
     mjModel* m = model.get();
     if (!has_volume(box)) {
       m->geom_contype[keepout] = 0;
@@ -48,12 +57,26 @@ struct ReachabilityChecker::Impl {
     if (rig.kind == RigKind::kArm) c.z() += object_z_m;
     m->geom_contype[keepout] = keepout_contype;
     m->geom_conaffinity[keepout] = keepout_conaffinity;
+    m->geom_quat[4 * keepout] = 1;
+    m->geom_quat[4 * keepout + 1] = m->geom_quat[4 * keepout + 2] = m->geom_quat[4 * keepout + 3] = 0;
+    if (turning && rig.has_turntable) {
+      double r = 0;
+      for (int k = 0; k < 4; ++k) {
+        r = std::max(r, std::hypot((k & 1) ? box.max().x() : box.min().x(), (k & 2) ? box.max().y() : box.min().y()));
+      }
+      m->geom_type[keepout] = mjGEOM_CYLINDER;
+      m->geom_size[3 * keepout] = r;
+      m->geom_size[3 * keepout + 1] = half.z();
+      m->geom_pos[3 * keepout] = m->geom_pos[3 * keepout + 1] = 0;  // on the axis
+      m->geom_pos[3 * keepout + 2] = c.z();
+      m->geom_rbound[keepout] = std::hypot(r, half.z());
+      return;
+    }
+    m->geom_type[keepout] = mjGEOM_BOX;
     for (int i = 0; i < 3; ++i) {
       m->geom_size[3 * keepout + i] = half[i];
       m->geom_pos[3 * keepout + i] = c[i];
     }
-    m->geom_quat[4 * keepout] = 1;
-    m->geom_quat[4 * keepout + 1] = m->geom_quat[4 * keepout + 2] = m->geom_quat[4 * keepout + 3] = 0;
     m->geom_rbound[keepout] = half.norm();
   }
 
@@ -106,6 +129,54 @@ struct ReachabilityChecker::Impl {
     mj_kinematics(model.get(), d);
   }
 
+  // The lever of each arm joint (see `lever`), from the kinematics at home: distances between
+  // points fixed in one body do not depend on the configuration.
+  void compute_levers() {
+    const mjModel* m = model.get();
+    mjData* d = data.get();
+    place(rig.q_home, 0);
+    std::array<int, 6> jid{}, body{};
+    for (int i = 0; i < 6; ++i) {
+      jid[i] = mj_name2id(m, mjOBJ_JOINT, rig.joint_names[i].c_str());
+      body[i] = m->jnt_bodyid[jid[i]];
+    }
+    const auto anchor = [&](int i) { return Eigen::Vector3d(d->xanchor[3 * jid[i]], d->xanchor[3 * jid[i] + 1], d->xanchor[3 * jid[i] + 2]); };
+    std::array<double, 6> own{};  // per joint: the geoms whose nearest joint above is this one
+    for (int g = 0; g < m->ngeom; ++g) {
+      if (!arm_side[g]) continue;
+      int carrier = -1;
+      for (int b = m->geom_bodyid[g]; b > 0 && carrier < 0; b = m->body_parentid[b]) {
+        for (int i = 0; i < 6; ++i) {
+          if (body[i] == b) carrier = std::max(carrier, i);
+        }
+      }
+      if (carrier < 0) continue;
+      const Eigen::Vector3d c(d->geom_xpos[3 * g], d->geom_xpos[3 * g + 1], d->geom_xpos[3 * g + 2]);
+      own[carrier] = std::max(own[carrier], (c - anchor(carrier)).norm() + m->geom_rbound[g]);
+    }
+    for (int i = 5; i >= 0; --i) {
+      lever[i] = own[i];
+      if (i < 5) lever[i] = std::max(lever[i], (anchor(i + 1) - anchor(i)).norm() + lever[i + 1]);
+    }
+  }
+
+  // The first colliding pair on the straight move a -> b ("" when clear), keep-out box set by the
+  // caller; `at` receives the fraction of the move where it is.
+  std::string first_contact_on(const RigState& a, const RigState& b, double* at) {
+    double length = 0;  // a bound on the path length of any point of the arm
+    for (int i = 0; i < 6; ++i) length += std::abs(b.q[i] - a.q[i]) * lever[i];
+    const int n = std::max(1, static_cast<int>(std::ceil(length / kPathStepM)));
+    for (int k = 1; k <= n; ++k) {
+      const double s = static_cast<double>(k) / n;
+      const std::vector<std::string> c = colliding(a.q + s * (b.q - a.q), a.turntable_rad + s * (b.turntable_rad - a.turntable_rad));
+      if (!c.empty()) {
+        *at = s;
+        return c.front();
+      }
+    }
+    return "";
+  }
+
   // colliding() at the state last placed.
   std::vector<std::string> colliding_placed(bool* view_fixed = nullptr) {
     mjModel* m = model.get();
@@ -127,9 +198,10 @@ struct ReachabilityChecker::Impl {
   }
 };
 
-ReachabilityChecker::ReachabilityChecker(const RigModel& rig) : impl_(std::make_unique<Impl>()) {
+ReachabilityChecker::ReachabilityChecker(const RigModel& rig, TurntableChoice choice) : impl_(std::make_unique<Impl>()) {
   Impl& im = *impl_;
   im.rig = rig;
+  im.choice = choice;
   im.model = load_mj_model(rig.model_path);
   mjModel* m = im.model.get();
   im.data = DataPtr(mj_makeData(m));
@@ -185,9 +257,100 @@ ReachabilityChecker::ReachabilityChecker(const RigModel& rig) : impl_(std::make_
   // The box is moved around: make mj_kinematics place it from geom_pos/geom_quat rather than
   // copying the body (or inertial) frame.
   m->geom_sameframe[im.keepout] = 0;
+  if (rig.kind == RigKind::kArm) im.compute_levers();
 }
 
 ReachabilityChecker::~ReachabilityChecker() = default;
+
+void ReachabilityChecker::set_turntable_choice(TurntableChoice choice) { impl_->choice = choice; }
+TurntableChoice ReachabilityChecker::turntable_choice() const { return impl_->choice; }
+
+std::string ReachabilityChecker::path_collision(const RigState& from, const RigState& to,
+                                                const Eigen::AlignedBox3d& keepout, double object_z_m) {
+  Impl& im = *impl_;
+  if (im.rig.kind != RigKind::kArm) return "";  // the gantry flies through (rig_free.xml)
+  im.set_keepout(keepout, object_z_m, std::abs(to.turntable_rad - from.turntable_rad) > 1e-9);
+  double at = 0;
+  const std::string hit = im.first_contact_on(from, to, &at);
+  if (hit.empty()) return "";
+  return hit + " at " + fixed(100 * at, 0) + " % of the move";
+}
+
+namespace {
+
+// The arm configuration with the camera `back_m` behind where it is at `q` along its view axis
+// (turntable unchanged): the IK solution quickest to reach from `q`; none when out of reach.
+std::optional<Vector6d> backed_off(const RigModel& rig, const Vector6d& q, double back_m) {
+  Pose w_c = camera_in_world(rig, q);
+  w_c.translation() -= back_m * w_c.linear().col(2);
+  const std::vector<Vector6d> sols = inverse_kinematics(rig, w_c * rig.flange_T_camera.inverse(), nullptr, q);
+  std::optional<Vector6d> best;
+  for (const Vector6d& s : sols) {
+    if (!best || arm_move_s(rig, q, s) < arm_move_s(rig, q, *best)) best = s;
+  }
+  return best;
+}
+
+}  // namespace
+
+RigPath ReachabilityChecker::plan_path(const RigState& from, const RigState& to, const Eigen::AlignedBox3d& keepout,
+                                       double object_z_m) {
+  const RigModel& rig = impl_->rig;
+  RigPath out;
+  out.route = "direct";
+  out.stops = {to};
+  out.time_s = move_s(rig, from, to);
+  const std::string direct = path_collision(from, to, keepout, object_z_m);
+  if (direct.empty()) {
+    out.clear = true;
+    return out;
+  }
+  std::vector<std::pair<std::string, std::vector<RigState>>> routes;
+  // One joint group at a time: the turntable first, or the arm first (a turning keep-out box
+  // is checked as its sweep; one that stands still as it is).
+  routes.push_back({"turntable first", {{from.q, to.turntable_rad}, to}});
+  routes.push_back({"arm first", {{to.q, from.turntable_rad}, to}});
+  for (double back : {kPathRetreatM, 2 * kPathRetreatM}) {
+    const std::optional<Vector6d> ra = backed_off(rig, from.q, back), rb = backed_off(rig, to.q, back);
+    if (ra && rb) {
+      routes.push_back({"retreat " + fixed(back, 2) + " m, turn, approach",
+                        {{*ra, from.turntable_rad}, {*rb, to.turntable_rad}, to}});
+    }
+  }
+  routes.push_back({"via home", {{rig.q_home, to.turntable_rad}, to}});
+  if (const auto ra = backed_off(rig, from.q, kPathRetreatM), rb = backed_off(rig, to.q, kPathRetreatM); ra && rb) {
+    routes.push_back({"retreat, home, approach",
+                      {{*ra, from.turntable_rad}, {rig.q_home, to.turntable_rad}, {*rb, to.turntable_rad}, to}});
+  }
+  std::string reasons = "direct: " + direct;
+  for (const auto& [name, stops] : routes) {
+    double t = 0;
+    std::string hit;
+    RigState at = from;
+    for (const RigState& next : stops) {
+      t += move_s(rig, at, next);
+      if (out.clear && t >= out.time_s) break;  // no quicker than the clear route found
+      hit = path_collision(at, next, keepout, object_z_m);
+      if (!hit.empty()) break;
+      at = next;
+    }
+    if (!hit.empty()) {
+      reasons += "; " + name + ": " + hit;
+      continue;
+    }
+    if (out.clear && t >= out.time_s) continue;
+    out.clear = true;
+    out.stops = stops;
+    out.time_s = t;
+    out.route = name;
+  }
+  if (!out.clear) {
+    out.stops.clear();
+    out.route.clear();
+    out.reason = "no collision-free path from where the rig stands (" + reasons + ")";
+  }
+  return out;
+}
 
 std::vector<std::string> ReachabilityChecker::collisions(const Vector6d& q, double turntable_rad,
                                                          const Eigen::AlignedBox3d& keepout,
@@ -217,9 +380,13 @@ std::string join_unique(const std::vector<std::string>& v, size_t max_items = 3)
   return s;
 }
 
-// The turntable angles to try a view at: the one bringing it to the preferred azimuth, then
-// nearby azimuths (+-15 ... +-90 deg); 0 alone without a turntable.
-std::vector<double> candidate_turntable_angles(const RigModel& rig, const Pose& object_T_camera, double turntable_current) {
+// The turntable angles to try a view at (TurntableChoice): the one bringing it to the preferred
+// azimuth, then nearby azimuths (+-15 ... +-90 deg); kLeastTurn adds the current angle when the
+// view lies within +-90 deg of the preferred azimuth there, and orders them by the turn. 0 alone
+// without a turntable.
+std::vector<double> candidate_turntable_angles(const RigModel& rig, const Pose& object_T_camera, double turntable_current,
+                                               TurntableChoice choice, double* preferred) {
+  *preferred = 0;
   if (rig.kind != RigKind::kArm || !rig.has_turntable) return {0.0};
   std::vector<double> offsets_deg{0};
   for (int k = 15; k <= 90; k += 15) {
@@ -234,6 +401,15 @@ std::vector<double> candidate_turntable_angles(const RigModel& rig, const Pose& 
     const double t = above ? turntable_current + off * kPi / 180.0
                            : rig.preferred_azimuth_rad + off * kPi / 180.0 - psi + rig.turntable_zero_rad;
     angles.push_back(nearest_equivalent_angle_rad(t, turntable_current));
+  }
+  *preferred = angles.front();
+  if (choice == TurntableChoice::kLeastTurn) {
+    // Where the view is with the turntable where it stands, as an offset from the preferred azimuth.
+    const double off = above ? 0.0 : nearest_equivalent_angle_rad(turntable_current - angles.front(), 0.0);
+    if (std::abs(off) <= 0.5 * kPi + 1e-9) angles.push_back(turntable_current);
+    std::stable_sort(angles.begin(), angles.end(), [&](double a, double b) {
+      return std::abs(a - turntable_current) < std::abs(b - turntable_current);
+    });
   }
   return angles;
 }
@@ -352,7 +528,8 @@ ViewSolution ReachabilityChecker::solve(const Pose& object_T_camera, const Vecto
   const RigModel& rig = im.rig;
   im.set_keepout(keepout, object_z_m);
   ViewSolution out;
-  const std::vector<double> angles = candidate_turntable_angles(rig, object_T_camera, turntable_current);
+  double preferred = 0;
+  const std::vector<double> angles = candidate_turntable_angles(rig, object_T_camera, turntable_current, im.choice, &preferred);
   std::string first_reason;
   for (std::size_t a = 0; a < angles.size(); ++a) {
     const double t = angles[a];
@@ -369,7 +546,7 @@ ViewSolution ReachabilityChecker::solve(const Pose& object_T_camera, const Vecto
       else if (search.first_clear(sols, out)) return out;
     }
     if (reason.empty()) reason = search.collided();
-    if (a == 0) first_reason = reason;
+    if (t == preferred) first_reason = reason;
   }
   out.reachable = false;
   out.reason = angles.size() == 1 ? first_reason

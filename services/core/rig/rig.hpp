@@ -23,6 +23,11 @@
 
 namespace pbnbv {
 
+// A joint's acceleration limit when the rig file states none, as a multiple of its speed limit
+// per second: full speed within a quarter of a second, about what industrial arms and turntables
+// reach at their default acceleration.
+inline constexpr double kAccelerationPerSpeed = 4.0;
+
 // Lengths of a spherical-wrist 6R arm with the KUKA joint layout (axes z, y, y, x, y, x at
 // zero), metres: base->A2 (a1 forward, d1 up), A2->A3 (a2), A3->wrist (a3 up, d4 forward),
 // wrist centre -> flange (d6). Set only when the chain has this layout (the analytic IK).
@@ -64,6 +69,9 @@ struct RigModel {
   std::vector<std::string> joint_names;   // 6 arm (or gantry) joints, base to flange
   Vector6d q_lower, q_upper;              // joint limits, rad (m for gantry slides)
   Vector6d qd_max;                        // joint speed limits, rad/s (m/s)
+  Vector6d qdd_max;                       // joint acceleration limits, rad/s^2 (m/s^2):
+                                          // <custom><numeric name="pbnbv_joint_acceleration_limits">
+                                          // (optional; default kAccelerationPerSpeed x qd_max)
   Vector6d q_home;                        // a safe start configuration
   std::array<ChainJoint, 6> chain{};      // kArm: base -> joint bodies (forward kinematics)
   Pose last_T_flange = Pose::Identity();  // kArm: flange in the last joint's body
@@ -75,6 +83,8 @@ struct RigModel {
   Pose flange_T_camera = Pose::Identity(); // hand-eye: optical frame in the flange frame
   bool has_turntable = false;
   double turntable_qd_max = 0;            // rad/s
+  double turntable_qdd_max = 0;           // rad/s^2: "pbnbv_turntable_acceleration_limit"
+                                          // (optional; default kAccelerationPerSpeed x turntable_qd_max)
   Pose world_T_turntable = Pose::Identity();  // turntable top centre at angle 0, z = axis
   double preferred_azimuth_rad = 0;       // world azimuth about the turntable axis where the
                                           // arm sees best (towards the arm base)
@@ -130,6 +140,42 @@ std::vector<Vector6d> inverse_kinematics(const RigModel& rig, const Pose& world_
 bool general_ik_from_seed(const RigModel& rig, const Pose& world_T_flange, const Vector6d& seed,
                           Vector6d* q);
 
+// Where the rig stands: the arm's joints and the turntable's reading.
+struct RigState {
+  Vector6d q = Vector6d::Zero();
+  double turntable_rad = 0;
+};
+
+// Rig time: a move as the rig's drivers execute it (the twin does exactly this; an arm's movej
+// and a turntable's positioning move are close): each joint group (the arm's 6 joints together,
+// the turntable on its own) follows a smoothstep ramp from rest to rest, whose peak speed (1.5 x
+// the mean) stays within every joint's speed limit and whose peak acceleration (6 distance / T^2)
+// within its acceleration limit, both scaled by `speed_scale`; the arm's joints arrive together
+// (the slowest sets the time); the arm and the turntable move at once (the slower decides).
+// Seconds of real time. 0 for no distance.
+double ramp_duration_s(double distance, double speed_limit, double accel_limit);
+double arm_move_s(const RigModel& rig, const Vector6d& from, const Vector6d& to, double speed_scale = 1.0);
+double turntable_move_s(const RigModel& rig, double from_rad, double to_rad, double speed_scale = 1.0);
+double move_s(const RigModel& rig, const RigState& from, const RigState& to, double speed_scale = 1.0);
+// The moves through `stops` in turn, from `from`.
+double path_s(const RigModel& rig, const RigState& from, const std::vector<RigState>& stops, double speed_scale = 1.0);
+
+// The path check's step: no point of the arm moves farther between two checked states, m (below
+// the check's 5 mm clearance, so that between samples at least 3 mm remain).
+inline constexpr double kPathStepM = 0.004;
+// How far a detour backs the camera off along its view axis (and twice that), m.
+inline constexpr double kPathRetreatM = 0.2;
+
+// A path the rig can take to a view: the states it stops at in order (the last one the view's),
+// each reached from the one before by one move of both joint groups (see move_s).
+struct RigPath {
+  bool clear = false;
+  std::vector<RigState> stops;  // excludes where the rig starts
+  double time_s = 0;            // the moves' time at full speed, s
+  std::string route;            // "direct", "retreat 0.20 m, turn, approach", "via home", ...
+  std::string reason;           // !clear: why every route collides (each route's first contact)
+};
+
 // A requested view split into a turntable angle and an arm configuration.
 struct ViewSolution {
   bool reachable = false;
@@ -145,15 +191,16 @@ struct ViewSolution {
 // must not enter and whose corners must be in sight; an empty or flat box: none.
 class ReachabilityChecker {
  public:
-  explicit ReachabilityChecker(const RigModel& rig);
+  explicit ReachabilityChecker(const RigModel& rig, TurntableChoice choice = TurntableChoice::kPreferred);
   ~ReachabilityChecker();
+  void set_turntable_choice(TurntableChoice choice);
+  TurntableChoice turntable_choice() const;
   ReachabilityChecker(const ReachabilityChecker&) = delete;
   ReachabilityChecker& operator=(const ReachabilityChecker&) = delete;
 
-  // Splits object_T_camera into a turntable angle (the turntable brings the view's azimuth to
-  // the arm's preferred azimuth, trying nearby azimuths when that fails; the angle nearest
-  // `turntable_current`) and the IK solution nearest `q_current` within joint limits that
-  // collides with nothing. Free rig: the gantry configuration, turntable 0.
+  // Splits object_T_camera into a turntable angle (see TurntableChoice; each angle taken in its
+  // equivalent nearest `turntable_current`) and the IK solution nearest `q_current` within joint
+  // limits that collides with nothing. Free rig: the gantry configuration, turntable 0.
   ViewSolution solve(const Pose& object_T_camera, const Vector6d& q_current,
                      double turntable_current, const Eigen::AlignedBox3d& keepout, double object_z_m);
 
@@ -161,6 +208,24 @@ class ReachabilityChecker {
   std::vector<ViewSolution> solve_batch(const std::vector<Pose>& object_T_cameras,
                                         const Vector6d& q_current, double turntable_current,
                                         const Eigen::AlignedBox3d& keepout, double object_z_m);
+
+  // The first collision on the straight joint-space move from `from` to `to` ("link_6 / platter
+  // at 40 % of the move"), "" when the whole move is clear. The move is sampled so that no point
+  // of the arm moves more than kPathStepM between samples (bounded by each joint's turn times the
+  // farthest any part it carries reaches from its axis), and each sample is checked with the
+  // clearance kContactMargin: between samples nothing comes nearer than the margin minus half the
+  // step. When the turntable turns during the move the keep-out box is checked as the cylinder
+  // about the turntable axis that it sweeps turning through any angle, so the turntable's timing
+  // against the arm's does not matter.
+  std::string path_collision(const RigState& from, const RigState& to, const Eigen::AlignedBox3d& keepout,
+                             double object_z_m);
+
+  // A collision-free path from `from` to the view's state `to`: the direct move when it is clear,
+  // else the quickest clear one of: retreat along the camera's view axis (0.2 m, then 0.4 m),
+  // turn the turntable, approach along the view's axis; via the home configuration; retreat,
+  // home, approach. Free rig: direct (the gantry flies). !clear when every route collides.
+  RigPath plan_path(const RigState& from, const RigState& to, const Eigen::AlignedBox3d& keepout,
+                    double object_z_m);
 
   // Names of colliding geom pairs ("link_4 / table") at this configuration; empty = free.
   std::vector<std::string> collisions(const Vector6d& q, double turntable_rad,

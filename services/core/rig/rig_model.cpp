@@ -367,6 +367,13 @@ void load_turntable(const mjModel* m, const std::string& path, int tt, int mount
   rig.has_turntable = true;
   rig.turntable_qd_max = custom_numeric(m, path, "pbnbv_turntable_speed_limit", 1)[0];
   if (!(rig.turntable_qd_max > 0)) fail(path, "pbnbv_turntable_speed_limit must be positive");
+  rig.turntable_qdd_max = kAccelerationPerSpeed * rig.turntable_qd_max;
+  if (mj_name2id(m, mjOBJ_NUMERIC, "pbnbv_turntable_acceleration_limit") >= 0) {
+    rig.turntable_qdd_max = custom_numeric(m, path, "pbnbv_turntable_acceleration_limit", 1)[0];
+    if (!(rig.turntable_qdd_max > 0 && std::isfinite(rig.turntable_qdd_max))) {
+      fail(path, "pbnbv_turntable_acceleration_limit must be positive");
+    }
+  }
   const Eigen::Vector3d b_rel = rig.world_T_base.translation() - rig.world_T_turntable.translation();
   rig.preferred_azimuth_rad = std::atan2(b_rel.y(), b_rel.x());
   if (mj_name2id(m, mjOBJ_NUMERIC, "pbnbv_turntable_zero") >= 0) {
@@ -398,6 +405,16 @@ void load_limits(const mjModel* m, const std::string& path, RigModel* out) {
     rig.qd_max[i] = qd[i];
     rig.q_home[i] = qh[i];
     if (!(qd[i] > 0)) fail(path, "pbnbv_joint_speed_limits[" + std::to_string(i) + "] must be positive");
+    rig.qdd_max[i] = kAccelerationPerSpeed * qd[i];
+  }
+  if (mj_name2id(m, mjOBJ_NUMERIC, "pbnbv_joint_acceleration_limits") >= 0) {
+    const std::vector<double> qdd = custom_numeric(m, path, "pbnbv_joint_acceleration_limits", 6);
+    for (int i = 0; i < 6; ++i) {
+      rig.qdd_max[i] = qdd[i];
+      if (!(qdd[i] > 0 && std::isfinite(qdd[i]))) {
+        fail(path, "pbnbv_joint_acceleration_limits[" + std::to_string(i) + "] must be positive");
+      }
+    }
   }
   if (!within_limits(rig, rig.q_home)) fail(path, "pbnbv_q_home is outside the joint limits");
   if (const int wv = mj_name2id(m, mjOBJ_TEXT, "pbnbv_working_volume"); wv >= 0) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/base/pose.hpp"
+#include "core/geometry/rig_kind.hpp"
 #include "core/geometry/camera_model.hpp"
 #include "core/geometry/colour_image.hpp"
 #include "core/geometry/mesh_summary.hpp"
@@ -31,6 +32,7 @@ struct MoveRequest {
   double speed_scale = 1.0;             // (0, 1]: fraction of the joint speed limits
   double timeout_s = 60.0;              // not settled after this long: timed out
   bool plan_only = false;               // only check reachability
+  TurntableChoice turntable_choice = TurntableChoice::kPreferred;  // arm rig (core/rig/rig.hpp)
 };
 
 enum class MoveStatus : int8_t {
@@ -55,6 +57,8 @@ struct MoveResult {
   double turntable_angle_rad = 0;
   double plan_s = 0, move_s = 0, settle_s = 0, rig_motion_s = 0;  // see move_result_t
   int64_t settled_utime = 0;                   // rig clock at settle, microseconds
+  std::string route;                           // the path taken: "direct", or the detour's name
+  double path_s = 0;                           // the path's time by the rig-time model, s
 };
 
 // CAPTURE_REQUEST: one frame at the current pose, as an object-frame cloud.
@@ -213,6 +217,8 @@ struct PlanRequest {
   double turntable_angle_rad = 0;
   double object_z_m = 0;
   Eigen::AlignedBox3d keepout;             // empty: none
+  TurntableChoice turntable_choice = TurntableChoice::kPreferred;  // as the motion executor's
+  double seconds_per_point = 0;            // motion-aware ranking (0: off)
 };
 
 enum class PlanOutcome : int8_t { kView = 0, kStop = 1, kFailed = 2 };

@@ -29,7 +29,8 @@ json move_json(const MoveResult& m) {
           {"joint_target_rad", to_json6(m.joint_target_rad)},
           {"joint_position_rad", to_json6(m.joint_position_rad)},
           {"turntable_target_rad", m.turntable_target_rad},
-          {"turntable_angle_rad", m.turntable_angle_rad}};
+          {"turntable_angle_rad", m.turntable_angle_rad},
+          {"route", m.route}};
 }
 
 // scan.json's "capture" of a view that got its CLOUD.
@@ -160,7 +161,8 @@ json to_json(const ViewRecord& v) {
   } else if (v.move) {
     view["move"] = move_json(*v.move);
     view["time_s"] = {{"plan", v.move->plan_s}, {"move", v.move->move_s}, {"settle", v.move->settle_s},
-                      {"rig_motion", v.move->rig_motion_s}, {"move_round_trip", v.move_round_trip_s}};
+                      {"rig_motion", v.move->rig_motion_s}, {"path_model", v.move->path_s},
+                      {"move_round_trip", v.move_round_trip_s}};
   }
   if (v.capture_unanswered) {
     view["capture"] = {{"status", "no_answer"}};

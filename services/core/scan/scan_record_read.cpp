@@ -124,11 +124,13 @@ MoveResult move_from(const Fields& m, const Fields* time) {
   r.joint_position_rad = m.vector6("joint_position_rad");
   r.turntable_target_rad = m.number("turntable_target_rad");
   r.turntable_angle_rad = m.number("turntable_angle_rad");
+  if (m.has("route")) r.route = m.text("route");  // pbnbv 0.13.0 on
   if (time) {
     r.plan_s = time->number("plan");
     r.move_s = time->number("move");
     r.settle_s = time->number("settle");
     r.rig_motion_s = time->number("rig_motion");
+    if (time->has("path_model")) r.path_s = time->number("path_model");
   }
   return r;
 }

@@ -437,6 +437,8 @@ void ScanSequencer::begin_plan(double now_s) {
   r.turntable_angle_rad = done_.turntable_rad;
   r.object_z_m = s_.object_z_m;
   r.keepout = box_or_none(s_.keepout_min_m, s_.keepout_max_m);
+  r.turntable_choice = turntable_choice(s_);
+  r.seconds_per_point = r.turntable_choice == TurntableChoice::kLeastTurn && s_.rig == RigKind::kArm ? s_.seconds_per_point : 0.0;
   if (done_.last_map < 0) {  // nothing to plan from: no request
     ViewPlan none;
     none.scan_id = s_.scan_id;
@@ -511,6 +513,7 @@ void ScanSequencer::send_move(double now_s) {
   r.speed_scale = s_.speed_scale;
   r.timeout_s = s_.move_timeout_s;
   r.plan_only = false;
+  r.turntable_choice = turntable_choice(s_);
   send(r, r.request_id, t_.resend_s, now_s + s_.move_timeout_s + t_.move_extra_s, now_s);
 }
 

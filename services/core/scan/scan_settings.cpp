@@ -50,6 +50,7 @@ nlohmann::json to_json(const ScanSettings& s) {
       {"planning", {{"candidates", s.candidates}, {"parallels", s.parallels}, {"sectors", s.sectors},
                     {"area", std::string(name_of(s.area))}, {"t_max", s.t_max},
                     {"map_resolution_m", s.map_resolution_m}, {"stop_fraction", s.stop_fraction}, {"when_done", std::string(name_of(s.when_done))},
+                    {"motion", std::string(name_of(s.motion))}, {"seconds_per_point", s.seconds_per_point},
                     {"alternatives", s.alternatives}, {"seed", s.seed}}},
       {"keepout", {{"min_m", to_json(s.keepout_min_m)}, {"max_m", to_json(s.keepout_max_m)}}},
       {"crop", {{"min_m", to_json(s.crop_min_m)}, {"max_m", to_json(s.crop_max_m)},
@@ -133,6 +134,9 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.map_resolution_m = pl.at("map_resolution_m").get<double>();
     s.stop_fraction = pl.at("stop_fraction").get<double>();
     s.when_done = parse_name<WhenDone>(pl.value("when_done", std::string(name_of(kWhenDone.value))));
+    // Settings written before pbnbv 0.13.0 have none: their scans turned every view to the arm.
+    s.motion = parse_name<Motion>(pl.value("motion", std::string(name_of(Motion::kPlain))));
+    s.seconds_per_point = pl.value("seconds_per_point", 0.0);
     s.alternatives = int_at(pl, "alternatives", "planning.alternatives");
     if (pl.contains("seed")) {
       s.seed = integer_from_json(pl["seed"], std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max(),
@@ -267,6 +271,11 @@ std::string new_scan_id(const std::string& name) {
   char hex[17];
   std::snprintf(hex, sizeof(hex), "%016llx", static_cast<unsigned long long>(bits));
   return (id.empty() ? "scan" : id) + "-" + hex;
+}
+
+TurntableChoice turntable_choice(const ScanSettings& s) {
+  const bool aware = s.motion == Motion::kAware || (s.motion == Motion::kAuto && s.planner != PlannerKind::kPbnbvPaper);
+  return aware ? TurntableChoice::kLeastTurn : TurntableChoice::kPreferred;
 }
 
 }  // namespace pbnbv

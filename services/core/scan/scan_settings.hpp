@@ -29,6 +29,11 @@ inline constexpr double kMaxInitialViewM = 10.0;
 // object centre.
 void check_initial_view(const Eigen::Vector3d& p);
 
+struct ScanSettings;
+// The turntable choice of the scan's moves and plans: least turn when `motion` is aware (auto:
+// for every planner but pbnbv-paper), else the preferred azimuth.
+TurntableChoice turntable_choice(const ScanSettings& s);
+
 struct ScanSettings {
   std::string scan_id;
   RigKind rig = kRig.value;
@@ -77,6 +82,8 @@ struct ScanSettings {
   double map_resolution_m = kMapResolution.value;
   double stop_fraction = kStopFraction.value;  // stop when best F < this * F of the first planned view (0: off)
   WhenDone when_done = kWhenDone.value;       // nothing left to aim at: stop, or spread (use the budget)
+  Motion motion = kMotion.value;              // arm rig: moves chosen for what they cost (turntable_choice)
+  double seconds_per_point = kSecondsPerPoint.value;  // motion-aware: pbnbv's ranking charges rig time
   int alternatives = kAlternatives.value;     // next-best views tried when the rig cannot reach the best
   int64_t seed = kPlannerSeed.value;          // the random planner's seed (view i uses seed + i)
 

@@ -521,5 +521,101 @@ TEST_F(ArmMotion, AStopForEveryScanHoldsTheScanInProgress) {
   EXPECT_EQ(refused.result->status, MoveStatus::kRejected);
 }
 
+
+// The arm standing where the camera sees the object from `eye` (object frame, turntable at 0).
+Vector6d config_seeing_from(const Eigen::Vector3d& eye) {
+  const RigModel& rig = arm_rig();
+  const Pose w_c = object_in_world(rig, 0, kObjectZ) * look_at_z_up(eye, Eigen::Vector3d::Zero());
+  const std::vector<Vector6d> sols = inverse_kinematics(rig, w_c * rig.flange_T_camera.inverse(), nullptr, rig.q_home);
+  Vector6d best = sols.empty() ? rig.q_home : sols.front();
+  for (const Vector6d& q : sols) {
+    if (arm_move_s(rig, rig.q_home, q) < arm_move_s(rig, rig.q_home, best)) best = q;
+  }
+  return best;
+}
+
+TEST(ArmMotionDetour, ADirectMoveThatCollidesIsDrivenThroughTheDetoursStopsOneCommandEach) {
+  const RigModel& rig = arm_rig();
+  ReachabilityChecker checker(rig);
+  // A tall object (keep-out box 0.3 x 0.3 x 0.5 m); the arm sees its front left corner from 0.55 m
+  // at 50 deg left of its base's direction, 0.2 m up, and is asked for the same view on the right.
+  // With the least turn the turntable stays (the view lies 50 deg off the preferred azimuth) and
+  // the straight move (mostly A1) carries the camera through the box (core/rig's rig_path_test).
+  MoveRequest r = reachable_request();
+  const double side = 0.55 * std::sin(50 * kPi / 180), front = -0.55 * std::cos(50 * kPi / 180);
+  r.object_T_camera = look_at_z_up(Eigen::Vector3d(side, front, 0.2), Eigen::Vector3d::Zero());
+  r.keepout = Eigen::AlignedBox3d(Eigen::Vector3d(-0.15, -0.15, -0.15), Eigen::Vector3d(0.15, 0.15, 0.35));
+  r.turntable_choice = TurntableChoice::kLeastTurn;
+  checker.set_turntable_choice(TurntableChoice::kLeastTurn);
+  const RigState from{config_seeing_from(Eigen::Vector3d(-side, front, 0.2)), 0};
+  const ViewSolution sol = checker.solve(r.object_T_camera, from.q, 0, r.keepout, kObjectZ);
+  ASSERT_TRUE(sol.reachable) << sol.reason;
+  EXPECT_EQ(sol.turntable_rad, 0.0);
+  const RigPath path = checker.plan_path(from, {sol.q, sol.turntable_rad}, r.keepout, kObjectZ);
+  ASSERT_TRUE(path.clear) << path.reason;
+  ASSERT_NE(path.route, "direct") << "the direct move is clear: the test's premise is gone";
+  ASSERT_GE(path.stops.size(), 2u);
+
+  MotionSequencer seq(rig, kFirstSeq);
+  seq.on_arm_status(arm_at(from.q, -1, RigMode::kIdle, 5000000), 100.0);
+  seq.on_turntable_status(turntable_at(0, -1, RigMode::kIdle, 5000000), 100.0);
+  MotionStep step = seq.on_request(r, 100.0);
+  ASSERT_FALSE(step.result) << step.result->reason;
+  double now = 100.0;
+  int64_t utime = 5000000;
+  for (std::size_t i = 0; i < path.stops.size(); ++i) {
+    // Stop i commanded with its own sequence number; the rig acknowledges it and gets there.
+    ASSERT_TRUE(step.arm_command && step.turntable_command) << "stop " << i;
+    EXPECT_EQ(step.arm_command->seq, kFirstSeq + static_cast<int64_t>(i));
+    EXPECT_EQ(step.arm_command->joint_position_rad, path.stops[i].q);
+    EXPECT_EQ(step.turntable_command->angle_rad, path.stops[i].turntable_rad);
+    const int64_t seq_i = step.arm_command->seq;
+    now += 1.0;
+    utime += 1000000;
+    // On its way (acknowledged, not there): nothing new.
+    seq.on_arm_status(arm_at(0.5 * (path.stops[i].q + (i ? path.stops[i - 1].q : from.q)), seq_i, RigMode::kMoving, utime), now);
+    seq.on_turntable_status(turntable_at(path.stops[i].turntable_rad, seq_i, RigMode::kMoving, utime), now);
+    step = seq.tick(now);
+    EXPECT_FALSE(step.arm_command || step.result) << "stop " << i;
+    now += 1.0;
+    utime += 1000000;
+    seq.on_arm_status(arm_at(path.stops[i].q, seq_i, RigMode::kSettled, utime), now);
+    seq.on_turntable_status(turntable_at(path.stops[i].turntable_rad, seq_i, RigMode::kSettled, utime), now);
+    step = seq.tick(now);
+  }
+  ASSERT_TRUE(step.result);
+  EXPECT_EQ(step.result->status, MoveStatus::kReached) << step.result->reason;
+  EXPECT_EQ(step.result->route, path.route);
+  EXPECT_NEAR(step.result->path_s, path.time_s, 1e-9);   // at speed scale 1
+  EXPECT_NEAR(step.result->rig_motion_s, 2.0 * path.stops.size(), 1e-9);
+  EXPECT_EQ(step.result->joint_target_rad, sol.q);
+  EXPECT_LT(step.result->position_error_m, 1e-6);
+}
+
+TEST(ArmMotionDetour, AViewWithNoCollisionFreePathIsUnreachableNamingEachRoutesContact) {
+  const RigModel& rig = arm_rig();
+  // Standing with the camera inside the keep-out box (a box grown to take in where the camera
+  // stands, as a keep-out box changed under a standing arm would): every way out starts in the box.
+  const double side = 0.55 * std::sin(50 * kPi / 180), front = -0.55 * std::cos(50 * kPi / 180);
+  const Vector6d q = config_seeing_from(Eigen::Vector3d(-side, front, 0.2));
+  const Eigen::Vector3d cam = (object_in_world(rig, 0, kObjectZ).inverse() * camera_in_world(rig, q)).translation();
+  ASSERT_LT((cam - Eigen::Vector3d(-side, front, 0.2)).norm(), 1e-6);
+  MoveRequest r = reachable_request();
+  r.keepout = Eigen::AlignedBox3d(Eigen::Vector3d(-0.15, -0.15, -0.15), Eigen::Vector3d(0.15, 0.15, 0.15));
+  r.keepout.extend(cam - Eigen::Vector3d::Constant(0.05));
+  r.keepout.extend(cam + Eigen::Vector3d::Constant(0.05));
+  MotionSequencer seq(rig, kFirstSeq);
+  seq.on_arm_status(arm_at(q, -1, RigMode::kIdle, 5000000), 100.0);
+  seq.on_turntable_status(turntable_at(0, -1, RigMode::kIdle, 5000000), 100.0);
+  const MotionStep step = seq.on_request(r, 100.0);
+  ASSERT_TRUE(step.result);
+  EXPECT_EQ(step.result->status, MoveStatus::kUnreachable);
+  EXPECT_NE(step.result->reason.find("no collision-free path"), std::string::npos) << step.result->reason;
+  EXPECT_NE(step.result->reason.find("direct: "), std::string::npos) << step.result->reason;
+  EXPECT_NE(step.result->reason.find("via home: "), std::string::npos) << step.result->reason;
+  EXPECT_FALSE(step.arm_command);
+  EXPECT_FALSE(seq.moving());
+}
+
 }  // namespace
 }  // namespace pbnbv

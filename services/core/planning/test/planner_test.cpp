@@ -257,6 +257,51 @@ TEST(Planner, CombinedRankingSumsThreeScaledTermsOverAShortlist) {
   EXPECT_EQ(plan_pbnbv(in).ranking, Ranking::kF);
 }
 
+// Motion-aware: of two equally good views (mirror images across the plane through the view taken
+// and the frontier ball) the one the rig reaches sooner is taken; each candidate's score is its
+// combined score less its move time over seconds_per_point.
+TEST(Planner, MotionAwareRankingTakesTheQuickerOfTwoEqualViews) {
+  PlanInput in = scene(0.0, 1);
+  Eigen::Vector3d centre;
+  double radius = 0;
+  candidate_sphere(in.bbox, in.candidates.working_distance_m, &centre, &radius);
+  in.views_done = {look_at_z_up(centre + radius * Eigen::Vector3d::UnitX(), centre)};
+  const VoxelGrid grid = grid_of(in.bbox, VoxelState::kUnknown);
+  in.grid = &grid;
+  in.combined.shortlist = 10;
+  const PlanResult plain = plan_pbnbv(in);
+  ASSERT_EQ(plain.outcome, PlanResult::Outcome::kView) << plain.reason;
+  EXPECT_TRUE(plain.move_time_s.empty());
+  const int a = plain.chosen;
+  // Its mirror image (y -> -y about the centre), scored the same.
+  int b = -1;
+  for (int i = 0; i < static_cast<int>(plain.candidates.size()); ++i) {
+    Eigen::Vector3d m = plain.candidates[a].translation() - centre;
+    m.y() = -m.y();
+    if (i != a && (plain.candidates[i].translation() - centre - m).norm() < 1e-9) b = i;
+  }
+  ASSERT_GE(b, 0) << "candidate " << a << " has no mirror image";
+  ASSERT_NEAR(plain.scores[b].quality, plain.scores[a].quality, 1e-9) << "the mirror images score differently";
+
+  // Every other candidate 100 s away; a 3 s away, b 1 s: b is taken, by 2 s / 4 s per point = 0.5.
+  in.move_time_s.assign(plain.candidates.size(), 100.0);
+  in.move_time_s[a] = 3.0;
+  in.move_time_s[b] = 1.0;
+  in.combined.seconds_per_point = 4.0;
+  const PlanResult aware = plan_pbnbv(in);
+  ASSERT_EQ(aware.outcome, PlanResult::Outcome::kView) << aware.reason;
+  EXPECT_EQ(aware.chosen, b);
+  EXPECT_NEAR(aware.scores[b].quality, plain.scores[b].quality - 0.25, 1e-12);
+  EXPECT_NEAR(aware.scores[a].quality, plain.scores[a].quality - 0.75, 1e-12);
+  EXPECT_NE(aware.reason.find("1 s to reach"), std::string::npos) << aware.reason;
+  // The other way round, a.
+  std::swap(in.move_time_s[a], in.move_time_s[b]);
+  EXPECT_EQ(plan_pbnbv(in).chosen, a);
+  // A time for each candidate or none.
+  in.move_time_s.pop_back();
+  EXPECT_THROW(plan_pbnbv(in), std::invalid_argument);
+}
+
 // No Frontier ellipsoid: while rays still reach unobserved space the combined ranking goes on
 // (gap and rays); once they reach none there is nothing left to aim at: the largest gap, or a stop.
 TEST(Planner, CombinedRankingGoesOnWithoutAFrontierUntilNoRayReachesUnobservedSpace) {
