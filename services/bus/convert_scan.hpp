@@ -106,6 +106,8 @@ inline move_result_t to_msg(const MoveResult& r) {
   m.settle_s = r.settle_s;
   m.rig_motion_s = r.rig_motion_s;
   m.settled_utime = r.settled_utime;
+  m.contacts = r.contacts;
+  m.contact = r.contact;
   return m;
 }
 
@@ -132,6 +134,9 @@ inline MoveResult from_msg(const move_result_t& m) {
   r.settle_s = m.settle_s;
   r.rig_motion_s = m.rig_motion_s;
   r.settled_utime = m.settled_utime;
+  contacts_from_msg(m.contacts, m.contact, "MOVE_RESULT contacts", "MOVE_RESULT contact");
+  r.contacts = m.contacts;
+  r.contact = m.contact;
   return r;
 }
 

@@ -104,6 +104,7 @@ MotionStep MotionSequencer::on_request(const MoveRequest& r, double now_s) {
   job.t_commanded = now_s + plan_s;  // the commands leave once the plan is made
   job.deadline = job.t_commanded + r.timeout_s;
   job.rig_utime_commanded = arm_.utime;
+  job.contacts_commanded = arm_.contacts;
   step = send_commands(job, job.t_commanded);
   job_ = job;
   return step;
@@ -238,6 +239,14 @@ MotionStep MotionSequencer::finish(MoveStatus status, const std::string& reason,
   result.settle_s = job.t_within >= 0 ? now_s - job.t_within : 0;
   result.rig_motion_s = (arm_.utime - job.rig_utime_commanded) * 1e-6;
   result.settled_utime = arm_.utime;
+  // The contacts the rig counted since the command (a driver restarted meanwhile counts from 0:
+  // all of its count), and the last one's text.
+  if (job.contacts_commanded < 0 || arm_.contacts < 0) {
+    result.contacts = -1;
+  } else {
+    result.contacts = arm_.contacts >= job.contacts_commanded ? arm_.contacts - job.contacts_commanded : arm_.contacts;
+    if (result.contacts > 0) result.contact = arm_.last_contact;
+  }
   job_.reset();
   MotionStep step;
   step.result = result;

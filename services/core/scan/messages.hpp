@@ -55,6 +55,8 @@ struct MoveResult {
   double turntable_angle_rad = 0;
   double plan_s = 0, move_s = 0, settle_s = 0, rig_motion_s = 0;  // see move_result_t
   int64_t settled_utime = 0;                   // rig clock at settle, microseconds
+  int32_t contacts = 0;                        // contact events the rig reported during the move (-1: it cannot tell)
+  std::string contact;                         // the last one ("" when contacts <= 0)
 };
 
 // CAPTURE_REQUEST: one frame at the current pose, as an object-frame cloud.
