@@ -56,7 +56,11 @@ TEST(BenchRules, SummaryMeansMediansAndFailures) {
   b.views_to_95 = 2;
   c.object = "c";
   c.error = "the scan did not complete";
+  b.rig_contacts = 2;  // the rig's contacts count in every run, complete or not
+  c.rig_contacts = 1;
   const eval::PlannerSummary s = eval::summarise(PlannerKind::kPbnbv, {a, b, c}, 3);
+  EXPECT_EQ(s.rig_contacts, 3);
+  EXPECT_EQ(s.runs_with_rig_contacts, (std::vector<std::string>{"b", "c"}));
   EXPECT_EQ(s.complete, 2);
   EXPECT_EQ(s.failed, 1);
   ASSERT_EQ(s.coverage_by_view.size(), 3u);
@@ -146,6 +150,9 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
     EXPECT_GT(p["planner_ms_median"].get<double>(), 0.0);
     EXPECT_GT(p["planner_ms_mean"].get<double>(), 0.0);
     ASSERT_TRUE(p["views_to_95"].is_null() || p["views_to_95"].is_number());
+    // No move of any scan touched anything (the twin's contact check).
+    EXPECT_EQ(p["rig_contacts"]["events"], 0) << p["rig_contacts"].dump();
+    EXPECT_EQ(p["rig_contacts"]["runs_with_any"], json::array());
     std::vector<double> mean(3, 0.0);
     double mean_f = 0;  // F-score at 5 mm, mean over the objects
     for (const std::string object : {"sphere", "box"}) {
@@ -153,6 +160,7 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
       const json& o = p["runs"].at(object);  // one first view: the run is named after the object
       EXPECT_EQ(o["object"], object);
       EXPECT_EQ(o["first_view"], 1);
+      EXPECT_EQ(o["rig_contacts"], 0);
       EXPECT_EQ(p["objects"].at(object)["coverage_by_view"], o["coverage_by_view"]);  // its mean over one run
       ASSERT_EQ(o["coverage_by_view"].size(), 3u);
       EXPECT_EQ(o["planner_ms"].size(), 2u);  // views 2 and 3 were planned
@@ -210,6 +218,7 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
   EXPECT_NE(report.find("| raycast |"), std::string::npos);
   EXPECT_NE(report.find("resolution 0.03 m"), std::string::npos);
   EXPECT_NE(report.find("## Stop rule"), std::string::npos);
+  EXPECT_NE(report.find("Rig contacts: none"), std::string::npos);
   EXPECT_NE(report.find("## Surface metrics after the last view"), std::string::npos);
   EXPECT_NE(report.find("| pbnbv | cloud | 2 |"), std::string::npos);
   for (const char* png : {"coverage.png", "time.png"}) {

@@ -46,6 +46,7 @@ NbvScan nbv_scan(const std::string& name, const std::string& options, int views)
   EXPECT_EQ(s.scan["status"]["state"], "done");
   EXPECT_EQ(s.scan["settings"]["planner"], "pbnbv");
   EXPECT_EQ(s.scan["stop"]["rule"], "budget") << s.scan["stop"].dump();
+  EXPECT_EQ(s.scan["rig_contacts"], nlohmann::json::array()) << s.scan["rig_contacts"].dump(2);
   return s;
 }
 

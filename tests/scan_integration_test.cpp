@@ -51,8 +51,11 @@ fs::path scan_and_check(const std::string& name, const std::string& options, int
   const auto scan = read_json_file(out / "scan.json");
   EXPECT_EQ(scan["status"]["state"], "done");
   EXPECT_EQ(scan["views"].size(), static_cast<std::size_t>(views));
+  // The twin counted no contact of the arm or the camera with anything in any move.
+  EXPECT_EQ(scan["rig_contacts"], nlohmann::json::array()) << scan["rig_contacts"].dump(2);
   for (const auto& v : scan["views"]) {
     EXPECT_EQ(v["move"]["status"], "reached") << v.dump(2);
+    EXPECT_EQ(v["move"]["contacts"], 0) << v.dump(2);
     EXPECT_LT(v["move"]["position_error_m"].get<double>(), 1e-3) << v.dump(2);
     EXPECT_LT(v["move"]["angle_error_deg"].get<double>(), 0.1) << v.dump(2);
     EXPECT_EQ(v["capture"]["status"], "ok");

@@ -194,6 +194,24 @@ RigSim::RigSim(const RigModel& rig, const ObjectPlacement& object,
     arm_.start[i] = arm_.target[i] = arm_.setpoint[i] = rig.q_home[i];
   }
   mj_forward(m_, d_);
+  contacts_ = std::make_unique<ContactMonitor>(m_, rig.joint_names[0], d_->qpos);
+  untaken_contacts_ = contacts_->initial_contacts();
+  if (!untaken_contacts_.empty()) last_contact_ = untaken_contacts_.back();
+}
+
+std::vector<RigContact> RigSim::take_contacts() {
+  std::vector<RigContact> out;
+  out.swap(untaken_contacts_);
+  return out;
+}
+
+void RigSim::protective_stop() {
+  hold_arm(arm_.command_seq);
+  if (turntable_) {
+    const std::vector<double> here{d_->qpos[turntable_->qpos_adr[0]]};
+    turntable_->setpoint = here;
+    start_ramp(*turntable_, here, 1.0, turntable_->command_seq);
+  }
 }
 
 RigSim::~RigSim() {
@@ -369,6 +387,12 @@ void RigSim::step() {
   if (d_->warning[mjWARN_BADQACC].number > 0) {
     throw std::runtime_error("the physics diverged at rig time " + std::to_string(t) +
                              " s (MuJoCo reset the simulation); the rig model's gains or the command are unsafe");
+  }
+  const std::vector<RigContact> found = contacts_->check(d_->qpos, !teleport_, d_->time, arm_.command_seq);
+  if (!found.empty()) {
+    protective_stop();
+    last_contact_ = found.back();
+    untaken_contacts_.insert(untaken_contacts_.end(), found.begin(), found.end());
   }
 }
 

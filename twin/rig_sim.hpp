@@ -4,9 +4,12 @@
 // command arriving together); the model's position actuators track the ramp, helped, as an
 // industrial controller is, by gravity compensation and velocity/acceleration feed-forward
 // (joint damping and inertia times the ramp's velocity and acceleration); a joint group is
-// "settled" when it is at its target and still.
+// "settled" when it is at its target and still. Every state is checked for contacts between the
+// arm and the rest of the rig (twin/contact_monitor.hpp): on a contact the rig stops, as a real
+// arm's collision detection stops it.
 #include <mujoco/mujoco.h>
 
+#include <memory>
 #include <optional>
 #include <random>
 #include <stdexcept>
@@ -18,6 +21,7 @@
 #include "core/geometry/colour_image.hpp"
 #include "core/geometry/mesh.hpp"
 #include "core/rig/rig.hpp"
+#include "twin/contact_monitor.hpp"
 
 namespace pbnbv::twin {
 
@@ -125,7 +129,11 @@ class RigSim {
   // executed (the joints stop at their mechanical limits) and speed_scale is clamped into (0, 1].
   void set_ignore_limits(bool on) { ignore_limits_ = on; }
 
-  // Advances physics by one timestep.
+  // Advances physics by one timestep, and checks the states it went through for contacts
+  // (ContactMonitor, swept unless the rig teleports). On a contact's onset the rig makes a
+  // protective stop: the arm holds where it is (its command_seq kept: the command it was
+  // executing), and so does the turntable (one safety circuit for the cell: a turntable turning
+  // the object into the camera stops too); the next command moves it again.
   void step();
   double time_s() const;
 
@@ -150,9 +158,17 @@ class RigSim {
   mjModel* model() { return m_; }
   mjData* data() { return d_; }
 
+  // Contact events since the rig was made (a start in contact included), the last one, and the
+  // ones the driver has not taken yet (each taken once, in order).
+  int64_t contact_events() const { return contacts_->events(); }
+  const std::optional<RigContact>& last_contact() const { return last_contact_; }
+  std::vector<RigContact> take_contacts();
+  const ContactMonitor& contact_monitor() const { return *contacts_; }
+
  private:
   void start_ramp(JointGroup& g, const std::vector<double>& target, double speed_scale, long seq);
   void advance_ramp(JointGroup& g);
+  void protective_stop();
   JointGroup make_group(const std::vector<std::string>& joints, const std::vector<double>& speeds,
                         const std::vector<double>& accelerations);
 
@@ -169,6 +185,9 @@ class RigSim {
   // one to the bit and a benchmark scan's plans do not depend on the machine's timing.
   bool teleport_ = false;
   bool ignore_limits_ = false;
+  std::unique_ptr<ContactMonitor> contacts_;
+  std::optional<RigContact> last_contact_;
+  std::vector<RigContact> untaken_contacts_;
 };
 
 }  // namespace pbnbv::twin

@@ -325,6 +325,7 @@ class Twin {
     while (!stop_requested()) {
       bus_.spin_once(0);
       sim_.step();
+      for (const twin::RigContact& c : sim_.take_contacts()) on_contact(c, rig_driver);
       if (ur_) serve_ur();
       if (sim_.time_s() + 1e-12 < next_status) continue;
       next_status += status_period_s;
@@ -333,9 +334,28 @@ class Twin {
       const double ahead = (sim_.time_s() - sim0_) / o_.speed - (bus::now_s() - wall0_);
       if (ahead > 0) bus_.spin_once(static_cast<int>(ahead * 1000));  // sleeps in the LCM wait
     }
+    const twin::ContactCheckCost& cost = sim_.contact_monitor().cost();
+    log_info(fmt::format("contact check: {} contact events; {} states checked in {} steps, {:.1f} us each, {:.2f} s in all",
+                         sim_.contact_events(), cost.states, cost.calls,
+                         cost.states > 0 ? 1e6 * cost.seconds / static_cast<double>(cost.states) : 0.0, cost.seconds));
   }
 
  private:
+  // A contact's onset (the rig has already stopped, twin/rig_sim.hpp): reported at once in the
+  // log, and in every ARM_STATUS as kFaultContact on the command it was executing until the next
+  // command is accepted; playing a UR controller, as the protective stop a UR arm's collision
+  // detection makes (safety mode 3, which pbnbv-ur-driver reports as a drive fault; it stays, as a
+  // UR arm's stays until someone releases it at the pendant, which the twin does not play).
+  void on_contact(const twin::RigContact& c, driver::RigDriver& rig_driver) {
+    const std::string text = "contact: " + c.text();
+    log_warn(text + ": the arm stops and holds");
+    if (ur_) {
+      safety_mode_ = driver::ur::kSafetyModeProtectiveStop;
+    } else {
+      rig_driver.set_arm_contact(c.command_seq, text);
+    }
+  }
+
   // As a UR controller: the RTDE client's requests answered, the program's part played (a new
   // command number in the registers starts the move or the hold and is echoed), the faults
   // played, and the controller's state streamed.
@@ -483,6 +503,8 @@ class Twin {
                                     (sim_.arm_position_reported() - sim_.arm_position()));
     arm.command_seq = no_echo ? -1 : sim_.arm().command_seq;
     arm.motion = motion_of(sim_, sim_.arm());
+    arm.contacts = static_cast<int32_t>(std::min<int64_t>(sim_.contact_events(), INT32_MAX));
+    if (sim_.last_contact()) arm.last_contact = sim_.last_contact()->text();
     std::optional<driver::TurntableReading> turntable;
     if (sim_.has_turntable()) {
       driver::TurntableReading& t = turntable.emplace();

@@ -47,6 +47,20 @@ inline Vector6d to_vector6(const std::vector<double>& v, const std::string& what
 inline std::vector<double> to_std(const Vector6d& q) { return std::vector<double>(q.data(), q.data() + 6); }
 
 // Throws std::invalid_argument when x is not finite or outside [lo, hi].
+// A count of contact events and the last one's text (ARM_STATUS contacts / last_contact,
+// MOVE_RESULT contacts / contact): throws naming the field when the count is below -1 (-1: the
+// rig cannot tell) or a text comes with no event counted.
+inline void contacts_from_msg(int32_t contacts, const std::string& text, const std::string& count_what,
+                              const std::string& text_what) {
+  if (contacts < -1) {
+    throw std::invalid_argument(count_what + " = " + std::to_string(contacts) + " is below -1 (-1: the rig cannot tell)");
+  }
+  if (contacts <= 0 && !text.empty()) {
+    throw std::invalid_argument(text_what + " is given with " + count_what + " = " + std::to_string(contacts) +
+                                " (only with a contact counted)");
+  }
+}
+
 inline void require_range(double x, double lo, double hi, const std::string& what) {
   if (!(std::isfinite(x) && x >= lo && x <= hi)) {
     std::ostringstream os;

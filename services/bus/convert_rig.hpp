@@ -19,16 +19,17 @@
 namespace pbnbv::bus {
 
 // A status's mode and fault code as the plain enums; throws naming `what` (the message) when
-// either is not one of its constants, or when the fault code and the mode disagree (a fault code
-// is set exactly when the mode is kModeFault).
+// either is not one of its constants (fault codes 0..`max_fault`: kFaultContact, 4, is the arm's
+// only), or when the fault code and the mode disagree (a fault code is set exactly when the mode
+// is kModeFault).
 inline void rig_mode_from_msg(int8_t mode, int8_t fault_code, const std::string& what, RigMode* mode_out,
-                              RigFault* fault_out) {
+                              RigFault* fault_out, int max_fault = 3) {
   if (mode < 0 || mode > 3) {
     throw std::invalid_argument(what + " mode = " + std::to_string(mode) + " is not one of its constants (0..3)");
   }
-  if (fault_code < 0 || fault_code > 3) {
+  if (fault_code < 0 || fault_code > max_fault) {
     throw std::invalid_argument(what + " fault_code = " + std::to_string(fault_code) +
-                                " is not one of its constants (0..3)");
+                                " is not one of its constants (0.." + std::to_string(max_fault) + ")");
   }
   *mode_out = static_cast<RigMode>(mode);
   *fault_out = static_cast<RigFault>(fault_code);
@@ -45,9 +46,12 @@ inline ArmReading from_msg(const arm_status_t& m) {
   r.joint_position_rad = to_vector6(m.joint_position_rad, "ARM_STATUS joint_position_rad");
   r.joint_velocity_rad_s = to_vector6(m.joint_velocity_rad_s, "ARM_STATUS joint_velocity_rad_s");
   r.command_seq = m.command_seq;
-  rig_mode_from_msg(m.mode, m.fault_code, "ARM_STATUS", &r.mode, &r.fault_code);
+  rig_mode_from_msg(m.mode, m.fault_code, "ARM_STATUS", &r.mode, &r.fault_code, arm_status_t::kFaultContact);
   r.fault_command_seq = m.fault_command_seq;
   r.fault = m.fault;
+  contacts_from_msg(m.contacts, m.last_contact, "ARM_STATUS contacts", "ARM_STATUS last_contact");
+  r.contacts = m.contacts;
+  r.last_contact = m.last_contact;
   return r;
 }
 

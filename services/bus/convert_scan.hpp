@@ -110,6 +110,8 @@ inline move_result_t to_msg(const MoveResult& r) {
   m.settled_utime = r.settled_utime;
   m.route = r.route;
   m.path_s = r.path_s;
+  m.contacts = r.contacts;
+  m.contact = r.contact;
   return m;
 }
 
@@ -141,6 +143,9 @@ inline MoveResult from_msg(const move_result_t& m) {
     throw std::invalid_argument("MOVE_RESULT path_s = " + std::to_string(m.path_s) + " is not a time in [0, 1e6) s");
   }
   r.path_s = m.path_s;
+  contacts_from_msg(m.contacts, m.contact, "MOVE_RESULT contacts", "MOVE_RESULT contact");
+  r.contacts = m.contacts;
+  r.contact = m.contact;
   return r;
 }
 

@@ -13,6 +13,7 @@ namespace {
 static_assert(static_cast<int8_t>(FaultCode::kCommandRejected) == arm_status_t::kFaultCommandRejected &&
                   static_cast<int8_t>(FaultCode::kDriver) == arm_status_t::kFaultDriver &&
                   static_cast<int8_t>(FaultCode::kOutOfLimits) == arm_status_t::kFaultOutOfLimits &&
+                  static_cast<int8_t>(FaultCode::kContact) == arm_status_t::kFaultContact &&
                   static_cast<int8_t>(FaultCode::kCommandRejected) == turntable_status_t::kFaultCommandRejected &&
                   static_cast<int8_t>(FaultCode::kDriver) == turntable_status_t::kFaultDriver &&
                   static_cast<int8_t>(FaultCode::kOutOfLimits) == turntable_status_t::kFaultOutOfLimits,
@@ -52,6 +53,14 @@ arm_status_t arm_status(const Stamp& stamp, int64_t seq, const std::string& scan
                                 std::to_string(reading.velocity_rad_s.size()) + " velocities, " +
                                 std::to_string(reading.commanded_rad.size()) + " targets");
   }
+  if (reading.contacts < -1) {
+    throw std::invalid_argument("arm_status: contacts " + std::to_string(reading.contacts) +
+                                " (a count, or -1 when the driver cannot tell)");
+  }
+  if (reading.contacts <= 0 && !reading.last_contact.empty()) {
+    throw std::invalid_argument("arm_status: a last contact ('" + reading.last_contact + "') with contacts " +
+                                std::to_string(reading.contacts));
+  }
   arm_status_t s;
   s.utime = stamp.utime;
   s.driver_utime = stamp.driver_utime;
@@ -65,11 +74,16 @@ arm_status_t arm_status(const Stamp& stamp, int64_t seq, const std::string& scan
   s.command_seq = reading.command_seq;
   s.mode = mode_of<arm_status_t>(reading.motion, fault);
   fill_fault(s, fault);
+  s.contacts = reading.contacts;
+  s.last_contact = reading.last_contact;
   return s;
 }
 
 turntable_status_t turntable_status(const Stamp& stamp, int64_t seq, const std::string& scan_id,
                                     const TurntableReading& reading, const FaultLatch& fault) {
+  if (fault.code() == FaultCode::kContact) {
+    throw std::invalid_argument("turntable_status: fault kContact is the arm's (ARM_STATUS only)");
+  }
   turntable_status_t t;
   t.utime = stamp.utime;
   t.driver_utime = stamp.driver_utime;

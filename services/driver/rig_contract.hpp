@@ -26,9 +26,9 @@ inline constexpr double kStatusPeriodS = 0.01;
 // A joint group's motion, as the status's mode reports it when there is no fault.
 enum class Motion { kIdle, kMoving, kSettled };
 
-// Why a command was refused: the status's fault_code (the same values in arm_status_t and
-// turntable_status_t).
-enum class FaultCode : int8_t { kNone = 0, kCommandRejected = 1, kDriver = 2, kOutOfLimits = 3 };
+// Why a command was refused, or what stopped it: the status's fault_code (the same values in
+// arm_status_t and turntable_status_t; kContact, the arm touching something, in arm_status_t only).
+enum class FaultCode : int8_t { kNone = 0, kCommandRejected = 1, kDriver = 2, kOutOfLimits = 3, kContact = 4 };
 
 // A command target outside its joint's limits or the turntable's travel: reported as
 // kOutOfLimits (any other refusal is kCommandRejected). A driver's move handler throws it.
@@ -72,6 +72,11 @@ struct ArmReading {
   std::vector<double> commanded_rad;  // the target being tracked
   int64_t command_seq = -1;           // the last ARM_COMMAND accepted (-1: none yet)
   Motion motion = Motion::kIdle;
+  // Contact events since the driver started (the arm touching anything else, each onset once),
+  // -1 when the driver cannot tell (the default: a driver without collision detection), and the
+  // last one for people ("" while there is none).
+  int32_t contacts = -1;
+  std::string last_contact = "";
 };
 
 struct TurntableReading {
@@ -84,7 +89,9 @@ struct TurntableReading {
 
 // The statuses of a reading: mode kModeFault with the latch's code, command and text while it is
 // active, else the reading's motion. `scan_id` is the scan the driver serves ("": any). Throws
-// std::invalid_argument when the arm reading's vectors are not one entry per joint name.
+// std::invalid_argument when the arm reading's vectors are not one entry per joint name, its
+// contacts below -1, or a last contact given while contacts is 0 or -1 (and for a turntable fault
+// kContact, which is the arm's).
 arm_status_t arm_status(const Stamp& stamp, int64_t seq, const std::string& scan_id, const ArmReading& reading,
                         const FaultLatch& fault);
 turntable_status_t turntable_status(const Stamp& stamp, int64_t seq, const std::string& scan_id,

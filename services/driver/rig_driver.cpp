@@ -57,6 +57,11 @@ void RigDriver::set_arm_drive_fault(const std::string& text) {
   }
 }
 
+void RigDriver::set_arm_contact(int64_t command_seq, const std::string& text) {
+  if (text.empty()) throw std::invalid_argument("RigDriver::set_arm_contact: a contact needs its text");
+  arm_fault_.set(FaultCode::kContact, command_seq, text);
+}
+
 void RigDriver::on_arm(const arm_command_t& c) {
   latched(arm_fault_, "ARM_COMMAND", c.seq,
           [&] { handlers_.move_arm(arm_target(c, options_.arm_joints, options_.any_speed_scale)); });

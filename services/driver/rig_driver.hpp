@@ -55,6 +55,12 @@ class RigDriver {
   // fault (which stays latched beneath it). The driver clears it ("") when the drive is well.
   void set_arm_drive_fault(const std::string& text);
 
+  // The arm touched something while executing command `command_seq` (the driver's collision
+  // detection; the twin's contact check) and has stopped: every ARM_STATUS reports kFaultContact
+  // with `text` ("contact: link_6 / platter, ...") and that seq, latched like a refused command's
+  // fault until the driver accepts a command. Count the event in ArmReading::contacts too.
+  void set_arm_contact(int64_t command_seq, const std::string& text);
+
   bool owns_arm() const { return static_cast<bool>(handlers_.move_arm); }
   bool owns_turntable() const { return static_cast<bool>(handlers_.turn_table) || options_.no_turntable; }
   bool owns_camera() const { return static_cast<bool>(handlers_.capture); }

@@ -422,6 +422,8 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
   int with_observable = 0;
   std::vector<double> times, reached;
   for (const auto& r : runs) {
+    p.rig_contacts += r.rig_contacts;
+    if (r.rig_contacts > 0) p.runs_with_rig_contacts.push_back(run_folder(r.object, r.first_view));
     if (!r.complete || r.coverage_by_view.empty()) {
       ++p.failed;
       continue;
@@ -575,7 +577,8 @@ json planner_means_json(const PlannerSummary& p, const BenchSpec& spec) {
              {"views_to_95_of_mean_curve", p.views_to_95_of_mean ? json(*p.views_to_95_of_mean) : json(nullptr)},
              {"runs_complete", p.complete},
              {"runs_failed", p.failed},
-             {"objects_complete", p.objects_complete}};
+             {"objects_complete", p.objects_complete},
+             {"rig_contacts", {{"events", p.rig_contacts}, {"runs_with_any", p.runs_with_rig_contacts}}}};
   if (!p.observable_by_view.empty()) pj["observable_coverage_by_view"] = p.observable_by_view;
   for (const auto& [name, m] : {std::pair{"cloud", &p.cloud_metrics}, std::pair{"mesh", &p.mesh_metrics}}) {
     if (m->objects == 0) continue;
@@ -619,7 +622,9 @@ json run_json(const ObjectRun& o, int views) {
              {"views_done", o.views_done},
              {"complete", o.complete},
              {"stop_reason", o.stop_reason},
-             {"wall_s", o.wall_s}};
+             {"wall_s", o.wall_s},
+             {"rig_contacts", o.rig_contacts}};
+  if (!o.rig_contact_list.empty()) oj["rig_contact_list"] = o.rig_contact_list;
   if (!o.observable_by_view.empty()) oj["observable_coverage_by_view"] = o.observable_by_view;
   if (!o.error.empty()) oj["error"] = o.error;
   if (o.cloud_metrics) oj["surface_metrics"]["cloud"] = to_json(*o.cloud_metrics);
@@ -942,6 +947,12 @@ ObjectRun evaluate_job(const BenchSpec& spec, const Job& j, std::map<std::string
   r.initial_view = j.initial_view;  // until the scan's record says where it started
   r.planner = j.planner;
   try {
+    // The rig's contacts, whether the scan completed or not (a contact may be why it did not).
+    if (fs::exists(j.dir / "scan.json")) {
+      const std::vector<RigContactRecord> contacts = rig_contacts(read_scan_record(j.dir).views);
+      r.rig_contacts = rig_contact_events(contacts);
+      for (const RigContactRecord& c : contacts) r.rig_contact_list.push_back(to_string(c));
+    }
     if (!scan_complete(j.dir)) throw std::runtime_error(scan_failure_reason(j.dir, j.log));
     if (!masks.count(j.name)) {
       std::string what;

@@ -120,6 +120,10 @@ struct ObjectRun {
   std::string stop_rule_reason;
   // After the last view, against the true mesh (evaluate_scan): the cloud's and mesh.ply's.
   std::optional<SurfaceMetrics> cloud_metrics, mesh_metrics;
+  // Contacts of the rig during the scan's moves (scan.json's rig_contacts; complete or not): the
+  // events, and per move with any "view 3 (request 17): <the last contact>".
+  int64_t rig_contacts = 0;
+  std::vector<std::string> rig_contact_list;
 };
 
 // A planner's surface metrics after the last view, mean over the complete runs that have them.
@@ -200,6 +204,9 @@ struct PlannerSummary {
   int gap_objects = 0;
   StopRuleSummary stop_rule;
   MeanSurfaceMetrics cloud_metrics, mesh_metrics;  // after the last view
+  // Contact events of the rig over every run (complete or not), and the runs with any (run_folder).
+  int64_t rig_contacts = 0;
+  std::vector<std::string> runs_with_rig_contacts;
 };
 
 // Why a scan in `dir` did not complete, for the report: scan.json's state and message ("scan

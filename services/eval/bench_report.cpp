@@ -317,6 +317,31 @@ void failed_and_times_section(const BenchResult& r, std::ostream& md) {
   }
 }
 
+// The rig's contacts during the scans' moves (the twin's contact check): none, or per planner
+// the events and each move with any.
+void rig_contacts_section(const BenchResult& r, std::ostream& md) {
+  int64_t events = 0;
+  for (const auto& p : r.planners) events += p.rig_contacts;
+  if (events == 0) {
+    md << "Rig contacts: none (no move of any scan touched anything with the arm or the camera).\n\n";
+    return;
+  }
+  md << "## Rig contacts\n\n" << events << " contact" << (events == 1 ? "" : "s")
+     << " of the arm or the camera with the rig or the object during the scans' moves (each stops its move):\n\n"
+     << "| planner | contacts | run | moves |\n|---|---|---|---|\n";
+  for (const auto& p : r.planners) {
+    for (const auto& o : p.runs) {
+      if (o.rig_contacts == 0) continue;
+      std::string moves;
+      for (const std::string& c : o.rig_contact_list) moves += (moves.empty() ? "" : "; ") + c;
+      std::replace(moves.begin(), moves.end(), '|', '/');
+      md << "| " << name_of(p.planner) << " | " << o.rig_contacts << " | " << run_folder(o.object, o.first_view)
+         << " | " << moves << " |\n";
+    }
+  }
+  md << "\n";
+}
+
 // Coverage of the surface some reachable candidate can see (runs with an observable mask).
 void observable_section(const BenchResult& r, std::ostream& md) {
   const BenchSpec& s = r.spec;
@@ -468,6 +493,7 @@ void write_report(const BenchResult& r) {
   std::ostringstream md;
   header_section(r, md);
   failed_and_times_section(r, md);
+  rig_contacts_section(r, md);
   md << surface_metrics_markdown(r.planners, s.metrics);
   if (any_observable) observable_section(r, md);
   if (any_gap) gap_section(r, md);

@@ -451,9 +451,26 @@ void wind_down(bus::Bus& bus, std::vector<process::Child>& children, const ScanS
   if (record_log && fs::exists(out / "scan.json")) audit_log(out, s.scan_id);
 }
 
+// The rig's contacts during the scan's moves (scan.json's rig_contacts), when there were any:
+// "2 rig contacts: view 3 (request 17): link_6 / platter, ...; view 5 (...): ...".
+void report_rig_contacts(const fs::path& out) {
+  if (!fs::exists(out / "scan.json")) return;
+  try {
+    const std::vector<RigContactRecord> contacts = rig_contacts(read_scan_record(out).views);
+    if (contacts.empty()) return;
+    std::string line;
+    for (const RigContactRecord& c : contacts) line += (line.empty() ? "" : "; ") + to_string(c);
+    const int64_t n = rig_contact_events(contacts);
+    std::cerr << "warning: " << n << " rig contact" << (n == 1 ? "" : "s") << ": " << line << std::endl;
+  } catch (const std::exception& e) {
+    std::cerr << "warning: the rig's contacts not read: " << e.what() << std::endl;
+  }
+}
+
 // What the user reads at the end: the outputs (with the evaluation of a twin scan), or where the
-// logs of a failed scan are.
+// logs of a failed scan are; and any contact of the rig.
 void report_outcome(int code, const ScanSettings& s, const fs::path& out, bool record_log, bool evaluate) {
+  report_rig_contacts(out);
   if (code == 0) {
     if (evaluate) evaluate_against_truth(s, out);
     std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "

@@ -34,7 +34,9 @@ class MotionService {
  public:
   MotionService(bus::Bus& bus, const RigModel& rig) : bus_(bus), rig_(rig), sequencer_(rig, bus::now_utime()) {
     bus_.subscribe<arm_status_t>(channels::kArmStatus, [this](const arm_status_t& s) {
-      sequencer_.on_arm_status(bus::from_msg(s), bus::now_s());
+      const ArmReading reading = bus::from_msg(s);
+      warn_of_contacts(reading);
+      sequencer_.on_arm_status(reading, bus::now_s());
     });
     if (rig_.has_turntable) {
       bus_.subscribe<turntable_status_t>(channels::kTurntableStatus, [this](const turntable_status_t& s) {
@@ -51,6 +53,18 @@ class MotionService {
   void tick() { apply(sequencer_.tick(bus::now_s())); }
 
  private:
+  // The log says at once when the rig counts a contact, during a move (its MOVE_RESULT carries it
+  // too) or while none is in progress (nothing else records it then).
+  void warn_of_contacts(const ArmReading& r) {
+    if (contacts_seen_ >= 0 && r.contacts > contacts_seen_) {
+      log_warn(fmt::format("the rig reports {} new contact{} ({} since its driver started), {}: {}", r.contacts - contacts_seen_,
+                           r.contacts - contacts_seen_ == 1 ? "" : "s", r.contacts,
+                           sequencer_.moving() ? "during the move in progress" : "while no move is in progress",
+                           r.last_contact));
+    }
+    contacts_seen_ = r.contacts;
+  }
+
   void on_request(const move_request_t& m) {
     bus_.set_scan(m.scan_id, m.iteration);
     if (const move_result_t* done = results_.find({m.scan_id, m.request_id})) {
@@ -97,6 +111,7 @@ class MotionService {
   const RigModel& rig_;
   MotionSequencer sequencer_;
   std::string scan_;  // of the request being executed
+  int32_t contacts_seen_ = -1;  // the rig's contact count in the last ARM_STATUS (-1: none, or it cannot tell)
   bus::ReplyCache<std::pair<std::string, int64_t>, move_result_t> results_{kResultsKept};
 };
 

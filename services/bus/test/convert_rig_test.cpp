@@ -23,6 +23,7 @@ arm_status_t arm_status() {
   m.mode = arm_status_t::kModeSettled;
   m.fault_code = arm_status_t::kFaultNone;
   m.fault_command_seq = -1;
+  m.contacts = 0;
   return m;
 }
 
@@ -70,6 +71,39 @@ TEST(ConvertRig, ArmStatusFieldsCarryOver) {
   EXPECT_EQ(r.fault, m.fault);
 }
 
+// A contact: kFaultContact on the command it stopped, the count and the last one's text carry
+// over, through an encoding and the message guard's check as every receiver decodes them.
+TEST(ConvertRig, AContactCarriesOverWithItsCountAndText) {
+  arm_status_t m = arm_status();
+  m.mode = arm_status_t::kModeFault;
+  m.fault_code = arm_status_t::kFaultContact;
+  m.fault_command_seq = 41;
+  m.fault = "contact: camera_optical / table, 1.4 mm deep, at rig time 12.345 s, during command 41";
+  m.contacts = 3;
+  m.last_contact = "camera_optical / table, 1.4 mm deep, at rig time 12.345 s, during command 41";
+  std::vector<uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
+  ASSERT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
+  arm_status_t decoded;
+  std::string why;
+  ASSERT_TRUE(bus::decode_checked("ARM_STATUS", bytes.data(), static_cast<int64_t>(bytes.size()), &decoded, &why)) << why;
+  const ArmReading r = bus::from_msg(decoded);
+  EXPECT_EQ(r.mode, RigMode::kFault);
+  EXPECT_EQ(r.fault_code, RigFault::kContact);
+  EXPECT_EQ(std::string(to_string(r.fault_code)), "contact");
+  EXPECT_EQ(r.fault_command_seq, 41);
+  EXPECT_EQ(r.contacts, 3);
+  EXPECT_EQ(r.last_contact, m.last_contact);
+  EXPECT_EQ(static_cast<int>(RigFault::kContact), arm_status_t::kFaultContact);
+  // A driver that cannot tell.
+  m = arm_status();
+  m.contacts = -1;
+  EXPECT_EQ(bus::from_msg(m).contacts, -1);
+  // Cut short inside the text: the guard refuses it before the decoder sizes a string from it.
+  bytes.resize(bytes.size() - 10);
+  EXPECT_FALSE(bus::decode_checked("ARM_STATUS", bytes.data(), static_cast<int64_t>(bytes.size()), &decoded, &why));
+  EXPECT_NE(why.find("arm_status_t.last_contact"), std::string::npos) << why;
+}
+
 TEST(ConvertRig, TurntableStatusHasItsOwnConstantsWithTheSameMeaning) {
   turntable_status_t m = turntable_status();
   const TurntableReading r = bus::from_msg(m);
@@ -101,7 +135,14 @@ TEST(ConvertRig, MalformedStatusesAreRejectedNamingTheField) {
   EXPECT_EQ(error_of([&] { bus::from_msg(m); }), "ARM_STATUS mode = 7 is not one of its constants (0..3)");
   m = arm_status();
   m.fault_code = 9;
-  EXPECT_EQ(error_of([&] { bus::from_msg(m); }), "ARM_STATUS fault_code = 9 is not one of its constants (0..3)");
+  EXPECT_EQ(error_of([&] { bus::from_msg(m); }), "ARM_STATUS fault_code = 9 is not one of its constants (0..4)");
+  m = arm_status();
+  m.contacts = -2;
+  EXPECT_EQ(error_of([&] { bus::from_msg(m); }), "ARM_STATUS contacts = -2 is below -1 (-1: the rig cannot tell)");
+  m = arm_status();
+  m.last_contact = "link_6 / platter";  // a text with no contact counted
+  EXPECT_EQ(error_of([&] { bus::from_msg(m); }),
+            "ARM_STATUS last_contact is given with ARM_STATUS contacts = 0 (only with a contact counted)");
   m = arm_status();
   m.mode = arm_status_t::kModeFault;  // a fault without its code
   EXPECT_NE(error_of([&] { bus::from_msg(m); }).find("fault_code = 0 disagrees with mode = 3"), std::string::npos);
@@ -118,6 +159,10 @@ TEST(ConvertRig, MalformedStatusesAreRejectedNamingTheField) {
   t = turntable_status();
   t.mode = -1;
   EXPECT_EQ(error_of([&] { bus::from_msg(t); }), "TURNTABLE_STATUS mode = -1 is not one of its constants (0..3)");
+  t = turntable_status();
+  t.mode = turntable_status_t::kModeFault;
+  t.fault_code = 4;  // kFaultContact is the arm's only
+  EXPECT_EQ(error_of([&] { bus::from_msg(t); }), "TURNTABLE_STATUS fault_code = 4 is not one of its constants (0..3)");
 }
 
 TEST(ConvertRig, CommandsArePositionCommandsWithTheirSequenceNumber) {

@@ -65,6 +65,28 @@ TEST(ConvertScan, CloudRoundTripsItsPointsAndRejectsANonFiniteOne) {
   expect_error([&] { bus::from_msg(m); }, "CLOUD points_m[1]");
 }
 
+// The contacts of a move: the count and the last one's text, through the message; a count below
+// -1 or a text without a count is refused naming the field.
+TEST(ConvertScan, AMoveResultCarriesItsContacts) {
+  MoveResult r;
+  r.status = MoveStatus::kTimedOut;
+  r.contacts = 1;
+  r.contact = "link_4 / pedestal, 0.8 mm deep, at rig time 3.210 s, during command 9";
+  const MoveResult b = bus::from_msg(bus::to_msg(r));
+  EXPECT_EQ(b.contacts, 1);
+  EXPECT_EQ(b.contact, r.contact);
+  EXPECT_EQ(bus::from_msg(bus::to_msg(MoveResult{})).contacts, 0);
+  move_result_t m = bus::to_msg(r);
+  m.contacts = -7;
+  expect_error([&] { bus::from_msg(m); }, "MOVE_RESULT contacts = -7 is below -1");
+  m = bus::to_msg(r);
+  m.contacts = 0;
+  expect_error([&] { bus::from_msg(m); }, "MOVE_RESULT contact is given with MOVE_RESULT contacts = 0");
+  m.contacts = -1;  // the rig cannot tell
+  m.contact = "";
+  EXPECT_EQ(bus::from_msg(m).contacts, -1);
+}
+
 TEST(ConvertScan, MoveResultStatusOutsideItsConstantsIsRejected) {
   MoveResult r;
   r.status = MoveStatus::kReached;

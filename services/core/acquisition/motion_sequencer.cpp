@@ -114,6 +114,7 @@ MotionStep MotionSequencer::on_request(const MoveRequest& r, double now_s) {
   job.t_commanded = now_s + plan_s;  // the commands leave once the plan is made
   job.deadline = job.t_commanded + r.timeout_s;
   job.rig_utime_commanded = arm_.utime;
+  job.contacts_commanded = arm_.contacts;
   step = send_commands(job, job.t_commanded);
   job_ = job;
   return step;
@@ -261,6 +262,14 @@ MotionStep MotionSequencer::finish(MoveStatus status, const std::string& reason,
   result.settled_utime = arm_.utime;
   result.route = job.path.route;
   result.path_s = path_s(rig_, job.from, job.path.stops, job.request.speed_scale);
+  // The contacts the rig counted since the command (a driver restarted meanwhile counts from 0:
+  // all of its count), and the last one's text.
+  if (job.contacts_commanded < 0 || arm_.contacts < 0) {
+    result.contacts = -1;
+  } else {
+    result.contacts = arm_.contacts >= job.contacts_commanded ? arm_.contacts - job.contacts_commanded : arm_.contacts;
+    if (result.contacts > 0) result.contact = arm_.last_contact;
+  }
   job_.reset();
   MotionStep step;
   step.result = result;

@@ -59,6 +59,8 @@ struct MoveResult {
   int64_t settled_utime = 0;                   // rig clock at settle, microseconds
   std::string route;                           // the path taken: "direct", or the detour's name
   double path_s = 0;                           // the path's time by the rig-time model, s
+  int32_t contacts = 0;                        // contact events the rig reported during the move (-1: it cannot tell)
+  std::string contact;                         // the last one ("" when contacts <= 0)
 };
 
 // CAPTURE_REQUEST: one frame at the current pose, as an object-frame cloud.

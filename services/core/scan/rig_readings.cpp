@@ -8,6 +8,7 @@ const char* to_string(RigFault f) {
     case RigFault::kCommandRejected: return "command_rejected";
     case RigFault::kDriver: return "driver";
     case RigFault::kOutOfLimits: return "out_of_limits";
+    case RigFault::kContact: return "contact";
   }
   return "unknown";
 }

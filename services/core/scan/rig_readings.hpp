@@ -30,8 +30,9 @@ enum class RigFault : int8_t {
                          // outside (0, 1], wrong joint count); the rig keeps holding
   kDriver = 2,           // the drive itself failed (amplifier, following error, emergency stop)
   kOutOfLimits = 3,      // a command was refused: a target outside its joint's limits
+  kContact = 4,          // the arm touched something and stopped (ARM_STATUS only)
 };
-const char* to_string(RigFault f);  // "none", "command_rejected", "driver", "out_of_limits"
+const char* to_string(RigFault f);  // "none", "command_rejected", "driver", "out_of_limits", "contact"
 
 // ARM_STATUS: the measured state of the arm (or the free rig's gantry).
 struct ArmReading {
@@ -44,6 +45,8 @@ struct ArmReading {
   RigFault fault_code = RigFault::kNone;
   int64_t fault_command_seq = -1;             // the command the fault refers to (-1: none)
   std::string fault;                          // the fault for people
+  int32_t contacts = -1;                      // contact events since the driver started (-1: it cannot tell)
+  std::string last_contact;                   // the last one for people ("" while none)
 };
 
 // TURNTABLE_STATUS: the measured state of the turntable.

@@ -30,7 +30,10 @@ json move_json(const MoveResult& m) {
           {"joint_position_rad", to_json6(m.joint_position_rad)},
           {"turntable_target_rad", m.turntable_target_rad},
           {"turntable_angle_rad", m.turntable_angle_rad},
-          {"route", m.route}};
+          {"route", m.route},
+          {"request_id", m.request_id},
+          {"contacts", m.contacts},
+          {"contact", m.contact}};
 }
 
 // scan.json's "capture" of a view that got its CLOUD.
@@ -152,7 +155,10 @@ json to_json(const ViewRecord& v) {
       attempts.push_back({{"option", f.option},
                           {"status", to_string(f.status)},
                           {"reason", f.reason},
-                          {"object_T_camera", to_json(f.object_T_camera)}});
+                          {"object_T_camera", to_json(f.object_T_camera)},
+                          {"request_id", f.request_id},
+                          {"contacts", f.contacts},
+                          {"contact", f.contact}});
     }
     view["failed_moves"] = attempts;
   }
@@ -234,6 +240,30 @@ json to_json(const ScanStop& s) {
   json j = {{"reason", s.reason}, {"after_views", s.after_views}, {"rule", s.rule}};
   if (!s.figures.is_null()) j["figures"] = s.figures;
   return j;
+}
+
+std::vector<RigContactRecord> rig_contacts(const std::vector<ViewRecord>& views) {
+  std::vector<RigContactRecord> out;
+  for (const ViewRecord& v : views) {
+    for (const FailedMove& f : v.failed_moves) {
+      if (f.contacts > 0) out.push_back({v.view, f.request_id, f.contacts, f.contact});
+    }
+    if (v.move && v.move->status == MoveStatus::kReached && v.move->contacts > 0) {
+      out.push_back({v.view, v.move->request_id, v.move->contacts, v.move->contact});
+    }
+  }
+  return out;
+}
+
+int64_t rig_contact_events(const std::vector<RigContactRecord>& contacts) {
+  int64_t n = 0;
+  for (const RigContactRecord& c : contacts) n += c.contacts;
+  return n;
+}
+
+std::string to_string(const RigContactRecord& c) {
+  return "view " + std::to_string(c.view + 1) + " (request " + std::to_string(c.request_id) +
+         (c.contacts > 1 ? ", " + std::to_string(c.contacts) + " contacts" : "") + "): " + c.contact;
 }
 
 std::vector<double> new_surface_figures(const std::vector<ViewRecord>& views) {

@@ -39,6 +39,9 @@ struct FailedMove {
   Pose object_T_camera = Pose::Identity();  // the option's pose (a resumed scan excludes it again)
   MoveStatus status = MoveStatus::kRejected;
   std::string reason;
+  int64_t request_id = 0;  // its MOVE_REQUEST (0: a record from before rig contacts were recorded)
+  int32_t contacts = 0;    // contact events the rig reported during it (-1: the rig cannot tell)
+  std::string contact;     // the last one
 };
 
 // One entry of scan.json's "views": what became of view `view`. A section is written when
@@ -63,6 +66,25 @@ struct ViewRecord {
   double move_round_trip_s = kUnset, capture_round_trip_s = kUnset, register_round_trip_s = kUnset,
          map_round_trip_s = kUnset, view_total_s = kUnset;
 };
+
+// A move during which the rig reported contacts: an entry of scan.json's "rig_contacts".
+struct RigContactRecord {
+  int view = 0;            // 0-based (written from 1, as "view")
+  int64_t request_id = 0;  // the move's MOVE_REQUEST
+  int32_t contacts = 0;    // contact events during it (> 0)
+  std::string contact;     // the last one, as the rig told it
+  bool operator==(const RigContactRecord& o) const {
+    return view == o.view && request_id == o.request_id && contacts == o.contacts && contact == o.contact;
+  }
+};
+// The moves of `views` during which the rig reported contacts, in order: each view's failed moves,
+// then the move it reached (a failed move that ended its view is its "move" too: counted once).
+// Moves whose rig could not tell (contacts -1) are not among them.
+std::vector<RigContactRecord> rig_contacts(const std::vector<ViewRecord>& views);
+// Their contact events in all.
+int64_t rig_contact_events(const std::vector<RigContactRecord>& contacts);
+// "view 3 (request 17): link_6 / platter, ..." ("view 3 (request 17, 2 contacts): ..." for more).
+std::string to_string(const RigContactRecord& c);
 
 // Why the scan stopped before or at its view budget.
 struct ScanStop {

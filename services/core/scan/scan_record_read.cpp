@@ -113,6 +113,18 @@ constexpr std::array<MoveStatus, 7> kMoveStatuses = {MoveStatus::kReached, MoveS
                                                     MoveStatus::kRigSilent};
 constexpr std::array<PlanOutcome, 3> kOutcomes = {PlanOutcome::kView, PlanOutcome::kStop, PlanOutcome::kFailed};
 
+// A move's request id and the contacts the rig reported during it (written since 0.12.0 records
+// rig contacts; an earlier record has none: 0 contacts, request 0). The text only with a contact
+// counted.
+void move_contacts_from(const Fields& m, int64_t* request_id, int32_t* contacts, std::string* contact) {
+  if (!m.has("contacts")) return;
+  *request_id = m.integer("request_id", 0, int64_t{1} << 62);
+  *contacts = static_cast<int32_t>(m.integer("contacts", -1, INT32_MAX));
+  *contact = m.text("contact");
+  if (*contacts <= 0 && !contact->empty()) m.fail("contact", "is given with contacts " + std::to_string(*contacts));
+  if (*contacts > 0 && contact->empty()) m.fail("contact", "is empty with contacts " + std::to_string(*contacts));
+}
+
 MoveResult move_from(const Fields& m, const Fields* time) {
   MoveResult r;
   r.status = enum_named(m, "status", kMoveStatuses);
@@ -125,6 +137,7 @@ MoveResult move_from(const Fields& m, const Fields* time) {
   r.turntable_target_rad = m.number("turntable_target_rad");
   r.turntable_angle_rad = m.number("turntable_angle_rad");
   if (m.has("route")) r.route = m.text("route");  // pbnbv 0.13.0 on
+  move_contacts_from(m, &r.request_id, &r.contacts, &r.contact);
   if (time) {
     r.plan_s = time->number("plan");
     r.move_s = time->number("move");
@@ -298,8 +311,13 @@ ViewRecord view_record_from_json(const json& j, const std::string& where) {
     if (!list.is_array()) view.fail("failed_moves", "is not a list");
     for (std::size_t k = 0; k < list.size(); ++k) {
       const Fields m(list[k], view.where() + " failed_moves[" + std::to_string(k) + "]");
-      v.failed_moves.push_back(
-          {static_cast<int>(m.integer("option", 0, 1000)), m.pose("object_T_camera"), enum_named(m, "status", kMoveStatuses), m.text("reason")});
+      FailedMove failed;
+      failed.option = static_cast<int>(m.integer("option", 0, 1000));
+      failed.object_T_camera = m.pose("object_T_camera");
+      failed.status = enum_named(m, "status", kMoveStatuses);
+      failed.reason = m.text("reason");
+      move_contacts_from(m, &failed.request_id, &failed.contacts, &failed.contact);
+      v.failed_moves.push_back(failed);
     }
   }
   if (view.has("move")) {
@@ -416,6 +434,28 @@ RecordedScan recorded_scan_from_json(const json& j, const std::string& where) {
       r.mesh = mesh_summary_from_json(f.at("mesh"), where + " mesh");
     }
   }
+  if (f.has("rig_contacts")) {  // (an earlier record has none) the views' moves with contacts, in order
+    const json& list = f.at("rig_contacts");
+    if (!list.is_array()) f.fail("rig_contacts", "is not a list");
+    const std::vector<RigContactRecord> expected = rig_contacts(r.views);
+    for (std::size_t k = 0; k < list.size(); ++k) {
+      const Fields c(list[k], where + " rig_contacts[" + std::to_string(k) + "]");
+      const RigContactRecord read{static_cast<int>(c.integer("view", 1, kViews.max)) - 1,
+                                  c.integer("request_id", 0, int64_t{1} << 62),
+                                  static_cast<int32_t>(c.integer("contacts", 1, INT32_MAX)), c.text("contact")};
+      if (k >= expected.size() || !(read == expected[k])) {
+        c.fail("", k < expected.size()
+                       ? "is not what the views record for it (view " + std::to_string(expected[k].view + 1) +
+                             ", request " + std::to_string(expected[k].request_id) + ", " +
+                             std::to_string(expected[k].contacts) + " contacts, '" + expected[k].contact + "')"
+                       : "is one more than the " + std::to_string(expected.size()) + " moves with contacts the views record");
+      }
+    }
+    if (list.size() < expected.size()) {
+      f.fail("rig_contacts", "lists " + std::to_string(list.size()) + " moves with contacts, the views have " +
+                                 std::to_string(expected.size()));
+    }
+  }
   const Fields s = f.object("status");
   r.status.state = s.text("state");
   r.status.message = s.text("message");
@@ -468,6 +508,11 @@ json to_json(const RecordedScan& r) {
   j["settings"] = to_json(r.settings);
   j["views"] = json::array();
   for (const ViewRecord& v : r.views) j["views"].push_back(to_json(v));
+  j["rig_contacts"] = json::array();
+  for (const RigContactRecord& c : rig_contacts(r.views)) {
+    j["rig_contacts"].push_back(
+        {{"view", c.view + 1}, {"request_id", c.request_id}, {"contacts", c.contacts}, {"contact", c.contact}});
+  }
   if (r.plan && r.plan->planner == "ring") {
     j["plan"] = {{"planner", "ring"}, {"radius_m", r.plan->radius_m}, {"elevation_deg", r.plan->elevation_deg}};
   } else if (r.plan) {

@@ -1,5 +1,7 @@
 #include "core/scan/scan_sequencer.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -518,11 +520,17 @@ void ScanSequencer::send_move(double now_s) {
 }
 
 void ScanSequencer::moved(const MoveResult& r, double now_s) {
+  if (r.contacts > 0) {
+    progress(fmt::format("warning: the rig reported {} contact{} during the move (request {}): {}", r.contacts,
+                         r.contacts == 1 ? "" : "s", r.request_id, r.contact),
+             true);
+  }
   if (r.status == MoveStatus::kReached) {
     view_.option = static_cast<int>(option_);
     view_.requested_object_T_camera = options_[option_];
   } else {
-    view_.failed_moves.push_back({static_cast<int>(option_), options_[option_], r.status, r.reason});
+    view_.failed_moves.push_back(
+        {static_cast<int>(option_), options_[option_], r.status, r.reason, r.request_id, r.contacts, r.contact});
     done_.excluded.push_back(options_[option_]);
     if (r.status == MoveStatus::kUnreachable && option_ + 1 < options_.size()) {  // the next alternative
       ++option_;

@@ -83,6 +83,32 @@ TEST(RigContract, AFaultIsReportedByCodeUntilCleared) {
   EXPECT_EQ(cleared.fault, "");
 }
 
+// A contact: kFaultContact on the command the arm was executing, with the count and the last
+// one's text in every status; a driver that cannot tell says -1 (the reading's default); a count
+// below -1, a text with no contact, or a turntable kFaultContact is the driver's error.
+TEST(RigContract, AContactIsAFaultOfTheArmWithItsCount) {
+  ArmReading r = two_joints(Motion::kSettled);
+  EXPECT_EQ(arm_status(Stamp{}, 1, "", r, FaultLatch{}).contacts, -1) << "a driver that cannot tell";
+  FaultLatch fault;
+  fault.set(FaultCode::kContact, 41, "contact: link_6 / platter, 3.2 mm deep, at rig time 12.345 s, during command 41");
+  r.contacts = 2;
+  r.last_contact = "link_6 / platter, 3.2 mm deep, at rig time 12.345 s, during command 41";
+  const arm_status_t s = arm_status(Stamp{}, 2, "", r, fault);
+  EXPECT_EQ(s.mode, arm_status_t::kModeFault);
+  EXPECT_EQ(s.fault_code, arm_status_t::kFaultContact);
+  EXPECT_EQ(s.fault_command_seq, 41);
+  EXPECT_EQ(s.contacts, 2);
+  EXPECT_EQ(s.last_contact, r.last_contact);
+  ArmReading bad = r;
+  bad.contacts = -2;
+  expect_error([&] { arm_status(Stamp{}, 3, "", bad, FaultLatch{}); }, "arm_status: contacts -2");
+  bad = r;
+  bad.contacts = 0;
+  expect_error([&] { arm_status(Stamp{}, 3, "", bad, FaultLatch{}); }, "arm_status: a last contact");
+  expect_error([&] { turntable_status(Stamp{}, 3, "", TurntableReading{}, fault); },
+               "turntable_status: fault kContact is the arm's");
+}
+
 arm_command_t arm_command(int joints) {
   arm_command_t c{};
   c.seq = 5;

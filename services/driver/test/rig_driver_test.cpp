@@ -105,6 +105,30 @@ TEST_F(RigDriverTest, RefusalsAreLatchedByCodeAndAcceptedCommandsEchoed) {
   EXPECT_EQ(s.fault_code, arm_status_t::kFaultNone);
   EXPECT_EQ(s.command_seq, 3);
 
+  // The arm touches something under command 3 and stops: kFaultContact with its text in every
+  // status, the count and the last contact in the reading, until the next command is accepted.
+  driver.set_arm_contact(3, "contact: link_6 / platter, 3.2 mm deep, at rig time 12.345 s, during command 3");
+  reading.contacts = 1;
+  reading.last_contact = "link_6 / platter, 3.2 mm deep, at rig time 12.345 s, during command 3";
+  for (int k = 0; k < 2; ++k) {
+    s = status();
+    EXPECT_EQ(s.mode, arm_status_t::kModeFault);
+    EXPECT_EQ(s.fault_code, arm_status_t::kFaultContact);
+    EXPECT_EQ(s.fault_command_seq, 3);
+    EXPECT_EQ(s.fault, "contact: link_6 / platter, 3.2 mm deep, at rig time 12.345 s, during command 3");
+    EXPECT_EQ(s.contacts, 1);
+    EXPECT_EQ(s.last_contact, reading.last_contact);
+  }
+  c.seq = 4;
+  lcm.publish(channels::kArmCommand, &c);
+  EXPECT_TRUE(spin_until(bus, [&] { return moves.size() == 2; }));
+  reading.command_seq = 4;
+  s = status();
+  EXPECT_EQ(s.mode, arm_status_t::kModeMoving);
+  EXPECT_EQ(s.fault_code, arm_status_t::kFaultNone);
+  EXPECT_EQ(s.contacts, 1) << "the count stays";
+  EXPECT_THROW(driver.set_arm_contact(4, ""), std::invalid_argument);
+
   // No turntable handler: a turntable command is refused and latched on the turntable's fault.
   turntable_command_t tc{};
   tc.seq = 8;
@@ -121,7 +145,7 @@ TEST_F(RigDriverTest, RefusalsAreLatchedByCodeAndAcceptedCommandsEchoed) {
   ASSERT_EQ(frames.size(), 1u);
   EXPECT_EQ(frames[0].trigger_seq, 31);
   EXPECT_EQ(frames[0].scan_id, "s");
-  EXPECT_EQ(driver.statuses_published(), 3);
+  EXPECT_EQ(driver.statuses_published(), 6);
 }
 
 // A driver owning the arm only (pbnbv-ur-driver): it publishes ARM_STATUS alone, leaves the

@@ -71,6 +71,46 @@ TEST_F(BenchReport, FailureReasonFromScanJsonOrLog) {
             "scan failed after 3 of 10 views: registration lost track (log: " + log.string() + ")");
 }
 
+// The rig's contacts: summed per planner over every run (a failed one too), the runs with any
+// named in summary.json, and report.md's "Rig contacts" lists each move; none: one line saying so.
+TEST_F(BenchReport, RigContactsAreCountedAndListed) {
+  BenchResult r;
+  r.spec.objects = {"a", "b"};
+  r.spec.planners = {PlannerKind::kPbnbv, PlannerKind::kRaycast};
+  r.spec.views = 2;
+  r.spec.rig = RigKind::kArm;
+  r.spec.area = CandidateArea::kHemisphere;
+  r.spec.out = dir_;
+  r.machine = {{"cpu", "test"}, {"cores", 2}};
+  ObjectRun touched = failed("b", PlannerKind::kPbnbv, "scan failed after 1 of 2 views");
+  touched.rig_contacts = 2;
+  touched.rig_contact_list = {"view 2 (request 17, 2 contacts): link_4 / pedestal, 0.6 mm deep, at rig time 20.000 s, "
+                              "during command 9"};
+  r.planners = {summarise(PlannerKind::kPbnbv, {run("a", PlannerKind::kPbnbv, {40, 90}), touched}, 2),
+                summarise(PlannerKind::kRaycast,
+                          {run("a", PlannerKind::kRaycast, {40, 80}), run("b", PlannerKind::kRaycast, {30, 70})}, 2)};
+  write_json_atomic(to_json(r), (dir_ / "summary.json").string());
+  write_report(r);
+  const json j = read_json((dir_ / "summary.json").string());
+  EXPECT_EQ(j["pbnbv"]["rig_contacts"], json({{"events", 2}, {"runs_with_any", {"b"}}}));
+  EXPECT_EQ(j["raycast"]["rig_contacts"], json({{"events", 0}, {"runs_with_any", json::array()}}));
+  EXPECT_EQ(j["pbnbv"]["runs"]["b"]["rig_contacts"], 2);
+  EXPECT_EQ(j["pbnbv"]["runs"]["b"]["rig_contact_list"], json(touched.rig_contact_list));
+  EXPECT_EQ(j["pbnbv"]["runs"]["a"]["rig_contacts"], 0);
+  EXPECT_FALSE(j["pbnbv"]["runs"]["a"].contains("rig_contact_list"));
+  std::string md = read(dir_ / "report.md");
+  EXPECT_NE(md.find("## Rig contacts\n\n2 contacts of the arm or the camera"), std::string::npos) << md;
+  EXPECT_NE(md.find("| pbnbv | 2 | b | " + touched.rig_contact_list[0] + " |"), std::string::npos) << md;
+  EXPECT_EQ(md.find("| raycast | 0"), std::string::npos);
+
+  r.planners[0] = summarise(PlannerKind::kPbnbv, {run("a", PlannerKind::kPbnbv, {40, 90})}, 2);
+  write_report(r);
+  md = read(dir_ / "report.md");
+  EXPECT_NE(md.find("Rig contacts: none (no move of any scan touched anything with the arm or the camera)."),
+            std::string::npos);
+  EXPECT_EQ(md.find("## Rig contacts"), std::string::npos);
+}
+
 TEST_F(BenchReport, FailedScanIsCountedApartAndExplained) {
   const std::string reason = "scan failed after 1 of 2 views: registration lost track (log: x.log)";
   BenchResult r;

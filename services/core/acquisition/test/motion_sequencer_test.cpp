@@ -371,6 +371,50 @@ TEST_F(ArmMotion, ArmRefusingATargetOutsideItsLimitsEndsTheMoveAsUnreachable) {
   EXPECT_EQ(done.result->reason, "the rig rejected the command: " + a.fault);
 }
 
+// A contact stops the arm under the move's command: the move ends with the fault's text, and its
+// answer carries the contacts counted since the command (7 - 5 = 2) and the last one's text.
+TEST_F(ArmMotion, AContactEndsTheMoveWithTheContactsCountedSinceTheCommand) {
+  ArmReading before = arm_at(arm_rig().q_home, -1, RigMode::kIdle, 5000000);
+  before.contacts = 5;
+  before.last_contact = "link_2 / pedestal, 0.2 mm deep, at rig time 1.000 s, during command 0";
+  seq_.on_arm_status(before, 100.0);
+  start();
+  ArmReading a = arm_at(arm_rig().q_home, kFirstSeq, RigMode::kFault, 6000000);
+  a.fault_code = RigFault::kContact;
+  a.fault_command_seq = kFirstSeq;
+  a.contacts = 7;
+  a.last_contact = "camera_optical / object, 1.1 mm deep, at rig time 6.000 s, during command 1";
+  a.fault = "contact: " + a.last_contact;
+  seq_.on_arm_status(a, 100.2);
+  const MotionStep done = seq_.tick(100.2);
+  ASSERT_TRUE(done.result);
+  EXPECT_EQ(done.result->status, MoveStatus::kTimedOut);
+  EXPECT_EQ(done.result->reason, "the arm driver reported a contact fault on command seq 1: " + a.fault);
+  EXPECT_EQ(done.result->contacts, 2);
+  EXPECT_EQ(done.result->contact, a.last_contact);
+}
+
+// A move reached with no contact counted: 0 and no text; a rig that cannot tell (-1) at the
+// command or at the answer: -1.
+TEST_F(ArmMotion, AMoveCarriesNoContactOrMinusOneWhenTheRigCannotTell) {
+  for (const int32_t at_answer : {3, -1}) {
+    SCOPED_TRACE(at_answer);
+    ArmReading before = arm_at(arm_rig().q_home, -1, RigMode::kIdle, 5000000);
+    before.contacts = 3;
+    seq_.on_arm_status(before, 100.0);
+    const int64_t command = start().arm_command->seq;  // kFirstSeq, then the next
+    ArmReading a = arm_at(arm_target_, command, RigMode::kSettled, 6000000);
+    a.contacts = at_answer;
+    seq_.on_arm_status(a, 100.5);
+    seq_.on_turntable_status(turntable_at(turntable_target_, command, RigMode::kSettled, 6000000), 100.5);
+    const MotionStep done = seq_.tick(100.5);
+    ASSERT_TRUE(done.result);
+    EXPECT_EQ(done.result->status, MoveStatus::kReached);
+    EXPECT_EQ(done.result->contacts, at_answer < 0 ? -1 : 0);
+    EXPECT_EQ(done.result->contact, "");
+  }
+}
+
 TEST_F(ArmMotion, TurntableRejectingTheCommandEndsTheMoveAsUnreachable) {
   // Defect: turntable faults were ignored (the move waited for its deadline).
   start();

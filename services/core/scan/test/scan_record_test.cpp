@@ -40,7 +40,7 @@ TEST_F(ScanRecordTest, AViewEntryHasASectionPerStepReached) {
   v.view = 2;
   v.option = 1;
   v.requested_object_T_camera = look_at_z_up(Eigen::Vector3d(0.6, 0, 0.3), Eigen::Vector3d::Zero());
-  v.failed_moves.push_back({0, Pose::Identity(), MoveStatus::kUnreachable, "no IK solution"});
+  v.failed_moves.push_back({0, Pose::Identity(), MoveStatus::kUnreachable, "no IK solution", 7, 0, ""});
   MoveResult m;
   m.status = MoveStatus::kReached;
   m.angle_error_rad = kPi / 180;
@@ -137,6 +137,84 @@ TEST_F(ScanRecordTest, TheStatusAndStopAreWrittenWithTheViews) {
   EXPECT_EQ(j["status"]["state"], "done");
   EXPECT_EQ(j["stop"]["rule"], "budget");
   EXPECT_EQ(j["settings"]["scan_id"], "record");
+}
+
+// The rig's contacts: per move (and failed move) its request id, count and last text; top-level
+// rig_contacts lists the moves with any, a failed move that ended its view (also its "move")
+// once, a move whose rig could not tell (-1) not at all. Read back into the same types; a
+// rig_contacts that disagrees with the views, or a text without a count, is refused naming it.
+TEST_F(ScanRecordTest, TheRigsContactsAreRecordedPerMoveAndListedOnce) {
+  ScanRecord record(dir_, settings());
+  record.set_ring_plan(0.8, 30);
+  const std::string table = "contact: camera_optical / table, 1.4 mm deep, at rig time 12.345 s, during command 11";
+  const std::string pedestal = "contact: link_4 / pedestal, 0.6 mm deep, at rig time 20.000 s, during command 13";
+  auto result = [](int64_t request, MoveStatus status, int32_t contacts, const std::string& text) {
+    MoveResult m;
+    m.request_id = request;
+    m.status = status;
+    m.contacts = contacts;
+    m.contact = text;
+    return m;
+  };
+  ViewRecord v0;  // a contact stopped its only move: the view failed
+  v0.view = 0;
+  const MoveResult stopped = result(11, MoveStatus::kTimedOut, 1, table);
+  v0.failed_moves.push_back({0, Pose::Identity(), stopped.status, "the arm driver reported a contact fault", 11, 1, table});
+  v0.move = stopped;
+  record.add_view(v0, 0, 1.0);
+  ViewRecord v1;  // an unreachable option, then an alternative reached with two contacts on the way
+  v1.view = 1;
+  v1.failed_moves.push_back({0, Pose::Identity(), MoveStatus::kUnreachable, "no IK solution", 12, 0, ""});
+  v1.option = 1;
+  v1.move = result(13, MoveStatus::kReached, 2, pedestal);
+  record.add_view(v1, 1, 2.0);
+  ViewRecord v2;  // a rig that cannot tell
+  v2.view = 2;
+  v2.option = 0;
+  v2.move = result(14, MoveStatus::kReached, -1, "");
+  record.add_view(v2, 2, 3.0);
+
+  json j = read_json((dir_ / "scan.json").string());
+  EXPECT_EQ(j["rig_contacts"], json::array({{{"view", 1}, {"request_id", 11}, {"contacts", 1}, {"contact", table}},
+                                            {{"view", 2}, {"request_id", 13}, {"contacts", 2}, {"contact", pedestal}}}));
+  EXPECT_EQ(j["views"][0]["failed_moves"][0]["contacts"], 1);
+  EXPECT_EQ(j["views"][0]["move"]["request_id"], 11);
+  EXPECT_EQ(j["views"][2]["move"]["contacts"], -1);
+  const RecordedScan r = read_scan_record(dir_);
+  ASSERT_EQ(r.views.size(), 3u);
+  EXPECT_EQ(r.views[0].failed_moves[0].request_id, 11);
+  EXPECT_EQ(r.views[0].failed_moves[0].contact, table);
+  EXPECT_EQ(r.views[1].failed_moves[0].contacts, 0);
+  EXPECT_EQ(r.views[1].move->contacts, 2);
+  EXPECT_EQ(r.views[1].move->request_id, 13);
+  EXPECT_EQ(r.views[2].move->contacts, -1);
+  const std::vector<RigContactRecord> listed = rig_contacts(r.views);
+  ASSERT_EQ(listed.size(), 2u);
+  EXPECT_EQ(listed[1], (RigContactRecord{1, 13, 2, pedestal}));
+  EXPECT_EQ(rig_contact_events(listed), 3);
+  EXPECT_EQ(to_string(listed[0]), "view 1 (request 11): " + table);
+  EXPECT_EQ(to_string(listed[1]), "view 2 (request 13, 2 contacts): " + pedestal);
+  EXPECT_EQ(to_json(r)["rig_contacts"], j["rig_contacts"]) << "written again as read";
+
+  const std::string where = (dir_ / "scan.json").string();
+  json bad = j;
+  bad["rig_contacts"][1]["contacts"] = 1;
+  pbnbv::testing::expect_error([&] { recorded_scan_from_json(bad, where); },
+                               where + " rig_contacts[1] is not what the views record for it (view 2, request 13, 2 contacts");
+  bad = j;
+  bad["rig_contacts"].erase(1);
+  pbnbv::testing::expect_error([&] { recorded_scan_from_json(bad, where); },
+                               where + " rig_contacts lists 1 moves with contacts, the views have 2");
+  bad = j;
+  bad["rig_contacts"][0]["view"] = 0;
+  pbnbv::testing::expect_error([&] { recorded_scan_from_json(bad, where); }, "rig_contacts[0] view = 0 is not a whole number in 1..1000");
+  bad = j;
+  bad["views"][2]["move"]["contact"] = "link_6 / platter";
+  pbnbv::testing::expect_error([&] { recorded_scan_from_json(bad, where); },
+                               where + " views[2] view 3 move contact is given with contacts -1");
+  bad = j;
+  bad["views"][1]["move"]["contacts"] = -2;
+  pbnbv::testing::expect_error([&] { recorded_scan_from_json(bad, where); }, "move contacts = -2 is not a whole number in -1..");
 }
 
 }  // namespace
