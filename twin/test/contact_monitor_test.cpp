@@ -235,7 +235,7 @@ TEST(ContactMonitor, AFullSpeedMoveIsSweptInStepsOfAtMostTwoMillimetres) {
               1e6 * check_s / static_cast<double>(std::max<int64_t>(states, 1)), 100 * check_s / wall, wall);
   EXPECT_EQ(sim.contact_events(), 0);
   EXPECT_GE(static_cast<double>(states), r / twin::kMaxSweepStepM);
-  const double peak = 1.5 / twin::ramp_duration_s(1.0, rig.qd_max[0], twin::kAccelerationPerSpeed * rig.qd_max[0]);
+  const double peak = 1.5 / ramp_duration_s(1.0, rig.qd_max[0], rig.qdd_max[0]);
   EXPECT_GE(static_cast<double>(most_per_step), std::floor(r * peak * sim.model()->opt.timestep / twin::kMaxSweepStepM));
   EXPECT_GE(most_per_step, 2);
   std::filesystem::remove_all(dir);
