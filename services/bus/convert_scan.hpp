@@ -106,6 +106,7 @@ inline move_result_t to_msg(const MoveResult& r) {
   m.settle_s = r.settle_s;
   m.rig_motion_s = r.rig_motion_s;
   m.settled_utime = r.settled_utime;
+  m.within_tolerance_utime = r.within_tolerance_utime;
   return m;
 }
 
@@ -132,6 +133,7 @@ inline MoveResult from_msg(const move_result_t& m) {
   r.settle_s = m.settle_s;
   r.rig_motion_s = m.rig_motion_s;
   r.settled_utime = m.settled_utime;
+  r.within_tolerance_utime = m.within_tolerance_utime;
   return r;
 }
 

@@ -198,7 +198,10 @@ MotionStep MotionSequencer::tick(double now_s) {
   }
   const bool acknowledged = arm_acknowledged && turntable_acknowledged;
   const bool within = acknowledged && within_tolerance(job);
-  if (within && job.t_within < 0) job.t_within = now_s;
+  if (within && job.t_within < 0) {
+    job.t_within = now_s;
+    job.rig_utime_within = arm_.utime;
+  }
   const bool settled = (arm_.mode == RigMode::kSettled || arm_.mode == RigMode::kIdle) &&
                        (!rig_.has_turntable || turntable_.mode == RigMode::kSettled ||
                         turntable_.mode == RigMode::kIdle);
@@ -238,6 +241,7 @@ MotionStep MotionSequencer::finish(MoveStatus status, const std::string& reason,
   result.settle_s = job.t_within >= 0 ? now_s - job.t_within : 0;
   result.rig_motion_s = (arm_.utime - job.rig_utime_commanded) * 1e-6;
   result.settled_utime = arm_.utime;
+  result.within_tolerance_utime = job.rig_utime_within;
   job_.reset();
   MotionStep step;
   step.result = result;

@@ -92,6 +92,7 @@ class MotionSequencer {
     double deadline = 0;
     double last_send = 0;
     int64_t rig_utime_commanded = 0;  // arm status utime when commanded
+    int64_t rig_utime_within = 0;     // arm status utime at t_within (0: not yet)
   };
 
   MotionStep send_commands(Job& job, double now_s) const;

@@ -55,6 +55,7 @@ struct MoveResult {
   double turntable_angle_rad = 0;
   double plan_s = 0, move_s = 0, settle_s = 0, rig_motion_s = 0;  // see move_result_t
   int64_t settled_utime = 0;                   // rig clock at settle, microseconds
+  int64_t within_tolerance_utime = 0;          // rig clock when within tolerance (0: never)
 };
 
 // CAPTURE_REQUEST: one frame at the current pose, as an object-frame cloud.
