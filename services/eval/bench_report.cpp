@@ -233,8 +233,10 @@ bool rig_time_chart(const BenchResult& r, const fs::path& path) {
             ", " + objects_text(r) + ", band: min-max over " + means_over(s);
   c.x_label = "rig time (s): motion, settling, capture and the wait for computation";
   c.y_label = "observable surface covered (%, mean)";
+  c.y_min = 0;
   c.y_max = 100;
   c.x_min = 0;
+  c.x_max = times.back() > 0 ? times.back() : NAN;
   c.y_lines = {{90.0, "90 %"}, {95.0, "95 %"}};
   for (const auto& p : r.planners) {
     const CoverageOverTime cov = coverage_at_rig_times(p.runs, times);

@@ -22,7 +22,8 @@ double capture_wait_s(double settled_received_s, double cloud_received_s, const 
 }
 
 double compute_wait_s(double rig_idle_since_s, double next_received_s, const MoveResult& next) {
-  return next_received_s - (next.move_s + next.settle_s) - rig_idle_since_s;
+  const double s = next_received_s - (next.move_s + next.settle_s) - rig_idle_since_s;
+  return s >= 0 ? s : RigTime::kUnset;
 }
 
 std::string rig_time_text(const RigTime& t) {

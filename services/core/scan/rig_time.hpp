@@ -65,7 +65,7 @@ double capture_wait_s(double settled_received_s, double cloud_received_s, const 
 // The compute wait from `rig_idle_since_s` (the coordinator's clock when the rig's part of the
 // previous view ended) to the next command: the coordinator received that move's answer `next`
 // at `next_received_s`, and the command left next.move_s + next.settle_s (the executor's wall
-// time from command to settled, or to giving up) before.
+// time from command to settled, or to giving up) before. NaN when that comes out negative.
 double compute_wait_s(double rig_idle_since_s, double next_received_s, const MoveResult& next);
 
 // "24.1 s (motion 19.8, settle 1.2, capture 0.4, compute 2.7)", one decimal ("-": not known).

@@ -176,6 +176,7 @@ TEST_F(ScanRecordTest, RigTimeSplitsTheMoveOnTheRigClockAndTimesTheRestOnTheWall
   next.move_s = 4.0;
   next.settle_s = 0.5;
   EXPECT_DOUBLE_EQ(compute_wait_s(10.0, 16.0, next), 1.5);
+  EXPECT_TRUE(std::isnan(compute_wait_s(10.0, 14.0, next)));  // a move longer than the wait: not a fit
 
   const RigTime r{19.84, 1.2, 0.4, 2.7};
   EXPECT_NEAR(r.total_s(), 24.14, 1e-12);
