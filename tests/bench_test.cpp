@@ -203,6 +203,16 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
       EXPECT_NEAR(m["recall"].get<double>() * 100, o["coverage_by_view"][2].get<double>(), 2.0);
       mean_f += m["f_score"].get<double>() / 2;
     }
+    // Rig time: both runs measured at every view, the rig time at the end of each view growing.
+    EXPECT_EQ(p["rig_time_runs"], 2);
+    ASSERT_EQ(p["rig_time_s_by_view"].size(), 3u);
+    EXPECT_GT(p["rig_time_s_by_view"][0].get<double>(), 0.0);
+    for (int i = 1; i < 3; ++i) EXPECT_GT(p["rig_time_s_by_view"][i].get<double>(), p["rig_time_s_by_view"][i - 1].get<double>());
+    EXPECT_TRUE(p["rig_time_s_to_95"].is_null() || p["rig_time_s_to_95"].is_number());
+    EXPECT_NEAR(p["rig_time_s"]["total"].get<double>(),
+                p["rig_time_s"]["motion"].get<double>() + p["rig_time_s"]["settle"].get<double>() +
+                    p["rig_time_s"]["capture"].get<double>() + p["rig_time_s"]["compute"].get<double>(),
+                1e-9);
     EXPECT_NEAR(p["surface_metrics"]["cloud"]["f_score"].get<double>(), mean_f, 1e-9);
     EXPECT_EQ(p["surface_metrics"]["cloud"]["runs"], 2);
     for (int i = 0; i < 3; ++i) EXPECT_NEAR(p["coverage_by_view"][i].get<double>(), mean[i], 1e-9);
@@ -221,7 +231,8 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
   EXPECT_NE(report.find("Rig contacts: none"), std::string::npos);
   EXPECT_NE(report.find("## Surface metrics after the last view"), std::string::npos);
   EXPECT_NE(report.find("| pbnbv | cloud | 2 |"), std::string::npos);
-  for (const char* png : {"coverage.png", "time.png"}) {
+  EXPECT_NE(report.find("## Rig time"), std::string::npos);
+  for (const char* png : {"coverage.png", "time.png", "observable_time.png"}) {
     const cv::Mat img = cv::imread((out / png).string());
     EXPECT_EQ(img.cols, 960) << png;
     EXPECT_EQ(img.rows, 600) << png;

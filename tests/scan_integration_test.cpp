@@ -64,6 +64,30 @@ fs::path scan_and_check(const std::string& name, const std::string& options, int
       EXPECT_TRUE(v["time_s"].contains(stage)) << stage;
     }
   }
+  // Rig time (docs/scan.md): every view's parts measured, none negative, the total their sum; on
+  // the arm every view moves the rig (the first from where it stood); the scan's figures are
+  // the views' sums, and the closing line says them.
+  const bool arm = options.find("--rig arm") != std::string::npos;
+  double motion = 0, total = 0;
+  for (const auto& v : scan["views"]) {
+    const auto& t = v["rig_time_s"];
+    double parts = 0;
+    for (const char* part : {"motion", "settle", "capture", "compute"}) {
+      ASSERT_TRUE(t[part].is_number()) << part << " " << v.dump(2);
+      EXPECT_GE(t[part].get<double>(), 0.0) << part;
+      parts += t[part].get<double>();
+    }
+    EXPECT_NEAR(t["total"].get<double>(), parts, 1e-9);
+    if (arm) EXPECT_GT(t["motion"].get<double>(), 0.0) << v.dump(2);
+    EXPECT_GT(t["compute"].get<double>(), 0.0) << "registration and mapping take time after every capture";
+    motion += t["motion"].get<double>();
+    total += t["total"].get<double>();
+  }
+  EXPECT_NEAR(scan["rig_time_s"]["motion"].get<double>(), motion, 1e-9);
+  EXPECT_NEAR(scan["rig_time_s"]["total"].get<double>(), total, 1e-9);
+  EXPECT_EQ(scan["rig_time_s"]["views"], views);
+  EXPECT_EQ(scan["rig_time_s"]["views_incomplete"], 0);
+  EXPECT_NE(r.output.find("; rig time "), std::string::npos) << r.output;
   // Every process exited cleanly.
   const auto procs = read_json_file(out / "processes.json");
   for (const auto& p : procs["processes"]) EXPECT_EQ(p["exit_code"], 0) << p.dump();

@@ -112,6 +112,7 @@ inline move_result_t to_msg(const MoveResult& r) {
   m.path_s = r.path_s;
   m.contacts = r.contacts;
   m.contact = r.contact;
+  m.within_tolerance_utime = r.within_tolerance_utime;
   return m;
 }
 
@@ -146,6 +147,7 @@ inline MoveResult from_msg(const move_result_t& m) {
   contacts_from_msg(m.contacts, m.contact, "MOVE_RESULT contacts", "MOVE_RESULT contact");
   r.contacts = m.contacts;
   r.contact = m.contact;
+  r.within_tolerance_utime = m.within_tolerance_utime;
   return r;
 }
 

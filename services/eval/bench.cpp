@@ -386,6 +386,72 @@ std::vector<double> pad_views(std::vector<double> v, int n) {
   return v;
 }
 
+std::optional<double> rig_time_to_reach(const std::vector<double>& coverage_by_view,
+                                        const std::vector<double>& rig_time_by_view, double percent) {
+  const std::optional<int> view = views_to_reach(coverage_by_view, percent);
+  if (!view || *view > static_cast<int>(rig_time_by_view.size())) return std::nullopt;
+  const double t = rig_time_by_view[*view - 1];
+  if (!std::isfinite(t)) return std::nullopt;
+  return t;
+}
+
+std::vector<double> rig_time_grid(double max_s, int points) {
+  if (!(max_s > 0) || !std::isfinite(max_s) || points < 1) return {0.0};
+  // The step m x 10^e; each time k m 10^e computed as one division or product of whole numbers,
+  // so that a time such as 25 s is exactly 25 (k x 0.2 would not always be).
+  int e = -3;
+  double m = 0;
+  const auto scale = [](double x, int e10) { return e10 >= 0 ? x * std::pow(10.0, e10) : x / std::pow(10.0, -e10); };
+  while (m == 0) {
+    for (const double candidate : {1.0, 2.0, 5.0}) {
+      if (max_s / scale(candidate, e) <= points) {
+        m = candidate;
+        break;
+      }
+    }
+    if (m == 0) ++e;
+  }
+  std::vector<double> t;
+  for (double k = 0;; ++k) {
+    t.push_back(scale(k * m, e));
+    if (t.back() >= max_s) break;
+  }
+  return t;
+}
+
+namespace {
+
+// A run whose observable coverage and rig time can be drawn against each other: complete, with
+// both per view and every view's rig time known.
+bool has_rig_time(const ObjectRun& r) {
+  return r.complete && r.rig_time && !r.observable_by_view.empty() && !r.rig_time_by_view.empty() &&
+         std::all_of(r.rig_time_by_view.begin(), r.rig_time_by_view.end(), [](double t) { return std::isfinite(t); });
+}
+
+}  // namespace
+
+CoverageOverTime coverage_at_rig_times(const std::vector<ObjectRun>& runs, const std::vector<double>& times) {
+  CoverageOverTime c;
+  c.mean.assign(times.size(), 0.0);
+  c.lo.assign(times.size(), INFINITY);
+  c.hi.assign(times.size(), -INFINITY);
+  for (const ObjectRun& r : runs) {
+    if (!has_rig_time(r)) continue;
+    ++c.runs;
+    const std::size_t n = std::min(r.observable_by_view.size(), r.rig_time_by_view.size());
+    for (std::size_t i = 0; i < times.size(); ++i) {
+      double covered = 0;  // before its first view
+      for (std::size_t k = 0; k < n && r.rig_time_by_view[k] <= times[i]; ++k) covered = r.observable_by_view[k];
+      c.mean[i] += covered;
+      c.lo[i] = std::min(c.lo[i], covered);
+      c.hi[i] = std::max(c.hi[i], covered);
+    }
+  }
+  if (c.runs == 0) return CoverageOverTime{};
+  for (double& m : c.mean) m /= c.runs;
+  return c;
+}
+
 MeanSurfaceMetrics mean_surface_metrics(const std::vector<ObjectRun>& runs,
                                         std::optional<SurfaceMetrics> ObjectRun::*which) {
   MeanSurfaceMetrics m;
@@ -460,6 +526,30 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
     p.planner_ms_median = n % 2 ? times[n / 2] : 0.5 * (times[n / 2 - 1] + times[n / 2]);
     p.planner_ms_mean = std::accumulate(times.begin(), times.end(), 0.0) / n;
   }
+  // Rig time over the complete runs that measured it at every view.
+  std::vector<double> to_90, to_95;
+  for (const auto& r : runs) {
+    if (!has_rig_time(r)) continue;
+    ++p.rig_time_runs;
+    for (auto part : {&RigTime::motion_s, &RigTime::settle_s, &RigTime::capture_s, &RigTime::compute_s}) {
+      p.rig_time_mean.*part += (*r.rig_time).*part;
+    }
+    const std::vector<double> t = pad_views(r.rig_time_by_view, views);
+    if (p.rig_time_by_view.empty()) p.rig_time_by_view.assign(views, 0.0);
+    for (int i = 0; i < views; ++i) p.rig_time_by_view[i] += t[i];
+    if (const auto t90 = rig_time_to_reach(r.observable_by_view, r.rig_time_by_view, 90.0)) to_90.push_back(*t90);
+    if (const auto t95 = rig_time_to_reach(r.observable_by_view, r.rig_time_by_view, 95.0)) to_95.push_back(*t95);
+  }
+  if (p.rig_time_runs > 0) {
+    for (auto part : {&RigTime::motion_s, &RigTime::settle_s, &RigTime::capture_s, &RigTime::compute_s}) {
+      p.rig_time_mean.*part /= p.rig_time_runs;
+    }
+    for (double& t : p.rig_time_by_view) t /= p.rig_time_runs;
+  }
+  p.rig_time_reaching_90 = static_cast<int>(to_90.size());
+  p.rig_time_reaching_95 = static_cast<int>(to_95.size());
+  if (!to_90.empty()) p.rig_time_to_90 = std::accumulate(to_90.begin(), to_90.end(), 0.0) / to_90.size();
+  if (!to_95.empty()) p.rig_time_to_95 = std::accumulate(to_95.begin(), to_95.end(), 0.0) / to_95.size();
   p.stop_rule = summarise_stop_rule(runs, views);
   p.cloud_metrics = mean_surface_metrics(runs, &ObjectRun::cloud_metrics);
   p.mesh_metrics = mean_surface_metrics(runs, &ObjectRun::mesh_metrics);
@@ -609,6 +699,15 @@ json planner_means_json(const PlannerSummary& p, const BenchSpec& spec) {
     pj["gap_to_oracle_by_view"] = p.gap_to_oracle_by_view;
     pj["gap_to_oracle_runs"] = p.gap_objects;
   }
+  pj["rig_time_runs"] = p.rig_time_runs;
+  if (p.rig_time_runs > 0) {
+    pj["rig_time_s"] = rig_time_json(p.rig_time_mean);
+    pj["rig_time_s_by_view"] = p.rig_time_by_view;
+    pj["rig_time_s_to_90"] = p.rig_time_to_90 ? json(*p.rig_time_to_90) : json(nullptr);
+    pj["rig_time_s_to_90_runs"] = p.rig_time_reaching_90;
+    pj["rig_time_s_to_95"] = p.rig_time_to_95 ? json(*p.rig_time_to_95) : json(nullptr);
+    pj["rig_time_s_to_95_runs"] = p.rig_time_reaching_95;
+  }
   return pj;
 }
 
@@ -626,6 +725,16 @@ json run_json(const ObjectRun& o, int views) {
              {"rig_contacts", o.rig_contacts}};
   if (!o.rig_contact_list.empty()) oj["rig_contact_list"] = o.rig_contact_list;
   if (!o.observable_by_view.empty()) oj["observable_coverage_by_view"] = o.observable_by_view;
+  if (!o.rig_time_by_view.empty()) oj["rig_time_s_by_view"] = o.rig_time_by_view;
+  if (o.rig_time) {
+    oj["rig_time_s"] = rig_time_json(*o.rig_time);
+    const auto to = [&](double percent) {
+      const auto t = rig_time_to_reach(o.observable_by_view, o.rig_time_by_view, percent);
+      return t ? json(*t) : json(nullptr);
+    };
+    oj["rig_time_s_to_90"] = to(90.0);
+    oj["rig_time_s_to_95"] = to(95.0);
+  }
   if (!o.error.empty()) oj["error"] = o.error;
   if (o.cloud_metrics) oj["surface_metrics"]["cloud"] = to_json(*o.cloud_metrics);
   if (o.mesh_metrics) oj["surface_metrics"]["mesh"] = to_json(*o.mesh_metrics);
@@ -727,6 +836,13 @@ json to_json(const BenchResult& r) {
                        "): each object's value is its mean over its complete first views; views_to_95_ci95 over the "
                        "objects with a run reaching 95 % (views_to_95_ci95_objects; each its mean over those runs), an "
                        "object that never reaches 95 % is left out as in views_to_95";
+  j["rig_time_rule"] = "rig time (scan.json rig_time_s, docs/scan.md): per view motion (command to within tolerance) "
+                       "and settle (to settled) on the rig clock, capture (the settled move's answer to the frame's arrival "
+                       "at the camera service) and compute (the rig waiting after the capture for the next command, or "
+                       "for the scan to stop) on the wall clock; rig_time_s_by_view: from the start to the end of each view, mean over "
+                       "the rig_time_runs runs measured at every view; rig_time_s_to_90 / _95: the rig time at the end "
+                       "of the first view whose observable coverage reaches 90 / 95 %, mean over the runs that reach it "
+                       "(rig_time_s_to_90_runs / _95_runs); rig_time_s: the mean per scan of each part";
   j["planner_ms_rule"] = "per planning iteration: map update + view selection (+ ellipsoid fitting for pbnbv; "
                          "view selection includes the reachability check and waiting for it)";
   return j;
@@ -967,6 +1083,8 @@ ObjectRun evaluate_job(const BenchSpec& spec, const Job& j, std::map<std::string
     r.views_done = e.views_done;
     r.stop_reason = e.stop_reason;
     r.new_surface_by_view = e.new_surface_by_view;
+    r.rig_time_by_view = pad_views(e.rig_time_s_by_view, spec.views);
+    if (e.rig_time.views > 0 && e.rig_time.views_incomplete == 0) r.rig_time = e.rig_time.sum;
     r.cloud_metrics = e.cloud_metrics;
     r.mesh_metrics = e.mesh_metrics;
     if (const auto d = first_surface_stop(e.new_surface_by_view, spec.stop_rule); d && d->after_views < spec.views) {

@@ -21,6 +21,7 @@
 #include "core/planning/kinds.hpp"
 #include "core/planning/planning_options.hpp"
 #include "core/rig/rig.hpp"
+#include "core/scan/rig_time.hpp"
 #include "core/scan/scan_options.hpp"
 #include "core/scan/stop_rule.hpp"
 #include "core/metrics/surface_metrics.hpp"
@@ -114,6 +115,11 @@ struct ObjectRun {
   int views_done = 0;
   std::string stop_reason;
   double wall_s = 0;                      // the scan's wall time (as recorded when it ran)
+  // Rig time (core/scan/rig_time.hpp): from the start to the end of each view of coverage_by_view,
+  // s (padded as it; NaN from a view not measured in full; empty: the scan recorded none), and
+  // the scan's sums per part (none unless every view's is known).
+  std::vector<double> rig_time_by_view;
+  std::optional<RigTime> rig_time;
   // The surface stop rule on the scan's recorded figures (scan.json's new_surface per view).
   std::vector<double> new_surface_by_view;  // percent of the model, NaN for a view not merged
   std::optional<int> stop_view;             // the view after which the rule would stop (none: never)
@@ -207,6 +213,15 @@ struct PlannerSummary {
   // Contact events of the rig over every run (complete or not), and the runs with any (run_folder).
   int64_t rig_contacts = 0;
   std::vector<std::string> runs_with_rig_contacts;
+  // Rig time over the complete runs with a rig time measured in full (rig_time_runs of them): the
+  // mean per scan of each part, the mean rig time from the start to the end of each view, and
+  // the mean time to 90 % and 95 % of the observable surface over the runs that reach it
+  // (rig_time_to_reach; none when no run does).
+  int rig_time_runs = 0;
+  RigTime rig_time_mean{0, 0, 0, 0};
+  std::vector<double> rig_time_by_view;
+  std::optional<double> rig_time_to_90, rig_time_to_95;
+  int rig_time_reaching_90 = 0, rig_time_reaching_95 = 0;
 };
 
 // Why a scan in `dir` did not complete, for the report: scan.json's state and message ("scan
@@ -219,6 +234,24 @@ std::string scan_failure_reason(const std::filesystem::path& dir, const std::fil
 // every first view).
 std::optional<int> views_to_reach(const std::vector<double>& coverage_by_view, double percent);
 std::vector<double> pad_views(std::vector<double> v, int n);
+// The rig time (s, from the start) at the end of the first view whose coverage reaches `percent`
+// (coverage and rig time per view, in step); none when no view reaches it, or that view's rig
+// time is not known (NaN, or the rig time has fewer views).
+std::optional<double> rig_time_to_reach(const std::vector<double>& coverage_by_view,
+                                        const std::vector<double>& rig_time_by_view, double percent);
+// The times at which coverage_at_rig_times is drawn: 0, step, 2 step, ... up to the first at or
+// past max_s, the step the smallest of 1, 2, 5 x 10^k (k whole) that needs at most `points`
+// steps (max_s <= 0: just 0).
+std::vector<double> rig_time_grid(double max_s, int points = 200);
+// Observable coverage against rig time, over a planner's complete runs with observable coverage
+// and a rig time known at every view: each run's coverage at time t is its figure after the last
+// view that ended at or before t (0 before its first view; its last figure after its last view);
+// at each of `times`, the mean over those runs (`runs`), and their min and max.
+struct CoverageOverTime {
+  int runs = 0;
+  std::vector<double> mean, lo, hi;  // per time
+};
+CoverageOverTime coverage_at_rig_times(const std::vector<ObjectRun>& runs, const std::vector<double>& times);
 PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs, int views);
 // Fills every planner's gap_to_oracle_by_view (the oracle's own: zeros) when `planners` holds
 // the oracle; otherwise leaves them empty. Runs pair by object and first view.

@@ -216,6 +216,44 @@ void coverage_chart(const BenchResult& r, bool observable, const fs::path& path)
   write_line_chart(c, path.string());
 }
 
+// Observable coverage against rig time: per planner the mean over its runs at common times
+// (coverage_at_rig_times on one grid for every planner, to the longest run's rig time), with the
+// runs' min-max as a band; false when no run measured its rig time.
+bool rig_time_chart(const BenchResult& r, const fs::path& path) {
+  const BenchSpec& s = r.spec;
+  double longest = 0;
+  for (const auto& p : r.planners) {
+    for (const auto& o : p.runs) {
+      if (o.complete && o.rig_time && !o.rig_time_by_view.empty() && std::isfinite(o.rig_time_by_view.back())) {
+        longest = std::max(longest, o.rig_time_by_view.back());
+      }
+    }
+  }
+  const std::vector<double> times = rig_time_grid(longest);
+  LineChart c;
+  c.title = "Observable coverage against rig time - " + std::string(name_of(s.rig)) + " rig, " + area_text(s, "hemisphere") +
+            ", " + objects_text(r) + ", band: min-max over " + means_over(s);
+  c.x_label = "rig time (s): motion, settling, capture and the wait for computation";
+  c.y_label = "observable surface covered (%, mean)";
+  c.y_min = 0;
+  c.y_max = 100;
+  c.x_min = 0;
+  c.x_max = times.back() > 0 ? times.back() : NAN;
+  c.y_lines = {{90.0, "90 %"}, {95.0, "95 %"}};
+  for (const auto& p : r.planners) {
+    const CoverageOverTime cov = coverage_at_rig_times(p.runs, times);
+    if (cov.runs == 0) continue;
+    ChartSeries cs{std::string(name_of(p.planner)), times, cov.mean};
+    cs.markers = false;
+    cs.lo = cov.lo;
+    cs.hi = cov.hi;
+    c.series.push_back(cs);
+  }
+  if (c.series.empty()) return false;
+  write_line_chart(c, path.string());
+  return true;
+}
+
 // Each planner's gap to the oracle (percentage points) after each view; false when there is none.
 bool gap_chart(const BenchResult& r, const fs::path& path) {
   LineChart c;
@@ -360,6 +398,48 @@ void observable_section(const BenchResult& r, std::ostream& md) {
   md << "\n";
 }
 
+// Rig time per scan and its parts, the time to 90 % and 95 % of the observable surface, and the
+// rig time at the end of each view.
+void rig_time_section(const BenchResult& r, std::ostream& md) {
+  const BenchSpec& s = r.spec;
+  const int n = s.views;
+  const auto seconds = [](const std::optional<double>& t, int runs, int of) {
+    return (t ? fixed(*t, 1) + " s" : std::string("never")) + " (" + std::to_string(runs) + " of " + std::to_string(of) + ")";
+  };
+  md << "## Rig time (s, mean per scan over the " << means_over(s) << " measured at every view)\n\n"
+     << "What the rig spends, as a physical rig would: motion (command to within tolerance) and settling on the rig's "
+        "clock; capture (the settled move's answer to the frame's arrival at the camera service) and compute (the rig "
+        "standing still after a capture until the next command: cloud, registration, map, plan, inverse kinematics; "
+        "after the last view until the scan stops) on the wall clock (docs/scan.md, rig time). Time to 90 % and 95 %: the rig time at "
+        "the end of the first view whose observable coverage reaches it, mean over the runs that reach it (how many of "
+        "those measured).\n\n"
+     << "| planner | runs | rig time per scan | motion | settle | capture | compute | motion share | to 90 % observable | "
+        "to 95 % observable |\n|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& p : r.planners) {
+    if (p.rig_time_runs == 0) continue;
+    const RigTime& t = p.rig_time_mean;
+    md << "| " << name_of(p.planner) << " | " << p.rig_time_runs << " | " << fixed(t.total_s(), 1) << " | "
+       << fixed(t.motion_s, 1) << " | " << fixed(t.settle_s, 2) << " | " << fixed(t.capture_s, 2) << " | "
+       << fixed(t.compute_s, 1) << " | " << fixed(t.total_s() > 0 ? 100.0 * t.motion_s / t.total_s() : 0.0, 0) << " % | "
+       << seconds(p.rig_time_to_90, p.rig_time_reaching_90, p.rig_time_runs) << " | "
+       << seconds(p.rig_time_to_95, p.rig_time_reaching_95, p.rig_time_runs) << " |\n";
+  }
+  md << "\nRig time (s) from the start to the end of each view, mean:\n\n| planner |";
+  for (int i = 1; i <= n; ++i) md << " " << i << " |";
+  md << "\n|---|";
+  for (int i = 0; i < n; ++i) md << "---|";
+  md << "\n";
+  for (const auto& p : r.planners) {
+    if (p.rig_time_by_view.empty()) continue;
+    md << "| " << name_of(p.planner) << " |";
+    for (int i = 0; i < n; ++i) md << " " << f1(p.rig_time_by_view[i]) << " |";
+    md << "\n";
+  }
+  md << "\n![observable coverage against rig time](observable_time.png)\n\nobservable_time.png: at each time, each "
+        "run's observable coverage after the last view it had finished by then (0 before its first), mean over the runs "
+        "(band: min-max); its .csv holds the curves.\n\n";
+}
+
 // Each planner's gap to the oracle after each view.
 void gap_section(const BenchResult& r, std::ostream& md) {
   const BenchSpec& s = r.spec;
@@ -485,9 +565,10 @@ void halves_section(const BenchResult& r, std::ostream& md) {
 
 void write_report(const BenchResult& r) {
   const BenchSpec& s = r.spec;
-  bool any_observable = false, any_gap = false;
+  bool any_observable = false, any_gap = false, any_rig_time = false;
   for (const auto& p : r.planners) {
     any_observable = any_observable || !p.observable_by_view.empty();
+    any_rig_time = any_rig_time || p.rig_time_runs > 0;
     any_gap = any_gap || (p.planner != PlannerKind::kOracle && !p.gap_to_oracle_by_view.empty());
   }
   std::ostringstream md;
@@ -496,6 +577,7 @@ void write_report(const BenchResult& r) {
   rig_contacts_section(r, md);
   md << surface_metrics_markdown(r.planners, s.metrics);
   if (any_observable) observable_section(r, md);
+  if (any_rig_time) rig_time_section(r, md);
   if (any_gap) gap_section(r, md);
   stop_rule_section(r, md);
   per_object_section(r, md);
@@ -508,6 +590,7 @@ void write_report(const BenchResult& r) {
 
   coverage_chart(r, false, s.out / "coverage.png");
   if (any_observable) coverage_chart(r, true, s.out / "observable.png");
+  if (any_rig_time) rig_time_chart(r, s.out / "observable_time.png");
   time_chart(r, s.out / "time.png");
   if (any_gap) gap_chart(r, s.out / "gap.png");
 }

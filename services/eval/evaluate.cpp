@@ -85,6 +85,8 @@ ScanEvaluation evaluate(const fs::path& out, const CoverageParams& params, const
     e.points_by_view.push_back(points);
   }
   e.new_surface_by_view = new_surface_figures(scan.views);
+  e.rig_time = sum_rig_time(scan.views);
+  e.rig_time_s_by_view = rig_time_at_frames(scan.views);  // in step with coverage_by_view
   e.hand_eye = check_hand_eye(out);
   if (!metrics) return e;
   const PointCloud cloud = fs::exists(out / "cloud.ply") ? read_ply((out / "cloud.ply").string()) : merged;
@@ -151,6 +153,7 @@ json to_json(const ScanEvaluation& e, const CoverageParams& params) {
           {"planner_ms", e.planner_ms},
           {"points_by_view", e.points_by_view},
           {"new_surface_by_view", e.new_surface_by_view},
+          {"rig_time_s_by_view", e.rig_time_s_by_view},
           {"state", e.state},
           {"stop_reason", e.stop_reason},
           {"views_done", e.views_done},

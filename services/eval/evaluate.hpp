@@ -13,6 +13,7 @@
 
 #include "core/geometry/point_cloud.hpp"
 #include "core/metrics/surface_metrics.hpp"
+#include "core/scan/scan_record.hpp"
 #include "eval/coverage.hpp"
 
 namespace pbnbv::eval {
@@ -37,6 +38,12 @@ struct ScanEvaluation {
   std::vector<int> points_by_view;       // points in the model after each view
   std::vector<double> new_surface_by_view;  // what each view added, % of the model before it
                                             // (the stop rule's figure; NaN: not merged or not recorded)
+  // Rig time (core/scan/rig_time.hpp) from the start to the end of each view of coverage_by_view
+  // (the sum of every recorded view's rig time up to it, views that captured nothing included),
+  // s; NaN from a view whose rig time is not known in full; empty when the record has none
+  // (written before rig time was recorded).
+  std::vector<double> rig_time_s_by_view;
+  RigTimeSum rig_time;                   // scan.json's rig_time_s: the views' sums
   std::string state;                     // scan.json status.state
   std::string stop_reason;               // why the scan stopped
   int views_done = 0;

@@ -220,7 +220,10 @@ MotionStep MotionSequencer::tick(double now_s) {
     return next;
   }
   const bool within = acknowledged && within_tolerance(job);
-  if (within && job.t_within < 0) job.t_within = now_s;
+  if (within && job.t_within < 0) {
+    job.t_within = now_s;
+    job.rig_utime_within = arm_.utime;
+  }
   const bool settled = (arm_.mode == RigMode::kSettled || arm_.mode == RigMode::kIdle) &&
                        (!rig_.has_turntable || turntable_.mode == RigMode::kSettled ||
                         turntable_.mode == RigMode::kIdle);
@@ -270,6 +273,7 @@ MotionStep MotionSequencer::finish(MoveStatus status, const std::string& reason,
     result.contacts = arm_.contacts >= job.contacts_commanded ? arm_.contacts - job.contacts_commanded : arm_.contacts;
     if (result.contacts > 0) result.contact = arm_.last_contact;
   }
+  result.within_tolerance_utime = job.rig_utime_within;
   job_.reset();
   MotionStep step;
   step.result = result;

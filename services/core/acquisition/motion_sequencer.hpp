@@ -98,6 +98,7 @@ class MotionSequencer {
     double last_send = 0;
     int64_t rig_utime_commanded = 0;  // arm status utime when commanded
     int32_t contacts_commanded = -1;  // arm status contacts when commanded (-1: the rig cannot tell)
+    int64_t rig_utime_within = 0;     // arm status utime at t_within (0: not yet)
   };
 
   MotionStep send_commands(Job& job, double now_s) const;

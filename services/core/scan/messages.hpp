@@ -61,6 +61,7 @@ struct MoveResult {
   double path_s = 0;                           // the path's time by the rig-time model, s
   int32_t contacts = 0;                        // contact events the rig reported during the move (-1: it cannot tell)
   std::string contact;                         // the last one ("" when contacts <= 0)
+  int64_t within_tolerance_utime = 0;          // rig clock when within tolerance (0: never)
 };
 
 // CAPTURE_REQUEST: one frame at the current pose, as an object-frame cloud.

@@ -1,5 +1,6 @@
 #include "core/scan/scan_record.hpp"
 
+#include <cmath>
 #include <limits>
 
 
@@ -99,6 +100,36 @@ json ellipsoids_json(const EllipsoidSetSummary& es) {
 }
 
 }  // namespace
+
+json rig_time_json(const RigTime& t) {
+  // NaN (not measured) is written as null.
+  return {{"motion", t.motion_s}, {"settle", t.settle_s}, {"capture", t.capture_s}, {"compute", t.compute_s},
+          {"total", t.total_s()}};
+}
+
+RigTimeSum sum_rig_time(const std::vector<ViewRecord>& views) {
+  RigTimeSum s;
+  for (const ViewRecord& v : views) {
+    if (!v.rig_time) continue;
+    ++s.views;
+    if (!v.rig_time->complete()) ++s.views_incomplete;
+    for (auto part : {&RigTime::motion_s, &RigTime::settle_s, &RigTime::capture_s, &RigTime::compute_s}) {
+      if (std::isfinite((*v.rig_time).*part)) s.sum.*part += (*v.rig_time).*part;
+    }
+  }
+  return s;
+}
+
+std::vector<double> rig_time_at_frames(const std::vector<ViewRecord>& views) {
+  if (sum_rig_time(views).views == 0) return {};
+  std::vector<double> out;
+  double t = 0;
+  for (const ViewRecord& v : views) {
+    t += v.rig_time ? v.rig_time->total_s() : RigTime::kUnset;
+    if (v.registration && !v.registration->frame_file.empty()) out.push_back(t);
+  }
+  return out;
+}
 
 double planner_step_ms(const PlanRecord& p) {
   const double fit_s = p.ellipsoids ? p.ellipsoids->fit_s : 0.0;
@@ -206,6 +237,7 @@ json to_json(const ViewRecord& v) {
     view["time_s"]["accumulate"] = r.accumulate_s;
   }
   if (v.map) view["time_s"]["view_total"] = v.view_total_s;
+  if (v.rig_time) view["rig_time_s"] = rig_time_json(*v.rig_time);
   return view;
 }
 
@@ -322,6 +354,11 @@ void ScanRecord::continue_from_folder(const std::string& scan_id) {
 }
 
 void ScanRecord::set_stop(const ScanStop& stop) { record_.stop = stop; }
+
+void ScanRecord::set_compute_wait(std::size_t index, double compute_s) {
+  if (index >= record_.views.size() || !record_.views[index].rig_time) return;
+  record_.views[index].rig_time->compute_s = compute_s;
+}
 
 void ScanRecord::set_planning_stopped(const PlanRecord& p) { record_.planning_stopped = p; }
 

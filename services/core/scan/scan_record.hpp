@@ -17,6 +17,7 @@
 #include "core/geometry/point_cloud.hpp"
 #include "core/scan/messages.hpp"
 #include "core/scan/rig_readings.hpp"
+#include "core/scan/rig_time.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "core/scan/stop_rule.hpp"
 
@@ -63,6 +64,9 @@ struct ViewRecord {
   std::optional<RegisteredCloud> registration;  // with the files written for the view (frame, depth
                                                 // image) and what it added to the model
   std::optional<VoxelMapSummary> map;
+  // The view's rig time (core/scan/rig_time.hpp): set once its move is answered; its compute
+  // once the next move is (or the scan stops).
+  std::optional<RigTime> rig_time;
   double move_round_trip_s = kUnset, capture_round_trip_s = kUnset, register_round_trip_s = kUnset,
          map_round_trip_s = kUnset, view_total_s = kUnset;
 };
@@ -132,6 +136,8 @@ struct RecordedScan {
 nlohmann::json to_json(const ViewRecord& v);
 nlohmann::json to_json(const PlanRecord& p);
 nlohmann::json to_json(const ScanStop& s);
+// A view's (or the scan's) "rig_time_s": motion, settle, capture, compute, total (null: not known).
+nlohmann::json rig_time_json(const RigTime& t);
 // scan.json's "mesh": file, also, method, vertices, triangles, watertight, boundary_loops,
 // hole_boundary_length_m, area_m2, volume_m3 (null unless watertight), seconds, settings, ...
 nlohmann::json to_json(const MeshSummary& m);
@@ -163,6 +169,21 @@ std::vector<std::vector<Pose>> recorded_attempts(const RecordedScan& scan);
 // written through its types.
 void write_scan_mesh(const std::filesystem::path& dir, const MeshSummary& mesh);
 
+// The rig time of a scan's views summed part by part (scan.json's top-level "rig_time_s"): each
+// part the sum of the views' known figures (a view's NaN part is left out of that part's sum);
+// `views` counts the views with a rig time, `views_incomplete` those of them with a part not
+// known. total = the four sums added.
+struct RigTimeSum {
+  RigTime sum{0, 0, 0, 0};
+  int views = 0, views_incomplete = 0;
+};
+RigTimeSum sum_rig_time(const std::vector<ViewRecord>& views);
+// The rig time from the start to the end of each view with a frame (the views of
+// new_surface_figures, and of coverage by view), s: every view's rig time added up to it, views
+// without a frame included; NaN from a view whose rig time is not known in full on; empty when no
+// view has a rig time (a record written before rig time was recorded).
+std::vector<double> rig_time_at_frames(const std::vector<ViewRecord>& views);
+
 // What each view added to the model (percent_of_model) for the views the registration answered,
 // NaN where the view was not merged: the figures the surface stop rule reads, in view order.
 std::vector<double> new_surface_figures(const std::vector<ViewRecord>& views);
@@ -188,6 +209,9 @@ class ScanRecord {
   void add_view(const ViewRecord& v, int views_done, double elapsed_s);
   void set_stop(const ScanStop& stop);
   void set_planning_stopped(const PlanRecord& p);  // the plan that ended the scan
+  // The compute wait of the recorded view at `index` in "views" (written with the next write);
+  // nothing when there is no such view or it has no rig time.
+  void set_compute_wait(std::size_t index, double compute_s);
   // A replay (`pbnbv replay`) of the scan recorded in `recorded` (its scan.json), `views` views.
   void set_replay_of(const std::string& recorded, int views);
   // Writes scan.json with the status `state` ("running", "done", "stopped", "failed").

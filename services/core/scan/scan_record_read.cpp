@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <type_traits>
 #include <stdexcept>
+#include <tuple>
 
 #include "core/base/format.hpp"
 #include "core/base/units.hpp"
@@ -240,6 +241,29 @@ EllipsoidSetSummary ellipsoids_from(const Fields& e, double fit_s) {
   return r;
 }
 
+// A "rig_time_s" (a view's or the scan's): each part a duration in seconds or null (not known),
+// the total their sum, or null when a part is.
+RigTime rig_time_from(const Fields& t) {
+  RigTime r;
+  const auto part = [&t](const char* key) {
+    const double x = t.number(key);
+    if (!std::isnan(x) && !(std::isfinite(x) && x >= 0 && x < 1e9)) t.fail(key, "is not a duration in seconds (0..1e9) nor null");
+    return x;
+  };
+  r.motion_s = part("motion");
+  r.settle_s = part("settle");
+  r.capture_s = part("capture");
+  r.compute_s = part("compute");
+  const double total = t.number("total");
+  const double sum = r.motion_s + r.settle_s + r.capture_s + r.compute_s;
+  if (std::isnan(sum) != std::isnan(total) || (!std::isnan(sum) && std::abs(total - sum) > 1e-9 * std::max(1.0, sum))) {
+    t.fail("total", "is " + (std::isnan(total) ? std::string("null") : fmt::format("{}", total)) +
+                        ", not motion + settle + capture + compute = " +
+                        (std::isnan(sum) ? std::string("null (a part is null)") : fmt::format("{}", sum)));
+  }
+  return r;
+}
+
 }  // namespace
 
 PlanRecord plan_record_from_json(const json& j, const std::string& where) {
@@ -352,6 +376,7 @@ ViewRecord view_record_from_json(const json& j, const std::string& where) {
     v.map_round_trip_s = time.number("map_round_trip");
     v.view_total_s = time.number("view_total");
   }
+  if (view.has("rig_time_s")) v.rig_time = rig_time_from(view.object("rig_time_s"));  // none in older records
   return v;
 }
 
@@ -422,6 +447,23 @@ RecordedScan recorded_scan_from_json(const json& j, const std::string& where) {
   if (!views.is_array()) f.fail("views", "is not a list");
   for (std::size_t k = 0; k < views.size(); ++k) {
     r.views.push_back(view_record_from_json(views[k], where + " views[" + std::to_string(k) + "]"));
+  }
+  if (f.has("rig_time_s")) {  // the views' sums (none in older records), checked against them
+    const Fields t = f.object("rig_time_s");
+    const RigTime written = rig_time_from(t);
+    const RigTimeSum sum = sum_rig_time(r.views);
+    for (const auto& [key, a, b] : {std::tuple{"motion", written.motion_s, sum.sum.motion_s},
+                                    std::tuple{"settle", written.settle_s, sum.sum.settle_s},
+                                    std::tuple{"capture", written.capture_s, sum.sum.capture_s},
+                                    std::tuple{"compute", written.compute_s, sum.sum.compute_s}}) {
+      if (!(std::abs(a - b) <= 1e-6 * std::max(1.0, b))) {
+        t.fail(key, fmt::format("is {}, not the views' sum {}", a, b));
+      }
+    }
+    if (t.count("views") != sum.views) t.fail("views", fmt::format("is {}, not the {} views with a rig_time_s", t.count("views"), sum.views));
+    if (t.count("views_incomplete") != sum.views_incomplete) {
+      t.fail("views_incomplete", fmt::format("is {}, not the {} views with a part null", t.count("views_incomplete"), sum.views_incomplete));
+    }
   }
   if (f.has("stop")) r.stop = scan_stop_from_json(f.at("stop"), where + " stop");
   if (f.has("planning_stopped")) r.planning_stopped = plan_record_from_json(f.at("planning_stopped"), where + " planning_stopped");
@@ -518,6 +560,10 @@ json to_json(const RecordedScan& r) {
   } else if (r.plan) {
     j["plan"] = {{"planner", r.plan->planner}, {"initial_view", to_json(r.plan->initial_view)}};
   }
+  const RigTimeSum rig = sum_rig_time(r.views);
+  j["rig_time_s"] = rig_time_json(rig.sum);
+  j["rig_time_s"]["views"] = rig.views;
+  j["rig_time_s"]["views_incomplete"] = rig.views_incomplete;
   if (r.stop) j["stop"] = to_json(*r.stop);
   if (r.planning_stopped) j["planning_stopped"] = to_json(*r.planning_stopped);
   if (!r.replay_of.empty()) j["replay_of"] = r.replay_of;

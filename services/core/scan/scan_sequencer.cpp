@@ -539,12 +539,19 @@ void ScanSequencer::moved(const MoveResult& r, double now_s) {
   }
   view_.move = r;
   view_.move_round_trip_s = now_s - t_step_s_;
-  if (r.status != MoveStatus::kReached) {
+  // Rig time: this move's motion and settling; the previous view waited until its command.
+  const MoveRigTime rig = move_rig_time(r);
+  const bool reached = r.status == MoveStatus::kReached;  // then a capture follows; else none (0)
+  view_.rig_time = RigTime{rig.motion_s, rig.settle_s, reached ? RigTime::kUnset : 0.0, RigTime::kUnset};
+  if (rig_wait_) end_rig_wait(compute_wait_s(rig_wait_->since_s, now_s, r));
+  if (!reached) {
     progress(std::string(to_string(r.status)) + ": " + r.reason, true);
+    begin_rig_wait(now_s);  // nothing to capture: the rig waits from here
     record_.add_view(view_, done_.views_done, now_s - t_start_s_);
     return next_view(now_s);
   }
   moved_ = r;
+  t_settled_s_ = now_s;
   done_.joints_rad = r.joint_position_rad;
   done_.turntable_rad = r.turntable_angle_rad;
   begin_capture(r.settled_utime, now_s);
@@ -570,6 +577,8 @@ void ScanSequencer::captured(const CaptureResult& c, double now_s) {
   view_.capture->points = PointCloud();  // counted; the registration service keeps the points
   view_.capture->normals.clear();
   view_.capture_round_trip_s = now_s - t_step_s_;
+  if (view_.rig_time) view_.rig_time->capture_s = capture_wait_s(t_settled_s_, now_s, c);
+  begin_rig_wait(now_s - c.process_s);  // from the frame's arrival at the camera service
   if (!c.ok) {
     progress("capture failed: " + c.message, true);
     done_.excluded.push_back(moved_.reached_object_T_camera);
@@ -668,6 +677,7 @@ void ScanSequencer::fail_view(const std::string& message, double now_s) {
 }
 
 void ScanSequencer::finish(ScanState state, const std::string& message, double now_s) {
+  if (rig_wait_) end_rig_wait(now_s - rig_wait_->since_s);  // the scan no longer uses the rig
   // A scan that is done gets its surface mesh first (a resumed scan and an external rig's too:
   // they end here).
   if (state == ScanState::kDone && phase_ != Phase::kMeshing) return begin_mesh(message, now_s);
@@ -711,9 +721,25 @@ void ScanSequencer::conclude(ScanState state, const std::string& message, double
   set_status(state, message, now_s);
   const char* name = state == ScanState::kDone ? "done" : state == ScanState::kStopped ? "stopped" : "failed";
   record_.write(name, message, done_.views_done, now_s - t_start_s_);
+  const RigTimeSum rig = sum_rig_time(record_.record().views);
+  std::string rig_text;
+  if (rig.views > 0) {
+    rig_text = "; rig time " + rig_time_text(rig.sum);
+    if (rig.views_incomplete > 0) {
+      rig_text += " (" + std::to_string(rig.views_incomplete) + (rig.views_incomplete == 1 ? " view" : " views") +
+                  " not measured in full)";
+    }
+  }
   summary_ = (state == ScanState::kDone ? "" : "scan ") + message + ": " + std::to_string(done_.views_done) + " of " +
              std::to_string(s_.views) + " views, " + std::to_string(record_.num_points()) + " points, " +
-             fixed(now_s - t_start_s_, 2) + " s -> " + record_.scan_json_path().string();
+             fixed(now_s - t_start_s_, 2) + " s" + rig_text + " -> " + record_.scan_json_path().string();
+}
+
+void ScanSequencer::begin_rig_wait(double since_s) { rig_wait_ = RigWait{record_.record().views.size(), since_s}; }
+
+void ScanSequencer::end_rig_wait(double compute_s) {
+  record_.set_compute_wait(rig_wait_->index, compute_s);
+  rig_wait_.reset();
 }
 
 // ---- Output ----------------------------------------------------------------------------------

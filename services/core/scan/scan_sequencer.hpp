@@ -210,6 +210,11 @@ class ScanSequencer {
   // Records the mesh, or why there is none, and concludes.
   void meshed(const std::optional<MeshSummary>& mesh, const std::string& why_not, double now_s);
   void conclude(ScanState state, const std::string& message, double now_s);
+  // Rig time's compute (core/scan/rig_time.hpp): the rig's part of the view about to be recorded
+  // at the end of "views" ended at since_s (coordinator's clock); the wait ends with the next
+  // move's answer or the scan's end, and is recorded in that view.
+  void begin_rig_wait(double since_s);
+  void end_rig_wait(double compute_s);
 
   void send(const ScanOutput& request, int64_t request_id, double resend_s, double deadline_s, double now_s);
   void wait_for_answer(double deadline_s, double now_s);
@@ -247,12 +252,18 @@ class ScanSequencer {
   std::vector<Pose> options_;               // the planned view and its alternatives
   std::size_t option_ = 0;
   MoveResult moved_;
+  double t_settled_s_ = 0;                  // when its answer came (rig time's capture starts)
   int64_t capture_id_ = -1;
   CaptureRequest capture_request_;          // re-sent while the view's answers are late
   std::optional<RegisteredCloud> registered_;  // kept when it comes before it is waited for
   std::optional<VoxelMapSummary> map_;
   Awaited awaited_;
   std::string done_message_;                // the scan's closing message while its mesh is made
+  struct RigWait {
+    std::size_t index = 0;                  // the waiting view's entry in "views"
+    double since_s = 0;                     // when the rig's part of it ended
+  };
+  std::optional<RigWait> rig_wait_;         // none: no view waits (the first; after a resume)
 
   std::optional<std::vector<std::vector<Pose>>> replay_;  // replaying: each recorded view's poses
   int next_view_after_ready_ = 0;           // the view after the readiness wait (resume: the next)

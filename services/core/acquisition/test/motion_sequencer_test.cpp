@@ -130,6 +130,7 @@ TEST_F(ArmMotion, ReachedWhenAcknowledgedWithinToleranceAndSettledWithTheMoveTim
   EXPECT_NEAR(m.settle_s, 0.5, 1e-9);            // from within tolerance to settled
   EXPECT_NEAR(m.rig_motion_s, 2.5, 1e-9);        // rig clock 5.0 s -> 7.5 s
   EXPECT_EQ(m.settled_utime, 7500000);
+  EXPECT_EQ(m.within_tolerance_utime, 7000000);  // rig clock when first within tolerance
   EXPECT_LT(m.position_error_m, 1e-6);
   EXPECT_LT(m.angle_error_rad, 1e-6);
   EXPECT_EQ(m.joint_target_rad, arm_target_);

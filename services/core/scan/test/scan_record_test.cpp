@@ -215,6 +215,122 @@ TEST_F(ScanRecordTest, TheRigsContactsAreRecordedPerMoveAndListedOnce) {
   bad = j;
   bad["views"][1]["move"]["contacts"] = -2;
   pbnbv::testing::expect_error([&] { recorded_scan_from_json(bad, where); }, "move contacts = -2 is not a whole number in -1..");
+// Rig time from the messages, by hand: a move commanded at rig clock 5.0 s, within tolerance at
+// 7.0 s, settled at 7.5 s (rig_motion_s 2.5) moves for 2.0 s and settles for 0.5 s on the rig's
+// clock; the capture and the wait for the next command are wall time.
+TEST_F(ScanRecordTest, RigTimeSplitsTheMoveOnTheRigClockAndTimesTheRestOnTheWallClock) {
+  MoveResult m;
+  m.rig_motion_s = 2.5;
+  m.settled_utime = 7500000;
+  m.within_tolerance_utime = 7000000;
+  MoveRigTime t = move_rig_time(m);
+  EXPECT_DOUBLE_EQ(t.motion_s, 2.0);
+  EXPECT_DOUBLE_EQ(t.settle_s, 0.5);
+  m.within_tolerance_utime = 0;  // never within tolerance (timed out): all motion
+  t = move_rig_time(m);
+  EXPECT_DOUBLE_EQ(t.motion_s, 2.5);
+  EXPECT_EQ(t.settle_s, 0.0);
+  m.within_tolerance_utime = 4000000;  // before the command (7.5 - 2.5 = 5.0 s): not a fit
+  EXPECT_TRUE(std::isnan(move_rig_time(m).motion_s));
+  m.within_tolerance_utime = 8000000;  // after settling
+  EXPECT_TRUE(std::isnan(move_rig_time(m).settle_s));
+  m.within_tolerance_utime = 7000000;
+  m.rig_motion_s = -1;
+  EXPECT_TRUE(std::isnan(move_rig_time(m).motion_s));
+
+  // The settled move's answer came at 20.0 s, the cloud at 20.5 s after 0.125 s of processing
+  // in the camera service: the frame arrived 0.375 s after the answer.
+  CaptureResult c;
+  c.process_s = 0.125;
+  EXPECT_EQ(capture_wait_s(20.0, 20.5, c), 0.375);
+  c.process_s = 0.75;  // more processing than the whole wait: figures that do not fit
+  EXPECT_TRUE(std::isnan(capture_wait_s(20.0, 20.5, c)));
+
+  // The rig waited from 10.0 s (coordinator's clock) until the next command: its answer came at
+  // 16.0 s after 4.0 s of moving and 0.5 s of settling (the executor's wall time): 1.5 s.
+  MoveResult next;
+  next.move_s = 4.0;
+  next.settle_s = 0.5;
+  EXPECT_DOUBLE_EQ(compute_wait_s(10.0, 16.0, next), 1.5);
+  EXPECT_TRUE(std::isnan(compute_wait_s(10.0, 14.0, next)));  // a move longer than the wait: not a fit
+
+  const RigTime r{19.84, 1.2, 0.4, 2.7};
+  EXPECT_NEAR(r.total_s(), 24.14, 1e-12);
+  EXPECT_EQ(rig_time_text(r), "24.1 s (motion 19.8, settle 1.2, capture 0.4, compute 2.7)");
+  EXPECT_EQ(rig_time_text(RigTime{1, 2, 3, RigTime::kUnset}), "- s (motion 1.0, settle 2.0, capture 3.0, compute -)");
+}
+
+// Each view's rig_time_s and their sums at the top of scan.json round-trip through the reader;
+// a total that is not the sum of its parts, a negative part, or top-level sums that are not the
+// views' are refused naming the file, the view and the field.
+TEST_F(ScanRecordTest, RigTimeIsWrittenPerViewAndSummedAndReadBackChecked) {
+  ScanRecord record(dir_, settings());
+  record.set_ring_plan(0.8, 30);
+  ViewRecord a;
+  a.view = 0;
+  a.move = MoveResult{};
+  a.move_round_trip_s = 1;
+  a.rig_time = RigTime{2.0, 0.5, 0.125, 1.5};
+  record.add_view(a, 1, 5.0);
+  ViewRecord b;
+  b.view = 1;
+  b.move = MoveResult{};
+  b.move_round_trip_s = 1;
+  b.rig_time = RigTime{1.0, 0.25, 0.0, RigTime::kUnset};  // compute not known yet
+  record.add_view(b, 1, 6.0);
+  json j = read_json((dir_ / "scan.json").string());
+  EXPECT_EQ(j["views"][0]["rig_time_s"], json({{"motion", 2.0}, {"settle", 0.5}, {"capture", 0.125}, {"compute", 1.5}, {"total", 4.125}}));
+  EXPECT_TRUE(j["views"][1]["rig_time_s"]["compute"].is_null());
+  EXPECT_TRUE(j["views"][1]["rig_time_s"]["total"].is_null());
+  // Sums of what is known: 3.0 + 0.75 + 0.125 + 1.5 = 5.375; one view not measured in full.
+  EXPECT_EQ(j["rig_time_s"], json({{"motion", 3.0}, {"settle", 0.75}, {"capture", 0.125}, {"compute", 1.5},
+                                   {"total", 5.375}, {"views", 2}, {"views_incomplete", 1}}));
+  // The wait of view 2 comes with the next move's answer (or the scan's end).
+  record.set_compute_wait(1, 0.25);
+  record.set_compute_wait(7, 9.0);  // no such view: nothing
+  record.write("done", "scan complete", 2, 7.0);
+  j = read_json((dir_ / "scan.json").string());
+  EXPECT_EQ(j["views"][1]["rig_time_s"]["total"], 1.5);
+  EXPECT_EQ(j["rig_time_s"]["total"], 5.625);
+  EXPECT_EQ(j["rig_time_s"]["views_incomplete"], 0);
+
+  const RecordedScan back = read_scan_record(dir_);
+  ASSERT_EQ(back.views.size(), 2u);
+  ASSERT_TRUE(back.views[0].rig_time);
+  EXPECT_EQ(back.views[0].rig_time->motion_s, 2.0);
+  EXPECT_EQ(back.views[0].rig_time->settle_s, 0.5);
+  EXPECT_EQ(back.views[0].rig_time->capture_s, 0.125);
+  EXPECT_EQ(back.views[0].rig_time->compute_s, 1.5);
+  EXPECT_EQ(back.views[1].rig_time->compute_s, 0.25);
+  EXPECT_EQ(to_json(back)["rig_time_s"], j["rig_time_s"]);
+  const RigTimeSum sum = sum_rig_time(back.views);
+  EXPECT_EQ(sum.sum.total_s(), 5.625);
+  EXPECT_EQ(sum.views, 2);
+
+  const std::string file = (dir_ / "scan.json").string();
+  json bad = j;
+  bad["views"][0]["rig_time_s"]["total"] = 4.0;
+  pbnbv::testing::expect_error([&] { recorded_scan_from_json(bad, file); },
+                               file + " views[0] view 1 rig_time_s total is 4, not motion + settle + capture + compute = 4.125");
+  bad = j;
+  bad["views"][1]["rig_time_s"]["settle"] = -0.25;
+  pbnbv::testing::expect_error([&] { recorded_scan_from_json(bad, file); },
+                               file + " views[1] view 2 rig_time_s settle is not a duration in seconds (0..1e9) nor null");
+  bad = j;
+  bad["rig_time_s"]["capture"] = 0.5;
+  bad["rig_time_s"]["total"] = 6.0;
+  pbnbv::testing::expect_error([&] { recorded_scan_from_json(bad, file); }, file + " rig_time_s capture is 0.5, not the views' sum 0.125");
+  bad = j;
+  bad["rig_time_s"]["views"] = 3;
+  pbnbv::testing::expect_error([&] { recorded_scan_from_json(bad, file); }, file + " rig_time_s views is 3, not the 2 views with a rig_time_s");
+  // A record written before rig time was recorded has none: read as none.
+  bad = j;
+  bad.erase("rig_time_s");
+  bad["views"][0].erase("rig_time_s");
+  bad["views"][1].erase("rig_time_s");
+  const RecordedScan old = recorded_scan_from_json(bad, file);
+  EXPECT_FALSE(old.views[0].rig_time);
+  EXPECT_EQ(sum_rig_time(old.views).views, 0);
 }
 
 }  // namespace

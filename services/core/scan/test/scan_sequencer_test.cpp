@@ -155,6 +155,7 @@ class ScanSequencerTest : public pbnbv::testing::TempDirTest {
     m.settle_s = 0.5;
     m.rig_motion_s = 1.25;
     m.settled_utime = 1000000 * (r.iteration + 1);
+    m.within_tolerance_utime = m.settled_utime - 500000;  // 0.75 s of motion, 0.5 s of settling
     return m;
   };
 
@@ -401,7 +402,21 @@ TEST_F(ScanSequencerTest, ThreeViewRingScanEndToEnd) {
     EXPECT_EQ(v["time_s"]["move"], 1.0);
     EXPECT_GE(v["time_s"]["view_total"].get<double>(), 3.75);
     EXPECT_EQ(read_ply((dir_ / v["frame_file"].get<std::string>()).string()).size(), 10u);
+    // Rig time: 0.75 s of motion and 0.5 s of settling (the move's rig clock); the capture from
+    // the settled move's answer (3.75k + 2.0) to the frame's arrival at the camera service (the
+    // cloud answered at 3.75k + 3.0, less its 0.0625 s of processing): 0.9375 s; the rig waits from
+    // there to the next command (the next move answered at 3.75k + 5.75, less its 1.5 s of moving
+    // and settling): 1.3125 s; after the last view until the scan stops with its map at 11.25 s:
+    // 0.8125 s.
+    const double compute = k < 2 ? 1.3125 : 0.8125;
+    EXPECT_EQ(v["rig_time_s"], json({{"motion", 0.75}, {"settle", 0.5}, {"capture", 0.9375}, {"compute", compute},
+                                     {"total", 2.1875 + compute}}))
+        << "view " << k + 1;
   }
+  // The scan's wall time from the first command (2.0 - 1.5 s) to its stop (11.25 s), 10.75 s, with
+  // its three moves' 1.5 s of wall time each replaced by their 1.25 s on the rig's clock: 10 s.
+  EXPECT_EQ(scan["rig_time_s"], json({{"motion", 2.25}, {"settle", 1.5}, {"capture", 2.8125}, {"compute", 3.4375},
+                                      {"total", 10.0}, {"views", 3}, {"views_incomplete", 0}}));
   EXPECT_EQ(read_ply((dir_ / "cloud.ply").string()).size(), 30u);
   // The finished scan's mesh: the three merged frames' 30 points fused (core/surface tests its shape).
   ASSERT_TRUE(scan.contains("mesh"));
@@ -428,7 +443,8 @@ TEST_F(ScanSequencerTest, ThreeViewRingScanEndToEnd) {
   EXPECT_EQ(lines_.back(), "mesh.ply: " + std::to_string(scan["mesh"]["triangles"].get<std::size_t>()) + " triangles, " +
                               std::to_string(scan["mesh"]["boundary_loops"].get<std::size_t>()) + " holes, " +
                               fixed(scan["mesh"]["seconds"].get<double>(), 2) + " s");
-  EXPECT_EQ(seq_->summary(), "scan complete: view budget reached (--views 3): 3 of 3 views, 30 points, 11.75 s -> " +
+  EXPECT_EQ(seq_->summary(), "scan complete: view budget reached (--views 3): 3 of 3 views, 30 points, 11.75 s; rig time "
+                             "10.0 s (motion 2.2, settle 1.5, capture 2.8, compute 3.4) -> " +
                                  (dir_ / "scan.json").string());
 }
 
@@ -515,6 +531,11 @@ TEST_F(ScanSequencerTest, AnUnreachableBestViewIsReplacedByTheNextAlternative) {
   EXPECT_EQ(v1["move"]["status"], "reached");
   // Two moves of 2 s each.
   EXPECT_EQ(v1["time_s"]["move_round_trip"], 4.0);
+  // Rig time: the refused option moved nothing (view 2's motion is its alternative's), and the
+  // rig stood waiting from view 1's frame (3.0 - 0.0625 s) through the map, the plan, the refusal
+  // and the alternative's command (answered at 8.25 s less 1.5 s of moving and settling).
+  EXPECT_EQ(v1["rig_time_s"]["motion"], 0.75);
+  EXPECT_EQ(v0["rig_time_s"]["compute"], 8.25 - 1.5 - 2.9375);
   // The plan as recorded: from the map of view 0, with that map's and the ellipsoids' times.
   const json& plan = v1["plan"];
   EXPECT_EQ(plan["outcome"], "view");
@@ -675,7 +696,8 @@ TEST_F(ScanSequencerTest, TheRegistrationDeadlineFailsTheScanNamingTheRegistrati
   EXPECT_FALSE(scan["views"][0].contains("frame_file"));
   EXPECT_EQ(seq_->summary(),
             "scan the registration service sent no REGISTERED_CLOUD for view 1 in 60 s (the capture request sent 60 "
-            "times): 0 of 2 views, 0 points, 63.00 s -> " +
+            "times): 0 of 2 views, 0 points, 63.00 s; rig time 62.2 s (motion 0.8, settle 0.5, capture 0.9, compute "
+            "60.1) -> " +
                                  (dir_ / "scan.json").string());
 }
 
@@ -710,6 +732,10 @@ TEST_F(ScanSequencerTest, APlannerStopEndsTheScanDoneWithItsReason) {
   EXPECT_EQ(scan["planning_stopped"]["outcome"], "stop");
   EXPECT_EQ(scan["planning_stopped"]["map_of_view"], 1);
   EXPECT_EQ(scan["views"].size(), 1u);
+  // The rig waited from the cloud's frame (3.0 - 0.0625 s) through the map and the plan that said
+  // stop (answered at 4.25 s): the scan no longer uses the rig from there.
+  EXPECT_EQ(scan["views"][0]["rig_time_s"]["compute"], 1.3125);
+  EXPECT_EQ(scan["rig_time_s"]["total"], 0.75 + 0.5 + 0.9375 + 1.3125);
   EXPECT_EQ(seq_->summary().rfind("scan complete: no frontier ellipsoid remains: 1 of 5 views, 10 points", 0), 0u)
       << seq_->summary();
 }
