@@ -24,13 +24,13 @@ namespace {
 
 // The tests' twin renders 320 x 180 frames at the default camera's 696 px focal length; the rig
 // files they scan with state that camera.
-const char* const kCamera = "--width 320 --height 180";
+const char* const kSmallImage = "--width 320 --height 180";
 const char* const kRigCamera = "320 180 696 696 160 90 0.1 3.0";
 
 // A shell line that starts the twin as the rig's drivers (no --scan: it obeys every scan, as a
 // real driver does), runs `commands`, stops the twin and exits with the commands' status.
 std::string with_twin_as_hardware(const std::string& twin_options, const std::string& commands) {
-  return netns_run() + " sh -c '" + bin_dir() + "/pbnbv-twin --speed 20 " + kCamera + " " + twin_options +
+  return netns_run() + " sh -c '" + bin_dir() + "/pbnbv-twin --speed 20 " + kSmallImage + " " + twin_options +
          " >/dev/null 2>&1 & T=$!; " + commands + "; rc=$?; kill $T; wait $T; exit $rc'";
 }
 
@@ -72,7 +72,7 @@ void compare_with_twin_in_the_loop(const std::string& name, const std::string& m
   const fs::path twin_run = fresh_dir(name + "-twin-in-the-loop");
   const std::string options = "--rig-model " + rig_model(model) + " --views 6";
   const CommandResult a = run_command(netns_run() + " " + bin_dir() + "/pbnbv scan --object bunny " + options + " " +
-                                      kCamera + " --sim-speed 20 --out " + twin_run.string());
+                                      kSmallImage + " --sim-speed 20 --out " + twin_run.string());
   ASSERT_EQ(a.exit_code, 0) << a.output;
   const double twin_coverage = read_json_file(twin_run / "coverage.json")["coverage_by_view"].back().get<double>();
   const double object_z = read_json_file(twin_run / "settings.json")["object_z_m"].get<double>();
@@ -203,7 +203,7 @@ TEST(ExternalRig, AWorkingVolumeTheArmCannotReachIsRefused) {
 // completes with the coverage of the same scan on one host.
 TEST(TwoHosts, AScanAcrossALinkCoversWhatItDoesOnOneHost) {
   const fs::path twin_run = fresh_dir("two-hosts-object");
-  const CommandResult a = run_command(netns_run() + " " + bin_dir() + "/pbnbv scan --object bunny --views 1 " + kCamera +
+  const CommandResult a = run_command(netns_run() + " " + bin_dir() + "/pbnbv scan --object bunny --views 1 " + kSmallImage +
                                       " --sim-speed 20 --no-log --out " + twin_run.string());
   ASSERT_EQ(a.exit_code, 0) << a.output;
   const double object_z = read_json_file(twin_run / "settings.json")["object_z_m"].get<double>();
@@ -222,7 +222,7 @@ TEST(TwoHosts, AScanAcrossALinkCoversWhatItDoesOnOneHost) {
 
   const fs::path two = fresh_dir("two-hosts");
   const CommandResult c = run_command("PBNBV_BIN_DIR=" + bin_dir() + " " + source_dir() + "/tests/two_hosts.sh " +
-                                      two.string() + " " + rig + " '" + twin + " " + kCamera + "' '" + scan + "'");
+                                      two.string() + " " + rig + " '" + twin + " " + kSmallImage + "' '" + scan + "'");
   ASSERT_EQ(c.exit_code, 0) << c.output << "\n" << run_command("tail -n 20 " + (two / "rig-host" / "*.log").string()).output;
   // The compute host started neither the motion executor nor the camera: the rig host's served it.
   for (const auto& p : read_json_file(two / "scan" / "processes.json")["processes"]) {

@@ -73,7 +73,8 @@ fs::path scan_and_check(const std::string& name, const std::string& options, int
     const auto& t = v["rig_time_s"];
     double parts = 0;
     for (const char* part : {"motion", "settle", "capture", "compute"}) {
-      ASSERT_TRUE(t[part].is_number()) << part << " " << v.dump(2);
+      EXPECT_TRUE(t[part].is_number()) << part << " " << v.dump(2);
+      if (!t[part].is_number()) continue;
       EXPECT_GE(t[part].get<double>(), 0.0) << part;
       parts += t[part].get<double>();
     }

@@ -215,6 +215,8 @@ TEST_F(ScanRecordTest, TheRigsContactsAreRecordedPerMoveAndListedOnce) {
   bad = j;
   bad["views"][1]["move"]["contacts"] = -2;
   pbnbv::testing::expect_error([&] { recorded_scan_from_json(bad, where); }, "move contacts = -2 is not a whole number in -1..");
+}
+
 // Rig time from the messages, by hand: a move commanded at rig clock 5.0 s, within tolerance at
 // 7.0 s, settled at 7.5 s (rig_motion_s 2.5) moves for 2.0 s and settles for 0.5 s on the rig's
 // clock; the capture and the wait for the next command are wall time.
