@@ -104,7 +104,7 @@ class Listener {
 
 // Requests as the services' tests send them: scan "bad-input", the suite's sphere.
 inline move_request_t move_request(int64_t id, const Pose& object_T_camera) {
-  move_request_t r;
+  move_request_t r{};
   r.utime = 0;
   r.scan_id = "bad-input";
   r.iteration = 0;

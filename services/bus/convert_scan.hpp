@@ -53,7 +53,7 @@ inline Eigen::AlignedBox3d box_from_arrays(const double min_m[3], const double m
 }
 
 inline move_request_t to_msg(const MoveRequest& r) {
-  move_request_t m;
+  move_request_t m{};
   m.utime = 0;
   m.scan_id = r.scan_id;
   m.iteration = r.iteration;
@@ -421,7 +421,7 @@ inline EllipsoidSetSummary from_msg(const ellipsoid_set_t& m) {
 }
 
 inline plan_request_t to_msg(const PlanRequest& r) {
-  plan_request_t m;
+  plan_request_t m{};
   m.utime = 0;
   m.scan_id = r.scan_id;
   m.iteration = r.iteration;
