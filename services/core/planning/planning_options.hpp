@@ -24,7 +24,7 @@ inline constexpr ChoiceSetting<WhenDone> kWhenDone{
     "when the map has nothing left to aim at (no frontier ellipsoid; raycast: no unobserved voxel in view): "
     "stop, or spend the remaining views filling the largest gaps between the views taken"};
 inline constexpr ChoiceSetting<Motion> kMotion{
-    "motion", Motion::kAuto,
+    "motion", Motion::kPlain,
     "arm rig: aware (the turntable turns only as far as the arm cannot reach round the object), plain (every view "
     "turned to the arm, the paper's rig), or auto (aware for every planner but pbnbv-paper)"};
 
