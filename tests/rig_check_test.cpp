@@ -18,6 +18,7 @@
 #include "pbnbv/turntable_command_t.hpp"
 #include "process/processes.hpp"
 #include "scan_checks.hpp"
+#include "process_group.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -67,29 +68,20 @@ class RigCheck : public ::testing::Test {
     dir_ = fresh_dir(std::string("rig-check-") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     rig_ = small_camera_rig(dir_);
   }
-  void TearDown() override {
-    process::stop_all(children_, 5.0);
-    for (const auto& c : children_) {
-      EXPECT_EQ(c.exit_code, 0) << c.name << " did not exit cleanly:\n" << process::tail_lines(c.log_path, 20);
-    }
-  }
+  void TearDown() override { processes_.stop_expecting_clean_exits(); }
 
   // Starts the twin (no object; `camera`: its image size and focal lengths, by default the test
   // rig file's; `extra` appended) and waits for its ARM_STATUS.
   void start_twin(const std::vector<std::string>& extra,
                   const std::vector<std::string>& camera = {"--width", "320", "--height", "180", "--fx", "174",
                                                             "--fy", "174"}) {
-    process::Child c;
-    c.name = "twin";
-    c.argv = {bin_dir() + "/pbnbv-twin", "--rig", "arm", "--model-out", (dir_ / "twin_model.xml").string()};
-    c.argv.insert(c.argv.end(), camera.begin(), camera.end());
-    c.argv.insert(c.argv.end(), extra.begin(), extra.end());
-    c.log_path = (dir_ / "twin.log").string();
-    children_.push_back(c);
-    process::start(children_.back());
+    std::vector<std::string> argv = {bin_dir() + "/pbnbv-twin", "--rig", "arm", "--model-out", (dir_ / "twin_model.xml").string()};
+    argv.insert(argv.end(), camera.begin(), camera.end());
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    processes_.start(dir_, "twin", argv);
     const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
     while (listener_.arm_statuses == 0 && std::chrono::steady_clock::now() < end) listener_.spin(50);
-    ASSERT_GT(listener_.arm_statuses, 0) << "the twin did not start:\n" << process::tail_lines(c.log_path, 20);
+    ASSERT_GT(listener_.arm_statuses, 0) << "the twin did not start:\n" << process::tail_lines((dir_ / "twin.log").string(), 20);
     listener_.arm_commands = listener_.turntable_commands = 0;
   }
 
@@ -137,7 +129,7 @@ class RigCheck : public ::testing::Test {
   }
 
   fs::path dir_, rig_;
-  std::vector<process::Child> children_;
+  ProcessGroup processes_;
   Listener listener_;
 };
 
@@ -168,15 +160,10 @@ TEST_F(RigCheck, PassesOnTheTwin) {
 // depth with forward kinematics, a real camera's to pass.)
 TEST_F(RigCheck, TheDriverSkeletonPassesThePassiveChecks) {
   rig_ = source_dir() + "/models/rig_arm.xml";
-  process::Child c;
-  c.name = "driver-skeleton";
-  c.argv = {bin_dir() + "/../tests/pbnbv-driver-skeleton"};
-  c.log_path = (dir_ / "skeleton.log").string();
-  children_.push_back(c);
-  process::start(children_.back());
+  processes_.start(dir_, "skeleton", {bin_dir() + "/../tests/pbnbv-driver-skeleton"});
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while (listener_.arm_statuses == 0 && std::chrono::steady_clock::now() < end) listener_.spin(50);
-  ASSERT_GT(listener_.arm_statuses, 0) << process::tail_lines(c.log_path, 20);
+  ASSERT_GT(listener_.arm_statuses, 0) << process::tail_lines((dir_ / "skeleton.log").string(), 20);
   listener_.arm_commands = listener_.turntable_commands = 0;
   const Outcome o = rig_check({"--passive"});
   EXPECT_EQ(o.exit_code, 0) << o.output;

@@ -18,6 +18,7 @@
 #include "pbnbv/arm_command_t.hpp"
 #include "pbnbv/arm_status_t.hpp"
 #include "process/processes.hpp"
+#include "process_group.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -46,20 +47,8 @@ class RigContact : public ::testing::Test {
     start("motion", {bin_dir() + "/pbnbv-motion", "--rig", "arm"});
     ASSERT_TRUE(until([&] { return have_; }, 60)) << process::tail_lines((dir_ / "twin.log").string(), 20);
   }
-  void TearDown() override {
-    process::stop_all(children_, 5.0);
-    for (const auto& c : children_) {
-      EXPECT_EQ(c.exit_code, 0) << c.name << " did not exit cleanly:\n" << process::tail_lines(c.log_path, 20);
-    }
-  }
-  void start(const std::string& name, const std::vector<std::string>& argv) {
-    process::Child c;
-    c.name = name;
-    c.argv = argv;
-    c.log_path = (dir_ / (name + ".log")).string();
-    children_.push_back(c);
-    process::start(children_.back());
-  }
+  void TearDown() override { processes_.stop_expecting_clean_exits(); }
+  void start(const std::string& name, const std::vector<std::string>& argv) { processes_.start(dir_, name, argv); }
   bool until(const std::function<bool()>& done, double timeout_s) {
     const auto end = Clock::now() + std::chrono::duration<double>(timeout_s);
     while (!done() && Clock::now() < end) lcm_.handleTimeout(20);
@@ -84,7 +73,7 @@ class RigContact : public ::testing::Test {
   }
 
   fs::path dir_;
-  std::vector<process::Child> children_;
+  ProcessGroup processes_;
   lcm::LCM lcm_{"udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608"};
   arm_status_t arm_{};
   bool have_ = false;

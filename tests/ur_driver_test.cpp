@@ -21,6 +21,7 @@
 #include "pbnbv/turntable_status_t.hpp"
 #include "process/processes.hpp"
 #include "scan_checks.hpp"
+#include "process_group.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -69,21 +70,9 @@ class UrDriver : public ::testing::Test {
     // The UR5e rig file with a small camera (320 x 180), so that frames render quickly.
     rig_ = rig_with_camera(source_dir() + "/models", "rig_ur5e.xml", dir_, "320 180 174 174 160 90 0.1 3.0");
   }
-  void TearDown() override {
-    process::stop_all(children_, 5.0);
-    for (const auto& c : children_) {
-      EXPECT_EQ(c.exit_code, 0) << c.name << " did not exit cleanly:\n" << process::tail_lines(c.log_path, 20);
-    }
-  }
+  void TearDown() override { processes_.stop_expecting_clean_exits(); }
 
-  void start(const std::string& name, const std::vector<std::string>& argv) {
-    process::Child c;
-    c.name = name;
-    c.argv = argv;
-    c.log_path = (dir_ / (name + ".log")).string();
-    children_.push_back(c);
-    process::start(children_.back());
-  }
+  void start(const std::string& name, const std::vector<std::string>& argv) { processes_.start(dir_, name, argv); }
 
   // The twin as the controller (`faults` played) on fresh ports, then the driver; both heard on the bus.
   void start_rig(const std::string& faults = "") {
@@ -118,7 +107,7 @@ class UrDriver : public ::testing::Test {
 
   fs::path dir_, rig_;
   int port_ = 0;
-  std::vector<process::Child> children_;
+  ProcessGroup processes_;
   Bus bus_;
 };
 

@@ -87,7 +87,7 @@ inline PlanInput plan_input_from_msg(const plan_request_t& r) {
   require_range(r.num_alternatives, kAlternatives.min, kAlternatives.max, "PLAN_REQUEST num_alternatives");
   require_range(r.stop_fraction, kStopFraction.min, kStopFraction.max, "PLAN_REQUEST stop_fraction");
   require_range(r.seconds_per_point, kSecondsPerPoint.min, kSecondsPerPoint.max, "PLAN_REQUEST seconds_per_point");
-  in.combined.seconds_per_point = r.seconds_per_point > 0 ? r.seconds_per_point : kMotionSecondsPerPoint;
+  if (r.seconds_per_point > 0) in.combined.seconds_per_point = r.seconds_per_point;
   if (!std::isnan(r.first_quality)) require_range(r.first_quality, -1e12, 1e12, "PLAN_REQUEST first_quality");
   if (r.num_parallels > r.num_candidates) throw std::invalid_argument("PLAN_REQUEST num_parallels exceeds num_candidates");
   in.candidates.num_views = r.num_candidates;

@@ -15,8 +15,10 @@
 // history, so the scorer keeps no scan state: restarted, it answers the next request the same.
 // Reachability runs as soon as B is known, while the ellipsoid fitter is still working.
 #include <chrono>
+#include <cmath>
 #include <deque>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -75,9 +77,9 @@ class ScorerService {
     const voxel_set_t* map = maps_.find(r.scan_id, r.map_iteration, r.map_request_id);
     const bool needs_ellipsoids = uses_ellipsoids(pending_->planner);
     const ellipsoid_set_t* ell = needs_ellipsoids ? ellipsoids_.find(r.scan_id, r.map_iteration, r.map_request_id) : nullptr;
-    if (map && !pending_->reachable && r.check_reachability) {
+    if (map && !pending_->move_time_s && r.check_reachability) {
       try {
-        pending_->reachable = reachability(r, *map, &pending_->move_time_s);
+        pending_->move_time_s = reachability(r, *map);
       } catch (const std::exception& e) {  // from any worker of the check: this request fails
         fail(std::string("reachability check failed: ") + e.what());
         return;
@@ -99,8 +101,9 @@ class ScorerService {
     PlanInput input;
     double received_s = 0;
     double deadline_s = 0;
-    std::optional<std::vector<bool>> reachable;
-    std::vector<double> move_time_s;  // per candidate, from the reachability check (NaN: unreachable)
+    // Per candidate, the rig's time to reach it from the request's rig state (core/rig move_s),
+    // NaN where it is unreachable; none before the check (or without one: the free rig).
+    std::optional<std::vector<double>> move_time_s;
     double reachability_s = 0;
     RaycastParams raycast;  // planner "raycast"
     VisibilityParams visibility;  // planner "oracle"
@@ -162,7 +165,8 @@ class ScorerService {
 
   // The reachability of every candidate for B of this map, on the workers of core/base/parallel.hpp
   // (one MuJoCo checker each: a checker is not thread-safe).
-  std::vector<bool> reachability(const plan_request_t& r, const voxel_set_t& map, std::vector<double>* move_time_s) {
+  // Returns each candidate's move time, NaN where it is unreachable.
+  std::vector<double> reachability(const plan_request_t& r, const voxel_set_t& map) {
     const auto t0 = std::chrono::steady_clock::now();
     const Eigen::AlignedBox3d box = bus::bbox_of(map);
     const std::vector<Pose> cands = candidate_views(box, pending_->input.candidates);
@@ -171,7 +175,6 @@ class ScorerService {
     const std::string key = bus::reachability_key(r, box);
     if (key == reach_key_) {
       pending_->reachability_s = 0;
-      *move_time_s = move_cache_;
       return reach_cache_;
     }
     Vector6d q;
@@ -183,7 +186,6 @@ class ScorerService {
     // byte (a std::vector<bool> packs eight candidates into one).
     const int workers = worker_count(cands.size(), kCandidatesPerWorker);
     while (checkers_.size() < static_cast<std::size_t>(workers)) checkers_.push_back(std::make_unique<ReachabilityChecker>(rig_));
-    std::vector<uint8_t> reachable(cands.size(), 0);
     std::vector<double> times(cands.size(), std::numeric_limits<double>::quiet_NaN());
     const RigState from{q, r.turntable_angle_rad};
     const TurntableChoice choice = bus::turntable_choice_from_msg(r.turntable_choice, "PLAN_REQUEST turntable_choice");
@@ -192,17 +194,13 @@ class ScorerService {
       checkers_[w]->set_turntable_choice(choice);
       const std::vector<ViewSolution> s = checkers_[w]->solve_batch(part, q, r.turntable_angle_rad, keepout, r.object_z_m);
       for (std::size_t i = 0; i < s.size(); ++i) {
-        reachable[begin + i] = s[i].reachable ? 1 : 0;
         if (s[i].reachable) times[begin + i] = move_s(rig_, from, {s[i].q, s[i].turntable_rad});
       }
     }, kCandidatesPerWorker, workers);
-    const std::vector<bool> ok(reachable.begin(), reachable.end());
     pending_->reachability_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     reach_key_ = key;
-    reach_cache_ = ok;
-    move_cache_ = times;
-    *move_time_s = std::move(times);
-    return ok;
+    reach_cache_ = times;
+    return times;
   }
 
   void answer(const voxel_set_t& map, const ellipsoid_set_t* ell) {
@@ -218,8 +216,9 @@ class ScorerService {
       for (std::size_t i = 0; ell && i < ell->ellipsoids.size(); ++i) {
         p.input.ellipsoids.push_back(bus::from_msg(ell->ellipsoids[i], "ELLIPSOIDS ellipsoids[" + std::to_string(i) + "]"));
       }
-      if (p.reachable) {
-        const std::vector<bool> cached = *p.reachable;
+      if (p.move_time_s) {
+        std::vector<bool> cached(p.move_time_s->size());
+        for (std::size_t i = 0; i < cached.size(); ++i) cached[i] = !std::isnan((*p.move_time_s)[i]);
         p.input.reachable = [cached](const std::vector<Pose>& c) {
           if (c.size() != cached.size()) throw std::logic_error("candidate set changed after the reachability check");
           return cached;
@@ -239,7 +238,7 @@ class ScorerService {
         if (combined_ranking(p.planner)) {
           p.input.grid = &grid.emplace(bus::grid_from_msg(map));
           // Motion-aware (the scan's --motion): the rig's time to each candidate weighs against it.
-          if (r.seconds_per_point > 0 && p.reachable) p.input.move_time_s = p.move_time_s;
+          if (r.seconds_per_point > 0 && p.move_time_s) p.input.move_time_s = *p.move_time_s;
         }
         result = plan_pbnbv(p.input);
       }
@@ -303,8 +302,7 @@ class ScorerService {
   bus::RecentPerScan<ellipsoid_set_t> ellipsoids_;
   std::optional<Pending> pending_;
   std::string reach_key_;                 // the candidate set of the last reachability check
-  std::vector<bool> reach_cache_;
-  std::vector<double> move_cache_;
+  std::vector<double> reach_cache_;        // its answer: each candidate's move time, NaN unreachable
   bus::ReplyCache<std::pair<std::string, int64_t>, view_plan_t> answers_{kAnswersKept};
 };
 

@@ -76,13 +76,12 @@ MotionStep MotionSequencer::on_request(const MoveRequest& r, double now_s) {
     return step;
   }
   const auto t0 = std::chrono::steady_clock::now();
+  const RigState from{arm_.joint_position_rad, turntable_.angle_rad};
   checker_.set_turntable_choice(r.turntable_choice);
-  const ViewSolution solution = checker_.solve(r.object_T_camera, arm_.joint_position_rad, turntable_.angle_rad,
-                                               r.keepout, r.object_z_m);
+  const ViewSolution solution = checker_.solve(r.object_T_camera, from.q, from.turntable_rad, r.keepout, r.object_z_m);
   RigPath path;
   if (solution.reachable) {
-    path = checker_.plan_path({arm_.joint_position_rad, turntable_.angle_rad}, {solution.q, solution.turntable_rad},
-                              r.keepout, r.object_z_m);
+    path = checker_.plan_path(from, {solution.q, solution.turntable_rad}, r.keepout, r.object_z_m);
   }
   const double plan_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!solution.reachable || !path.clear) {
@@ -99,7 +98,7 @@ MotionStep MotionSequencer::on_request(const MoveRequest& r, double now_s) {
     result.turntable_target_rad = solution.turntable_rad;
     result.plan_s = plan_s;
     result.route = path.route;
-    result.path_s = path_s(rig_, {arm_.joint_position_rad, turntable_.angle_rad}, path.stops, r.speed_scale);
+    result.path_s = path_s(rig_, from, path.stops, r.speed_scale);
     step.result = result;
     step.keep_result = true;
     return step;
@@ -108,7 +107,7 @@ MotionStep MotionSequencer::on_request(const MoveRequest& r, double now_s) {
   job.request = r;
   job.solution = solution;
   job.path = path;
-  job.from = {arm_.joint_position_rad, turntable_.angle_rad};
+  job.from = from;
   job.plan_s = plan_s;
   job.arm_seq = job.turntable_seq = next_seq_++;
   job.t_commanded = now_s + plan_s;  // the commands leave once the plan is made

@@ -310,15 +310,18 @@ RigPath ReachabilityChecker::plan_path(const RigState& from, const RigState& to,
   // is checked as its sweep; one that stands still as it is).
   routes.push_back({"turntable first", {{from.q, to.turntable_rad}, to}});
   routes.push_back({"arm first", {{to.q, from.turntable_rad}, to}});
-  for (double back : {kPathRetreatM, 2 * kPathRetreatM}) {
-    const std::optional<Vector6d> ra = backed_off(rig, from.q, back), rb = backed_off(rig, to.q, back);
-    if (ra && rb) {
-      routes.push_back({"retreat " + fixed(back, 2) + " m, turn, approach",
-                        {{*ra, from.turntable_rad}, {*rb, to.turntable_rad}, to}});
+  const std::optional<Vector6d> ra = backed_off(rig, from.q, kPathRetreatM), rb = backed_off(rig, to.q, kPathRetreatM);
+  const std::optional<Vector6d> ra2 = backed_off(rig, from.q, 2 * kPathRetreatM),
+                                rb2 = backed_off(rig, to.q, 2 * kPathRetreatM);
+  const auto retreat = [&](double back, const std::optional<Vector6d>& a, const std::optional<Vector6d>& b) {
+    if (a && b) {
+      routes.push_back({"retreat " + fixed(back, 2) + " m, turn, approach", {{*a, from.turntable_rad}, {*b, to.turntable_rad}, to}});
     }
-  }
+  };
+  retreat(kPathRetreatM, ra, rb);
+  retreat(2 * kPathRetreatM, ra2, rb2);
   routes.push_back({"via home", {{rig.q_home, to.turntable_rad}, to}});
-  if (const auto ra = backed_off(rig, from.q, kPathRetreatM), rb = backed_off(rig, to.q, kPathRetreatM); ra && rb) {
+  if (ra && rb) {
     routes.push_back({"retreat, home, approach",
                       {{*ra, from.turntable_rad}, {rig.q_home, to.turntable_rad}, {*rb, to.turntable_rad}, to}});
   }

@@ -120,6 +120,16 @@ RigTimeSum sum_rig_time(const std::vector<ViewRecord>& views) {
   return s;
 }
 
+std::string rig_time_summary(const RigTimeSum& rig) {
+  if (rig.views == 0) return "";
+  std::string text = "; rig time " + rig_time_text(rig.sum);
+  if (rig.views_incomplete > 0) {
+    text += " (" + std::to_string(rig.views_incomplete) + (rig.views_incomplete == 1 ? " view" : " views") +
+            " not measured in full)";
+  }
+  return text;
+}
+
 std::vector<double> rig_time_at_frames(const std::vector<ViewRecord>& views) {
   if (sum_rig_time(views).views == 0) return {};
   std::vector<double> out;

@@ -178,6 +178,9 @@ struct RigTimeSum {
   int views = 0, views_incomplete = 0;
 };
 RigTimeSum sum_rig_time(const std::vector<ViewRecord>& views);
+// The scan's closing line's rig time: "; rig time 24.1 s (motion ...)" and, when some views were
+// not measured in full, " (2 views not measured in full)"; "" when no view was measured.
+std::string rig_time_summary(const RigTimeSum& rig);
 // The rig time from the start to the end of each view with a frame (the views of
 // new_surface_figures, and of coverage by view), s: every view's rig time added up to it, views
 // without a frame included; NaN from a view whose rig time is not known in full on; empty when no

@@ -721,15 +721,7 @@ void ScanSequencer::conclude(ScanState state, const std::string& message, double
   set_status(state, message, now_s);
   const char* name = state == ScanState::kDone ? "done" : state == ScanState::kStopped ? "stopped" : "failed";
   record_.write(name, message, done_.views_done, now_s - t_start_s_);
-  const RigTimeSum rig = sum_rig_time(record_.record().views);
-  std::string rig_text;
-  if (rig.views > 0) {
-    rig_text = "; rig time " + rig_time_text(rig.sum);
-    if (rig.views_incomplete > 0) {
-      rig_text += " (" + std::to_string(rig.views_incomplete) + (rig.views_incomplete == 1 ? " view" : " views") +
-                  " not measured in full)";
-    }
-  }
+  const std::string rig_text = rig_time_summary(sum_rig_time(record_.record().views));
   summary_ = (state == ScanState::kDone ? "" : "scan ") + message + ": " + std::to_string(done_.views_done) + " of " +
              std::to_string(s_.views) + " views, " + std::to_string(record_.num_points()) + " points, " +
              fixed(now_s - t_start_s_, 2) + " s" + rig_text + " -> " + record_.scan_json_path().string();

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "eval/bench.hpp"
+#include "file_test_util.hpp"
 
 namespace fs = std::filesystem;
 
@@ -33,12 +34,7 @@ BenchResult bench(const fs::path& out, double pbnbv_ms, double raycast_ms) {
   return r;
 }
 
-std::string read(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using pbnbv::testing::read_text;
 
 TEST(AblationReport, TimeRatio) {
   EXPECT_DOUBLE_EQ(*time_ratio_raycast_to_pbnbv(bench("x", 20, 600)), 30.0);
@@ -57,14 +53,14 @@ TEST(AblationReport, SeveralPlannersPerValue) {
       {"0.03", bench(dir / "resolution=0.03", 20, 60)}, {"0.01", bench(dir / "resolution=0.01", 25, 1000)}};
   write_ablation("resolution", runs, dir);
 
-  const std::string md = read(dir / "ablation.md");
+  const std::string md = read_text(dir / "ablation.md");
   EXPECT_NE(md.find("| resolution 0.03 pbnbv | 30.0 | 90.0 | never | 20.0 ms (20.0) |"), std::string::npos) << md;
   EXPECT_NE(md.find("| resolution 0.01 raycast | 30.0 | 80.0 | never | 1000 ms (1000) |"), std::string::npos) << md;
   EXPECT_NE(md.find("| 0.03 | 20.0 ms | 60.0 ms | 3.0x |"), std::string::npos) << md;
   EXPECT_NE(md.find("| 0.01 | 25.0 ms | 1000 ms | 40.0x |"), std::string::npos) << md;
   EXPECT_NE(md.find("ablation_time.png"), std::string::npos);
 
-  const nlohmann::json j = nlohmann::json::parse(read(dir / "ablation.json"));
+  const nlohmann::json j = nlohmann::json::parse(read_text(dir / "ablation.json"));
   ASSERT_EQ(j["values"].size(), 4u);
   EXPECT_EQ(j["values"][3]["planner"], "raycast");
   EXPECT_EQ(j["values"][3]["value"], "0.01");
@@ -77,7 +73,7 @@ TEST(AblationReport, SeveralPlannersPerValue) {
   const fs::path views = dir / "views";
   write_ablation("initial-view", {{"0.9,0,0", bench(views / "a", 20, 60)}}, views);
   EXPECT_FALSE(fs::exists(views / "ablation_time.png"));
-  EXPECT_EQ(read(views / "ablation.md").find("ablation_time.png"), std::string::npos);
+  EXPECT_EQ(read_text(views / "ablation.md").find("ablation_time.png"), std::string::npos);
   fs::remove_all(dir);
 }
 

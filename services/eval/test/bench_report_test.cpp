@@ -10,6 +10,7 @@
 
 #include "core/io/json.hpp"
 #include "eval/bench.hpp"
+#include "file_test_util.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -17,14 +18,9 @@ using nlohmann::json;
 namespace pbnbv::eval {
 namespace {
 
-std::string read(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using pbnbv::testing::read_text;
 
-class BenchReport : public testing::Test {
+class BenchReport : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() / ("pbnbv_bench_report_test_" + std::to_string(::getpid()));
@@ -98,14 +94,14 @@ TEST_F(BenchReport, RigContactsAreCountedAndListed) {
   EXPECT_EQ(j["pbnbv"]["runs"]["b"]["rig_contact_list"], json(touched.rig_contact_list));
   EXPECT_EQ(j["pbnbv"]["runs"]["a"]["rig_contacts"], 0);
   EXPECT_FALSE(j["pbnbv"]["runs"]["a"].contains("rig_contact_list"));
-  std::string md = read(dir_ / "report.md");
+  std::string md = read_text(dir_ / "report.md");
   EXPECT_NE(md.find("## Rig contacts\n\n2 contacts of the arm or the camera"), std::string::npos) << md;
   EXPECT_NE(md.find("| pbnbv | 2 | b | " + touched.rig_contact_list[0] + " |"), std::string::npos) << md;
   EXPECT_EQ(md.find("| raycast | 0"), std::string::npos);
 
   r.planners[0] = summarise(PlannerKind::kPbnbv, {run("a", PlannerKind::kPbnbv, {40, 90})}, 2);
   write_report(r);
-  md = read(dir_ / "report.md");
+  md = read_text(dir_ / "report.md");
   EXPECT_NE(md.find("Rig contacts: none (no move of any scan touched anything with the arm or the camera)."),
             std::string::npos);
   EXPECT_EQ(md.find("## Rig contacts"), std::string::npos);
@@ -142,7 +138,7 @@ TEST_F(BenchReport, FailedScanIsCountedApartAndExplained) {
 
   write_json_atomic(to_json(r), (dir_ / "summary.json").string());
   write_report(r);
-  const std::string md = read(dir_ / "report.md");
+  const std::string md = read_text(dir_ / "report.md");
   EXPECT_NE(md.find("# Benchmark: free rig, full sphere, 2-3 objects (failed: pbnbv 1 of 3), 2 views"), std::string::npos)
       << md;
   EXPECT_NE(md.find("## Failed scans"), std::string::npos);
@@ -162,10 +158,10 @@ TEST_F(BenchReport, FailedScanIsCountedApartAndExplained) {
   for (const char* f : {"coverage.png", "coverage.svg", "coverage.pdf", "time.png", "time.svg", "time.pdf"}) {
     EXPECT_GT(fs::file_size(dir_ / f), 1000u) << f;
   }
-  std::string svg = read(dir_ / "coverage.svg");
+  std::string svg = read_text(dir_ / "coverage.svg");
   EXPECT_NE(svg.find("2-3 objects (failed: pbnbv 1 of 3)"), std::string::npos);
   EXPECT_EQ(svg.find("authors' release"), std::string::npos);
-  const std::string gp = read(dir_ / "coverage.gp");  // the script gnuplot drew it with
+  const std::string gp = read_text(dir_ / "coverage.gp");  // the script gnuplot drew it with
   size_t bands = 0;
   for (size_t at = gp.find("with filledcurves"); at != std::string::npos; at = gp.find("with filledcurves", at + 1)) ++bands;
   EXPECT_EQ(bands, 2u);
@@ -174,9 +170,9 @@ TEST_F(BenchReport, FailedScanIsCountedApartAndExplained) {
   BenchResult d = r;
   d.spec.objects = object_set(ObjectSet::kDefault);
   write_report(d);
-  EXPECT_EQ(read(dir_ / "coverage.svg").find("authors' release"), std::string::npos);
-  EXPECT_EQ(read(dir_ / "time.svg").find("25.8 s"), std::string::npos);
-  const std::string dmd = read(dir_ / "report.md");
+  EXPECT_EQ(read_text(dir_ / "coverage.svg").find("authors' release"), std::string::npos);
+  EXPECT_EQ(read_text(dir_ / "time.svg").find("25.8 s"), std::string::npos);
+  const std::string dmd = read_text(dir_ / "report.md");
   EXPECT_EQ(dmd.find("| authors' release"), std::string::npos);
   EXPECT_NE(dmd.find("in a median 25.8 s per planning iteration"), std::string::npos);
 

@@ -11,6 +11,7 @@
 
 #include "core/base/version.hpp"
 #include "eval/bench.hpp"
+#include "file_test_util.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -177,12 +178,7 @@ TEST(BenchStatistics, FirstViewsAreRangeCheckedAndExcludeAFixedInitialView) {
   EXPECT_NO_THROW(s.validate());
 }
 
-std::string read(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using pbnbv::testing::read_text;
 
 // Runs of two tuning objects (bunny: tune half, bear: confirm half) and a sphere (neither) from
 // two first views; pbnbv and raycast.
@@ -248,7 +244,7 @@ TEST(BenchStatistics, HalvesSummaryJsonAndReport) {
   EXPECT_EQ(j["failed_scans"][0]["first_view"], 2);
 
   write_report(r);
-  const std::string md = read(dir / "report.md");
+  const std::string md = read_text(dir / "report.md");
   EXPECT_NE(md.find("mean over runs: objects x first views"), std::string::npos) << md;
   // The line of intervals under the main table.
   EXPECT_NE(md.find("- pbnbv (3 objects): coverage after view 2 ["), std::string::npos) << md;
@@ -269,7 +265,7 @@ TEST(BenchStatistics, HalvesSummaryJsonAndReport) {
   EXPECT_NE(md.find("| bunny-fv2 | pbnbv |"), std::string::npos);
   // Not the default set: no foreign reference curve.
   EXPECT_EQ(md.find("authors' release"), std::string::npos);
-  EXPECT_EQ(read(dir / "coverage.svg").find("authors' release"), std::string::npos);
+  EXPECT_EQ(read_text(dir / "coverage.svg").find("authors' release"), std::string::npos);
   fs::remove_all(dir);
 }
 

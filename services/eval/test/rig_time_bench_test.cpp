@@ -12,6 +12,7 @@
 
 #include "core/scan/scan_record.hpp"
 #include "eval/bench.hpp"
+#include "file_test_util.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -19,12 +20,7 @@ using nlohmann::json;
 namespace pbnbv::eval {
 namespace {
 
-std::string read(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using pbnbv::testing::read_text;
 
 // A recorded view with rig time (motion, settle, capture, compute), with a frame or not.
 ViewRecord view(int i, RigTime t, bool frame) {
@@ -173,7 +169,7 @@ TEST(RigTimeBench, SummaryJsonAndReportCarryIt) {
   EXPECT_TRUE(j.contains("rig_time_rule"));
 
   write_report(r);
-  const std::string md = read(dir / "report.md");
+  const std::string md = read_text(dir / "report.md");
   // 31.5 s per scan, motion 24.0 of it (76 %).
   EXPECT_NE(md.find("| pbnbv | 2 | 31.5 | 24.0 | 1.50 | 0.62 | 5.4 | 76 % | 22.5 s (2 of 2) | 33.0 s (1 of 2) |"),
             std::string::npos)
@@ -181,7 +177,7 @@ TEST(RigTimeBench, SummaryJsonAndReportCarryIt) {
   EXPECT_NE(md.find("| pbnbv | 11.5 | 22.5 | 31.5 |"), std::string::npos) << md;
   EXPECT_NE(md.find("![observable coverage against rig time](observable_time.png)"), std::string::npos) << md;
   // The plot's data: 0.2 s steps to 33 s (the longest run), the mean at 25 s as above.
-  const std::string csv = read(dir / "observable_time.csv");
+  const std::string csv = read_text(dir / "observable_time.csv");
   EXPECT_NE(csv.find("\n25,91.5,91,92,\"pbnbv\""), std::string::npos) << csv.substr(0, 400);
   EXPECT_NE(csv.find("\n33,94.5,93,96,\"pbnbv\""), std::string::npos) << csv.substr(0, 400);
   for (const char* f : {"observable_time.png", "observable_time.svg"}) EXPECT_TRUE(fs::exists(dir / f)) << f;

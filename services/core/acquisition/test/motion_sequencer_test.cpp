@@ -8,6 +8,7 @@
 
 #include <cmath>
 
+#include "arm_views.hpp"
 #include "core/base/units.hpp"
 
 namespace pbnbv {
@@ -567,18 +568,6 @@ TEST_F(ArmMotion, AStopForEveryScanHoldsTheScanInProgress) {
 }
 
 
-// The arm standing where the camera sees the object from `eye` (object frame, turntable at 0).
-Vector6d config_seeing_from(const Eigen::Vector3d& eye) {
-  const RigModel& rig = arm_rig();
-  const Pose w_c = object_in_world(rig, 0, kObjectZ) * look_at_z_up(eye, Eigen::Vector3d::Zero());
-  const std::vector<Vector6d> sols = inverse_kinematics(rig, w_c * rig.flange_T_camera.inverse(), nullptr, rig.q_home);
-  Vector6d best = sols.empty() ? rig.q_home : sols.front();
-  for (const Vector6d& q : sols) {
-    if (arm_move_s(rig, rig.q_home, q) < arm_move_s(rig, rig.q_home, best)) best = q;
-  }
-  return best;
-}
-
 TEST(ArmMotionDetour, ADirectMoveThatCollidesIsDrivenThroughTheDetoursStopsOneCommandEach) {
   const RigModel& rig = arm_rig();
   ReachabilityChecker checker(rig);
@@ -592,7 +581,7 @@ TEST(ArmMotionDetour, ADirectMoveThatCollidesIsDrivenThroughTheDetoursStopsOneCo
   r.keepout = Eigen::AlignedBox3d(Eigen::Vector3d(-0.15, -0.15, -0.15), Eigen::Vector3d(0.15, 0.15, 0.35));
   r.turntable_choice = TurntableChoice::kLeastTurn;
   checker.set_turntable_choice(TurntableChoice::kLeastTurn);
-  const RigState from{config_seeing_from(Eigen::Vector3d(-side, front, 0.2)), 0};
+  const RigState from{testing::config_seeing_from(arm_rig(), Eigen::Vector3d(-side, front, 0.2), kObjectZ), 0};
   const ViewSolution sol = checker.solve(r.object_T_camera, from.q, 0, r.keepout, kObjectZ);
   ASSERT_TRUE(sol.reachable) << sol.reason;
   EXPECT_EQ(sol.turntable_rad, 0.0);
@@ -642,7 +631,7 @@ TEST(ArmMotionDetour, AViewWithNoCollisionFreePathIsUnreachableNamingEachRoutesC
   // Standing with the camera inside the keep-out box (a box grown to take in where the camera
   // stands, as a keep-out box changed under a standing arm would): every way out starts in the box.
   const double side = 0.55 * std::sin(50 * kPi / 180), front = -0.55 * std::cos(50 * kPi / 180);
-  const Vector6d q = config_seeing_from(Eigen::Vector3d(-side, front, 0.2));
+  const Vector6d q = testing::config_seeing_from(arm_rig(), Eigen::Vector3d(-side, front, 0.2), kObjectZ);
   const Eigen::Vector3d cam = (object_in_world(rig, 0, kObjectZ).inverse() * camera_in_world(rig, q)).translation();
   ASSERT_LT((cam - Eigen::Vector3d(-side, front, 0.2)).norm(), 1e-6);
   MoveRequest r = reachable_request();

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/base/units.hpp"
+#include "arm_views.hpp"
 #include "core/rig/rig.hpp"
 
 namespace pbnbv {
@@ -51,20 +52,6 @@ TEST(RigTime, TheArmsSlowestJointAndTheSlowerOfArmAndTurntableDecide) {
   EXPECT_NEAR(path_s(rig, {a, 0}, {{a, kPi}, {b, kPi}}), 4.5 + std::sqrt(6.0 / (4 * 5 * kPi / 3)), 1e-12);
 }
 
-// The configuration (nearest home) that puts the camera at `eye` (object frame, turntable at 0)
-// looking at the object's centre.
-Vector6d config_seeing_from(const RigModel& rig, const Eigen::Vector3d& eye) {
-  const Pose w_c = object_in_world(rig, 0, kObjectZ) * look_at_z_up(eye, Eigen::Vector3d::Zero());
-  std::string why;
-  const std::vector<Vector6d> sols = inverse_kinematics(rig, w_c * rig.flange_T_camera.inverse(), &why, rig.q_home);
-  EXPECT_FALSE(sols.empty()) << why;
-  Vector6d best = sols.empty() ? rig.q_home : sols.front();
-  for (const Vector6d& s : sols) {
-    if (arm_move_s(rig, rig.q_home, s) < arm_move_s(rig, rig.q_home, best)) best = s;
-  }
-  return best;
-}
-
 // Every state on the straight move a -> b, 1 mm of the camera's travel apart at most (a finer
 // and independent check of path_collision's sampling), collides with nothing.
 void expect_clear_all_along(ReachabilityChecker& checker, const RigModel& rig, const RigState& a, const RigState& b,
@@ -88,8 +75,8 @@ TEST(RigPath, AMoveAroundTheObjectOnTheArmsBaseArcCrossesTheKeepOutBoxAndADetour
   // the box.
   const Eigen::AlignedBox3d box(Eigen::Vector3d(-0.15, -0.15, -0.15), Eigen::Vector3d(0.15, 0.15, 0.35));
   const double side = 0.55 * std::sin(50 * kPi / 180), front = -0.55 * std::cos(50 * kPi / 180);
-  const RigState left{config_seeing_from(rig, Eigen::Vector3d(-side, front, 0.2)), 0};
-  const RigState right{config_seeing_from(rig, Eigen::Vector3d(side, front, 0.2)), 0};
+  const RigState left{testing::config_seeing_from(rig, Eigen::Vector3d(-side, front, 0.2), kObjectZ), 0};
+  const RigState right{testing::config_seeing_from(rig, Eigen::Vector3d(side, front, 0.2), kObjectZ), 0};
   ASSERT_TRUE(checker.collisions(left.q, 0, box, kObjectZ).empty());
   ASSERT_TRUE(checker.collisions(right.q, 0, box, kObjectZ).empty());
   // Midway in joint space the camera is inside the box.
@@ -118,8 +105,8 @@ TEST(RigPath, ThePathsSamplingCatchesAPlateThinnerThanItsStep) {
   ReachabilityChecker checker(rig);
   // The camera lowered on the object's side facing the arm, from 0.4 m to 0 m up; a keep-out plate
   // 1 mm thick (a quarter of the sampling step), 6 x 6 cm, where the camera is halfway.
-  const RigState high{config_seeing_from(rig, Eigen::Vector3d(0, -0.6, 0.4)), 0};
-  const RigState low{config_seeing_from(rig, Eigen::Vector3d(0, -0.6, 0.0)), 0};
+  const RigState high{testing::config_seeing_from(rig, Eigen::Vector3d(0, -0.6, 0.4), kObjectZ), 0};
+  const RigState low{testing::config_seeing_from(rig, Eigen::Vector3d(0, -0.6, 0.0), kObjectZ), 0};
   const Eigen::Vector3d halfway =
       (object_in_world(rig, 0, kObjectZ).inverse() * camera_in_world(rig, 0.5 * (high.q + low.q))).translation();
   const Eigen::AlignedBox3d plate(halfway - Eigen::Vector3d(0.03, 0.03, 0.0005), halfway + Eigen::Vector3d(0.03, 0.03, 0.0005));
@@ -138,7 +125,7 @@ TEST(RigPath, ATurningTurntableSweepsTheKeepOutBoxWhateverTheTiming) {
   // across the camera's view; at 90 deg its end reaches 0.285 m out towards the camera: only
   // the sweep (a cylinder of radius hypot(0.285, 0.05) = 0.289 m) collides.
   const Eigen::AlignedBox3d box(Eigen::Vector3d(-0.285, -0.05, -0.1), Eigen::Vector3d(0.285, 0.05, 0.1));
-  const RigState near_side{config_seeing_from(rig, Eigen::Vector3d(0, -0.28, 0.0)), 0};
+  const RigState near_side{testing::config_seeing_from(rig, Eigen::Vector3d(0, -0.28, 0.0), kObjectZ), 0};
   ASSERT_TRUE(checker.collisions(near_side.q, 0, box, kObjectZ).empty());
   ASSERT_TRUE(checker.collisions(near_side.q, kPi, box, kObjectZ).empty());
   EXPECT_FALSE(checker.collisions(near_side.q, kPi / 2, box, kObjectZ).empty());
