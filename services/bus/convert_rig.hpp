@@ -125,6 +125,7 @@ inline RigTimeline timeline_of(const RigLog& log) {
   }
   for (const auto& f : log.frames) t.frames.push_back({f.msg.utime, f.order});
   for (const auto& c : log.arm_commands) {
+    if (c.msg.mode != arm_command_t::kModePosition) continue;  // a hold is no view's and no stop's command
     RecordedCommand r;
     r.order = c.order;
     r.seq = c.msg.seq;

@@ -82,6 +82,7 @@ std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, con
     a.insert(a.end(), {"--initial-view", exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z())});
   }
   if (s.up) a.insert(a.end(), {"--up", std::string(name_of(*s.up))});
+  if (!s.rig_model.empty()) a.insert(a.end(), {"--rig-model", s.rig_model});
   return a;
 }
 
@@ -286,6 +287,8 @@ json to_json(const BenchSpec& s) {
   j["first_view_seed"] = kFirstViewSeed;
   j["camera"] = name_of(s.camera);
   j["rig_errors"] = name_of(s.rig_errors);
+  j["rig_model"] = s.rig_model;  // "": the rig kind's own file
+  j["seconds_rule"] = to_json(s.seconds_rule);
   return j;
 }
 
@@ -551,6 +554,7 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
   if (!to_90.empty()) p.rig_time_to_90 = std::accumulate(to_90.begin(), to_90.end(), 0.0) / to_90.size();
   if (!to_95.empty()) p.rig_time_to_95 = std::accumulate(to_95.begin(), to_95.end(), 0.0) / to_95.size();
   p.stop_rule = summarise_stop_rule(runs, views);
+  p.seconds_rule = summarise_stop_rule(runs, views, &ObjectRun::seconds_stop_view);
   p.cloud_metrics = mean_surface_metrics(runs, &ObjectRun::cloud_metrics);
   p.mesh_metrics = mean_surface_metrics(runs, &ObjectRun::mesh_metrics);
   p.reached_95 = static_cast<int>(reached.size());
@@ -570,23 +574,31 @@ PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs
   return p;
 }
 
-int stop_view_or_budget(const ObjectRun& r, int views) { return r.stop_view ? std::min(*r.stop_view, views) : views; }
+int stop_view_or_budget(const ObjectRun& r, int views, StopViewOf stop) {
+  return r.*stop ? std::min(*(r.*stop), views) : views;
+}
 
 double coverage_at_view(const ObjectRun& r, int view) {
   const std::vector<double> c = pad_views(r.coverage_by_view, std::max(view, 1));
   return c.empty() ? NAN : c[view - 1];
 }
 
-StopRuleSummary summarise_stop_rule(const std::vector<ObjectRun>& runs, int views) {
+StopRuleSummary summarise_stop_rule(const std::vector<ObjectRun>& runs, int views, StopViewOf stop_of) {
   StopRuleSummary s;
   for (const auto& r : runs) {
     if (!r.complete || r.coverage_by_view.empty()) continue;
-    const int stop = stop_view_or_budget(r, views);
+    const int stop = stop_view_or_budget(r, views, stop_of);
     const double shortfall = coverage_at_view(r, views) - coverage_at_view(r, stop);
     ++s.objects;
     if (stop < views) ++s.stopped;
     s.mean_stop_view += stop;
     s.mean_views_saved_percent += 100.0 * (views - stop) / views;
+    s.mean_shortfall += shortfall;
+    if (static_cast<int>(r.rig_time_by_view.size()) >= views && std::isfinite(r.rig_time_by_view[stop - 1]) &&
+        std::isfinite(r.rig_time_by_view[views - 1]) && r.rig_time_by_view[views - 1] > 0) {
+      s.mean_rig_time_saved_percent += 100.0 * (1.0 - r.rig_time_by_view[stop - 1] / r.rig_time_by_view[views - 1]);
+      ++s.rig_time_runs;
+    }
     if (s.worst_object.empty() || shortfall > s.worst_shortfall) {
       s.worst_shortfall = shortfall;
       s.worst_object = run_folder(r.object, r.first_view);
@@ -596,7 +608,9 @@ StopRuleSummary summarise_stop_rule(const std::vector<ObjectRun>& runs, int view
   if (s.objects > 0) {
     s.mean_stop_view /= s.objects;
     s.mean_views_saved_percent /= s.objects;
+    s.mean_shortfall /= s.objects;
   }
+  if (s.rig_time_runs > 0) s.mean_rig_time_saved_percent /= s.rig_time_runs;
   return s;
 }
 
@@ -686,15 +700,24 @@ json planner_means_json(const PlannerSummary& p, const BenchSpec& spec) {
     pj["coverage_min_by_view"] = p.coverage_min_by_view;
     pj["coverage_max_by_view"] = p.coverage_max_by_view;
   }
-  const StopRuleSummary& st = p.stop_rule;
-  pj["stop_rule"] = {{"rule", to_json(spec.stop_rule)},
-                     {"runs", st.objects},
-                     {"runs_stopped_before_budget", st.stopped},
-                     {"mean_stop_view", st.mean_stop_view},
-                     {"mean_views_saved_percent", st.mean_views_saved_percent},
-                     {"worst_shortfall_points", st.worst_shortfall},
-                     {"worst_run", st.worst_object},
-                     {"runs_within_0_5_points", st.within_half_point}};
+  const auto rule_json = [](const json& rule, const StopRuleSummary& st) {
+    json j = {{"rule", rule},
+              {"runs", st.objects},
+              {"runs_stopped_before_budget", st.stopped},
+              {"mean_stop_view", st.mean_stop_view},
+              {"mean_views_saved_percent", st.mean_views_saved_percent},
+              {"mean_shortfall_points", st.mean_shortfall},
+              {"worst_shortfall_points", st.worst_shortfall},
+              {"worst_run", st.worst_object},
+              {"runs_within_0_5_points", st.within_half_point}};
+    if (st.rig_time_runs > 0) {
+      j["mean_rig_time_saved_percent"] = st.mean_rig_time_saved_percent;
+      j["rig_time_runs"] = st.rig_time_runs;
+    }
+    return j;
+  };
+  pj["stop_rule"] = rule_json(to_json(spec.stop_rule), p.stop_rule);
+  pj["seconds_rule"] = rule_json(to_json(spec.seconds_rule), p.seconds_rule);
   if (!p.gap_to_oracle_by_view.empty()) {
     pj["gap_to_oracle_by_view"] = p.gap_to_oracle_by_view;
     pj["gap_to_oracle_runs"] = p.gap_objects;
@@ -746,6 +769,11 @@ json run_json(const ObjectRun& o, int views) {
                        {"coverage_at_budget", coverage_at_view(o, views)},
                        {"shortfall_points", coverage_at_view(o, views) - coverage_at_view(o, stop)},
                        {"new_surface_by_view", o.new_surface_by_view}};
+    const int seconds_stop = stop_view_or_budget(o, views, &ObjectRun::seconds_stop_view);
+    oj["seconds_rule"] = {{"stop_view", o.seconds_stop_view ? json(*o.seconds_stop_view) : json(nullptr)},
+                          {"reason", o.seconds_stop_view ? o.seconds_stop_reason : "never stops before the budget"},
+                          {"coverage_at_stop", coverage_at_view(o, seconds_stop)},
+                          {"shortfall_points", coverage_at_view(o, views) - coverage_at_view(o, seconds_stop)}};
   }
   return oj;
 }
@@ -858,6 +886,7 @@ void claim_folder(const BenchSpec& spec) {
   settings.erase("objects");  // objects may be added to a folder's benchmark
   settings.erase("planners");
   settings.erase("stop_rule");  // evaluated from the recorded figures, not run: it may change
+  settings.erase("seconds_rule");
   settings.erase("first_views");  // first views may be added (the draws for N are the first of those for N + 1)
   if (fs::exists(spec_path)) {
     const json before = read_json(spec_path.string());
@@ -1090,6 +1119,10 @@ ObjectRun evaluate_job(const BenchSpec& spec, const Job& j, std::map<std::string
     if (const auto d = first_surface_stop(e.new_surface_by_view, spec.stop_rule); d && d->after_views < spec.views) {
       r.stop_view = d->after_views;
       r.stop_rule_reason = d->reason;
+    }
+    if (const auto d = first_seconds_stop(e.view_gains, spec.seconds_rule); d && d->after_views < spec.views) {
+      r.seconds_stop_view = d->after_views;
+      r.seconds_stop_reason = d->reason;
     }
     r.complete = true;
     const std::optional<ScanPlanHeader> plan = read_scan_record(j.dir).plan;

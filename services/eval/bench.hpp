@@ -53,6 +53,7 @@ struct BenchSpec {
   std::vector<std::string> objects;  // names (default set, built-ins) or mesh paths
   std::vector<PlannerKind> planners = std::vector<PlannerKind>(kBenchPlanners.begin(), kBenchPlanners.end());
   RigKind rig = kBenchRig.value;
+  std::string rig_model;  // the rig's MJCF file ("": models/rig_<rig>.xml), e.g. models/rig_ur5e.xml
   CandidateArea area = kBenchArea.value;
   int views = kViews.value;
   double resolution_m = kMapResolution.value;
@@ -73,6 +74,7 @@ struct BenchSpec {
   // The scans spend the whole budget (stop rule off); the summary says where this rule would
   // have stopped each from its recorded per-view figures (it may change in a folder's reruns).
   SurfaceStopRule stop_rule;
+  SecondsStopRule seconds_rule;  // the rule in seconds, evaluated the same way
   int jobs = kJobs.value;            // scans run at once (each in its own network namespace)
   bool netns = true;                 // false: every scan on the current LCM bus, one at a time
   std::filesystem::path out;
@@ -124,6 +126,9 @@ struct ObjectRun {
   std::vector<double> new_surface_by_view;  // percent of the model, NaN for a view not merged
   std::optional<int> stop_view;             // the view after which the rule would stop (none: never)
   std::string stop_rule_reason;
+  // The rule in seconds on the recorded figures (new surface and rig time before computation).
+  std::optional<int> seconds_stop_view;
+  std::string seconds_stop_reason;
   // After the last view, against the true mesh (evaluate_scan): the cloud's and mesh.ply's.
   std::optional<SurfaceMetrics> cloud_metrics, mesh_metrics;
   // Contacts of the rig during the scan's moves (scan.json's rig_contacts; complete or not): the
@@ -153,11 +158,18 @@ struct StopRuleSummary {
   double worst_shortfall = 0;         // largest coverage at the budget minus at the stop view, points
   std::string worst_object;           // that run's run_folder name
   int within_half_point = 0;          // runs whose shortfall is at most 0.5 points
+  double mean_shortfall = 0;          // coverage at the budget minus at the stop view, mean, points
+  // Rig time to the end of the stop view against to the end of the budget's last view, over the
+  // runs with both known: 100 * (1 - stop / budget), mean, and the runs.
+  double mean_rig_time_saved_percent = 0;
+  int rig_time_runs = 0;
 };
 // The stop view of a run (its budget `views` when the rule never stops it), its coverage there and the shortfall.
-int stop_view_or_budget(const ObjectRun& r, int views);
+// `stop`: which rule's stop view (the surface rule's, or seconds_stop_view).
+using StopViewOf = std::optional<int> ObjectRun::*;
+int stop_view_or_budget(const ObjectRun& r, int views, StopViewOf stop = &ObjectRun::stop_view);
 double coverage_at_view(const ObjectRun& r, int view);
-StopRuleSummary summarise_stop_rule(const std::vector<ObjectRun>& runs, int views);
+StopRuleSummary summarise_stop_rule(const std::vector<ObjectRun>& runs, int views, StopViewOf stop = &ObjectRun::stop_view);
 
 // A 95 % interval [lo, hi].
 struct Interval {
@@ -208,7 +220,7 @@ struct PlannerSummary {
   // oracle was not run.
   std::vector<double> gap_to_oracle_by_view;
   int gap_objects = 0;
-  StopRuleSummary stop_rule;
+  StopRuleSummary stop_rule, seconds_rule;
   MeanSurfaceMetrics cloud_metrics, mesh_metrics;  // after the last view
   // Contact events of the rig over every run (complete or not), and the runs with any (run_folder).
   int64_t rig_contacts = 0;

@@ -53,12 +53,17 @@ std::string command_of(const BenchSpec& s) {
   if (s.first_views != kFirstViews.value) os << " --first-views " << s.first_views;
   if (s.size_m != kObjectSize.value) os << " --size " << s.size_m;
   if (s.up) os << " --up " << name_of(*s.up);
+  if (!s.rig_model.empty()) os << " --rig-model " << s.rig_model;
   if (s.when_done != kWhenDone.value) os << " --when-done " << name_of(s.when_done);
   if (s.motion != kMotion.value) os << " --motion " << name_of(s.motion);
   if (s.seconds_per_point != kSecondsPerPoint.value) os << " --seconds-per-point " << s.seconds_per_point;
   if (s.stop_rule.window != kStopWindow.value) os << " --stop-window " << s.stop_rule.window;
   if (s.stop_rule.max_new_percent != kStopNewSurface.value) os << " --stop-new-surface " << s.stop_rule.max_new_percent;
   if (s.stop_rule.min_views != kStopMinViews.value) os << " --stop-min-views " << s.stop_rule.min_views;
+  if (s.seconds_rule.window != kStopRateViews.value) os << " --stop-rate-views " << s.seconds_rule.window;
+  if (s.seconds_rule.min_percent_per_s != kStopGainPerSecond.value) {
+    os << " --stop-gain-per-second " << s.seconds_rule.min_percent_per_s;
+  }
   if (s.metrics.threshold_m != kMetricThreshold.value) os << " --threshold " << s.metrics.threshold_m;
   os << " --jobs " << s.jobs << " --out " << s.out.string();
   return os.str();
@@ -489,6 +494,24 @@ void stop_rule_section(const BenchResult& r, std::ostream& md) {
     md << "| " << name_of(p.planner) << " | " << st.objects << " | " << st.stopped << " | " << fixed(st.mean_stop_view, 2) << " | "
        << fixed(st.mean_views_saved_percent, 1) << " % | " << fixed(st.worst_shortfall, 2) << " (" << st.worst_object << ") | "
        << st.within_half_point << " of " << st.objects << " |\n";
+  }
+  const SecondsStopRule& sr = s.seconds_rule;
+  md << "\nThe rule in seconds (`--stop-rule seconds --stop-rate-views " << sr.window << " --stop-gain-per-second "
+     << fixed(sr.min_percent_per_s, 3) << "`) would have stopped each after the first view (from view " << sr.min_views
+     << " on) at which the last " << sr.window << " views added less than " << fixed(sr.min_percent_per_s, 3)
+     << " % of the model per second of their rig time (motion, settle, capture). Rig time saved: to the end of the stop "
+        "view against to the end of view "
+     << n << ".\n\n"
+     << "| planner | runs | stopped before " << n << " | mean stop view | mean shortfall | worst shortfall | within 0.5 points | "
+        "rig time saved |\n|---|---|---|---|---|---|---|---|\n";
+  for (const auto& p : r.planners) {
+    const StopRuleSummary& st = p.seconds_rule;
+    md << "| " << name_of(p.planner) << " | " << st.objects << " | " << st.stopped << " | " << fixed(st.mean_stop_view, 2) << " | "
+       << fixed(st.mean_shortfall, 2) << " | " << fixed(st.worst_shortfall, 2) << " (" << st.worst_object << ") | "
+       << st.within_half_point << " of " << st.objects << " | "
+       << (st.rig_time_runs > 0 ? fixed(st.mean_rig_time_saved_percent, 1) + " % (" + std::to_string(st.rig_time_runs) + " runs)"
+                                : std::string("-"))
+       << " |\n";
   }
   md << "\n";
 }

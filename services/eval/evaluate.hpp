@@ -37,6 +37,7 @@ struct ScanEvaluation {
                                          // view selection (views 2..n; empty for a ring scan)
   std::vector<int> points_by_view;       // points in the model after each view
   std::vector<double> new_surface_by_view;  // what each view added, % of the model before it
+  std::vector<ViewGain> view_gains;         // the same with each view's rig time (the seconds rule)
                                             // (the stop rule's figure; NaN: not merged or not recorded)
   // Rig time (core/scan/rig_time.hpp) from the start to the end of each view of coverage_by_view
   // (the sum of every recorded view's rig time up to it, views that captured nothing included),

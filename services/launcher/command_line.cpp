@@ -204,6 +204,8 @@ void CommandLine::declare_scan() {
   cli::add(c, kStopWindow, &s.surface_rule.window)->group(kGroupPlanning);
   cli::add(c, kStopNewSurface, &s.surface_rule.max_new_percent)->group(kGroupPlanning);
   cli::add(c, kStopMinViews, &s.surface_rule.min_views)->group(kGroupPlanning);
+  cli::add(c, kStopRateViews, &s.seconds_rule.window)->group(kGroupPlanning);
+  cli::add(c, kStopGainPerSecond, &s.seconds_rule.min_percent_per_s)->group(kGroupPlanning);
   cli::add(c, kStopRadius, &s.stop_radius_m)->group(kGroupPlanning);
   cli::add(c, kWhenDone, &s.when_done)->group(kGroupPlanning);
   cli::add(c, kMotion, &s.motion)->group(kGroupPlanning);
@@ -287,6 +289,7 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add_text(c, "object-dir", &pending->object_dir, "every .obj/.stl/.off/.ply in DIR instead", "DIR");
   cli::add_list(c, "planners", &spec->planners, "planners to compare");
   cli::add(c, eval::kBenchRig, &spec->rig);
+  cli::add_text(c, "rig-model", &spec->rig_model, "the rig's MJCF file, e.g. models/rig_ur5e.xml [models/rig_<rig>.xml]", "FILE");
   cli::add(c, eval::kBenchArea, &spec->area);
   cli::add(c, kViews, &spec->views);
   cli::add(c, kMapResolution, &spec->resolution_m);
@@ -309,6 +312,8 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add(c, kStopWindow, &spec->stop_rule.window);
   cli::add(c, kStopNewSurface, &spec->stop_rule.max_new_percent);
   cli::add(c, kStopMinViews, &spec->stop_rule.min_views);
+  cli::add(c, kStopRateViews, &spec->seconds_rule.window);  // and where the rule in seconds would have
+  cli::add(c, kStopGainPerSecond, &spec->seconds_rule.min_percent_per_s);
   cli::add(c, kMetricThreshold, &spec->metrics.threshold_m);  // the surface metrics' precision / recall
   cli::add(c, eval::kJobs, &spec->jobs);
   cli::add_flag(c, "no-netns", &pending->no_netns, "run the scans on the current LCM bus (one at a time)");
@@ -417,6 +422,7 @@ void CommandLine::resolve_scan() {
   } else {
     s.rig_model_path = default_rig_path(s.rig);
   }
+  s.seconds_rule.min_views = s.surface_rule.min_views;  // --stop-min-views: either rule
   s.ring_elevation_deg = p.ring_elevation_deg.value_or(s.rig == RigKind::kArm ? kRingElevation.value
                                                                                 : kRingElevationFreeDeg);
   if (p.initial_view) s.initial_view_m = *p.initial_view;
@@ -514,6 +520,8 @@ void CommandLine::resolve_bench(const CLI::App* command, eval::BenchSpec* spec, 
     spec->objects = eval::expand_objects(spec->objects);
   }
   spec->netns = !pending.no_netns;
+  spec->seconds_rule.min_views = spec->stop_rule.min_views;  // --stop-min-views: either rule
+  if (!spec->rig_model.empty()) spec->rig_model = std::filesystem::absolute(spec->rig_model).string();  // scans run elsewhere
   if (pending.out.empty()) throw std::invalid_argument("--out DIR is required");
   spec->out = fs::absolute(pending.out);
   spec->validate();

@@ -35,7 +35,10 @@ class ReplayRigService {
       } else if (c.mode == arm_command_t::kModePosition && c.num_joints == 6) {
         rig_.on_arm_command(c.seq, bus::to_vector6(c.joint_position_rad, "ARM_COMMAND joint_position_rad"));
         if (!rig_.arm_fault().empty()) throw std::invalid_argument(rig_.arm_fault());
-        log_info("ARM_COMMAND seq " + std::to_string(c.seq) + ": recorded view " + std::to_string(rig_.view() + 1));
+        log_info("ARM_COMMAND seq " + std::to_string(c.seq) + ": " +
+                 (rig_.detour_stop() < 0 ? "recorded view " + std::to_string(rig_.view() + 1)
+                                         : "stop " + std::to_string(rig_.detour_stop() + 1) + " of recorded view " +
+                                               std::to_string(rig_.view() + 2) + "'s detour"));
       } else {
         throw std::invalid_argument("ARM_COMMAND seq " + std::to_string(c.seq) + ": unknown mode or num_joints");
       }
@@ -46,7 +49,12 @@ class ReplayRigService {
     });
     bus_.subscribe<depth_trigger_t>(channels::kDepthTrigger, [this](const depth_trigger_t& t) {
       const std::optional<std::size_t> f = rig_.on_trigger();
-      if (!f) throw std::invalid_argument("DEPTH_TRIGGER seq " + std::to_string(t.seq) + " before any command: no view to show");
+      if (!f) {
+        throw std::invalid_argument("DEPTH_TRIGGER seq " + std::to_string(t.seq) +
+                                    (rig_.view() < 0 && rig_.detour_stop() < 0 ? " before any command"
+                                                                               : " at a detour's stop") +
+                                    ": no recorded view to show");
+      }
       depth_frame_t frame = log_.frames[*f].msg;
       frame.trigger_seq = t.seq;
       frame.scan_id = t.scan_id;

@@ -24,9 +24,10 @@ inline constexpr ChoiceSetting<WhenDone> kWhenDone{
     "when the map has nothing left to aim at (no frontier ellipsoid; raycast: no unobserved voxel in view): "
     "stop, or spend the remaining views filling the largest gaps between the views taken"};
 inline constexpr ChoiceSetting<Motion> kMotion{
-    "motion", Motion::kPlain,
-    "arm rig: aware (the turntable turns only as far as the arm cannot reach round the object), plain (every view "
-    "turned to the arm, the paper's rig), or auto (aware for every planner but pbnbv-paper)"};
+    "motion", Motion::kAuto,
+    "arm rig: aware (the turntable turns only as far as the arm cannot reach round the object, and pbnbv charges "
+    "each candidate its rig time), plain (every view turned to the arm, the paper's rig), or auto (aware for every "
+    "planner but pbnbv-paper)"};
 
 // pbnbv's combined ranking (docs/method.md "Beyond the paper", departure 4; chosen on the tune half of
 // the tuning set, planner.hpp CombinedRanking): the shortlist's size per term, the ray term's

@@ -77,6 +77,61 @@ const RecordedCommand* command_of(const std::vector<RecordedCommand>& c, int64_t
   return nullptr;
 }
 
+// The statuses played at a detour's stop (command `seq`): from the first still one following it to
+// the last one following it, held there. Empty (nullopt) when the log holds none.
+std::optional<StatusSpan> stop_span(const std::vector<RecordedStatus>& s, int64_t seq) {
+  std::optional<std::size_t> first, first_still, last;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (s[i].command_seq != seq) continue;
+    if (!first) first = i;
+    if (!first_still && s[i].still) first_still = i;
+    last = i;
+  }
+  if (!last) return std::nullopt;
+  StatusSpan span;
+  span.begin = first_still.value_or(*first);
+  span.at_frame = *last;
+  span.end = *last + 1;
+  return span;
+}
+
+// The detour's stops commanded after log position `after` and before `before`, other than `view_seq`.
+std::vector<RecordedStop> stops_between(const RigTimeline& t, int64_t after, int64_t before, int64_t view_seq) {
+  std::vector<RecordedStop> stops;
+  for (const RecordedCommand& c : t.arm_commands) {
+    if (c.order <= after || c.order >= before || c.seq == view_seq) continue;
+    if (!stops.empty() && stops.back().arm_command_seq == c.seq) continue;  // re-sent
+    const std::optional<StatusSpan> arm = stop_span(t.arm, c.seq);
+    if (!arm) continue;  // the log lost what the rig did: a replayed command there is refused
+    RecordedStop stop;
+    stop.arm_command_seq = c.seq;
+    stop.arm_target_rad = c.target_rad;
+    stop.arm = *arm;
+    if (t.has_turntable()) {
+      if (const RecordedCommand* tc = command_of(t.turntable_commands, c.seq)) stop.turntable_target_rad = tc->target_rad[0];
+      if (const std::optional<StatusSpan> tt = stop_span(t.turntable, c.seq)) stop.turntable = *tt;
+    }
+    stops.push_back(stop);
+  }
+  return stops;
+}
+
+// Where in the log the arm was first commanded to `seq` (its command, or the first status
+// acknowledging it when the log lost the command).
+int64_t commanded_at(const RigTimeline& t, int64_t seq) {
+  int64_t order = std::numeric_limits<int64_t>::max();
+  for (const RecordedCommand& c : t.arm_commands) {
+    if (c.seq == seq) order = std::min(order, c.order);
+  }
+  for (const RecordedStatus& s : t.arm) {
+    if (s.command_seq == seq) {
+      order = std::min(order, s.order);
+      break;
+    }
+  }
+  return order;
+}
+
 }  // namespace
 
 std::vector<RecordedView> recorded_views(const RigTimeline& t) {
@@ -104,6 +159,8 @@ std::vector<RecordedView> recorded_views(const RigTimeline& t) {
       if (const RecordedCommand* c = command_of(t.turntable_commands, tt.command_seq)) v.turntable_target_rad = c->target_rad[0];
       v.turntable = span_of(t.turntable, frame.utime, frame.order, tt.command_seq);
     }
+    const int64_t previous_frame = views.empty() ? -1 : t.frames[views.back().frame].order;
+    v.stops = stops_between(t, previous_frame, commanded_at(t, v.arm_command_seq), v.arm_command_seq);
     views.push_back(v);
   }
   return views;
@@ -137,19 +194,39 @@ ReplayRig::Statuses ReplayRig::tick() {
   return s;
 }
 
-void ReplayRig::enter(int view) {
-  view_ = view;
+void ReplayRig::play(const StatusSpan& arm, const StatusSpan& turntable, std::optional<double> turntable_target) {
   triggered_ = false;
-  arm_span_ = views_[view].arm;
+  arm_span_ = arm;
   arm_at_ = arm_span_.begin;
   if (has_turntable_) {
-    turntable_span_ = views_[view].turntable;
+    turntable_span_ = turntable;
     turntable_at_ = turntable_span_.begin;
   }
+  expected_turntable_rad_ = turntable_target;
+}
+
+void ReplayRig::enter(int view) {
+  view_ = view;
+  stop_ = -1;
+  play(views_[view].arm, views_[view].turntable, views_[view].turntable_target_rad);
 }
 
 void ReplayRig::on_arm_command(int64_t seq, const Vector6d& target_rad) {
   if (seq == arm_seq_) return;  // a repeat of the command being played
+  // A stop of the next view's detour, after the one being played.
+  if (view_ + 1 < static_cast<int>(views_.size())) {
+    const std::vector<RecordedStop>& stops = views_[view_ + 1].stops;
+    for (int k = stop_ + 1; k < static_cast<int>(stops.size()); ++k) {
+      if ((stops[k].arm_target_rad - target_rad).cwiseAbs().maxCoeff() > kReplayTargetToleranceRad) continue;
+      arm_fault_.clear();
+      arm_fault_seq_ = -1;
+      arm_seq_ = seq;
+      stop_ = k;
+      play(stops[k].arm, stops[k].turntable, stops[k].turntable_target_rad);
+      check_turntable();
+      return;
+    }
+  }
   int nearest = -1;
   double nearest_rad = std::numeric_limits<double>::infinity();
   // The next recorded view first (the scan's order), then any other.
@@ -195,17 +272,19 @@ void ReplayRig::on_turntable_command(int64_t seq, double angle_rad) {
 }
 
 void ReplayRig::check_turntable() {
-  if (!has_turntable_ || view_ < 0 || turntable_seq_ != arm_seq_ || !turntable_target_) return;
-  const std::optional<double>& recorded = views_[view_].turntable_target_rad;
+  if (!has_turntable_ || (view_ < 0 && stop_ < 0) || turntable_seq_ != arm_seq_ || !turntable_target_) return;
+  const std::optional<double>& recorded = expected_turntable_rad_;
   if (recorded && std::abs(*recorded - *turntable_target_) > kReplayTargetToleranceRad) {
-    turntable_fault_ = fmt::format("TURNTABLE_COMMAND seq {}: recorded view {} was commanded to {:.6f} rad, not {:.6f}",
-                                   turntable_seq_, view_ + 1, *recorded, *turntable_target_);
+    const std::string what = stop_ < 0 ? fmt::format("recorded view {}", view_ + 1)
+                                       : fmt::format("stop {} of recorded view {}'s detour", stop_ + 1, view_ + 2);
+    turntable_fault_ = fmt::format("TURNTABLE_COMMAND seq {}: {} was commanded to {:.6f} rad, not {:.6f}",
+                                   turntable_seq_, what, *recorded, *turntable_target_);
     turntable_fault_seq_ = turntable_seq_;
   }
 }
 
 std::optional<std::size_t> ReplayRig::on_trigger() {
-  if (view_ < 0) return std::nullopt;
+  if (view_ < 0 || stop_ >= 0) return std::nullopt;
   triggered_ = true;
   return views_[view_].frame;
 }

@@ -71,6 +71,16 @@ struct StatusSpan {
   bool nearest_reading_lost = false;
 };
 
+// A stop of a detour the motion executor took on its way to a view (a retreat, a turn, home): the
+// command's targets and the statuses the rig reported while it followed it, from the first still
+// one to the last (at_frame = end - 1: held until the next command).
+struct RecordedStop {
+  int64_t arm_command_seq = -1;
+  Vector6d arm_target_rad = Vector6d::Zero();
+  std::optional<double> turntable_target_rad;
+  StatusSpan arm, turntable;
+};
+
 // One recorded view: the frame the scan used (the last frame the rig took while following the
 // view's command), the targets it was commanded to, and the statuses played for it. The command is
 // the one the arm's status acknowledged at the frame (the log may have lost the command itself:
@@ -81,6 +91,9 @@ struct RecordedView {
   Vector6d arm_target_rad = Vector6d::Zero();
   std::optional<double> turntable_target_rad;
   StatusSpan arm, turntable;
+  // The detour's stops commanded after the previous view's frame and before this view's command,
+  // in order (empty: the move went straight).
+  std::vector<RecordedStop> stops;
 };
 
 // The views of a recording, in order. Throws std::invalid_argument when it has no arm status, no
@@ -103,8 +116,9 @@ class ReplayRig {
   // The statuses of this tick; playback advances by one status per tick.
   Statuses tick();
 
-  // A position command. The recorded view commanded to these joints becomes the current one (a
-  // repeated seq is ignored); none: the command is refused, the rig keeps holding and reports the
+  // A position command. A stop of the next recorded view's detour commanded to these joints is
+  // played (no frame is shown there); else the recorded view commanded to them becomes the current
+  // one (a repeated seq is ignored); none: the command is refused, the rig keeps holding and reports the
   // fault (arm_fault()) until it accepts a command.
   void on_arm_command(int64_t seq, const Vector6d& target_rad);
   // Hold where you are (STOP): the seq is echoed, nothing moves.
@@ -125,11 +139,14 @@ class ReplayRig {
   int64_t turntable_fault_seq() const { return turntable_fault_seq_; }
   // The current recorded view (-1: before the first command).
   int view() const { return view_; }
+  // The stop of the next view's detour being played (-1: none).
+  int detour_stop() const { return stop_; }
   const std::vector<RecordedView>& views() const { return views_; }
 
  private:
   void check_turntable();
   void enter(int view);
+  void play(const StatusSpan& arm, const StatusSpan& turntable, std::optional<double> turntable_target);
 
   std::vector<RecordedView> views_;
   bool has_turntable_;
@@ -137,6 +154,8 @@ class ReplayRig {
   std::size_t arm_at_ = 0, turntable_at_ = 0;
   bool triggered_ = false;
   int view_ = -1;
+  int stop_ = -1;                                   // of views_[view_ + 1].stops
+  std::optional<double> expected_turntable_rad_;    // the recorded turntable target of what is played
   int64_t arm_seq_ = -1, turntable_seq_ = -1;
   std::optional<double> turntable_target_;  // of turntable_seq_
   std::string arm_fault_, turntable_fault_;

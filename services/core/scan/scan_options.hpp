@@ -37,19 +37,28 @@ inline constexpr Setting<int> kViews{"views", 10, 1, 1000, "", "at most this man
 // --stop-min-views views. Defaults tuned on half the default object set, arm rig, 20 views: the
 // largest saving with every object within 0.5 points of its 20-view coverage (docs/scan.md "When a
 // scan stops": 7 views in a row under 0.05 %; a shorter window stops before late gains).
-enum class StopRule : uint8_t { kOff, kSurface };
+// The rule in seconds stops it when the last --stop-rate-views views added less than
+// --stop-gain-per-second percent of the model per second of the rig time they took.
+enum class StopRule : uint8_t { kOff, kSurface, kSeconds };
 template <>
 struct EnumNames<StopRule> {
   static constexpr std::string_view what = "stop rule";
-  static constexpr std::array<NamedValue<StopRule>, 2> names{{{StopRule::kSurface, "surface"}, {StopRule::kOff, "off"}}};
+  static constexpr std::array<NamedValue<StopRule>, 3> names{
+      {{StopRule::kSurface, "surface"}, {StopRule::kSeconds, "seconds"}, {StopRule::kOff, "off"}}};
 };
 inline constexpr ChoiceSetting<StopRule> kStopRule{
     "stop-rule", StopRule::kSurface,
-    "surface: stop when the last views added (almost) no new surface; off: use the whole --views budget"};
+    "surface: stop when the last views added (almost) no new surface; seconds: stop when they added too little "
+    "per second of rig time; off: use the whole --views budget"};
 inline constexpr Setting<int> kStopWindow{"stop-window", 7, 1, 100, "",
                                           "surface rule: this many views in a row must each add too little"};
 inline constexpr Setting<double> kStopNewSurface{"stop-new-surface", 0.05, 0.0, 100.0, "%",
                                                  "surface rule: too little = new points under this percent of the model"};
+inline constexpr Setting<int> kStopRateViews{"stop-rate-views", 2, 1, 100, "",
+                                            "seconds rule: the gain per second is measured over this many views"};
+inline constexpr Setting<double> kStopGainPerSecond{
+    "stop-gain-per-second", 0.05, 0.0, 100.0, "%/s",
+    "seconds rule: too little = new surface under this percent of the model per second of rig time"};
 inline constexpr Setting<int> kStopMinViews{"stop-min-views", 3, 1, 1000, "", "surface rule: never stop before this many views"};
 inline constexpr Setting<double> kStopRadius{"stop-radius", 0.005, 0.0005, 0.1, "m",
                                              "surface rule: a point is new farther than this from the model (the coverage scale)"};

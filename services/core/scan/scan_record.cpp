@@ -308,6 +308,42 @@ std::string to_string(const RigContactRecord& c) {
          (c.contacts > 1 ? ", " + std::to_string(c.contacts) + " contacts" : "") + "): " + c.contact;
 }
 
+std::optional<ScanStop> rule_stop(const ScanSettings& s, const std::vector<ViewRecord>& views, int views_done) {
+  if (s.stop_rule == StopRule::kOff) return std::nullopt;
+  const std::vector<double> figures = new_surface_figures(views);
+  std::optional<SurfaceStopDecision> d;
+  nlohmann::json used;
+  if (s.stop_rule == StopRule::kSeconds) {
+    const std::vector<ViewGain> gains = view_gains(views);
+    d = seconds_stop(gains, s.seconds_rule);
+    used = to_json(s.seconds_rule);
+    nlohmann::json seconds = nlohmann::json::array();
+    for (const ViewGain& g : gains) seconds.push_back(std::isfinite(g.rig_s) ? nlohmann::json(g.rig_s) : nlohmann::json());
+    used["rig_s_by_view"] = seconds;  // motion, settle and capture of each view
+  } else {
+    d = surface_stop(figures, s.surface_rule);
+    used = to_json(s.surface_rule);
+  }
+  if (!d) return std::nullopt;
+  used["radius_m"] = s.stop_radius_m;
+  used["last_percent_of_model"] = d->last_percent;
+  used["percent_of_model_by_view"] = figures;
+  return ScanStop{d->reason, views_done, std::string(name_of(s.stop_rule)), used};
+}
+
+std::vector<ViewGain> view_gains(const std::vector<ViewRecord>& views) {
+  std::vector<ViewGain> out;
+  for (const ViewRecord& v : views) {
+    if (!v.registration || v.registration->frame_file.empty()) continue;  // as new_surface_figures
+    const RegisteredCloud& r = *v.registration;
+    ViewGain g;
+    if (r.accepted && r.new_surface) g.new_percent = r.new_surface->percent_of_model();
+    if (v.rig_time) g.rig_s = v.rig_time->motion_s + v.rig_time->settle_s + v.rig_time->capture_s;
+    out.push_back(g);
+  }
+  return out;
+}
+
 std::vector<double> new_surface_figures(const std::vector<ViewRecord>& views) {
   std::vector<double> out;
   for (const ViewRecord& v : views) {

@@ -94,9 +94,14 @@ std::string to_string(const RigContactRecord& c);
 struct ScanStop {
   std::string reason;
   int after_views = 0;
-  std::string rule;  // "planner", "planner failed", "budget", "surface"
-  nlohmann::json figures;  // what the rule read (surface: its parameters and the window's figures)
+  std::string rule;  // "planner", "planner failed", "budget", "surface", "seconds", "replay"
+  nlohmann::json figures;  // what the rule read (surface, seconds: its parameters and the figures)
 };
+
+// The scan's stop rule (settings.stop_rule, stop_rule.hpp) applied to its views so far, of which
+// `views_done` were taken: the stop with the rule's reason and the figures it read; none when the
+// scan goes on or the rule is off.
+std::optional<ScanStop> rule_stop(const ScanSettings& s, const std::vector<ViewRecord>& views, int views_done);
 
 // scan.json's "status".
 struct ScanStatusRecord {
@@ -190,6 +195,9 @@ std::vector<double> rig_time_at_frames(const std::vector<ViewRecord>& views);
 // What each view added to the model (percent_of_model) for the views the registration answered,
 // NaN where the view was not merged: the figures the surface stop rule reads, in view order.
 std::vector<double> new_surface_figures(const std::vector<ViewRecord>& views);
+// The seconds rule's figures (stop_rule.hpp), view by view as new_surface_figures: the new
+// surface and the rig time before computation (motion, settle, capture).
+std::vector<ViewGain> view_gains(const std::vector<ViewRecord>& views);
 
 // The coordinator's scan.json: a RecordedScan kept in memory and written whole (atomically) at
 // every view and at the end. The only writer of scan.json.

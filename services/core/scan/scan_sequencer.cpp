@@ -644,17 +644,12 @@ void ScanSequencer::mapped(double now_s) {
 }
 
 bool ScanSequencer::stopped_by_surface(double now_s) {
-  if (s_.stop_rule != StopRule::kSurface || replay_ || iteration_ + 1 >= s_.views) return false;
-  const std::vector<double> figures = new_surface_figures(record_.record().views);
-  const std::optional<SurfaceStopDecision> d = surface_stop(figures, s_.surface_rule);
-  if (!d) return false;
-  nlohmann::json used = to_json(s_.surface_rule);
-  used["radius_m"] = s_.stop_radius_m;
-  used["last_percent_of_model"] = d->last_percent;
-  used["percent_of_model_by_view"] = figures;
-  stop_ = ScanStop{d->reason, done_.views_done, "surface", used};
+  if (replay_ || iteration_ + 1 >= s_.views) return false;
+  std::optional<ScanStop> stop = rule_stop(s_, record_.record().views, done_.views_done);
+  if (!stop) return false;
+  stop_ = std::move(stop);
   record_.set_stop(*stop_);
-  finish(ScanState::kDone, "scan complete: " + d->reason, now_s);
+  finish(ScanState::kDone, "scan complete: " + stop_->reason, now_s);
   return true;
 }
 

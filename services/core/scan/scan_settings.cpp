@@ -36,7 +36,8 @@ nlohmann::json to_json(const ScanSettings& s) {
       {"views", s.views},
       {"stop_rule", {{"rule", std::string(name_of(s.stop_rule))}, {"window", s.surface_rule.window},
                      {"max_new_percent", s.surface_rule.max_new_percent}, {"min_views", s.surface_rule.min_views},
-                     {"radius_m", s.stop_radius_m}}},
+                     {"radius_m", s.stop_radius_m},
+                     {"seconds", to_json(s.seconds_rule)}}},
       {"registration", {{"pose_sigma_mm", s.pose_sigma_m * 1e3}, {"pose_sigma_deg", s.pose_sigma_deg}}},
       {"depth_filter", s.depth_filter},
       {"external_rig", s.external_rig},
@@ -96,6 +97,12 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
       s.surface_rule.max_new_percent = r.at("max_new_percent").get<double>();
       s.surface_rule.min_views = int_at(r, "min_views", "stop_rule.min_views");
       s.stop_radius_m = r.at("radius_m").get<double>();
+      if (r.contains("seconds")) {  // since the rule in seconds (before: its defaults, unused)
+        const auto& t = r["seconds"];
+        s.seconds_rule.window = int_at(t, "window", "stop_rule.seconds.window");
+        s.seconds_rule.min_percent_per_s = t.at("min_percent_per_s").get<double>();
+        s.seconds_rule.min_views = int_at(t, "min_views", "stop_rule.seconds.min_views");
+      }
     } else {
       s.stop_rule = StopRule::kOff;  // a scan recorded before the rule existed ran without it
     }
@@ -189,6 +196,9 @@ void ScanSettings::validate() const {
   kStopWindow.checked(surface_rule.window);
   kStopNewSurface.checked(surface_rule.max_new_percent);
   kStopMinViews.checked(surface_rule.min_views);
+  kStopRateViews.checked(seconds_rule.window);
+  kStopGainPerSecond.checked(seconds_rule.min_percent_per_s);
+  kStopMinViews.checked(seconds_rule.min_views);
   kStopRadius.checked(stop_radius_m);
   kPoseSigmaMm.checked(pose_sigma_m * 1e3);
   kPoseSigmaDeg.checked(pose_sigma_deg);

@@ -40,9 +40,11 @@ struct ScanSettings {
   std::string rig_model_path;
   PlannerKind planner = kPlanner.value;  // next best view, fixed ring views, or a baseline
   int views = kViews.value;              // at most this many views
-  // Stop before the budget when the last views added (almost) no new surface (stop_rule.hpp).
+  // Stop before the budget when the last views added (almost) no new surface, or too little per
+  // second of rig time (stop_rule.hpp).
   StopRule stop_rule = kStopRule.value;
   SurfaceStopRule surface_rule;
+  SecondsStopRule seconds_rule;
   double stop_radius_m = kStopRadius.value;  // a point farther than this from the model is new surface
   // How well the rig knows the camera's pose (registration's prior, 1 sigma per axis).
   double pose_sigma_m = kPoseSigmaMm.value * 1e-3;

@@ -59,6 +59,53 @@ std::optional<SurfaceStopDecision> first_surface_stop(const std::vector<double>&
   return std::nullopt;
 }
 
+namespace {
+
+void check(const SecondsStopRule& r) {
+  kStopRateViews.checked(r.window);
+  kStopGainPerSecond.checked(r.min_percent_per_s);
+  kStopMinViews.checked(r.min_views);
+}
+
+}  // namespace
+
+std::optional<SurfaceStopDecision> seconds_stop(const std::vector<ViewGain>& views, const SecondsStopRule& rule) {
+  check(rule);
+  const int n = static_cast<int>(views.size());
+  if (n < rule.min_views || n < rule.window) return std::nullopt;
+  double gain = 0, seconds = 0;
+  SurfaceStopDecision d;
+  d.after_views = n;
+  for (int i = n - rule.window; i < n; ++i) {
+    if (!std::isfinite(views[i].rig_s) || views[i].rig_s < 0) return std::nullopt;  // not known: no judgement
+    const double added = std::isfinite(views[i].new_percent) ? views[i].new_percent : 0.0;
+    gain += added;
+    seconds += views[i].rig_s;
+    d.last_percent.push_back(added);
+  }
+  if (!(seconds > 0)) return std::nullopt;
+  const double rate = gain / seconds;
+  if (rate >= rule.min_percent_per_s) return std::nullopt;
+  const std::string which =
+      rule.window == 1 ? "view " + std::to_string(n) : "views " + std::to_string(n - rule.window + 1) + "-" + std::to_string(n);
+  d.reason = which + " added " + fixed(gain, 2) + " % new surface in " + fixed(seconds, 1) + " s of rig time (" +
+             fixed(rate, 3) + " %/s, under " + fixed(rule.min_percent_per_s, 3) + " %/s)";
+  return d;
+}
+
+std::optional<SurfaceStopDecision> first_seconds_stop(const std::vector<ViewGain>& views, const SecondsStopRule& rule) {
+  check(rule);
+  for (std::size_t n = 1; n <= views.size(); ++n) {
+    auto d = seconds_stop(std::vector<ViewGain>(views.begin(), views.begin() + n), rule);
+    if (d) return d;
+  }
+  return std::nullopt;
+}
+
+nlohmann::json to_json(const SecondsStopRule& r) {
+  return {{"window", r.window}, {"min_percent_per_s", r.min_percent_per_s}, {"min_views", r.min_views}};
+}
+
 nlohmann::json to_json(const SurfaceStopRule& r) {
   return {{"window", r.window}, {"max_new_percent", r.max_new_percent}, {"min_views", r.min_views}};
 }

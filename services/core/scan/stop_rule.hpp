@@ -4,6 +4,7 @@
 // NewSurface, is the registration service's: core/perception/new_surface.hpp). Plain data and functions, no bus: the
 // coordinator applies the rule after each view, the benchmark computes from a fixed-budget scan's
 // recorded figures where the rule would have stopped it.
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -44,5 +45,36 @@ std::optional<SurfaceStopDecision> first_surface_stop(const std::vector<double>&
                                                       const SurfaceStopRule& rule);
 
 nlohmann::json to_json(const SurfaceStopRule& r);
+
+// The rule in seconds (the scan settings stop-rate-views, stop-gain-per-second, stop-min-views).
+// On a rig a view costs the rig's time, and what the next view will add is best judged by what
+// the last ones added: the scan stops when the last `window` views added, together, less than
+// min_percent_per_s percent of the model per second of the rig time they took (their motion,
+// settling and capture: what a view costs the rig before its computation, known once its cloud
+// is in).
+struct SecondsStopRule {
+  int window = kStopRateViews.value;
+  double min_percent_per_s = kStopGainPerSecond.value;
+  int min_views = kStopMinViews.value;
+};
+
+// One view's figures for the rule: the new surface it added (% of the model; NaN: not merged into
+// it, counted as adding nothing) and the rig seconds it took (NaN: not known).
+struct ViewGain {
+  double new_percent = std::numeric_limits<double>::quiet_NaN();
+  double rig_s = std::numeric_limits<double>::quiet_NaN();
+};
+
+// Applies the rule to the figures of a scan's views so far (one per view that produced a cloud, in
+// order). Stops when at least rule.min_views views were taken, the last rule.window ones have a
+// rig time, and their new surface per second of it is under rule.min_percent_per_s. Throws
+// std::invalid_argument naming the parameter outside its range.
+std::optional<SurfaceStopDecision> seconds_stop(const std::vector<ViewGain>& views, const SecondsStopRule& rule);
+
+// The first view after which the rule stops a scan whose figures are `views` (seconds_stop on
+// views 1..i for i = 1..n); none if it never stops.
+std::optional<SurfaceStopDecision> first_seconds_stop(const std::vector<ViewGain>& views, const SecondsStopRule& rule);
+
+nlohmann::json to_json(const SecondsStopRule& r);
 
 }  // namespace pbnbv

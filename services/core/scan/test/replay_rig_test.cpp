@@ -203,3 +203,68 @@ TEST(ReplayRig, ACommandNoRecordedViewWasGivenIsRefusedAndTheRigHolds) {
   rig.on_turntable_command(10, 2.0);
   EXPECT_TRUE(rig.turntable_fault().empty());
 }
+
+// A move that took a detour: between view 1's frame and view 2's command the executor commanded a
+// stop (seq 150: joints 0.1, turntable 1.5), the rig moved there (10 statuses) and was still (5),
+// then view 2 as in two_views. The stop is recorded with view 2 and played when commanded.
+TEST(ReplayRig, ADetoursStopIsPlayedWhereTheRecordingWentAndShowsNoFrame) {
+  RigTimeline t;
+  int64_t order = 0, utime = 0;
+  statuses(t, order, utime, 5, true);
+  command(t, order, 100, 0.5, 1.0);
+  statuses(t, order, utime, 20, false, 100, 0.5, 1.0);
+  statuses(t, order, utime, 40, true, 100, 0.5, 1.0);
+  t.frames.push_back({utime - kPeriodUs, ++order});
+  statuses(t, order, utime, 30, true, 100, 0.5, 1.0);  // arm statuses 0..94
+  command(t, order, 150, 0.1, 1.5);
+  command(t, order, 150, 0.1, 1.5);  // re-sent: one stop
+  statuses(t, order, utime, 10, false, 150, 0.1, 1.5);  // 95..104
+  statuses(t, order, utime, 5, true, 150, 0.1, 1.5);    // 105..109
+  command(t, order, 101, -0.25, 2.0);
+  statuses(t, order, utime, 20, false, 101, -0.25, 2.0);  // 110..129
+  statuses(t, order, utime, 40, true, 101, -0.25, 2.0);   // 130..169
+  t.frames.push_back({utime - kPeriodUs, ++order});
+  statuses(t, order, utime, 30, true, 101, -0.25, 2.0);
+
+  const std::vector<RecordedView> views = recorded_views(t);
+  ASSERT_EQ(views.size(), 2u);
+  EXPECT_TRUE(views[0].stops.empty());
+  ASSERT_EQ(views[1].stops.size(), 1u);
+  const RecordedStop& stop = views[1].stops[0];
+  EXPECT_EQ(stop.arm_command_seq, 150);
+  EXPECT_EQ(stop.arm_target_rad, Vector6d::Constant(0.1));
+  EXPECT_EQ(stop.turntable_target_rad, std::optional<double>(1.5));
+  EXPECT_EQ(stop.arm.begin, 105u);     // the first still status following it
+  EXPECT_EQ(stop.arm.at_frame, 109u);  // the last one following it, held
+  EXPECT_EQ(stop.arm.end, 110u);
+  EXPECT_EQ(views[1].arm_command_seq, 101);
+
+  ReplayRig rig(t);
+  rig.on_arm_command(1, Vector6d::Constant(0.5));
+  rig.on_turntable_command(1, 1.0);
+  EXPECT_EQ(rig.view(), 0);
+  EXPECT_EQ(rig.on_trigger(), std::optional<std::size_t>(0u));
+  // The detour's stop: its statuses from 105, held at 109; no frame there; the view is still view 1.
+  rig.on_arm_command(2, Vector6d::Constant(0.1));
+  rig.on_turntable_command(2, 1.5);
+  EXPECT_TRUE(rig.arm_fault().empty());
+  EXPECT_TRUE(rig.turntable_fault().empty());
+  EXPECT_EQ(rig.detour_stop(), 0);
+  EXPECT_EQ(rig.view(), 0);
+  EXPECT_EQ(rig.tick().arm, 105u);
+  EXPECT_EQ(tick(rig, 50), 109u);
+  EXPECT_EQ(rig.on_trigger(), std::nullopt);
+  EXPECT_EQ(tick(rig, 5), 109u);
+  // A turntable target that is not the stop's is named as the stop's.
+  rig.on_turntable_command(2, 1.25);
+  EXPECT_EQ(rig.turntable_fault(),
+            "TURNTABLE_COMMAND seq 2: stop 1 of recorded view 2's detour was commanded to 1.500000 rad, not 1.250000");
+  // Then view 2 as recorded.
+  rig.on_arm_command(3, Vector6d::Constant(-0.25));
+  rig.on_turntable_command(3, 2.0);
+  EXPECT_EQ(rig.detour_stop(), -1);
+  EXPECT_EQ(rig.view(), 1);
+  EXPECT_TRUE(rig.turntable_fault().empty());
+  EXPECT_EQ(rig.tick().arm, 139u);  // view 2's still statuses from 300 ms before its frame (169)
+  EXPECT_EQ(rig.on_trigger(), std::optional<std::size_t>(1u));
+}

@@ -156,7 +156,7 @@ TEST(ScanKinds, EveryNameRoundTripsAndAnUnknownOneIsNamedWithTheChoices) {
   expect_names_round_trip<RigKind>("rig kind", "arm or free");
   expect_names_round_trip<UpAxis>("up axis", "z, y or x");
   expect_names_round_trip<OnOff>("switch", "on or off");
-  expect_names_round_trip<StopRule>("stop rule", "surface or off");
+  expect_names_round_trip<StopRule>("stop rule", "surface, seconds or off");
   EXPECT_EQ(to_string(RigKind::kFree), "free");
   EXPECT_EQ(parse_rig_kind("arm"), RigKind::kArm);
   EXPECT_THROW(parse_name<PlannerKind>("Ring"), std::invalid_argument);  // exact names only
