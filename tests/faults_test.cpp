@@ -184,14 +184,16 @@ TEST(Faults, PacketLossOfOneAndFivePercentCostsNoViewAndNoCoverage) {
 // undisturbed run. (lcm-logger: AKilledLoggerGoesOnInASecondFileAndTheAuditSaysWhatItLacks.)
 namespace {
 
-// `pbnbv scan` of a 10-view bunny scan on the arm rig into dir/<victims joined by '+'>, in its
-// own network namespace; SIGNAL sent to victims[k] (by its processes.json pid) once view 2 + 2k
-// is recorded (one victim: view 3).
+// `pbnbv scan` of a 10-view bunny scan on the arm rig (small images; at --sim-speed 20 unless
+// recorded: lcm-logger keeps up with the twin's statuses at the default 4x, at 20x it lost some)
+// into dir/<victims joined by '+'>, in its own network namespace; SIGNAL sent to victims[k] (by
+// its processes.json pid) once view 2 + 2k is recorded (one victim: view 3).
 fs::path run_killing(const fs::path& dir, const std::vector<std::string>& victims, int sig = SIGKILL, bool log = false) {
   std::string name = victims.empty() ? std::string("undisturbed") : victims[0];
   for (std::size_t k = 1; k < victims.size(); ++k) name += "+" + victims[k];
   const fs::path out = dir / (name + (sig == SIGKILL ? "" : "-stopped"));
-  const std::string scan10 = std::string("--object bunny --rig arm --views 10") + (log ? "" : " --no-log");
+  const std::string scan10 = std::string("--object bunny --rig arm --views 10 ") + kSmallImageOptions +
+                             (log ? "" : " --no-log --sim-speed 20");
   const pid_t pid = ::fork();
   if (pid == 0) {
     const std::string cmd = netns_run() + " " + scan_command(out, scan10);
@@ -597,7 +599,7 @@ TEST(Faults, TheMainJobsLogHoldsEveryMessageOfItsScan) {
 TEST(Faults, HostileTrafficFromView2TakesNothingOver) {
   const fs::path dir = fresh_dir("hostile");
   const fs::path hostile = dir / "hostile", clean = dir / "clean";
-  const std::string nbv = "--object bunny --rig free --views 10 --sim-speed 4";
+  const std::string nbv = std::string("--object bunny --rig free --views 10 --sim-speed 4 ") + kSmallImageOptions;
   const std::string sender = bin_dir() + "/../tests/pbnbv-test-hostile --out " + hostile.string() + " --from-view 2 --deadline 600";
   const CommandResult r = run_command(netns_run() + " sh -c '" + sender + " > " + hostile.string() + ".hostile 2>&1 & p=$!; " +
                                       scan_command(hostile, nbv) + "; s=$?; wait $p; exit $s'");

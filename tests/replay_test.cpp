@@ -38,8 +38,7 @@ struct Replayed {
 fs::path record(const std::string& name) {
   const fs::path out = fresh_dir(name) / "original";
   const std::string cmd = netns_run() + " " + bin_dir() +
-                          "/pbnbv scan --object bunny --size 0.2 --rig arm --views 3 --width 320 --height 180 --fx 174 "
-                          "--fy 174 --out " + out.string();
+                          "/pbnbv scan --object bunny --size 0.2 --rig arm --views 3 " + kSmallImageOptions + " --out " + out.string();
   const CommandResult r = run_command(cmd);
   EXPECT_EQ(r.exit_code, 0) << cmd << "\n" << r.output;
   return out;

@@ -41,6 +41,12 @@ inline std::string bin_dir() { return env_or("PBNBV_BIN_DIR", PBNBV_TEST_BIN_DIR
 inline std::string source_dir() { return env_or("PBNBV_SOURCE_DIR", PBNBV_TEST_SOURCE_DIR); }
 inline std::string netns_run() { return source_dir() + "/scripts/netns-run"; }
 
+// `pbnbv scan` options for a small image with the default camera's field of view (320 x 180 at
+// fx = fy = 174 px): for the tests of what processes do (faults, restarts, replay), where the
+// frame's size is not what is tested and a quarter of the pixels renders, filters and registers
+// in a fraction of the time.
+inline constexpr const char* kSmallImageOptions = "--width 320 --height 180 --fx 174 --fy 174";
+
 // A text file's contents ("" when it cannot be read).
 inline std::string read_file(const std::filesystem::path& p) {
   std::ifstream f(p);

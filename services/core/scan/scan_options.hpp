@@ -57,7 +57,7 @@ inline constexpr Setting<double> kStopNewSurface{"stop-new-surface", 0.05, 0.0, 
 inline constexpr Setting<int> kStopRateViews{"stop-rate-views", 2, 1, 100, "",
                                             "seconds rule: the gain per second is measured over this many views"};
 inline constexpr Setting<double> kStopGainPerSecond{
-    "stop-gain-per-second", 0.05, 0.0, 100.0, "%/s",
+    "stop-gain-per-second", 0.003, 0.0, 100.0, "%/s",
     "seconds rule: too little = new surface under this percent of the model per second of rig time"};
 inline constexpr Setting<int> kStopMinViews{"stop-min-views", 3, 1, 1000, "", "surface rule: never stop before this many views"};
 inline constexpr Setting<double> kStopRadius{"stop-radius", 0.005, 0.0005, 0.1, "m",
