@@ -84,8 +84,8 @@ ScanEvaluation evaluate(const fs::path& out, const CoverageParams& params, const
     if (observable) e.observable_by_view.push_back(coverage.coverage_percent(*observable));
     e.points_by_view.push_back(points);
   }
-  e.new_surface_by_view = new_surface_figures(scan.views);
   e.view_gains = view_gains(scan.views);
+  e.new_surface_by_view = new_percents(e.view_gains);
   e.rig_time = sum_rig_time(scan.views);
   e.rig_time_s_by_view = rig_time_at_frames(scan.views);  // in step with coverage_by_view
   e.hand_eye = check_hand_eye(out);

@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -37,12 +36,6 @@ class TempDirTest : public ::testing::Test {
   }
   std::filesystem::path dir_;
 };
-
-// The whole of a text file ("" when it cannot be read).
-inline std::string read_text(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
 
 // Appends n bytes of *p big-endian (the host is little-endian).
 inline void put_be(std::string& s, const void* p, size_t n) {

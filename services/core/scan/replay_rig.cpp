@@ -213,46 +213,47 @@ void ReplayRig::enter(int view) {
 
 void ReplayRig::on_arm_command(int64_t seq, const Vector6d& target_rad) {
   if (seq == arm_seq_) return;  // a repeat of the command being played
+  const auto away = [&](const Vector6d& recorded) { return (recorded - target_rad).cwiseAbs().maxCoeff(); };
   // A stop of the next view's detour, after the one being played.
+  int stop = -1;
   if (view_ + 1 < static_cast<int>(views_.size())) {
     const std::vector<RecordedStop>& stops = views_[view_ + 1].stops;
-    for (int k = stop_ + 1; k < static_cast<int>(stops.size()); ++k) {
-      if ((stops[k].arm_target_rad - target_rad).cwiseAbs().maxCoeff() > kReplayTargetToleranceRad) continue;
-      arm_fault_.clear();
-      arm_fault_seq_ = -1;
-      arm_seq_ = seq;
-      stop_ = k;
-      play(stops[k].arm, stops[k].turntable, stops[k].turntable_target_rad);
-      check_turntable();
+    for (int k = stop_ + 1; k < static_cast<int>(stops.size()) && stop < 0; ++k) {
+      if (away(stops[k].arm_target_rad) <= kReplayTargetToleranceRad) stop = k;
+    }
+  }
+  if (stop >= 0) {
+    const RecordedStop& s = views_[view_ + 1].stops[stop];
+    stop_ = stop;
+    play(s.arm, s.turntable, s.turntable_target_rad);
+  } else {
+    int nearest = -1;
+    double nearest_rad = std::numeric_limits<double>::infinity();
+    // The next recorded view first (the scan's order), then any other.
+    for (std::size_t n = 0; n < views_.size(); ++n) {
+      const int k = static_cast<int>((view_ + 1 + n) % views_.size());
+      const double d = away(views_[k].arm_target_rad);
+      if (d < nearest_rad) {
+        nearest_rad = d;
+        nearest = k;
+      }
+      if (d <= kReplayTargetToleranceRad) {
+        nearest = k;
+        break;
+      }
+    }
+    if (nearest_rad > kReplayTargetToleranceRad) {
+      arm_fault_ = fmt::format("ARM_COMMAND seq {}: no recorded view was commanded to these joints (the nearest, "
+                               "recorded view {}, is {:.4g} rad away)",
+                               seq, nearest + 1, nearest_rad);
+      arm_fault_seq_ = seq;
       return;
     }
-  }
-  int nearest = -1;
-  double nearest_rad = std::numeric_limits<double>::infinity();
-  // The next recorded view first (the scan's order), then any other.
-  for (std::size_t n = 0; n < views_.size(); ++n) {
-    const int k = static_cast<int>((view_ + 1 + n) % views_.size());
-    const double d = (views_[k].arm_target_rad - target_rad).cwiseAbs().maxCoeff();
-    if (d < nearest_rad) {
-      nearest_rad = d;
-      nearest = k;
-    }
-    if (d <= kReplayTargetToleranceRad) {
-      nearest = k;
-      break;
-    }
-  }
-  if (nearest_rad > kReplayTargetToleranceRad) {
-    arm_fault_ = fmt::format("ARM_COMMAND seq {}: no recorded view was commanded to these joints (the nearest, "
-                             "recorded view {}, is {:.4g} rad away)",
-                             seq, nearest + 1, nearest_rad);
-    arm_fault_seq_ = seq;
-    return;
+    enter(nearest);
   }
   arm_fault_.clear();
   arm_fault_seq_ = -1;
   arm_seq_ = seq;
-  enter(nearest);
   check_turntable();
 }
 
@@ -272,7 +273,8 @@ void ReplayRig::on_turntable_command(int64_t seq, double angle_rad) {
 }
 
 void ReplayRig::check_turntable() {
-  if (!has_turntable_ || (view_ < 0 && stop_ < 0) || turntable_seq_ != arm_seq_ || !turntable_target_) return;
+  // Before the first command nothing is expected (expected_turntable_rad_ is empty).
+  if (!has_turntable_ || turntable_seq_ != arm_seq_ || !turntable_target_) return;
   const std::optional<double>& recorded = expected_turntable_rad_;
   if (recorded && std::abs(*recorded - *turntable_target_) > kReplayTargetToleranceRad) {
     const std::string what = stop_ < 0 ? fmt::format("recorded view {}", view_ + 1)

@@ -310,11 +310,11 @@ std::string to_string(const RigContactRecord& c) {
 
 std::optional<ScanStop> rule_stop(const ScanSettings& s, const std::vector<ViewRecord>& views, int views_done) {
   if (s.stop_rule == StopRule::kOff) return std::nullopt;
-  const std::vector<double> figures = new_surface_figures(views);
+  const std::vector<ViewGain> gains = view_gains(views);
+  const std::vector<double> figures = new_percents(gains);
   std::optional<SurfaceStopDecision> d;
   nlohmann::json used;
   if (s.stop_rule == StopRule::kSeconds) {
-    const std::vector<ViewGain> gains = view_gains(views);
     d = seconds_stop(gains, s.seconds_rule);
     used = to_json(s.seconds_rule);
     nlohmann::json seconds = nlohmann::json::array();
@@ -334,7 +334,7 @@ std::optional<ScanStop> rule_stop(const ScanSettings& s, const std::vector<ViewR
 std::vector<ViewGain> view_gains(const std::vector<ViewRecord>& views) {
   std::vector<ViewGain> out;
   for (const ViewRecord& v : views) {
-    if (!v.registration || v.registration->frame_file.empty()) continue;  // as new_surface_figures
+    if (!v.registration || v.registration->frame_file.empty()) continue;  // never captured or registered
     const RegisteredCloud& r = *v.registration;
     ViewGain g;
     if (r.accepted && r.new_surface) g.new_percent = r.new_surface->percent_of_model();
@@ -344,15 +344,7 @@ std::vector<ViewGain> view_gains(const std::vector<ViewRecord>& views) {
   return out;
 }
 
-std::vector<double> new_surface_figures(const std::vector<ViewRecord>& views) {
-  std::vector<double> out;
-  for (const ViewRecord& v : views) {
-    if (!v.registration || v.registration->frame_file.empty()) continue;  // never captured or registered
-    const RegisteredCloud& r = *v.registration;
-    out.push_back(r.accepted && r.new_surface ? r.new_surface->percent_of_model() : std::numeric_limits<double>::quiet_NaN());
-  }
-  return out;
-}
+std::vector<double> new_surface_figures(const std::vector<ViewRecord>& views) { return new_percents(view_gains(views)); }
 
 ScanRecord::ScanRecord(fs::path out, const ScanSettings& settings) : out_(std::move(out)) {
   fs::create_directories(out_);

@@ -195,8 +195,8 @@ std::vector<double> rig_time_at_frames(const std::vector<ViewRecord>& views);
 // What each view added to the model (percent_of_model) for the views the registration answered,
 // NaN where the view was not merged: the figures the surface stop rule reads, in view order.
 std::vector<double> new_surface_figures(const std::vector<ViewRecord>& views);
-// The seconds rule's figures (stop_rule.hpp), view by view as new_surface_figures: the new
-// surface and the rig time before computation (motion, settle, capture).
+// The stop rules' figures (stop_rule.hpp), one per view that was captured and registered: the
+// new surface (NaN: not merged) and the rig time before computation (motion, settle, capture).
 std::vector<ViewGain> view_gains(const std::vector<ViewRecord>& views);
 
 // The coordinator's scan.json: a RecordedScan kept in memory and written whole (atomically) at

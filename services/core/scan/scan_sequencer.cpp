@@ -639,11 +639,11 @@ void ScanSequencer::mapped(double now_s) {
   if (view_.plan) line += ", plan " + fixed(planner_step_ms(*view_.plan), 2) + " ms";
   if (reg.new_surface) line += "; " + fixed(reg.new_surface->percent_of_model(), 2) + " % new surface";
   progress(line, true);
-  if (stopped_by_surface(now_s)) return;
+  if (stopped_by_rule(now_s)) return;
   next_view(now_s);
 }
 
-bool ScanSequencer::stopped_by_surface(double now_s) {
+bool ScanSequencer::stopped_by_rule(double now_s) {
   if (replay_ || iteration_ + 1 >= s_.views) return false;
   std::optional<ScanStop> stop = rule_stop(s_, record_.record().views, done_.views_done);
   if (!stop) return false;

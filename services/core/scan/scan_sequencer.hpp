@@ -199,9 +199,9 @@ class ScanSequencer {
   void begin_register(double now_s);
   void registered(double now_s);
   void mapped(double now_s);
-  // The surface rule (settings' stop_rule) on the views so far: ends the scan "done" when it says
+  // The stop rule (settings' stop_rule: surface or seconds) on the views so far: ends the scan "done" when it says
   // stop (not at the budget's last view, nor in a replay).
-  bool stopped_by_surface(double now_s);
+  bool stopped_by_rule(double now_s);
   void next_view(double now_s);
   void fail_view(const std::string& message, double now_s);  // records the view so far, fails the scan
   // Ends the scan; one that is done asks for its mesh first (begin_mesh), then concludes.

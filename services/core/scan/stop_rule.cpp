@@ -22,6 +22,22 @@ void check(const SurfaceStopRule& r) {
   kStopMinViews.checked(r.min_views);
 }
 
+void check(const SecondsStopRule& r) {
+  kStopRateViews.checked(r.window);
+  kStopGainPerSecond.checked(r.min_percent_per_s);
+  kStopMinViews.checked(r.min_views);
+}
+
+// The first prefix (views 1..n, n = 1..size) on which `stop` stops; none if none does.
+template <class Figure, class Rule, class Stop>
+std::optional<SurfaceStopDecision> first_stop(const std::vector<Figure>& figures, const Rule& rule, Stop stop) {
+  check(rule);
+  for (std::size_t n = 1; n <= figures.size(); ++n) {
+    if (auto d = stop(std::vector<Figure>(figures.begin(), figures.begin() + n), rule)) return d;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::optional<SurfaceStopDecision> surface_stop(const std::vector<double>& figures, const SurfaceStopRule& rule) {
@@ -51,23 +67,8 @@ std::optional<SurfaceStopDecision> surface_stop(const std::vector<double>& figur
 }
 
 std::optional<SurfaceStopDecision> first_surface_stop(const std::vector<double>& figures, const SurfaceStopRule& rule) {
-  check(rule);
-  for (std::size_t n = 1; n <= figures.size(); ++n) {
-    auto d = surface_stop(std::vector<double>(figures.begin(), figures.begin() + n), rule);
-    if (d) return d;
-  }
-  return std::nullopt;
+  return first_stop(figures, rule, surface_stop);
 }
-
-namespace {
-
-void check(const SecondsStopRule& r) {
-  kStopRateViews.checked(r.window);
-  kStopGainPerSecond.checked(r.min_percent_per_s);
-  kStopMinViews.checked(r.min_views);
-}
-
-}  // namespace
 
 std::optional<SurfaceStopDecision> seconds_stop(const std::vector<ViewGain>& views, const SecondsStopRule& rule) {
   check(rule);
@@ -94,12 +95,14 @@ std::optional<SurfaceStopDecision> seconds_stop(const std::vector<ViewGain>& vie
 }
 
 std::optional<SurfaceStopDecision> first_seconds_stop(const std::vector<ViewGain>& views, const SecondsStopRule& rule) {
-  check(rule);
-  for (std::size_t n = 1; n <= views.size(); ++n) {
-    auto d = seconds_stop(std::vector<ViewGain>(views.begin(), views.begin() + n), rule);
-    if (d) return d;
-  }
-  return std::nullopt;
+  return first_stop(views, rule, seconds_stop);
+}
+
+std::vector<double> new_percents(const std::vector<ViewGain>& views) {
+  std::vector<double> out;
+  out.reserve(views.size());
+  for (const ViewGain& g : views) out.push_back(g.new_percent);
+  return out;
 }
 
 nlohmann::json to_json(const SecondsStopRule& r) {

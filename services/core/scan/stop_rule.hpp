@@ -75,6 +75,9 @@ std::optional<SurfaceStopDecision> seconds_stop(const std::vector<ViewGain>& vie
 // views 1..i for i = 1..n); none if it never stops.
 std::optional<SurfaceStopDecision> first_seconds_stop(const std::vector<ViewGain>& views, const SecondsStopRule& rule);
 
+// The views' new surface alone (the surface rule's figures).
+std::vector<double> new_percents(const std::vector<ViewGain>& views);
+
 nlohmann::json to_json(const SecondsStopRule& r);
 
 }  // namespace pbnbv

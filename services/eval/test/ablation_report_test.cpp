@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "eval/bench.hpp"
+#include "core/io/json.hpp"
 #include "file_test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -34,7 +35,7 @@ BenchResult bench(const fs::path& out, double pbnbv_ms, double raycast_ms) {
   return r;
 }
 
-using pbnbv::testing::read_text;
+using pbnbv::read_text;  // core/io: the whole file, or an error naming it
 
 TEST(AblationReport, TimeRatio) {
   EXPECT_DOUBLE_EQ(*time_ratio_raycast_to_pbnbv(bench("x", 20, 600)), 30.0);

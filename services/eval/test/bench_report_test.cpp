@@ -18,7 +18,7 @@ using nlohmann::json;
 namespace pbnbv::eval {
 namespace {
 
-using pbnbv::testing::read_text;
+using pbnbv::read_text;  // core/io: the whole file, or an error naming it
 
 class BenchReport : public ::testing::Test {
  protected:

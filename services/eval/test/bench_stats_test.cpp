@@ -11,6 +11,7 @@
 
 #include "core/base/version.hpp"
 #include "eval/bench.hpp"
+#include "core/io/json.hpp"
 #include "file_test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -178,7 +179,7 @@ TEST(BenchStatistics, FirstViewsAreRangeCheckedAndExcludeAFixedInitialView) {
   EXPECT_NO_THROW(s.validate());
 }
 
-using pbnbv::testing::read_text;
+using pbnbv::read_text;  // core/io: the whole file, or an error naming it
 
 // Runs of two tuning objects (bunny: tune half, bear: confirm half) and a sphere (neither) from
 // two first views; pbnbv and raycast.

@@ -12,6 +12,7 @@
 
 #include "core/scan/scan_record.hpp"
 #include "eval/bench.hpp"
+#include "core/io/json.hpp"
 #include "file_test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -20,7 +21,7 @@ using nlohmann::json;
 namespace pbnbv::eval {
 namespace {
 
-using pbnbv::testing::read_text;
+using pbnbv::read_text;  // core/io: the whole file, or an error naming it
 
 // A recorded view with rig time (motion, settle, capture, compute), with a frame or not.
 ViewRecord view(int i, RigTime t, bool frame) {
