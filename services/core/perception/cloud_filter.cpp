@@ -51,17 +51,6 @@ void radix_sort(std::vector<KeyIndex>& a, int bits) {
   }
 }
 
-// A point's voxel index; false for non-finite points and absurdly far ones (dropped).
-inline bool voxel_of(const Eigen::Vector3f& p, double voxel_m, int64_t q[3]) {
-  constexpr double kMaxIndex = 4.0e18;
-  for (int k = 0; k < 3; ++k) {
-    const double f = std::floor(static_cast<double>(p[k]) / voxel_m);
-    if (!(std::fabs(f) < kMaxIndex)) return false;  // also catches NaN
-    q[k] = static_cast<int64_t>(f);
-  }
-  return true;
-}
-
 // Appends the centroid of a run of points [b, e) of `cloud`, all in one voxel, to `out`.
 inline void emit_centroid(const PointCloud& cloud, const KeyIndex* b, const KeyIndex* e, PointCloud& out) {
   double sx = 0, sy = 0, sz = 0;
@@ -84,7 +73,7 @@ std::size_t voxel_range(const PointCloud& cloud, double voxel_m, int64_t lo[3], 
   std::size_t n = 0;
   for (const auto& p : cloud) {
     int64_t q[3];
-    if (!voxel_of(p, voxel_m, q)) continue;
+    if (!voxel_index(p, voxel_m, q)) continue;
     ++n;
     for (int k = 0; k < 3; ++k) {
       lo[k] = std::min(lo[k], q[k]);
@@ -102,7 +91,7 @@ void downsample_packed(const PointCloud& cloud, double voxel_m, std::size_t n, c
   ki.reserve(n);
   for (size_t i = 0; i < cloud.size(); ++i) {
     int64_t q[3];
-    if (!voxel_of(cloud[i], voxel_m, q)) continue;
+    if (!voxel_index(cloud[i], voxel_m, q)) continue;
     uint64_t key = static_cast<uint64_t>(q[0]) - static_cast<uint64_t>(lo[0]);
     for (int k = 1; k < 3; ++k) {
       key = bits[k] ? (key << bits[k]) : key;
@@ -130,7 +119,7 @@ void downsample_wide(const PointCloud& cloud, double voxel_m, std::size_t n, Poi
   w.reserve(n);
   for (size_t i = 0; i < cloud.size(); ++i) {
     Wide x;
-    if (!voxel_of(cloud[i], voxel_m, x.q)) continue;
+    if (!voxel_index(cloud[i], voxel_m, x.q)) continue;
     x.index = static_cast<uint32_t>(i);
     w.push_back(x);
   }

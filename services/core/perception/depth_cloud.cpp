@@ -3,6 +3,7 @@
 #include "core/perception/neighbours.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_map>
 #include <stdexcept>
@@ -186,6 +187,13 @@ VoxelKey voxel_key(const Eigen::Vector3f& p, double voxel_m) {
 
 std::vector<Eigen::Vector3f> voxel_normals(const PointCloud& points, const std::vector<Eigen::Vector3f>& normals,
                                            const PointCloud& downsampled, double voxel_m) {
+  if (!(voxel_m > 0)) {  // nothing was merged: each point's own normal
+    std::vector<Eigen::Vector3f> out(downsampled.size(), Eigen::Vector3f::Zero());
+    for (std::size_t i = 0; i < out.size() && i < normals.size(); ++i) {
+      if (normals[i].norm() > 0.0f) out[i] = normals[i].normalized();
+    }
+    return out;
+  }
   std::unordered_map<VoxelKey, Eigen::Vector3f, VoxelKeyHash> sums;
   for (std::size_t i = 0; i < points.size() && i < normals.size(); ++i) {
     if (!points[i].allFinite() || normals[i].isZero()) continue;
@@ -217,6 +225,143 @@ std::vector<Rgb> voxel_colours(const PointCloud& points, const std::vector<Rgb>&
     for (int c = 0; c < 3; ++c) out[i][static_cast<std::size_t>(c)] = static_cast<uint8_t>(std::lround(s[c] / s[3]));
   }
   return out;
+}
+
+}  // namespace pbnbv
+
+namespace pbnbv {
+
+namespace {
+
+using VoxelIndex = std::array<int64_t, 3>;
+
+// The full computation: the model's points followed by the new ones, downsampled, their normals
+// and colours averaged into the voxels.
+void merge_by_downsampling(VoxelCloud& model, const PointCloud& points, const std::vector<Eigen::Vector3f>& normals,
+                           const std::vector<Rgb>& colours, double voxel_m, bool coloured) {
+  PointCloud grown = model.points;
+  grown.insert(grown.end(), points.begin(), points.end());
+  std::vector<Eigen::Vector3f> grown_normals = model.normals;
+  grown_normals.insert(grown_normals.end(), normals.begin(), normals.end());
+  std::vector<Rgb> grown_colours;
+  if (coloured) {
+    grown_colours = model.colours;
+    grown_colours.resize(model.points.size(), kNoColour);
+    if (colours.empty()) {
+      grown_colours.resize(grown.size(), kNoColour);
+    } else {
+      grown_colours.insert(grown_colours.end(), colours.begin(), colours.end());
+    }
+  }
+  model.points = voxel_downsample(grown, voxel_m);
+  model.normals = voxel_normals(grown, grown_normals, model.points, voxel_m);
+  if (coloured) model.colours = voxel_colours(grown, grown_colours, model.points, voxel_m);
+}
+
+// One voxel's sums, in the order voxel_downsample, voxel_normals and voxel_colours add.
+struct VoxelSum {
+  double x = 0, y = 0, z = 0;
+  std::size_t count = 0;
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+  Eigen::Vector4d colour = Eigen::Vector4d::Zero();  // r g b count
+  void add(const Eigen::Vector3f& p, const Eigen::Vector3f& n, const Rgb& c) {
+    x += p.x();
+    y += p.y();
+    z += p.z();
+    ++count;
+    if (!n.isZero()) normal += n;
+    colour += Eigen::Vector4d(c[0], c[1], c[2], 1.0);
+  }
+};
+
+}  // namespace
+
+void merge_into_voxels(VoxelCloud& model, const PointCloud& points, const std::vector<Eigen::Vector3f>& normals,
+                       const std::vector<Rgb>& colours, double voxel_m) {
+  if (normals.size() != points.size() || (!colours.empty() && colours.size() != points.size())) {
+    throw std::invalid_argument("merge_into_voxels: " + std::to_string(normals.size()) + " normals and " +
+                                std::to_string(colours.size()) + " colours for " + std::to_string(points.size()) +
+                                " points (one each, or no colours)");
+  }
+  if (model.normals.size() != model.points.size() ||
+      (!model.colours.empty() && model.colours.size() != model.points.size())) {
+    throw std::invalid_argument("merge_into_voxels: a model of " + std::to_string(model.points.size()) + " points with " +
+                                std::to_string(model.normals.size()) + " normals and " +
+                                std::to_string(model.colours.size()) + " colours");
+  }
+  const bool coloured = !model.colours.empty() || !colours.empty();
+  if (!(voxel_m > 0) || !std::isfinite(voxel_m)) {  // nothing is merged: every point kept as it came
+    if (coloured) model.colours.resize(model.points.size(), kNoColour);
+    model.points.insert(model.points.end(), points.begin(), points.end());
+    model.normals.insert(model.normals.end(), normals.begin(), normals.end());
+    if (coloured) {
+      if (colours.empty()) {
+        model.colours.resize(model.points.size(), kNoColour);
+      } else {
+        model.colours.insert(model.colours.end(), colours.begin(), colours.end());
+      }
+    }
+    return;
+  }
+  // The model's voxels: one point each, in increasing order, or the full computation.
+  const std::size_t n = model.points.size();
+  std::vector<VoxelIndex> model_index(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!voxel_index(model.points[i], voxel_m, model_index[i].data()) || (i > 0 && !(model_index[i - 1] < model_index[i]))) {
+      merge_by_downsampling(model, points, normals, colours, voxel_m, coloured);
+      return;
+    }
+  }
+  // The new points by voxel, each voxel's in their order (as the downsampling sums them).
+  struct New {
+    VoxelIndex q;
+    uint32_t index;
+  };
+  std::vector<New> added;
+  added.reserve(points.size());
+  for (std::size_t j = 0; j < points.size(); ++j) {
+    New a;
+    if (voxel_index(points[j], voxel_m, a.q.data())) added.push_back({a.q, static_cast<uint32_t>(j)});
+  }
+  std::stable_sort(added.begin(), added.end(), [](const New& a, const New& b) { return a.q < b.q; });
+
+  VoxelCloud out;
+  out.points.reserve(n + added.size());
+  out.normals.reserve(n + added.size());
+  if (coloured) out.colours.reserve(n + added.size());
+  const auto model_colour = [&](std::size_t i) { return model.colours.empty() ? kNoColour : model.colours[i]; };
+  const auto new_colour = [&](std::size_t j) { return colours.empty() ? kNoColour : colours[j]; };
+  const auto emit = [&](const VoxelSum& s) {
+    const double inv = 1.0 / static_cast<double>(s.count);
+    out.points.emplace_back(static_cast<float>(s.x * inv), static_cast<float>(s.y * inv), static_cast<float>(s.z * inv));
+    out.normals.push_back(s.normal.norm() > 0.0f ? Eigen::Vector3f(s.normal.normalized()) : Eigen::Vector3f::Zero());
+    if (coloured) {
+      Rgb c;
+      for (int k = 0; k < 3; ++k) c[static_cast<std::size_t>(k)] = static_cast<uint8_t>(std::lround(s.colour[k] / s.colour[3]));
+      out.colours.push_back(c);
+    }
+  };
+  std::size_t i = 0, j = 0;
+  while (i < n || j < added.size()) {
+    const bool take_model = i < n && (j == added.size() || !(added[j].q < model_index[i]));
+    const VoxelIndex q = take_model ? model_index[i] : added[j].q;
+    VoxelSum s;
+    if (take_model) {
+      s.add(model.points[i], model.normals[i], model_colour(i));
+      ++i;
+    }
+    const bool grows = j < added.size() && added[j].q == q;
+    for (; j < added.size() && added[j].q == q; ++j) s.add(points[added[j].index], normals[added[j].index], new_colour(added[j].index));
+    emit(s);
+    VoxelIndex centre;
+    if (grows && (!voxel_index(out.points.back(), voxel_m, centre.data()) || centre != q)) {
+      // A centroid across its voxel's face: its normal and colour would be looked up in the
+      // neighbour's sums, as the full computation does.
+      merge_by_downsampling(model, points, normals, colours, voxel_m, coloured);
+      return;
+    }
+  }
+  model = std::move(out);
 }
 
 }  // namespace pbnbv

@@ -60,7 +60,8 @@ std::vector<Eigen::Vector3f> neighbour_normals(const PointCloud& points, const E
                                                int neighbours = 12);
 
 // The normals of `points` averaged into the voxels of voxel_downsample(points, voxel_m) =
-// `downsampled` (zero normals are left out; a voxel without any gets a zero normal).
+// `downsampled` (zero normals are left out; a voxel without any gets a zero normal). voxel_m <= 0
+// (nothing merged, `downsampled` = `points`): each point's own normal.
 std::vector<Eigen::Vector3f> voxel_normals(const PointCloud& points, const std::vector<Eigen::Vector3f>& normals,
                                            const PointCloud& downsampled, double voxel_m);
 
@@ -68,5 +69,24 @@ std::vector<Eigen::Vector3f> voxel_normals(const PointCloud& points, const std::
 // `downsampled`, channel by channel (a voxel without any gets kNoColour).
 std::vector<Rgb> voxel_colours(const PointCloud& points, const std::vector<Rgb>& colours, const PointCloud& downsampled,
                                double voxel_m);
+
+// A cloud downsampled at a voxel size: one point per voxel (the centroid of what fell in it), its
+// normal and, when `colours` is not empty, its colour, in voxel_downsample's order.
+struct VoxelCloud {
+  PointCloud points;
+  std::vector<Eigen::Vector3f> normals;  // one per point
+  std::vector<Rgb> colours;              // empty, or one per point
+};
+
+// Merges `points` (with one normal each, and colours: empty or one each) into `model`: the result
+// is what voxel_downsample, voxel_normals and voxel_colours of the model's points followed by the
+// new ones give (bit for bit; colours from the first coloured merge on, kNoColour for points that
+// had none), with the model's untouched voxels copied instead of sorted and summed again: the
+// cost is linear in the model and sorts only the new points. Falls back to the full computation
+// when the model is not in voxel order (not made by these functions) or a new centroid rounds
+// across its voxel's face. voxel_m <= 0: the points are appended. Throws std::invalid_argument
+// when the normals or colours are not one per point.
+void merge_into_voxels(VoxelCloud& model, const PointCloud& points, const std::vector<Eigen::Vector3f>& normals,
+                       const std::vector<Rgb>& colours, double voxel_m);
 
 }  // namespace pbnbv

@@ -25,9 +25,9 @@ ScanModel::ScanModel(fs::path folder, double voxel_m, double new_surface_radius_
 }
 
 void ScanModel::clear() {
-  points_.clear();
-  normals_.clear();
-  colours_.clear();
+  model_.points.clear();
+  model_.normals.clear();
+  model_.colours.clear();
   poses_.clear();
 }
 
@@ -35,18 +35,18 @@ bool ScanModel::restore() {
   const fs::path path = folder_ / "cloud.ply";
   if (folder_.empty() || !fs::exists(path)) return false;
   CloudExtras extras;
-  points_ = read_ply(path.string(), extras);
+  model_.points = read_ply(path.string(), extras);
   poses_ = extras.camera_poses;
-  normals_ = extras.normals;
-  colours_ = extras.colours;
-  if (normals_.size() != points_.size()) {
+  model_.normals = extras.normals;
+  model_.colours = extras.colours;
+  if (model_.normals.size() != model_.points.size()) {
     // A cloud.ply written before normals were: fit them to the neighbours, facing away from the
     // cloud's centre (the cameras look at the object from outside).
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-    for (const auto& p : points_) centre += p.cast<double>();
-    if (!points_.empty()) centre /= static_cast<double>(points_.size());
-    normals_ = neighbour_normals(points_, centre);
-    for (auto& n : normals_) n = -n;
+    for (const auto& p : model_.points) centre += p.cast<double>();
+    if (!model_.points.empty()) centre /= static_cast<double>(model_.points.size());
+    model_.normals = neighbour_normals(model_.points, centre);
+    for (auto& n : model_.normals) n = -n;
   }
   return true;
 }
@@ -73,28 +73,12 @@ ModelUpdate ScanModel::add_view(int view, const PointCloud& points, std::vector<
     write_ply(points, (folder_ / u.frame_file).string(), CloudExtras{normals, {object_T_camera}, colours});
   }
   if (merge) {
-    u.new_surface = new_surface(points, points_, radius_m_);
-    PointCloud grown = points_;
-    grown.insert(grown.end(), points.begin(), points.end());
-    std::vector<Eigen::Vector3f> grown_normals = normals_;
-    grown_normals.resize(points_.size(), Eigen::Vector3f::Zero());
-    grown_normals.insert(grown_normals.end(), normals.begin(), normals.end());
-    const bool coloured = !colours_.empty() || !colours.empty();
-    std::vector<Rgb> grown_colours;
-    if (coloured) {
-      grown_colours = colours_;
-      grown_colours.resize(points_.size(), kNoColour);
-      if (colours.empty()) {
-        grown_colours.resize(grown.size(), kNoColour);
-      } else {
-        grown_colours.insert(grown_colours.end(), colours.begin(), colours.end());
-      }
-    }
-    points_ = voxel_downsample(grown, voxel_m_);
-    normals_ = voxel_normals(grown, grown_normals, points_, voxel_m_);
-    if (coloured) colours_ = voxel_colours(grown, grown_colours, points_, voxel_m_);
+    u.new_surface = new_surface(points, model_.points, radius_m_);
+    merge_into_voxels(model_, points, normals, colours, voxel_m_);  // sizes checked above
     poses_.push_back(object_T_camera);
-    if (!folder_.empty()) write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_, colours_});
+    if (!folder_.empty()) {
+      write_ply(model_.points, (folder_ / "cloud.ply").string(), CloudExtras{model_.normals, poses_, model_.colours});
+    }
   }
   u.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return u;
@@ -178,11 +162,11 @@ void ScanModel::write_trajectory() const {
 }
 
 void ScanModel::move_frame(const Pose& q) {
-  points_ = moved(points_, q);
-  normals_ = turned(normals_, q);
+  model_.points = moved(model_.points, q);
+  model_.normals = turned(model_.normals, q);
   for (Pose& pose : poses_) pose = q * pose;
   if (folder_.empty()) return;
-  write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_, colours_});
+  write_ply(model_.points, (folder_ / "cloud.ply").string(), CloudExtras{model_.normals, poses_, model_.colours});
   if (fs::is_directory(folder_ / "frames")) {
     for (const auto& entry : fs::directory_iterator(folder_ / "frames")) {
       if (entry.path().extension() == ".ply") move_frame_file(entry.path(), q);
@@ -222,11 +206,11 @@ void ScanModel::move_views(const std::vector<std::pair<int, Pose>>& moves, const
     all_colours.insert(all_colours.end(), e.colours.begin(), e.colours.end());
     if (!e.camera_poses.empty()) poses.push_back(e.camera_poses.front());
   }
-  points_ = voxel_downsample(all, voxel_m_);
-  normals_ = voxel_normals(all, all_normals, points_, voxel_m_);
-  colours_ = coloured ? voxel_colours(all, all_colours, points_, voxel_m_) : std::vector<Rgb>{};
+  model_.points = voxel_downsample(all, voxel_m_);
+  model_.normals = voxel_normals(all, all_normals, model_.points, voxel_m_);
+  model_.colours = coloured ? voxel_colours(all, all_colours, model_.points, voxel_m_) : std::vector<Rgb>{};
   poses_ = poses;
-  write_ply(points_, (folder_ / "cloud.ply").string(), CloudExtras{normals_, poses_, colours_});
+  write_ply(model_.points, (folder_ / "cloud.ply").string(), CloudExtras{model_.normals, poses_, model_.colours});
 }
 
 void ScanModel::view_in_camera_frame(int view, PointCloud& points, std::vector<Eigen::Vector3f>& normals) const {

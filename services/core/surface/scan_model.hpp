@@ -20,6 +20,7 @@
 #include "core/io/mesh_file.hpp"
 #include "core/geometry/mesh_summary.hpp"
 #include "core/geometry/point_cloud.hpp"
+#include "core/perception/depth_cloud.hpp"
 #include "core/perception/new_surface.hpp"
 
 namespace pbnbv {
@@ -111,9 +112,9 @@ class ScanModel {
   // mount estimate refits to them). Throws naming the file when there is none or it has no pose.
   void view_in_camera_frame(int view, PointCloud& points, std::vector<Eigen::Vector3f>& normals) const;
 
-  const PointCloud& points() const { return points_; }
-  const std::vector<Eigen::Vector3f>& normals() const { return normals_; }
-  const std::vector<Rgb>& colours() const { return colours_; }  // empty, or one per point
+  const PointCloud& points() const { return model_.points; }
+  const std::vector<Eigen::Vector3f>& normals() const { return model_.normals; }
+  const std::vector<Rgb>& colours() const { return model_.colours; }  // empty, or one per point
   const std::vector<Pose>& camera_poses() const { return poses_; }
   const std::filesystem::path& folder() const { return folder_; }
 
@@ -121,9 +122,8 @@ class ScanModel {
   std::filesystem::path folder_;
   double voxel_m_;
   double radius_m_;
-  PointCloud points_;
-  std::vector<Eigen::Vector3f> normals_;  // one per point (zero: none)
-  std::vector<Rgb> colours_;              // empty (no merged view had colours), or one per point
+  VoxelCloud model_;  // normals: one per point (zero: none); colours: empty (no merged view had
+                      // colours), or one per point
   std::vector<Pose> poses_;               // the merged views' camera poses, in order
 };
 

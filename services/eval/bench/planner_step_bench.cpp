@@ -119,7 +119,7 @@ const Sequence& sequence() {
       write_stl_binary(mesh, (dir / "bunny.stl").string());
       const RigModel rig = load_rig(default_rig_path(RigKind::kFree));
       static twin::EglContext egl;
-      twin::RigSim sim(rig, twin::ObjectPlacement{(dir / "bunny.stl").string(), 0.0}, (dir / "model.xml").string());
+      twin::RigSim sim(rig, twin::ObjectPlacement{(dir / "bunny.stl").string(), 0.0, 0.0, 0.0, {}}, (dir / "model.xml").string());
       const CameraIntrinsics k;
       twin::DepthRenderer renderer(sim.model(), "depth", k, DepthRange{});
       ReachabilityChecker solver(rig);

@@ -123,7 +123,7 @@ class FreeRigTwin {
  public:
   FreeRigTwin(const RigModel& rig, const TriangleMesh& mesh, const fs::path& dir, const CameraIntrinsics& camera,
               const DepthRange& range)
-      : solver_(rig), sim_(rig, twin::ObjectPlacement{write(mesh, dir), 0.0}, (dir / "model.xml").string()),
+      : solver_(rig), sim_(rig, twin::ObjectPlacement{write(mesh, dir), 0.0, 0.0, 0.0, {}}, (dir / "model.xml").string()),
         renderer_(sim_.model(), "depth", camera, range) {}
 
   std::vector<float> render(const Pose& view) {
