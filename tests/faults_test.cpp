@@ -559,6 +559,31 @@ TEST(Faults, ObjectsNoRigCanScanAreRefusedUpFront) {
     EXPECT_LT(s, 10.0) << "refused before any process starts";
     EXPECT_FALSE(fs::exists(dir / (std::string(name) + "-out") / "processes.json"));
   }
+  // A slab 1.4 x 0.2 x 0.3 m (--size 0.2: as it is) on the UR5e rig, whose pedestal's near face is
+  // 0.60 m from the turntable axis: its corners reach hypot(0.7, 0.1) = 0.707 m, so turning it
+  // would jam it against the pedestal. It clears when scaled to reach under 0.595 m (the 5 mm
+  // margin): by 0.595 / 0.7071 = 0.8415, a shortest edge of 0.168 m: --size 0.16 (in cm, down).
+  std::ofstream slab(dir / "slab.obj");
+  for (int k = 0; k < 8; ++k) slab << "v " << ((k & 1) ? 0.7 : -0.7) << " " << ((k & 2) ? 0.1 : -0.1) << " " << ((k & 4) ? 0.3 : 0.0) << "\n";
+  slab << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+  slab.close();
+  const CommandResult r = run_command(bin_dir() + "/pbnbv scan --object " + (dir / "slab.obj").string() +
+                                      " --size 0.2 --rig-model " + source_dir() + "/models/rig_ur5e.xml --out " +
+                                      (dir / "slab-out").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("slab.obj', turned on the turntable, would strike the rig's pedestal"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("it reaches 0.707 m from the turntable axis"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("at --size 0.16 or less (now 0.20) it turns clear"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "slab-out" / "processes.json"));
+  // An external rig's working volume likewise, before any driver is waited for: a cylinder of
+  // radius 0.62 m on the UR5e strikes the pedestal; 0.595 / 0.62 = 96 % of it turns clear.
+  const CommandResult wide = run_command(bin_dir() + "/pbnbv scan --external-rig --working-volume cylinder:0.62,0.3 --rig-model " +
+                                         source_dir() + "/models/rig_ur5e.xml --driver-timeout 60 --out " + (dir / "wide-out").string());
+  EXPECT_EQ(wide.exit_code, 2) << wide.output;
+  EXPECT_NE(wide.output.find("the working volume cylinder:0.62,0.3, turned on the turntable, would strike the rig's pedestal"),
+            std::string::npos) << wide.output;
+  EXPECT_NE(wide.output.find("(96 % of it turns clear)"), std::string::npos) << wide.output;
+  EXPECT_EQ(wide.output.find("waiting for them"), std::string::npos) << wide.output;
 }
 
 // The README's first command, run as a user runs it (the default bus, no namespace): its log

@@ -13,9 +13,12 @@ namespace pbnbv::twin {
 namespace {
 
 // Collision filter of the monitor's model copy: (contype1 & conaffinity2) || (contype2 &
-// conaffinity1) holds for a moving geom against an other geom only.
+// conaffinity1) holds for a moving geom against an other geom (bit 2), and for the object turning
+// on the turntable against a fixed part (bit 4), only.
 constexpr int kMovingContype = 2, kMovingConaffinity = 0;
 constexpr int kOtherContype = 0, kOtherConaffinity = 2;
+constexpr int kTurningContype = 4, kTurningConaffinity = kOtherConaffinity;
+constexpr int kFixedContype = 0, kFixedConaffinity = kOtherConaffinity | kTurningContype;
 
 std::string body_name(const mjModel* m, int body) {
   const char* n = mj_id2name(m, mjOBJ_BODY, body);
@@ -28,6 +31,9 @@ std::string geom_name(const mjModel* m, int geom) {
   const char* b = mj_id2name(m, mjOBJ_BODY, m->geom_bodyid[geom]);
   return b ? std::string(b) : "geom " + std::to_string(geom);
 }
+
+// A pair's moving side: a body of the arm (>= 0), or the turning object's geom (-1 - geom).
+std::string side_name(const mjModel* m, int side) { return side >= 0 ? body_name(m, side) : geom_name(m, -1 - side); }
 
 bool in_subtree(const mjModel* m, int body, int root) {
   for (int b = body; b > 0; b = m->body_parentid[b]) {
@@ -61,6 +67,8 @@ ContactMonitor::ContactMonitor(const mjModel* model, const std::string& first_jo
   const int root = m_->jnt_bodyid[joint];
   is_moving_.assign(static_cast<std::size_t>(m_->ngeom), 0);
   is_other_.assign(static_cast<std::size_t>(m_->ngeom), 0);
+  is_turning_.assign(static_cast<std::size_t>(m_->ngeom), 0);
+  is_fixed_.assign(static_cast<std::size_t>(m_->ngeom), 0);
   for (int g = 0; g < m_->ngeom; ++g) {
     const bool moving = in_subtree(m_, m_->geom_bodyid[g], root);
     const char* name = mj_id2name(m_, mjOBJ_GEOM, g);
@@ -76,6 +84,15 @@ ContactMonitor::ContactMonitor(const mjModel* model, const std::string& first_jo
       other_.push_back(g);
       m_->geom_contype[g] = kOtherContype;
       m_->geom_conaffinity[g] = kOtherConaffinity;
+      if (inserted && m_->body_weldid[m_->geom_bodyid[g]] != 0) {  // carried by a joint: the turntable
+        is_turning_[static_cast<std::size_t>(g)] = 1;
+        m_->geom_contype[g] = kTurningContype;
+        m_->geom_conaffinity[g] = kTurningConaffinity;
+      } else if (!inserted && m_->body_weldid[m_->geom_bodyid[g]] == 0) {  // welded to the world
+        is_fixed_[static_cast<std::size_t>(g)] = 1;
+        m_->geom_contype[g] = kFixedContype;
+        m_->geom_conaffinity[g] = kFixedConaffinity;
+      }
     } else {
       m_->geom_contype[g] = 0;
       m_->geom_conaffinity[g] = 0;
@@ -167,10 +184,15 @@ std::vector<RigContact> ContactMonitor::check_state(const double* qpos, double r
   std::vector<std::pair<std::pair<int, int>, double>> pairs;
   for (int i = 0; i < d_->ncon; ++i) {
     const mjContact& c = d_->contact[i];
-    const bool first_moving = is_moving_[static_cast<std::size_t>(c.geom1)] != 0;
+    const auto at = [](const std::vector<char>& v, int g) { return v[static_cast<std::size_t>(g)] != 0; };
+    // The arm against the rest, or the object turning against a fixed part.
+    const bool first_moving = at(is_moving_, c.geom1) || (!at(is_moving_, c.geom2) && at(is_turning_, c.geom1));
     const int gm = first_moving ? c.geom1 : c.geom2, go = first_moving ? c.geom2 : c.geom1;
-    if (!is_moving_[static_cast<std::size_t>(gm)] || !is_other_[static_cast<std::size_t>(go)]) continue;
-    const std::pair<int, int> key{m_->geom_bodyid[gm], go};
+    const bool arm = at(is_moving_, gm) && at(is_other_, go);
+    const bool turning = at(is_turning_, gm) && at(is_fixed_, go);
+    if (!arm && !turning) continue;
+    // The arm's side by its body, the object's by its geom (-1 - geom).
+    const std::pair<int, int> key{arm ? m_->geom_bodyid[gm] : -1 - gm, go};
     auto it = std::find_if(pairs.begin(), pairs.end(), [&](const auto& p) { return p.first == key; });
     if (it == pairs.end()) {
       pairs.push_back({key, c.dist});
@@ -188,14 +210,14 @@ std::vector<RigContact> ContactMonitor::check_state(const double* qpos, double r
     if (dist >= 0 || touching_.count(key)) continue;
     touching_.insert(key);
     ++events_;
-    began.push_back({body_name(m_, key.first), geom_name(m_, key.second), -dist, rig_time_s, command_seq});
+    began.push_back({side_name(m_, key.first), geom_name(m_, key.second), -dist, rig_time_s, command_seq});
   }
   return began;
 }
 
 std::vector<std::string> ContactMonitor::touching() const {
   std::vector<std::string> out;
-  for (const auto& [body, geom] : touching_) out.push_back(body_name(m_, body) + " / " + geom_name(m_, geom));
+  for (const auto& [side, geom] : touching_) out.push_back(side_name(m_, side) + " / " + geom_name(m_, geom));
   return out;
 }
 

@@ -2,9 +2,11 @@
 // The twin's contact check: every contact between the rig's moving side (every geom under the
 // first arm joint's body: the links, the camera bracket and housing; the free rig's camera) and
 // anything else solid in the rig (table, pedestal, arm base, turntable housing, platter, the
-// object, the calibration sphere), found on a copy of the rig's model of its own, so that the
-// check neither depends on nor changes the physics (whose contact filtering, flags and margins
-// stay as the rig file says).
+// object, the calibration sphere), and between the object (and calibration sphere) turning on
+// the turntable and the rig's fixed parts (every solid geom welded to the world: the table, the
+// pedestal, the arm's base; an object too wide for the rig jams against them), found on a copy of
+// the rig's model of its own, so that the check neither depends on nor changes the physics (whose
+// contact filtering, flags and margins stay as the rig file says).
 //
 // The object counts by its convex hull: MuJoCo 2.2.2 collides a mesh as its convex hull, so an
 // arm reaching into a concavity of the object (between a mug's handle and its body) is reported
@@ -34,7 +36,7 @@ inline constexpr double kSeparatedM = 1e-3;
 
 // One contact event.
 struct RigContact {
-  std::string moving;       // the moving side's body ("link_6", "camera_optical")
+  std::string moving;       // the moving side's body ("link_6", "camera_optical", "object")
   std::string other;        // the other geom ("platter", "object", "table")
   double depth_m = 0;       // penetration when found
   double rig_time_s = 0;    // rig time when found
@@ -93,10 +95,12 @@ class ContactMonitor {
   mjData* d_ = nullptr;
   std::vector<int> moving_, other_;         // geom ids
   std::vector<char> is_moving_, is_other_;  // per geom
+  std::vector<char> is_turning_, is_fixed_; // per geom: the object on the turntable; welded to the world
   // Per joint (hinge or slide): the checked geoms it carries (its body's subtree).
   std::vector<std::vector<int>> carried_;
   std::vector<double> last_qpos_;           // the state last checked
-  std::set<std::pair<int, int>> touching_;  // (moving body, other geom) within kSeparatedM after touching
+  std::set<std::pair<int, int>> touching_;  // (moving body, or -1 - turning geom; other geom) within
+                                            // kSeparatedM after touching
   int64_t events_ = 0;
   std::vector<RigContact> initial_;
   ContactCheckCost cost_;

@@ -297,6 +297,60 @@ std::vector<Rgb> object_colours(const eval::ObjectSpec& object) {
   return read_ply_colours(object.source, object.mesh.vertices.size());
 }
 
+// What an object of radius `radius_m` about the turntable axis, from `bottom_z_m` to `top_z_m`
+// (object frame, object_z_m above the platter), would strike turning on the rig's turntable, and
+// the largest factor by which it could be scaled (about the platter's centre, standing on it) to
+// turn clear (bisection; 0: nothing clears).
+struct TurningCheck {
+  std::vector<std::string> parts;
+  double clear_scale = 1;
+};
+TurningCheck turning_check(const RigModel& rig, double radius_m, double bottom_z_m, double top_z_m, double object_z_m) {
+  ReachabilityChecker checker(rig);
+  const auto hit = [&](double k) { return checker.turning_collisions(k * radius_m, k * bottom_z_m, k * top_z_m, k * object_z_m); };
+  TurningCheck c;
+  c.parts = hit(1.0);
+  if (c.parts.empty()) return c;
+  double clear = 0, strikes = 1;
+  for (int i = 0; i < 30; ++i) {
+    const double k = 0.5 * (clear + strikes);
+    (hit(k).empty() ? clear : strikes) = k;
+  }
+  c.clear_scale = clear;
+  return c;
+}
+
+std::string joined(const std::vector<std::string>& parts) {
+  std::string out;
+  for (const std::string& p : parts) out += (out.empty() ? "" : ", ") + p;
+  return out;
+}
+
+// Refuses, before anything starts, an object that turned on the turntable would strike the rig's
+// fixed parts (an object too wide for the rig jams against the pedestal): the cylinder about the
+// turntable axis through the mesh's farthest vertex, as tall as the object stands. Names the parts,
+// the object's reach and the largest --size that turns clear.
+void check_object_turns_clear(const TriangleMesh& mesh, const ScanSettings& s, const std::string& what) {
+  if (s.rig != RigKind::kArm || mesh.vertices.empty()) return;
+  double radius = 0, bottom = mesh.vertices[0].z(), top = bottom;
+  for (const Eigen::Vector3d& v : mesh.vertices) {
+    radius = std::max(radius, std::hypot(v.x(), v.y()));
+    bottom = std::min(bottom, v.z());
+    top = std::max(top, v.z());
+  }
+  const RigModel rig = load_rig(s.rig_model_path);
+  const TurningCheck c = turning_check(rig, radius, bottom, top, s.object_z_m);
+  if (c.parts.empty()) return;
+  const double size = s.normalisation.extent_m.minCoeff();
+  const double fits = std::floor(100 * c.clear_scale * size) / 100;
+  throw std::invalid_argument(fmt::format(
+      "{}, turned on the turntable, would strike the rig's {} ({}): it reaches {:.3f} m from the turntable axis (its "
+      "farthest point) and stands {:.3f} m tall; {}",
+      what, joined(c.parts), rig.model_path, radius, top - bottom,
+      fits >= 0.01 ? fmt::format("at --size {:.2f} or less (now {:.2f}) it turns clear", fits, size)
+                   : std::string("nothing of this shape turns clear: check the rig file")));
+}
+
 }  // namespace
 
 int resume_scan(const fs::path& dir, const fs::path& bin);
@@ -321,6 +375,7 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
 
   // The object rests on the turntable (arm rig) or floats at the origin (free rig).
   place_object(s);
+  check_object_turns_clear(mesh, s, "the object '" + object.source + "'");
 
   prepare_out(out, o.overwrite);
   const std::string stl = (out / "object.stl").string();
@@ -351,6 +406,20 @@ int run_external_scan(const ScanOptions& o, const fs::path& bin) {
   s.object_name = "unknown";
   s.scan_id = new_scan_id("scan");
   place_object(s);  // in the working volume
+  {
+    // The working volume, turned: its cylinder, or the one through the box's corners.
+    const WorkingVolume& v = *s.working_volume;
+    const Eigen::AlignedBox3d b = v.bounds();
+    const double radius = std::hypot(std::max(-b.min().x(), b.max().x()), std::max(-b.min().y(), b.max().y()));
+    const TurningCheck c = turning_check(rig, v.shape == WorkingVolume::Shape::kCylinder ? v.radius_m : radius,
+                                         b.min().z(), b.max().z(), s.object_z_m);
+    if (!c.parts.empty()) {
+      throw std::invalid_argument(fmt::format(
+          "the working volume {}, turned on the turntable, would strike the rig's {} ({}): an object filling it would "
+          "jam; give a smaller --working-volume or pbnbv_working_volume in the rig file ({:.0f} % of it turns clear)",
+          v.to_text(), joined(c.parts), rig.model_path, 100 * c.clear_scale));
+    }
+  }
   std::cout << "pbnbv scan: an unknown object in the working volume " << s.working_volume->to_text() << " of the rig "
             << rig.model_path << " (" << rig.arm_name << "), drivers outside; waiting for them on " << bus::lcm_url()
             << std::endl;

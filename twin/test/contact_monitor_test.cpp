@@ -143,7 +143,7 @@ TEST(ContactMonitor, TheCameraDrivenIntoTheObjectIsStoppedAtItsFace) {
     EXPECT_NEAR(f.translation().z(), 0.6, 1e-3);
     EXPECT_NEAR(f.linear().col(0).y(), 1.0, 1e-9) << "the tool points along world +y";
   }
-  twin::RigSim sim(rig, twin::ObjectPlacement{stl, object_z}, (dir / "model.xml").string());
+  twin::RigSim sim(rig, twin::ObjectPlacement{stl, object_z, 0, 0, {}}, (dir / "model.xml").string());
   EXPECT_EQ(sim.contact_events(), 0);
   sim.command_arm(near, 1.0, 1);
   EXPECT_TRUE(run(sim, 20.0, false).empty()) << "home to 0.45 m from the axis touches nothing";
@@ -172,6 +172,40 @@ TEST(ContactMonitor, TheCameraDrivenIntoTheObjectIsStoppedAtItsFace) {
   std::filesystem::remove_all(dir);
 }
 
+// An object too wide for the rig, turned on the turntable, jams against the pedestal: on the UR5e
+// rig the pedestal's near face is 0.60 m from the turntable axis (its centre 0.70 m along world
+// -y, 0.10 m half-width), its corner (-0.10, -0.60) m 0.608 m from the axis. A box 1.4 x 0.2 m
+// along the object's x (at turntable 0 along world x) turned counter-clockwise: the box's points
+// 0.608 m from the axis lie within atan(0.1 / 0.6) = 9.5 deg of its -x end (polar 180 deg), so
+// the leading ones reach the corner's polar angle, 260.5 deg, when the turntable has turned
+// 260.5 - 189.5 = 71 deg. Counted as "object / pedestal"; the rig stops there (the turntable short
+// of its 90 deg target), and the arm, standing still, touched nothing.
+TEST(ContactMonitor, AnObjectTooWideForTheRigTurnedIntoThePedestalIsStoppedAndCounted) {
+  const auto dir = temp_dir("contact_turning");
+  const std::string stl = (dir / "slab.stl").string();
+  write_stl_binary(make_box(Eigen::Vector3d(1.4, 0.2, 0.3)), stl);
+  const RigModel rig = load_rig(model_file_path("rig_ur5e.xml"));
+  twin::RigSim sim(rig, twin::ObjectPlacement{stl, 0.15, 0, 0, {}}, (dir / "model.xml").string());
+  EXPECT_EQ(sim.contact_events(), 0) << "at turntable 0 the slab lies along world x, clear of the pedestal";
+  sim.command_turntable(kPi / 2, 1.0, 1);
+  std::vector<twin::RigContact> found;
+  const int steps = static_cast<int>(20.0 / sim.model()->opt.timestep);
+  for (int i = 0; i < steps && found.empty(); ++i) {
+    sim.step();
+    for (const twin::RigContact& c : sim.take_contacts()) found.push_back(c);
+  }
+  ASSERT_EQ(found.size(), 1u) << "no contact in 20 s; the turntable at " << sim.turntable_angle() / kPi * 180 << " deg";
+  EXPECT_EQ(found[0].moving, "object");
+  EXPECT_EQ(found[0].other, "pedestal");
+  const double at_deg = sim.turntable_angle() / kPi * 180;
+  std::printf("object / pedestal at turntable %.2f deg (by hand 71.0)\n", at_deg);
+  EXPECT_NEAR(at_deg, 71.0, 1.0);
+  for (int i = 0; i < 2000; ++i) sim.step();
+  EXPECT_LT(sim.turntable_angle() / kPi * 180, 73.0) << "stopped, short of 90 deg";
+  EXPECT_EQ(sim.contact_events(), 1);
+  std::filesystem::remove_all(dir);
+}
+
 // Only the arm against the rest counts: the object resting on the platter (it stands on it) and
 // the environment's parts among themselves are no contact; the moving side is the arm's links and
 // the camera, the other side every solid geom of the rig plus the object.
@@ -181,7 +215,7 @@ TEST(ContactMonitor, TheSidesAreTheArmAndTheRest) {
   write_stl_binary(make_box(Eigen::Vector3d(0.2, 0.2, 0.2)), stl);
   const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
   // Sunk 5 mm into the platter: the object against the platter is not counted.
-  twin::ObjectPlacement object{stl, 0.095};
+  twin::ObjectPlacement object{stl, 0.095, 0, 0, {}};
   object.calibration_sphere_radius_m = 0.025;
   object.calibration_sphere_offset_m = 0.15;
   twin::RigSim sim(rig, object, (dir / "model.xml").string());

@@ -1,6 +1,7 @@
 // ReachabilityChecker: IK solutions per candidate turntable angle, checked for collisions and a
 // free line of sight in the rig's MuJoCo model. See rig.hpp (and rig_model.cpp's header comment).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -360,6 +361,52 @@ std::vector<std::string> ReachabilityChecker::collisions(const Vector6d& q, doub
                                                          double object_z_m) {
   impl_->set_keepout(keepout, object_z_m);
   return impl_->colliding(q, turntable_rad);
+}
+
+std::vector<std::string> ReachabilityChecker::turning_collisions(double radius_m, double bottom_z_m, double top_z_m,
+                                                                double object_z_m) {
+  Impl& im = *impl_;
+  const double bottom = bottom_z_m + kTurningLiftM;
+  if (im.rig.kind != RigKind::kArm || !im.rig.has_turntable || !(radius_m > 0) || !(top_z_m > bottom)) return {};
+  mjModel* m = im.model.get();
+  const int k = im.keepout;
+  // The keep-out geom stands in for the cylinder, colliding with everything; put back after.
+  const int type = m->geom_type[k], contype = m->geom_contype[k], conaffinity = m->geom_conaffinity[k];
+  std::array<mjtNum, 3> size, pos;
+  std::array<mjtNum, 4> quat;
+  std::copy_n(m->geom_size + 3 * k, 3, size.begin());
+  std::copy_n(m->geom_pos + 3 * k, 3, pos.begin());
+  std::copy_n(m->geom_quat + 4 * k, 4, quat.begin());
+  const mjtNum rbound = m->geom_rbound[k];
+  const double half = 0.5 * (top_z_m - bottom);
+  m->geom_type[k] = mjGEOM_CYLINDER;
+  m->geom_size[3 * k] = radius_m;
+  m->geom_size[3 * k + 1] = half;
+  m->geom_pos[3 * k] = m->geom_pos[3 * k + 1] = 0;
+  m->geom_pos[3 * k + 2] = object_z_m + bottom + half;
+  m->geom_quat[4 * k] = 1;
+  m->geom_quat[4 * k + 1] = m->geom_quat[4 * k + 2] = m->geom_quat[4 * k + 3] = 0;
+  m->geom_rbound[k] = std::hypot(radius_m, half);
+  m->geom_contype[k] = m->geom_conaffinity[k] = 0x7fffffff;
+  im.place(im.rig.q_home, 0);
+  mjData* d = im.data.get();
+  mj_collision(m, d);
+  std::vector<std::string> out;
+  for (int i = 0; i < d->ncon; ++i) {
+    const mjContact& c = d->contact[i];
+    if ((c.geom1 != k && c.geom2 != k) || c.dist >= kContactMargin) continue;
+    const int g = c.geom1 == k ? c.geom2 : c.geom1;
+    const bool fixed = m->body_weldid[m->geom_bodyid[g]] == 0 && (m->geom_contype[g] != 0 || m->geom_conaffinity[g] != 0);
+    if (fixed && std::find(out.begin(), out.end(), im.side_name[g]) == out.end()) out.push_back(im.side_name[g]);
+  }
+  m->geom_type[k] = type;
+  m->geom_contype[k] = contype;
+  m->geom_conaffinity[k] = conaffinity;
+  std::copy(size.begin(), size.end(), m->geom_size + 3 * k);
+  std::copy(pos.begin(), pos.end(), m->geom_pos + 3 * k);
+  std::copy(quat.begin(), quat.end(), m->geom_quat + 4 * k);
+  m->geom_rbound[k] = rbound;
+  return out;
 }
 
 namespace {

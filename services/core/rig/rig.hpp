@@ -227,6 +227,15 @@ class ReachabilityChecker {
   RigPath plan_path(const RigState& from, const RigState& to, const Eigen::AlignedBox3d& keepout,
                     double object_z_m);
 
+  // The rig's fixed parts (its solid geoms welded to the world: the table, the pedestal, the arm's
+  // base) that an object turning on the turntable would strike: the cylinder about the turntable
+  // axis of radius `radius_m` from `bottom_z_m` + kTurningLiftM to `top_z_m` (object frame, whose
+  // origin is object_z_m above the platter top: the object stands on the platter, and what lies
+  // under the platter's top cannot be struck), each part within kContactMargin of it, by name.
+  // Empty: clear; the free rig and a rig without a turntable: always.
+  static constexpr double kTurningLiftM = 0.01;
+  std::vector<std::string> turning_collisions(double radius_m, double bottom_z_m, double top_z_m, double object_z_m);
+
   // Names of colliding geom pairs ("link_4 / table") at this configuration; empty = free.
   std::vector<std::string> collisions(const Vector6d& q, double turntable_rad,
                                       const Eigen::AlignedBox3d& keepout, double object_z_m);
