@@ -951,6 +951,10 @@ class ScanRunner {
 
   void run(const std::vector<Job*>& todo) {
     install_stop_handlers();
+    if (spec_.slurm) {
+      run_on_slurm(todo);
+      return;
+    }
     while (next_ < todo.size() || !running_.empty()) {
       if (stop_requested()) stop_every_scan();
       while (static_cast<int>(running_.size()) < spec_.jobs && next_ < todo.size()) start(todo[next_++]);
@@ -963,6 +967,107 @@ class ScanRunner {
   }
 
  private:
+  // The scans as the tasks of Slurm job arrays: one array for `todo`, one more for the tasks that
+  // ended without a complete scan (once each); Slurm's queue and the scans' logs read once a second.
+  void run_on_slurm(const std::vector<Job*>& todo) {
+    SlurmQueue queue(spec_.out / "slurm");
+    struct Array {
+      std::string id;
+      std::vector<Job*> jobs;  // task i: jobs[i]
+    };
+    std::vector<Array> arrays;
+    std::map<Job*, std::pair<std::size_t, int>> task_of;  // the array (index) and task running it now
+    std::map<Job*, int> submitted;                         // how often
+    std::map<Job*, std::vector<std::string>> command;      // the scan's command, as last submitted
+    const auto submit = [&](const std::vector<Job*>& batch) {
+      std::vector<SlurmTask> tasks;
+      for (Job* j : batch) {
+        // An interrupted scan is resumed (scan_argv); a folder without its processes.json starts anew.
+        if (fs::exists(j->dir) && !fs::exists(j->dir / "processes.json")) fs::remove_all(j->dir);
+        fs::create_directories(j->dir);
+        fs::remove(j->dir / "bench_task.json");
+        command[j] = scan_argv(spec_, self_, j->object, j->planner, j->initial_view, j->dir);
+        tasks.push_back({command[j], j->dir, j->log});
+        j->view = j->views = 0;
+        j->last_progress.clear();
+        j->started = {};
+      }
+      const std::string id = queue.submit(*spec_.slurm, tasks, !spec_.netns);
+      for (std::size_t i = 0; i < batch.size(); ++i) {
+        task_of[batch[i]] = {arrays.size(), static_cast<int>(i)};
+        ++submitted[batch[i]];
+      }
+      arrays.push_back({id, batch});
+      live_.event("bench: " + std::to_string(batch.size()) + " scans submitted to Slurm, job array " + id + " (" +
+                  (spec_.out / "slurm").string() + ")");
+    };
+    const auto ids = [&] {
+      std::vector<std::string> out;
+      for (const Array& a : arrays) out.push_back(a.id);
+      return out;
+    };
+    if (!todo.empty()) submit(todo);
+    std::size_t waiting = todo.size();
+    while (!task_of.empty()) {
+      if (stop_requested()) {
+        queue.cancel(ids());
+        throw std::runtime_error("interrupted: Slurm job arrays " + fmt::format("{}", fmt::join(ids(), ", ")) +
+                                 " cancelled; the scans completed so far are kept in " + spec_.out.string() +
+                                 "; run the same command again to resume");
+      }
+      if (const auto states = queue.states(ids())) {
+        std::vector<Job*> again;
+        running_.clear();
+        waiting = 0;
+        for (auto it = task_of.begin(); it != task_of.end();) {
+          Job* j = it->first;
+          const Array& a = arrays[it->second.first];
+          const int task = it->second.second;
+          const auto& tasks = states->at(a.id);
+          const auto st = tasks.find(task);
+          const bool recorded = fs::exists(j->dir / "bench_task.json");
+          // Ended: Slurm says so, or Slurm no longer knows the task and its record is written.
+          if (st == tasks.end() ? !recorded : !st->second.ended()) {
+            if (st != tasks.end() && st->second.state == "RUNNING") {
+              if (j->started == std::chrono::steady_clock::time_point{}) j->started = std::chrono::steady_clock::now();
+              running_.push_back(j);
+            } else {
+              ++waiting;
+            }
+            ++it;
+            continue;
+          }
+          int exit_code = -1;
+          double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - j->started).count();
+          json record = {{"command", command[j]}, {"slurm_job", a.id + "_" + std::to_string(task)}};
+          if (recorded) {
+            try {
+              const json r = read_json((j->dir / "bench_task.json").string());
+              exit_code = r.at("exit_code").get<int>();
+              wall = r.at("wall_s").get<double>();
+              record["host"] = r.value("host", "");
+            } catch (const std::exception&) {
+            }
+          }
+          const std::string slurm = st == tasks.end() ? "Slurm no longer lists it"
+                                                      : "Slurm: " + st->second.state +
+                                                            (st->second.reason.empty() || st->second.reason == "None"
+                                                                 ? std::string()
+                                                                 : " (" + st->second.reason + ")");
+          const bool retry = submitted[j] < 2 && !(exit_code == 0 && scan_complete(j->dir));
+          finished(j, exit_code, wall, record, slurm + (recorded ? "" : ", no task record"), retry);
+          if (retry) again.push_back(j);
+          it = task_of.erase(it);
+        }
+        if (!again.empty()) submit(again);
+      }
+      read_progress();
+      if (live_.live()) show_live(waiting);
+      std::this_thread::sleep_for(std::chrono::seconds(1));
+    }
+    live_.update({});
+  }
+
   std::string prefix(const Job* j) const {
     return "[" + std::to_string(j - jobs_.data() + 1) + "/" + std::to_string(jobs_.size()) + "] " + j->run + " - " +
            std::string(name_of(j->planner)) + ": ";
@@ -999,31 +1104,44 @@ class ScanRunner {
     for (const Child* c : reap(children_)) {
       Job* j = running_[c - children_.data()];
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - j->started).count();
-      ++finished_;
-      walls_.push_back(wall);
-      if (c->exit_code == 0 && scan_complete(j->dir)) {
-        write_json_atomic({{"wall_s", wall}, {"command", c->argv}}, (j->dir / "bench_run.json").string());
-        std::string line;
-        try {
-          const json cov = read_json((j->dir / "coverage.json").string());
-          const auto& cv = cov.at("coverage_by_view");
-          if (!cv.empty()) line = ", coverage after view " + std::to_string(cv.size()) + " " + fixed(cv.back().get<double>()) + " %";
-        } catch (const std::exception&) {
-        }
-        live_.event(prefix(j) + "done in " + fixed(wall, 0) + " s" + line + " (" + std::to_string(finished_) + " of " +
-                    std::to_string(jobs_.size()) + " scans complete)");
-      } else {
-        std::string tail = tail_lines(j->log.string(), 6);
-        while (!tail.empty() && tail.back() == '\n') tail.pop_back();
-        live_.event(prefix(j) + "FAILED (exit " + std::to_string(c->exit_code) + "): " + scan_failure_reason(j->dir, j->log) +
-                    "; the end of " + j->log.string() + ":\n" + tail);
-      }
+      finished(j, c->exit_code, wall, json{{"command", c->argv}}, "");
     }
     for (std::size_t i = children_.size(); i-- > 0;) {
       if (children_[i].running) continue;
       children_.erase(children_.begin() + i);
       running_.erase(running_.begin() + i);
     }
+  }
+
+  // A scan that ended with `exit_code` after `wall` s: done (bench_run.json: its wall time and
+  // `record`), or failed with its reason (`why` first, when given). With `again`, a failed scan is
+  // not counted: the caller runs it once more.
+  void finished(Job* j, int exit_code, double wall, json record, const std::string& why, bool again = false) {
+    if (exit_code == 0 && scan_complete(j->dir)) {
+      ++finished_;
+      walls_.push_back(wall);
+      record["wall_s"] = wall;
+      write_json_atomic(record, (j->dir / "bench_run.json").string());
+      std::string line;
+      try {
+        const json cov = read_json((j->dir / "coverage.json").string());
+        const auto& cv = cov.at("coverage_by_view");
+        if (!cv.empty()) line = ", coverage after view " + std::to_string(cv.size()) + " " + fixed(cv.back().get<double>()) + " %";
+      } catch (const std::exception&) {
+      }
+      live_.event(prefix(j) + "done in " + fixed(wall, 0) + " s" + line + " (" + std::to_string(finished_) + " of " +
+                  std::to_string(jobs_.size()) + " scans complete)");
+      return;
+    }
+    if (!again) {
+      ++finished_;
+      walls_.push_back(wall);
+    }
+    std::string tail = tail_lines(j->log.string(), 6);
+    while (!tail.empty() && tail.back() == '\n') tail.pop_back();
+    live_.event(prefix(j) + "FAILED (exit " + std::to_string(exit_code) + "): " + (why.empty() ? "" : why + "; ") +
+                scan_failure_reason(j->dir, j->log) + "; the end of " + j->log.string() + ":\n" + tail +
+                (again ? "\n" + prefix(j) + "submitted once more" : ""));
   }
 
   // Progress: each scan's "[view k/N] ..." line; off a terminal printed when the view changes.
@@ -1148,6 +1266,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
     spec.netns = false;
   }
   if (!spec.netns) spec.jobs = 1;
+  if (spec.slurm) validate(*spec.slurm);
 
   std::vector<Job> jobs = plan_jobs(spec);
   std::vector<Job*> todo;
@@ -1159,7 +1278,7 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
       << (spec.first_views > 1 ? std::to_string(spec.first_views) + " first views x " : std::string())
       << spec.planners.size() << " planners = " << total
       << " scans (" << total - static_cast<int>(todo.size()) << " already complete in " << spec.out.string() << "), "
-      << spec.jobs << " at a time" << std::endl;
+      << (spec.slurm ? std::string("each a Slurm task") : std::to_string(spec.jobs) + " at a time") << std::endl;
   ScanRunner(spec, jobs, total - static_cast<int>(todo.size()), self, log, terminal).run(todo);
 
   // Evaluation of every scan in the folder against the ground truth.
@@ -1173,7 +1292,12 @@ BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostre
   add_gaps_to_oracle(result.planners, spec.views);
   result.halves = summarise_halves(spec, result.planners);
   result.machine = machine_info();
-  result.machine["scans_at_once"] = spec.jobs;
+  if (spec.slurm) {
+    result.machine["slurm"] = {{"partition", spec.slurm->partition}, {"account", spec.slurm->account},
+                               {"time_limit", spec.slurm->time_limit}};
+  } else {
+    result.machine["scans_at_once"] = spec.jobs;
+  }
   write_json_atomic(to_json(result), (spec.out / "summary.json").string());
   write_report(result);
   return result;

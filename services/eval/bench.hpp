@@ -25,6 +25,7 @@
 #include "core/scan/scan_options.hpp"
 #include "core/scan/stop_rule.hpp"
 #include "core/metrics/surface_metrics.hpp"
+#include "eval/bench_slurm.hpp"
 #include "eval/coverage.hpp"
 #include "eval/objects.hpp"
 
@@ -77,6 +78,9 @@ struct BenchSpec {
   SecondsStopRule seconds_rule;  // the rule in seconds, evaluated the same way
   int jobs = kJobs.value;            // scans run at once (each in its own network namespace)
   bool netns = true;                 // false: every scan on the current LCM bus, one at a time
+  // Each scan a task of a Slurm job array (bench_slurm.hpp) instead of a process here; `jobs`
+  // does not apply (Slurm decides how many run at once).
+  std::optional<SlurmSpec> slurm;
   std::filesystem::path out;
   CoverageParams coverage;
   MetricParams metrics;  // the surface metrics' threshold and sample density

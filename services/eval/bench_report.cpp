@@ -65,7 +65,16 @@ std::string command_of(const BenchSpec& s) {
     os << " --stop-gain-per-second " << s.seconds_rule.min_percent_per_s;
   }
   if (s.metrics.threshold_m != kMetricThreshold.value) os << " --threshold " << s.metrics.threshold_m;
-  os << " --jobs " << s.jobs << " --out " << s.out.string();
+  if (s.slurm) {
+    os << " --slurm";
+    if (!s.slurm->partition.empty()) os << " --partition " << s.slurm->partition;
+    if (!s.slurm->account.empty()) os << " --account " << s.slurm->account;
+    if (!s.slurm->time_limit.empty()) os << " --time-limit " << s.slurm->time_limit;
+  } else {
+    os << " --jobs " << s.jobs;
+  }
+  if (!s.netns) os << " --no-netns";
+  os << " --out " << s.out.string();
   return os.str();
 }
 

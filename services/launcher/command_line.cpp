@@ -316,7 +316,15 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add(c, kStopGainPerSecond, &spec->seconds_rule.min_percent_per_s);
   cli::add(c, kMetricThreshold, &spec->metrics.threshold_m);  // the surface metrics' precision / recall
   cli::add(c, eval::kJobs, &spec->jobs);
-  cli::add_flag(c, "no-netns", &pending->no_netns, "run the scans on the current LCM bus (one at a time)");
+  cli::add_flag(c, "no-netns", &pending->no_netns,
+                "run the scans on the current LCM bus (one at a time; with --slurm one per node)");
+  cli::add_flag(c, "slurm", &pending->slurm,
+                "run each scan as a task of a Slurm job array (sbatch; SLURM_CONF from the environment): the bench "
+                "folder and pbnbv must be on a file system every node shares (README, 'On a Slurm cluster')");
+  cli::add_text(c, "partition", &pending->slurm_spec.partition, "--slurm: the partition [Slurm's default]", "P");
+  cli::add_text(c, "account", &pending->slurm_spec.account, "--slurm: the account [Slurm's default]", "A");
+  cli::add_text(c, "time-limit", &pending->slurm_spec.time_limit,
+                "--slurm: each scan's time limit, as sbatch --time takes it (30, 1:00:00) [the partition's]", "T");
   cli::add_text(c, "out", &pending->out, "results (required); a rerun skips the scans already complete there and resumes interrupted ones", "DIR");
   cli::add_settings_file(c);
 }
@@ -520,6 +528,14 @@ void CommandLine::resolve_bench(const CLI::App* command, eval::BenchSpec* spec, 
     spec->objects = eval::expand_objects(spec->objects);
   }
   spec->netns = !pending.no_netns;
+  if (pending.slurm) {
+    spec->slurm = pending.slurm_spec;
+    eval::validate(*spec->slurm);
+  } else {
+    for (const char* o : {"--partition", "--account", "--time-limit"}) {
+      if (command->get_option(o)->count() > 0) throw std::invalid_argument(std::string(o) + " is for --slurm");
+    }
+  }
   spec->seconds_rule.min_views = spec->stop_rule.min_views;  // --stop-min-views: either rule
   if (!spec->rig_model.empty()) spec->rig_model = std::filesystem::absolute(spec->rig_model).string();  // scans run elsewhere
   if (pending.out.empty()) throw std::invalid_argument("--out DIR is required");

@@ -176,6 +176,8 @@ class CommandLine {
     std::string object_dir;
     std::string out;
     bool no_netns = false;
+    bool slurm = false;
+    eval::SlurmSpec slurm_spec;
   };
 
   // The options of `scan`, bound to scan_ and scan_pending_.

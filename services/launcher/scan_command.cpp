@@ -320,12 +320,6 @@ TurningCheck turning_check(const RigModel& rig, double radius_m, double bottom_z
   return c;
 }
 
-std::string joined(const std::vector<std::string>& parts) {
-  std::string out;
-  for (const std::string& p : parts) out += (out.empty() ? "" : ", ") + p;
-  return out;
-}
-
 // Refuses, before anything starts, an object that turned on the turntable would strike the rig's
 // fixed parts (an object too wide for the rig jams against the pedestal): the cylinder about the
 // turntable axis through the mesh's farthest vertex, as tall as the object stands. Names the parts,
@@ -346,7 +340,7 @@ void check_object_turns_clear(const TriangleMesh& mesh, const ScanSettings& s, c
   throw std::invalid_argument(fmt::format(
       "{}, turned on the turntable, would strike the rig's {} ({}): it reaches {:.3f} m from the turntable axis (its "
       "farthest point) and stands {:.3f} m tall; {}",
-      what, joined(c.parts), rig.model_path, radius, top - bottom,
+      what, fmt::join(c.parts, ", "), rig.model_path, radius, top - bottom,
       fits >= 0.01 ? fmt::format("at --size {:.2f} or less (now {:.2f}) it turns clear", fits, size)
                    : std::string("nothing of this shape turns clear: check the rig file")));
 }
@@ -417,7 +411,7 @@ int run_external_scan(const ScanOptions& o, const fs::path& bin) {
       throw std::invalid_argument(fmt::format(
           "the working volume {}, turned on the turntable, would strike the rig's {} ({}): an object filling it would "
           "jam; give a smaller --working-volume or pbnbv_working_volume in the rig file ({:.0f} % of it turns clear)",
-          v.to_text(), joined(c.parts), rig.model_path, 100 * c.clear_scale));
+          v.to_text(), fmt::join(c.parts, ", "), rig.model_path, 100 * c.clear_scale));
     }
   }
   std::cout << "pbnbv scan: an unknown object in the working volume " << s.working_volume->to_text() << " of the rig "
