@@ -1008,6 +1008,10 @@ class ScanRunner {
     };
     if (!todo.empty()) submit(todo);
     std::size_t waiting = todo.size();
+    // Slurm's queue not answering (slurmctld down, the network): the launcher gives up after this
+    // long; the tasks go on, and the same command resumes.
+    constexpr double kQueueSilenceS = 600;
+    auto answered = std::chrono::steady_clock::now();
     while (!task_of.empty()) {
       if (stop_requested()) {
         queue.cancel(ids());
@@ -1015,8 +1019,17 @@ class ScanRunner {
                                  " cancelled; the scans completed so far are kept in " + spec_.out.string() +
                                  "; run the same command again to resume");
       }
-      if (const auto states = queue.states(ids())) {
+      const auto states = queue.states(ids());
+      if (!states && std::chrono::duration<double>(std::chrono::steady_clock::now() - answered).count() > kQueueSilenceS) {
+        throw std::runtime_error("Slurm's queue has not answered for " + fixed(kQueueSilenceS, 0) + " s (squeue: " +
+                                 tail_lines((spec_.out / "slurm" / "squeue.out").string(), 3) + "); job arrays " +
+                                 fmt::format("{}", fmt::join(ids(), ", ")) +
+                                 " were not cancelled: run the same command again to resume once Slurm answers");
+      }
+      if (states) {
+        answered = std::chrono::steady_clock::now();
         std::vector<Job*> again;
+        std::map<std::string, int> pending;  // Slurm's reasons for the tasks that wait
         running_.clear();
         waiting = 0;
         for (auto it = task_of.begin(); it != task_of.end();) {
@@ -1029,16 +1042,22 @@ class ScanRunner {
           // Ended: Slurm says so, or Slurm no longer knows the task and its record is written.
           if (st == tasks.end() ? !recorded : !st->second.ended()) {
             if (st != tasks.end() && st->second.state == "RUNNING") {
-              if (j->started == std::chrono::steady_clock::time_point{}) j->started = std::chrono::steady_clock::now();
+              if (j->started == std::chrono::steady_clock::time_point{}) {
+                j->started = std::chrono::steady_clock::now();
+                live_.event(prefix(j) + "started (Slurm task " + a.id + "_" + std::to_string(task) + ")");
+              }
               running_.push_back(j);
             } else {
               ++waiting;
+              if (st != tasks.end()) ++pending[st->second.state + (st->second.reason.empty() ? "" : " (" + st->second.reason + ")")];
             }
             ++it;
             continue;
           }
           int exit_code = -1;
-          double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - j->started).count();
+          double wall = j->started == std::chrono::steady_clock::time_point{}
+                            ? 0.0
+                            : std::chrono::duration<double>(std::chrono::steady_clock::now() - j->started).count();
           json record = {{"command", command[j]}, {"slurm_job", a.id + "_" + std::to_string(task)}};
           if (recorded) {
             try {
@@ -1059,6 +1078,8 @@ class ScanRunner {
           if (retry) again.push_back(j);
           it = task_of.erase(it);
         }
+        waiting_note_.clear();
+        for (const auto& [why, n] : pending) waiting_note_ += (waiting_note_.empty() ? "" : ", ") + std::to_string(n) + " " + why;
         if (!again.empty()) submit(again);
       }
       read_progress();
@@ -1185,6 +1206,7 @@ class ScanRunner {
       summary += ", about " + duration_text((left_running + static_cast<double>(waiting) * per_scan) / std::max(1, spec_.jobs)) +
                  " left";
     }
+    if (!waiting_note_.empty()) summary += "; " + waiting_note_;
     lines.push_back(summary);
     live_.update(lines);
   }
@@ -1198,6 +1220,7 @@ class ScanRunner {
   std::size_t next_ = 0;         // in todo
   int finished_;
   std::vector<double> walls_;  // of the scans finished in this run
+  std::string waiting_note_;   // Slurm: how many tasks wait and why ("3 pending (Resources)")
 };
 
 // One scan of the folder against the ground truth (its object's observable-surface mask made once
