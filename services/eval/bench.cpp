@@ -1011,6 +1011,8 @@ class ScanRunner {
     // Slurm's queue not answering (slurmctld down, the network): the launcher gives up after this
     // long; the tasks go on, and the same command resumes.
     constexpr double kQueueSilenceS = 600;
+    constexpr double kRecordGraceS = 30;
+    std::map<Job*, std::chrono::steady_clock::time_point> completed_seen;
     auto answered = std::chrono::steady_clock::now();
     while (!task_of.empty()) {
       if (stop_requested()) {
@@ -1039,8 +1041,15 @@ class ScanRunner {
           const auto& tasks = states->at(a.id);
           const auto st = tasks.find(task);
           const bool recorded = fs::exists(j->dir / "bench_task.json");
-          // Ended: Slurm says so, or Slurm no longer knows the task and its record is written.
-          if (st == tasks.end() ? !recorded : !st->second.ended()) {
+          // Ended: Slurm says so, or Slurm no longer knows the task and its record is written. A
+          // task Slurm says COMPLETED is given kRecordGraceS for its record to show (a shared file
+          // system may show a node's files here a little later).
+          bool ended = st == tasks.end() ? recorded : st->second.ended();
+          if (ended && !recorded && st != tasks.end() && st->second.state == "COMPLETED") {
+            const auto first = completed_seen.try_emplace(j, std::chrono::steady_clock::now()).first->second;
+            ended = std::chrono::duration<double>(std::chrono::steady_clock::now() - first).count() > kRecordGraceS;
+          }
+          if (!ended) {
             if (st != tasks.end() && st->second.state == "RUNNING") {
               if (j->started == std::chrono::steady_clock::time_point{}) {
                 j->started = std::chrono::steady_clock::now();

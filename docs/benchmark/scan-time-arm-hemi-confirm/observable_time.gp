@@ -1,6 +1,7 @@
 # observable_time.gp: draws observable_time.csv into observable_time.png (run `gnuplot observable_time.gp` in this folder).
-# Made from the observable_time.csv of four pbnbv bench runs on the confirm half (docs/benchmark.md,
-# "Scan time on the arm"): each row x (rig time, s), y (observable coverage, %, mean over 15 objects), series.
+# Made from the observable_time.csv of three bench runs on the confirm half (docs/benchmark.md,
+# "Scan time on the arm"): each row x (rig time, s), y (observable coverage, %, mean over 15 objects), series,
+# every 0.5 s (each run's figure at the last of its own times at or before x).
 set datafile separator comma
 set encoding utf8
 set title 'Observable coverage against rig time - arm rig, hemisphere, confirm half (15 objects), 0.03 m' noenhanced
