@@ -345,6 +345,22 @@ void check_object_turns_clear(const TriangleMesh& mesh, const ScanSettings& s, c
                    : std::string("nothing of this shape turns clear: check the rig file")));
 }
 
+// The same for an external rig's working volume, turned: its cylinder, or the one through the
+// box's corners.
+void check_working_volume_turns_clear(const RigModel& rig, const ScanSettings& s) {
+  const WorkingVolume& v = *s.working_volume;
+  const Eigen::AlignedBox3d b = v.bounds();
+  const double radius = v.shape == WorkingVolume::Shape::kCylinder
+                            ? v.radius_m
+                            : std::hypot(std::max(-b.min().x(), b.max().x()), std::max(-b.min().y(), b.max().y()));
+  const TurningCheck c = turning_check(rig, radius, b.min().z(), b.max().z(), s.object_z_m);
+  if (c.parts.empty()) return;
+  throw std::invalid_argument(fmt::format(
+      "the working volume {}, turned on the turntable, would strike the rig's {} ({}): an object filling it would "
+      "jam; give a smaller --working-volume or pbnbv_working_volume in the rig file ({:.0f} % of it turns clear)",
+      v.to_text(), fmt::join(c.parts, ", "), rig.model_path, 100 * c.clear_scale));
+}
+
 }  // namespace
 
 int resume_scan(const fs::path& dir, const fs::path& bin);
@@ -400,20 +416,7 @@ int run_external_scan(const ScanOptions& o, const fs::path& bin) {
   s.object_name = "unknown";
   s.scan_id = new_scan_id("scan");
   place_object(s);  // in the working volume
-  {
-    // The working volume, turned: its cylinder, or the one through the box's corners.
-    const WorkingVolume& v = *s.working_volume;
-    const Eigen::AlignedBox3d b = v.bounds();
-    const double radius = std::hypot(std::max(-b.min().x(), b.max().x()), std::max(-b.min().y(), b.max().y()));
-    const TurningCheck c = turning_check(rig, v.shape == WorkingVolume::Shape::kCylinder ? v.radius_m : radius,
-                                         b.min().z(), b.max().z(), s.object_z_m);
-    if (!c.parts.empty()) {
-      throw std::invalid_argument(fmt::format(
-          "the working volume {}, turned on the turntable, would strike the rig's {} ({}): an object filling it would "
-          "jam; give a smaller --working-volume or pbnbv_working_volume in the rig file ({:.0f} % of it turns clear)",
-          v.to_text(), fmt::join(c.parts, ", "), rig.model_path, 100 * c.clear_scale));
-    }
-  }
+  check_working_volume_turns_clear(rig, s);
   std::cout << "pbnbv scan: an unknown object in the working volume " << s.working_volume->to_text() << " of the rig "
             << rig.model_path << " (" << rig.arm_name << "), drivers outside; waiting for them on " << bus::lcm_url()
             << std::endl;

@@ -290,17 +290,8 @@ void merge_into_voxels(VoxelCloud& model, const PointCloud& points, const std::v
                                 std::to_string(model.colours.size()) + " colours");
   }
   const bool coloured = !model.colours.empty() || !colours.empty();
-  if (!(voxel_m > 0) || !std::isfinite(voxel_m)) {  // nothing is merged: every point kept as it came
-    if (coloured) model.colours.resize(model.points.size(), kNoColour);
-    model.points.insert(model.points.end(), points.begin(), points.end());
-    model.normals.insert(model.normals.end(), normals.begin(), normals.end());
-    if (coloured) {
-      if (colours.empty()) {
-        model.colours.resize(model.points.size(), kNoColour);
-      } else {
-        model.colours.insert(model.colours.end(), colours.begin(), colours.end());
-      }
-    }
+  if (!(voxel_m > 0) || !std::isfinite(voxel_m)) {  // nothing is merged: every point kept
+    merge_by_downsampling(model, points, normals, colours, voxel_m, coloured);
     return;
   }
   // The model's voxels: one point each, in increasing order, or the full computation.

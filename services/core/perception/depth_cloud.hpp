@@ -84,7 +84,7 @@ struct VoxelCloud {
 // had none), with the model's untouched voxels copied instead of sorted and summed again: the
 // cost is linear in the model and sorts only the new points. Falls back to the full computation
 // when the model is not in voxel order (not made by these functions) or a new centroid rounds
-// across its voxel's face. voxel_m <= 0: the points are appended. Throws std::invalid_argument
+// across its voxel's face (and for voxel_m <= 0: every point kept). Throws std::invalid_argument
 // when the normals or colours are not one per point.
 void merge_into_voxels(VoxelCloud& model, const PointCloud& points, const std::vector<Eigen::Vector3f>& normals,
                        const std::vector<Rgb>& colours, double voxel_m);

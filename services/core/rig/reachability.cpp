@@ -1,7 +1,6 @@
 // ReachabilityChecker: IK solutions per candidate turntable angle, checked for collisions and a
 // free line of sight in the rig's MuJoCo model. See rig.hpp (and rig_model.cpp's header comment).
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -43,6 +42,20 @@ struct ReachabilityChecker::Impl {
   std::array<double, 6> lever{};
   TurntableChoice choice = TurntableChoice::kPreferred;
 
+  // The keep-out geom as the cylinder about the turntable axis of radius r and half height `half`,
+  // its centre z_centre above the object mount (its flags left to the caller).
+  void keepout_cylinder(double r, double half, double z_centre) {
+    mjModel* m = model.get();
+    m->geom_type[keepout] = mjGEOM_CYLINDER;
+    m->geom_size[3 * keepout] = r;
+    m->geom_size[3 * keepout + 1] = half;
+    m->geom_pos[3 * keepout] = m->geom_pos[3 * keepout + 1] = 0;  // on the axis
+    m->geom_pos[3 * keepout + 2] = z_centre;
+    m->geom_quat[4 * keepout] = 1;
+    m->geom_quat[4 * keepout + 1] = m->geom_quat[4 * keepout + 2] = m->geom_quat[4 * keepout + 3] = 0;
+    m->geom_rbound[keepout] = std::hypot(r, half);
+  }
+
   // The keep-out box, placed in the object frame (on the platter: it turns with the turntable).
   // `turning`: the box as the turntable sweeps it through any angle, i.e. the cylinder about the
   // turntable axis through its farthest corner (same height).
@@ -58,21 +71,16 @@ struct ReachabilityChecker::Impl {
     if (rig.kind == RigKind::kArm) c.z() += object_z_m;
     m->geom_contype[keepout] = keepout_contype;
     m->geom_conaffinity[keepout] = keepout_conaffinity;
-    m->geom_quat[4 * keepout] = 1;
-    m->geom_quat[4 * keepout + 1] = m->geom_quat[4 * keepout + 2] = m->geom_quat[4 * keepout + 3] = 0;
     if (turning && rig.has_turntable) {
       double r = 0;
       for (int k = 0; k < 4; ++k) {
         r = std::max(r, std::hypot((k & 1) ? box.max().x() : box.min().x(), (k & 2) ? box.max().y() : box.min().y()));
       }
-      m->geom_type[keepout] = mjGEOM_CYLINDER;
-      m->geom_size[3 * keepout] = r;
-      m->geom_size[3 * keepout + 1] = half.z();
-      m->geom_pos[3 * keepout] = m->geom_pos[3 * keepout + 1] = 0;  // on the axis
-      m->geom_pos[3 * keepout + 2] = c.z();
-      m->geom_rbound[keepout] = std::hypot(r, half.z());
+      keepout_cylinder(r, half.z(), c.z());
       return;
     }
+    m->geom_quat[4 * keepout] = 1;
+    m->geom_quat[4 * keepout + 1] = m->geom_quat[4 * keepout + 2] = m->geom_quat[4 * keepout + 3] = 0;
     m->geom_type[keepout] = mjGEOM_BOX;
     for (int i = 0; i < 3; ++i) {
       m->geom_size[3 * keepout + i] = half[i];
@@ -370,23 +378,10 @@ std::vector<std::string> ReachabilityChecker::turning_collisions(double radius_m
   if (im.rig.kind != RigKind::kArm || !im.rig.has_turntable || !(radius_m > 0) || !(top_z_m > bottom)) return {};
   mjModel* m = im.model.get();
   const int k = im.keepout;
-  // The keep-out geom stands in for the cylinder, colliding with everything; put back after.
-  const int type = m->geom_type[k], contype = m->geom_contype[k], conaffinity = m->geom_conaffinity[k];
-  std::array<mjtNum, 3> size, pos;
-  std::array<mjtNum, 4> quat;
-  std::copy_n(m->geom_size + 3 * k, 3, size.begin());
-  std::copy_n(m->geom_pos + 3 * k, 3, pos.begin());
-  std::copy_n(m->geom_quat + 4 * k, 4, quat.begin());
-  const mjtNum rbound = m->geom_rbound[k];
+  // The keep-out geom stands in for the cylinder, colliding with everything; off again after (every
+  // check sets it anew).
   const double half = 0.5 * (top_z_m - bottom);
-  m->geom_type[k] = mjGEOM_CYLINDER;
-  m->geom_size[3 * k] = radius_m;
-  m->geom_size[3 * k + 1] = half;
-  m->geom_pos[3 * k] = m->geom_pos[3 * k + 1] = 0;
-  m->geom_pos[3 * k + 2] = object_z_m + bottom + half;
-  m->geom_quat[4 * k] = 1;
-  m->geom_quat[4 * k + 1] = m->geom_quat[4 * k + 2] = m->geom_quat[4 * k + 3] = 0;
-  m->geom_rbound[k] = std::hypot(radius_m, half);
+  im.keepout_cylinder(radius_m, half, object_z_m + bottom + half);
   m->geom_contype[k] = m->geom_conaffinity[k] = 0x7fffffff;
   im.place(im.rig.q_home, 0);
   mjData* d = im.data.get();
@@ -399,13 +394,7 @@ std::vector<std::string> ReachabilityChecker::turning_collisions(double radius_m
     const bool fixed = m->body_weldid[m->geom_bodyid[g]] == 0 && (m->geom_contype[g] != 0 || m->geom_conaffinity[g] != 0);
     if (fixed && std::find(out.begin(), out.end(), im.side_name[g]) == out.end()) out.push_back(im.side_name[g]);
   }
-  m->geom_type[k] = type;
-  m->geom_contype[k] = contype;
-  m->geom_conaffinity[k] = conaffinity;
-  std::copy(size.begin(), size.end(), m->geom_size + 3 * k);
-  std::copy(pos.begin(), pos.end(), m->geom_pos + 3 * k);
-  std::copy(quat.begin(), quat.end(), m->geom_quat + 4 * k);
-  m->geom_rbound[k] = rbound;
+  m->geom_contype[k] = m->geom_conaffinity[k] = 0;
   return out;
 }
 

@@ -9,7 +9,6 @@
 #include "core/base/format.hpp"
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
-#include "core/perception/cloud_filter.hpp"
 #include "core/perception/depth_cloud.hpp"
 #include "core/surface/scan_mesh.hpp"
 
@@ -206,9 +205,8 @@ void ScanModel::move_views(const std::vector<std::pair<int, Pose>>& moves, const
     all_colours.insert(all_colours.end(), e.colours.begin(), e.colours.end());
     if (!e.camera_poses.empty()) poses.push_back(e.camera_poses.front());
   }
-  model_.points = voxel_downsample(all, voxel_m_);
-  model_.normals = voxel_normals(all, all_normals, model_.points, voxel_m_);
-  model_.colours = coloured ? voxel_colours(all, all_colours, model_.points, voxel_m_) : std::vector<Rgb>{};
+  model_ = VoxelCloud{};
+  merge_into_voxels(model_, all, all_normals, coloured ? all_colours : std::vector<Rgb>{}, voxel_m_);
   poses_ = poses;
   write_ply(model_.points, (folder_ / "cloud.ply").string(), CloudExtras{model_.normals, poses_, model_.colours});
 }

@@ -29,7 +29,12 @@ TEST(WorkingVolume, FromTheRigFileOrDerivedFromTheTurntable) {
 // 0.65 m tall one (top 0.715 m above the table) of radius 0.7 m strikes the arm's base as well.
 // The KUKA rig's pedestal face is 0.97 m from the axis (0.13 m half-width, centre 1.10 m).
 TEST(TurningClearance, AnObjectTurningClearsThePedestalByTheMarginOrStrikesIt) {
-  ReachabilityChecker ur5e(load_rig(model_file_path("rig_ur5e.xml")));
+  const RigModel ur5e_rig = load_rig(model_file_path("rig_ur5e.xml"));
+  ReachabilityChecker ur5e(ur5e_rig);
+  // A keep-out box the arm at home reaches into, checked before and after (below).
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-1.5, -1.5, -0.15), Eigen::Vector3d(1.5, 1.5, 1.5));
+  const std::vector<std::string> before = ur5e.collisions(ur5e_rig.q_home, 0, box, 0.15);
+  EXPECT_FALSE(before.empty());
   EXPECT_TRUE(ur5e.turning_collisions(0.59, -0.15, 0.15, 0.15).empty());
   EXPECT_EQ(ur5e.turning_collisions(0.597, -0.15, 0.15, 0.15), (std::vector<std::string>{"pedestal"}));
   std::vector<std::string> both = ur5e.turning_collisions(0.7, -0.15, 0.5, 0.15);
@@ -38,8 +43,9 @@ TEST(TurningClearance, AnObjectTurningClearsThePedestalByTheMarginOrStrikesIt) {
   // Below the arm's base (its bottom 0.5 - 0.065 - 0.15 = 0.285 m above the object frame's origin
   // less the 5 mm margin) only the pedestal.
   EXPECT_EQ(ur5e.turning_collisions(0.7, -0.15, 0.275, 0.15), (std::vector<std::string>{"pedestal"}));
-  // The checker's keep-out box is as it was: a view's check after this one is unchanged.
+  // The checker's keep-out geom is set anew by each check: one after this gives what it gave before.
   EXPECT_TRUE(ur5e.turning_collisions(0.59, -0.15, 0.15, 0.15).empty());
+  EXPECT_EQ(ur5e.collisions(ur5e_rig.q_home, 0, box, 0.15), before);
 
   ReachabilityChecker kuka(load_rig(default_rig_path(RigKind::kArm)));
   EXPECT_TRUE(kuka.turning_collisions(0.96, -0.15, 0.15, 0.15).empty());
