@@ -213,6 +213,46 @@ CLI::Option* add_list(CLI::App& app, const std::string& name, std::vector<E>* ta
   return detail::finish(o, detail::type_of_choice<E>() + ",...");
 }
 
+// --<name> N[,N...]: one or more numbers from the table, each checked against its range, none
+// twice, into *target (which is {s.value} unless given); `help` is added to the setting's.
+template <typename T>
+CLI::Option* add_values(CLI::App& app, const Setting<T>& s, std::vector<T>* target, const std::string& help) {
+  *target = {s.value};
+  auto* o = app.add_option_function<std::string>(
+      "--" + std::string(s.name),
+      [target](const std::string& text) {
+        target->clear();
+        for (const auto& part : detail::split_list(text)) target->push_back(detail::to_number<T>(part));
+      },
+      detail::described(s, fmt::format("{}", s.value), true) + "; " + help);
+  o->check(CLI::Validator(
+      [s](std::string& text) -> std::string {
+        const std::string missing = detail::missing_value(text);
+        if (!missing.empty()) return missing;
+        const std::vector<std::string> parts = detail::split_list(text);
+        if (parts.empty()) return "'" + text + "' lists no value";
+        for (std::size_t i = 0; i < parts.size(); ++i) {
+          const std::string bad = detail::check_number(s, parts[i]);
+          if (!bad.empty()) return bad;
+          for (std::size_t k = 0; k < i; ++k) {
+            if (detail::to_number<T>(parts[k]) == detail::to_number<T>(parts[i])) return "'" + parts[i] + "' is listed twice";
+          }
+        }
+        return "";
+      },
+      ""));
+  detail::takes(o, detail::ValueKind::kList);
+  return detail::finish(o, detail::type_name(s.unit, std::is_integral_v<T>) + "[,...]");
+}
+
+// --<name> a[,b...]: one or more of a choice's names, none twice, into *target (which is
+// {s.value} unless given); `help` is added to the setting's.
+template <typename E>
+CLI::Option* add_list(CLI::App& app, const ChoiceSetting<E>& s, std::vector<E>* target, const std::string& help) {
+  *target = {s.value};
+  return add_list(app, std::string(s.name), target, std::string(s.help) + "; " + help);
+}
+
 // --<name> TEXT into *target (which keeps its value unless given).
 CLI::Option* add_text(CLI::App& app, const std::string& name, std::string* target, const std::string& help,
                       const std::string& type = "TEXT");

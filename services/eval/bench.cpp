@@ -31,6 +31,7 @@
 #include "core/scan/scan_settings.hpp"
 #include "core/geometry/views.hpp"
 #include "core/geometry/visibility.hpp"
+#include "eval/bench_evaluation.hpp"
 #include "eval/bench_progress.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/objects.hpp"
@@ -94,15 +95,6 @@ bool netns_available() {
   return std::system(cmd.c_str()) == 0;
 }
 
-bool scan_complete(const fs::path& dir) {
-  try {
-    if (!fs::exists(dir / "scan.json") || !fs::exists(dir / "processes.json")) return false;
-    return recorded_state(dir) == "done";
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
 json machine_info() {
   json m;
   char host[256] = {0};
@@ -142,50 +134,12 @@ json machine_info() {
   return m;
 }
 
-// The samples of the object's coverage evaluation that at least one reachable candidate view can
-// see: candidates as the planner generates them around the object's bounding box (B at the end
-// of a scan), filtered by the rig's reachability check, visibility by ray casting the true mesh.
-std::vector<uint8_t> observable_mask(const BenchSpec& spec, const fs::path& scan_dir, std::string* summary) {
-  const ScanSettings s = scan_settings_from_json(read_json((scan_dir / "settings.json").string()));
-  const TriangleMesh mesh = load_mesh((scan_dir / "object.stl").string());
-  const SurfaceSamples samples = sample_surface_with_normals(mesh, spec.coverage.num_samples, spec.coverage.seed);
-  const Eigen::Vector3d half = s.normalisation.extent_m / 2.0;
-  CandidateSpec cs;
-  cs.num_views = s.candidates;
-  cs.num_parallels = s.parallels;
-  cs.area = s.area;
-  cs.working_distance_m = s.working_distance_m;
-  const std::vector<Pose> candidates = candidate_views(Eigen::AlignedBox3d(-half, half), cs);
-  const RigModel rig = load_rig(s.rig_model_path);
-  ReachabilityChecker checker(rig);
-  const Eigen::AlignedBox3d keepout(s.keepout_min_m, s.keepout_max_m);
-  const std::vector<ViewSolution> reach = checker.solve_batch(candidates, rig.q_home, 0.0, keepout, s.object_z_m);
-  std::vector<Pose> reachable;
-  for (std::size_t i = 0; i < candidates.size(); ++i) {
-    if (reach[i].reachable) reachable.push_back(candidates[i]);
-  }
-  VisibilityParams vp;
-  vp.camera = s.camera;
-  vp.range = s.depth_range;
-  const std::vector<uint8_t> mask = visible_from_any(mesh, samples.points, samples.normals, reachable, vp);
-  const double seen = std::accumulate(mask.begin(), mask.end(), 0.0);
-  if (summary) {
-    *summary = std::to_string(reachable.size()) + " of " + std::to_string(candidates.size()) +
-               " candidates reachable; they see " + fixed(100.0 * seen / std::max<std::size_t>(mask.size(), 1)) +
-               " % of the surface";
-  }
-  return mask;
-}
-
-struct Job {
-  std::string object;   // as given
-  std::string name;     // the object's name
-  int first_view = 1;   // 1: the scan's default; 2..N: initial_view, drawn
-  std::optional<Eigen::Vector3d> initial_view;
-  std::string run;      // run_folder(name, first_view)
-  PlannerKind planner = PlannerKind::kPbnbv;
-  fs::path dir;
-  fs::path log;
+// A task of the bench's runner: a scan, or the evaluation of one object's scans (`evaluation`: dir
+// holds its request.json; name is the object's).
+struct Job : ScanJob {
+  const BenchSpec* spec = nullptr;  // the bench it is of
+  std::string label;                // its bench's combination in a sweep ("": a bench alone)
+  bool evaluation = false;
   std::string last_progress;
   int view = 0, views = 0;  // the scan's view in progress (its "[view k/N]" line), 0: none yet
   std::chrono::steady_clock::time_point started;
@@ -881,6 +835,9 @@ namespace {
 // A folder holds one benchmark: a rerun with other settings must not mix results. Refuses a folder
 // whose bench.json says other settings, naming the first; writes this run's.
 void claim_folder(const BenchSpec& spec) {
+  if (fs::exists(spec.out / "sweep.json")) {
+    throw std::invalid_argument(spec.out.string() + " holds a sweep (sweep.json), not one benchmark: use another --out");
+  }
   const fs::path spec_path = spec.out / "bench.json";
   json settings = to_json(spec);
   settings.erase("objects");  // objects may be added to a folder's benchmark
@@ -940,24 +897,36 @@ std::vector<Job> plan_jobs(const BenchSpec& spec) {
   return jobs;
 }
 
-// Runs the scans of `todo` (of `jobs`), spec.jobs at a time, each a `pbnbv scan` process, printing
-// each start, view and end (live, one line per running scan and an estimate, on a terminal).
-// SIGINT or SIGTERM stops every scan (each keeps what it has) and throws.
-class ScanRunner {
+// How the runner runs its tasks: `jobs` at a time here, or as Slurm tasks.
+struct RunnerOptions {
+  int jobs = 1;
+  bool netns = true;                // false: the scans share the bus (on Slurm: one task a node)
+  std::optional<SlurmSpec> slurm;
+  fs::path root;                    // the folder of the run: slurm/ is below it
+};
+
+// Runs the tasks of `todo` (of `jobs`), each a process: a `pbnbv scan`, or (`evaluation` jobs)
+// a `pbnbv bench-evaluate` of one object's scans. Here options.jobs at a time, or as the tasks of
+// Slurm job arrays. Prints each start, view and end (live, one line per running task and an
+// estimate, on a terminal). SIGINT or SIGTERM stops every task (a scan keeps what it has) and throws.
+class TaskRunner {
  public:
-  ScanRunner(const BenchSpec& spec, std::vector<Job>& jobs, int complete, const fs::path& self, std::ostream& log,
+  TaskRunner(const RunnerOptions& options, std::vector<Job>& jobs, int complete, const fs::path& self, std::ostream& log,
              bool terminal)
-      : spec_(spec), jobs_(jobs), self_(self), live_(log, terminal), finished_(complete) {}
+      : options_(options), jobs_(jobs), self_(self), live_(log, terminal), finished_(complete) {
+    evaluations_ = !jobs.empty() && jobs.front().evaluation;
+    noun_ = evaluations_ ? "evaluations" : "scans";
+  }
 
   void run(const std::vector<Job*>& todo) {
     install_stop_handlers();
-    if (spec_.slurm) {
+    if (options_.slurm) {
       run_on_slurm(todo);
       return;
     }
     while (next_ < todo.size() || !running_.empty()) {
-      if (stop_requested()) stop_every_scan();
-      while (static_cast<int>(running_.size()) < spec_.jobs && next_ < todo.size()) start(todo[next_++]);
+      if (stop_requested()) stop_every_task();
+      while (static_cast<int>(running_.size()) < options_.jobs && next_ < todo.size()) start(todo[next_++]);
       reap_finished();
       read_progress();
       if (live_.live()) show_live(todo.size() - next_);
@@ -967,10 +936,34 @@ class ScanRunner {
   }
 
  private:
-  // The scans as the tasks of Slurm job arrays: one array for `todo`, one more for the tasks that
-  // ended without a complete scan (once each); Slurm's queue and the scans' logs read once a second.
+  std::vector<std::string> argv_of(const Job* j) const {
+    if (j->evaluation) return {self_.string(), "bench-evaluate", (j->dir / "request.json").string()};
+    return scan_argv(*j->spec, self_, j->object, j->planner, j->initial_view, j->dir);
+  }
+
+  bool complete(const Job* j) const { return j->evaluation ? read_evaluation(j->dir).has_value() : scan_complete(j->dir); }
+
+  // Before a task starts: an interrupted scan is resumed (scan_argv), a folder without its
+  // processes.json starts anew; an evaluation's last record goes.
+  void prepare(const Job* j) const {
+    if (j->evaluation) {
+      fs::remove(j->dir / "evaluation.json");
+    } else if (fs::exists(j->dir) && !fs::exists(j->dir / "processes.json")) {
+      fs::remove_all(j->dir);
+    }
+  }
+
+  std::string interrupted() const {
+    return evaluations_ ? "interrupted during the evaluation: the scans are complete in " + options_.root.string() +
+                              "; run the same command again to evaluate them"
+                        : "interrupted: the scans completed so far are kept in " + options_.root.string() +
+                              "; run the same command again to resume";
+  }
+
+  // The tasks as the tasks of Slurm job arrays: one array for `todo`, one more for the tasks that
+  // ended without their result (once each); Slurm's queue and the scans' logs read once a second.
   void run_on_slurm(const std::vector<Job*>& todo) {
-    SlurmQueue queue(spec_.out / "slurm");
+    SlurmQueue queue(options_.root / "slurm", evaluations_ ? "evaluate" : "submit");
     struct Array {
       std::string id;
       std::vector<Job*> jobs;  // task i: jobs[i]
@@ -978,28 +971,28 @@ class ScanRunner {
     std::vector<Array> arrays;
     std::map<Job*, std::pair<std::size_t, int>> task_of;  // the array (index) and task running it now
     std::map<Job*, int> submitted;                         // how often
-    std::map<Job*, std::vector<std::string>> command;      // the scan's command, as last submitted
+    std::map<Job*, std::vector<std::string>> command;      // the task's command, as last submitted
     const auto submit = [&](const std::vector<Job*>& batch) {
       std::vector<SlurmTask> tasks;
       for (Job* j : batch) {
-        // An interrupted scan is resumed (scan_argv); a folder without its processes.json starts anew.
-        if (fs::exists(j->dir) && !fs::exists(j->dir / "processes.json")) fs::remove_all(j->dir);
+        prepare(j);
         fs::create_directories(j->dir);
         fs::remove(j->dir / "bench_task.json");
-        command[j] = scan_argv(spec_, self_, j->object, j->planner, j->initial_view, j->dir);
+        command[j] = argv_of(j);
         tasks.push_back({command[j], j->dir, j->log});
         j->view = j->views = 0;
         j->last_progress.clear();
         j->started = {};
       }
-      const std::string id = queue.submit(*spec_.slurm, tasks, !spec_.netns);
+      // Scans that cannot have a namespace share the node's bus: one a node.
+      const std::string id = queue.submit(*options_.slurm, tasks, !evaluations_ && !options_.netns);
       for (std::size_t i = 0; i < batch.size(); ++i) {
         task_of[batch[i]] = {arrays.size(), static_cast<int>(i)};
         ++submitted[batch[i]];
       }
       arrays.push_back({id, batch});
-      live_.event("bench: " + std::to_string(batch.size()) + " scans submitted to Slurm, job array " + id + " (" +
-                  (spec_.out / "slurm").string() + ")");
+      live_.event("bench: " + std::to_string(batch.size()) + " " + noun_ + " submitted to Slurm, job array " + id + " (" +
+                  (options_.root / "slurm").string() + ")");
     };
     const auto ids = [&] {
       std::vector<std::string> out;
@@ -1011,20 +1004,17 @@ class ScanRunner {
     // Slurm's queue not answering (slurmctld down, the network): the launcher gives up after this
     // long; the tasks go on, and the same command resumes.
     constexpr double kQueueSilenceS = 600;
-    constexpr double kRecordGraceS = 30;
-    std::map<Job*, std::chrono::steady_clock::time_point> completed_seen;
     auto answered = std::chrono::steady_clock::now();
     while (!task_of.empty()) {
       if (stop_requested()) {
         queue.cancel(ids());
-        throw std::runtime_error("interrupted: Slurm job arrays " + fmt::format("{}", fmt::join(ids(), ", ")) +
-                                 " cancelled; the scans completed so far are kept in " + spec_.out.string() +
-                                 "; run the same command again to resume");
+        throw std::runtime_error(interrupted() + " (Slurm job arrays " + fmt::format("{}", fmt::join(ids(), ", ")) +
+                                 " cancelled)");
       }
       const auto states = queue.states(ids());
       if (!states && std::chrono::duration<double>(std::chrono::steady_clock::now() - answered).count() > kQueueSilenceS) {
         throw std::runtime_error("Slurm's queue has not answered for " + fixed(kQueueSilenceS, 0) + " s (squeue: " +
-                                 tail_lines((spec_.out / "slurm" / "squeue.out").string(), 3) + "); job arrays " +
+                                 tail_lines((options_.root / "slurm" / "squeue.out").string(), 3) + "); job arrays " +
                                  fmt::format("{}", fmt::join(ids(), ", ")) +
                                  " were not cancelled: run the same command again to resume once Slurm answers");
       }
@@ -1040,16 +1030,7 @@ class ScanRunner {
           const int task = it->second.second;
           const auto& tasks = states->at(a.id);
           const auto st = tasks.find(task);
-          const bool recorded = fs::exists(j->dir / "bench_task.json");
-          // Ended: Slurm says so, or Slurm no longer knows the task and its record is written. A
-          // task Slurm says COMPLETED is given kRecordGraceS for its record to show (a shared file
-          // system may show a node's files here a little later).
-          bool ended = st == tasks.end() ? recorded : st->second.ended();
-          if (ended && !recorded && st != tasks.end() && st->second.state == "COMPLETED") {
-            const auto first = completed_seen.try_emplace(j, std::chrono::steady_clock::now()).first->second;
-            ended = std::chrono::duration<double>(std::chrono::steady_clock::now() - first).count() > kRecordGraceS;
-          }
-          if (!ended) {
+          if (!task_ended(j, tasks, task)) {
             if (st != tasks.end() && st->second.state == "RUNNING") {
               if (j->started == std::chrono::steady_clock::time_point{}) {
                 j->started = std::chrono::steady_clock::now();
@@ -1063,28 +1044,9 @@ class ScanRunner {
             ++it;
             continue;
           }
-          int exit_code = -1;
-          double wall = j->started == std::chrono::steady_clock::time_point{}
-                            ? 0.0
-                            : std::chrono::duration<double>(std::chrono::steady_clock::now() - j->started).count();
-          json record = {{"command", command[j]}, {"slurm_job", a.id + "_" + std::to_string(task)}};
-          if (recorded) {
-            try {
-              const json r = read_json((j->dir / "bench_task.json").string());
-              exit_code = r.at("exit_code").get<int>();
-              wall = r.at("wall_s").get<double>();
-              record["host"] = r.value("host", "");
-            } catch (const std::exception&) {
-            }
+          if (slurm_task_ended(j, a.id, task, st == tasks.end() ? nullptr : &st->second, command[j], submitted[j] < 2)) {
+            again.push_back(j);
           }
-          const std::string slurm = st == tasks.end() ? "Slurm no longer lists it"
-                                                      : "Slurm: " + st->second.state +
-                                                            (st->second.reason.empty() || st->second.reason == "None"
-                                                                 ? std::string()
-                                                                 : " (" + st->second.reason + ")");
-          const bool retry = submitted[j] < 2 && !(exit_code == 0 && scan_complete(j->dir));
-          finished(j, exit_code, wall, record, slurm + (recorded ? "" : ", no task record"), retry);
-          if (retry) again.push_back(j);
           it = task_of.erase(it);
         }
         waiting_note_.clear();
@@ -1098,12 +1060,58 @@ class ScanRunner {
     live_.update({});
   }
 
-  std::string prefix(const Job* j) const {
-    return "[" + std::to_string(j - jobs_.data() + 1) + "/" + std::to_string(jobs_.size()) + "] " + j->run + " - " +
-           std::string(name_of(j->planner)) + ": ";
+  // Whether Slurm task `task` (of `tasks`, the states of its array) running `j` has ended: Slurm
+  // says so, or Slurm no longer knows the task and its record is written. A task Slurm says
+  // COMPLETED is given kRecordGraceS for its record to show (a shared file system may show a
+  // node's files here a little later).
+  bool task_ended(Job* j, const std::map<int, SlurmTaskState>& tasks, int task) {
+    constexpr double kRecordGraceS = 30;
+    const auto st = tasks.find(task);
+    const bool recorded = fs::exists(j->dir / "bench_task.json");
+    if (st == tasks.end()) return recorded;
+    if (!st->second.ended()) return false;
+    if (recorded || st->second.state != "COMPLETED") return true;
+    const auto first = completed_seen_.try_emplace(j, std::chrono::steady_clock::now()).first->second;
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - first).count() > kRecordGraceS;
   }
 
-  [[noreturn]] void stop_every_scan() {
+  // Slurm task `job_id`_`task` running `j` ended (`state`: Slurm's last word on it, none when
+  // Slurm no longer lists it): its record read, reported (finished). Returns whether it is to run
+  // again: not complete, and `may_retry`.
+  bool slurm_task_ended(Job* j, const std::string& job_id, int task, const SlurmTaskState* state,
+                        const std::vector<std::string>& command, bool may_retry) {
+    completed_seen_.erase(j);
+    const bool recorded = fs::exists(j->dir / "bench_task.json");
+    int exit_code = -1;
+    double wall = j->started == std::chrono::steady_clock::time_point{}
+                      ? 0.0
+                      : std::chrono::duration<double>(std::chrono::steady_clock::now() - j->started).count();
+    json record = {{"command", command}, {"slurm_job", job_id + "_" + std::to_string(task)}};
+    if (recorded) {
+      try {
+        const json r = read_json((j->dir / "bench_task.json").string());
+        exit_code = r.at("exit_code").get<int>();
+        wall = r.at("wall_s").get<double>();
+        record["host"] = r.value("host", "");
+      } catch (const std::exception&) {
+      }
+    }
+    const std::string slurm = !state ? "Slurm no longer lists it"
+                                     : "Slurm: " + state->state +
+                                           (state->reason.empty() || state->reason == "None" ? std::string()
+                                                                                             : " (" + state->reason + ")");
+    const bool retry = may_retry && !(exit_code == 0 && complete(j));
+    finished(j, exit_code, wall, record, slurm + (recorded ? "" : ", no task record"), retry);
+    return retry;
+  }
+
+  std::string prefix(const Job* j) const {
+    return "[" + std::to_string(j - jobs_.data() + 1) + "/" + std::to_string(jobs_.size()) + "] " +
+           (j->label.empty() ? "" : j->label + " ") +
+           (j->evaluation ? "evaluation of " + j->name : j->run + " - " + std::string(name_of(j->planner))) + ": ";
+  }
+
+  [[noreturn]] void stop_every_task() {
     for (const Child& c : children_) ::kill(c.pid, SIGINT);  // each scan keeps what it has and stops its processes
     for (int i = 0; i < 500; ++i) {
       reap(children_);
@@ -1111,17 +1119,16 @@ class ScanRunner {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     stop_all(children_, 5.0);
-    throw std::runtime_error("interrupted: the scans completed so far are kept in " + spec_.out.string() +
-                             "; run the same command again to resume");
+    throw std::runtime_error(interrupted());
   }
 
   void start(Job* j) {
-    // An interrupted scan is resumed (scan_argv); a folder without its processes.json starts anew.
-    if (fs::exists(j->dir) && !fs::exists(j->dir / "processes.json")) fs::remove_all(j->dir);
+    prepare(j);
     fs::create_directories(j->dir.parent_path());
+    fs::create_directories(j->log.parent_path());
     Child c;
-    c.name = std::string(name_of(j->planner)) + "-" + j->run;
-    c.argv = scan_argv(spec_, self_, j->object, j->planner, j->initial_view, j->dir);
+    c.name = j->evaluation ? "evaluate-" + j->name : std::string(name_of(j->planner)) + "-" + j->run;
+    c.argv = argv_of(j);
     c.log_path = j->log.string();
     j->started = std::chrono::steady_clock::now();
     pbnbv::process::start(c);
@@ -1143,24 +1150,29 @@ class ScanRunner {
     }
   }
 
-  // A scan that ended with `exit_code` after `wall` s: done (bench_run.json: its wall time and
-  // `record`), or failed with its reason (`why` first, when given). With `again`, a failed scan is
-  // not counted: the caller runs it once more.
+  // A task that ended with `exit_code` after `wall` s: done (a scan's bench_run.json: its wall
+  // time and `record`), or failed with its reason (`why` first, when given). With `again`, a failed
+  // task is not counted: the caller runs it once more.
   void finished(Job* j, int exit_code, double wall, json record, const std::string& why, bool again = false) {
-    if (exit_code == 0 && scan_complete(j->dir)) {
+    std::string evaluation_error;
+    const bool done = exit_code == 0 && (j->evaluation ? read_evaluation(j->dir, &evaluation_error).has_value()
+                                                       : scan_complete(j->dir));
+    if (done) {
       ++finished_;
       walls_.push_back(wall);
-      record["wall_s"] = wall;
-      write_json_atomic(record, (j->dir / "bench_run.json").string());
       std::string line;
-      try {
-        const json cov = read_json((j->dir / "coverage.json").string());
-        const auto& cv = cov.at("coverage_by_view");
-        if (!cv.empty()) line = ", coverage after view " + std::to_string(cv.size()) + " " + fixed(cv.back().get<double>()) + " %";
-      } catch (const std::exception&) {
+      if (!j->evaluation) {
+        record["wall_s"] = wall;
+        write_json_atomic(record, (j->dir / "bench_run.json").string());
+        try {
+          const json cov = read_json((j->dir / "coverage.json").string());
+          const auto& cv = cov.at("coverage_by_view");
+          if (!cv.empty()) line = ", coverage after view " + std::to_string(cv.size()) + " " + fixed(cv.back().get<double>()) + " %";
+        } catch (const std::exception&) {
+        }
       }
       live_.event(prefix(j) + "done in " + fixed(wall, 0) + " s" + line + " (" + std::to_string(finished_) + " of " +
-                  std::to_string(jobs_.size()) + " scans complete)");
+                  std::to_string(jobs_.size()) + " " + noun_ + " complete)");
       return;
     }
     if (!again) {
@@ -1169,14 +1181,17 @@ class ScanRunner {
     }
     std::string tail = tail_lines(j->log.string(), 6);
     while (!tail.empty() && tail.back() == '\n') tail.pop_back();
+    const std::string reason = j->evaluation ? (evaluation_error.empty() ? "the evaluation failed" : evaluation_error)
+                                             : scan_failure_reason(j->dir, j->log);
     live_.event(prefix(j) + "FAILED (exit " + std::to_string(exit_code) + "): " + (why.empty() ? "" : why + "; ") +
-                scan_failure_reason(j->dir, j->log) + "; the end of " + j->log.string() + ":\n" + tail +
+                reason + "; the end of " + j->log.string() + ":\n" + tail +
                 (again ? "\n" + prefix(j) + "submitted once more" : ""));
   }
 
   // Progress: each scan's "[view k/N] ..." line; off a terminal printed when the view changes.
   void read_progress() {
     for (Job* j : running_) {
+      if (j->evaluation) continue;
       const std::string last = tail_lines(j->log.string(), 1);
       const auto a = last.rfind("[view ");
       if (a == std::string::npos) continue;
@@ -1189,8 +1204,8 @@ class ScanRunner {
     }
   }
 
-  // One line per running scan, then the whole run's estimate: the scans to go at the mean wall
-  // time of those finished (else of the running ones' estimates), spread over the jobs.
+  // One line per running task, then the whole run's estimate: the tasks to go at the mean wall
+  // time of those finished (else, for scans, of the running ones' estimates), spread over the jobs.
   void show_live(std::size_t waiting) {
     const auto now = std::chrono::steady_clock::now();
     std::vector<std::string> lines;
@@ -1198,21 +1213,27 @@ class ScanRunner {
     int with_estimate = 0;
     for (const Job* j : running_) {
       const double elapsed = std::chrono::duration<double>(now - j->started).count();
+      if (j->evaluation) {
+        lines.push_back(prefix(j) + "evaluating, " + duration_text(elapsed));
+        continue;
+      }
+      const int views = j->views > 0 ? j->views : j->spec->views;
       // prefix(j) ends in ": ", as the progress line of an empty name starts.
-      lines.push_back(prefix(j) + scan_progress_line("", j->view, j->views > 0 ? j->views : spec_.views, elapsed).substr(2));
-      if (const auto left = scan_time_left_s(j->view, j->views > 0 ? j->views : spec_.views, elapsed)) {
+      lines.push_back(prefix(j) + scan_progress_line("", j->view, views, elapsed).substr(2));
+      if (const auto left = scan_time_left_s(j->view, views, elapsed)) {
         left_running += *left;
         projected += elapsed + *left;
         ++with_estimate;
       }
     }
-    std::string summary = "bench: " + std::to_string(finished_) + " of " + std::to_string(jobs_.size()) + " scans done, " +
-                          std::to_string(running_.size()) + " running";
-    const double per_scan = !walls_.empty() ? std::accumulate(walls_.begin(), walls_.end(), 0.0) / walls_.size()
+    std::string summary = "bench: " + std::to_string(finished_) + " of " + std::to_string(jobs_.size()) + " " + noun_ +
+                          " done, " + std::to_string(running_.size()) + " running";
+    const double per_task = !walls_.empty() ? std::accumulate(walls_.begin(), walls_.end(), 0.0) / walls_.size()
                             : with_estimate > 0 ? projected / with_estimate
                                                 : NAN;
-    if (std::isfinite(per_scan)) {
-      summary += ", about " + duration_text((left_running + static_cast<double>(waiting) * per_scan) / std::max(1, spec_.jobs)) +
+    if (std::isfinite(per_task)) {
+      summary += ", about " +
+                 duration_text((left_running + static_cast<double>(waiting) * per_task) / std::max(1, options_.jobs)) +
                  " left";
     }
     if (!waiting_note_.empty()) summary += "; " + waiting_note_;
@@ -1220,132 +1241,192 @@ class ScanRunner {
     live_.update(lines);
   }
 
-  const BenchSpec& spec_;
+  const RunnerOptions& options_;
   std::vector<Job>& jobs_;
   fs::path self_;
   LiveLines live_;
-  std::vector<Child> children_;  // the scans running now: their processes and, at the same index,
+  bool evaluations_ = false;
+  std::string noun_;
+  std::vector<Child> children_;  // the tasks running now: their processes and, at the same index,
   std::vector<Job*> running_;    // their jobs
   std::size_t next_ = 0;         // in todo
   int finished_;
-  std::vector<double> walls_;  // of the scans finished in this run
+  std::vector<double> walls_;  // of the tasks finished in this run
   std::string waiting_note_;   // Slurm: how many tasks wait and why ("3 pending (Resources)")
+  std::map<Job*, std::chrono::steady_clock::time_point> completed_seen_;  // Slurm said COMPLETED, no record yet
 };
 
-// One scan of the folder against the ground truth (its object's observable-surface mask made once
-// and kept in `masks`); a scan that is not complete, or fails to evaluate, is a run with its error.
-ObjectRun evaluate_job(const BenchSpec& spec, const Job& j, std::map<std::string, std::vector<uint8_t>>& masks,
-                       std::ostream& log) {
-  ObjectRun r;
-  r.object = j.name;
-  r.first_view = j.first_view;
-  r.initial_view = j.initial_view;  // until the scan's record says where it started
-  r.planner = j.planner;
-  try {
-    // The rig's contacts, whether the scan completed or not (a contact may be why it did not).
-    if (fs::exists(j.dir / "scan.json")) {
-      const std::vector<RigContactRecord> contacts = rig_contacts(read_scan_record(j.dir).views);
-      r.rig_contacts = rig_contact_events(contacts);
-      for (const RigContactRecord& c : contacts) r.rig_contact_list.push_back(to_string(c));
+// The evaluation tasks of `jobs` (scans, benches[i].second's): one per object of each bench, its
+// request written (below the bench's evaluation/<object>/).
+std::vector<Job> evaluation_jobs(const std::vector<Job>& jobs) {
+  std::vector<Job> out;
+  std::map<std::pair<const BenchSpec*, std::string>, std::vector<ScanJob>> scans;
+  for (const Job& j : jobs) {
+    auto& s = scans[{j.spec, j.name}];
+    if (s.empty()) {
+      Job e;
+      e.spec = j.spec;
+      e.label = j.label;
+      e.evaluation = true;
+      e.object = j.object;
+      e.name = e.run = j.name;
+      e.dir = j.spec->out / "evaluation" / j.name;
+      e.log = j.spec->out / "logs" / ("evaluate-" + j.name + ".log");
+      out.push_back(std::move(e));
     }
-    if (!scan_complete(j.dir)) throw std::runtime_error(scan_failure_reason(j.dir, j.log));
-    if (!masks.count(j.name)) {
-      std::string what;
-      masks[j.name] = observable_mask(spec, j.dir, &what);
-      log << j.name << ": observable surface: " << what << std::endl;
-    }
-    const ScanEvaluation e = evaluate_scan(j.dir, spec.coverage, &masks[j.name], spec.metrics);
-    r.coverage_by_view = pad_views(e.coverage_by_view, spec.views);
-    r.observable_by_view = pad_views(e.observable_by_view, spec.views);
-    r.planner_ms = e.planner_ms;
-    r.views_to_95 = views_to_reach(r.coverage_by_view, 95.0);
-    r.views_done = e.views_done;
-    r.stop_reason = e.stop_reason;
-    r.new_surface_by_view = e.new_surface_by_view;
-    r.rig_time_by_view = pad_views(e.rig_time_s_by_view, spec.views);
-    if (e.rig_time.views > 0 && e.rig_time.views_incomplete == 0) r.rig_time = e.rig_time.sum;
-    r.cloud_metrics = e.cloud_metrics;
-    r.mesh_metrics = e.mesh_metrics;
-    if (const auto d = first_surface_stop(e.new_surface_by_view, spec.stop_rule); d && d->after_views < spec.views) {
-      r.stop_view = d->after_views;
-      r.stop_rule_reason = d->reason;
-    }
-    if (const auto d = first_seconds_stop(e.view_gains, spec.seconds_rule); d && d->after_views < spec.views) {
-      r.seconds_stop_view = d->after_views;
-      r.seconds_stop_reason = d->reason;
-    }
-    r.complete = true;
-    const std::optional<ScanPlanHeader> plan = read_scan_record(j.dir).plan;
-    if (plan && plan->planner != "ring") r.initial_view = plan->initial_view.translation();
-    if (fs::exists(j.dir / "bench_run.json")) r.wall_s = read_json((j.dir / "bench_run.json").string()).value("wall_s", 0.0);
-  } catch (const std::exception& x) {
-    r.error = x.what();
+    s.push_back(j);
   }
-  return r;
+  for (const Job& e : out) {
+    fs::create_directories(e.dir);
+    write_json_atomic(evaluation_request(*e.spec, scans.at({e.spec, e.name})), (e.dir / "request.json").string());
+  }
+  return out;
+}
+
+// The run of scan `j` in its object's evaluation record (`records`, by bench and object: none when
+// the task wrote none, with why in `errors`).
+ObjectRun recorded_run(const Job& j, const std::map<std::pair<const BenchSpec*, std::string>, ObjectEvaluation>& records,
+                       const std::map<std::pair<const BenchSpec*, std::string>, std::string>& errors) {
+  const auto key = std::make_pair(j.spec, j.name);
+  const auto r = records.find(key);
+  if (r != records.end()) {
+    for (const ObjectRun& run : r->second.runs) {
+      if (run.first_view == j.first_view && run.planner == j.planner) return run;
+    }
+  }
+  ObjectRun run;
+  run.object = j.name;
+  run.first_view = j.first_view;
+  run.initial_view = j.initial_view;
+  run.planner = j.planner;
+  const auto e = errors.find(key);
+  run.error = "not evaluated: " + (r != records.end() ? "the evaluation's record has no such run"
+                                   : e != errors.end() ? e->second
+                                                       : std::string("no evaluation")) +
+              " (log: " + (j.spec->out / "logs" / ("evaluate-" + j.name + ".log")).string() +
+              "); run the same command again to evaluate it";
+  return run;
 }
 
 }  // namespace
 
-BenchResult run_bench(const BenchSpec& spec_in, const fs::path& self, std::ostream& log, bool terminal) {
-  BenchSpec spec = spec_in;
-  spec.validate();
-  fs::create_directories(spec.out / "logs");
-  claim_folder(spec);
-  if (spec.netns && !netns_available()) {
+std::vector<BenchResult> run_benches(const std::vector<std::pair<std::string, BenchSpec>>& benches_in,
+                                     const fs::path& root, const fs::path& self, std::ostream& log, bool terminal) {
+  if (benches_in.empty()) throw std::invalid_argument("no benchmark to run");
+  std::vector<std::pair<std::string, BenchSpec>> benches = benches_in;
+  RunnerOptions options;
+  options.jobs = benches.front().second.jobs;
+  options.netns = benches.front().second.netns;
+  options.slurm = benches.front().second.slurm;
+  options.root = root;
+  if (options.slurm) validate(*options.slurm);
+  if (options.netns && !netns_available()) {
     log << "pbnbv bench: cannot create a private network namespace here (needs root or unprivileged user "
            "namespaces): every scan runs on the current LCM bus, one at a time"
         << std::endl;
-    spec.netns = false;
+    options.netns = false;
   }
-  if (!spec.netns) spec.jobs = 1;
-  if (spec.slurm) validate(*spec.slurm);
-
-  std::vector<Job> jobs = plan_jobs(spec);
+  const int evaluation_jobs_at_once = options.jobs;  // the evaluations need no bus
+  if (!options.netns) options.jobs = 1;
+  std::vector<Job> jobs;
+  for (auto& [label, spec] : benches) {
+    spec.validate();
+    spec.netns = options.netns;
+    spec.jobs = options.jobs;
+    fs::create_directories(spec.out / "logs");
+    claim_folder(spec);
+    for (Job& j : plan_jobs(spec)) {
+      j.spec = &spec;
+      j.label = label;
+      jobs.push_back(std::move(j));
+    }
+  }
   std::vector<Job*> todo;
   for (auto& j : jobs) {
     if (!scan_complete(j.dir)) todo.push_back(&j);
   }
-  const int total = static_cast<int>(jobs.size());
-  log << "pbnbv bench: " << spec.objects.size() << " objects x "
-      << (spec.first_views > 1 ? std::to_string(spec.first_views) + " first views x " : std::string())
-      << spec.planners.size() << " planners = " << total
-      << " scans (" << total - static_cast<int>(todo.size()) << " already complete in " << spec.out.string() << "), "
-      << (spec.slurm ? std::string("each a Slurm task") : std::to_string(spec.jobs) + " at a time") << std::endl;
-  ScanRunner(spec, jobs, total - static_cast<int>(todo.size()), self, log, terminal).run(todo);
-
-  // Evaluation of every scan in the folder against the ground truth.
-  BenchResult result;
-  result.spec = spec;
-  result.spec.jobs = spec_in.jobs;
-  std::map<std::string, std::vector<uint8_t>> masks;
-  std::map<PlannerKind, std::vector<ObjectRun>> runs;
-  for (const auto& j : jobs) runs[j.planner].push_back(evaluate_job(spec, j, masks, log));
-  for (const auto& p : spec.planners) result.planners.push_back(summarise(p, runs[p], spec.views));
-  add_gaps_to_oracle(result.planners, spec.views);
-  result.halves = summarise_halves(spec, result.planners);
-  result.machine = machine_info();
-  if (spec.slurm) {
-    result.machine["slurm"] = {{"partition", spec.slurm->partition}, {"account", spec.slurm->account},
-                               {"time_limit", spec.slurm->time_limit}};
-  } else {
-    result.machine["scans_at_once"] = spec.jobs;
+  for (const auto& [label, spec] : benches) {
+    const int total = static_cast<int>(std::count_if(jobs.begin(), jobs.end(), [&](const Job& j) { return j.spec == &spec; }));
+    const int left = static_cast<int>(std::count_if(todo.begin(), todo.end(), [&](const Job* j) { return j->spec == &spec; }));
+    log << "pbnbv bench: " << (label.empty() ? "" : label + ": ") << spec.objects.size() << " objects x "
+        << (spec.first_views > 1 ? std::to_string(spec.first_views) + " first views x " : std::string())
+        << spec.planners.size() << " planners = " << total << " scans (" << total - left << " already complete in "
+        << spec.out.string() << ")" << std::endl;
   }
-  write_json_atomic(to_json(result), (spec.out / "summary.json").string());
-  write_report(result);
-  return result;
+  log << "pbnbv bench: " << todo.size() << " scans to run"
+      << (benches.size() > 1 ? " of " + std::to_string(jobs.size()) + " in " + std::to_string(benches.size()) + " benchmarks" : "")
+      << ", " << (options.slurm ? std::string("each a Slurm task") : std::to_string(options.jobs) + " at a time") << std::endl;
+  TaskRunner(options, jobs, static_cast<int>(jobs.size() - todo.size()), self, log, terminal).run(todo);
+
+  // Evaluation of every scan against the ground truth: one task per object of each bench.
+  std::vector<Job> evaluations = evaluation_jobs(jobs);
+  std::vector<Job*> to_evaluate;
+  for (Job& e : evaluations) {
+    if (!evaluation_current(e.dir)) to_evaluate.push_back(&e);
+  }
+  log << "pbnbv bench: evaluating the scans against the ground truth, one task per object: " << to_evaluate.size()
+      << " to run (" << evaluations.size() - to_evaluate.size() << " recorded from the same scans), "
+      << (options.slurm ? std::string("each a Slurm task") : std::to_string(evaluation_jobs_at_once) + " at a time")
+      << std::endl;
+  RunnerOptions evaluation_options = options;
+  evaluation_options.jobs = evaluation_jobs_at_once;
+  TaskRunner(evaluation_options, evaluations, static_cast<int>(evaluations.size() - to_evaluate.size()), self, log,
+             terminal)
+      .run(to_evaluate);
+  std::map<std::pair<const BenchSpec*, std::string>, ObjectEvaluation> records;
+  std::map<std::pair<const BenchSpec*, std::string>, std::string> errors;
+  for (const Job& e : evaluations) {
+    std::string error;
+    if (auto r = read_evaluation(e.dir, &error)) {
+      if (!r->observable.empty()) log << (e.label.empty() ? "" : e.label + ": ") << r->observable << std::endl;
+      records.emplace(std::make_pair(e.spec, e.name), std::move(*r));
+    } else {
+      errors.emplace(std::make_pair(e.spec, e.name), error);
+    }
+  }
+
+  std::vector<BenchResult> results;
+  for (std::size_t b = 0; b < benches.size(); ++b) {
+    const BenchSpec& spec = benches[b].second;
+    BenchResult result;
+    result.spec = spec;
+    result.spec.jobs = benches_in[b].second.jobs;
+    std::map<PlannerKind, std::vector<ObjectRun>> runs;
+    for (const auto& j : jobs) {
+      if (j.spec == &spec) runs[j.planner].push_back(recorded_run(j, records, errors));
+    }
+    for (const auto& p : spec.planners) result.planners.push_back(summarise(p, runs[p], spec.views));
+    add_gaps_to_oracle(result.planners, spec.views);
+    result.halves = summarise_halves(spec, result.planners);
+    result.machine = machine_info();
+    if (spec.slurm) {
+      result.machine["slurm"] = {{"partition", spec.slurm->partition}, {"account", spec.slurm->account},
+                                 {"time_limit", spec.slurm->time_limit}};
+    } else {
+      result.machine["scans_at_once"] = spec.jobs;
+    }
+    write_json_atomic(to_json(result), (spec.out / "summary.json").string());
+    write_report(result);
+    results.push_back(std::move(result));
+  }
+  return results;
+}
+
+BenchResult run_bench(const BenchSpec& spec, const fs::path& self, std::ostream& log, bool terminal) {
+  return run_benches({{"", spec}}, spec.out, self, log, terminal).front();
 }
 
 std::vector<std::pair<std::string, BenchResult>> run_ablation(const std::string& param,
                                                               const std::vector<std::pair<std::string, BenchSpec>>& runs,
                                                               const fs::path& out, const fs::path& self, std::ostream& log,
                                                               bool terminal) {
-  std::vector<std::pair<std::string, BenchResult>> results;
-  for (const auto& [value, spec] : runs) {
-    log << "=== " << param << " = " << value << " -> " << spec.out.string() << std::endl;
-    results.emplace_back(value, run_bench(spec, self, log, terminal));
-  }
-  write_ablation(param, results, out);
-  return results;
+  std::vector<std::pair<std::string, BenchSpec>> labelled;
+  for (const auto& [value, spec] : runs) labelled.emplace_back(param + "=" + value, spec);
+  const std::vector<BenchResult> results = run_benches(labelled, out, self, log, terminal);
+  std::vector<std::pair<std::string, BenchResult>> by_value;
+  for (std::size_t i = 0; i < runs.size(); ++i) by_value.emplace_back(runs[i].first, results[i]);
+  write_ablation(param, by_value, out);
+  return by_value;
 }
 
 }  // namespace pbnbv::eval

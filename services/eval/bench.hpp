@@ -314,9 +314,18 @@ std::string objects_text(const BenchResult& r);
 // else plain lines.
 BenchResult run_bench(const BenchSpec& spec, const std::filesystem::path& self, std::ostream& log,
                       bool terminal = false);
+// Several benchmarks at once (a sweep's or an ablation's: each with its label, e.g.
+// "resolution=0.01"): every scan of every one in one run (spec.jobs at a time, or on Slurm, as
+// the first bench's spec says: the options of how to run are the same for all), then each
+// bench's evaluation and summary as run_bench writes them. The scans' evaluation runs as tasks
+// like the scans, one per object of each bench (bench_evaluation.hpp): here spec.jobs at a time,
+// or as Slurm tasks. `root`: the run's folder (Slurm's scripts and output go to root/slurm).
+std::vector<BenchResult> run_benches(const std::vector<std::pair<std::string, BenchSpec>>& benches,
+                                     const std::filesystem::path& root, const std::filesystem::path& self,
+                                     std::ostream& log, bool terminal = false);
 
-// An ablation: one benchmark per value of `param` (runs: the value as text, its benchmark), in
-// the order given, then write_ablation into `out`. Progress goes to `log`.
+// An ablation: one benchmark per value of `param` (runs: the value as text, its benchmark), run
+// together (run_benches), then write_ablation into `out`. Progress goes to `log`.
 std::vector<std::pair<std::string, BenchResult>> run_ablation(const std::string& param,
                                                               const std::vector<std::pair<std::string, BenchSpec>>& runs,
                                                               const std::filesystem::path& out,

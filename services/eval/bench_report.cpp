@@ -9,8 +9,11 @@
 #include "core/io/json.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "eval/bench.hpp"
+#include "eval/bench_sweep.hpp"
 #include "eval/objects.hpp"
 #include "core/base/format.hpp"
+
+#include <fmt/format.h>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -40,20 +43,32 @@ std::vector<double> view_numbers(int n, int first = 1) {
   return x;
 }
 
-// The command that reproduces the benchmark.
-std::string command_of(const BenchSpec& s) {
+// The command that reproduces the benchmark; `lists`: the values of swept options, as given
+// (option without "--" -> "a,b"), instead of the spec's one.
+std::string command_of(const BenchSpec& s, const std::map<std::string, std::string>& lists = {}) {
+  const auto value = [&](const std::string& option, const std::string& one) {
+    const auto it = lists.find(option);
+    return it != lists.end() ? it->second : one;
+  };
   std::ostringstream os;
   os << "build/bin/pbnbv bench --objects ";
   for (std::size_t i = 0; i < s.objects.size(); ++i) os << (i ? "," : "") << s.objects[i];
   os << " --planners ";
   for (std::size_t i = 0; i < s.planners.size(); ++i) os << (i ? "," : "") << name_of(s.planners[i]);
-  os << " --rig " << name_of(s.rig) << " --area " << name_of(s.area) << " --views " << s.views << " --resolution " << s.resolution_m
-     << " --candidates " << s.candidates << " --tmax " << s.tmax << " --beta " << s.beta;
+  os << " --rig " << value("rig", std::string(name_of(s.rig))) << " --area " << name_of(s.area) << " --views " << s.views
+     << " --resolution " << value("resolution", fmt::format("{}", s.resolution_m)) << " --candidates " << s.candidates
+     << " --tmax " << s.tmax << " --beta " << s.beta;
   if (s.initial_view) os << " --initial-view " << s.initial_view->x() << "," << s.initial_view->y() << "," << s.initial_view->z();
-  if (s.first_views != kFirstViews.value) os << " --first-views " << s.first_views;
+  if (s.first_views != kFirstViews.value || lists.count("first-views")) {
+    os << " --first-views " << value("first-views", std::to_string(s.first_views));
+  }
   if (s.size_m != kObjectSize.value) os << " --size " << s.size_m;
   if (s.up) os << " --up " << name_of(*s.up);
-  if (!s.rig_model.empty()) os << " --rig-model " << s.rig_model;
+  if (!s.rig_model.empty() || lists.count("rig-model")) os << " --rig-model " << value("rig-model", s.rig_model);
+  if (s.camera != kCamera.value || lists.count("camera")) os << " --camera " << value("camera", std::string(name_of(s.camera)));
+  if (s.rig_errors != kRigErrors.value || lists.count("rig-errors")) {
+    os << " --rig-errors " << value("rig-errors", std::string(name_of(s.rig_errors)));
+  }
   if (s.when_done != kWhenDone.value) os << " --when-done " << name_of(s.when_done);
   if (s.motion != kMotion.value) os << " --motion " << name_of(s.motion);
   if (s.seconds_per_point != kSecondsPerPoint.value) os << " --seconds-per-point " << s.seconds_per_point;
@@ -721,6 +736,80 @@ void write_ablation(const std::string& param, const std::vector<std::pair<std::s
   write_text_atomic(md.str(), (out / "ablation.md").string());
   if (!c.series.empty()) write_line_chart(c, (out / "ablation.png").string());
   if (time_plot) write_line_chart(t, (out / "ablation_time.png").string());
+}
+
+void write_sweep(const Sweep& sweep, const std::vector<BenchResult>& results) {
+  if (results.size() != sweep.benches.size() || sweep.values.size() != sweep.benches.size()) {
+    throw std::invalid_argument("write_sweep: one result and one set of values per combination are needed");
+  }
+  fs::create_directories(sweep.out);
+  std::string swept;
+  for (const std::string& p : sweep.parameters) swept += (swept.empty() ? "" : " x ") + p;
+  json j = {{"parameters", sweep.parameters}, {"benches", json::array()}};
+  LineChart c;
+  c.title = "Sweep: " + swept + " (mean coverage)";
+  c.x_label = "views";
+  c.y_label = "surface covered (%, mean)";
+  c.integer_x = true;
+  c.y_max = 100;
+  c.y_lines = {{95.0, "95 %"}};
+  std::ostringstream md;
+  md << "# Sweep: " << swept << "\n\n"
+     << results.size() << " benchmarks, one per combination, each in its folder (summary.json, report.md, the scans). "
+     << "Coverage: mean over each planner's complete runs after the last view, with its 95 % interval (bootstrap over the "
+     << "objects); rig time: mean per scan over the runs measured at every view, and to 95 % of the observable surface "
+     << "over the runs that reach it.\n\n|";
+  for (const std::string& p : sweep.parameters) md << " " << p << " |";
+  md << " planner | runs | coverage after the last view (%) | views to 95 % | planner time, median | rig time (s) | to 95 % (s) | rig contacts |\n|";
+  for (std::size_t i = 0; i < sweep.parameters.size() + 8; ++i) md << "---|";
+  md << "\n";
+  for (std::size_t b = 0; b < results.size(); ++b) {
+    const BenchResult& r = results[b];
+    const int n = r.spec.views;
+    json values = json::object();
+    for (std::size_t k = 0; k < sweep.parameters.size(); ++k) values[sweep.parameters[k]] = sweep.values[b][k];
+    json bj = {{"label", sweep.benches[b].first}, {"folder", r.spec.out.filename().string()}, {"values", values},
+               {"planners", json::object()}};
+    for (const PlannerSummary& p : r.planners) {
+      const std::string planner(name_of(p.planner));
+      const double last = p.coverage_by_view.empty() ? NAN : p.coverage_by_view.back();
+      const bool timed = p.rig_time_runs > 0;
+      bj["planners"][planner] = {
+          {"runs_complete", p.complete},
+          {"runs_failed", p.failed},
+          {"coverage_by_view", p.coverage_by_view},
+          {"coverage_ci95_last", p.coverage_ci95_by_view.empty() ? json(nullptr) : json{p.coverage_ci95_by_view.back().lo, p.coverage_ci95_by_view.back().hi}},
+          {"views_to_95", p.views_to_95 ? json(*p.views_to_95) : json(nullptr)},
+          {"planner_ms_median", p.planner_ms_median},
+          {"rig_time_s", timed ? json(p.rig_time_mean.total_s()) : json(nullptr)},
+          {"rig_time_s_to_95", p.rig_time_to_95 ? json(*p.rig_time_to_95) : json(nullptr)},
+          {"rig_contacts", p.rig_contacts}};
+      md << "|";
+      for (const std::string& v : sweep.values[b]) md << " " << v << " |";
+      md << " " << planner << " | " << p.complete << (p.failed ? " (" + std::to_string(p.failed) + " failed)" : "") << " | "
+         << f1(last) << " " << coverage_interval(p, n) << " | " << opt(p.views_to_95) << " | "
+         << (p.planner == PlannerKind::kRing ? std::string("-") : ms(p.planner_ms_median) + " ms") << " | "
+         << (timed ? f1(p.rig_time_mean.total_s()) : std::string("-")) << " | "
+         << (p.rig_time_to_95 ? f1(*p.rig_time_to_95) : std::string("-")) << " | " << p.rig_contacts << " |\n";
+      if (!p.coverage_by_view.empty()) {
+        ChartSeries line;
+        line.label = sweep.benches[b].first + (r.planners.size() > 1 ? " " + planner : "");
+        line.x = view_numbers(static_cast<int>(p.coverage_by_view.size()));
+        line.y = p.coverage_by_view;
+        c.series.push_back(std::move(line));
+      }
+    }
+    j["benches"].push_back(bj);
+  }
+  if (!results.empty()) {
+    BenchSpec first = results.front().spec;
+    first.out = sweep.out;
+    md << "\nThe command:\n\n```\n" << command_of(first, sweep.lists) << "\n```\n";
+  }
+  md << "\n![sweep](sweep.png)\n";
+  write_json_atomic(j, (sweep.out / "sweep.json").string());
+  write_text_atomic(md.str(), (sweep.out / "sweep.md").string());
+  if (!c.series.empty()) write_line_chart(c, (sweep.out / "sweep.png").string());
 }
 
 }  // namespace pbnbv::eval

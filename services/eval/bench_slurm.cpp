@@ -49,10 +49,10 @@ void validate(const SlurmSpec& s) {
 std::string slurm_task_script(const std::vector<SlurmTask>& tasks) {
   std::ostringstream s;
   s << "#!/bin/bash\n"
-       "# Written by pbnbv bench: the scans of one Slurm job array, task i the i-th below. Each runs with\n"
-       "# its output into its log; SIGTERM or SIGINT (scancel, a time limit) reaches the scan as SIGINT,\n"
-       "# on which it keeps what it has (a rerun of the bench resumes it); the task then writes\n"
-       "# bench_task.json into the scan's folder: its exit code, wall time, host and Slurm job.\n"
+       "# Written by pbnbv bench: the scans (or evaluations) of one Slurm job array, task i the i-th below.\n"
+       "# Each runs with its output into its log; SIGTERM or SIGINT (scancel, a time limit) reaches it as\n"
+       "# SIGINT, on which a scan keeps what it has (a rerun of the bench resumes it); the task then\n"
+       "# writes bench_task.json into its folder: its exit code, wall time, host and Slurm job.\n"
        "set -u\n"
        "case \"${SLURM_ARRAY_TASK_ID:-}\" in\n";
   for (std::size_t i = 0; i < tasks.size(); ++i) {
@@ -86,8 +86,8 @@ std::string slurm_task_script(const std::vector<SlurmTask>& tasks) {
 }
 
 std::vector<std::string> sbatch_argv(const SlurmSpec& s, const fs::path& script, int n, const fs::path& slurm_dir,
-                                     bool exclusive) {
-  std::vector<std::string> a = {"sbatch", "--parsable", "--job-name=pbnbv-bench", "--array=0-" + std::to_string(n - 1),
+                                     bool exclusive, const std::string& job_name) {
+  std::vector<std::string> a = {"sbatch", "--parsable", "--job-name=" + job_name, "--array=0-" + std::to_string(n - 1),
                                 "--cpus-per-task=1", "--output=" + (slurm_dir / "slurm-%A_%a.out").string()};
   if (!s.partition.empty()) a.push_back("--partition=" + s.partition);
   if (!s.account.empty()) a.push_back("--account=" + s.account);
@@ -141,12 +141,14 @@ int SlurmQueue::run(const std::vector<std::string>& argv, const std::string& nam
 }
 
 std::string SlurmQueue::submit(const SlurmSpec& s, const std::vector<SlurmTask>& tasks, bool exclusive) {
-  const fs::path script = dir_ / ("submit-" + std::to_string(++submissions_) + ".sh");
+  const fs::path script = dir_ / (kind_ + "-" + std::to_string(++submissions_) + ".sh");
   fs::create_directories(dir_);
   write_text_atomic(slurm_task_script(tasks), script.string());
   fs::permissions(script, fs::perms::owner_exec | fs::perms::group_exec, fs::perm_options::add);
   std::string out;
-  const int code = run(sbatch_argv(s, script, static_cast<int>(tasks.size()), dir_, exclusive), "sbatch", out, 60);
+  const int code = run(sbatch_argv(s, script, static_cast<int>(tasks.size()), dir_, exclusive,
+                                       kind_ == "submit" ? "pbnbv-bench" : "pbnbv-" + kind_),
+                           "sbatch", out, 60);
   while (!out.empty() && std::isspace(static_cast<unsigned char>(out.back()))) out.pop_back();
   // --parsable: "<job id>" or "<job id>;<cluster>".
   const std::string id = out.substr(0, out.find(';'));

@@ -26,7 +26,7 @@ struct SlurmSpec {
 // not minutes, M:S, H:M:S, D-H, D-H:M or D-H:M:S.
 void validate(const SlurmSpec& s);
 
-// One scan as a task runs it: its command, its folder (it writes bench_task.json there) and its log.
+// One task: its command, its folder (it writes bench_task.json there) and its log.
 struct SlurmTask {
   std::vector<std::string> argv;
   std::filesystem::path dir, log;
@@ -39,11 +39,12 @@ struct SlurmTask {
 std::string slurm_task_script(const std::vector<SlurmTask>& tasks);
 
 // sbatch's command for an array of `n` tasks (ids 0..n-1) of `script`: --parsable, one CPU a
-// task, the job named pbnbv-bench, Slurm's own output of each task into `slurm_dir`
+// task, the job named `job_name`, Slurm's own output of each task into `slurm_dir`
 // (slurm-<job>_<task>.out), the spec's partition, account and time limit; `exclusive`: one task
 // per node (the scans share the node's bus when they cannot have namespaces of their own).
 std::vector<std::string> sbatch_argv(const SlurmSpec& s, const std::filesystem::path& script, int n,
-                                     const std::filesystem::path& slurm_dir, bool exclusive);
+                                     const std::filesystem::path& slurm_dir, bool exclusive,
+                                     const std::string& job_name = "pbnbv-bench");
 
 // A task as squeue shows it.
 struct SlurmTaskState {
@@ -56,10 +57,13 @@ struct SlurmTaskState {
 std::map<int, SlurmTaskState> parse_squeue(const std::string& text, const std::string& job_id);
 
 // Slurm's commands (sbatch, squeue, scancel on the PATH, SLURM_CONF from the environment), each
-// with a deadline; their output goes through files in `slurm_dir`.
+// with a deadline; their output goes through files in `slurm_dir`. `kind` names the arrays'
+// scripts (<kind>-N.sh) and jobs: "submit" for the scans (jobs named pbnbv-bench), "evaluate"
+// for the evaluations (pbnbv-evaluate).
 class SlurmQueue {
  public:
-  explicit SlurmQueue(std::filesystem::path slurm_dir) : dir_(std::move(slurm_dir)) {}
+  explicit SlurmQueue(std::filesystem::path slurm_dir, std::string kind = "submit")
+      : dir_(std::move(slurm_dir)), kind_(std::move(kind)) {}
   // Submits the array; returns its job id. Throws std::runtime_error with sbatch's message.
   std::string submit(const SlurmSpec& s, const std::vector<SlurmTask>& tasks, bool exclusive);
   // The tasks of the arrays, by job id then task id (none when squeue does not answer in time:
@@ -72,6 +76,7 @@ class SlurmQueue {
  private:
   int run(const std::vector<std::string>& argv, const std::string& name, std::string& output, double timeout_s);
   std::filesystem::path dir_;
+  std::string kind_;
   int submissions_ = 0;
   std::chrono::steady_clock::time_point last_query_{};
   std::optional<std::map<std::string, std::map<int, SlurmTaskState>>> last_;

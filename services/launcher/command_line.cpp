@@ -288,11 +288,13 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
                  "object sets (default, tuning, tune, confirm), object names or mesh paths, mixed [default]");
   cli::add_text(c, "object-dir", &pending->object_dir, "every .obj/.stl/.off/.ply in DIR instead", "DIR");
   cli::add_list(c, "planners", &spec->planners, "planners to compare");
-  cli::add(c, eval::kBenchRig, &spec->rig);
-  cli::add_text(c, "rig-model", &spec->rig_model, "the rig's MJCF file, e.g. models/rig_ur5e.xml [models/rig_<rig>.xml]", "FILE");
+  // A list of values for these sweeps: one benchmark per combination (README, "Sweeps").
+  cli::add_list(c, eval::kBenchRig, &pending->rigs, "a list sweeps");
+  cli::add_words(c, "rig-model", &pending->rig_models,
+                 "the rig's MJCF file, e.g. models/rig_ur5e.xml [models/rig_<rig>.xml]; a list sweeps", "FILE[,...]");
   cli::add(c, eval::kBenchArea, &spec->area);
   cli::add(c, kViews, &spec->views);
-  cli::add(c, kMapResolution, &spec->resolution_m);
+  cli::add_values(c, kMapResolution, &pending->resolutions, "a list sweeps");
   cli::add(c, kCandidates, &spec->candidates);
   cli::add(c, kTMax, &spec->tmax);
   cli::add(c, kSectors, &spec->beta);
@@ -301,13 +303,13 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add(c, kUp, &spec->up);
   cli::add_point(c, "initial-view", &spec->initial_view,
                  "first camera position, object frame, m [the scan's default first view]");
-  cli::add(c, eval::kFirstViews, &spec->first_views);
+  cli::add_values(c, eval::kFirstViews, &pending->first_views, "a list sweeps");
   cli::add(c, kPlannerSeed, &spec->seed);
   cli::add(c, kWhenDone, &spec->when_done);
   cli::add(c, kMotion, &spec->motion);
   cli::add(c, kSecondsPerPoint, &spec->seconds_per_point);
-  cli::add(c, kCamera, &spec->camera);
-  cli::add(c, kRigErrors, &spec->rig_errors);
+  cli::add_list(c, kCamera, &pending->cameras, "a list sweeps");
+  cli::add_list(c, kRigErrors, &pending->rig_errors, "a list sweeps");
   // The scans run without a stop rule; the report says where the surface rule would have stopped each.
   cli::add(c, kStopWindow, &spec->stop_rule.window);
   cli::add(c, kStopNewSurface, &spec->stop_rule.max_new_percent);
@@ -355,7 +357,7 @@ std::optional<int> CommandLine::parse(int argc, const char* const* argv, std::os
       resolve_scan();
     } else if (given == bench_cmd_) {
       command_ = Command::kBench;
-      resolve_bench(bench_cmd_, &bench_, bench_pending_);
+      resolve_bench(bench_cmd_, &bench_, bench_pending_, &sweep_);
     } else if (given == ablate_cmd_) {
       command_ = Command::kAblate;
       resolve_ablate();
@@ -509,7 +511,8 @@ void CommandLine::resolve_scan() {
   s.validate();
 }
 
-void CommandLine::resolve_bench(const CLI::App* command, eval::BenchSpec* spec, const BenchPending& pending) {
+void CommandLine::resolve_bench(const CLI::App* command, eval::BenchSpec* spec, const BenchPending& pending,
+                                eval::Sweep* sweep) {
   const bool objects_given = command->get_option("--objects")->count() > 0;
   if (objects_given && !pending.object_dir.empty()) throw std::invalid_argument("give --objects or --object-dir, not both");
   if (!pending.object_dir.empty()) {
@@ -537,10 +540,21 @@ void CommandLine::resolve_bench(const CLI::App* command, eval::BenchSpec* spec, 
     }
   }
   spec->seconds_rule.min_views = spec->stop_rule.min_views;  // --stop-min-views: either rule
-  if (!spec->rig_model.empty()) spec->rig_model = std::filesystem::absolute(spec->rig_model).string();  // scans run elsewhere
   if (pending.out.empty()) throw std::invalid_argument("--out DIR is required");
   spec->out = fs::absolute(pending.out);
-  spec->validate();
+  std::vector<std::string> rig_models;
+  for (const std::string& m : pending.rig_models) rig_models.push_back(fs::absolute(m).string());  // scans run elsewhere
+  if (rig_models.empty()) rig_models = {""};
+  eval::SweepValues values;
+  values.rigs = pending.rigs;
+  values.rig_models = rig_models;
+  values.cameras = pending.cameras;
+  values.rig_errors = pending.rig_errors;
+  values.resolutions = pending.resolutions;
+  values.first_views = pending.first_views;
+  *sweep = eval::expand_sweep(*spec, values);
+  *spec = sweep->benches.front().second;
+  if (sweep->benches.size() == 1) spec->out = sweep->out;
 }
 
 void CommandLine::resolve_ablate() {
@@ -548,7 +562,13 @@ void CommandLine::resolve_ablate() {
     throw std::invalid_argument("name the parameter: tmax, beta, initial-view or resolution (pbnbv ablate tmax [options])");
   }
   const AblatedParameter param = parse_name<AblatedParameter>(ablate_parameter_);
-  resolve_bench(ablate_cmd_, &ablate_base_, ablate_pending_);
+  eval::Sweep sweep;
+  resolve_bench(ablate_cmd_, &ablate_base_, ablate_pending_, &sweep);
+  if (sweep.benches.size() > 1) {
+    throw std::invalid_argument("--" + sweep.parameters.front() +
+                                " lists several values: pbnbv ablate varies one parameter (--values); a sweep over "
+                                "lists is pbnbv bench's");
+  }
   ablate_.parameter = param;
   ablate_.out = ablate_base_.out;
   const std::vector<std::string> values =

@@ -20,6 +20,7 @@
 #include "core/scan/scan_settings.hpp"
 #include "core/surface/surface.hpp"
 #include "eval/bench.hpp"
+#include "eval/bench_sweep.hpp"
 
 namespace pbnbv::launcher {
 
@@ -155,7 +156,10 @@ class CommandLine {
   const EvaluateOptions& evaluate() const { return evaluate_; }
   const MeshOptions& mesh() const { return mesh_; }
   const ScanOptions& scan() const { return scan_; }
+  // `pbnbv bench`: the spec (with several values of a swept setting, its first combination's), and
+  // the sweep (one bench when no setting lists more than one value).
   const eval::BenchSpec& bench() const { return bench_; }
+  const eval::Sweep& sweep() const { return sweep_; }
   const AblateOptions& ablate() const { return ablate_; }
 
   // The whole usage: every command with its options.
@@ -178,6 +182,13 @@ class CommandLine {
     bool no_netns = false;
     bool slurm = false;
     eval::SlurmSpec slurm_spec;
+    // The settings a bench may sweep: each combination of their values one benchmark.
+    std::vector<RigKind> rigs;
+    std::vector<std::string> rig_models;  // empty: the rig kind's own file
+    std::vector<CameraKind> cameras;
+    std::vector<RigErrors> rig_errors;
+    std::vector<double> resolutions;
+    std::vector<int> first_views;
   };
 
   // The options of `scan`, bound to scan_ and scan_pending_.
@@ -188,8 +199,9 @@ class CommandLine {
   // principal point by image size), then ScanSettings::validate. Throws std::invalid_argument.
   void resolve_scan();
   // The object list (--objects, --object-dir or the default set), the output folder, then
-  // BenchSpec::validate. Throws std::invalid_argument.
-  void resolve_bench(const CLI::App* command, eval::BenchSpec* spec, const BenchPending& pending);
+  // BenchSpec::validate; *spec takes the first value of each swept setting, *sweep one bench per
+  // combination of their values. Throws std::invalid_argument.
+  void resolve_bench(const CLI::App* command, eval::BenchSpec* spec, const BenchPending& pending, eval::Sweep* sweep);
   // The ablated parameter and one benchmark per value of --values. Throws std::invalid_argument.
   void resolve_ablate();
 
@@ -217,6 +229,7 @@ class CommandLine {
   ScanPending scan_pending_;
   eval::BenchSpec bench_;
   BenchPending bench_pending_;
+  eval::Sweep sweep_;
   eval::BenchSpec ablate_base_;
   BenchPending ablate_pending_;
   std::string ablate_parameter_, ablate_values_;

@@ -25,6 +25,24 @@ namespace fs = std::filesystem;
 
 namespace pbnbv::launcher {
 
+int run_sweep(const eval::Sweep& sweep, const fs::path& self) {
+  const std::vector<eval::BenchResult> results = eval::run_sweep(sweep, self, std::cout, ::isatty(STDOUT_FILENO) == 1);
+  std::cout << "\n" << read_text((sweep.out / "sweep.md").string()) << std::endl;
+  std::cout << "outputs: " << (sweep.out / "sweep.json").string() << ", " << (sweep.out / "sweep.md").string()
+            << ", sweep.png; each combination's summary.json, report.md, plots and scans in " << sweep.out.string()
+            << "/<combination>/" << std::endl;
+  int failed = 0;
+  for (const eval::BenchResult& r : results) {
+    for (const auto& p : r.planners) failed += p.failed;
+  }
+  if (failed > 0) {
+    std::cerr << "pbnbv bench: " << failed << " scans did not complete (see each combination's summary.json and logs/); "
+              << "run the command again to retry them" << std::endl;
+    return 1;
+  }
+  return 0;
+}
+
 int run_bench(const eval::BenchSpec& spec, const fs::path& self) {
   const eval::BenchResult r = eval::run_bench(spec, self, std::cout, ::isatty(STDOUT_FILENO) == 1);
   std::cout << "\n" << read_text((spec.out / "report.md").string()) << std::endl;

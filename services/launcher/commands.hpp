@@ -18,6 +18,9 @@ int run_scan(const ScanOptions& o, const std::filesystem::path& bin);
 // `pbnbv bench`: the benchmark (eval::run_bench), its report printed. `self`: the pbnbv
 // executable that runs each scan. 1 when a scan did not complete.
 int run_bench(const eval::BenchSpec& spec, const std::filesystem::path& self);
+// `pbnbv bench` with lists (eval::run_sweep): every combination's benchmark, the table across
+// them printed. 1 when a scan did not complete.
+int run_sweep(const eval::Sweep& sweep, const std::filesystem::path& self);
 
 // `pbnbv ablate`: one benchmark per value (eval::run_ablation), the ablation's table printed.
 int run_ablate(const AblateOptions& o, const std::filesystem::path& self);

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "core/base/install_paths.hpp"
+#include "eval/bench_evaluation.hpp"
 #include "launcher/command_line.hpp"
 #include "launcher/commands.hpp"
 
@@ -36,6 +37,21 @@ int main(int argc, char** argv) {
     std::cerr << "pbnbv view: cannot run " << view << " (build it: ./scripts/setup)" << std::endl;
     return 2;
   }
+  // pbnbv bench's evaluation of one object's scans, a task of its own (eval/bench_evaluation.hpp):
+  // not a command for users, so not in the help.
+  if (argc > 1 && std::string(argv[1]) == "bench-evaluate") {
+    if (argc != 3) {
+      std::cerr << "pbnbv bench-evaluate REQUEST: pbnbv bench runs it, with the request it wrote" << std::endl;
+      return 2;
+    }
+    try {
+      eval::run_evaluation_task(argv[2], std::cout);
+      return 0;
+    } catch (const std::exception& e) {
+      std::cerr << "pbnbv bench-evaluate " << argv[2] << ": " << e.what() << std::endl;
+      return 2;
+    }
+  }
   launcher::CommandLine line;
   if (const std::optional<int> code = line.parse(argc, argv, std::cout, std::cerr)) return *code;
   const fs::path self = fs::read_symlink("/proc/self/exe");
@@ -45,6 +61,7 @@ int main(int argc, char** argv) {
       case launcher::Command::kScan:
         return launcher::run_scan(line.scan(), services_dir());
       case launcher::Command::kBench:
+        if (line.sweep().benches.size() > 1) return launcher::run_sweep(line.sweep(), self);
         return launcher::run_bench(line.bench(), self);
       case launcher::Command::kAblate:
         return launcher::run_ablate(line.ablate(), self);

@@ -1,0 +1,440 @@
+// The benchmark's evaluation, one object at a time, as a task (bench_evaluation.hpp).
+#include "eval/bench_evaluation.hpp"
+
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <ostream>
+#include <stdexcept>
+
+#include "core/base/enum_names.hpp"
+#include "core/base/format.hpp"
+#include "core/base/version.hpp"
+#include "core/geometry/views.hpp"
+#include "core/geometry/visibility.hpp"
+#include "core/io/json.hpp"
+#include "core/io/mesh_file.hpp"
+#include "core/planning/planner.hpp"
+#include "core/rig/rig.hpp"
+#include "core/scan/scan_file.hpp"
+#include "core/scan/scan_record.hpp"
+#include "core/scan/scan_settings.hpp"
+#include "eval/evaluate.hpp"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace pbnbv::eval {
+
+namespace {
+
+constexpr const char* kRequestKind = "pbnbv bench evaluation request";
+constexpr const char* kRecordKind = "pbnbv bench evaluation";
+constexpr std::size_t kMaxRequestJobs = 1000;  // runs of one object: first views x planners
+
+// The samples of the object's coverage evaluation that at least one reachable candidate view can
+// see: candidates as the planner generates them around the object's bounding box (B at the end
+// of a scan), filtered by the rig's reachability check, visibility by ray casting the true mesh.
+std::vector<uint8_t> observable_mask(const BenchSpec& spec, const fs::path& scan_dir, std::string* summary) {
+  const ScanSettings s = scan_settings_from_json(read_json((scan_dir / "settings.json").string()));
+  const TriangleMesh mesh = load_mesh((scan_dir / "object.stl").string());
+  const SurfaceSamples samples = sample_surface_with_normals(mesh, spec.coverage.num_samples, spec.coverage.seed);
+  const Eigen::Vector3d half = s.normalisation.extent_m / 2.0;
+  CandidateSpec cs;
+  cs.num_views = s.candidates;
+  cs.num_parallels = s.parallels;
+  cs.area = s.area;
+  cs.working_distance_m = s.working_distance_m;
+  const std::vector<Pose> candidates = candidate_views(Eigen::AlignedBox3d(-half, half), cs);
+  const RigModel rig = load_rig(s.rig_model_path);
+  ReachabilityChecker checker(rig);
+  const Eigen::AlignedBox3d keepout(s.keepout_min_m, s.keepout_max_m);
+  const std::vector<ViewSolution> reach = checker.solve_batch(candidates, rig.q_home, 0.0, keepout, s.object_z_m);
+  std::vector<Pose> reachable;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    if (reach[i].reachable) reachable.push_back(candidates[i]);
+  }
+  VisibilityParams vp;
+  vp.camera = s.camera;
+  vp.range = s.depth_range;
+  const std::vector<uint8_t> mask = visible_from_any(mesh, samples.points, samples.normals, reachable, vp);
+  const double seen = std::accumulate(mask.begin(), mask.end(), 0.0);
+  if (summary) {
+    *summary = std::to_string(reachable.size()) + " of " + std::to_string(candidates.size()) +
+               " candidates reachable; they see " + fixed(100.0 * seen / std::max<std::size_t>(mask.size(), 1)) +
+               " % of the surface";
+  }
+  return mask;
+}
+
+// Doubles exactly, NaN (and infinities, which JSON has not either) as null.
+json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+json numbers(const std::vector<double>& v) {
+  json a = json::array();
+  for (double x : v) a.push_back(number(x));
+  return a;
+}
+json point(const std::optional<Eigen::Vector3d>& p) { return p ? json{p->x(), p->y(), p->z()} : json(nullptr); }
+json stats(const DistanceStats& s) {
+  return {{"count", s.count}, {"mean_m", number(s.mean_m)}, {"median_m", number(s.median_m)},
+          {"rmse_m", number(s.rmse_m)}, {"p95_m", number(s.p95_m)}, {"max_m", number(s.max_m)}};
+}
+json metrics(const std::optional<SurfaceMetrics>& m) {
+  if (!m) return nullptr;
+  return {{"model", m->model},         {"threshold_m", number(m->threshold_m)}, {"accuracy", stats(m->accuracy)},
+          {"completeness", stats(m->completeness)}, {"precision", number(m->precision)},
+          {"recall", number(m->recall)}, {"f_score", number(m->f_score)}, {"skipped_points", m->skipped_points}};
+}
+
+// Reading back, naming the field (`where`: the path to it) that is missing or of the wrong type.
+class Fields {
+ public:
+  Fields(const json& j, std::string where) : j_(j), where_(std::move(where)) {
+    if (!j_.is_object()) throw std::invalid_argument(where_ + ": not an object");
+  }
+  const json& at(const std::string& k) const {
+    if (!j_.contains(k)) throw std::invalid_argument(where_ + "." + k + ": missing");
+    return j_.at(k);
+  }
+  std::string name(const std::string& k) const { return where_ + "." + k; }
+  template <typename T>
+  T get(const std::string& k) const {
+    try {
+      return at(k).get<T>();
+    } catch (const json::exception&) {
+      throw std::invalid_argument(name(k) + ": " + at(k).dump() + " is not of the expected type");
+    }
+  }
+  double real(const std::string& k) const { return to_real(at(k), name(k)); }
+  std::vector<double> reals(const std::string& k) const {
+    const json& a = at(k);
+    if (!a.is_array()) throw std::invalid_argument(name(k) + ": not an array");
+    std::vector<double> v;
+    for (std::size_t i = 0; i < a.size(); ++i) v.push_back(to_real(a[i], name(k) + "[" + std::to_string(i) + "]"));
+    return v;
+  }
+  std::optional<int> optional_int(const std::string& k) const {
+    return at(k).is_null() ? std::nullopt : std::optional<int>(get<int>(k));
+  }
+  std::optional<Eigen::Vector3d> optional_point(const std::string& k) const {
+    if (at(k).is_null()) return std::nullopt;
+    const std::vector<double> v = reals(k);
+    if (v.size() != 3 || !std::isfinite(v[0] + v[1] + v[2])) throw std::invalid_argument(name(k) + ": not x, y, z");
+    return Eigen::Vector3d(v[0], v[1], v[2]);
+  }
+  Fields object(const std::string& k) const { return Fields(at(k), name(k)); }
+  bool is_null(const std::string& k) const { return at(k).is_null(); }
+
+ private:
+  static double to_real(const json& v, const std::string& where) {
+    if (v.is_null()) return std::numeric_limits<double>::quiet_NaN();
+    if (!v.is_number()) throw std::invalid_argument(where + ": " + v.dump() + " is not a number");
+    return v.get<double>();
+  }
+  const json& j_;
+  std::string where_;
+};
+
+DistanceStats stats_from(const Fields& f) {
+  DistanceStats s;
+  s.count = f.get<std::size_t>("count");
+  s.mean_m = f.real("mean_m");
+  s.median_m = f.real("median_m");
+  s.rmse_m = f.real("rmse_m");
+  s.p95_m = f.real("p95_m");
+  s.max_m = f.real("max_m");
+  return s;
+}
+std::optional<SurfaceMetrics> metrics_from(const Fields& f, const std::string& k) {
+  if (f.is_null(k)) return std::nullopt;
+  const Fields m = f.object(k);
+  SurfaceMetrics s;
+  s.model = m.get<std::string>("model");
+  s.threshold_m = m.real("threshold_m");
+  s.accuracy = stats_from(m.object("accuracy"));
+  s.completeness = stats_from(m.object("completeness"));
+  s.precision = m.real("precision");
+  s.recall = m.real("recall");
+  s.f_score = m.real("f_score");
+  s.skipped_points = m.get<std::size_t>("skipped_points");
+  return s;
+}
+
+// `p` lexically inside `root` (both absolute): no "..", no other root.
+bool inside(const fs::path& p, const fs::path& root) {
+  if (!p.is_absolute()) return false;
+  const fs::path n = p.lexically_normal(), r = root.lexically_normal();
+  const fs::path rel = n.lexically_relative(r);
+  return !rel.empty() && *rel.begin() != ".." && rel != ".";
+}
+
+// The files at the top of a scan's folder, each with its size and time of last change (ns): what
+// its evaluation reads, so a record made from the same is still the scan's.
+json file_stamps(const fs::path& dir) {
+  json files = json::object();
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (!it->is_regular_file() || it->path().filename() == "bench_task.json") continue;
+    const auto size = fs::file_size(it->path(), ec);
+    const auto time = fs::last_write_time(it->path(), ec);
+    if (ec) continue;
+    files[it->path().filename().string()] = {size, static_cast<int64_t>(time.time_since_epoch().count())};
+  }
+  return files;
+}
+
+}  // namespace
+
+bool scan_complete(const fs::path& dir) {
+  try {
+    if (!fs::exists(dir / "scan.json") || !fs::exists(dir / "processes.json")) return false;
+    return recorded_state(dir) == "done";
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+ObjectRun evaluate_run(const BenchSpec& spec, const ScanJob& j, std::map<std::string, std::vector<uint8_t>>& masks,
+                       std::ostream& log) {
+  ObjectRun r;
+  r.object = j.name;
+  r.first_view = j.first_view;
+  r.initial_view = j.initial_view;  // until the scan's record says where it started
+  r.planner = j.planner;
+  try {
+    // The rig's contacts, whether the scan completed or not (a contact may be why it did not).
+    if (fs::exists(j.dir / "scan.json")) {
+      const std::vector<RigContactRecord> contacts = rig_contacts(read_scan_record(j.dir).views);
+      r.rig_contacts = rig_contact_events(contacts);
+      for (const RigContactRecord& c : contacts) r.rig_contact_list.push_back(to_string(c));
+    }
+    if (!scan_complete(j.dir)) throw std::runtime_error(scan_failure_reason(j.dir, j.log));
+    if (!masks.count(j.name)) {
+      std::string what;
+      masks[j.name] = observable_mask(spec, j.dir, &what);
+      log << j.name << ": observable surface: " << what << std::endl;
+    }
+    const ScanEvaluation e = evaluate_scan(j.dir, spec.coverage, &masks[j.name], spec.metrics);
+    r.coverage_by_view = pad_views(e.coverage_by_view, spec.views);
+    r.observable_by_view = pad_views(e.observable_by_view, spec.views);
+    r.planner_ms = e.planner_ms;
+    r.views_to_95 = views_to_reach(r.coverage_by_view, 95.0);
+    r.views_done = e.views_done;
+    r.stop_reason = e.stop_reason;
+    r.new_surface_by_view = e.new_surface_by_view;
+    r.rig_time_by_view = pad_views(e.rig_time_s_by_view, spec.views);
+    if (e.rig_time.views > 0 && e.rig_time.views_incomplete == 0) r.rig_time = e.rig_time.sum;
+    r.cloud_metrics = e.cloud_metrics;
+    r.mesh_metrics = e.mesh_metrics;
+    if (const auto d = first_surface_stop(e.new_surface_by_view, spec.stop_rule); d && d->after_views < spec.views) {
+      r.stop_view = d->after_views;
+      r.stop_rule_reason = d->reason;
+    }
+    if (const auto d = first_seconds_stop(e.view_gains, spec.seconds_rule); d && d->after_views < spec.views) {
+      r.seconds_stop_view = d->after_views;
+      r.seconds_stop_reason = d->reason;
+    }
+    r.complete = true;
+    const std::optional<ScanPlanHeader> plan = read_scan_record(j.dir).plan;
+    if (plan && plan->planner != "ring") r.initial_view = plan->initial_view.translation();
+    if (fs::exists(j.dir / "bench_run.json")) r.wall_s = read_json((j.dir / "bench_run.json").string()).value("wall_s", 0.0);
+  } catch (const std::exception& x) {
+    r.error = x.what();
+  }
+  return r;
+}
+
+json run_record(const ObjectRun& r) {
+  json j = {{"object", r.object},
+            {"first_view", r.first_view},
+            {"initial_view", point(r.initial_view)},
+            {"planner", std::string(name_of(r.planner))},
+            {"complete", r.complete},
+            {"error", r.error},
+            {"coverage_by_view", numbers(r.coverage_by_view)},
+            {"observable_by_view", numbers(r.observable_by_view)},
+            {"planner_ms", numbers(r.planner_ms)},
+            {"views_to_95", r.views_to_95 ? json(*r.views_to_95) : json(nullptr)},
+            {"views_done", r.views_done},
+            {"stop_reason", r.stop_reason},
+            {"wall_s", number(r.wall_s)},
+            {"rig_time_by_view", numbers(r.rig_time_by_view)},
+            {"new_surface_by_view", numbers(r.new_surface_by_view)},
+            {"stop_view", r.stop_view ? json(*r.stop_view) : json(nullptr)},
+            {"stop_rule_reason", r.stop_rule_reason},
+            {"seconds_stop_view", r.seconds_stop_view ? json(*r.seconds_stop_view) : json(nullptr)},
+            {"seconds_stop_reason", r.seconds_stop_reason},
+            {"cloud_metrics", metrics(r.cloud_metrics)},
+            {"mesh_metrics", metrics(r.mesh_metrics)},
+            {"rig_contacts", r.rig_contacts},
+            {"rig_contact_list", r.rig_contact_list}};
+  j["rig_time"] = r.rig_time ? json{{"motion_s", number(r.rig_time->motion_s)},
+                                    {"settle_s", number(r.rig_time->settle_s)},
+                                    {"capture_s", number(r.rig_time->capture_s)},
+                                    {"compute_s", number(r.rig_time->compute_s)}}
+                             : json(nullptr);
+  return j;
+}
+
+ObjectRun run_from_record(const json& j) {
+  const Fields f(j, "run");
+  ObjectRun r;
+  r.object = f.get<std::string>("object");
+  r.first_view = f.get<int>("first_view");
+  r.initial_view = f.optional_point("initial_view");
+  try {
+    r.planner = parse_name<PlannerKind>(f.get<std::string>("planner"));
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(f.name("planner") + ": " + e.what());
+  }
+  r.complete = f.get<bool>("complete");
+  r.error = f.get<std::string>("error");
+  r.coverage_by_view = f.reals("coverage_by_view");
+  r.observable_by_view = f.reals("observable_by_view");
+  r.planner_ms = f.reals("planner_ms");
+  r.views_to_95 = f.optional_int("views_to_95");
+  r.views_done = f.get<int>("views_done");
+  r.stop_reason = f.get<std::string>("stop_reason");
+  r.wall_s = f.real("wall_s");
+  r.rig_time_by_view = f.reals("rig_time_by_view");
+  if (!f.is_null("rig_time")) {
+    const Fields t = f.object("rig_time");
+    r.rig_time = RigTime{t.real("motion_s"), t.real("settle_s"), t.real("capture_s"), t.real("compute_s")};
+  }
+  r.new_surface_by_view = f.reals("new_surface_by_view");
+  r.stop_view = f.optional_int("stop_view");
+  r.stop_rule_reason = f.get<std::string>("stop_rule_reason");
+  r.seconds_stop_view = f.optional_int("seconds_stop_view");
+  r.seconds_stop_reason = f.get<std::string>("seconds_stop_reason");
+  r.cloud_metrics = metrics_from(f, "cloud_metrics");
+  r.mesh_metrics = metrics_from(f, "mesh_metrics");
+  r.rig_contacts = f.get<int64_t>("rig_contacts");
+  r.rig_contact_list = f.get<std::vector<std::string>>("rig_contact_list");
+  return r;
+}
+
+json evaluation_request(const BenchSpec& spec, const std::vector<ScanJob>& jobs) {
+  json scans = json::array();
+  for (const ScanJob& j : jobs) {
+    scans.push_back({{"object", j.object}, {"name", j.name}, {"first_view", j.first_view},
+                     {"initial_view", point(j.initial_view)}, {"run", j.run},
+                     {"planner", std::string(name_of(j.planner))}, {"dir", j.dir.string()}, {"log", j.log.string()},
+                     {"files", file_stamps(j.dir)}});
+  }
+  return {{"kind", kRequestKind},
+          {"pbnbv_version", std::string(pbnbv_version())},
+          {"bench", spec.out.string()},
+          {"views", spec.views},
+          {"coverage", {{"num_samples", spec.coverage.num_samples}, {"seed", spec.coverage.seed}, {"radius_m", spec.coverage.radius_m}}},
+          {"metrics", {{"threshold_m", spec.metrics.threshold_m}, {"samples_per_cm2", spec.metrics.samples_per_cm2}, {"seed", spec.metrics.seed}}},
+          {"stop_rule", {{"window", spec.stop_rule.window}, {"max_new_percent", spec.stop_rule.max_new_percent}, {"min_views", spec.stop_rule.min_views}}},
+          {"seconds_rule", {{"window", spec.seconds_rule.window}, {"min_percent_per_s", spec.seconds_rule.min_percent_per_s}, {"min_views", spec.seconds_rule.min_views}}},
+          {"scans", scans}};
+}
+
+void run_evaluation_task(const fs::path& request, std::ostream& log) {
+  const json q = read_json(request.string());
+  const std::string where = request.string();
+  const Fields f(q, where);
+  if (f.get<std::string>("kind") != kRequestKind) throw std::invalid_argument(where + ": not a request of pbnbv bench's evaluation");
+  BenchSpec spec;
+  spec.out = f.get<std::string>("bench");
+  if (!spec.out.is_absolute()) throw std::invalid_argument(f.name("bench") + ": not an absolute path");
+  spec.views = kViews.checked(f.get<int>("views"));
+  const Fields c = f.object("coverage");
+  spec.coverage.num_samples = c.get<std::size_t>("num_samples");
+  spec.coverage.seed = c.get<std::uint64_t>("seed");
+  spec.coverage.radius_m = c.real("radius_m");
+  if (spec.coverage.num_samples == 0 || spec.coverage.num_samples > 10'000'000) {
+    throw std::invalid_argument(c.name("num_samples") + ": 1 to 10000000");
+  }
+  if (!(spec.coverage.radius_m > 0 && spec.coverage.radius_m < 1)) throw std::invalid_argument(c.name("radius_m") + ": above 0 and under 1 m");
+  const Fields m = f.object("metrics");
+  spec.metrics.threshold_m = m.real("threshold_m");
+  spec.metrics.samples_per_cm2 = m.real("samples_per_cm2");
+  spec.metrics.seed = m.get<std::uint64_t>("seed");
+  spec.metrics.validate();
+  const Fields s = f.object("stop_rule");
+  spec.stop_rule = {kStopWindow.checked(s.get<int>("window")), kStopNewSurface.checked(s.real("max_new_percent")),
+                    kStopMinViews.checked(s.get<int>("min_views"))};
+  const Fields t = f.object("seconds_rule");
+  spec.seconds_rule = {kStopRateViews.checked(t.get<int>("window")), kStopGainPerSecond.checked(t.real("min_percent_per_s")),
+                       kStopMinViews.checked(t.get<int>("min_views"))};
+  const json& scans = f.at("scans");
+  if (!scans.is_array() || scans.empty() || scans.size() > kMaxRequestJobs) {
+    throw std::invalid_argument(f.name("scans") + ": 1 to " + std::to_string(kMaxRequestJobs) + " scans");
+  }
+  ObjectEvaluation out;
+  std::map<std::string, std::vector<uint8_t>> masks;
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    const Fields sj(scans[i], f.name("scans") + "[" + std::to_string(i) + "]");
+    ScanJob job;
+    job.object = sj.get<std::string>("object");
+    job.name = sj.get<std::string>("name");
+    job.first_view = sj.get<int>("first_view");
+    job.initial_view = sj.optional_point("initial_view");
+    job.run = sj.get<std::string>("run");
+    try {
+      job.planner = parse_name<PlannerKind>(sj.get<std::string>("planner"));
+    } catch (const std::exception& e) {
+      throw std::invalid_argument(sj.name("planner") + ": " + e.what());
+    }
+    job.dir = sj.get<std::string>("dir");
+    job.log = sj.get<std::string>("log");
+    for (const auto& [key, p] : {std::pair<std::string, fs::path>{"dir", job.dir}, {"log", job.log}}) {
+      if (!inside(p, spec.out)) throw std::invalid_argument(sj.name(key) + ": " + p.string() + " is not inside the bench folder " + spec.out.string());
+    }
+    if (i == 0) out.object = job.name;
+    if (job.name != out.object) {
+      throw std::invalid_argument(sj.name("name") + ": " + job.name + ", another object than the request's " + out.object);
+    }
+    log << "evaluating " << job.run << " - " << name_of(job.planner) << std::endl;
+    std::ostringstream observable;
+    out.runs.push_back(evaluate_run(spec, job, masks, observable));
+    if (!observable.str().empty()) {
+      log << observable.str();
+      out.observable = observable.str().substr(0, observable.str().find_last_not_of('\n') + 1);
+    }
+    const ObjectRun& r = out.runs.back();
+    log << "  " << (r.complete ? "evaluated" : "not evaluated: " + r.error) << std::endl;
+  }
+  json runs = json::array();
+  for (const ObjectRun& r : out.runs) runs.push_back(run_record(r));
+  write_json_atomic({{"kind", kRecordKind}, {"request", q}, {"object", out.object}, {"observable", out.observable}, {"runs", runs}},
+                    (request.parent_path() / "evaluation.json").string());
+}
+
+std::optional<ObjectEvaluation> read_evaluation(const fs::path& dir, std::string* error) {
+  const fs::path file = dir / "evaluation.json";
+  try {
+    if (!fs::exists(file)) throw std::runtime_error(file.string() + " was not written");
+    const json j = read_json(file.string());
+    const Fields f(j, file.string());
+    if (f.get<std::string>("kind") != kRecordKind) throw std::invalid_argument(file.string() + ": not an evaluation record");
+    ObjectEvaluation e;
+    e.object = f.get<std::string>("object");
+    e.observable = f.get<std::string>("observable");
+    const json& runs = f.at("runs");
+    if (!runs.is_array()) throw std::invalid_argument(f.name("runs") + ": not an array");
+    for (const json& r : runs) e.runs.push_back(run_from_record(r));
+    return e;
+  } catch (const std::exception& x) {
+    if (error) *error = x.what();
+    return std::nullopt;
+  }
+}
+
+}  // namespace pbnbv::eval
+
+namespace pbnbv::eval {
+
+bool evaluation_current(const fs::path& dir) {
+  try {
+    if (!fs::exists(dir / "evaluation.json") || !read_evaluation(dir)) return false;
+    return read_json((dir / "evaluation.json").string()).at("request") == read_json((dir / "request.json").string());
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+}  // namespace pbnbv::eval
