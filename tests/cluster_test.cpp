@@ -1,5 +1,6 @@
 // pbnbv bench --slurm on a one-node Slurm cluster of this machine (scripts/slurm-local: munged,
-// slurmctld, slurmd, real sbatch / squeue / scancel): the same results as a local run, a failing
+// slurmctld, slurmd, real sbatch / squeue / scancel): the same results as a local run (the
+// evaluation too run as Slurm tasks), a failing
 // task reported with Slurm's reason while the others complete, a cancelled task run again and a
 // rerun that runs nothing twice. The cluster is started once for the cases, which run one after
 // another (one ctest test: Slurm's ports are the machine's).
@@ -72,6 +73,14 @@ TEST(SlurmBench, GivesTheSameCoverageAsTheSameBenchRunHere) {
   ASSERT_EQ(slurm.exit_code, 0) << slurm.output;
   std::printf("the same bench: here %.1f s, through Slurm %.1f s (%.2fx)\n", local_s, slurm_s, slurm_s / local_s);
   EXPECT_NE(slurm.output.find("4 scans submitted to Slurm, job array "), std::string::npos) << slurm.output;
+  // The evaluation too: one task per object, on the node, not in the launcher.
+  EXPECT_NE(slurm.output.find("2 evaluations submitted to Slurm, job array "), std::string::npos) << slurm.output;
+  for (const char* object : {"bunny", "sphere"}) {
+    const json task = json::parse(read_file(dir / "slurm" / "evaluation" / object / "bench_task.json"));
+    EXPECT_EQ(task.at("exit_code"), 0) << object;
+    EXPECT_TRUE(fs::exists(dir / "slurm" / "evaluation" / object / "evaluation.json")) << object;
+  }
+  EXPECT_TRUE(fs::exists(dir / "slurm" / "slurm" / "evaluate-1.sh"));
   const auto a = curves(summary(dir / "local")), b = curves(summary(dir / "slurm"));
   ASSERT_EQ(a.size(), 2u);
   EXPECT_EQ(a, b);
@@ -141,7 +150,7 @@ TEST(SlurmBench, ACancelledTaskRunsAgainAndARerunRunsNothingTwice) {
   const CommandResult again = run_command(command);
   EXPECT_EQ(again.exit_code, 0) << again.output;
   EXPECT_NE(again.output.find("(2 already complete"), std::string::npos) << again.output;
-  EXPECT_EQ(again.output.find("submitted to Slurm"), std::string::npos) << again.output;
+  EXPECT_EQ(again.output.find("submitted to Slurm"), std::string::npos) << again.output;  // neither scans nor evaluations
   for (const char* object : {"sphere", "bunny"}) {
     const json scan = json::parse(read_file(dir / "out" / "pbnbv" / object / "scan.json"));
     EXPECT_EQ(scan.at("views").size(), 10u) << object;

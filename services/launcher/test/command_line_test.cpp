@@ -261,6 +261,51 @@ TEST(LauncherCommandLine, BenchDefaultsAndAblationRuns) {
   EXPECT_EQ(res.ablate().runs[3].second.planners, (std::vector<PlannerKind>{PlannerKind::kPbnbv, PlannerKind::kRaycast}));
 }
 
+// Lists sweep: one bench per combination (the spec: the first); a list is checked value by value
+// (range, twice); ablate takes one value of each (it varies one parameter with --values).
+TEST(LauncherCommandLine, BenchListsSweepEveryCombination) {
+  CommandLine line;
+  const Parsed p = parse(line, {"bench", "--objects", "sphere", "--resolution", "0.03,0.01", "--camera", "ideal,d435",
+                                "--rig-errors", "calibrated", "--out", "/tmp/pbnbv-sweep"});
+  ASSERT_EQ(p.code, std::nullopt) << p.err;
+  const eval::Sweep& s = line.sweep();
+  ASSERT_EQ(s.benches.size(), 4u);
+  EXPECT_EQ(s.parameters, (std::vector<std::string>{"camera", "resolution"}));
+  EXPECT_EQ(s.benches[1].first, "camera=ideal,resolution=0.01");
+  EXPECT_EQ(s.benches[1].second.resolution_m, 0.01);
+  EXPECT_EQ(s.benches[3].second.camera, CameraKind::kD435);
+  EXPECT_EQ(s.benches[3].second.rig_errors, RigErrors::kCalibrated);  // one value: every bench's
+  EXPECT_EQ(s.benches[3].second.out, fs::path("/tmp/pbnbv-sweep/camera=d435,resolution=0.01"));
+  EXPECT_EQ(line.bench().resolution_m, 0.03);
+  EXPECT_EQ(line.bench().camera, CameraKind::kIdeal);
+
+  // One value each: a bench, in --out itself.
+  CommandLine one;
+  ASSERT_EQ(parse(one, {"bench", "--objects", "sphere", "--resolution", "0.01", "--out", "/tmp/pbnbv-b"}).code, std::nullopt);
+  ASSERT_EQ(one.sweep().benches.size(), 1u);
+  EXPECT_EQ(one.bench().resolution_m, 0.01);
+  EXPECT_EQ(one.bench().out, fs::path("/tmp/pbnbv-b"));
+
+  for (const auto& [words, why] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"--resolution", "0.03,0.5"}, "0.5 is outside its range"},
+           {{"--resolution", "0.03,0.030"}, "'0.030' is listed twice"},
+           {{"--first-views", "1,x"}, "'x' is not a whole number"},
+           {{"--camera", "ideal,hd"}, "hd"},
+           {{"--rig", "arm,arm"}, "'arm' is listed twice"}}) {
+    CommandLine bad;
+    std::vector<std::string> argv = {"bench", "--objects", "sphere", "--out", "/tmp/pbnbv-b"};
+    argv.insert(argv.end(), words.begin(), words.end());
+    const Parsed b = parse(bad, argv);
+    EXPECT_EQ(b.code, 2) << words[1];
+    EXPECT_NE(b.err.find(words[0]), std::string::npos) << b.err;
+    EXPECT_NE(b.err.find(why), std::string::npos) << b.err;
+  }
+  CommandLine ablate;
+  const Parsed a = parse(ablate, {"ablate", "tmax", "--camera", "ideal,d435", "--out", "/tmp/pbnbv-abl"});
+  EXPECT_EQ(a.code, 2);
+  EXPECT_NE(a.err.find("--camera lists several values: pbnbv ablate varies one parameter"), std::string::npos) << a.err;
+}
+
 // Each kind of bad option, on scan and on bench: exit 2, the message names the option (and the
 // value and range where there is one).
 TEST(LauncherCommandLine, RigCheckDefaultsAndOptions) {
