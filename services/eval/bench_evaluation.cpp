@@ -31,6 +31,19 @@ namespace {
 constexpr const char* kRequestKind = "pbnbv bench evaluation request";
 constexpr const char* kRecordKind = "pbnbv bench evaluation";
 constexpr std::size_t kMaxRequestJobs = 1000;  // runs of one object: first views x planners
+// A request or record of 1000 runs is a few MB; a file far larger is not one.
+constexpr std::uintmax_t kMaxFileBytes = 256u << 20;
+
+// A request's or record's JSON; throws naming the file when it is not a regular file of at most
+// kMaxFileBytes or does not parse.
+json read_task_file(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw std::runtime_error(path.string() + ": not a file");
+  if (fs::file_size(path, ec) > kMaxFileBytes) {
+    throw std::runtime_error(path.string() + ": over " + std::to_string(kMaxFileBytes >> 20) + " MiB, not one of pbnbv bench's");
+  }
+  return read_json(path.string());
+}
 
 // The samples of the object's coverage evaluation that at least one reachable candidate view can
 // see: candidates as the planner generates them around the object's bounding box (B at the end
@@ -333,7 +346,7 @@ json evaluation_request(const BenchSpec& spec, const std::vector<ScanJob>& jobs)
 }
 
 void run_evaluation_task(const fs::path& request, std::ostream& log) {
-  const json q = read_json(request.string());
+  const json q = read_task_file(request);
   const std::string where = request.string();
   const Fields f(q, where);
   if (f.get<std::string>("kind") != kRequestKind) throw std::invalid_argument(where + ": not a request of pbnbv bench's evaluation");
@@ -408,7 +421,7 @@ std::optional<ObjectEvaluation> read_evaluation(const fs::path& dir, std::string
   const fs::path file = dir / "evaluation.json";
   try {
     if (!fs::exists(file)) throw std::runtime_error(file.string() + " was not written");
-    const json j = read_json(file.string());
+    const json j = read_task_file(file);
     const Fields f(j, file.string());
     if (f.get<std::string>("kind") != kRecordKind) throw std::invalid_argument(file.string() + ": not an evaluation record");
     ObjectEvaluation e;
@@ -424,14 +437,10 @@ std::optional<ObjectEvaluation> read_evaluation(const fs::path& dir, std::string
   }
 }
 
-}  // namespace pbnbv::eval
-
-namespace pbnbv::eval {
-
 bool evaluation_current(const fs::path& dir) {
   try {
     if (!fs::exists(dir / "evaluation.json") || !read_evaluation(dir)) return false;
-    return read_json((dir / "evaluation.json").string()).at("request") == read_json((dir / "request.json").string());
+    return read_task_file(dir / "evaluation.json").at("request") == read_task_file(dir / "request.json");
   } catch (const std::exception&) {
     return false;
   }

@@ -177,6 +177,8 @@ class ScorerService {
       pending_->reachability_s = 0;
       return reach_cache_;
     }
+    reach_solutions_.assign(cands.size(), RigState{});
+    paths_.clear();
     Vector6d q;
     for (int k = 0; k < 6; ++k) q[k] = r.joint_position_rad[k];
     const Eigen::AlignedBox3d keepout(Eigen::Map<const Eigen::Vector3d>(r.keepout_min_m),
@@ -194,13 +196,32 @@ class ScorerService {
       checkers_[w]->set_turntable_choice(choice);
       const std::vector<ViewSolution> s = checkers_[w]->solve_batch(part, q, r.turntable_angle_rad, keepout, r.object_z_m);
       for (std::size_t i = 0; i < s.size(); ++i) {
-        if (s[i].reachable) times[begin + i] = move_s(rig_, from, {s[i].q, s[i].turntable_rad});
+        if (!s[i].reachable) continue;
+        reach_solutions_[begin + i] = {s[i].q, s[i].turntable_rad};
+        times[begin + i] = move_s(rig_, from, reach_solutions_[begin + i]);
       }
     }, kCandidatesPerWorker, workers);
     pending_->reachability_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     reach_key_ = key;
     reach_cache_ = times;
+    reach_from_ = from;
+    reach_keepout_ = keepout;
+    reach_object_z_m_ = r.object_z_m;
     return times;
+  }
+
+  // Candidate i's path from where the rig stood at the last reachability check (its solution
+  // there): its direct move's time when that move is clear along its whole path, else the time of
+  // a detour via home (the motion executor plans the quickest clear detour when it moves: via home
+  // is what it takes most often, and checking every detour here would cost a plan 10 times the
+  // direct check). Kept until the next check.
+  CandidatePath candidate_path(int i) {
+    if (const auto it = paths_.find(i); it != paths_.end()) return it->second;
+    const RigState& to = reach_solutions_.at(static_cast<std::size_t>(i));
+    const std::string hit = checkers_.front()->path_collision(reach_from_, to, reach_keepout_, reach_object_z_m_);
+    if (hit.empty()) return paths_[i] = CandidatePath{true, move_s(rig_, reach_from_, to), "direct"};
+    return paths_[i] = CandidatePath{true, path_s(rig_, reach_from_, {{rig_.q_home, to.turntable_rad}, to}),
+                                     "a detour: the direct move hits " + hit};
   }
 
   void answer(const voxel_set_t& map, const ellipsoid_set_t* ell) {
@@ -238,7 +259,10 @@ class ScorerService {
         if (combined_ranking(p.planner)) {
           p.input.grid = &grid.emplace(bus::grid_from_msg(map));
           // Motion-aware (the scan's --motion): the rig's time to each candidate weighs against it.
-          if (r.seconds_per_point > 0 && p.move_time_s) p.input.move_time_s = *p.move_time_s;
+          if (r.seconds_per_point > 0 && p.move_time_s) {
+            p.input.move_time_s = *p.move_time_s;
+            p.input.path = [this](int i) { return candidate_path(i); };  // a detour's time, asked for the best
+          }
         }
         result = plan_pbnbv(p.input);
       }
@@ -303,6 +327,11 @@ class ScorerService {
   std::optional<Pending> pending_;
   std::string reach_key_;                 // the candidate set of the last reachability check
   std::vector<double> reach_cache_;        // its answer: each candidate's move time, NaN unreachable
+  std::vector<RigState> reach_solutions_;  // and each reachable candidate's rig state there
+  RigState reach_from_;                    // where the rig stood
+  Eigen::AlignedBox3d reach_keepout_;
+  double reach_object_z_m_ = 0;
+  std::map<int, CandidatePath> paths_;     // the paths asked for since (candidate_path)
   bus::ReplyCache<std::pair<std::string, int64_t>, view_plan_t> answers_{kAnswersKept};
 };
 

@@ -200,6 +200,38 @@ static std::vector<int> top_by(const std::vector<double>& v, std::vector<int> po
   return pool;
 }
 
+// Motion-aware with path checks (PlanInput::path): r ranked over `shortlist` with each candidate
+// charged its direct move's time; the best's path asked for, the time a detour adds charged (one
+// point per seconds_per_point), a candidate with no clear path made unreachable and taken off the
+// shortlist, and ranked again, until the best's path is known (or kPathChecks asked; the shortlist
+// may end empty).
+static void charge_paths(const PlanInput& in, PlanResult& r, std::vector<int>& shortlist) {
+  std::vector<uint8_t> asked(r.candidates.size(), 0);
+  std::vector<std::string> routes(r.candidates.size());
+  while (!shortlist.empty() && !asked[r.chosen] && r.path_checks < kPathChecks) {
+    const int k = r.chosen;
+    asked[k] = 1;
+    const CandidatePath p = in.path(k);
+    ++r.path_checks;
+    routes[k] = p.route;
+    if (!p.clear) {
+      r.status[k] = CandidateStatus::kUnreachable;
+      ++r.num_unreachable;
+      --r.num_scored;
+      r.scores[k].quality = 0;
+      shortlist.erase(std::find(shortlist.begin(), shortlist.end(), k));
+    } else if (p.time_s > r.move_time_s[k]) {
+      r.scores[k].quality -= (p.time_s - r.move_time_s[k]) / in.combined.seconds_per_point;
+      r.move_time_s[k] = p.time_s;
+    }
+    r.alternatives.clear();
+    r.chosen = -1;
+    if (shortlist.empty()) return;
+    rank_pool(in, r, shortlist);
+  }
+  if (r.chosen >= 0 && asked[r.chosen]) r.route = routes[r.chosen];
+}
+
 // pbnbv's combined ranking (planner.hpp CombinedRanking) over `pool` (the scored candidates of the
 // allowed sectors); r.scores hold F where a Frontier ellipsoid exists.
 static PlanResult rank_combined(const PlanInput& in, PlanResult r, const std::vector<int>& pool) {
@@ -263,11 +295,20 @@ static PlanResult rank_combined(const PlanInput& in, PlanResult r, const std::ve
   }
   r.ranking = Ranking::kCombined;
   rank_pool(in, r, shortlist);
+  if (!r.move_time_s.empty() && in.path) {
+    charge_paths(in, r, shortlist);
+    if (shortlist.empty()) {
+      return nothing_left(in, std::move(r), "no shortlisted candidate has a collision-free path from where the rig stands");
+    }
+  }
   const int k = r.chosen;
   std::ostringstream os;
   os << "combined " << r.scores[k].quality << " of 3 (F " << r.f_px[k] << " px" << (has_f ? "" : ": no frontier ellipsoid")
      << ", gap " << r.gap_deg[k] << " deg, rays " << r.rays[k];
-  if (!r.move_time_s.empty()) os << ", less " << r.move_time_s[k] << " s to reach / " << c.seconds_per_point << " s per point";
+  if (!r.move_time_s.empty()) {
+    os << ", less " << r.move_time_s[k] << " s to reach" << (r.route.empty() ? "" : " (" + r.route + ")") << " / "
+       << c.seconds_per_point << " s per point";
+  }
   os << ") over a shortlist of " << shortlist.size() << " of " << r.num_scored << " scored";
   r.reason = os.str();
   r.outcome = PlanResult::Outcome::kView;

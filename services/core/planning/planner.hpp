@@ -62,6 +62,15 @@ std::vector<Pose> candidate_views(const Eigen::AlignedBox3d& bbox, const Candida
 // rig stands is charged against its combined score, one point per `seconds_per_point` seconds, so
 // that of two equally good views the quicker one is taken, and a view twice as far away must be
 // that much better.
+// A candidate's path from where the rig stands, for motion-aware planning (PlanInput::path).
+struct CandidatePath {
+  bool clear = false;
+  double time_s = 0;  // clear: the path's time at full speed, s
+  std::string route;  // "direct", "via home", ...; !clear: why none is clear
+};
+// The most paths the ranking asks for in one plan (each a path check of the rig model).
+inline constexpr int kPathChecks = 8;
+
 struct CombinedRanking {
   int shortlist = kShortlistPerTerm;
   double saturation_m = kRaySaturationM;
@@ -111,6 +120,13 @@ struct PlanInput {
   // rig's time to reach it from where it stands, s (core/rig move_s); empty: every view costs the
   // same. Its size must be the candidates' (else std::invalid_argument).
   std::vector<double> move_time_s;
+  // Motion-aware with path checks: candidate i's path from where the rig stands (core/rig
+  // ReachabilityChecker::plan_path: the direct move, or the quickest clear detour when that
+  // collides). move_time_s holds the direct moves' times, which a detour exceeds; the ranking asks
+  // for the best candidate's path, charges its time, ranks again, and so on until the best has its
+  // path's time (at most kPathChecks asks); a candidate with no clear path is unreachable. Empty:
+  // move_time_s as given.
+  std::function<CandidatePath(int)> path;
 };
 
 struct PlanResult {
@@ -139,6 +155,8 @@ struct PlanResult {
   // ellipsoid), the gap in degrees, the ray term (0 off the shortlist).
   std::vector<double> f_px, gap_deg, rays;
   std::vector<double> move_time_s;  // motion-aware: the rig time charged against each candidate, s
+  int path_checks = 0;              // motion-aware: the paths asked for (PlanInput::path)
+  std::string route;                // the chosen candidate's, when its path was asked for
   double candidates_s = 0, reachability_s = 0, scoring_s = 0;  // wall time per stage
 
   const ViewScore* chosen_score() const { return chosen >= 0 ? &scores[chosen] : nullptr; }

@@ -299,6 +299,74 @@ TEST(Planner, MotionAwareRankingTakesTheQuickerViewWhenItsTimeIsWorthMoreThanThe
   EXPECT_THROW(plan_pbnbv(in), std::invalid_argument);
 }
 
+// Motion-aware with path checks: the best view's direct move collides and its detour is slow: the
+// ranking charges the detour's time and takes the runner-up (a clear direct move), asking for the
+// paths of those two only; a best with no clear path is unreachable; the detour's route is named.
+TEST(Planner, MotionAwareRankingChargesTheDetourOfAViewWhoseDirectMoveCollides) {
+  PlanInput in = scene(0.0, 1);
+  Eigen::Vector3d centre;
+  double radius = 0;
+  candidate_sphere(in.bbox, in.candidates.working_distance_m, &centre, &radius);
+  in.views_done = {look_at_z_up(centre + radius * Eigen::Vector3d::UnitX(), centre)};
+  const VoxelGrid grid = grid_of(in.bbox, VoxelState::kUnknown);
+  in.grid = &grid;
+  in.combined.shortlist = 10;
+  in.combined.seconds_per_point = 4.0;
+  const PlanResult plain = plan_pbnbv(in);
+  ASSERT_EQ(plain.outcome, PlanResult::Outcome::kView) << plain.reason;
+  const int a = plain.chosen, b = plain.alternatives.front();
+  const double lead = plain.scores[a].quality - plain.scores[b].quality;
+  ASSERT_GT(lead, 0.0);
+  in.move_time_s.assign(plain.candidates.size(), 100.0);
+  in.move_time_s[a] = in.move_time_s[b] = 1.0;  // their direct moves: equally quick
+  std::vector<int> asked;
+  // a's direct move collides: its detour takes 1 s more than its lead is worth.
+  const double detour_s = 1.0 + 4.0 * lead + 1.0;
+  in.path = [&](int i) {
+    asked.push_back(i);
+    if (i == a) return CandidatePath{true, detour_s, "via home"};
+    return CandidatePath{true, in.move_time_s[i], "direct"};
+  };
+  PlanResult r = plan_pbnbv(in);
+  ASSERT_EQ(r.outcome, PlanResult::Outcome::kView) << r.reason;
+  EXPECT_EQ(r.chosen, b);
+  EXPECT_EQ(asked, (std::vector<int>{a, b}));
+  EXPECT_EQ(r.path_checks, 2);
+  EXPECT_EQ(r.move_time_s[a], detour_s);
+  EXPECT_NEAR(r.scores[a].quality, plain.scores[a].quality - detour_s / 4.0, 1e-12);
+  EXPECT_NEAR(r.scores[b].quality, plain.scores[b].quality - 0.25, 1e-12);
+  EXPECT_EQ(r.route, "direct");
+  // A shorter detour (its lead still worth more): a, named with its route; one path asked, then a again.
+  asked.clear();
+  in.path = [&](int i) {
+    asked.push_back(i);
+    return CandidatePath{true, i == a ? 1.0 + 4.0 * lead - 0.01 : in.move_time_s[i], i == a ? "via home" : "direct"};
+  };
+  r = plan_pbnbv(in);
+  EXPECT_EQ(r.chosen, a);
+  EXPECT_EQ(asked, (std::vector<int>{a}));
+  EXPECT_EQ(r.route, "via home");
+  EXPECT_NE(r.reason.find("to reach (via home)"), std::string::npos) << r.reason;
+  // No clear path to a: unreachable, b taken.
+  in.path = [&](int i) {
+    return i == a ? CandidatePath{false, 0, "no collision-free path"} : CandidatePath{true, in.move_time_s[i], "direct"};
+  };
+  r = plan_pbnbv(in);
+  EXPECT_EQ(r.chosen, b);
+  EXPECT_EQ(r.status[a], CandidateStatus::kUnreachable);
+  EXPECT_EQ(r.num_unreachable, plain.num_unreachable + 1);
+  // Every path blocked: at most kPathChecks asked, then nothing left to aim at reachable.
+  asked.clear();
+  in.path = [&](int i) {
+    asked.push_back(i);
+    return CandidatePath{false, 0, "blocked"};
+  };
+  in.when_done = WhenDone::kStop;
+  r = plan_pbnbv(in);
+  EXPECT_EQ(static_cast<int>(asked.size()), kPathChecks);
+  EXPECT_EQ(r.path_checks, kPathChecks);
+}
+
 // No Frontier ellipsoid: while rays still reach unobserved space the combined ranking goes on
 // (gap and rays); once they reach none there is nothing left to aim at: the largest gap, or a stop.
 TEST(Planner, CombinedRankingGoesOnWithoutAFrontierUntilNoRayReachesUnobservedSpace) {
