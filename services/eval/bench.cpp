@@ -22,7 +22,6 @@
 
 #include "core/base/signals.hpp"
 #include "core/io/json.hpp"
-#include "core/io/mesh_file.hpp"
 #include "core/planning/planner.hpp"
 #include "core/rig/rig.hpp"
 #include "core/scan/scan_file.hpp"
@@ -30,7 +29,6 @@
 #include "core/scan/scan_sequencer.hpp"
 #include "core/scan/scan_settings.hpp"
 #include "core/geometry/views.hpp"
-#include "core/geometry/visibility.hpp"
 #include "eval/bench_evaluation.hpp"
 #include "eval/bench_progress.hpp"
 #include "eval/evaluate.hpp"
