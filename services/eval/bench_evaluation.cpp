@@ -13,6 +13,7 @@
 #include "core/geometry/views.hpp"
 #include "core/geometry/visibility.hpp"
 #include "core/io/json.hpp"
+#include "core/io/json_fields.hpp"
 #include "core/io/mesh_file.hpp"
 #include "core/planning/planner.hpp"
 #include "core/rig/rig.hpp"
@@ -99,78 +100,45 @@ json metrics(const std::optional<SurfaceMetrics>& m) {
           {"recall", number(m->recall)}, {"f_score", number(m->f_score)}, {"skipped_points", m->skipped_points}};
 }
 
-// Reading back, naming the field (`where`: the path to it) that is missing or of the wrong type.
-class Fields {
- public:
-  Fields(const json& j, std::string where) : j_(j), where_(std::move(where)) {
-    if (!j_.is_object()) throw std::invalid_argument(where_ + ": not an object");
-  }
-  const json& at(const std::string& k) const {
-    if (!j_.contains(k)) throw std::invalid_argument(where_ + "." + k + ": missing");
-    return j_.at(k);
-  }
-  std::string name(const std::string& k) const { return where_ + "." + k; }
-  template <typename T>
-  T get(const std::string& k) const {
-    try {
-      return at(k).get<T>();
-    } catch (const json::exception&) {
-      throw std::invalid_argument(name(k) + ": " + at(k).dump() + " is not of the expected type");
-    }
-  }
-  double real(const std::string& k) const { return to_real(at(k), name(k)); }
-  std::vector<double> reals(const std::string& k) const {
-    const json& a = at(k);
-    if (!a.is_array()) throw std::invalid_argument(name(k) + ": not an array");
-    std::vector<double> v;
-    for (std::size_t i = 0; i < a.size(); ++i) v.push_back(to_real(a[i], name(k) + "[" + std::to_string(i) + "]"));
-    return v;
-  }
-  std::optional<int> optional_int(const std::string& k) const {
-    return at(k).is_null() ? std::nullopt : std::optional<int>(get<int>(k));
-  }
-  std::optional<Eigen::Vector3d> optional_point(const std::string& k) const {
-    if (at(k).is_null()) return std::nullopt;
-    const std::vector<double> v = reals(k);
-    if (v.size() != 3 || !std::isfinite(v[0] + v[1] + v[2])) throw std::invalid_argument(name(k) + ": not x, y, z");
-    return Eigen::Vector3d(v[0], v[1], v[2]);
-  }
-  Fields object(const std::string& k) const { return Fields(at(k), name(k)); }
-  bool is_null(const std::string& k) const { return at(k).is_null(); }
+// Reading back (core/io/json_fields.hpp): an error names the field and what is wrong with it.
+using Fields = JsonFields;
 
- private:
-  static double to_real(const json& v, const std::string& where) {
-    if (v.is_null()) return std::numeric_limits<double>::quiet_NaN();
-    if (!v.is_number()) throw std::invalid_argument(where + ": " + v.dump() + " is not a number");
-    return v.get<double>();
-  }
-  const json& j_;
-  std::string where_;
-};
+// A whole number in [0, hi] or none (null).
+std::optional<int> optional_count(const Fields& f, const char* key) {
+  return f.has(key) ? std::optional<int>(f.count(key)) : std::nullopt;
+}
 
 DistanceStats stats_from(const Fields& f) {
   DistanceStats s;
-  s.count = f.get<std::size_t>("count");
-  s.mean_m = f.real("mean_m");
-  s.median_m = f.real("median_m");
-  s.rmse_m = f.real("rmse_m");
-  s.p95_m = f.real("p95_m");
-  s.max_m = f.real("max_m");
+  s.count = static_cast<std::size_t>(f.integer("count", 0, INT64_MAX));
+  s.mean_m = f.number("mean_m");
+  s.median_m = f.number("median_m");
+  s.rmse_m = f.number("rmse_m");
+  s.p95_m = f.number("p95_m");
+  s.max_m = f.number("max_m");
   return s;
 }
-std::optional<SurfaceMetrics> metrics_from(const Fields& f, const std::string& k) {
-  if (f.is_null(k)) return std::nullopt;
-  const Fields m = f.object(k);
+std::optional<SurfaceMetrics> metrics_from(const Fields& f, const char* key) {
+  if (!f.has(key)) return std::nullopt;
+  const Fields m = f.object(key);
   SurfaceMetrics s;
-  s.model = m.get<std::string>("model");
-  s.threshold_m = m.real("threshold_m");
+  s.model = m.text("model");
+  s.threshold_m = m.number("threshold_m");
   s.accuracy = stats_from(m.object("accuracy"));
   s.completeness = stats_from(m.object("completeness"));
-  s.precision = m.real("precision");
-  s.recall = m.real("recall");
-  s.f_score = m.real("f_score");
-  s.skipped_points = m.get<std::size_t>("skipped_points");
+  s.precision = m.number("precision");
+  s.recall = m.number("recall");
+  s.f_score = m.number("f_score");
+  s.skipped_points = static_cast<std::size_t>(m.integer("skipped_points", 0, INT64_MAX));
   return s;
+}
+
+PlannerKind planner_from(const Fields& f, const char* key) {
+  try {
+    return parse_name<PlannerKind>(f.text(key));
+  } catch (const std::invalid_argument& e) {
+    f.fail(key, e.what());
+  }
 }
 
 // `p` lexically inside `root` (both absolute): no "..", no other root.
@@ -292,37 +260,33 @@ json run_record(const ObjectRun& r) {
 ObjectRun run_from_record(const json& j) {
   const Fields f(j, "run");
   ObjectRun r;
-  r.object = f.get<std::string>("object");
-  r.first_view = f.get<int>("first_view");
-  r.initial_view = f.optional_point("initial_view");
-  try {
-    r.planner = parse_name<PlannerKind>(f.get<std::string>("planner"));
-  } catch (const std::exception& e) {
-    throw std::invalid_argument(f.name("planner") + ": " + e.what());
-  }
-  r.complete = f.get<bool>("complete");
-  r.error = f.get<std::string>("error");
-  r.coverage_by_view = f.reals("coverage_by_view");
-  r.observable_by_view = f.reals("observable_by_view");
-  r.planner_ms = f.reals("planner_ms");
-  r.views_to_95 = f.optional_int("views_to_95");
-  r.views_done = f.get<int>("views_done");
-  r.stop_reason = f.get<std::string>("stop_reason");
-  r.wall_s = f.real("wall_s");
-  r.rig_time_by_view = f.reals("rig_time_by_view");
-  if (!f.is_null("rig_time")) {
+  r.object = f.text("object");
+  r.first_view = f.count("first_view");
+  if (f.has("initial_view")) r.initial_view = f.vector3("initial_view");
+  r.planner = planner_from(f, "planner");
+  r.complete = f.flag("complete");
+  r.error = f.text("error");
+  r.coverage_by_view = f.list<double>("coverage_by_view");
+  r.observable_by_view = f.list<double>("observable_by_view");
+  r.planner_ms = f.list<double>("planner_ms");
+  r.views_to_95 = optional_count(f, "views_to_95");
+  r.views_done = f.count("views_done");
+  r.stop_reason = f.text("stop_reason");
+  r.wall_s = f.number("wall_s");
+  r.rig_time_by_view = f.list<double>("rig_time_by_view");
+  if (f.has("rig_time")) {
     const Fields t = f.object("rig_time");
-    r.rig_time = RigTime{t.real("motion_s"), t.real("settle_s"), t.real("capture_s"), t.real("compute_s")};
+    r.rig_time = RigTime{t.number("motion_s"), t.number("settle_s"), t.number("capture_s"), t.number("compute_s")};
   }
-  r.new_surface_by_view = f.reals("new_surface_by_view");
-  r.stop_view = f.optional_int("stop_view");
-  r.stop_rule_reason = f.get<std::string>("stop_rule_reason");
-  r.seconds_stop_view = f.optional_int("seconds_stop_view");
-  r.seconds_stop_reason = f.get<std::string>("seconds_stop_reason");
+  r.new_surface_by_view = f.list<double>("new_surface_by_view");
+  r.stop_view = optional_count(f, "stop_view");
+  r.stop_rule_reason = f.text("stop_rule_reason");
+  r.seconds_stop_view = optional_count(f, "seconds_stop_view");
+  r.seconds_stop_reason = f.text("seconds_stop_reason");
   r.cloud_metrics = metrics_from(f, "cloud_metrics");
   r.mesh_metrics = metrics_from(f, "mesh_metrics");
-  r.rig_contacts = f.get<int64_t>("rig_contacts");
-  r.rig_contact_list = f.get<std::vector<std::string>>("rig_contact_list");
+  r.rig_contacts = f.integer("rig_contacts", 0, INT64_MAX);
+  r.rig_contact_list = f.list<std::string>("rig_contact_list");
   return r;
 }
 
@@ -347,60 +311,51 @@ json evaluation_request(const BenchSpec& spec, const std::vector<ScanJob>& jobs)
 
 void run_evaluation_task(const fs::path& request, std::ostream& log) {
   const json q = read_task_file(request);
-  const std::string where = request.string();
-  const Fields f(q, where);
-  if (f.get<std::string>("kind") != kRequestKind) throw std::invalid_argument(where + ": not a request of pbnbv bench's evaluation");
+  const Fields f(q, request.string());
+  if (f.text("kind") != kRequestKind) f.fail("kind", "is not \"" + std::string(kRequestKind) + "\"");
   BenchSpec spec;
-  spec.out = f.get<std::string>("bench");
-  if (!spec.out.is_absolute()) throw std::invalid_argument(f.name("bench") + ": not an absolute path");
-  spec.views = kViews.checked(f.get<int>("views"));
+  spec.out = f.text("bench");
+  if (!spec.out.is_absolute()) f.fail("bench", "is not an absolute path");
+  spec.views = static_cast<int>(f.integer("views", kViews.min, kViews.max));
   const Fields c = f.object("coverage");
-  spec.coverage.num_samples = c.get<std::size_t>("num_samples");
-  spec.coverage.seed = c.get<std::uint64_t>("seed");
-  spec.coverage.radius_m = c.real("radius_m");
-  if (spec.coverage.num_samples == 0 || spec.coverage.num_samples > 10'000'000) {
-    throw std::invalid_argument(c.name("num_samples") + ": 1 to 10000000");
-  }
-  if (!(spec.coverage.radius_m > 0 && spec.coverage.radius_m < 1)) throw std::invalid_argument(c.name("radius_m") + ": above 0 and under 1 m");
+  spec.coverage.num_samples = static_cast<std::size_t>(c.integer("num_samples", 1, 10'000'000));
+  spec.coverage.seed = static_cast<std::uint64_t>(c.integer("seed", 0, INT64_MAX));
+  spec.coverage.radius_m = c.number("radius_m");
+  if (!(spec.coverage.radius_m > 0 && spec.coverage.radius_m < 1)) c.fail("radius_m", "is not above 0 and under 1 m");
   const Fields m = f.object("metrics");
-  spec.metrics.threshold_m = m.real("threshold_m");
-  spec.metrics.samples_per_cm2 = m.real("samples_per_cm2");
-  spec.metrics.seed = m.get<std::uint64_t>("seed");
+  spec.metrics.threshold_m = m.number("threshold_m");
+  spec.metrics.samples_per_cm2 = m.number("samples_per_cm2");
+  spec.metrics.seed = static_cast<std::uint64_t>(m.integer("seed", 0, INT64_MAX));
   spec.metrics.validate();
   const Fields s = f.object("stop_rule");
-  spec.stop_rule = {kStopWindow.checked(s.get<int>("window")), kStopNewSurface.checked(s.real("max_new_percent")),
-                    kStopMinViews.checked(s.get<int>("min_views"))};
+  spec.stop_rule = {static_cast<int>(s.integer("window", kStopWindow.min, kStopWindow.max)),
+                    kStopNewSurface.checked(s.number("max_new_percent")),
+                    static_cast<int>(s.integer("min_views", kStopMinViews.min, kStopMinViews.max))};
   const Fields t = f.object("seconds_rule");
-  spec.seconds_rule = {kStopRateViews.checked(t.get<int>("window")), kStopGainPerSecond.checked(t.real("min_percent_per_s")),
-                       kStopMinViews.checked(t.get<int>("min_views"))};
+  spec.seconds_rule = {static_cast<int>(t.integer("window", kStopRateViews.min, kStopRateViews.max)),
+                       kStopGainPerSecond.checked(t.number("min_percent_per_s")),
+                       static_cast<int>(t.integer("min_views", kStopMinViews.min, kStopMinViews.max))};
   const json& scans = f.at("scans");
   if (!scans.is_array() || scans.empty() || scans.size() > kMaxRequestJobs) {
-    throw std::invalid_argument(f.name("scans") + ": 1 to " + std::to_string(kMaxRequestJobs) + " scans");
+    f.fail("scans", "is not a list of 1 to " + std::to_string(kMaxRequestJobs) + " scans");
   }
   ObjectEvaluation out;
   std::map<std::string, std::vector<uint8_t>> masks;
   for (std::size_t i = 0; i < scans.size(); ++i) {
-    const Fields sj(scans[i], f.name("scans") + "[" + std::to_string(i) + "]");
+    const Fields sj(scans[i], f.name("scans") + " " + std::to_string(i));
     ScanJob job;
-    job.object = sj.get<std::string>("object");
-    job.name = sj.get<std::string>("name");
-    job.first_view = sj.get<int>("first_view");
-    job.initial_view = sj.optional_point("initial_view");
-    job.run = sj.get<std::string>("run");
-    try {
-      job.planner = parse_name<PlannerKind>(sj.get<std::string>("planner"));
-    } catch (const std::exception& e) {
-      throw std::invalid_argument(sj.name("planner") + ": " + e.what());
-    }
-    job.dir = sj.get<std::string>("dir");
-    job.log = sj.get<std::string>("log");
-    for (const auto& [key, p] : {std::pair<std::string, fs::path>{"dir", job.dir}, {"log", job.log}}) {
-      if (!inside(p, spec.out)) throw std::invalid_argument(sj.name(key) + ": " + p.string() + " is not inside the bench folder " + spec.out.string());
-    }
+    job.object = sj.text("object");
+    job.name = sj.text("name");
+    job.first_view = sj.count("first_view");
+    if (sj.has("initial_view")) job.initial_view = sj.vector3("initial_view");
+    job.run = sj.text("run");
+    job.planner = planner_from(sj, "planner");
+    job.dir = sj.text("dir");
+    job.log = sj.text("log");
+    if (!inside(job.dir, spec.out)) sj.fail("dir", job.dir.string() + " is not inside the bench folder " + spec.out.string());
+    if (!inside(job.log, spec.out)) sj.fail("log", job.log.string() + " is not inside the bench folder " + spec.out.string());
     if (i == 0) out.object = job.name;
-    if (job.name != out.object) {
-      throw std::invalid_argument(sj.name("name") + ": " + job.name + ", another object than the request's " + out.object);
-    }
+    if (job.name != out.object) sj.fail("name", job.name + " is another object than the request's " + out.object);
     log << "evaluating " << job.run << " - " << name_of(job.planner) << std::endl;
     std::ostringstream observable;
     out.runs.push_back(evaluate_run(spec, job, masks, observable));
@@ -423,12 +378,12 @@ std::optional<ObjectEvaluation> read_evaluation(const fs::path& dir, std::string
     if (!fs::exists(file)) throw std::runtime_error(file.string() + " was not written");
     const json j = read_task_file(file);
     const Fields f(j, file.string());
-    if (f.get<std::string>("kind") != kRecordKind) throw std::invalid_argument(file.string() + ": not an evaluation record");
+    if (f.text("kind") != kRecordKind) f.fail("kind", "is not \"" + std::string(kRecordKind) + "\": not an evaluation record");
     ObjectEvaluation e;
-    e.object = f.get<std::string>("object");
-    e.observable = f.get<std::string>("observable");
+    e.object = f.text("object");
+    e.observable = f.text("observable");
     const json& runs = f.at("runs");
-    if (!runs.is_array()) throw std::invalid_argument(f.name("runs") + ": not an array");
+    if (!runs.is_array()) f.fail("runs", "is not a list");
     for (const json& r : runs) e.runs.push_back(run_from_record(r));
     return e;
   } catch (const std::exception& x) {

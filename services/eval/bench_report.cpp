@@ -43,6 +43,18 @@ std::vector<double> view_numbers(int n, int first = 1) {
   return x;
 }
 
+// A chart of mean coverage against views (0-100 %, a line at 95 %), its series to come.
+LineChart coverage_by_view_chart(const std::string& title) {
+  LineChart c;
+  c.title = title;
+  c.x_label = "views";
+  c.y_label = "surface covered (%, mean)";
+  c.integer_x = true;
+  c.y_max = 100;
+  c.y_lines = {{95.0, "95 %"}};
+  return c;
+}
+
 // The command that reproduces the benchmark; `lists`: the values of swept options, as given
 // (option without "--" -> "a,b"), instead of the spec's one.
 std::string command_of(const BenchSpec& s, const std::map<std::string, std::string>& lists = {}) {
@@ -660,13 +672,8 @@ void write_ablation(const std::string& param, const std::vector<std::pair<std::s
   json j = {{"parameter", param}, {"values", json::array()}, {"time_ratios", json::array()}};
   bool several = false;
   for (const auto& run : runs) several = several || run.second.planners.size() > 1;
-  LineChart c;
-  c.title = "Ablation: " + param + (several ? " (mean coverage over objects)" : " (PB-NBV, mean coverage over objects)");
-  c.x_label = "views";
-  c.y_label = "surface covered (%, mean)";
-  c.integer_x = true;
-  c.y_max = 100;
-  c.y_lines = {{95.0, "95 %"}};
+  LineChart c = coverage_by_view_chart("Ablation: " + param +
+                                       (several ? " (mean coverage over objects)" : " (PB-NBV, mean coverage over objects)"));
   std::ostringstream md;
   md << "# Ablation: " << param << "\n\n";
   int n = 0;
@@ -746,13 +753,7 @@ void write_sweep(const Sweep& sweep, const std::vector<BenchResult>& results) {
   std::string swept;
   for (const std::string& p : sweep.parameters) swept += (swept.empty() ? "" : " x ") + p;
   json j = {{"parameters", sweep.parameters}, {"benches", json::array()}};
-  LineChart c;
-  c.title = "Sweep: " + swept + " (mean coverage)";
-  c.x_label = "views";
-  c.y_label = "surface covered (%, mean)";
-  c.integer_x = true;
-  c.y_max = 100;
-  c.y_lines = {{95.0, "95 %"}};
+  LineChart c = coverage_by_view_chart("Sweep: " + swept + " (mean coverage)");
   std::ostringstream md;
   md << "# Sweep: " << swept << "\n\n"
      << results.size() << " benchmarks, one per combination, each in its folder (summary.json, report.md, the scans). "

@@ -289,12 +289,12 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add_text(c, "object-dir", &pending->object_dir, "every .obj/.stl/.off/.ply in DIR instead", "DIR");
   cli::add_list(c, "planners", &spec->planners, "planners to compare");
   // A list of values for these sweeps: one benchmark per combination (README, "Sweeps").
-  cli::add_list(c, eval::kBenchRig, &pending->rigs, "a list sweeps");
-  cli::add_words(c, "rig-model", &pending->rig_models,
+  cli::add_list(c, eval::kBenchRig, &pending->sweep.rigs, "a list sweeps");
+  cli::add_words(c, "rig-model", &pending->sweep.rig_models,
                  "the rig's MJCF file, e.g. models/rig_ur5e.xml [models/rig_<rig>.xml]; a list sweeps", "FILE[,...]");
   cli::add(c, eval::kBenchArea, &spec->area);
   cli::add(c, kViews, &spec->views);
-  cli::add_values(c, kMapResolution, &pending->resolutions, "a list sweeps");
+  cli::add_values(c, kMapResolution, &pending->sweep.resolutions, "a list sweeps");
   cli::add(c, kCandidates, &spec->candidates);
   cli::add(c, kTMax, &spec->tmax);
   cli::add(c, kSectors, &spec->beta);
@@ -303,13 +303,13 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add(c, kUp, &spec->up);
   cli::add_point(c, "initial-view", &spec->initial_view,
                  "first camera position, object frame, m [the scan's default first view]");
-  cli::add_values(c, eval::kFirstViews, &pending->first_views, "a list sweeps");
+  cli::add_values(c, eval::kFirstViews, &pending->sweep.first_views, "a list sweeps");
   cli::add(c, kPlannerSeed, &spec->seed);
   cli::add(c, kWhenDone, &spec->when_done);
   cli::add(c, kMotion, &spec->motion);
   cli::add(c, kSecondsPerPoint, &spec->seconds_per_point);
-  cli::add_list(c, kCamera, &pending->cameras, "a list sweeps");
-  cli::add_list(c, kRigErrors, &pending->rig_errors, "a list sweeps");
+  cli::add_list(c, kCamera, &pending->sweep.cameras, "a list sweeps");
+  cli::add_list(c, kRigErrors, &pending->sweep.rig_errors, "a list sweeps");
   // The scans run without a stop rule; the report says where the surface rule would have stopped each.
   cli::add(c, kStopWindow, &spec->stop_rule.window);
   cli::add(c, kStopNewSurface, &spec->stop_rule.max_new_percent);
@@ -542,16 +542,10 @@ void CommandLine::resolve_bench(const CLI::App* command, eval::BenchSpec* spec, 
   spec->seconds_rule.min_views = spec->stop_rule.min_views;  // --stop-min-views: either rule
   if (pending.out.empty()) throw std::invalid_argument("--out DIR is required");
   spec->out = fs::absolute(pending.out);
-  std::vector<std::string> rig_models;
-  for (const std::string& m : pending.rig_models) rig_models.push_back(fs::absolute(m).string());  // scans run elsewhere
-  if (rig_models.empty()) rig_models = {""};
-  eval::SweepValues values;
-  values.rigs = pending.rigs;
-  values.rig_models = rig_models;
-  values.cameras = pending.cameras;
-  values.rig_errors = pending.rig_errors;
-  values.resolutions = pending.resolutions;
-  values.first_views = pending.first_views;
+  eval::SweepValues values = pending.sweep;
+  for (std::string& m : values.rig_models) {
+    if (!m.empty()) m = fs::absolute(m).string();  // the scans run elsewhere
+  }
   *sweep = eval::expand_sweep(*spec, values);
   *spec = sweep->benches.front().second;
   if (sweep->benches.size() == 1) spec->out = sweep->out;

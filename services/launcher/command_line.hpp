@@ -182,13 +182,7 @@ class CommandLine {
     bool no_netns = false;
     bool slurm = false;
     eval::SlurmSpec slurm_spec;
-    // The settings a bench may sweep: each combination of their values one benchmark.
-    std::vector<RigKind> rigs;
-    std::vector<std::string> rig_models;  // empty: the rig kind's own file
-    std::vector<CameraKind> cameras;
-    std::vector<RigErrors> rig_errors;
-    std::vector<double> resolutions;
-    std::vector<int> first_views;
+    eval::SweepValues sweep;  // the settings a bench may sweep: each combination one benchmark
   };
 
   // The options of `scan`, bound to scan_ and scan_pending_.

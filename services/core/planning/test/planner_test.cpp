@@ -257,19 +257,27 @@ TEST(Planner, CombinedRankingSumsThreeScaledTermsOverAShortlist) {
   EXPECT_EQ(plan_pbnbv(in).ranking, Ranking::kF);
 }
 
-// Motion-aware: each candidate's score is its combined score less its move time over
-// seconds_per_point. The plain ranking's best (a) and runner-up (b): with equal times a is taken;
-// once a is slower than b by more than its lead times seconds_per_point, b (of two views equal
-// but for the time, the quicker).
-TEST(Planner, MotionAwareRankingTakesTheQuickerViewWhenItsTimeIsWorthMoreThanTheOthersLead) {
+// The motion-aware tests' scene: one view taken (on +x), the map all unknown (`grid`, which the
+// input points to), a shortlist of 10 per term.
+PlanInput one_view_taken(VoxelGrid& grid) {
   PlanInput in = scene(0.0, 1);
   Eigen::Vector3d centre;
   double radius = 0;
   candidate_sphere(in.bbox, in.candidates.working_distance_m, &centre, &radius);
   in.views_done = {look_at_z_up(centre + radius * Eigen::Vector3d::UnitX(), centre)};
-  const VoxelGrid grid = grid_of(in.bbox, VoxelState::kUnknown);
+  grid = grid_of(in.bbox, VoxelState::kUnknown);
   in.grid = &grid;
   in.combined.shortlist = 10;
+  return in;
+}
+
+// Motion-aware: each candidate's score is its combined score less its move time over
+// seconds_per_point. The plain ranking's best (a) and runner-up (b): with equal times a is taken;
+// once a is slower than b by more than its lead times seconds_per_point, b (of two views equal
+// but for the time, the quicker).
+TEST(Planner, MotionAwareRankingTakesTheQuickerViewWhenItsTimeIsWorthMoreThanTheOthersLead) {
+  VoxelGrid grid;
+  PlanInput in = one_view_taken(grid);
   const PlanResult plain = plan_pbnbv(in);
   ASSERT_EQ(plain.outcome, PlanResult::Outcome::kView) << plain.reason;
   ASSERT_FALSE(plain.alternatives.empty());
@@ -303,14 +311,8 @@ TEST(Planner, MotionAwareRankingTakesTheQuickerViewWhenItsTimeIsWorthMoreThanThe
 // ranking charges the detour's time and takes the runner-up (a clear direct move), asking for the
 // paths of those two only; a best with no clear path is unreachable; the detour's route is named.
 TEST(Planner, MotionAwareRankingChargesTheDetourOfAViewWhoseDirectMoveCollides) {
-  PlanInput in = scene(0.0, 1);
-  Eigen::Vector3d centre;
-  double radius = 0;
-  candidate_sphere(in.bbox, in.candidates.working_distance_m, &centre, &radius);
-  in.views_done = {look_at_z_up(centre + radius * Eigen::Vector3d::UnitX(), centre)};
-  const VoxelGrid grid = grid_of(in.bbox, VoxelState::kUnknown);
-  in.grid = &grid;
-  in.combined.shortlist = 10;
+  VoxelGrid grid;
+  PlanInput in = one_view_taken(grid);
   in.combined.seconds_per_point = 4.0;
   const PlanResult plain = plan_pbnbv(in);
   ASSERT_EQ(plain.outcome, PlanResult::Outcome::kView) << plain.reason;
