@@ -120,12 +120,12 @@ struct PlanInput {
   // rig's time to reach it from where it stands, s (core/rig move_s); empty: every view costs the
   // same. Its size must be the candidates' (else std::invalid_argument).
   std::vector<double> move_time_s;
-  // Motion-aware with path checks: candidate i's path from where the rig stands (core/rig
-  // ReachabilityChecker::plan_path: the direct move, or the quickest clear detour when that
-  // collides). move_time_s holds the direct moves' times, which a detour exceeds; the ranking asks
-  // for the best candidate's path, charges its time, ranks again, and so on until the best has its
-  // path's time (at most kPathChecks asks); a candidate with no clear path is unreachable. Empty:
-  // move_time_s as given.
+  // Motion-aware with path checks: candidate i's path from where the rig stands, its time and
+  // route (the scorer: the direct move when it is clear along its whole path, core/rig
+  // ReachabilityChecker::path_collision, else a detour through home). move_time_s holds the direct
+  // moves' times, which a detour exceeds; the ranking asks for the best candidate's path, charges
+  // its time, ranks again, and so on until the best has its path's time (at most kPathChecks
+  // asks); a candidate whose path is not clear is unreachable. Empty: move_time_s as given.
   std::function<CandidatePath(int)> path;
 };
 
