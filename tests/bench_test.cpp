@@ -307,46 +307,50 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
   EXPECT_NE(other.output.find("views"), std::string::npos) << other.output;
 }
 
-// A sweep (--resolution 0.03,0.05 --first-views 1,2): four benchmarks, each in its folder with
-// its own settings and summary, their six scans run together, one table across them; a rerun
+// A sweep (--camera ideal,d435 --resolution 0.03,0.05): four benchmarks, each in its folder with
+// its own settings and summary, their four scans run together, one table across them; a rerun
 // runs and evaluates nothing; a bench of its own is refused in the sweep's folder.
 TEST(Bench, ASweepRunsEveryCombinationInAFolderOfItsOwn) {
   const fs::path out = fresh_dir("bench-sweep");
   const std::string cmd = netns_run() + " " + bin_dir() +
                           "/pbnbv bench --objects box --planners pbnbv --rig free --area full --views 2 "
-                          "--resolution 0.03,0.05 --first-views 1,2 --jobs 2 --out " + out.string();
+                          "--camera ideal,d435 --resolution 0.03,0.05 --jobs 2 --out " + out.string();
   const CommandResult r = run_command(cmd);
   ASSERT_EQ(r.exit_code, 0) << cmd << "\n" << r.output;
-  EXPECT_NE(r.output.find("6 scans to run of 6 in 4 benchmarks, 2 at a time"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("[4/6] resolution=0.05,first-views=1 box - pbnbv: started"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("4 scans to run of 4 in 4 benchmarks, 2 at a time"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("[3/4] camera=d435,resolution=0.03 box - pbnbv: started"), std::string::npos) << r.output;
   const json sweep = read_json_file(out / "sweep.json");
-  EXPECT_EQ(sweep["parameters"], json({"resolution", "first-views"}));
+  EXPECT_EQ(sweep["parameters"], json({"camera", "resolution"}));
   ASSERT_EQ(sweep["benches"].size(), 4u);
-  std::map<std::string, double> first;  // combination -> coverage of box after view 1
+  std::map<std::string, double> first;  // camera -> coverage of box after view 1
   for (const json& b : sweep["benches"]) {
     const std::string folder = b["folder"];
     SCOPED_TRACE(folder);
     const json s = read_json_file(out / folder / "summary.json");
     EXPECT_EQ(s["settings"]["resolution_m"].get<double>(), std::stod(b["values"]["resolution"].get<std::string>()));
-    const int fv = std::stoi(b["values"]["first-views"].get<std::string>());
-    EXPECT_EQ(s["settings"]["first_views"], fv);
-    EXPECT_EQ(s["pbnbv"]["runs"].size(), static_cast<std::size_t>(fv));
-    EXPECT_EQ(s["pbnbv"]["runs_complete"], fv);
+    EXPECT_EQ(s["settings"]["camera"], b["values"]["camera"]);
+    EXPECT_EQ(s["pbnbv"]["runs"].size(), 1u);
+    EXPECT_EQ(s["pbnbv"]["runs_complete"], 1);
     EXPECT_EQ(b["planners"]["pbnbv"]["coverage_by_view"], s["pbnbv"]["coverage_by_view"]);  // the table is the summaries'
     EXPECT_TRUE(fs::exists(out / folder / "report.md"));
     EXPECT_TRUE(fs::exists(out / folder / "logs" / "evaluate-box.log"));
-    first[folder] = s["pbnbv"]["runs"]["box"]["coverage_by_view"][0].get<double>();
+    const double c = s["pbnbv"]["runs"]["box"]["coverage_by_view"][0].get<double>();
+    // The resolution is the map's: with one camera, both resolutions' first views see the same.
+    const std::string camera = b["values"]["camera"];
+    if (first.count(camera)) {
+      EXPECT_NEAR(c, first[camera], 0.5) << camera;
+    }
+    first[camera] = c;
   }
-  // Every combination scans the box from the same default first view first.
-  for (const auto& [folder, c] : first) EXPECT_NEAR(c, first.begin()->second, 0.5) << folder;
+  EXPECT_EQ(first.size(), 2u);
   const std::string md = read_file(out / "sweep.md");
-  EXPECT_NE(md.find("| 0.05 | 2 | pbnbv | 2 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| d435 | 0.05 | pbnbv | 1 |"), std::string::npos) << md;
   EXPECT_NE(md.find("--resolution 0.03,0.05"), std::string::npos) << md;
-  EXPECT_NE(md.find("--first-views 1,2"), std::string::npos) << md;
+  EXPECT_NE(md.find("--camera ideal,d435"), std::string::npos) << md;
 
   const CommandResult again = run_command(cmd);
   ASSERT_EQ(again.exit_code, 0) << again.output;
-  EXPECT_NE(again.output.find("0 scans to run of 6"), std::string::npos) << again.output;
+  EXPECT_NE(again.output.find("0 scans to run of 4"), std::string::npos) << again.output;
   EXPECT_NE(again.output.find("0 to run (4 recorded from the same scans)"), std::string::npos) << again.output;
   EXPECT_EQ(again.output.find("started"), std::string::npos) << again.output;
   EXPECT_EQ(read_json_file(out / "sweep.json"), sweep);
