@@ -939,7 +939,10 @@ class TaskRunner {
     return scan_argv(*j->spec, self_, j->object, j->planner, j->initial_view, j->dir);
   }
 
-  bool complete(const Job* j) const { return j->evaluation ? read_evaluation(j->dir).has_value() : scan_complete(j->dir); }
+  // The task's result is there: a complete scan, or an evaluation record (else why not in `error`).
+  bool complete(const Job* j, std::string* error = nullptr) const {
+    return j->evaluation ? read_evaluation(j->dir, error).has_value() : scan_complete(j->dir);
+  }
 
   // Before a task starts: an interrupted scan is resumed (scan_argv), a folder without its
   // processes.json starts anew; an evaluation's last record goes.
@@ -1153,9 +1156,7 @@ class TaskRunner {
   // task is not counted: the caller runs it once more.
   void finished(Job* j, int exit_code, double wall, json record, const std::string& why, bool again = false) {
     std::string evaluation_error;
-    const bool done = exit_code == 0 && (j->evaluation ? read_evaluation(j->dir, &evaluation_error).has_value()
-                                                       : scan_complete(j->dir));
-    if (done) {
+    if (exit_code == 0 && complete(j, &evaluation_error)) {
       ++finished_;
       walls_.push_back(wall);
       std::string line;
@@ -1254,6 +1255,11 @@ class TaskRunner {
   std::map<Job*, std::chrono::steady_clock::time_point> completed_seen_;  // Slurm said COMPLETED, no record yet
 };
 
+// The log of the evaluation task of `spec`'s object `name`.
+fs::path evaluation_log(const BenchSpec& spec, const std::string& name) {
+  return spec.out / "logs" / ("evaluate-" + name + ".log");
+}
+
 // The evaluation tasks of `jobs` (scans, benches[i].second's): one per object of each bench, its
 // request written (below the bench's evaluation/<object>/).
 std::vector<Job> evaluation_jobs(const std::vector<Job>& jobs) {
@@ -1269,7 +1275,7 @@ std::vector<Job> evaluation_jobs(const std::vector<Job>& jobs) {
       e.object = j.object;
       e.name = e.run = j.name;
       e.dir = j.spec->out / "evaluation" / j.name;
-      e.log = j.spec->out / "logs" / ("evaluate-" + j.name + ".log");
+      e.log = evaluation_log(*j.spec, j.name);
       out.push_back(std::move(e));
     }
     s.push_back(j);
@@ -1301,7 +1307,7 @@ ObjectRun recorded_run(const Job& j, const std::map<std::pair<const BenchSpec*, 
   run.error = "not evaluated: " + (r != records.end() ? "the evaluation's record has no such run"
                                    : e != errors.end() ? e->second
                                                        : std::string("no evaluation")) +
-              " (log: " + (j.spec->out / "logs" / ("evaluate-" + j.name + ".log")).string() +
+              " (log: " + evaluation_log(*j.spec, j.name).string() +
               "); run the same command again to evaluate it";
   return run;
 }

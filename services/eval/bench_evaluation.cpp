@@ -88,7 +88,7 @@ json numbers(const std::vector<double>& v) {
   for (double x : v) a.push_back(number(x));
   return a;
 }
-json point(const std::optional<Eigen::Vector3d>& p) { return p ? json{p->x(), p->y(), p->z()} : json(nullptr); }
+json point(const std::optional<Eigen::Vector3d>& p) { return p ? pbnbv::to_json(*p) : json(nullptr); }
 json stats(const DistanceStats& s) {
   return {{"count", s.count}, {"mean_m", number(s.mean_m)}, {"median_m", number(s.median_m)},
           {"rmse_m", number(s.rmse_m)}, {"p95_m", number(s.p95_m)}, {"max_m", number(s.max_m)}};
@@ -380,6 +380,7 @@ std::optional<ObjectEvaluation> read_evaluation(const fs::path& dir, std::string
     const Fields f(j, file.string());
     if (f.text("kind") != kRecordKind) f.fail("kind", "is not \"" + std::string(kRecordKind) + "\": not an evaluation record");
     ObjectEvaluation e;
+    e.request = f.at("request");
     e.object = f.text("object");
     e.observable = f.text("observable");
     const json& runs = f.at("runs");
@@ -394,8 +395,8 @@ std::optional<ObjectEvaluation> read_evaluation(const fs::path& dir, std::string
 
 bool evaluation_current(const fs::path& dir) {
   try {
-    if (!fs::exists(dir / "evaluation.json") || !read_evaluation(dir)) return false;
-    return read_task_file(dir / "evaluation.json").at("request") == read_task_file(dir / "request.json");
+    const std::optional<ObjectEvaluation> e = read_evaluation(dir);
+    return e && e->request == read_task_file(dir / "request.json");
   } catch (const std::exception&) {
     return false;
   }

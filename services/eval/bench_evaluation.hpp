@@ -61,8 +61,9 @@ void run_evaluation_task(const std::filesystem::path& request, std::ostream& log
 // A rerun of a finished bench keeps such records instead of evaluating again.
 bool evaluation_current(const std::filesystem::path& dir);
 
-// An evaluation task's record: its object, the line on its observable surface, its runs.
+// An evaluation task's record: its request, its object, the line on its observable surface, its runs.
 struct ObjectEvaluation {
+  nlohmann::json request;  // the request it was made from
   std::string object;
   std::string observable;  // "bunny: observable surface: 120 of 200 candidates reachable; they see 97.1 % of the surface" ("": none made)
   std::vector<ObjectRun> runs;

@@ -548,7 +548,6 @@ void CommandLine::resolve_bench(const CLI::App* command, eval::BenchSpec* spec, 
   }
   *sweep = eval::expand_sweep(*spec, values);
   *spec = sweep->benches.front().second;
-  if (sweep->benches.size() == 1) spec->out = sweep->out;
 }
 
 void CommandLine::resolve_ablate() {
