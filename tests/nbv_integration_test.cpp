@@ -123,7 +123,7 @@ TEST(NbvIntegration, ThreeViewScanOnTheFreeRigFullSphere) {
 
 TEST(NbvIntegration, Ur5eRigScansLikeTheKuka) {
   // The same 5-view PB-NBV scan of the bunny on the KUKA rig (analytic IK) and on the UR5e rig
-  // (models/rig_ur5e.xml: general IK in the view scorer and the motion executor; the twin plays
+  // (models/rig_ur5e.xml: parallel-axes IK in the view scorer and the motion executor; the twin plays
   // the UR5e). Both reach the whole candidate hemisphere, so the planner's choices and the
   // coverage must agree within 2 points. Registration off: the twin's kinematic poses are exact,
   // and an ICP rejection (a registration matter, not the rig's) would drop a view from one scan

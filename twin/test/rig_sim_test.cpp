@@ -355,10 +355,10 @@ TEST(RigSim, MovesBetweenHemisphereViewsStayWithinLimitsAndSettleQuickly) {
   moves_between_hemisphere_views(load_rig(default_rig_path(RigKind::kArm)));
 }
 
-// The twin plays the UR5e rig (models/rig_ur5e.xml, general IK) the same way.
+// The twin plays the UR5e rig (models/rig_ur5e.xml, parallel-axes IK) the same way.
 TEST(RigSim, PlaysTheUr5eRig) {
   const RigModel rig = load_rig(model_file_path("rig_ur5e.xml"));
-  ASSERT_EQ(rig.ik, IkMethod::kGeneral);
+  ASSERT_EQ(rig.ik, IkMethod::kParallelAxes);
   {
     twin::RigSim sim(rig, twin::ObjectPlacement{}, model_out());
     EXPECT_LT((sim.arm_position() - rig.q_home).cwiseAbs().maxCoeff(), 1e-12) << "starts at home";

@@ -1,7 +1,9 @@
 // Inverse kinematics: the analytic solution of the spherical-wrist layout, the free rig's, and
-// the choice between them and the general IK (general_ik.cpp). See rig.hpp.
+// the choice between them, the parallel-axes one (parallel_ik.cpp) and the general IK
+// (general_ik.cpp). See rig.hpp.
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <tuple>
 
@@ -46,27 +48,25 @@ Vector6d polish_arm(const RigModel& rig, const Pose& target, Vector6d q) {
 
 namespace rig_internal {
 
-namespace {
+std::optional<Vector6d> verified_arm_solution(const RigModel& rig, const Pose& world_T_flange, const Vector6d& raw) {
+  Vector6d q = raw;
+  for (int i = 0; i < 6; ++i) q[i] = wrap_angle_rad(q[i]);
+  auto [ep, er] = pose_error(flange_in_world(rig, q), world_T_flange);
+  if (ep > 1e-10 || er > 1e-10) {
+    q = polish_arm(rig, world_T_flange, q);
+    std::tie(ep, er) = pose_error(flange_in_world(rig, q), world_T_flange);
+  }
+  if (ep > kVerifyPosTol || er > kVerifyRotTol) return std::nullopt;
+  return q;
+}
 
-// The arm's raw solutions checked against the pose (polished when off) and expanded into their
-// whole-turn variants within the joint limits, without duplicates; when none is left, why_none
-// says which limit the raw ones broke.
 std::vector<Vector6d> checked_arm_solutions(const RigModel& rig, const Pose& world_T_flange, const std::vector<Vector6d>& raw,
                                             std::string* why_none) {
   const std::array<bool, 6> revolute{true, true, true, true, true, true};
   std::vector<Vector6d> sols;
   std::string violation;
   for (const Vector6d& q : raw) {
-    Vector6d qq = q;
-    for (int i = 0; i < 6; ++i) qq[i] = wrap_angle_rad(qq[i]);
-    // Verify (and polish if needed) before expanding variants.
-    auto [ep, er] = pose_error(flange_in_world(rig, qq), world_T_flange);
-    if (ep > 1e-10 || er > 1e-10) {
-      qq = polish_arm(rig, world_T_flange, qq);
-      std::tie(ep, er) = pose_error(flange_in_world(rig, qq), world_T_flange);
-    }
-    if (ep > kVerifyPosTol || er > kVerifyRotTol) continue;
-    expand_variants(rig, qq, revolute, &sols, &violation);
+    if (const auto v = verified_arm_solution(rig, world_T_flange, q)) expand_variants(rig, *v, revolute, &sols, &violation);
   }
   // Remove duplicates (singular cases can produce the same configuration twice).
   std::vector<Vector6d> uniq;
@@ -81,8 +81,6 @@ std::vector<Vector6d> checked_arm_solutions(const RigModel& rig, const Pose& wor
   }
   return uniq;
 }
-
-}  // namespace
 
 // Arm IK; q_ref resolves the free angles at singularities (wrist centre on the A1 axis, q5 = 0).
 std::vector<Vector6d> arm_ik(const RigModel& rig, const Pose& world_T_flange,
@@ -216,6 +214,7 @@ std::vector<Vector6d> ik_with_ref(const RigModel& rig, const Pose& world_T_flang
                                   const Vector6d& q_ref, std::string* why_none) {
   if (rig.kind == RigKind::kFree) return free_ik(rig, world_T_flange, q_ref, why_none);
   if (rig.ik == IkMethod::kGeneral) return general_ik(rig, world_T_flange, q_ref, why_none);
+  if (rig.ik == IkMethod::kParallelAxes) return parallel_axes_ik(rig, world_T_flange, q_ref, why_none);
   if (!rig.spherical_wrist) {
     throw std::invalid_argument("rig model " + rig.model_path +
                                 ": the analytic IK needs the spherical-wrist layout; use the general IK");

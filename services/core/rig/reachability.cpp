@@ -578,6 +578,11 @@ ViewSolution ReachabilityChecker::solve(const Pose& object_T_camera, const Vecto
     std::string reason;
     if (rig.kind == RigKind::kArm && rig.ik == IkMethod::kGeneral) {
       if (search.general(world_T_flange, out, reason)) return out;
+    } else if (rig.kind == RigKind::kArm && rig.ik == IkMethod::kParallelAxes) {
+      // Each solution once, in its whole-turn variant nearest the current configuration (the
+      // UR's +-2 pi joints would give up to 32 variants of each, with the same geometry).
+      const std::vector<Vector6d> sols = parallel_axes_ik_nearest(rig, world_T_flange, q_current, &reason);
+      if (!sols.empty() && search.first_clear(sols, out)) return out;
     } else {
       std::string why;
       const std::vector<Vector6d> sols = ik_with_ref(rig, world_T_flange, q_current, &why);

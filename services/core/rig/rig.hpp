@@ -58,9 +58,13 @@ struct ChainJoint {
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();    // a point on the axis, body frame, m
 };
 
-// How inverse_kinematics solves an arm: closed form for the spherical-wrist layout above, or
-// damped least squares on the chain's geometric Jacobian (any 6R chain).
-enum class IkMethod { kAnalytic, kGeneral };
+// How inverse_kinematics solves an arm: closed form for the spherical-wrist layout above
+// (kAnalytic); closed form for the parallel-axes layout of the Universal Robots arms (kParallelAxes:
+// joints 2-4 parallel, axes 4-5 and 5-6 meeting, any offsets and joint directions; up to 8
+// solutions); or damped least squares on the chain's geometric Jacobian (kGeneral: any 6R chain).
+// load_rig picks the first whose layout the chain has; a rig whose calibration moved an axis off
+// the layout falls back to kGeneral.
+enum class IkMethod { kAnalytic, kParallelAxes, kGeneral };
 
 struct RigModel {
   RigKind kind = RigKind::kArm;
@@ -76,8 +80,9 @@ struct RigModel {
   std::array<ChainJoint, 6> chain{};      // kArm: base -> joint bodies (forward kinematics)
   Pose last_T_flange = Pose::Identity();  // kArm: flange in the last joint's body
   bool spherical_wrist = false;           // kArm: the chain has the ArmGeometry layout
-  IkMethod ik = IkMethod::kGeneral;       // kArm: kAnalytic when spherical_wrist (set on load);
-                                          // a caller may set kGeneral to force the general IK
+  IkMethod ik = IkMethod::kGeneral;       // kArm: kAnalytic when spherical_wrist, kParallelAxes
+                                          // for that layout (set on load); a caller may set
+                                          // kGeneral to force the general IK
   ArmGeometry arm;                        // kArm with spherical_wrist only
   Pose world_T_base = Pose::Identity();   // arm base (A1 axis at the floor of link 1)
   Pose flange_T_camera = Pose::Identity(); // hand-eye: optical frame in the flange frame

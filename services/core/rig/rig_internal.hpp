@@ -6,6 +6,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -70,6 +71,26 @@ inline constexpr double kStallRatioFast = 0.25;
 inline constexpr double kStallRatioFull = 0.9;
 // ReachabilityChecker: spread seeds when the near seeds give no collision-free solution.
 inline constexpr int kReachSpreadSeeds = 6;
+// A raw IK solution wrapped into (-pi, pi], checked against the pose by forward kinematics
+// (polished when a little off); nullopt when far off.
+std::optional<Vector6d> verified_arm_solution(const RigModel& rig, const Pose& world_T_flange, const Vector6d& raw);
+// An arm's raw IK solutions checked against the pose by forward kinematics (polished when a
+// little off, dropped when far) and expanded into their whole-turn variants within the joint
+// limits, without duplicates; when none is left, why_none says which limit the raw ones broke.
+std::vector<Vector6d> checked_arm_solutions(const RigModel& rig, const Pose& world_T_flange,
+                                            const std::vector<Vector6d>& raw, std::string* why_none);
+// The closed-form IK of the parallel-axes (UR) layout, parallel_ik.cpp; throws
+// std::invalid_argument naming the file when the chain does not have the layout.
+std::vector<Vector6d> parallel_axes_ik(const RigModel& rig, const Pose& world_T_flange, const Vector6d& q_ref,
+                                       std::string* why_none);
+// The same solutions, each once, in its whole-turn variant nearest q_ref (what the
+// reachability check needs: whole turns share the geometry); empty with the reason when none is
+// within the limits.
+std::vector<Vector6d> parallel_axes_ik_nearest(const RigModel& rig, const Pose& world_T_flange, const Vector6d& q_ref,
+                                               std::string* why_none);
+// True when the chain has the parallel-axes layout and configurations spread over its joint
+// ranges come back through parallel_axes_ik (load_rig's test).
+bool parallel_axes_layout(const RigModel& rig);
 // The IK solutions of the rig's method; q_ref resolves free angles at singularities and seeds
 // the general IK. Empty with the reason in *why_none when there is none.
 std::vector<Vector6d> ik_with_ref(const RigModel& rig, const Pose& world_T_flange, const Vector6d& q_ref,

@@ -277,7 +277,9 @@ void load_arm_chain(const mjModel* m, const std::string& path, int flange, RigMo
   rig->last_T_flange = relative_static_pose(m, prev_body, flange);
   rig->spherical_wrist = match_spherical_wrist(*rig, &rig->arm);
   if (!rig->spherical_wrist) rig->arm = ArmGeometry{};
-  rig->ik = rig->spherical_wrist ? IkMethod::kAnalytic : IkMethod::kGeneral;
+  rig->ik = rig->spherical_wrist     ? IkMethod::kAnalytic
+            : parallel_axes_layout(*rig) ? IkMethod::kParallelAxes
+                                         : IkMethod::kGeneral;
 }
 
 }  // namespace

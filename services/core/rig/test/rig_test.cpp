@@ -560,7 +560,8 @@ double ik_round_trip_test(const RigModel& rig, int n, unsigned seed) {
   EXPECT_LT(worst_pos, 0.5e-3);
   EXPECT_LT(worst_rot, 0.1 * kPi / 180);
   const double share = static_cast<double>(found_zero_ref) / tried_zero_ref;
-  std::cout << rig.arm_name << " general IK round trip over " << n << " poses: worst error " << worst_pos
+  const char* method = rig.ik == IkMethod::kAnalytic ? "analytic" : rig.ik == IkMethod::kParallelAxes ? "parallel-axes" : "general";
+  std::cout << rig.arm_name << " " << method << " IK round trip over " << n << " poses: worst error " << worst_pos
             << " m, " << worst_rot << " rad; with a reference 0.2 rad away q found in " << found_near_ref << "/" << n
             << ", the solution nearest the reference is q in " << nearest_is_q << "/" << n
             << "; with a zero reference q found in " << found_zero_ref << "/" << tried_zero_ref << "\n";
@@ -637,7 +638,7 @@ TEST_F(ArmRig, HemisphereReachableShareGeneralIk) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// UR5e rig (general IK).
+// UR5e rig (parallel-axes IK).
 
 class Ur5eRig : public ::testing::Test {
  protected:
@@ -657,7 +658,7 @@ TEST_F(Ur5eRig, LoadsPublishedParameters) {
   EXPECT_EQ(rig.joint_names, (std::vector<std::string>{"shoulder_pan", "shoulder_lift", "elbow", "wrist_1",
                                                        "wrist_2", "wrist_3"}));
   EXPECT_FALSE(rig.spherical_wrist);
-  EXPECT_EQ(rig.ik, IkMethod::kGeneral);
+  EXPECT_EQ(rig.ik, IkMethod::kParallelAxes);
   for (int i = 0; i < 6; ++i) {
     const double limit_deg = i == 2 ? 180 : 360;  // elbow narrowed against self-collision
     EXPECT_NEAR(rad_to_deg(rig.q_lower[i]), -limit_deg, 1e-9) << i;
@@ -751,7 +752,83 @@ TEST_F(Ur5eRig, HomeIsFreeAndLooksAtTheObject) {
 TEST_F(Ur5eRig, HemisphereReachableShare) {
   // Measured 800/800. The floor, 95 %, leaves room for a change of link geometry but not for a
   // solver that loses a band of views (a band of the 24 parallels is >= 4 % of the candidates).
-  EXPECT_GE(hemisphere_share(*rig_, "UR5e, general IK"), 0.95);
+  EXPECT_GE(hemisphere_share(*rig_, "UR5e, parallel-axes IK"), 0.95);
+  RigModel general = *rig_;
+  general.ik = IkMethod::kGeneral;
+  EXPECT_GE(hemisphere_share(general, "UR5e, general IK"), 0.95);
+}
+
+TEST_F(Ur5eRig, ParallelAxesIkFindsEverySolutionTheGeneralIkFinds) {
+  RigModel general = *rig_;
+  general.ik = IkMethod::kGeneral;
+  std::mt19937 rng(29);
+  int from_general = 0, found = 0, closed_form = 0;
+  for (int k = 0; k < 100; ++k) {
+    const Pose target = flange_in_world(*rig_, random_q(*rig_, rng));
+    const std::vector<Vector6d> p = inverse_kinematics(*rig_, target);
+    closed_form += static_cast<int>(p.size());
+    for (const Vector6d& x : inverse_kinematics(general, target)) {
+      ++from_general;
+      bool in = false;
+      for (const Vector6d& y : p) {
+        bool same = true;
+        for (int i = 0; i < 6; ++i) same = same && angle_diff(x[i], y[i]) < 1e-6;
+        in = in || same;
+      }
+      found += in;
+    }
+  }
+  std::cout << "UR5e over 100 poses: the parallel-axes IK gives " << closed_form << " solutions and holds "
+            << found << " of the general IK's " << from_general << "\n";
+  EXPECT_EQ(found, from_general);
+  EXPECT_GE(closed_form, from_general);
+}
+
+TEST_F(Ur5eRig, ParallelAxesIkByHand) {
+  // At q = 0 the wrist point (where axes 5 and 6 meet) is at (a2 + a3, -d4, d1 - d5) in the base
+  // frame: the zero configuration's flange moved by an offset moves that point by the same offset.
+  const RigModel& rig = *rig_;
+  const Pose f0 = rig.world_T_base.inverse() * flange_in_world(rig, Vector6d::Zero());
+  const Eigen::Vector3d wrist0(-0.8172, -0.1333, 0.1625 - 0.0997);
+  const auto flange_with_wrist_at = [&](const Eigen::Vector3d& wrist) {
+    Pose f = f0;
+    f.translation() += wrist - wrist0;
+    return rig.world_T_base * f;
+  };
+  // The zero configuration itself is among the solutions.
+  bool zero = false;
+  for (const Vector6d& q : inverse_kinematics(rig, flange_with_wrist_at(wrist0))) zero = zero || q.norm() < 1e-9;
+  EXPECT_TRUE(zero);
+  // Every plane through the shoulder_pan axis holds the arm 0.1333 m (d4) off it: a wrist 0.05 m
+  // from the axis is out of reach.
+  std::string why;
+  EXPECT_TRUE(inverse_kinematics(rig, flange_with_wrist_at(Eigen::Vector3d(0.05, 0, 0.5)), &why).empty());
+  EXPECT_NE(why.find("the wrist (axes 5-6) is 0.050 m from the shoulder_pan axis"), std::string::npos) << why;
+  // The stretched arm 1 m further out: its wrist (axes 4-5) 1 m beyond the links' a2 + a3 (the
+  // other wrist branch, 2 d5 higher, misses by more).
+  why.clear();
+  EXPECT_TRUE(inverse_kinematics(rig, flange_with_wrist_at(wrist0 - Eigen::Vector3d(1.0, 0, 0)), &why).empty());
+  EXPECT_NE(why.find("the wrist (axes 4-5) is 1.000 m beyond what the shoulder_lift and elbow links reach"),
+            std::string::npos) << why;
+  // The KUKA's axes 2-4 are not parallel: the method is refused on it, naming the file.
+  RigModel kuka = load_rig(default_rig_path(RigKind::kArm));
+  kuka.ik = IkMethod::kParallelAxes;
+  EXPECT_THROW(inverse_kinematics(kuka, flange_in_world(kuka, kuka.q_home)), std::invalid_argument);
+}
+
+TEST(RigLoad, Ur5eMovedOffItsLayoutUsesGeneralIk) {
+  // A calibration that tilts the elbow axis by 1 mrad leaves joints 2-4 no longer parallel.
+  std::string text = read_text(model_file_path("rig_ur5e.xml"));
+  const std::string needle = "<joint name=\"elbow\" class=\"arm\" axis=\"0 0 1\"";
+  const size_t at = text.find(needle);
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, needle.size(), "<joint name=\"elbow\" class=\"arm\" axis=\"0 0.001 1\"");
+  const RigModel rig = load_rig(write_temp("rig_ur5e_tilted.xml", text));
+  EXPECT_EQ(rig.ik, IkMethod::kGeneral);
+  Vector6d q;
+  q << 0.4, -1.1, 1.3, -1.5, 1.2, 0.3;
+  double ep = 0, er = 0;
+  EXPECT_TRUE(round_trip(rig, q, q, &ep, &er));
 }
 
 TEST_F(Ur5eRig, SolveReturnsTheSolutionNearestTheCurrentOne) {
