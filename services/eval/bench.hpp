@@ -117,6 +117,7 @@ struct ObjectRun {
   std::vector<double> coverage_by_view;   // views 1..N; after an early stop the last figure holds
   std::vector<double> observable_by_view; // the same over the observable samples
   std::vector<double> planner_ms;         // per planning iteration
+  std::vector<double> planner_critical_ms;  // the same as the scan waited for them (those recorded)
   std::optional<int> views_to_95;         // first view with coverage >= 95 %
   int views_done = 0;
   std::string stop_reason;
@@ -206,6 +207,8 @@ struct PlannerSummary {
   std::vector<double> coverage_min_by_view, coverage_max_by_view;  // spread over the complete runs
   std::vector<double> observable_by_view;  // mean over the complete runs
   double planner_ms_median = 0, planner_ms_mean = 0;  // over every iteration of every run
+  double planner_critical_ms_median = 0;              // the same iterations as the scan waited
+                                                      // for them (0: none recorded)
   std::optional<double> views_to_95;       // mean over the runs that reach 95 %
   std::optional<int> views_to_95_of_mean;  // first view at which the mean coverage reaches 95 %
   int reached_95 = 0, complete = 0, failed = 0;  // runs

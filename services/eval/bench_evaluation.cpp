@@ -199,6 +199,7 @@ ObjectRun evaluate_run(const BenchSpec& spec, const ScanJob& j, std::map<std::st
     r.coverage_by_view = pad_views(e.coverage_by_view, spec.views);
     r.observable_by_view = pad_views(e.observable_by_view, spec.views);
     r.planner_ms = e.planner_ms;
+    r.planner_critical_ms = e.planner_critical_ms;
     r.views_to_95 = views_to_reach(r.coverage_by_view, 95.0);
     r.views_done = e.views_done;
     r.stop_reason = e.stop_reason;
@@ -235,6 +236,7 @@ json run_record(const ObjectRun& r) {
             {"coverage_by_view", numbers(r.coverage_by_view)},
             {"observable_by_view", numbers(r.observable_by_view)},
             {"planner_ms", numbers(r.planner_ms)},
+            {"planner_critical_ms", numbers(r.planner_critical_ms)},
             {"views_to_95", r.views_to_95 ? json(*r.views_to_95) : json(nullptr)},
             {"views_done", r.views_done},
             {"stop_reason", r.stop_reason},
@@ -269,6 +271,7 @@ ObjectRun run_from_record(const json& j) {
   r.coverage_by_view = f.list<double>("coverage_by_view");
   r.observable_by_view = f.list<double>("observable_by_view");
   r.planner_ms = f.list<double>("planner_ms");
+  if (f.has("planner_critical_ms")) r.planner_critical_ms = f.list<double>("planner_critical_ms");
   r.views_to_95 = optional_count(f, "views_to_95");
   r.views_done = f.count("views_done");
   r.stop_reason = f.text("stop_reason");

@@ -386,14 +386,26 @@ void failed_and_times_section(const BenchResult& r, std::ostream& md) {
     }
     md << "\n";
   }
-  if (pbnbv && pbnbv->planner_ms_median > 0) {
+  std::string critical;
+  for (const auto& p : r.planners) {
+    if (p.planner == PlannerKind::kRing || p.planner_critical_ms_median <= 0) continue;
+    critical += std::string(critical.empty() ? "" : "; ") + std::string(name_of(p.planner)) + " " + ms(p.planner_critical_ms_median) +
+                " ms (the parts' sum " + ms(p.planner_ms_median) + " ms)";
+  }
+  if (!critical.empty()) {
+    md << "- planner time per iteration as the scan waits for it (map update + the view scorer's time from the "
+          "request to its answer; the ellipsoid fit runs beside the reachability check), medians: "
+       << critical << "\n";
+  }
+  const bool ratios = pbnbv && pbnbv->planner_ms_median > 0;
+  if (ratios) {
     for (const auto& p : r.planners) {
       if (&p == pbnbv || p.planner == PlannerKind::kRing || p.planner_ms_median <= 0) continue;
       md << "- " << name_of(p.planner) << " / pbnbv planner time, medians: " << f1(p.planner_ms_median / pbnbv->planner_ms_median)
          << "x\n";
     }
-    md << "\n";
   }
+  if (ratios || !critical.empty()) md << "\n";
 }
 
 // The rig's contacts during the scans' moves (the twin's contact check): none, or per planner

@@ -72,6 +72,7 @@ ScanEvaluation evaluate(const fs::path& out, const CoverageParams& params, const
   int points = 0;
   for (const ViewRecord& v : scan.views) {
     if (v.plan) e.planner_ms.push_back(planner_step_ms(*v.plan));
+    if (v.plan && std::isfinite(planner_critical_ms(*v.plan))) e.planner_critical_ms.push_back(planner_critical_ms(*v.plan));
     const std::string frame_file = v.registration ? v.registration->frame_file : std::string();
     if (frame_file.empty()) continue;  // the rig never captured this view
     if (v.registration->accepted) {
@@ -152,6 +153,7 @@ json to_json(const ScanEvaluation& e, const CoverageParams& params) {
           {"hand_eye", hand_eye},
           {"surface_metrics", metrics},
           {"planner_ms", e.planner_ms},
+          {"planner_critical_ms", e.planner_critical_ms},
           {"points_by_view", e.points_by_view},
           {"new_surface_by_view", e.new_surface_by_view},
           {"rig_time_s_by_view", e.rig_time_s_by_view},

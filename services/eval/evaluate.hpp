@@ -35,6 +35,8 @@ struct ScanEvaluation {
                                            // is given; empty otherwise)
   std::vector<double> planner_ms;        // per planning iteration: map update + ellipsoid fit +
                                          // view selection (views 2..n; empty for a ring scan)
+  std::vector<double> planner_critical_ms;  // the same iterations as the scan waited for them
+                                            // (core/scan planner_critical_ms; those recorded)
   std::vector<int> points_by_view;       // points in the model after each view
   std::vector<double> new_surface_by_view;  // what each view added, % of the model before it
   std::vector<ViewGain> view_gains;         // the same with each view's rig time (the seconds rule)

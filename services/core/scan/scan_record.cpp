@@ -146,6 +146,12 @@ double planner_step_ms(const PlanRecord& p) {
   return (p.map_update_s + fit_s + p.plan.plan_s) * 1e3;
 }
 
+double planner_critical_ms(const PlanRecord& p) {
+  const ViewPlan& v = p.plan;
+  if (!(v.wait_s > 0) || v.wait_s + 1e-9 < v.reachability_s) return std::numeric_limits<double>::quiet_NaN();
+  return (p.map_update_s + v.wait_s + v.plan_s - v.reachability_s) * 1e3;
+}
+
 json to_json(const PlanRecord& r) {
   const ViewPlan& p = r.plan;
   json j = {{"planner", name_of(p.planner)},
@@ -175,6 +181,7 @@ json to_json(const PlanRecord& r) {
                   {"scoring", p.scoring_s * 1e3},      {"scorer_wait", p.wait_s * 1e3},
                   {"view_selection", p.plan_s * 1e3}};
   j["planner_step_ms"] = planner_step_ms(r);
+  if (const double c = planner_critical_ms(r); std::isfinite(c)) j["planner_critical_ms"] = c;
   j["figure"] = "plans/" + view_file(p.iteration, "png");  // written by the view scorer just after it answers
   return j;
 }

@@ -33,6 +33,13 @@ struct PlanRecord {
 
 // The planner step as the paper times it: map update + ellipsoid fit + view selection, in ms.
 double planner_step_ms(const PlanRecord& p);
+// The planner step as the scan waits for it, in ms: map update + the view scorer's time from the
+// request to its answer (waiting for the map and the ellipsoids, the reachability check, the
+// ranking). The ellipsoid fitter and the scorer's reachability check both start from the new map
+// and run at the same time, so this is less than planner_step_ms by what they overlap. NaN when
+// the record does not hold the scorer's wait (or holds one shorter than its reachability check,
+// which runs within it).
+double planner_critical_ms(const PlanRecord& p);
 
 // A move to an option of a view that did not reach it.
 struct FailedMove {

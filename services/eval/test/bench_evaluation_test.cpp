@@ -32,6 +32,7 @@ ObjectRun full_run() {
   r.coverage_by_view = {31.234567890123456, 1.0 / 3.0, 99.99999999999999};
   r.observable_by_view = {32.5, 2.0 / 3.0, 100.0};
   r.planner_ms = {4.1e-3, 12.25};
+  r.planner_critical_ms = {3.5e-3, 0.1 + 0.2};
   r.views_to_95 = 3;
   r.views_done = 3;
   r.stop_reason = "budget";
@@ -83,6 +84,7 @@ TEST(BenchEvaluation, ARunsRecordGivesItBackExactly) {
   expect_same(b.coverage_by_view, r.coverage_by_view, "coverage");
   expect_same(b.observable_by_view, r.observable_by_view, "observable");
   expect_same(b.planner_ms, r.planner_ms, "planner_ms");
+  expect_same(b.planner_critical_ms, r.planner_critical_ms, "planner_critical_ms");
   EXPECT_EQ(b.views_to_95, 3);
   EXPECT_EQ(b.stop_reason, "budget");
   EXPECT_EQ(b.wall_s, r.wall_s);

@@ -94,6 +94,34 @@ TEST_F(ScanRecordTest, TheFirstViewIsWrittenAsView1AndReadBackAs0) {
                                "DIR/scan.json views[0] view = 1001 is not a whole number in 1..1000");
 }
 
+TEST_F(ScanRecordTest, APlanEntryTimesThePlannerStepAsTheScanWaitedForIt) {
+  // The scorer got the request, checked reachability (0.1875 s) while the ellipsoid fitter worked
+  // (0.125 s), had the ellipsoids by then (wait 0.1875 s) and ranked for 0.0625 s: view selection
+  // 0.25 s. The scan waited map update 0.5 + 0.1875 + 0.0625 = 0.75 s; the parts' sum, with the
+  // fit that ran beside the check, is 0.875 s.
+  PlanRecord p;
+  p.plan.iteration = 1;
+  p.plan.planner = PlannerKind::kPbnbv;
+  p.plan.outcome = PlanOutcome::kView;
+  p.plan.first_quality = std::nan("");
+  p.map_update_s = 0.5;
+  p.plan.reachability_s = 0.1875;
+  p.plan.wait_s = 0.1875;
+  p.plan.plan_s = 0.25;
+  EllipsoidSetSummary e;
+  e.fit_s = 0.125;
+  p.ellipsoids = e;
+  EXPECT_EQ(planner_step_ms(p), 875.0);
+  EXPECT_EQ(planner_critical_ms(p), 750.0);
+  EXPECT_EQ(to_json(p)["planner_critical_ms"], 750.0);
+  // The fit outlasting the check: the scorer waited for the ellipsoids 0.0625 s more.
+  p.plan.wait_s = 0.25;
+  EXPECT_EQ(planner_critical_ms(p), 812.5);
+  // A wait shorter than the check it holds is not a scorer's record: not known.
+  p.plan.wait_s = 0.125;
+  EXPECT_TRUE(std::isnan(planner_critical_ms(p)));
+}
+
 TEST_F(ScanRecordTest, APlanEntryTimesThePlannerStepAsThePaperDoes) {
   PlanRecord p;
   p.plan.iteration = 4;
@@ -110,6 +138,9 @@ TEST_F(ScanRecordTest, APlanEntryTimesThePlannerStepAsThePaperDoes) {
   EXPECT_EQ(planner_step_ms(p), 875.0);
   const json j = to_json(p);
   EXPECT_EQ(j["planner_step_ms"], 875.0);
+  // Without the scorer's wait the step as the scan waited for it is not known.
+  EXPECT_TRUE(std::isnan(planner_critical_ms(p)));
+  EXPECT_FALSE(j.contains("planner_critical_ms"));
   EXPECT_EQ(j["time_ms"]["ellipsoid_fit"], 125.0);
   EXPECT_EQ(j["figure"], "plans/view_005.png");  // iteration 4 is the fifth view
   EXPECT_EQ(j["outcome"], "view");
