@@ -21,28 +21,23 @@ const RigModel& arm_rig() {
   return rig;
 }
 
-// The KUKA with the general IK forced (for comparison with its analytic IK).
-const RigModel& arm_rig_general() {
-  static const RigModel rig = [] {
-    RigModel r = arm_rig();
-    r.ik = IkMethod::kGeneral;
-    return r;
-  }();
-  return rig;
-}
-
 const RigModel& ur5e_rig() {
   static const RigModel rig = load_rig(model_file_path("rig_ur5e.xml"));
   return rig;
 }
 
-// The UR5e with the general IK forced (for comparison with its parallel-axes IK).
+// `rig` with the general IK forced (for comparison with its closed form).
+RigModel general(const RigModel& rig) {
+  RigModel r = rig;
+  r.ik = IkMethod::kGeneral;
+  return r;
+}
+const RigModel& arm_rig_general() {
+  static const RigModel rig = general(arm_rig());
+  return rig;
+}
 const RigModel& ur5e_rig_general() {
-  static const RigModel rig = [] {
-    RigModel r = ur5e_rig();
-    r.ik = IkMethod::kGeneral;
-    return r;
-  }();
+  static const RigModel rig = general(ur5e_rig());
   return rig;
 }
 
