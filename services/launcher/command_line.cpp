@@ -223,6 +223,7 @@ void CommandLine::declare_scan() {
   cli::add(c, kDepthFilter, &p.depth_filter)->group(kGroupCamera);
   cli::add(c, kPoseSigmaMm, &p.pose_sigma_mm, "twin: from its errors; a real rig: 0.5")->group(kGroupRig);
   cli::add(c, kPoseSigmaDeg, &p.pose_sigma_deg, "twin: from its errors; a real rig: 0.1")->group(kGroupRig);
+  cli::add(c, kIcpVoxel, &s.icp_voxel_m)->group(kGroupPlanning);
 
   cli::add(c, kRig, &s.rig)->group(kGroupRig);
   cli::add_text(c, "rig-model", &p.rig_model,

@@ -630,8 +630,7 @@ int main(int argc, char** argv) {
   // RegistrationParams, ranges here.
   RegistrationParams p;
   const RegistrationParams d;
-  cli::add(app, Setting<double>{"icp-voxel", d.voxel_m, 0.0005, 0.05, "m", "both clouds downsampled to this for ICP"},
-           &p.voxel_m);
+  cli::add(app, kIcpVoxel, &p.voxel_m);
   cli::add(app, Setting<double>{"max-correspondence", d.max_correspondence_m, 0.001, 0.5, "m",
                                 "ICP correspondence distance (coarse-to-fine from here)"},
            &p.max_correspondence_m);

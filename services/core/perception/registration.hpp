@@ -14,13 +14,12 @@
 
 #include "core/geometry/point_cloud.hpp"
 #include "core/base/pose.hpp"
+#include "core/perception/perception_options.hpp"
 
 namespace pbnbv {
 
 struct RegistrationParams {
-  double voxel_m = 0.003;                // both clouds downsampled to this for ICP (3 mm: ICP
-                                         // twice as fast as at 2 mm, the same cloud accuracy
-                                         // and coverage in the tune half's scans; stop 47)
+  double voxel_m = kIcpVoxel.value;      // both clouds downsampled to this for ICP
   double max_correspondence_m = 0.02;    // ICP correspondence distance (coarse-to-fine from here)
   int max_iterations = 60;
   // Gates: ICP's alignment is trusted only if all hold (else the kinematic pose, flagged).

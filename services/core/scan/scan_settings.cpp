@@ -38,7 +38,8 @@ nlohmann::json to_json(const ScanSettings& s) {
                      {"max_new_percent", s.surface_rule.max_new_percent}, {"min_views", s.surface_rule.min_views},
                      {"radius_m", s.stop_radius_m},
                      {"seconds", to_json(s.seconds_rule)}}},
-      {"registration", {{"pose_sigma_mm", s.pose_sigma_m * 1e3}, {"pose_sigma_deg", s.pose_sigma_deg}}},
+      {"registration", {{"pose_sigma_mm", s.pose_sigma_m * 1e3}, {"pose_sigma_deg", s.pose_sigma_deg},
+                        {"icp_voxel_m", s.icp_voxel_m}}},
       {"depth_filter", s.depth_filter},
       {"external_rig", s.external_rig},
       {"object", s.working_volume ? nlohmann::json{{"name", s.object_name}, {"working_volume", s.working_volume->to_text()}}
@@ -109,6 +110,8 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     if (j.contains("registration")) {  // written since pbnbv 0.11 (before: the defaults)
       s.pose_sigma_m = j["registration"].at("pose_sigma_mm").get<double>() * 1e-3;
       s.pose_sigma_deg = j["registration"].at("pose_sigma_deg").get<double>();
+      // Written since stop 47; a scan recorded before it aligned at 2 mm and resumes so.
+      s.icp_voxel_m = j["registration"].value("icp_voxel_m", 0.002);
     }
     s.external_rig = j.value("external_rig", false);
     s.depth_filter = j.value("depth_filter", false);  // a scan recorded before the filter ran without it
@@ -202,6 +205,7 @@ void ScanSettings::validate() const {
   kStopRadius.checked(stop_radius_m);
   kPoseSigmaMm.checked(pose_sigma_m * 1e3);
   kPoseSigmaDeg.checked(pose_sigma_deg);
+  kIcpVoxel.checked(icp_voxel_m);
   kAlternatives.checked(alternatives);
   kPlannerSeed.checked(seed);
   kCloudVoxel.checked(voxel_m);

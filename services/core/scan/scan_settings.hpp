@@ -49,6 +49,7 @@ struct ScanSettings {
   // How well the rig knows the camera's pose (registration's prior, 1 sigma per axis).
   double pose_sigma_m = kPoseSigmaMm.value * 1e-3;
   double pose_sigma_deg = kPoseSigmaDeg.value;
+  double icp_voxel_m = kIcpVoxel.value;   // registration's ICP voxel (pbnbv-registration --icp-voxel)
   bool depth_filter = true;  // flying pixels and speckles removed from each frame (--depth-filter)
 
   // The rig's drivers run outside (a physical rig, or a twin started as one): the launcher

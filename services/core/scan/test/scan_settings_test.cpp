@@ -137,6 +137,23 @@ TEST(ScanSettingsJson, WholeNumbersOutOfIntOrFractionalAreRefusedByName) {
             "scan settings: planning.seed = 2.5 is not a whole number in -9223372036854775808..9223372036854775807");
 }
 
+// Registration's ICP voxel: recorded and read back; a scan recorded before it was (stop 47)
+// aligned at 2 mm and resumes so; out of range it is refused naming the option.
+TEST(ScanSettingsJson, TheIcpVoxelIsRecordedAndAnOlderScanKeepsTwoMillimetres) {
+  ScanSettings s;
+  s.scan_id = "icp";
+  EXPECT_EQ(s.icp_voxel_m, 0.003);
+  s.icp_voxel_m = 0.0025;
+  nlohmann::json j = to_json(s);
+  EXPECT_EQ(j["registration"]["icp_voxel_m"], 0.0025);
+  EXPECT_EQ(scan_settings_from_json(j).icp_voxel_m, 0.0025);
+  j["registration"].erase("icp_voxel_m");
+  EXPECT_EQ(scan_settings_from_json(j).icp_voxel_m, 0.002);
+  j["registration"]["icp_voxel_m"] = 1.0;
+  const std::string why = pbnbv::testing::error_message([&] { scan_settings_from_json(j); });
+  EXPECT_NE(why.find("icp-voxel"), std::string::npos) << why;
+}
+
 namespace pbnbv {
 
 // --initial-view is a camera position 0.05..10 m from the object centre, every coordinate finite:
