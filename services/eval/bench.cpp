@@ -432,14 +432,11 @@ MeanSurfaceMetrics mean_surface_metrics(const std::vector<ObjectRun>& runs,
   return m;
 }
 
-namespace {
-// The middle value (the mean of the two middle ones for an even count); `v` not empty.
 double median_of(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
-}  // namespace
 
 PlannerSummary summarise(PlannerKind planner, const std::vector<ObjectRun>& runs, int views) {
   PlannerSummary p;

@@ -176,6 +176,9 @@ int stop_view_or_budget(const ObjectRun& r, int views, StopViewOf stop = &Object
 double coverage_at_view(const ObjectRun& r, int view);
 StopRuleSummary summarise_stop_rule(const std::vector<ObjectRun>& runs, int views, StopViewOf stop = &ObjectRun::stop_view);
 
+// The middle value of `v` (the mean of the two middle ones for an even count); `v` not empty.
+double median_of(std::vector<double> v);
+
 // A 95 % interval [lo, hi].
 struct Interval {
   double lo = 0, hi = 0;

@@ -206,8 +206,7 @@ std::vector<double> median_time_by_iteration(const PlannerSummary& p, int views)
       out.push_back(NAN);
       continue;
     }
-    std::sort(t.begin(), t.end());
-    out.push_back(t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]));
+    out.push_back(median_of(std::move(t)));
   }
   return out;
 }

@@ -71,8 +71,10 @@ ScanEvaluation evaluate(const fs::path& out, const CoverageParams& params, const
   e.stop_reason = scan.stop ? scan.stop->reason : scan.status.message;
   int points = 0;
   for (const ViewRecord& v : scan.views) {
-    if (v.plan) e.planner_ms.push_back(planner_step_ms(*v.plan));
-    if (v.plan && std::isfinite(planner_critical_ms(*v.plan))) e.planner_critical_ms.push_back(planner_critical_ms(*v.plan));
+    if (v.plan) {
+      e.planner_ms.push_back(planner_step_ms(*v.plan));
+      if (const double c = planner_critical_ms(*v.plan); std::isfinite(c)) e.planner_critical_ms.push_back(c);
+    }
     const std::string frame_file = v.registration ? v.registration->frame_file : std::string();
     if (frame_file.empty()) continue;  // the rig never captured this view
     if (v.registration->accepted) {

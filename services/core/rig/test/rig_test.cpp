@@ -486,6 +486,16 @@ void expect_load_error(const std::string& path, const std::vector<std::string>& 
   }
 }
 
+// `set` holds q: one of its configurations has every joint within 1e-6 rad of q's (angle_diff).
+bool holds(const std::vector<Vector6d>& set, const Vector6d& q) {
+  return std::any_of(set.begin(), set.end(), [&](const Vector6d& x) {
+    for (int i = 0; i < 6; ++i) {
+      if (!(angle_diff(x[i], q[i]) < 1e-6)) return false;
+    }
+    return true;
+  });
+}
+
 // Round trip of the flange pose at q through inverse_kinematics (reference q_ref): every
 // solution within limits and verified; returns whether q itself (up to whole turns) is among them.
 // (Same q: every joint within 1e-5 rad; near a singularity, e.g. a stretched elbow, a pose
@@ -612,13 +622,7 @@ TEST_F(ArmRig, GeneralIkSolvesTheKukaToo) {
     const std::vector<Vector6d> g = inverse_kinematics(rig, target);
     for (const Vector6d& x : a) {
       ++analytic;
-      bool found = false;
-      for (const Vector6d& y : g) {
-        bool same = true;
-        for (int i = 0; i < 6; ++i) same = same && angle_diff(x[i], y[i]) < 1e-6;
-        found = found || same;
-      }
-      general_found += found;
+      general_found += holds(g, x);
     }
   }
   std::cout << "KUKA: the general IK finds " << general_found << " of the analytic IK's " << analytic
@@ -727,13 +731,7 @@ TEST_F(Ur5eRig, InverseKinematicsRoundTrip) {
   q << 0.4, -1.1, 1.3, -1.5, 1.2, 0.3;
   std::vector<Vector6d> distinct;
   for (const Vector6d& s : inverse_kinematics(*rig_, flange_in_world(*rig_, q))) {
-    bool dup = false;
-    for (const Vector6d& t : distinct) {
-      bool same = true;
-      for (int i = 0; i < 6; ++i) same = same && angle_diff(s[i], t[i]) < 1e-6;
-      dup = dup || same;
-    }
-    if (!dup) distinct.push_back(s);
+    if (!holds(distinct, s)) distinct.push_back(s);
   }
   EXPECT_EQ(distinct.size(), 8u);
 }
@@ -769,13 +767,7 @@ TEST_F(Ur5eRig, ParallelAxesIkFindsEverySolutionTheGeneralIkFinds) {
     closed_form += static_cast<int>(p.size());
     for (const Vector6d& x : inverse_kinematics(general, target)) {
       ++from_general;
-      bool in = false;
-      for (const Vector6d& y : p) {
-        bool same = true;
-        for (int i = 0; i < 6; ++i) same = same && angle_diff(x[i], y[i]) < 1e-6;
-        in = in || same;
-      }
-      found += in;
+      found += holds(p, x);
     }
   }
   std::cout << "UR5e over 100 poses: the parallel-axes IK gives " << closed_form << " solutions and holds "
