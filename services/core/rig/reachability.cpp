@@ -16,6 +16,13 @@ using namespace rig_internal;
 
 namespace {
 
+// The turntable angles' grid of azimuth offsets (candidate_turntable_angles), and how often
+// refine_least_turn halves a step of it (15 / 2^3: within 1.9 deg of the least clear turn).
+constexpr int kTurnGridDeg = 15;
+constexpr double kTurnGridRad = kTurnGridDeg * kPi / 180.0;
+constexpr int kLeastTurnRefineSteps = 3;
+
+
 // A keep-out box that encloses a volume (not empty, not flat): only such a box is checked.
 bool has_volume(const Eigen::AlignedBox3d& box) { return !box.isEmpty() && box.sizes().minCoeff() > 0; }
 
@@ -34,6 +41,7 @@ struct ReachabilityChecker::Impl {
   std::vector<char> in_object;  // per geom: part of the object mount (never an occluder)
   std::vector<char> follows_flange;  // per geom: on the last joint's body or below (its pose is
                                      // fixed by the flange pose alone)
+  bool in_batch = false;        // solve_batch is running (solve does not refine the least turn)
   bool have_neighbour = false;  // solve_batch: the previous candidate's solution seeds the next
   Vector6d neighbour = Vector6d::Zero();
   // Per arm joint: the farthest any geom it carries (up to the next joint, then through it)
@@ -428,7 +436,7 @@ std::vector<double> candidate_turntable_angles(const RigModel& rig, const Pose& 
   *preferred = 0;
   if (rig.kind != RigKind::kArm || !rig.has_turntable) return {0.0};
   std::vector<double> offsets_deg{0};
-  for (int k = 15; k <= 90; k += 15) {
+  for (int k = kTurnGridDeg; k <= 90; k += kTurnGridDeg) {
     offsets_deg.push_back(k);
     offsets_deg.push_back(-k);
   }
@@ -451,6 +459,37 @@ std::vector<double> candidate_turntable_angles(const RigModel& rig, const Pose& 
     });
   }
   return angles;
+}
+
+}  // namespace
+
+namespace {
+
+// kLeastTurn: the azimuth offsets are kTurnGridRad apart, so the first clear angle can stand up to
+// that far past the least turn that brings the view within the arm's reach. Bisects between it and
+// the next angle nearer to where the turntable stands (tried and unclear, or not on the list) or
+// that angle itself, kLeastTurnRefineSteps times, keeping the nearest clear solution (`sol` on
+// entry: the clear one; the bisection does not assume the clear angles are contiguous, it only
+// ever takes a clear one). For one view (the motion executor's move): the view scorer's batch
+// ranks by the grid's angles.
+template <typename TryAngle>
+void refine_least_turn(const TryAngle& try_angle, double turntable_current, ViewSolution& sol) {
+  const double turn = sol.turntable_rad - turntable_current;
+  if (std::abs(turn) < 1e-9) return;
+  const double dir = turn > 0 ? 1.0 : -1.0;
+  double clear = sol.turntable_rad;
+  double unclear = std::abs(turn) > kTurnGridRad ? clear - dir * kTurnGridRad : turntable_current;
+  for (int k = 0; k < kLeastTurnRefineSteps; ++k) {
+    const double mid = 0.5 * (clear + unclear);
+    ViewSolution trial;
+    std::string reason;
+    if (try_angle(mid, trial, reason)) {
+      clear = mid;
+      sol = trial;
+    } else {
+      unclear = mid;
+    }
+  }
 }
 
 }  // namespace
@@ -566,30 +605,38 @@ ViewSolution ReachabilityChecker::solve(const Pose& object_T_camera, const Vecto
   Impl& im = *impl_;
   const RigModel& rig = im.rig;
   im.set_keepout(keepout, object_z_m);
+  // One turntable angle: true, with `sol` set, when a clear solution stands there; else `reason`.
+  const auto try_angle = [&](double t, ViewSolution& sol, std::string& reason) {
+    const Pose world_T_camera = object_in_world(rig, t, object_z_m) * object_T_camera;
+    const Pose world_T_flange = world_T_camera * rig.flange_T_camera.inverse();
+    AngleSearch search{im, q_current, keepout, object_z_m, t, {}, {}, {}};
+    if (rig.kind == RigKind::kArm && rig.ik == IkMethod::kGeneral) {
+      if (search.general(world_T_flange, sol, reason)) return true;
+    } else if (rig.kind == RigKind::kArm && rig.ik == IkMethod::kParallelAxes) {
+      // Each solution once, in its whole-turn variant nearest the current configuration (the
+      // UR's +-2 pi joints would give up to 32 variants of each, with the same geometry).
+      const std::vector<Vector6d> sols = parallel_axes_ik_nearest(rig, world_T_flange, q_current, &reason);
+      if (!sols.empty() && search.first_clear(sols, sol)) return true;
+    } else {
+      std::string why;
+      const std::vector<Vector6d> sols = ik_with_ref(rig, world_T_flange, q_current, &why);
+      if (sols.empty()) reason = why;
+      else if (search.first_clear(sols, sol)) return true;
+    }
+    if (reason.empty()) reason = search.collided();
+    return false;
+  };
   ViewSolution out;
   double preferred = 0;
   const std::vector<double> angles = candidate_turntable_angles(rig, object_T_camera, turntable_current, im.choice, &preferred);
   std::string first_reason;
   for (std::size_t a = 0; a < angles.size(); ++a) {
     const double t = angles[a];
-    const Pose world_T_camera = object_in_world(rig, t, object_z_m) * object_T_camera;
-    const Pose world_T_flange = world_T_camera * rig.flange_T_camera.inverse();
-    AngleSearch search{im, q_current, keepout, object_z_m, t, {}, {}, {}};
     std::string reason;
-    if (rig.kind == RigKind::kArm && rig.ik == IkMethod::kGeneral) {
-      if (search.general(world_T_flange, out, reason)) return out;
-    } else if (rig.kind == RigKind::kArm && rig.ik == IkMethod::kParallelAxes) {
-      // Each solution once, in its whole-turn variant nearest the current configuration (the
-      // UR's +-2 pi joints would give up to 32 variants of each, with the same geometry).
-      const std::vector<Vector6d> sols = parallel_axes_ik_nearest(rig, world_T_flange, q_current, &reason);
-      if (!sols.empty() && search.first_clear(sols, out)) return out;
-    } else {
-      std::string why;
-      const std::vector<Vector6d> sols = ik_with_ref(rig, world_T_flange, q_current, &why);
-      if (sols.empty()) reason = why;
-      else if (search.first_clear(sols, out)) return out;
+    if (try_angle(t, out, reason)) {
+      if (im.choice == TurntableChoice::kLeastTurn && !im.in_batch) refine_least_turn(try_angle, turntable_current, out);
+      return out;
     }
-    if (reason.empty()) reason = search.collided();
     if (t == preferred) first_reason = reason;
   }
   out.reachable = false;
@@ -606,6 +653,7 @@ std::vector<ViewSolution> ReachabilityChecker::solve_batch(
   out.reserve(object_T_cameras.size());
   // Neighbouring candidates have nearby solutions: each seeds the next one's general IK.
   impl_->have_neighbour = false;
+  impl_->in_batch = true;
   for (const Pose& p : object_T_cameras) {
     out.push_back(solve(p, q_current, turntable_current, keepout, object_z_m));
     if (out.back().reachable) {
@@ -614,6 +662,7 @@ std::vector<ViewSolution> ReachabilityChecker::solve_batch(
     }
   }
   impl_->have_neighbour = false;
+  impl_->in_batch = false;
   return out;
 }
 

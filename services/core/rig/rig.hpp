@@ -209,7 +209,8 @@ class ReachabilityChecker {
   ViewSolution solve(const Pose& object_T_camera, const Vector6d& q_current,
                      double turntable_current, const Eigen::AlignedBox3d& keepout, double object_z_m);
 
-  // solve() for each pose (a planner's candidate views), same current state.
+  // solve() for each pose (a planner's candidate views), same current state, but with kLeastTurn
+  // each on the grid of azimuth offsets alone (solve narrows a turn further: TurntableChoice).
   std::vector<ViewSolution> solve_batch(const std::vector<Pose>& object_T_cameras,
                                         const Vector6d& q_current, double turntable_current,
                                         const Eigen::AlignedBox3d& keepout, double object_z_m);

@@ -340,6 +340,48 @@ TEST_F(ArmRig, TopViewKeepsTurntable) {
   EXPECT_LT(rotation_angle_rad(back.linear(), top.linear()), 1e-6);
 }
 
+// The least-turn choice turns the turntable no farther than it must. The first clear angle on the
+// grid of 15 deg azimuth offsets (solve_batch, as the view scorer ranks) can stand up to 15 deg past
+// the least clear turn; one view's solve (the motion executor's move) bisects that step three times.
+// 24 views round the object at 20 deg elevation, from home with the turntable at 0: each solved the
+// same way round, no farther, less by whole steps of 15 / 8 deg, clear and reaching its view; one
+// step nearer its view is not clear (from there the least turn turns the turntable again).
+TEST_F(ArmRig, LeastTurnBisectsTheGridsTurnToWithinAnEighthOfItsStep) {
+  ReachabilityChecker checker(*rig_, TurntableChoice::kLeastTurn);
+  const std::vector<Pose> views = ring_views(24, hemisphere_radius(), 20 * kPi / 180, 0.0, Eigen::Vector3d::Zero());
+  const std::vector<ViewSolution> grid = checker.solve_batch(views, rig_->q_home, 0.0, cube_keepout(), kObjectZ);
+  const double step = 15.0 / 8 * kPi / 180;
+  int turned = 0, refined = 0;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const ViewSolution s = checker.solve(views[i], rig_->q_home, 0.0, cube_keepout(), kObjectZ);
+    ASSERT_EQ(s.reachable, grid[i].reachable) << i;
+    if (!s.reachable) continue;
+    const Pose back = camera_in_object(*rig_, s.q, s.turntable_rad, kObjectZ);
+    EXPECT_LT((back.translation() - views[i].translation()).norm(), 1e-6) << i;
+    EXPECT_TRUE(checker.collisions(s.q, s.turntable_rad, cube_keepout(), kObjectZ).empty()) << i;
+    const double g = grid[i].turntable_rad, t = s.turntable_rad;
+    if (g == 0.0) {
+      EXPECT_EQ(t, 0.0) << i;  // no turn: nothing to refine
+      continue;
+    }
+    ++turned;
+    EXPECT_GT(t * g, 0.0) << i;
+    EXPECT_LE(std::abs(t), std::abs(g) + 1e-12) << i;
+    const double k = (std::abs(g) - std::abs(t)) / step;
+    EXPECT_NEAR(k, std::round(k), 1e-9) << i;
+    EXPECT_LE(std::round(k), 7.0) << i;
+    if (std::round(k) > 0) ++refined;
+    if (std::abs(t) > step) {
+      const double nearer = t - (t > 0 ? step : -step);
+      const ViewSolution again = checker.solve_batch({views[i]}, rig_->q_home, nearer, cube_keepout(), kObjectZ)[0];
+      EXPECT_NE(again.turntable_rad, nearer) << i << ": clear " << 180 / kPi * step << " deg nearer";
+    }
+  }
+  std::cout << "least turn: " << refined << " of " << turned << " turned views refined\n";
+  EXPECT_GT(turned, 6);
+  EXPECT_GT(refined, turned / 2);
+}
+
 TEST_F(ArmRig, UnreachableViewsGiveReasons) {
   ReachabilityChecker checker(*rig_);
   // 3 m away: out of reach at every azimuth.
