@@ -22,7 +22,6 @@ constexpr int kTurnGridDeg = 15;
 constexpr double kTurnGridRad = kTurnGridDeg * kPi / 180.0;
 constexpr int kLeastTurnRefineSteps = 3;
 
-
 // A keep-out box that encloses a volume (not empty, not flat): only such a box is checked.
 bool has_volume(const Eigen::AlignedBox3d& box) { return !box.isEmpty() && box.sizes().minCoeff() > 0; }
 
@@ -461,10 +460,6 @@ std::vector<double> candidate_turntable_angles(const RigModel& rig, const Pose& 
   return angles;
 }
 
-}  // namespace
-
-namespace {
-
 // kLeastTurn: the azimuth offsets are kTurnGridRad apart, so the first clear angle can stand up to
 // that far past the least turn that brings the view within the arm's reach. Bisects between it and
 // the next angle nearer to where the turntable stands (tried and unclear, or not on the list) or
@@ -653,7 +648,17 @@ std::vector<ViewSolution> ReachabilityChecker::solve_batch(
   out.reserve(object_T_cameras.size());
   // Neighbouring candidates have nearby solutions: each seeds the next one's general IK.
   impl_->have_neighbour = false;
-  impl_->in_batch = true;
+  // Off again however the batch ends (a solve that throws included).
+  struct BatchScope {
+    Impl& im;
+    explicit BatchScope(Impl& i) : im(i) { im.in_batch = true; }
+    ~BatchScope() {
+      im.in_batch = false;
+      im.have_neighbour = false;
+    }
+    BatchScope(const BatchScope&) = delete;
+    BatchScope& operator=(const BatchScope&) = delete;
+  } scope(*impl_);
   for (const Pose& p : object_T_cameras) {
     out.push_back(solve(p, q_current, turntable_current, keepout, object_z_m));
     if (out.back().reachable) {
@@ -661,8 +666,6 @@ std::vector<ViewSolution> ReachabilityChecker::solve_batch(
       impl_->have_neighbour = true;
     }
   }
-  impl_->have_neighbour = false;
-  impl_->in_batch = false;
   return out;
 }
 
