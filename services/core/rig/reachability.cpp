@@ -40,7 +40,6 @@ struct ReachabilityChecker::Impl {
   std::vector<char> in_object;  // per geom: part of the object mount (never an occluder)
   std::vector<char> follows_flange;  // per geom: on the last joint's body or below (its pose is
                                      // fixed by the flange pose alone)
-  bool in_batch = false;        // solve_batch is running (solve does not refine the least turn)
   bool have_neighbour = false;  // solve_batch: the previous candidate's solution seeds the next
   Vector6d neighbour = Vector6d::Zero();
   // Per arm joint: the farthest any geom it carries (up to the next joint, then through it)
@@ -597,6 +596,12 @@ struct ReachabilityChecker::AngleSearch {
 ViewSolution ReachabilityChecker::solve(const Pose& object_T_camera, const Vector6d& q_current,
                                         double turntable_current, const Eigen::AlignedBox3d& keepout,
                                         double object_z_m) {
+  return solve_view(object_T_camera, q_current, turntable_current, keepout, object_z_m, true);
+}
+
+ViewSolution ReachabilityChecker::solve_view(const Pose& object_T_camera, const Vector6d& q_current,
+                                             double turntable_current, const Eigen::AlignedBox3d& keepout,
+                                             double object_z_m, bool narrow_turn) {
   Impl& im = *impl_;
   const RigModel& rig = im.rig;
   im.set_keepout(keepout, object_z_m);
@@ -629,7 +634,7 @@ ViewSolution ReachabilityChecker::solve(const Pose& object_T_camera, const Vecto
     const double t = angles[a];
     std::string reason;
     if (try_angle(t, out, reason)) {
-      if (im.choice == TurntableChoice::kLeastTurn && !im.in_batch) refine_least_turn(try_angle, turntable_current, out);
+      if (im.choice == TurntableChoice::kLeastTurn && narrow_turn) refine_least_turn(try_angle, turntable_current, out);
       return out;
     }
     if (t == preferred) first_reason = reason;
@@ -648,24 +653,14 @@ std::vector<ViewSolution> ReachabilityChecker::solve_batch(
   out.reserve(object_T_cameras.size());
   // Neighbouring candidates have nearby solutions: each seeds the next one's general IK.
   impl_->have_neighbour = false;
-  // Off again however the batch ends (a solve that throws included).
-  struct BatchScope {
-    Impl& im;
-    explicit BatchScope(Impl& i) : im(i) { im.in_batch = true; }
-    ~BatchScope() {
-      im.in_batch = false;
-      im.have_neighbour = false;
-    }
-    BatchScope(const BatchScope&) = delete;
-    BatchScope& operator=(const BatchScope&) = delete;
-  } scope(*impl_);
   for (const Pose& p : object_T_cameras) {
-    out.push_back(solve(p, q_current, turntable_current, keepout, object_z_m));
+    out.push_back(solve_view(p, q_current, turntable_current, keepout, object_z_m, false));
     if (out.back().reachable) {
       impl_->neighbour = out.back().q;
       impl_->have_neighbour = true;
     }
   }
+  impl_->have_neighbour = false;
   return out;
 }
 

@@ -249,6 +249,10 @@ class ReachabilityChecker {
  private:
   struct Impl;
   struct AngleSearch;  // solve()'s search at one turntable angle
+  // solve(), narrowing a least turn (TurntableChoice::kLeastTurn) when `narrow_turn`; solve_batch
+  // keeps the grid's angles.
+  ViewSolution solve_view(const Pose& object_T_camera, const Vector6d& q_current, double turntable_current,
+                          const Eigen::AlignedBox3d& keepout, double object_z_m, bool narrow_turn);
   std::unique_ptr<Impl> impl_;
 };
 
