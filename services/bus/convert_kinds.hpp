@@ -66,13 +66,16 @@ inline Ranking ranking_from_msg(int8_t value, const std::string& field) {
 
 static_assert(static_cast<int>(TurntableChoice::kPreferred) == plan_request_t::kPreferredAzimuth &&
               static_cast<int>(TurntableChoice::kLeastTurn) == plan_request_t::kLeastTurn &&
+              static_cast<int>(TurntableChoice::kLeastTurnOnGrid) == plan_request_t::kLeastTurnOnGrid &&
               move_request_t::kPreferredAzimuth == plan_request_t::kPreferredAzimuth &&
-              move_request_t::kLeastTurn == plan_request_t::kLeastTurn);
+              move_request_t::kLeastTurn == plan_request_t::kLeastTurn &&
+              move_request_t::kLeastTurnOnGrid == plan_request_t::kLeastTurnOnGrid);
 
 // A turntable_choice field (MOVE_REQUEST's, PLAN_REQUEST's): one of its constants, else throws naming `what`.
 inline TurntableChoice turntable_choice_from_msg(int8_t v, const std::string& what) {
-  if (v != plan_request_t::kPreferredAzimuth && v != plan_request_t::kLeastTurn) {
-    throw std::invalid_argument(what + " = " + std::to_string(v) + " is not one of its constants (0 preferred azimuth, 1 least turn)");
+  if (v != plan_request_t::kPreferredAzimuth && v != plan_request_t::kLeastTurn && v != plan_request_t::kLeastTurnOnGrid) {
+    throw std::invalid_argument(what + " = " + std::to_string(v) +
+                                " is not one of its constants (0 preferred azimuth, 1 least turn, 2 least turn on the grid)");
   }
   return static_cast<TurntableChoice>(v);
 }

@@ -34,7 +34,10 @@ inline RigKind parse_rig_kind(const std::string& s) { return parse_name<RigKind>
 //    (the motion executor's) then bisects the 15 deg step nearer to where the turntable stands
 //    three times: the turn stops within 1.9 deg of the least clear one (a batch, the view scorer's
 //    ranking, keeps the grid's angle).
-enum class TurntableChoice : uint8_t { kPreferred, kLeastTurn };
+//  kLeastTurnOnGrid: kLeastTurn without the bisection, a single view's solve too: the executor's
+//    rule before the least turn was narrowed, kept so that a scan recorded then replays as it was moved
+//    (ScanSettings::least_turn).
+enum class TurntableChoice : uint8_t { kPreferred, kLeastTurn, kLeastTurnOnGrid };
 
 // The rig option of every program that works with a rig (pbnbv scan, motion, camera, scorer, twin).
 inline constexpr ChoiceSetting<RigKind> kRig{"rig", RigKind::kArm,

@@ -448,7 +448,7 @@ std::vector<double> candidate_turntable_angles(const RigModel& rig, const Pose& 
     angles.push_back(nearest_equivalent_angle_rad(t, turntable_current));
   }
   *preferred = angles.front();
-  if (choice == TurntableChoice::kLeastTurn) {
+  if (choice == TurntableChoice::kLeastTurn || choice == TurntableChoice::kLeastTurnOnGrid) {
     // Where the view is with the turntable where it stands, as an offset from the preferred azimuth.
     const double off = above ? 0.0 : nearest_equivalent_angle_rad(turntable_current - angles.front(), 0.0);
     if (std::abs(off) <= 0.5 * kPi + 1e-9) angles.push_back(turntable_current);

@@ -440,7 +440,7 @@ void ScanSequencer::begin_plan(double now_s) {
   r.object_z_m = s_.object_z_m;
   r.keepout = box_or_none(s_.keepout_min_m, s_.keepout_max_m);
   r.turntable_choice = turntable_choice(s_);
-  r.seconds_per_point = r.turntable_choice == TurntableChoice::kLeastTurn && s_.rig == RigKind::kArm ? s_.seconds_per_point : 0.0;
+  r.seconds_per_point = r.turntable_choice != TurntableChoice::kPreferred && s_.rig == RigKind::kArm ? s_.seconds_per_point : 0.0;
   if (done_.last_map < 0) {  // nothing to plan from: no request
     ViewPlan none;
     none.scan_id = s_.scan_id;

@@ -346,8 +346,11 @@ TEST_F(ArmRig, TopViewKeepsTurntable) {
 // 24 views round the object at 20 deg elevation, from home with the turntable at 0: each solved the
 // same way round, no farther, less by whole steps of 15 / 8 deg, clear and reaching its view; one
 // step nearer its view is not clear (from there the least turn turns the turntable again).
+// kLeastTurnOnGrid (a scan recorded before the narrowing, replayed) solves every view at the grid's
+// angle, exactly, as it was moved then.
 TEST_F(ArmRig, LeastTurnBisectsTheGridsTurnToWithinAnEighthOfItsStep) {
   ReachabilityChecker checker(*rig_, TurntableChoice::kLeastTurn);
+  ReachabilityChecker on_grid(*rig_, TurntableChoice::kLeastTurnOnGrid);
   const std::vector<Pose> views = ring_views(24, hemisphere_radius(), 20 * kPi / 180, 0.0, Eigen::Vector3d::Zero());
   const std::vector<ViewSolution> grid = checker.solve_batch(views, rig_->q_home, 0.0, cube_keepout(), kObjectZ);
   const double step = 15.0 / 8 * kPi / 180;
@@ -355,6 +358,12 @@ TEST_F(ArmRig, LeastTurnBisectsTheGridsTurnToWithinAnEighthOfItsStep) {
   for (std::size_t i = 0; i < views.size(); ++i) {
     const ViewSolution s = checker.solve(views[i], rig_->q_home, 0.0, cube_keepout(), kObjectZ);
     ASSERT_EQ(s.reachable, grid[i].reachable) << i;
+    const ViewSolution old = on_grid.solve(views[i], rig_->q_home, 0.0, cube_keepout(), kObjectZ);
+    ASSERT_EQ(old.reachable, grid[i].reachable) << i;
+    if (old.reachable) {
+      EXPECT_EQ(old.turntable_rad, grid[i].turntable_rad) << i;
+      EXPECT_LT((old.q - grid[i].q).cwiseAbs().maxCoeff(), 1e-12) << i;
+    }
     if (!s.reachable) continue;
     const Pose back = camera_in_object(*rig_, s.q, s.turntable_rad, kObjectZ);
     EXPECT_LT((back.translation() - views[i].translation()).norm(), 1e-6) << i;

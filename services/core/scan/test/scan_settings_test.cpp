@@ -157,6 +157,28 @@ TEST(ScanSettingsJson, TheIcpVoxelIsRecordedAndAnOlderScanKeepsTwoMillimetres) {
 namespace pbnbv {
 
 // --initial-view is a camera position 0.05..10 m from the object centre, every coordinate finite:
+
+// The executor's least turn: a new scan's settings say it is narrowed, and the moves and plans of a
+// motion-aware scan take kLeastTurn; a settings.json without the field (a scan recorded before the
+// least turn was narrowed) reads as the grid's, so its replay commands the turns it recorded
+// (kLeastTurnOnGrid); plain motion is unaffected; any other word is refused naming the field.
+TEST(ScanSettingsJson, TheLeastTurnIsRecordedAndAnOlderScanTurnsOnTheGrid) {
+  ScanSettings s;
+  s.scan_id = "turn";
+  s.motion = Motion::kAware;
+  EXPECT_TRUE(s.least_turn_narrowed);
+  nlohmann::json j = to_json(s);
+  EXPECT_EQ(j["planning"]["least_turn"], "narrowed");
+  EXPECT_EQ(turntable_choice(scan_settings_from_json(j)), TurntableChoice::kLeastTurn);
+  j["planning"].erase("least_turn");
+  EXPECT_FALSE(scan_settings_from_json(j).least_turn_narrowed);
+  EXPECT_EQ(turntable_choice(scan_settings_from_json(j)), TurntableChoice::kLeastTurnOnGrid);
+  j["planning"]["motion"] = "plain";
+  EXPECT_EQ(turntable_choice(scan_settings_from_json(j)), TurntableChoice::kPreferred);
+  j["planning"]["least_turn"] = "nearest";
+  const std::string why = pbnbv::testing::error_message([&] { scan_settings_from_json(j); });
+  EXPECT_NE(why.find("planning.least_turn 'nearest' is neither 'narrowed' nor 'grid'"), std::string::npos) << why;
+}
 // 1e308 (which passed and failed only in the coordinator, after every process had started), inf
 // and a point at the centre are refused naming the option; 0.9 m above is taken.
 TEST(InitialView, OnlyAFinitePointFiveCentimetresToTenMetresFromTheCentreIsTaken) {
