@@ -36,7 +36,7 @@ inline RigKind parse_rig_kind(const std::string& s) { return parse_name<RigKind>
 //    ranking, keeps the grid's angle).
 //  kLeastTurnOnGrid: kLeastTurn without the bisection, a single view's solve too: the executor's
 //    rule before the least turn was narrowed, kept so that a scan recorded then replays as it was moved
-//    (ScanSettings::least_turn).
+//    (ScanSettings::least_turn_narrowed, settings.json planning.least_turn).
 enum class TurntableChoice : uint8_t { kPreferred, kLeastTurn, kLeastTurnOnGrid };
 
 // The rig option of every program that works with a rig (pbnbv scan, motion, camera, scorer, twin).
