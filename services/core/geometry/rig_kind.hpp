@@ -36,8 +36,17 @@ inline RigKind parse_rig_kind(const std::string& s) { return parse_name<RigKind>
 //    ranking, keeps the grid's angle).
 //  kLeastTurnOnGrid: kLeastTurn without the bisection, a single view's solve too: the executor's
 //    rule before the least turn was narrowed, kept so that a scan recorded then replays as it was moved
-//    (ScanSettings::least_turn_narrowed, settings.json planning.least_turn).
+//    (ScanSettings::least_turn, settings.json planning.least_turn).
 enum class TurntableChoice : uint8_t { kPreferred, kLeastTurn, kLeastTurnOnGrid };
+
+// The motion executor's least turn, as a scan's settings record it: narrowed (kLeastTurn), or on
+// the grid alone (kLeastTurnOnGrid: a scan recorded before the least turn was narrowed).
+enum class LeastTurn : uint8_t { kNarrowed, kGrid };
+template <>
+struct EnumNames<LeastTurn> {
+  static constexpr std::string_view what = "least turn";
+  static constexpr std::array<NamedValue<LeastTurn>, 2> names{{{LeastTurn::kNarrowed, "narrowed"}, {LeastTurn::kGrid, "grid"}}};
+};
 
 // The rig option of every program that works with a rig (pbnbv scan, motion, camera, scorer, twin).
 inline constexpr ChoiceSetting<RigKind> kRig{"rig", RigKind::kArm,

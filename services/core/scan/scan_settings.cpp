@@ -53,7 +53,7 @@ nlohmann::json to_json(const ScanSettings& s) {
                     {"area", std::string(name_of(s.area))}, {"t_max", s.t_max},
                     {"map_resolution_m", s.map_resolution_m}, {"stop_fraction", s.stop_fraction}, {"when_done", std::string(name_of(s.when_done))},
                     {"motion", std::string(name_of(s.motion))}, {"seconds_per_point", s.seconds_per_point},
-                    {"least_turn", s.least_turn_narrowed ? "narrowed" : "grid"}, {"alternatives", s.alternatives}, {"seed", s.seed}}},
+                    {"least_turn", std::string(name_of(s.least_turn))}, {"alternatives", s.alternatives}, {"seed", s.seed}}},
       {"keepout", {{"min_m", to_json(s.keepout_min_m)}, {"max_m", to_json(s.keepout_max_m)}}},
       {"crop", {{"min_m", to_json(s.crop_min_m)}, {"max_m", to_json(s.crop_max_m)},
                 {"ground_clearance_m", s.ground_clearance_m}}},
@@ -148,11 +148,7 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     s.motion = parse_name<Motion>(pl.value("motion", std::string(name_of(Motion::kPlain))));
     s.seconds_per_point = pl.value("seconds_per_point", 0.0);
     // Settings written before the least turn was narrowed have none: their moves took the grid's.
-    const std::string least_turn = pl.value("least_turn", std::string("grid"));
-    if (least_turn != "narrowed" && least_turn != "grid") {
-      throw std::invalid_argument("planning.least_turn '" + least_turn + "' is neither 'narrowed' nor 'grid'");
-    }
-    s.least_turn_narrowed = least_turn == "narrowed";
+    s.least_turn = parse_name<LeastTurn>(pl.value("least_turn", std::string(name_of(LeastTurn::kGrid))));
     s.alternatives = int_at(pl, "alternatives", "planning.alternatives");
     if (pl.contains("seed")) {
       s.seed = integer_from_json(pl["seed"], std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max(),
@@ -296,7 +292,7 @@ std::string new_scan_id(const std::string& name) {
 TurntableChoice turntable_choice(const ScanSettings& s) {
   const bool aware = s.motion == Motion::kAware || (s.motion == Motion::kAuto && s.planner != PlannerKind::kPbnbvPaper);
   if (!aware) return TurntableChoice::kPreferred;
-  return s.least_turn_narrowed ? TurntableChoice::kLeastTurn : TurntableChoice::kLeastTurnOnGrid;
+  return s.least_turn == LeastTurn::kNarrowed ? TurntableChoice::kLeastTurn : TurntableChoice::kLeastTurnOnGrid;
 }
 
 }  // namespace pbnbv

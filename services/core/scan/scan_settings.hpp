@@ -32,7 +32,7 @@ void check_initial_view(const Eigen::Vector3d& p);
 struct ScanSettings;
 // The turntable choice of the scan's moves and plans: least turn when `motion` is aware (auto:
 // for every planner but pbnbv-paper; narrowed unless the scan was recorded before that:
-// least_turn_narrowed), else the preferred azimuth.
+// least_turn), else the preferred azimuth.
 TurntableChoice turntable_choice(const ScanSettings& s);
 
 struct ScanSettings {
@@ -88,10 +88,10 @@ struct ScanSettings {
   WhenDone when_done = kWhenDone.value;       // nothing left to aim at: stop, or spread (use the budget)
   Motion motion = kMotion.value;              // arm rig: moves chosen for what they cost (turntable_choice)
   double seconds_per_point = kSecondsPerPoint.value;  // motion-aware: pbnbv's ranking charges rig time
-  // Motion-aware: the turntable's least turn as the motion executor narrows it (false: on the grid
+  // Motion-aware: the turntable's least turn as the motion executor narrows it (kGrid: on the grid
   // of 15 deg offsets alone, the rule of scans recorded before it was narrowed, whose settings.json
   // has no planning.least_turn; kept so that they replay as they were moved).
-  bool least_turn_narrowed = true;
+  LeastTurn least_turn = LeastTurn::kNarrowed;
   int alternatives = kAlternatives.value;     // next-best views tried when the rig cannot reach the best
   int64_t seed = kPlannerSeed.value;          // the random planner's seed (view i uses seed + i)
 
