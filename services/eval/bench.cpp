@@ -65,7 +65,7 @@ std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, con
                        "sysctl -q -w net.core.rmem_max=67108864 net.core.rmem_default=33554432 2>/dev/null; exec \"$@\"",
                        "netns"});
   }
-  if (fs::exists(out / "processes.json") && fs::exists(out / "settings.json")) {
+  if (scan_resumable(out)) {
     a.insert(a.end(), {self.string(), "scan", "--resume", out.string()});  // an interrupted scan goes on
     return a;
   }
@@ -954,12 +954,13 @@ class TaskRunner {
     return j->evaluation ? read_evaluation(j->dir, error).has_value() : scan_complete(j->dir);
   }
 
-  // Before a task starts: an interrupted scan is resumed (scan_argv), a folder without its
-  // processes.json starts anew; an evaluation's last record goes.
+  // Before a task starts: an interrupted scan is resumed (scan_argv), a folder that holds none
+  // (no processes.json, or stopped before the coordinator's first scan.json: a task cancelled
+  // while it started) starts anew; an evaluation's last record goes.
   void prepare(const Job* j) const {
     if (j->evaluation) {
       fs::remove(j->dir / "evaluation.json");
-    } else if (fs::exists(j->dir) && !fs::exists(j->dir / "processes.json")) {
+    } else if (fs::exists(j->dir) && !scan_resumable(j->dir)) {
       fs::remove_all(j->dir);
     }
   }

@@ -175,6 +175,10 @@ bool scan_complete(const fs::path& dir) {
   }
 }
 
+bool scan_resumable(const fs::path& dir) {
+  return fs::exists(dir / "processes.json") && fs::exists(dir / "settings.json") && fs::exists(dir / "scan.json");
+}
+
 ObjectRun evaluate_run(const BenchSpec& spec, const ScanJob& j, std::map<std::string, std::vector<uint8_t>>& masks,
                        std::ostream& log) {
   ObjectRun r;

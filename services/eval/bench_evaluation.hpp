@@ -34,6 +34,11 @@ struct ScanJob {
 // True when `dir` holds a scan that ended "done" (scan.json and processes.json).
 bool scan_complete(const std::filesystem::path& dir);
 
+// True when `dir` holds an interrupted scan that `pbnbv scan --resume` continues: its launcher
+// wrote processes.json and settings.json and its coordinator wrote scan.json. A scan interrupted
+// before its first record (no scan.json) has nothing to continue from: it is started anew.
+bool scan_resumable(const std::filesystem::path& dir);
+
 // One scan of the folder against the ground truth (its object's observable-surface mask made once
 // and kept in `masks`, a line naming it written to `log`); a scan that is not complete, or fails
 // to evaluate, is a run with its error. Reads spec.views, coverage, metrics, stop_rule and

@@ -1,7 +1,7 @@
 // The bench's evaluation task: a run's record back exactly (17 digits, NaN as null), a record
 // field missing or of the wrong type named, a request naming a folder outside its bench refused,
 // a scan that is not there recorded with its reason, and a record kept only while the scans it
-// was made from are unchanged.
+// was made from are unchanged; a scan is resumed only from its record.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -155,6 +155,26 @@ TEST(BenchEvaluation, ARecordsBadFieldIsNamed) {
   j = run_record(full_run());
   j["planner"] = "telepathy";
   EXPECT_THROW(run_from_record(j), std::invalid_argument);
+}
+
+// The bench resumes an interrupted scan only when there is a record to continue from: a task
+// cancelled while its scan started (processes.json and settings.json written, no scan.json yet)
+// is started anew, as `pbnbv scan --resume` would refuse it ("cannot resume: ... scan.json does
+// not exist") on every resubmission.
+TEST(BenchEvaluation, AScanIsResumedOnlyFromItsRecord) {
+  const fs::path dir = fs::temp_directory_path() / ("pbnbv_resumable_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  EXPECT_FALSE(scan_resumable(dir));
+  std::ofstream(dir / "processes.json") << "{}";
+  std::ofstream(dir / "settings.json") << "{}";
+  EXPECT_FALSE(scan_resumable(dir));  // cancelled before the coordinator's first record
+  std::ofstream(dir / "scan.json") << "{}";
+  EXPECT_TRUE(scan_resumable(dir));
+  EXPECT_FALSE(scan_complete(dir));  // a record, but not of a scan that is done
+  fs::remove(dir / "settings.json");
+  EXPECT_FALSE(scan_resumable(dir));
+  fs::remove_all(dir);
 }
 
 class EvaluationTask : public ::testing::Test {
