@@ -42,6 +42,7 @@
 #include "core/perception/perception_options.hpp"
 #include "core/geometry/point_cloud.hpp"
 #include "core/base/log.hpp"
+#include "core/perception/neighbours.hpp"
 #include "core/perception/mount_estimate.hpp"
 #include "core/perception/registration.hpp"
 #include "core/io/json.hpp"
@@ -292,6 +293,37 @@ class RegistrationService {
     bus_.publish(channels::kRegisteredCloud, out);
     answers_.put({out.scan_id, out.request_id}, out);
     save(out);
+    prepare_model();
+  }
+
+  // ICP's model for the next view (registration_model: the model downsampled, with its normals)
+  // and a k-d tree over the model for its new surface, prepared on a worker once a view is answered, while the rig moves to the next one instead of
+  // on the next frame's way; taken when the model has not changed since (a restart, a new scan or
+  // views placed again: prepared on the spot).
+  struct PreparedModel {
+    std::uint64_t revision = 0;  // ScanModel::revision() it was prepared from
+    RegistrationModel model;
+    std::optional<NeighbourIndex> index;  // over the model's points: the next view's new surface
+  };
+  void prepare_model() {
+    if (off_ || model_.points().empty()) return;
+    if (preparing_.valid()) preparing_.wait();  // the last view's (not taken: the model changed since)
+    preparing_ = std::async(std::launch::async, [points = model_.points(), revision = model_.revision(), p = params_] {
+      PreparedModel m{revision, registration_model(points, p), std::nullopt};
+      m.index.emplace(points);
+      return m;
+    });
+  }
+  const RegistrationModel& model_for_icp() {
+    if (preparing_.valid()) prepared_ = preparing_.get();
+    if (!prepared_ || prepared_->revision != model_.revision()) {
+      prepared_ = PreparedModel{model_.revision(), registration_model(model_.points(), params_)};
+    }
+    return prepared_->model;
+  }
+  // The prepared k-d tree over the model as it is now, if there is one.
+  const NeighbourIndex* prepared_index() const {
+    return prepared_ && prepared_->revision == model_.revision() && prepared_->index ? &*prepared_->index : nullptr;
   }
 
   // Registers a view from where the mount's estimate so far puts it (the kinematic pose when
@@ -303,7 +335,7 @@ class RegistrationService {
     // resting on a view that slid would lead the next ones astray.
     const bool use = mount_.trusted(3);
     const Pose predicted = applied_ * (use ? mount_.predicted_correction(kinematic) : Pose::Identity());
-    RegistrationResult r = register_frame(model_.points(), transform_cloud(frame, predicted), params_,
+    RegistrationResult r = register_frame(model_for_icp(), transform_cloud(frame, predicted), params_,
                                           (predicted * kinematic).translation());
     const Pose total = r.correction * predicted;
     const double predicted_mm = predicted.translation().norm() * 1e3;
@@ -537,7 +569,8 @@ class RegistrationService {
   void add_to_model(const point_cloud_t& c, const PointCloud& placed, std::vector<Eigen::Vector3f> normals,
                     const std::vector<Rgb>& colours, const Pose& pose, bool merge, registered_cloud_t& out) {
     const std::size_t before = model_.points().size();
-    const ModelUpdate u = model_.add_view(c.iteration, placed, std::move(normals), pose, merge, colours);
+    if (preparing_.valid()) prepared_ = preparing_.get();  // the first view's ICP took none
+    const ModelUpdate u = model_.add_view(c.iteration, placed, std::move(normals), pose, merge, colours, prepared_index());
     out.frame_file = u.frame_file;
     out.normals = u.normals_from_depth ? registered_cloud_t::kNormalsDepthImage : registered_cloud_t::kNormalsNeighbours;
     if (u.new_surface) {
@@ -614,6 +647,8 @@ class RegistrationService {
   std::vector<MountView> mount_views_;  // the merged views in their camera frames, for the mount's fit
   bus::RecentFrames frames_;          // the last depth frames, for DIR/depth/
   std::future<MeshResult> meshing_;   // the mesh being made
+  std::future<PreparedModel> preparing_;  // ICP's model for the next view, being prepared
+  std::optional<PreparedModel> prepared_;  // ... and prepared
   MeshKey making_;                    // ... of this
   int meshes_made_ = 0;               // for scan_id_
   std::optional<std::pair<MeshKey, mesh_result_t>> last_mesh_;  // the last mesh made for scan_id_

@@ -1,6 +1,5 @@
 #include "core/perception/new_surface.hpp"
 
-#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -8,12 +7,13 @@
 
 namespace pbnbv {
 
-NewSurface new_surface(const PointCloud& frame, const PointCloud& model, double radius_m) {
+namespace {
+
+// `index`: over the model (none: an empty model).
+NewSurface count_new(const PointCloud& frame, const NeighbourIndex* index, double radius_m) {
   if (!(radius_m > 0)) throw std::invalid_argument("new surface: the radius must be positive, not " + std::to_string(radius_m));
   NewSurface n;
   n.radius_m = radius_m;
-  std::optional<NeighbourIndex> index;
-  if (!model.empty()) index.emplace(model);
   n.model_points = index ? static_cast<int>(index->size()) : 0;
   const float r2 = static_cast<float>(radius_m * radius_m);
   for (const Eigen::Vector3f& p : frame) {
@@ -23,6 +23,18 @@ NewSurface new_surface(const PointCloud& frame, const PointCloud& model, double 
     if (n.model_points == 0 || index->nearest(p, r2, d2) < 0) ++n.new_points;
   }
   return n;
+}
+
+}  // namespace
+
+NewSurface new_surface(const PointCloud& frame, const NeighbourIndex& model, double radius_m) {
+  return count_new(frame, &model, radius_m);
+}
+
+NewSurface new_surface(const PointCloud& frame, const PointCloud& model, double radius_m) {
+  if (model.empty() || !(radius_m > 0)) return count_new(frame, nullptr, radius_m);
+  const NeighbourIndex index(model);
+  return count_new(frame, &index, radius_m);
 }
 
 }  // namespace pbnbv

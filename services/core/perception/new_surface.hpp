@@ -27,4 +27,9 @@ struct NewSurface {
 // over the model). Throws std::invalid_argument when radius_m is not positive.
 NewSurface new_surface(const PointCloud& frame, const PointCloud& model, double radius_m);
 
+class NeighbourIndex;
+// The same against a k-d tree over the model built beforehand (core/perception/neighbours.hpp),
+// as the registration service builds it while the rig moves.
+NewSurface new_surface(const PointCloud& frame, const NeighbourIndex& model, double radius_m);
+
 }  // namespace pbnbv

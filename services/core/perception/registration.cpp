@@ -77,9 +77,9 @@ class NormalCompatibilityRejector : public pcl::registration::CorrespondenceReje
 constexpr int kNormalNeighbours = 12;  // k-NN of the plane fits on the downsampled clouds
 constexpr double kMaxNormalAngleDeg = 30.0;  // correspondences with normals further apart drop
 
-// The points of `cloud` within `dist` of some point of `ref` (and some a little further: whole
-// cells of a grid of dist/2, the cells of `ref` dilated by two).
-PointCloud near_points(const PointCloud& cloud, const PointCloud& ref, double dist) {
+// The indices of the points of `cloud` within `dist` of some point of `ref` (and some a little
+// further: whole cells of a grid of dist/2, the cells of `ref` dilated by two), in order.
+std::vector<std::size_t> near_points(const PointCloud& cloud, const PointCloud& ref, double dist) {
   const double cell = dist / 2;
   auto key = [cell](const Eigen::Vector3f& p, int64_t& k) {
     const Eigen::Vector3d q = (p.cast<double>() / cell).array().floor();
@@ -89,10 +89,15 @@ PointCloud near_points(const PointCloud& cloud, const PointCloud& ref, double di
         (static_cast<int64_t>(q.z()) + (1 << 20));
     return true;
   };
+  std::vector<std::size_t> out;
+  out.reserve(cloud.size());
   std::unordered_set<int64_t> occupied;
   for (const auto& p : ref) {
     int64_t k;
-    if (!key(p, k)) return cloud;
+    if (!key(p, k)) {  // not cropped: every point
+      for (std::size_t i = 0; i < cloud.size(); ++i) out.push_back(i);
+      return out;
+    }
     occupied.insert(k);
   }
   std::unordered_set<int64_t> dilated;
@@ -106,11 +111,9 @@ PointCloud near_points(const PointCloud& cloud, const PointCloud& ref, double di
       }
     }
   }
-  PointCloud out;
-  out.reserve(cloud.size());
-  for (const auto& p : cloud) {
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
     int64_t k;
-    if (!key(p, k) || dilated.count(k)) out.push_back(p);
+    if (!key(cloud[i], k) || dilated.count(k)) out.push_back(i);
   }
   return out;
 }
@@ -124,13 +127,15 @@ PointCloud finite_points(const PointCloud& in) {
   return out;
 }
 
-// Points with usable normals (estimate_normals: a plane fitted to the k nearest neighbours);
-// points without a plane are dropped.
-pcl::PointCloud<pcl::PointNormal>::Ptr with_normals(const PointCloud& pts) {
-  const SurfaceNormals sn = estimate_normals(pts, kNormalNeighbours);
+// Points with usable normals, those of `pts` at `indices` (all: none given) with their normals
+// fitted beforehand; points without a plane are dropped.
+pcl::PointCloud<pcl::PointNormal>::Ptr with_normals(const PointCloud& pts, const SurfaceNormals& sn,
+                                                    const std::vector<std::size_t>* indices = nullptr) {
   pcl::PointCloud<pcl::PointNormal>::Ptr out(new pcl::PointCloud<pcl::PointNormal>);
-  out->reserve(pts.size());
-  for (std::size_t i = 0; i < pts.size(); ++i) {
+  const std::size_t n = indices ? indices->size() : pts.size();
+  out->reserve(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    const std::size_t i = indices ? (*indices)[j] : j;
     if (!sn.valid[i]) continue;
     pcl::PointNormal o;
     o.getVector3fMap() = pts[i];
@@ -142,6 +147,11 @@ pcl::PointCloud<pcl::PointNormal>::Ptr with_normals(const PointCloud& pts) {
   out->height = 1;
   out->is_dense = true;
   return out;
+}
+
+// The same with the normals fitted to `pts`' own nearest neighbours (estimate_normals).
+pcl::PointCloud<pcl::PointNormal>::Ptr with_normals(const PointCloud& pts) {
+  return with_normals(pts, estimate_normals(pts, kNormalNeighbours));
 }
 
 }  // namespace
@@ -461,15 +471,15 @@ void judge(const RegistrationParams& params, const Vec6& weakest, const Pairs& p
 }
 
 // register_frame's steps after the inputs' checks; throws what PCL throws.
-void align_and_judge(const PointCloud& model_ds, const PointCloud& frame_ds, const RegistrationParams& params,
+void align_and_judge(const RegistrationModel& model, const PointCloud& frame_ds, const RegistrationParams& params,
                      const std::optional<Eigen::Vector3d>& camera_m, const std::string& dropped_note, RegistrationResult& res) {
   const double voxel = params.voxel_m;
   // Only the part of the model the frame can reach matters: keep the model points within
   // `margin` (the largest correspondence distance plus room for the normals) of the frame,
   // via a grid of margin/2 cells: the frame's cells dilated by two.
   const double margin = std::max(params.max_correspondence_m, params.overlap_distance_m) + 4.0 * voxel;
-  const PointCloud model_crop = near_points(model_ds, frame_ds, margin);
-  const auto target = with_normals(model_crop);
+  const std::vector<std::size_t> near = near_points(model.points, frame_ds, margin);
+  const auto target = with_normals(model.points, model.normals, &near);
   const auto source = with_normals(frame_ds);
   Tree::Ptr tree(new Tree);
   if (target->size() >= 3) tree->setInputCloud(target);
@@ -492,8 +502,33 @@ void align_and_judge(const PointCloud& model_ds, const PointCloud& frame_ds, con
 
 }  // namespace
 
-RegistrationResult register_frame(const PointCloud& model, const PointCloud& frame, const RegistrationParams& params,
+RegistrationModel registration_model(const PointCloud& model, const RegistrationParams& params) {
+  RegistrationModel m;
+  m.voxel_m = params.voxel_m;
+  try {
+    const PointCloud finite = finite_points(model);
+    m.finite = finite.size();
+    m.dropped = model.size() - finite.size();
+    if (!finite.empty()) m.points = voxel_downsample(finite, params.voxel_m);
+    if (m.points.size() >= 3) m.normals = estimate_normals(m.points, kNormalNeighbours);
+  } catch (const std::exception& e) {
+    m.error = e.what();
+  } catch (...) {
+    m.error = "preparing the model failed";
+  }
+  // One entry per point whatever happened (none fitted: every point without a plane).
+  m.normals.normals.resize(m.points.size(), Eigen::Vector3f::Zero());
+  m.normals.curvature.resize(m.points.size(), 0.0f);
+  m.normals.valid.resize(m.points.size(), 0);
+  return m;
+}
+
+RegistrationResult register_frame(const RegistrationModel& model, const PointCloud& frame, const RegistrationParams& params,
                                   const std::optional<Eigen::Vector3d>& camera_m) {
+  if (model.voxel_m != params.voxel_m) {
+    throw std::invalid_argument(fmt::format("register_frame: the model was prepared for {:.1f} mm voxels, not {:.1f} mm",
+                                            model.voxel_m * 1e3, params.voxel_m * 1e3));
+  }
   const auto t0 = Clock::now();
   RegistrationResult res;
   const std::size_t frame_finite = static_cast<std::size_t>(
@@ -506,26 +541,25 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
     res.reason = (res.accepted ? "kinematic pose kept, flagged (" : "not merged (") + why + ")";
   };
   try {
-    const PointCloud model_f = finite_points(model);
+    if (!model.error.empty()) throw std::runtime_error(model.error);
     const PointCloud frame_f = finite_points(frame);
-    const std::size_t dropped = (model.size() - model_f.size()) + (frame.size() - frame_f.size());
+    const std::size_t dropped = model.dropped + (frame.size() - frame_f.size());
     const std::string dropped_note = dropped ? " (" + std::to_string(dropped) + " non-finite points dropped)" : "";
-    const PointCloud model_ds = model_f.empty() ? PointCloud() : voxel_downsample(model_f, params.voxel_m);
-    const PointCloud frame_ds = model_f.empty() ? PointCloud() : voxel_downsample(frame_f, params.voxel_m);
+    const PointCloud frame_ds = model.finite == 0 ? PointCloud() : voxel_downsample(frame_f, params.voxel_m);
     const std::size_t min_points = static_cast<std::size_t>(std::max(params.min_points, 3));
     if (frame_f.empty()) {
       kinematic_only("no finite point in the view" + dropped_note);
-    } else if (model_f.empty()) {
+    } else if (model.finite == 0) {
       res.accepted = true;
       res.converged = true;
       res.reason = "first frame: defines the model" + dropped_note;
-    } else if (frame_ds.size() < min_points || model_ds.size() < min_points) {
+    } else if (frame_ds.size() < min_points || model.points.size() < min_points) {
       kinematic_only("too few points to align: frame " + std::to_string(frame_ds.size()) + ", model " +
-                     std::to_string(model_ds.size()) + " after " + fmt::format("{:.1f}", params.voxel_m * 1e3) +
-                     " mm downsampling (of " + std::to_string(frame_f.size()) + " and " + std::to_string(model_f.size()) +
+                     std::to_string(model.points.size()) + " after " + fmt::format("{:.1f}", params.voxel_m * 1e3) +
+                     " mm downsampling (of " + std::to_string(frame_f.size()) + " and " + std::to_string(model.finite) +
                      " finite points), need " + std::to_string(min_points) + dropped_note);
     } else {
-      align_and_judge(model_ds, frame_ds, params, camera_m, dropped_note, res);
+      align_and_judge(model, frame_ds, params, camera_m, dropped_note, res);
     }
   } catch (const std::exception& e) {
     kinematic_only(std::string("registration failed: ") + e.what());
@@ -533,6 +567,14 @@ RegistrationResult register_frame(const PointCloud& model, const PointCloud& fra
     kinematic_only("registration failed");
   }
   res.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  return res;
+}
+
+RegistrationResult register_frame(const PointCloud& model, const PointCloud& frame, const RegistrationParams& params,
+                                  const std::optional<Eigen::Vector3d>& camera_m) {
+  const auto t0 = Clock::now();
+  RegistrationResult res = register_frame(registration_model(model, params), frame, params, camera_m);
+  res.time_s = std::chrono::duration<double>(Clock::now() - t0).count();  // the model's preparing too
   return res;
 }
 

@@ -9,11 +9,14 @@
 // whose alignment cannot be trusted (too little overlap, a poor fit, ICP not settled, a correction
 // the rig's uncertainty does not allow) is not thrown away: it is placed at its kinematic pose and
 // flagged, with the reason.
+#include <cstddef>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/geometry/point_cloud.hpp"
 #include "core/base/pose.hpp"
+#include "core/perception/neighbours.hpp"
 #include "core/perception/perception_options.hpp"
 
 namespace pbnbv {
@@ -89,12 +92,33 @@ struct RegistrationResult {
   std::optional<IcpProposal> icp;  // for estimating what is wrong the same way in every view
 };
 
+// The model as ICP reads it, prepared once per model: its finite points downsampled to
+// params.voxel_m, and a normal fitted to each one's nearest neighbours over the whole of it.
+// Everything register_frame does with the model alone; a caller that registers many frames to the
+// same model (the registration service: every view to the views before it) prepares it once,
+// while the rig moves to the next view, instead of on the next frame's way.
+struct RegistrationModel {
+  double voxel_m = 0;                   // the params.voxel_m it was prepared for
+  std::size_t finite = 0;               // the model's finite points
+  std::size_t dropped = 0;              // its non-finite points, left out
+  PointCloud points;                    // the finite points downsampled
+  SurfaceNormals normals;               // per point of `points` (valid 0: no plane fitted)
+  std::string error;                    // what failed while preparing it (register_frame then
+                                        // keeps the kinematic pose, flagged, saying so)
+};
+RegistrationModel registration_model(const PointCloud& model, const RegistrationParams& params);
+
 // Registers `frame` (already in the object frame by the kinematic pose) to `model`. `camera_m`:
 // the camera's kinematic position in the object frame (the lever of its rotation error; without
 // it, rotations are taken about the overlap's centre). The first frame of a scan (empty model) is
 // accepted as is. Throws nothing for bad clouds: too few points, or a failure inside ICP, keep
 // the kinematic pose, flagged, saying so; only a frame without a finite point is not accepted.
 RegistrationResult register_frame(const PointCloud& model, const PointCloud& frame,
+                                  const RegistrationParams& params,
+                                  const std::optional<Eigen::Vector3d>& camera_m = std::nullopt);
+// The same with the model prepared (registration_model with the same params.voxel_m; another
+// voxel is refused: std::invalid_argument naming both).
+RegistrationResult register_frame(const RegistrationModel& model, const PointCloud& frame,
                                   const RegistrationParams& params,
                                   const std::optional<Eigen::Vector3d>& camera_m = std::nullopt);
 

@@ -10,6 +10,7 @@
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
 #include "core/perception/depth_cloud.hpp"
+#include "core/perception/neighbours.hpp"
 #include "core/surface/scan_mesh.hpp"
 
 namespace fs = std::filesystem;
@@ -24,6 +25,7 @@ ScanModel::ScanModel(fs::path folder, double voxel_m, double new_surface_radius_
 }
 
 void ScanModel::clear() {
+  ++revision_;
   model_.points.clear();
   model_.normals.clear();
   model_.colours.clear();
@@ -33,6 +35,7 @@ void ScanModel::clear() {
 bool ScanModel::restore() {
   const fs::path path = folder_ / "cloud.ply";
   if (folder_.empty() || !fs::exists(path)) return false;
+  ++revision_;
   CloudExtras extras;
   model_.points = read_ply(path.string(), extras);
   poses_ = extras.camera_poses;
@@ -51,7 +54,8 @@ bool ScanModel::restore() {
 }
 
 ModelUpdate ScanModel::add_view(int view, const PointCloud& points, std::vector<Eigen::Vector3f> normals,
-                                const Pose& object_T_camera, bool merge, const std::vector<Rgb>& colours) {
+                                const Pose& object_T_camera, bool merge, const std::vector<Rgb>& colours,
+                                const NeighbourIndex* model_index) {
   const auto t0 = std::chrono::steady_clock::now();
   ModelUpdate u;
   if (!colours.empty() && colours.size() != points.size()) {
@@ -72,8 +76,9 @@ ModelUpdate ScanModel::add_view(int view, const PointCloud& points, std::vector<
     write_ply(points, (folder_ / u.frame_file).string(), CloudExtras{normals, {object_T_camera}, colours});
   }
   if (merge) {
-    u.new_surface = new_surface(points, model_.points, radius_m_);
+    u.new_surface = model_index ? new_surface(points, *model_index, radius_m_) : new_surface(points, model_.points, radius_m_);
     merge_into_voxels(model_, points, normals, colours, voxel_m_);  // sizes checked above
+    ++revision_;
     poses_.push_back(object_T_camera);
     if (!folder_.empty()) {
       write_ply(model_.points, (folder_ / "cloud.ply").string(), CloudExtras{model_.normals, poses_, model_.colours});
@@ -161,6 +166,7 @@ void ScanModel::write_trajectory() const {
 }
 
 void ScanModel::move_frame(const Pose& q) {
+  ++revision_;
   model_.points = moved(model_.points, q);
   model_.normals = turned(model_.normals, q);
   for (Pose& pose : poses_) pose = q * pose;
@@ -205,6 +211,7 @@ void ScanModel::move_views(const std::vector<std::pair<int, Pose>>& moves, const
     all_colours.insert(all_colours.end(), e.colours.begin(), e.colours.end());
     if (!e.camera_poses.empty()) poses.push_back(e.camera_poses.front());
   }
+  ++revision_;
   model_ = VoxelCloud{};
   merge_into_voxels(model_, all, all_normals, coloured ? all_colours : std::vector<Rgb>{}, voxel_m_);
   poses_ = poses;

@@ -7,6 +7,7 @@
 // tools (Open3D, MeshLab, PCL) read. cloud.ply is also the state a restarted service continues
 // from. Plain data and files, no bus.
 #include <Eigen/Core>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -59,9 +60,12 @@ class ScanModel {
   // frames/view_NNN.ply; when `merge`, counts its new surface against the model before it, merges
   // it and writes cloud.ply (coloured once any merged view had colours: each voxel the mean of its
   // points', kNoColour where only views without colour saw it). Throws std::invalid_argument when
-  // the normals or colours are neither empty nor one per point.
+  // the normals or colours are neither empty nor one per point. `model_index`: a k-d tree over
+  // points() as they are now (revision() unchanged since it was built), for the new surface; none:
+  // built here.
   ModelUpdate add_view(int view, const PointCloud& points, std::vector<Eigen::Vector3f> normals,
-                       const Pose& object_T_camera, bool merge, const std::vector<Rgb>& colours = {});
+                       const Pose& object_T_camera, bool merge, const std::vector<Rgb>& colours = {},
+                       const NeighbourIndex* model_index = nullptr);
 
   // Writes the view's depth image as depth/view_NNN.png (with `write_png`: 16-bit, in units of
   // 1 / depth_scale m: 0.1 mm where the camera's range fits 16 bits, else 1 mm) and
@@ -117,6 +121,9 @@ class ScanModel {
   const std::vector<Rgb>& colours() const { return model_.colours; }  // empty, or one per point
   const std::vector<Pose>& camera_poses() const { return poses_; }
   const std::filesystem::path& folder() const { return folder_; }
+  // Counts the changes of the merged cloud (every clear, restore, merge and move): what is derived
+  // from points() is current while this has not changed.
+  std::uint64_t revision() const { return revision_; }
 
  private:
   std::filesystem::path folder_;
@@ -125,6 +132,7 @@ class ScanModel {
   VoxelCloud model_;  // normals: one per point (zero: none); colours: empty (no merged view had
                       // colours), or one per point
   std::vector<Pose> poses_;               // the merged views' camera poses, in order
+  std::uint64_t revision_ = 0;
 };
 
 }  // namespace pbnbv

@@ -1,7 +1,8 @@
 // What a view adds to the model (core/perception/new_surface.hpp), on planes whose answer is known
 // by hand: a duplicate adds nothing, a plane 1 cm away everything, a half-overlapping one the
-// columns beyond the radius.
+// columns beyond the radius; against a k-d tree built beforehand, the same.
 #include "core/perception/new_surface.hpp"
+#include "core/perception/neighbours.hpp"
 
 #include <gtest/gtest.h>
 
@@ -45,8 +46,20 @@ TEST(NewSurface, HalfOverlappingPlaneCountsTheColumnsBeyondTheRadius) {
   EXPECT_NEAR(n.percent_of_frame(), 100.0 * 23 / 51, 1e-9);
 }
 
+// The registration service builds the model's k-d tree while the rig moves: the counts are the
+// same as with the tree built on the spot (23 columns of 51 beyond the radius, as above).
+TEST(NewSurface, AgainstATreeBuiltBeforehandTheCountsAreTheSame) {
+  const NeighbourIndex index(plane(0, 0));
+  const NewSurface n = new_surface(plane(0.05f, 0), index, 0.005);
+  EXPECT_EQ(n.frame_points, 2601);
+  EXPECT_EQ(n.model_points, 2601);
+  EXPECT_EQ(n.new_points, 23 * 51);
+  EXPECT_EQ(new_surface(plane(0, 0.01f), index, 0.005).new_points, 2601);
+  EXPECT_THROW(new_surface(plane(0, 0), index, 0.0), std::invalid_argument);
+}
+
 TEST(NewSurface, FirstViewIsAllNew) {
-  const NewSurface n = new_surface(plane(0, 0), {}, 0.005);
+  const NewSurface n = new_surface(plane(0, 0), PointCloud{}, 0.005);
   EXPECT_EQ(n.new_points, 2601);
   EXPECT_EQ(n.model_points, 0);
   EXPECT_DOUBLE_EQ(n.percent_of_model(), 100.0);

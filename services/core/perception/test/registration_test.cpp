@@ -387,7 +387,7 @@ TEST(Registration, DisjointFrameIsMergedAtItsKinematicPose) {
 
 TEST(Registration, EmptyModelDefinesTheModel) {
   const Scene& s = scene();
-  const auto r = register_frame({}, s.frame, RegistrationParams{});
+  const auto r = register_frame(PointCloud{}, s.frame, RegistrationParams{});
   EXPECT_TRUE(r.accepted);
   EXPECT_TRUE(r.correction.isApprox(Pose::Identity()));
   EXPECT_EQ(r.reason, "first frame: defines the model");
