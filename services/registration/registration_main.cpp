@@ -13,17 +13,22 @@
 // mount's error, the same in every view, is fitted to all views' clouds at once, each view's own
 // small error alongside (core mount_from_views, DIR/hand_eye.json); once it is sure, views are
 // registered from where it puts them, every view is placed again where it puts it, and at the
-// scan's end the model is moved into the object frame.
+// scan's end the model is moved into the object frame. What needs no new frame (the mount's fit
+// and the views' placing, ICP's downsampled model with its normals, the k-d tree for the new
+// surface) is done once a view is answered, on a worker while the rig moves to the next view.
 // It owns the model and what is made of it (core/surface/scan_model.hpp): each view's frame,
 // the merged cloud and what each view added to it (new surface), said in the answer. A
 // restarted service continues the model of its scan from DIR/cloud.ply; answers are idempotent
 // by (scan_id, request_id). The mesh is made on a worker thread, so the service's heartbeat goes
 // on while it fuses (seconds).
 #include <fmt/format.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <future>
+#include <limits>
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -128,6 +133,7 @@ class RegistrationService {
       return;
     }
     bus_.set_scan(r.scan_id, -1);
+    settle();  // the last view's mount fit and placing
     tie_model_to_object();
     ++meshes_made_;
     making_ = key;
@@ -199,6 +205,7 @@ class RegistrationService {
 
   void on_cloud(const point_cloud_t& c) {
     asked_.require("CLOUD", c.scan_id, c.request_id);  // a cloud nobody asked for is not merged
+    settle();
     bus_.set_scan(c.scan_id, c.iteration);
     if (meshing_.valid()) meshing_.wait();  // the frames stay as the mesh read them
     if (const registered_cloud_t* answer = answers_.find({c.scan_id, c.request_id})) {
@@ -244,9 +251,9 @@ class RegistrationService {
       } else {
         // On a worker, the heartbeat going on meanwhile: ICP against a large model of a noisy
         // camera takes seconds, more on a loaded machine, and a silent service is taken for hung.
+        // The mount was fitted to the views before this one after the last answer (after_answer).
         auto job = std::async(std::launch::async, [&] {
           keep_for_mount(capture);
-          fit_mount_to_views();
           return register_predicted(c.iteration, frame, kinematic);
         });
         while (job.wait_for(std::chrono::milliseconds(250)) != std::future_status::ready) bus_.keep_alive();
@@ -293,31 +300,48 @@ class RegistrationService {
     bus_.publish(channels::kRegisteredCloud, out);
     answers_.put({out.scan_id, out.request_id}, out);
     save(out);
-    prepare_model();
+    after_answer();
   }
 
-  // ICP's model for the next view (registration_model: the model downsampled, with its normals)
-  // and a k-d tree over the model for its new surface, prepared on a worker once a view is answered, while the rig moves to the next one instead of
-  // on the next frame's way; taken when the model has not changed since (a restart, a new scan or
-  // views placed again: prepared on the spot).
+  // After a view is answered, on a worker while the rig moves to the next view instead of on the
+  // next frame's way: the mount fitted to the views' clouds so far (this one's included) and the
+  // views placed again by it (fit_mount_to_views: on an uncalibrated rig seconds a view by view
+  // 10), hand_eye.json, then ICP's model (registration_model: the model downsampled, normals fitted)
+  // and a k-d tree over the model for the next view's new surface. Everything that touches the
+  // model, the mount or their files waits for it first (settle).
   struct PreparedModel {
     std::uint64_t revision = 0;  // ScanModel::revision() it was prepared from
     RegistrationModel model;
     std::optional<NeighbourIndex> index;  // over the model's points: the next view's new surface
   };
-  void prepare_model() {
+  void after_answer() {
     if (off_ || model_.points().empty()) return;
-    if (preparing_.valid()) preparing_.wait();  // the last view's (not taken: the model changed since)
-    preparing_ = std::async(std::launch::async, [points = model_.points(), revision = model_.revision(), p = params_] {
-      PreparedModel m{revision, registration_model(points, p), std::nullopt};
-      m.index.emplace(points);
-      return m;
+    settle();
+    preparing_ = std::async(std::launch::async, [this] {
+      // At the lowest priority: the next view's plan (the map, the ellipsoids, the view scorer)
+      // comes first; this has the time of the move. (Linux: a thread's own nice value.)
+      ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 19);
+      try {
+        fit_mount_to_views();
+        save_mount();
+        PreparedModel m{model_.revision(), registration_model(model_.points(), params_), std::nullopt};
+        m.index.emplace(model_.points());
+        return m;
+      } catch (const std::exception& e) {  // the next view fits and prepares on its way
+        log_warn("after the answer: " + std::string(e.what()));
+        return PreparedModel{std::numeric_limits<std::uint64_t>::max(), {}, std::nullopt};
+      }
     });
   }
-  const RegistrationModel& model_for_icp() {
+  // Waits for the work after the last answer and keeps what it prepared.
+  void settle() {
     if (preparing_.valid()) prepared_ = preparing_.get();
+  }
+  // ICP's model of the model as it is now: the prepared one, else prepared on the spot (the first
+  // view after a restart, a new scan, or views placed again since).
+  const RegistrationModel& model_for_icp() {
     if (!prepared_ || prepared_->revision != model_.revision()) {
-      prepared_ = PreparedModel{model_.revision(), registration_model(model_.points(), params_)};
+      prepared_ = PreparedModel{model_.revision(), registration_model(model_.points(), params_), std::nullopt};
     }
     return prepared_->model;
   }
@@ -569,7 +593,6 @@ class RegistrationService {
   void add_to_model(const point_cloud_t& c, const PointCloud& placed, std::vector<Eigen::Vector3f> normals,
                     const std::vector<Rgb>& colours, const Pose& pose, bool merge, registered_cloud_t& out) {
     const std::size_t before = model_.points().size();
-    if (preparing_.valid()) prepared_ = preparing_.get();  // the first view's ICP took none
     const ModelUpdate u = model_.add_view(c.iteration, placed, std::move(normals), pose, merge, colours, prepared_index());
     out.frame_file = u.frame_file;
     out.normals = u.normals_from_depth ? registered_cloud_t::kNormalsDepthImage : registered_cloud_t::kNormalsNeighbours;
@@ -647,8 +670,8 @@ class RegistrationService {
   std::vector<MountView> mount_views_;  // the merged views in their camera frames, for the mount's fit
   bus::RecentFrames frames_;          // the last depth frames, for DIR/depth/
   std::future<MeshResult> meshing_;   // the mesh being made
-  std::future<PreparedModel> preparing_;  // ICP's model for the next view, being prepared
-  std::optional<PreparedModel> prepared_;  // ... and prepared
+  std::future<PreparedModel> preparing_;  // after_answer's work, running
+  std::optional<PreparedModel> prepared_;  // ... and what it prepared
   MeshKey making_;                    // ... of this
   int meshes_made_ = 0;               // for scan_id_
   std::optional<std::pair<MeshKey, mesh_result_t>> last_mesh_;  // the last mesh made for scan_id_

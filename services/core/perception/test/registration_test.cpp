@@ -243,6 +243,39 @@ TEST(Registration, AnExactKinematicPoseStaysExactWhenTheRigSaysItIs) {
   }
 }
 
+// The model prepared beforehand (as the registration service does while the rig moves) registers
+// a frame 5 mm / 1 deg off exactly as the model given whole: the same correction, to the bit (the
+// whole model's path prepares it the same way), the error within a millimetre and a tenth of a
+// degree; the prepared model is the model's finite points downsampled, one normal per point. A
+// model prepared for another voxel is refused, naming both.
+TEST(Registration, APreparedModelRegistersAsTheWholeModel) {
+  const Scene& s = scene();
+  std::mt19937_64 rng(7);
+  const Pose p = perturbation(0.005, 1.0, rng);
+  const PointCloud frame = transform_cloud(s.frame, p);
+  const RegistrationModel prepared = registration_model(s.model, loose_prior());
+  EXPECT_EQ(prepared.finite, s.model.size());
+  EXPECT_EQ(prepared.dropped, 0u);
+  EXPECT_LT(prepared.points.size(), s.model.size());
+  EXPECT_EQ(prepared.normals.normals.size(), prepared.points.size());
+  EXPECT_EQ(prepared.normals.valid.size(), prepared.points.size());
+  const auto whole = register_frame(s.model, frame, loose_prior());
+  const auto r = register_frame(prepared, frame, loose_prior());
+  EXPECT_TRUE(r.refined) << r.reason;
+  EXPECT_TRUE(r.correction.isApprox(whole.correction, 1e-12)) << r.reason << " / " << whole.reason;
+  const Pose err = r.correction * p;
+  EXPECT_LT(err.translation().norm(), 0.001) << r.reason;
+  EXPECT_LT(deg(rotation_angle_rad(Eigen::Matrix3d::Identity(), err.linear())), 0.1) << r.reason;
+  RegistrationParams other = loose_prior();
+  other.voxel_m = 0.002;
+  try {
+    register_frame(prepared, frame, other);
+    ADD_FAILURE() << "a model prepared for 3 mm registered at 2 mm";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "register_frame: the model was prepared for 3.0 mm voxels, not 2.0 mm");
+  }
+}
+
 // A correction the rig's uncertainty does not allow (5 mm off where the rig claims 0.5 mm) is not
 // taken: the kinematic pose is kept and the view flagged, ICP's proposal and its sigmas said.
 TEST(Registration, ACorrectionBeyondThePriorIsNotTakenAndFlagged) {

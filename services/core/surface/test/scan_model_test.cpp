@@ -1,6 +1,6 @@
 // The registration service's model of a scan and the files it writes for each view, from
 // hand-made views: frames/view_NNN.ply, cloud.ply (merged, downsampled), what each view added,
-// depth/view_NNN.png and .json, and a restart from cloud.ply.
+// depth/view_NNN.png and .json, a restart from cloud.ply, and the revision that says what is stale.
 #include "core/surface/scan_model.hpp"
 
 #include <gtest/gtest.h>
@@ -9,6 +9,7 @@
 
 #include "core/io/cloud_file.hpp"
 #include "core/io/json.hpp"
+#include "core/perception/neighbours.hpp"
 #include "file_test_util.hpp"
 
 using namespace pbnbv;
@@ -172,6 +173,40 @@ TEST_F(ScanModelTest, ViewsPlacedAgainMoveTheirFramesAndTheMergedCloud) {
     EXPECT_NEAR((normals[0].cast<double>() - camera.linear().transpose() * Eigen::Vector3d::UnitX()).norm(), 0.0, 1e-6);
   }
   EXPECT_ANY_THROW(model.view_in_camera_frame(7, seen, normals));  // no such frame
+}
+
+// What is derived from the merged cloud (the registration service's prepared ICP model and k-d
+// tree) is current while the revision stands: a merged view, a view placed again, a restart and a
+// new scan each change it; a view kept only in its frame does not; the new surface against a tree
+// built beforehand is the same as against the cloud.
+TEST_F(ScanModelTest, TheRevisionChangesWithTheMergedCloudOnly) {
+  ScanModel model(dir_, 0.0, 0.005);
+  const std::uint64_t r0 = model.revision();
+  model.add_view(0, {Eigen::Vector3f(0.01f, 0, 0)}, {}, Pose::Identity(), true);
+  const std::uint64_t r1 = model.revision();
+  EXPECT_NE(r1, r0);
+  const NeighbourIndex tree(model.points());
+  model.add_view(1, {Eigen::Vector3f(0.5f, 0, 0)}, {}, Pose::Identity(), false);  // not merged
+  EXPECT_EQ(model.revision(), r1);
+  const ModelUpdate u = model.add_view(2, {Eigen::Vector3f(0.012f, 0, 0), Eigen::Vector3f(0.2f, 0, 0)}, {},
+                                       Pose::Identity(), true, {}, &tree);
+  EXPECT_EQ(u.new_surface->model_points, 1);
+  EXPECT_EQ(u.new_surface->new_points, 1);  // 2 mm from the model: not new; 19 cm: new
+  const std::uint64_t r2 = model.revision();
+  EXPECT_NE(r2, r1);
+  Pose shift = Pose::Identity();
+  shift.translation() = Eigen::Vector3d(0.01, 0, 0);
+  model.move_views({{0, shift}}, {0, 2});
+  EXPECT_NE(model.revision(), r2);
+  const std::uint64_t r3 = model.revision();
+  model.move_frame(shift);
+  EXPECT_NE(model.revision(), r3);
+  const std::uint64_t r4 = model.revision();
+  ASSERT_TRUE(model.restore());
+  EXPECT_NE(model.revision(), r4);
+  const std::uint64_t r5 = model.revision();
+  model.clear();
+  EXPECT_NE(model.revision(), r5);
 }
 
 TEST(ScanModel, WithoutAFolderNothingIsWritten) {
