@@ -2,7 +2,8 @@
 //   in:  CLOUD (a view placed by the rig's kinematic pose, with its normals), CAPTURE_REQUEST (a
 //        CLOUD is taken only when it answers a capture request heard: bus/asked_captures.hpp),
 //        DEPTH_FRAME and DEPTH_FRAME_RESENT (each view's depth image, for DIR/depth/),
-//        MESH_REQUEST (the scan's end)
+//        MESH_REQUEST (the scan's end), MOVE_REQUEST (only when it was sent: the rig set moving
+//        starts the work that needs no new frame)
 //   out: REGISTERED_CLOUD, MESH_RESULT, HEARTBEAT; with --out DIR: DIR/frames/view_NNN.ply (every
 //        view), DIR/cloud.ply (the model), DIR/depth/view_NNN.png and .json, DIR/mesh.ply and
 //        mesh.obj (the surface of the merged views, core/surface/scan_mesh.hpp)
@@ -22,13 +23,13 @@
 // by (scan_id, request_id). The mesh is made on a worker thread, so the service's heartbeat goes
 // on while it fuses (seconds).
 #include <fmt/format.h>
-#include <sys/resource.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <condition_variable>
 #include <future>
 #include <limits>
+#include <mutex>
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -58,6 +59,7 @@
 #include "pbnbv/capture_request_t.hpp"
 #include "pbnbv/depth_frame_t.hpp"
 #include "pbnbv/mesh_request_t.hpp"
+#include "pbnbv/move_request_t.hpp"
 #include "pbnbv/mesh_result_t.hpp"
 #include "report/depth_png.hpp"
 #include "pbnbv/point_cloud_t.hpp"
@@ -70,6 +72,7 @@ namespace {
 constexpr std::size_t kAnswersKept = 4;
 constexpr std::size_t kFramesKept = 4;
 constexpr double kMountMinOverlap = 0.5;  // alignments that inform the mount's estimate
+constexpr double kStartAfterS = 1.0;    // the work after an answer waits this long for the move at most
 constexpr int kMeshesPerScan = 3;       // different meshes made for one scan at most  // depth frames of the last views (a view's comes before its cloud)
 
 class RegistrationService {
@@ -84,6 +87,10 @@ class RegistrationService {
                                       [this](const capture_request_t& c) { asked_.heard(c.scan_id, c.request_id); });
     bus_.subscribe<point_cloud_t>(channels::kCloud, [this](const point_cloud_t& c) { on_cloud(c); });
     bus_.subscribe<mesh_request_t>(channels::kMeshRequest, [this](const mesh_request_t& m) { on_mesh_request(m); });
+    // The rig set moving: the work after the last answer starts (after_answer).
+    bus_.subscribe<move_request_t>(channels::kMoveRequest, [this](const move_request_t& m) {
+      if (m.scan_id == scan_id_) release_worker();
+    });
   }
 
   // Answers the mesh request whose mesh the worker has finished.
@@ -314,13 +321,21 @@ class RegistrationService {
     RegistrationModel model;
     std::optional<NeighbourIndex> index;  // over the model's points: the next view's new surface
   };
+  // It starts when the rig is set moving to the next view (the scan's next MOVE_REQUEST heard), so
+  // that the next view's plan (the map, the ellipsoids, the view scorer) has the CPU first, or
+  // kStartAfterS after the answer at the latest (a lost MOVE_REQUEST, a scan that ends).
   void after_answer() {
     if (off_ || model_.points().empty()) return;
     settle();
+    {
+      std::lock_guard<std::mutex> lock(start_mutex_);
+      start_ = false;
+    }
     preparing_ = std::async(std::launch::async, [this] {
-      // At the lowest priority: the next view's plan (the map, the ellipsoids, the view scorer)
-      // comes first; this has the time of the move. (Linux: a thread's own nice value.)
-      ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 19);
+      {
+        std::unique_lock<std::mutex> lock(start_mutex_);
+        start_cv_.wait_for(lock, std::chrono::duration<double>(kStartAfterS), [this] { return start_; });
+      }
       try {
         fit_mount_to_views();
         save_mount();
@@ -333,9 +348,19 @@ class RegistrationService {
       }
     });
   }
-  // Waits for the work after the last answer and keeps what it prepared.
+  void release_worker() {
+    {
+      std::lock_guard<std::mutex> lock(start_mutex_);
+      start_ = true;
+    }
+    start_cv_.notify_all();
+  }
+  // Waits for the work after the last answer (starting it now if it waits for the move) and keeps
+  // what it prepared.
   void settle() {
-    if (preparing_.valid()) prepared_ = preparing_.get();
+    if (!preparing_.valid()) return;
+    release_worker();
+    prepared_ = preparing_.get();
   }
   // ICP's model of the model as it is now: the prepared one, else prepared on the spot (the first
   // view after a restart, a new scan, or views placed again since).
@@ -670,6 +695,9 @@ class RegistrationService {
   std::vector<MountView> mount_views_;  // the merged views in their camera frames, for the mount's fit
   bus::RecentFrames frames_;          // the last depth frames, for DIR/depth/
   std::future<MeshResult> meshing_;   // the mesh being made
+  std::mutex start_mutex_;                 // after_answer's work waits for the move:
+  std::condition_variable start_cv_;       // ... signalled here
+  bool start_ = false;                     // ... once it may start
   std::future<PreparedModel> preparing_;  // after_answer's work, running
   std::optional<PreparedModel> prepared_;  // ... and what it prepared
   MeshKey making_;                    // ... of this
