@@ -14,9 +14,9 @@
 // mount's error, the same in every view, is fitted to all views' clouds at once, each view's own
 // small error alongside (core mount_from_views, DIR/hand_eye.json); once it is sure, views are
 // registered from where it puts them, every view is placed again where it puts it, and at the
-// scan's end the model is moved into the object frame. What needs no new frame (the mount's fit
-// and the views' placing, ICP's downsampled model with its normals, the k-d tree for the new
-// surface) is done once a view is answered, on a worker while the rig moves to the next view.
+// scan's end the model is moved into the object frame. What needs no new frame (ICP's downsampled
+// model with its normals, the k-d tree for the new surface) is done once a view is answered, on a
+// worker while the rig moves to the next view.
 // It owns the model and what is made of it (core/surface/scan_model.hpp): each view's frame,
 // the merged cloud and what each view added to it (new surface), said in the answer. A
 // restarted service continues the model of its scan from DIR/cloud.ply; answers are idempotent
@@ -140,7 +140,7 @@ class RegistrationService {
       return;
     }
     bus_.set_scan(r.scan_id, -1);
-    settle();  // the last view's mount fit and placing
+    settle();  // the work after the last answer
     tie_model_to_object();
     ++meshes_made_;
     making_ = key;
@@ -258,9 +258,9 @@ class RegistrationService {
       } else {
         // On a worker, the heartbeat going on meanwhile: ICP against a large model of a noisy
         // camera takes seconds, more on a loaded machine, and a silent service is taken for hung.
-        // The mount was fitted to the views before this one after the last answer (after_answer).
         auto job = std::async(std::launch::async, [&] {
           keep_for_mount(capture);
+          fit_mount_to_views();
           return register_predicted(c.iteration, frame, kinematic);
         });
         while (job.wait_for(std::chrono::milliseconds(250)) != std::future_status::ready) bus_.keep_alive();
@@ -311,11 +311,11 @@ class RegistrationService {
   }
 
   // After a view is answered, on a worker while the rig moves to the next view instead of on the
-  // next frame's way: the mount fitted to the views' clouds so far (this one's included) and the
-  // views placed again by it (fit_mount_to_views: on an uncalibrated rig seconds a view by view
-  // 10), hand_eye.json, then ICP's model (registration_model: the model downsampled, normals fitted)
-  // and a k-d tree over the model for the next view's new surface. Everything that touches the
-  // model, the mount or their files waits for it first (settle).
+  // next frame's way: ICP's model (registration_model: the model downsampled, normals fitted over
+  // all of it) and a k-d tree over the model for the next view's new surface. Taken while the model
+  // has not changed since (on an uncalibrated rig the mount's fit places views again before the
+  // next view registers: that view registers to the model given whole). Everything that touches
+  // the model waits for it first (settle).
   struct PreparedModel {
     std::uint64_t revision = 0;  // ScanModel::revision() it was prepared from
     RegistrationModel model;
@@ -337,12 +337,10 @@ class RegistrationService {
         start_cv_.wait_for(lock, std::chrono::duration<double>(kStartAfterS), [this] { return start_; });
       }
       try {
-        fit_mount_to_views();
-        save_mount();
         PreparedModel m{model_.revision(), registration_model(model_.points(), params_), std::nullopt};
         m.index.emplace(model_.points());
         return m;
-      } catch (const std::exception& e) {  // the next view fits and prepares on its way
+      } catch (const std::exception& e) {  // the next view registers to the model given whole
         log_warn("after the answer: " + std::string(e.what()));
         return PreparedModel{std::numeric_limits<std::uint64_t>::max(), {}, std::nullopt};
       }
@@ -360,15 +358,13 @@ class RegistrationService {
   void settle() {
     if (!preparing_.valid()) return;
     release_worker();
+    // The heartbeat goes on meanwhile (the mount's fit takes seconds on an uncalibrated rig).
+    while (preparing_.wait_for(std::chrono::milliseconds(250)) != std::future_status::ready) bus_.keep_alive();
     prepared_ = preparing_.get();
   }
-  // ICP's model of the model as it is now: the prepared one, else prepared on the spot (the first
-  // view after a restart, a new scan, or views placed again since).
-  const RegistrationModel& model_for_icp() {
-    if (!prepared_ || prepared_->revision != model_.revision()) {
-      prepared_ = PreparedModel{model_.revision(), registration_model(model_.points(), params_), std::nullopt};
-    }
-    return prepared_->model;
+  // The prepared ICP model of the model as it is now, if there is one.
+  const RegistrationModel* prepared_model() const {
+    return prepared_ && prepared_->revision == model_.revision() ? &prepared_->model : nullptr;
   }
   // The prepared k-d tree over the model as it is now, if there is one.
   const NeighbourIndex* prepared_index() const {
@@ -384,8 +380,11 @@ class RegistrationService {
     // resting on a view that slid would lead the next ones astray.
     const bool use = mount_.trusted(3);
     const Pose predicted = applied_ * (use ? mount_.predicted_correction(kinematic) : Pose::Identity());
-    RegistrationResult r = register_frame(model_for_icp(), transform_cloud(frame, predicted), params_,
-                                          (predicted * kinematic).translation());
+    const PointCloud placed = transform_cloud(frame, predicted);
+    const Eigen::Vector3d camera = (predicted * kinematic).translation();
+    const RegistrationModel* prepared = prepared_model();
+    RegistrationResult r = prepared ? register_frame(*prepared, placed, params_, camera)
+                                    : register_frame(model_.points(), placed, params_, camera);
     const Pose total = r.correction * predicted;
     const double predicted_mm = predicted.translation().norm() * 1e3;
     r.correction = total;
@@ -694,12 +693,12 @@ class RegistrationService {
   std::vector<PlacedView> placed_views_;
   std::vector<MountView> mount_views_;  // the merged views in their camera frames, for the mount's fit
   bus::RecentFrames frames_;          // the last depth frames, for DIR/depth/
-  std::future<MeshResult> meshing_;   // the mesh being made
-  std::mutex start_mutex_;                 // after_answer's work waits for the move:
-  std::condition_variable start_cv_;       // ... signalled here
-  bool start_ = false;                     // ... once it may start
-  std::future<PreparedModel> preparing_;  // after_answer's work, running
+  std::mutex start_mutex_;            // after_answer's work waits for the move:
+  std::condition_variable start_cv_;  // ... signalled here
+  bool start_ = false;                // ... once it may start
+  std::future<PreparedModel> preparing_;  // after_answer's work, running (declared after what it uses)
   std::optional<PreparedModel> prepared_;  // ... and what it prepared
+  std::future<MeshResult> meshing_;   // the mesh being made
   MeshKey making_;                    // ... of this
   int meshes_made_ = 0;               // for scan_id_
   std::optional<std::pair<MeshKey, mesh_result_t>> last_mesh_;  // the last mesh made for scan_id_

@@ -479,7 +479,16 @@ void align_and_judge(const RegistrationModel& model, const PointCloud& frame_ds,
   // via a grid of margin/2 cells: the frame's cells dilated by two.
   const double margin = std::max(params.max_correspondence_m, params.overlap_distance_m) + 4.0 * voxel;
   const std::vector<std::size_t> near = near_points(model.points, frame_ds, margin);
-  const auto target = with_normals(model.points, model.normals, &near);
+  // The model's normals fitted beforehand over all of it, else here over the part near the frame.
+  pcl::PointCloud<pcl::PointNormal>::Ptr target;
+  if (model.normals.valid.size() == model.points.size()) {
+    target = with_normals(model.points, model.normals, &near);
+  } else {
+    PointCloud crop;
+    crop.reserve(near.size());
+    for (const std::size_t i : near) crop.push_back(model.points[i]);
+    target = with_normals(crop);
+  }
   const auto source = with_normals(frame_ds);
   Tree::Ptr tree(new Tree);
   if (target->size() >= 3) tree->setInputCloud(target);
@@ -502,7 +511,7 @@ void align_and_judge(const RegistrationModel& model, const PointCloud& frame_ds,
 
 }  // namespace
 
-RegistrationModel registration_model(const PointCloud& model, const RegistrationParams& params) {
+RegistrationModel registration_model(const PointCloud& model, const RegistrationParams& params, bool fit_normals) {
   RegistrationModel m;
   m.voxel_m = params.voxel_m;
   try {
@@ -510,16 +519,17 @@ RegistrationModel registration_model(const PointCloud& model, const Registration
     m.finite = finite.size();
     m.dropped = model.size() - finite.size();
     if (!finite.empty()) m.points = voxel_downsample(finite, params.voxel_m);
-    if (m.points.size() >= 3) m.normals = estimate_normals(m.points, kNormalNeighbours);
+    if (fit_normals && m.points.size() >= 3) m.normals = estimate_normals(m.points, kNormalNeighbours);
   } catch (const std::exception& e) {
     m.error = e.what();
   } catch (...) {
     m.error = "preparing the model failed";
   }
-  // One entry per point whatever happened (none fitted: every point without a plane).
-  m.normals.normals.resize(m.points.size(), Eigen::Vector3f::Zero());
-  m.normals.curvature.resize(m.points.size(), 0.0f);
-  m.normals.valid.resize(m.points.size(), 0);
+  if (fit_normals) {  // one entry per point whatever happened (none fitted: every point without a plane)
+    m.normals.normals.resize(m.points.size(), Eigen::Vector3f::Zero());
+    m.normals.curvature.resize(m.points.size(), 0.0f);
+    m.normals.valid.resize(m.points.size(), 0);
+  }
   return m;
 }
 
@@ -573,7 +583,7 @@ RegistrationResult register_frame(const RegistrationModel& model, const PointClo
 RegistrationResult register_frame(const PointCloud& model, const PointCloud& frame, const RegistrationParams& params,
                                   const std::optional<Eigen::Vector3d>& camera_m) {
   const auto t0 = Clock::now();
-  RegistrationResult res = register_frame(registration_model(model, params), frame, params, camera_m);
+  RegistrationResult res = register_frame(registration_model(model, params, false), frame, params, camera_m);
   res.time_s = std::chrono::duration<double>(Clock::now() - t0).count();  // the model's preparing too
   return res;
 }

@@ -93,20 +93,22 @@ struct RegistrationResult {
 };
 
 // The model as ICP reads it, prepared once per model: its finite points downsampled to
-// params.voxel_m, and a normal fitted to each one's nearest neighbours over the whole of it.
-// Everything register_frame does with the model alone; a caller that registers many frames to the
-// same model (the registration service: every view to the views before it) prepares it once,
-// while the rig moves to the next view, instead of on the next frame's way.
+// params.voxel_m and, with `fit_normals`, a normal fitted to each one's nearest neighbours over the
+// whole of it (without: register_frame fits them over the part near each frame, as the model given
+// whole does). A caller that registers many frames to the same model (the registration service:
+// every view to the views before it) prepares it once, while the rig moves to the next view,
+// instead of on the next frame's way.
 struct RegistrationModel {
   double voxel_m = 0;                   // the params.voxel_m it was prepared for
   std::size_t finite = 0;               // the model's finite points
   std::size_t dropped = 0;              // its non-finite points, left out
   PointCloud points;                    // the finite points downsampled
-  SurfaceNormals normals;               // per point of `points` (valid 0: no plane fitted)
+  SurfaceNormals normals;               // per point of `points` (valid 0: no plane fitted); empty:
+                                        // not fitted
   std::string error;                    // what failed while preparing it (register_frame then
                                         // keeps the kinematic pose, flagged, saying so)
 };
-RegistrationModel registration_model(const PointCloud& model, const RegistrationParams& params);
+RegistrationModel registration_model(const PointCloud& model, const RegistrationParams& params, bool fit_normals = true);
 
 // Registers `frame` (already in the object frame by the kinematic pose) to `model`. `camera_m`:
 // the camera's kinematic position in the object frame (the lever of its rotation error; without
