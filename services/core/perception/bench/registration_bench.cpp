@@ -143,6 +143,15 @@ void BM_RegisterFrame(benchmark::State& state) {
 }
 BENCHMARK(BM_RegisterFrame)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 
+// The counters of an alignment of a frame moved by `perturbation`: taken, how far off, iterations.
+void report_alignment(benchmark::State& state, const pbnbv::RegistrationResult& r, const Pose& perturbation) {
+  const Pose err = r.correction * perturbation;
+  state.counters["refined"] = r.refined;
+  state.counters["err_mm"] = err.translation().norm() * 1e3;
+  state.counters["err_deg"] = rad_to_deg(rotation_angle_rad(Eigen::Matrix3d::Identity(), err.linear()));
+  state.counters["iterations"] = r.iterations;
+}
+
 // The same frame registered to the model prepared beforehand (registration_model: downsampled,
 // normals fitted), as the registration service does once a view is answered, while the rig moves:
 // what is left on the frame's way. And the preparing, side by side.
@@ -155,11 +164,7 @@ void BM_RegisterFramePrepared(benchmark::State& state) {
     r = pbnbv::register_frame(model, c.frame, params);
     benchmark::DoNotOptimize(r);
   }
-  const Pose err = r.correction * c.perturbation;
-  state.counters["refined"] = r.refined;
-  state.counters["err_mm"] = err.translation().norm() * 1e3;
-  state.counters["err_deg"] = rad_to_deg(rotation_angle_rad(Eigen::Matrix3d::Identity(), err.linear()));
-  state.counters["iterations"] = r.iterations;
+  report_alignment(state, r, c.perturbation);
 }
 BENCHMARK(BM_RegisterFramePrepared)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 
@@ -183,11 +188,7 @@ void BM_RegisterFrameVoxel(benchmark::State& state) {
     r = pbnbv::register_frame(c.model, c.frame, params);
     benchmark::DoNotOptimize(r);
   }
-  const Pose err = r.correction * c.perturbation;
-  state.counters["refined"] = r.refined;
-  state.counters["err_mm"] = err.translation().norm() * 1e3;
-  state.counters["err_deg"] = rad_to_deg(rotation_angle_rad(Eigen::Matrix3d::Identity(), err.linear()));
-  state.counters["iterations"] = r.iterations;
+  report_alignment(state, r, c.perturbation);
 }
 BENCHMARK(BM_RegisterFrameVoxel)->Arg(20)->Arg(30)->Arg(40)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
