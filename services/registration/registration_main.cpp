@@ -28,7 +28,6 @@
 #include <chrono>
 #include <condition_variable>
 #include <future>
-#include <limits>
 #include <mutex>
 #include <iostream>
 #include <optional>
@@ -337,12 +336,12 @@ class RegistrationService {
         start_cv_.wait_for(lock, std::chrono::duration<double>(kStartAfterS), [this] { return start_; });
       }
       try {
-        PreparedModel m{model_.revision(), registration_model(model_.points(), params_), std::nullopt};
-        m.index.emplace(model_.points());
+        std::optional<PreparedModel> m = PreparedModel{model_.revision(), registration_model(model_.points(), params_), std::nullopt};
+        m->index.emplace(model_.points());
         return m;
-      } catch (const std::exception& e) {  // the next view registers to the model given whole
+      } catch (const std::exception& e) {  // none: the next view registers to the model given whole
         log_warn("after the answer: " + std::string(e.what()));
-        return PreparedModel{std::numeric_limits<std::uint64_t>::max(), {}, std::nullopt};
+        return std::optional<PreparedModel>();
       }
     });
   }
@@ -358,17 +357,17 @@ class RegistrationService {
   void settle() {
     if (!preparing_.valid()) return;
     release_worker();
-    // The heartbeat goes on meanwhile (the mount's fit takes seconds on an uncalibrated rig).
+    // The heartbeat goes on meanwhile (preparing takes a tenth of a second, more on a loaded machine).
     while (preparing_.wait_for(std::chrono::milliseconds(250)) != std::future_status::ready) bus_.keep_alive();
     prepared_ = preparing_.get();
   }
-  // The prepared ICP model of the model as it is now, if there is one.
-  const RegistrationModel* prepared_model() const {
-    return prepared_ && prepared_->revision == model_.revision() ? &prepared_->model : nullptr;
+  // What was prepared, if the model is still as it was prepared from.
+  const PreparedModel* current() const {
+    return prepared_ && prepared_->revision == model_.revision() ? &*prepared_ : nullptr;
   }
-  // The prepared k-d tree over the model as it is now, if there is one.
+  const RegistrationModel* prepared_model() const { return current() ? &current()->model : nullptr; }
   const NeighbourIndex* prepared_index() const {
-    return prepared_ && prepared_->revision == model_.revision() && prepared_->index ? &*prepared_->index : nullptr;
+    return current() && current()->index ? &*current()->index : nullptr;
   }
 
   // Registers a view from where the mount's estimate so far puts it (the kinematic pose when
@@ -696,7 +695,7 @@ class RegistrationService {
   std::mutex start_mutex_;            // after_answer's work waits for the move:
   std::condition_variable start_cv_;  // ... signalled here
   bool start_ = false;                // ... once it may start
-  std::future<PreparedModel> preparing_;  // after_answer's work, running (declared after what it uses)
+  std::future<std::optional<PreparedModel>> preparing_;  // after_answer's work, running (declared after what it uses)
   std::optional<PreparedModel> prepared_;  // ... and what it prepared
   std::future<MeshResult> meshing_;   // the mesh being made
   MeshKey making_;                    // ... of this
