@@ -74,7 +74,7 @@ std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, con
                      "--views", std::to_string(s.views), "--resolution", exact(s.resolution_m), "--candidates",
                      std::to_string(s.candidates), "--tmax", std::to_string(s.tmax), "--beta", std::to_string(s.beta),
                      "--size", exact(s.size_m), "--working-distance", exact(s.working_distance_m), "--seed", std::to_string(s.seed), "--when-done",
-                     std::string(name_of(s.when_done)), "--motion", std::string(name_of(s.motion)), "--seconds-per-point", exact(s.seconds_per_point), "--stop-rule", "off", "--no-log", "--out", out.string(),
+                     std::string(name_of(s.when_done)), "--motion", std::string(name_of(s.motion)), "--seconds-per-point", exact(s.seconds_per_point), "--map-pose", std::string(name_of(s.map_pose)), "--stop-rule", "off", "--no-log", "--out", out.string(),
                      "--camera", std::string(name_of(s.camera)), "--rig-errors", std::string(name_of(s.rig_errors))});
   if (const std::optional<Eigen::Vector3d>& first = initial_view ? initial_view : s.initial_view) {
     const Eigen::Vector3d& v = *first;
@@ -231,7 +231,7 @@ json to_json(const BenchSpec& s) {
             {"area", std::string(name_of(s.area))}, {"views", s.views},
             {"resolution_m", s.resolution_m}, {"candidates", s.candidates}, {"tmax", s.tmax}, {"beta", s.beta},
             {"size_m", s.size_m}, {"working_distance_m", s.working_distance_m}, {"up", s.up ? std::string(name_of(*s.up)) : std::string("per object")}, {"seed", s.seed},
-            {"when_done", std::string(name_of(s.when_done))}, {"motion", std::string(name_of(s.motion))}, {"seconds_per_point", s.seconds_per_point}, {"stop_rule", to_json(s.stop_rule)},
+            {"when_done", std::string(name_of(s.when_done))}, {"motion", std::string(name_of(s.motion))}, {"seconds_per_point", s.seconds_per_point}, {"map_pose", std::string(name_of(s.map_pose))}, {"stop_rule", to_json(s.stop_rule)},
             {"coverage", {{"samples", s.coverage.num_samples}, {"seed", s.coverage.seed}, {"radius_m", s.coverage.radius_m}}},
             {"surface_metrics", to_json(s.metrics)}};
   j["initial_view"] = s.initial_view ? json{s.initial_view->x(), s.initial_view->y(), s.initial_view->z()} : json(nullptr);

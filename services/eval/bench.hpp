@@ -69,6 +69,7 @@ struct BenchSpec {
   int64_t seed = kPlannerSeed.value;            // the random planner's seed
   WhenDone when_done = kWhenDone.value;
   Motion motion = kMotion.value;
+  MapPose map_pose = kMapPose.value;  // the pose each view enters the planner's map at
   double seconds_per_point = kSecondsPerPoint.value;
   CameraKind camera = kCamera.value;        // the twin's camera (depth_sensor.hpp)
   RigErrors rig_errors = kRigErrors.value;  // the twin's rig errors by name

@@ -83,6 +83,7 @@ std::string command_of(const BenchSpec& s, const std::map<std::string, std::stri
   }
   if (s.when_done != kWhenDone.value) os << " --when-done " << name_of(s.when_done);
   if (s.motion != kMotion.value) os << " --motion " << name_of(s.motion);
+  if (s.map_pose != kMapPose.value) os << " --map-pose " << name_of(s.map_pose);
   if (s.seconds_per_point != kSecondsPerPoint.value) os << " --seconds-per-point " << s.seconds_per_point;
   if (s.stop_rule.window != kStopWindow.value) os << " --stop-window " << s.stop_rule.window;
   if (s.stop_rule.max_new_percent != kStopNewSurface.value) os << " --stop-new-surface " << s.stop_rule.max_new_percent;

@@ -209,6 +209,7 @@ void CommandLine::declare_scan() {
   cli::add(c, kStopRadius, &s.stop_radius_m)->group(kGroupPlanning);
   cli::add(c, kWhenDone, &s.when_done)->group(kGroupPlanning);
   cli::add(c, kMotion, &s.motion)->group(kGroupPlanning);
+  cli::add(c, kMapPose, &s.map_pose)->group(kGroupPlanning);
   cli::add(c, kSecondsPerPoint, &s.seconds_per_point)->group(kGroupPlanning);
   cli::add_point(c, "initial-view", &p.initial_view,
                  "first camera position, object frame, m; looks at the origin [the ring's view at --ring-elevation, "
@@ -308,6 +309,7 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add(c, kPlannerSeed, &spec->seed);
   cli::add(c, kWhenDone, &spec->when_done);
   cli::add(c, kMotion, &spec->motion);
+  cli::add(c, kMapPose, &spec->map_pose);
   cli::add(c, kSecondsPerPoint, &spec->seconds_per_point);
   cli::add_list(c, kCamera, &pending->sweep.cameras, "a list sweeps");
   cli::add_list(c, kRigErrors, &pending->sweep.rig_errors, "a list sweeps");

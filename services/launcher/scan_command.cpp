@@ -265,7 +265,7 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
   auto vec = [&](const Eigen::Vector3d& v) { return exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z()); };
   add("mapping", {(bin / "pbnbv-mapping").string(), "--resolution", exact(s.map_resolution_m), "--out", out.string(),
                   "--volume-min", vec(volume_min), "--volume-max", vec(s.crop_max_m), "--frontier-empty",
-                  std::string(name_of(frontier_empty(s.planner)))});
+                  std::string(name_of(frontier_empty(s.planner))), "--map-pose", std::string(name_of(s.map_pose))});
   if (!s.depth_filter) children.back().argv.push_back("--no-depth-filter");
   if (uses_ellipsoids(s.planner)) add("ellipsoids", {(bin / "pbnbv-ellipsoids").string(), "--tmax", std::to_string(s.t_max)});
   // The scorer draws each plan into out/plans/ (its own --out: no path comes from the bus).

@@ -206,6 +206,8 @@ void ScanSequencer::tick(double now_s) {
     case Phase::kMapping:
       if (awaited_.expired(now_s)) return fail_view(waited("the mapping service", "VOXEL_MAP", "the capture request"), now_s);
       break;
+    case Phase::kAwaitingRegistration:  // the deferred view's deadline, below
+      break;
     case Phase::kMeshing:
       if (awaited_.expired(now_s)) {
         return meshed(std::nullopt,
@@ -216,6 +218,21 @@ void ScanSequencer::tick(double now_s) {
       break;
   }
   if (phase_ == Phase::kFinished) return;
+  if (deferred_) {
+    if (now_s - deferred_->since_s >= t_.answer_s) {
+      const int sends = deferred_->sends;
+      return finish(ScanState::kFailed,
+                    "the registration service sent no REGISTERED_CLOUD for view " + std::to_string(deferred_->view.view + 1) +
+                        " in " + fixed(t_.answer_s, 0) + " s (the capture request sent " + std::to_string(sends) +
+                        (sends == 1 ? " time)" : " times)"),
+                    now_s);
+    }
+    if (now_s - deferred_->last_sent_s >= t_.capture_resend_s) {  // lost on the way: asked for again
+      outputs_.push_back(deferred_->capture_request);
+      deferred_->last_sent_s = now_s;
+      ++deferred_->sends;
+    }
+  }
   if (awaited_.resend_due(now_s)) {
     outputs_.push_back(*awaited_.request);
     // A late plan may wait for a VOXEL_MAP or ELLIPSOIDS that was lost, or that a restarted
@@ -324,15 +341,20 @@ void ScanSequencer::on(const CaptureResult& c, double now_s) {
 }
 
 void ScanSequencer::on(const RegisteredCloud& r, double now_s) {
-  // The registration may answer the cloud before the sequence has taken the cloud itself.
-  if (r.scan_id != s_.scan_id || r.request_id != capture_id_) return;
-  if (phase_ != Phase::kCapturing && phase_ != Phase::kRegistering) return;
+  if (r.scan_id != s_.scan_id) return;
+  if (deferred_ && r.request_id == deferred_->capture_id) return on_deferred(r, now_s);
+  // The registration may answer the cloud before the sequence has taken the cloud itself, and
+  // (map_pose rig) before or after the map.
+  if (r.request_id != capture_id_) return;
+  if (phase_ != Phase::kCapturing && phase_ != Phase::kRegistering && phase_ != Phase::kMapping) return;
   if (r.iteration != iteration_) {
     return refuse("REGISTERED_CLOUD of request " + std::to_string(r.request_id),
                   "it is for view " + std::to_string(r.iteration + 1));
   }
+  if (registered_) return;  // a repeat
   registered_ = r;
   if (phase_ == Phase::kRegistering) registered(now_s);
+  else if (phase_ == Phase::kMapping) view_.register_round_trip_s = now_s - t_captured_s_;
 }
 
 void ScanSequencer::on(const VoxelMapSummary& m, double now_s) {
@@ -520,6 +542,10 @@ void ScanSequencer::send_move(double now_s) {
 }
 
 void ScanSequencer::moved(const MoveResult& r, double now_s) {
+  if (deferred_) {  // what follows a move records or captures: the view before first
+    held_move_ = r;
+    return await_registration(now_s);
+  }
   if (r.contacts > 0) {
     progress(fmt::format("warning: the rig reported {} contact{} during the move (request {}): {}", r.contacts,
                          r.contacts == 1 ? "" : "s", r.request_id, r.contact),
@@ -585,6 +611,17 @@ void ScanSequencer::captured(const CaptureResult& c, double now_s) {
     record_.add_view(view_, done_.views_done, now_s - t_start_s_);
     return next_view(now_s);
   }
+  t_captured_s_ = now_s;
+  if (s_.map_pose == MapPose::kRig) {  // the map first: the next view is planned from it
+    if (registered_) view_.register_round_trip_s = 0;
+    phase_ = Phase::kMapping;
+    set_status(ScanState::kIntegrating, "mapping " + view_name(), now_s);
+    progress("mapping");
+    t_step_s_ = now_s;
+    wait_for_answer(now_s + t_.answer_s, now_s);
+    if (map_) mapped(now_s);
+    return;
+  }
   begin_register(now_s);
 }
 
@@ -608,8 +645,15 @@ void ScanSequencer::registered(double now_s) {
 }
 
 void ScanSequencer::mapped(double now_s) {
-  const VoxelMapSummary& m = *map_;
-  const RegisteredCloud& reg = *registered_;
+  take_map(*map_, now_s);
+  if (!registered_) return defer_registration(now_s);
+  view_.view_total_s = now_s - t_view_s_;
+  record_registered(view_, *registered_, now_s);
+  if (stopped_by_rule(iteration_, now_s)) return;
+  next_view(now_s);
+}
+
+void ScanSequencer::take_map(const VoxelMapSummary& m, double now_s) {
   done_.latest_map = iteration_;
   done_.latest_map_request = m.request_id;
   latest_map_summary_ = m;
@@ -618,33 +662,103 @@ void ScanSequencer::mapped(double now_s) {
   view_.map_round_trip_s = now_s - t_step_s_;
   if (m.updated) {
     done_.last_map = iteration_;
-    done_.views_taken.push_back(reg.cloud.object_T_camera);
+    // The registered pose; until the registration answers (map_pose rig), the rig's.
+    done_.views_taken.push_back(registered_ ? registered_->cloud.object_T_camera : view_.capture->object_T_camera);
   } else {  // not mapped (e.g. registration rejected it): do not plan it again
     done_.excluded.push_back(moved_.reached_object_T_camera);
   }
-  view_.view_total_s = now_s - t_view_s_;
+}
+
+void ScanSequencer::record_registered(ViewRecord& v, const RegisteredCloud& reg, double now_s) {
+  v.registration = reg;
   record_.set_model_points(static_cast<std::size_t>(std::max(reg.model_points, 0)));
   ++done_.views_done;
-  record_.add_view(view_, done_.views_done, now_s - t_start_s_);
+  record_.add_view(v, done_.views_done, now_s - t_start_s_);
   const std::string verdict = !reg.accepted ? std::string("not merged")
                               : reg.flagged ? std::string("kinematic pose kept, flagged (alignment not trusted)")
                               : reg.refined ? "registered (" + fixed(reg.translation_m * 1e3, 2) + " mm, " +
                                                   fixed(reg.rotation_deg, 2) + " deg)"
                                             : std::string("kinematic pose kept");
-  std::string line = "done: " + std::to_string(view_.capture_points) + " points, " +
+  const VoxelMapSummary& m = *v.map;
+  const double move_s = v.move ? v.move->move_s + v.move->settle_s : 0.0;
+  std::string line = "done: " + std::to_string(v.capture_points) + " points, " +
                      std::to_string(record_.num_points()) + " in the model; " + verdict + ", " +
-                     std::to_string(m.num_frontier) + " frontier voxels; move " +
-                     fixed(moved_.move_s + moved_.settle_s, 2) + " s, capture " + fixed(view_.capture->capture_s, 2) +
-                     " s, register " + fixed(reg.register_s, 2) + " s, map " + fixed(m.update_s * 1e3, 2) + " ms";
-  if (view_.plan) line += ", plan " + fixed(planner_step_ms(*view_.plan), 2) + " ms";
+                     std::to_string(m.num_frontier) + " frontier voxels; move " + fixed(move_s, 2) + " s, capture " +
+                     fixed(v.capture->capture_s, 2) + " s, register " + fixed(reg.register_s, 2) + " s, map " +
+                     fixed(m.update_s * 1e3, 2) + " ms";
+  if (v.plan) line += ", plan " + fixed(planner_step_ms(*v.plan), 2) + " ms";
   if (reg.new_surface) line += "; " + fixed(reg.new_surface->percent_of_model(), 2) + " % new surface";
-  progress(line, true);
-  if (stopped_by_rule(now_s)) return;
+  outputs_.push_back(ProgressLine{"[view " + std::to_string(v.view + 1) + "/" + std::to_string(s_.views) + "] " + line, true});
+}
+
+void ScanSequencer::defer_registration(double now_s) {
+  Deferred d;
+  d.view = view_;
+  d.mapped = view_.map->updated;
+  d.taken = done_.views_taken.size() - (d.mapped ? 1 : 0);
+  d.capture_id = capture_id_;
+  d.capture_request = capture_request_;
+  d.since_s = t_captured_s_;
+  d.last_sent_s = awaited_.last_sent_s;
+  d.sends = awaited_.sends;
+  d.t_view_s = t_view_s_;
+  deferred_ = std::move(d);
+  awaited_ = Awaited{};
+  progress("mapped; the registration refines it while the next view is planned");
   next_view(now_s);
 }
 
-bool ScanSequencer::stopped_by_rule(double now_s) {
-  if (replay_ || iteration_ + 1 >= s_.views) return false;
+void ScanSequencer::on_deferred(const RegisteredCloud& r, double now_s) {
+  if (r.iteration != deferred_->view.view) {
+    return refuse("REGISTERED_CLOUD of request " + std::to_string(r.request_id), "it is for view " + std::to_string(r.iteration + 1));
+  }
+  Deferred d = std::move(*deferred_);
+  deferred_.reset();
+  if (d.mapped && d.taken < done_.views_taken.size()) done_.views_taken[d.taken] = r.cloud.object_T_camera;
+  d.view.register_round_trip_s = now_s - d.since_s;
+  d.view.view_total_s = now_s - d.t_view_s;
+  record_registered(d.view, r, now_s);
+  if (stopped_by_rule(d.view.view, now_s)) return;
+  if (phase_ != Phase::kAwaitingRegistration) return;
+  // What waited for it goes on.
+  if (held_move_) {
+    const MoveResult m = *held_move_;
+    held_move_.reset();
+    phase_ = Phase::kMoving;
+    return moved(m, now_s);  // the rig's wait since the move counts as compute (compute_wait_s)
+  }
+  if (held_finish_) {
+    const HeldFinish h = *held_finish_;
+    held_finish_.reset();
+    return finish(h.state, h.message, now_s);
+  }
+  if (held_next_view_) {
+    held_next_view_ = false;
+    return next_view(now_s);
+  }
+}
+
+void ScanSequencer::await_registration(double now_s) {
+  phase_ = Phase::kAwaitingRegistration;
+  awaited_ = Awaited{};  // the deferred view's own deadline and re-sends (tick)
+  const std::string what = "waiting for view " + std::to_string(deferred_->view.view + 1) + "'s registration";
+  progress(what);
+  set_status(ScanState::kIntegrating, what, now_s);
+}
+
+void ScanSequencer::flush_deferred(double now_s) {
+  if (!deferred_) return;
+  Deferred d = std::move(*deferred_);
+  deferred_.reset();
+  d.view.view_total_s = now_s - d.t_view_s;
+  record_.add_view(d.view, done_.views_done, now_s - t_start_s_);
+  held_move_.reset();
+  held_finish_.reset();
+  held_next_view_ = false;
+}
+
+bool ScanSequencer::stopped_by_rule(int view, double now_s) {
+  if (replay_ || view + 1 >= s_.views) return false;
   std::optional<ScanStop> stop = rule_stop(s_, record_.record().views, done_.views_done);
   if (!stop) return false;
   stop_ = std::move(stop);
@@ -655,6 +769,10 @@ bool ScanSequencer::stopped_by_rule(double now_s) {
 
 void ScanSequencer::next_view(double now_s) {
   if (iteration_ + 1 < s_.views) return begin_view(iteration_ + 1, now_s);
+  if (deferred_) {  // the last view's registration first
+    held_next_view_ = true;
+    return await_registration(now_s);
+  }
   if (done_.views_done == 0) return finish(ScanState::kFailed, "no view produced a cloud", now_s);
   if (replay_) {
     stop_ = ScanStop{"the recording's " + std::to_string(s_.views) + " views replayed", done_.views_done, "replay", {}};
@@ -667,11 +785,19 @@ void ScanSequencer::next_view(double now_s) {
 }
 
 void ScanSequencer::fail_view(const std::string& message, double now_s) {
+  flush_deferred(now_s);  // recorded in order
   record_.add_view(view_, done_.views_done, now_s - t_start_s_);
   finish(ScanState::kFailed, message, now_s);
 }
 
 void ScanSequencer::finish(ScanState state, const std::string& message, double now_s) {
+  if (deferred_) {
+    if (state == ScanState::kDone) {  // done once the last view is recorded
+      held_finish_ = HeldFinish{state, message};
+      return await_registration(now_s);
+    }
+    flush_deferred(now_s);
+  }
   if (rig_wait_) end_rig_wait(now_s - rig_wait_->since_s);  // the scan no longer uses the rig
   // A scan that is done gets its surface mesh first (a resumed scan and an external rig's too:
   // they end here).

@@ -16,6 +16,10 @@
 // - wait for the registration's and the mapping service's answers to the view; a view the map
 //   did not take (e.g. registration rejected it) is excluded from later plans;
 //   (the registration service has written its frame and merged it into cloud.ply when accepted);
+//   with the map at the rig's pose (settings' map_pose rig, the default) the next view is planned
+//   and moved to once the map has answered: the view's registration is awaited meanwhile (its
+//   capture request re-sent, the same deadline) and the view is recorded when it comes, before the
+//   next view is captured (or anything else recorded, or the scan done);
 // - stop on the planner's decision, the surface rule (core/scan/stop_rule.hpp), the view
 //   budget, or no view produced;
 // - a scan that is done asks the registration service for the mesh of its merged views
@@ -176,7 +180,8 @@ class ScanSequencer {
   const ScanSoFar& so_far() const { return done_; }
 
  private:
-  enum class Phase { kIdle, kWaitingReady, kPlanning, kMoving, kCapturing, kRegistering, kMapping, kMeshing, kFinished };
+  enum class Phase { kIdle, kWaitingReady, kPlanning, kMoving, kCapturing, kRegistering, kMapping,
+                     kAwaitingRegistration, kMeshing, kFinished };
 
   void on(const MoveResult& r, double now_s);
   void on(const CaptureResult& c, double now_s);
@@ -199,9 +204,20 @@ class ScanSequencer {
   void begin_register(double now_s);
   void registered(double now_s);
   void mapped(double now_s);
+  // The view's map taken (done_'s plan inputs), with or without its registration.
+  void take_map(const VoxelMapSummary& m, double now_s);
+  // Records a view with its registration and map, and says so.
+  void record_registered(ViewRecord& v, const RegisteredCloud& reg, double now_s);
+  // map_pose rig: the view mapped before its registration answered, kept until it does.
+  void defer_registration(double now_s);
+  void on_deferred(const RegisteredCloud& r, double now_s);
+  // Until the deferred view is recorded, nothing later is: a move's answer and the scan's end wait
+  // for it (kAwaitingRegistration); a scan that fails or stops records it as it is.
+  void await_registration(double now_s);
+  void flush_deferred(double now_s);
   // The stop rule (settings' stop_rule: surface or seconds) on the views so far: ends the scan "done" when it says
   // stop (not at the budget's last view, nor in a replay).
-  bool stopped_by_rule(double now_s);
+  bool stopped_by_rule(int view, double now_s);
   void next_view(double now_s);
   void fail_view(const std::string& message, double now_s);  // records the view so far, fails the scan
   // Ends the scan; one that is done asks for its mesh first (begin_mesh), then concludes.
@@ -264,6 +280,25 @@ class ScanSequencer {
     double since_s = 0;                     // when the rig's part of it ended
   };
   std::optional<RigWait> rig_wait_;         // none: no view waits (the first; after a resume)
+  struct Deferred {                         // map_pose rig: a view mapped, its registration awaited
+    ViewRecord view;
+    std::size_t taken = 0;                  // its entry in done_.views_taken (the rig's pose until
+    bool mapped = false;                    // registered), when the map took it
+    int64_t capture_id = -1;
+    CaptureRequest capture_request;         // re-sent while the registration is late
+    double since_s = 0, last_sent_s = 0;
+    int sends = 0;
+    double t_view_s = 0;                    // the view's start
+  };
+  std::optional<Deferred> deferred_;
+  std::optional<MoveResult> held_move_;     // a move's answer waiting for the deferred view
+  struct HeldFinish {
+    ScanState state;
+    std::string message;
+  };
+  std::optional<HeldFinish> held_finish_;   // the scan's end waiting for the deferred view
+  bool held_next_view_ = false;             // the budget's end waiting for it
+  double t_captured_s_ = 0;                 // when the view's CLOUD came
 
   std::optional<std::vector<std::vector<Pose>>> replay_;  // replaying: each recorded view's poses
   int next_view_after_ready_ = 0;           // the view after the readiness wait (resume: the next)

@@ -53,6 +53,7 @@ nlohmann::json to_json(const ScanSettings& s) {
                     {"area", std::string(name_of(s.area))}, {"t_max", s.t_max},
                     {"map_resolution_m", s.map_resolution_m}, {"stop_fraction", s.stop_fraction}, {"when_done", std::string(name_of(s.when_done))},
                     {"motion", std::string(name_of(s.motion))}, {"seconds_per_point", s.seconds_per_point},
+                    {"map_pose", std::string(name_of(s.map_pose))},
                     {"least_turn", std::string(name_of(s.least_turn))}, {"alternatives", s.alternatives}, {"seed", s.seed}}},
       {"keepout", {{"min_m", to_json(s.keepout_min_m)}, {"max_m", to_json(s.keepout_max_m)}}},
       {"crop", {{"min_m", to_json(s.crop_min_m)}, {"max_m", to_json(s.crop_max_m)},
@@ -147,6 +148,8 @@ ScanSettings scan_settings_from_json(const nlohmann::json& j) {
     // Settings written before pbnbv 0.13.0 have none: their scans turned every view to the arm.
     s.motion = parse_name<Motion>(pl.value("motion", std::string(name_of(Motion::kPlain))));
     s.seconds_per_point = pl.value("seconds_per_point", 0.0);
+    // Settings written before the map took the rig's pose have none: their maps waited for the registration.
+    s.map_pose = parse_name<MapPose>(pl.value("map_pose", std::string(name_of(MapPose::kRegistered))));
     // Settings written before the least turn was narrowed have none: their moves took the grid's.
     s.least_turn = parse_name<LeastTurn>(pl.value("least_turn", std::string(name_of(LeastTurn::kGrid))));
     s.alternatives = int_at(pl, "alternatives", "planning.alternatives");

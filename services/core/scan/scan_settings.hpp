@@ -86,6 +86,7 @@ struct ScanSettings {
   double map_resolution_m = kMapResolution.value;
   double stop_fraction = kStopFraction.value;  // stop when best F < this * F of the first planned view (0: off)
   WhenDone when_done = kWhenDone.value;       // nothing left to aim at: stop, or spread (use the budget)
+  MapPose map_pose = kMapPose.value;         // the pose each view enters the planner's map at
   Motion motion = kMotion.value;              // arm rig: moves chosen for what they cost (turntable_choice)
   double seconds_per_point = kSecondsPerPoint.value;  // motion-aware: pbnbv's ranking charges rig time
   // Motion-aware: the turntable's least turn as the motion executor narrows it (kGrid: on the grid

@@ -43,6 +43,7 @@ ScanSettings test_settings(const std::string& planner, int views) {
   s.move_timeout_s = 60;
   s.capture_timeout_s = 10;
   s.startup_timeout_s = 90;
+  s.map_pose = MapPose::kRegistered;  // the sequence most tests below follow; the rig's pose: its own tests
   return s;
 }
 
@@ -120,18 +121,24 @@ class ScanSequencerTest : public pbnbv::testing::TempDirTest {
 
   void later(double delay_s, const ScanEvent& e) { due_.emplace(now_ + delay_s, e); }
 
-  // The camera answers after 1 s, the registration 0.5 s after the cloud, the map 0.25 s after
-  // that and (pbnbv) the ellipsoids 0.25 s after the map.
+  // The camera answers after 1 s, the registration 0.5 s after the cloud (register_after_s), the
+  // map 0.25 s after that and (pbnbv) the ellipsoids 0.25 s after the map. With the map at the
+  // rig's pose (settings' map_pose rig) the map comes 0.25 s after the cloud, whenever the
+  // registration does.
+  double register_after_s_ = 0.5;
   void answer_capture(const CaptureRequest& r) {
     std::optional<CaptureResult> c = camera(r);
     if (!c) return;
     later(1.0, *c);
     if (auto reg = registration(*c)) {
       add_to_model(*reg);
-      later(1.5, *reg);
+      const bool rig_pose = settings_.map_pose == MapPose::kRig;
+      const double map_at = rig_pose ? 1.25 : 1.25 + register_after_s_;
+      if (std::isfinite(register_after_s_)) later(1.0 + register_after_s_, *reg);
+      if (!rig_pose && !std::isfinite(register_after_s_)) return;
       if (auto map = mapping(*reg)) {
-        later(1.75, *map);
-        if (settings_.planner == PlannerKind::kPbnbv) later(2.0, ellipsoids(map->iteration, map->request_id));
+        later(map_at, *map);
+        if (settings_.planner == PlannerKind::kPbnbv) later(map_at + 0.25, ellipsoids(map->iteration, map->request_id));
       }
     }
   }
@@ -710,6 +717,99 @@ TEST_F(ScanSequencerTest, AMissingMapFailsTheScanNamingTheMappingService) {
   EXPECT_EQ(scan_json()["status"]["message"],
             "the mapping service sent no VOXEL_MAP for view 1 in 60 s (the capture request sent 60 times)");
   EXPECT_TRUE(scan_json()["views"][0].contains("registration"));
+}
+
+// ---- The map at the rig's pose (map_pose rig, the default) ----
+// The registration answers 3 s after the cloud (4 s after the capture request), the map 0.25 s
+// after the cloud: view 2 is planned and moved to before view 1's registration has come.
+
+// The times of the requests sent for view i, of one kind.
+template <typename Request>
+std::vector<double> times_of(const std::vector<std::pair<double, Request>>& sent, int view) {
+  std::vector<double> out;
+  for (const auto& [t, r] : sent) {
+    if (r.iteration == view) out.push_back(t);
+  }
+  return out;
+}
+
+TEST_F(ScanSequencerTest, WithTheMapAtTheRigsPoseTheNextViewIsPlannedAndMovedToWhileTheRegistrationRefines) {
+  register_after_s_ = 3.0;
+  ScanSettings s = test_settings("pbnbv", 3);
+  s.map_pose = MapPose::kRig;
+  start(s);
+  run();
+  ASSERT_TRUE(seq_->finished());
+  EXPECT_EQ(seq_->exit_code(), 0) << seq_->summary();
+  // View 1: moved at 0 (answer at 2), captured at 2 (cloud at 3, map at 3.25, registration at 6).
+  ASSERT_EQ(times_of(captures_, 0).front(), 2.0);
+  // View 2's plan is asked for on the map (3.25) and its move at the plan's answer (3.75), both
+  // before view 1's registration (6); the move's answer (5.75) waits for it: view 2 is captured at 6.
+  ASSERT_EQ(plans_.size(), 2u);
+  EXPECT_EQ(plans_[0].first, 3.25);
+  EXPECT_EQ(times_of(moves_, 1).front(), 3.75);
+  EXPECT_EQ(times_of(captures_, 1).front(), 6.0);
+  // The plan of view 2 took view 1 at the rig's pose (the camera's); view 3's at the registered one
+  // (here the same: the fake registration keeps the kinematic pose).
+  ASSERT_EQ(plans_[0].second.views_done.size(), 1u);
+  EXPECT_TRUE(plans_[0].second.views_done[0].isApprox(view_from(0.5, 0.0, 0.4)));
+  // Every view recorded in order, with its registration and map.
+  const json scan = scan_json();
+  ASSERT_EQ(scan["views"].size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    const json& v = scan["views"][i];
+    EXPECT_EQ(v["view"], i + 1);
+    EXPECT_TRUE(v.contains("registration")) << i;
+    EXPECT_TRUE(v["map"]["updated"]) << i;
+    EXPECT_EQ(v["time_s"]["register_round_trip"], 3.0) << i;  // from the cloud
+  }
+  EXPECT_EQ(scan["status"]["views_done"], 3);
+  // View 1's compute (rig time): from the frame (3 - 0.0625) to move 2's command (its answer at
+  // 5.75 less 1.5 s of moving and settling: 4.25), and the rig's wait from that answer to the
+  // registration (5.75 -> 6): 1.3125 + 0.25.
+  EXPECT_EQ(scan["views"][0]["rig_time_s"]["compute"], 1.5625);
+  // The mesh is asked for once the last view is recorded: every view in it.
+  ASSERT_EQ(meshes_.size(), 1u);
+  EXPECT_EQ(meshes_[0].second.views, (std::vector<int>{0, 1, 2}));
+}
+
+TEST_F(ScanSequencerTest, WithTheMapAtTheRigsPoseAViewWaitsForTheRegistrationAsLongAsAfterIt) {
+  // The same fakes with the map after the registration: view 1's compute is the whole wait.
+  register_after_s_ = 3.0;
+  start(test_settings("pbnbv", 3));
+  run();
+  ASSERT_EQ(seq_->exit_code(), 0) << seq_->summary();
+  // The map at 6.25, the plan asked for then, its answer at 6.75, the move's at 8.75; the frame
+  // came at 2.9375.
+  EXPECT_EQ(plans_[0].first, 6.25);
+  EXPECT_EQ(scan_json()["views"][0]["rig_time_s"]["compute"], 8.75 - 1.5 - 2.9375);
+}
+
+TEST_F(ScanSequencerTest, WithTheMapAtTheRigsPoseALateRegistrationFailsTheScanAtItsDeadline) {
+  register_after_s_ = std::numeric_limits<double>::infinity();  // never answers
+  ScanSettings s = test_settings("pbnbv", 3);
+  s.map_pose = MapPose::kRig;
+  start(s);
+  run();
+  ASSERT_TRUE(seq_->finished());
+  EXPECT_EQ(seq_->exit_code(), 1);
+  // The cloud came at 3: its registration is waited for 60 s while view 2 is planned and moved to.
+  EXPECT_EQ(now_, 63.0);
+  const json scan = scan_json();
+  EXPECT_EQ(scan["status"]["message"].get<std::string>().rfind(
+                "the registration service sent no REGISTERED_CLOUD for view 1 in 60 s (the capture request sent ", 0),
+            0u)
+      << scan["status"]["message"];
+  // View 1 is recorded as it is (mapped, not registered); view 2 was not captured.
+  ASSERT_EQ(scan["views"].size(), 1u);
+  EXPECT_FALSE(scan["views"][0].contains("registration"));
+  EXPECT_TRUE(scan["views"][0]["map"]["updated"]);
+  EXPECT_EQ(scan["status"]["views_done"], 0);
+  EXPECT_TRUE(times_of(captures_, 1).empty());
+  // Its capture request was sent again about every second meanwhile (the same id).
+  const std::vector<double> resent = times_of(captures_, 0);
+  EXPECT_GE(resent.size(), 58u);
+  for (const auto& [t, r] : captures_) EXPECT_EQ(r.request_id, captures_.front().second.request_id);
 }
 
 TEST_F(ScanSequencerTest, APlannerStopEndsTheScanDoneWithItsReason) {
