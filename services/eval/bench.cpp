@@ -75,7 +75,8 @@ std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, con
                      std::to_string(s.candidates), "--tmax", std::to_string(s.tmax), "--beta", std::to_string(s.beta),
                      "--size", exact(s.size_m), "--working-distance", exact(s.working_distance_m), "--seed", std::to_string(s.seed), "--when-done",
                      std::string(name_of(s.when_done)), "--motion", std::string(name_of(s.motion)), "--seconds-per-point", exact(s.seconds_per_point), "--map-pose", std::string(name_of(s.map_pose)), "--stop-rule", "off", "--no-log", "--out", out.string(),
-                     "--camera", std::string(name_of(s.camera)), "--rig-errors", std::string(name_of(s.rig_errors))});
+                     "--camera", std::string(name_of(s.camera)), "--rig-errors", std::string(name_of(s.rig_errors)),
+                     "--sim-speed", exact(s.sim_speed)});
   if (const std::optional<Eigen::Vector3d>& first = initial_view ? initial_view : s.initial_view) {
     const Eigen::Vector3d& v = *first;
     a.insert(a.end(), {"--initial-view", exact(v.x()) + "," + exact(v.y()) + "," + exact(v.z())});
@@ -239,6 +240,7 @@ json to_json(const BenchSpec& s) {
   j["first_view_seed"] = kFirstViewSeed;
   j["camera"] = name_of(s.camera);
   j["rig_errors"] = name_of(s.rig_errors);
+  j["sim_speed"] = s.sim_speed;
   j["rig_model"] = s.rig_model;  // "": the rig kind's own file
   j["seconds_rule"] = to_json(s.seconds_rule);
   return j;

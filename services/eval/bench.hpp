@@ -73,6 +73,7 @@ struct BenchSpec {
   double seconds_per_point = kSecondsPerPoint.value;
   CameraKind camera = kCamera.value;        // the twin's camera (depth_sensor.hpp)
   RigErrors rig_errors = kRigErrors.value;  // the twin's rig errors by name
+  double sim_speed = kSimSpeed.value;       // the twin's rig time per wall time
   // The scans spend the whole budget (stop rule off); the summary says where this rule would
   // have stopped each from its recorded per-view figures (it may change in a folder's reruns).
   SurfaceStopRule stop_rule;

@@ -78,6 +78,7 @@ std::string command_of(const BenchSpec& s, const std::map<std::string, std::stri
   if (s.up) os << " --up " << name_of(*s.up);
   if (!s.rig_model.empty() || lists.count("rig-model")) os << " --rig-model " << value("rig-model", s.rig_model);
   if (s.camera != kCamera.value || lists.count("camera")) os << " --camera " << value("camera", std::string(name_of(s.camera)));
+  if (s.sim_speed != kSimSpeed.value) os << " --sim-speed " << s.sim_speed;
   if (s.rig_errors != kRigErrors.value || lists.count("rig-errors")) {
     os << " --rig-errors " << value("rig-errors", std::string(name_of(s.rig_errors)));
   }

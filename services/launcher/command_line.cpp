@@ -310,6 +310,7 @@ void CommandLine::declare_bench_options(CLI::App* command, eval::BenchSpec* spec
   cli::add(c, kWhenDone, &spec->when_done);
   cli::add(c, kMotion, &spec->motion);
   cli::add(c, kMapPose, &spec->map_pose);
+  cli::add(c, kSimSpeed, &spec->sim_speed);
   cli::add(c, kSecondsPerPoint, &spec->seconds_per_point);
   cli::add_list(c, kCamera, &pending->sweep.cameras, "a list sweeps");
   cli::add_list(c, kRigErrors, &pending->sweep.rig_errors, "a list sweeps");
