@@ -494,7 +494,8 @@ void ScanSequencer::planned(const ViewPlan& p, double now_s) {
   }
   if (p.outcome != PlanOutcome::kView) {
     const bool stop = p.outcome == PlanOutcome::kStop;
-    stop_ = ScanStop{p.reason, done_.views_done, stop ? "planner" : "planner failed", {}};
+    // The view whose registration is awaited (map_pose rig) counts: the scan ends once it is recorded.
+    stop_ = ScanStop{p.reason, done_.views_done + (deferred_ ? 1 : 0), stop ? "planner" : "planner failed", {}};
     record_.set_stop(*stop_);
     record_.set_planning_stopped(plan);
     if (stop) return finish(ScanState::kDone, "scan complete: " + p.reason, now_s);
@@ -718,7 +719,16 @@ void ScanSequencer::on_deferred(const RegisteredCloud& r, double now_s) {
   d.view.register_round_trip_s = now_s - d.since_s;
   d.view.view_total_s = now_s - d.t_view_s;
   record_registered(d.view, r, now_s);
-  if (stopped_by_rule(d.view.view, now_s)) return;
+  if (held_finish_) {  // the scan ends (the planner said stop, the budget is spent): as it said
+    const HeldFinish h = *held_finish_;
+    held_finish_.reset();
+    return finish(h.state, h.message, now_s);
+  }
+  if (stopped_by_rule(d.view.view, now_s)) {  // what waited for the view is not done
+    held_move_.reset();
+    held_next_view_ = false;
+    return;
+  }
   if (phase_ != Phase::kAwaitingRegistration) return;
   // What waited for it goes on.
   if (held_move_) {
@@ -726,11 +736,6 @@ void ScanSequencer::on_deferred(const RegisteredCloud& r, double now_s) {
     held_move_.reset();
     phase_ = Phase::kMoving;
     return moved(m, now_s);  // the rig's wait since the move counts as compute (compute_wait_s)
-  }
-  if (held_finish_) {
-    const HeldFinish h = *held_finish_;
-    held_finish_.reset();
-    return finish(h.state, h.message, now_s);
   }
   if (held_next_view_) {
     held_next_view_ = false;

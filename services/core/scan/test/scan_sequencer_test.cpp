@@ -840,6 +840,35 @@ TEST_F(ScanSequencerTest, APlannerStopEndsTheScanDoneWithItsReason) {
       << seq_->summary();
 }
 
+TEST_F(ScanSequencerTest, WithTheMapAtTheRigsPoseAPlannerStopWaitsForTheViewsRegistration) {
+  scorer = [](const PlanRequest& r) {
+    ViewPlan p = make_plan(r, Pose::Identity(), {});
+    p.outcome = PlanOutcome::kStop;
+    p.reason = "no frontier ellipsoid remains";
+    return p;
+  };
+  register_after_s_ = 3.0;
+  ScanSettings s = test_settings("pbnbv", 5);
+  s.map_pose = MapPose::kRig;
+  start(s);
+  run();
+  ASSERT_TRUE(seq_->finished());
+  EXPECT_EQ(seq_->exit_code(), 0);
+  // The plan (asked for at 3.25, answered at 3.75) said stop before view 1's registration (6):
+  // the scan ends done once view 1 is recorded, its mesh made from it.
+  const json scan = scan_json();
+  EXPECT_EQ(scan["status"]["message"], "scan complete: no frontier ellipsoid remains");
+  EXPECT_EQ(scan["stop"], json({{"reason", "no frontier ellipsoid remains"}, {"after_views", 1}, {"rule", "planner"}}));
+  ASSERT_EQ(scan["views"].size(), 1u);
+  EXPECT_TRUE(scan["views"][0].contains("registration"));
+  EXPECT_EQ(scan["status"]["views_done"], 1);
+  ASSERT_EQ(meshes_.size(), 1u);
+  EXPECT_EQ(meshes_[0].first, 6.0);
+  EXPECT_EQ(meshes_[0].second.views, (std::vector<int>{0}));
+  // The rig waited from the frame (2.9375) until the scan no longer needed it (6).
+  EXPECT_EQ(scan["views"][0]["rig_time_s"]["compute"], 6.0 - 2.9375);
+}
+
 TEST_F(ScanSequencerTest, TheSurfaceRuleStopsWhenTheLastViewsAddNothingNew) {
   // Every view after the first sees the first view's ten points again (within 5 mm of the model):
   // views 2 and 3 add 0 % new surface, so a window of 2 from view 3 on stops after view 3 of 6.
