@@ -39,7 +39,7 @@ struct EnumNames<MapPose> {
   static constexpr std::array<NamedValue<MapPose>, 2> names{{{MapPose::kRig, "rig"}, {MapPose::kRegistered, "registered"}}};
 };
 inline constexpr ChoiceSetting<MapPose> kMapPose{
-    "map-pose", MapPose::kRegistered,
+    "map-pose", MapPose::kRig,
     "the pose each view enters the planner's map at: rig (the kinematic pose with the last registration's correction: the "
     "next view is planned while the registration refines this one) or registered (planned after it)"};
 
