@@ -59,7 +59,8 @@ class BadInput : public ServiceSuite {
         {"motion", {bin + "/pbnbv-motion", "--rig", "arm"}},
         {"camera", {bin + "/pbnbv-camera", "--rig", "arm"}},
         {"registration", {bin + "/pbnbv-registration"}},
-        {"mapping", {bin + "/pbnbv-mapping", "--out", (dir / "maps").string()}},
+        // The map at the registered pose: these tests hand it REGISTERED_CLOUDs.
+        {"mapping", {bin + "/pbnbv-mapping", "--out", (dir / "maps").string(), "--map-pose", "registered"}},
         {"ellipsoids", {bin + "/pbnbv-ellipsoids"}},
         {"scorer", {bin + "/pbnbv-scorer", "--rig", "arm"}},
     });

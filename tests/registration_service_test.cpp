@@ -31,7 +31,9 @@ class RegistrationService : public ServiceSuite {
     const std::string bin = bin_dir();
     start_suite("registration-service", {
         {"registration", {bin + "/pbnbv-registration"}},
-        {"mapping", {bin + "/pbnbv-mapping"}},
+        // The map at the registered pose: the view's REGISTERED_CLOUD is what it maps (the rig's
+        // pose: mapping_service_test.cpp).
+        {"mapping", {bin + "/pbnbv-mapping", "--map-pose", "registered"}},
     });
   }
   static void TearDownTestSuite() { stop_suite(); }
