@@ -615,13 +615,8 @@ void ScanSequencer::captured(const CaptureResult& c, double now_s) {
   t_captured_s_ = now_s;
   if (s_.map_pose == MapPose::kRig) {  // the map first: the next view is planned from it
     if (registered_) view_.register_round_trip_s = 0;
-    phase_ = Phase::kMapping;
     set_status(ScanState::kIntegrating, "mapping " + view_name(), now_s);
-    progress("mapping");
-    t_step_s_ = now_s;
-    wait_for_answer(now_s + t_.answer_s, now_s);
-    if (map_) mapped(now_s);
-    return;
+    return begin_map(now_s);
   }
   begin_register(now_s);
 }
@@ -638,6 +633,10 @@ void ScanSequencer::begin_register(double now_s) {
 void ScanSequencer::registered(double now_s) {
   view_.registration = registered_;
   view_.register_round_trip_s = now_s - t_step_s_;
+  begin_map(now_s);
+}
+
+void ScanSequencer::begin_map(double now_s) {
   phase_ = Phase::kMapping;
   progress("mapping");
   t_step_s_ = now_s;

@@ -203,6 +203,7 @@ class ScanSequencer {
   void captured(const CaptureResult& c, double now_s);
   void begin_register(double now_s);
   void registered(double now_s);
+  void begin_map(double now_s);  // waits for the view's map
   void mapped(double now_s);
   // The view's map taken (done_'s plan inputs), with or without its registration.
   void take_map(const VoxelMapSummary& m, double now_s);
