@@ -310,7 +310,7 @@ void ScanSequencer::on(const CaptureResult& c, double now_s) {
 
 void ScanSequencer::on(const RegisteredCloud& r, double now_s) {
   if (r.scan_id != s_.scan_id) return;
-  if (deferred_ && r.request_id == deferred_->capture_id) return on_deferred(r, now_s);
+  if (deferred_ && r.request_id == deferred_->capture_request.request_id) return on_deferred(r, now_s);
   // The registration may answer the cloud before the sequence has taken the cloud itself, and
   // (map_pose rig) before or after the map.
   if (r.request_id != capture_id_) return;

@@ -284,9 +284,9 @@ class ScanSequencer {
   struct Deferred {                         // map_pose rig: a view mapped, its registration awaited
     ViewRecord view;
     std::size_t taken = 0;                  // its entry in done_.views_taken (the rig's pose until
-    bool mapped = false;                    // registered), when the map took it
-    int64_t capture_id = -1;
-    CaptureRequest capture_request;         // re-sent while the registration is late
+                                            // registered), when the map took it (view.map->updated)
+    CaptureRequest capture_request;         // re-sent while the registration is late; its request_id
+                                            // is the one the registration answers
     double since_s = 0, last_sent_s = 0;
     int sends = 0;
     double t_view_s = 0;                    // the view's start

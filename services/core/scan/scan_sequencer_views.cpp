@@ -85,16 +85,13 @@ void ScanSequencer::record_registered(ViewRecord& v, const RegisteredCloud& reg,
 void ScanSequencer::defer_registration(double now_s) {
   Deferred d;
   d.view = view_;
-  d.mapped = view_.map->updated;
-  d.taken = done_.views_taken.size() - (d.mapped ? 1 : 0);
-  d.capture_id = capture_id_;
+  d.taken = done_.views_taken.size() - (view_.map->updated ? 1 : 0);
   d.capture_request = capture_request_;
   d.since_s = t_captured_s_;
   d.last_sent_s = awaited_.last_sent_s;
   d.sends = awaited_.sends;
   d.t_view_s = t_view_s_;
   deferred_ = std::move(d);
-  awaited_ = Awaited{};
   progress("mapped; the registration refines it while the next view is planned");
   next_view(now_s);
 }
@@ -105,7 +102,7 @@ void ScanSequencer::on_deferred(const RegisteredCloud& r, double now_s) {
   }
   Deferred d = std::move(*deferred_);
   deferred_.reset();
-  if (d.mapped && d.taken < done_.views_taken.size()) done_.views_taken[d.taken] = r.cloud.object_T_camera;
+  if (d.view.map->updated && d.taken < done_.views_taken.size()) done_.views_taken[d.taken] = r.cloud.object_T_camera;
   d.view.register_round_trip_s = now_s - d.since_s;
   d.view.view_total_s = now_s - d.t_view_s;
   record_registered(d.view, r, now_s);
