@@ -256,7 +256,8 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
   // The model (cloud.ply) at the scan's cloud voxel, its new surface at the stop rule's radius.
   add("registration", {(bin / "pbnbv-registration").string(), "--out", out.string(), "--model-voxel", exact(s.voxel_m),
                        "--new-surface-radius", exact(s.stop_radius_m), "--pose-sigma-mm", exact(s.pose_sigma_m * 1e3),
-                       "--pose-sigma-deg", exact(s.pose_sigma_deg), "--icp-voxel", exact(s.icp_voxel_m)});
+                       "--pose-sigma-deg", exact(s.pose_sigma_deg), "--icp-voxel", exact(s.icp_voxel_m), "--map-pose",
+                       std::string(name_of(s.map_pose))});
   if (!registration) children.back().argv.push_back("--off");
   if (mesh_units != LengthUnit::kMetre) children.back().argv.insert(children.back().argv.end(), {"--units", unit_symbol(mesh_units)});
   // The map's working volume: the cloud's crop box, above the turntable top.

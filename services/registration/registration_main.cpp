@@ -17,6 +17,10 @@
 // scan's end the model is moved into the object frame. What needs no new frame (ICP's downsampled
 // model with its normals, the k-d tree for the new surface) is done once a view is answered, on a
 // worker while the rig moves to the next view.
+// With --map-pose rig (the default) the next view is planned from the frame at the rig's pose while
+// this service aligns it: the alignment and what follows it run at a lower priority
+// (core/base/parallel.hpp lower_thread_priority), so that on a busy machine the plan has the cores
+// first and the alignment takes what is left, most of it while the rig moves.
 // It owns the model and what is made of it (core/surface/scan_model.hpp): each view's frame,
 // the merged cloud and what each view added to it (new surface), said in the answer. A
 // restarted service continues the model of its scan from DIR/cloud.ply; answers are idempotent
@@ -51,7 +55,9 @@
 #include "core/perception/mount_estimate.hpp"
 #include "core/perception/registration.hpp"
 #include "core/io/json.hpp"
+#include "core/base/parallel.hpp"
 #include "core/base/units.hpp"
+#include "core/mapping/map_options.hpp"
 #include "core/scan/scan_options.hpp"
 #include "core/surface/scan_model.hpp"
 #include "core/surface/surface_options.hpp"
@@ -72,13 +78,14 @@ constexpr std::size_t kAnswersKept = 4;
 constexpr std::size_t kFramesKept = 4;
 constexpr double kMountMinOverlap = 0.5;  // alignments that inform the mount's estimate
 constexpr double kStartAfterS = 1.0;    // the work after an answer waits this long for the move at most
+constexpr int kBackgroundNice = 10;     // the alignment's priority when the plan does not wait for it (nice)
 constexpr int kMeshesPerScan = 3;       // different meshes made for one scan at most  // depth frames of the last views (a view's comes before its cloud)
 
 class RegistrationService {
  public:
   RegistrationService(bus::Bus& bus, const RegistrationParams& params, double model_voxel_m, double new_surface_radius_m,
-                      bool off, std::filesystem::path out, LengthUnit mesh_units)
-      : bus_(bus), params_(params), off_(off), out_(std::move(out)), mesh_units_(mesh_units),
+                      bool off, std::filesystem::path out, LengthUnit mesh_units, MapPose map_pose)
+      : bus_(bus), params_(params), off_(off), background_(map_pose == MapPose::kRig), out_(std::move(out)), mesh_units_(mesh_units),
         model_(bus_.scope().empty() ? std::filesystem::path() : out_, model_voxel_m, new_surface_radius_m),
         frames_(bus, kFramesKept) {
     restore();
@@ -258,6 +265,7 @@ class RegistrationService {
         // On a worker, the heartbeat going on meanwhile: ICP against a large model of a noisy
         // camera takes seconds, more on a loaded machine, and a silent service is taken for hung.
         auto job = std::async(std::launch::async, [&] {
+          if (background_) lower_thread_priority(kBackgroundNice);  // the plan of the next view first
           keep_for_mount(capture);
           fit_mount_to_views();
           return register_predicted(c.iteration, frame, kinematic);
@@ -322,15 +330,18 @@ class RegistrationService {
   };
   // It starts when the rig is set moving to the next view (the scan's next MOVE_REQUEST heard), so
   // that the next view's plan (the map, the ellipsoids, the view scorer) has the CPU first, or
-  // kStartAfterS after the answer at the latest (a lost MOVE_REQUEST, a scan that ends).
+  // kStartAfterS after the answer at the latest (a lost MOVE_REQUEST, a scan that ends). With the
+  // map at the rig's pose the plan does not wait for the answer: the work starts at once, at the
+  // alignment's lower priority.
   void after_answer() {
     if (off_ || model_.points().empty()) return;
     settle();
     {
       std::lock_guard<std::mutex> lock(start_mutex_);
-      start_ = false;
+      start_ = background_;
     }
     preparing_ = std::async(std::launch::async, [this] {
+      if (background_) lower_thread_priority(kBackgroundNice);
       {
         std::unique_lock<std::mutex> lock(start_mutex_);
         start_cv_.wait_for(lock, std::chrono::duration<double>(kStartAfterS), [this] { return start_; });
@@ -677,6 +688,7 @@ class RegistrationService {
   bus::Bus& bus_;
   RegistrationParams params_;
   bool off_;
+  bool background_;  // the map at the rig's pose: the plan does not wait for the alignment
   std::filesystem::path out_;
   LengthUnit mesh_units_;  // mesh.obj's
   std::string scan_id_;
@@ -740,6 +752,8 @@ int main(int argc, char** argv) {
            &new_surface_radius_m);
   bool off = false;
   cli::add_flag(app, "off", &off, "pass every view through with its kinematic pose (no ICP)");
+  MapPose map_pose = kMapPose.value;
+  cli::add(app, kMapPose, &map_pose);
   LengthUnit mesh_units = kMeshUnits.value;
   cli::add(app, kMeshUnits, &mesh_units);
   std::string out;
@@ -748,7 +762,7 @@ int main(int argc, char** argv) {
                 "(DIR/cloud.ply, continued after a restart) are written there", "DIR");
   return bus::run_service("registration", app, argc, argv, 20, [&](bus::Bus& bus) -> std::function<void()> {
     p.prior_translation_m = pose_sigma_mm * 1e-3;
-    auto service = std::make_shared<RegistrationService>(bus, p, model_voxel_m, new_surface_radius_m, off, out, mesh_units);
+    auto service = std::make_shared<RegistrationService>(bus, p, model_voxel_m, new_surface_radius_m, off, out, mesh_units, map_pose);
     log_info("ready");
     return [service] { service->tick(); };
   });

@@ -1,10 +1,17 @@
 #include "core/base/parallel.hpp"
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <cstdlib>
 #include <exception>
 #include <mutex>
+#include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -82,6 +89,19 @@ void parallel_for(std::size_t n, const std::function<void(std::size_t, std::size
       }
     }
   });
+}
+
+int lower_thread_priority(int nice) {
+  if (nice < 1 || nice > 19) throw std::invalid_argument("lower_thread_priority: nice " + std::to_string(nice) + " is not in 1 .. 19");
+  // PRIO_PROCESS with a thread id: that thread alone (Linux; glibc's gettid wrapper is newer than
+  // some of the systems this builds on, the system call is not).
+  const auto tid = static_cast<id_t>(::syscall(SYS_gettid));
+  errno = 0;
+  const int now = ::getpriority(PRIO_PROCESS, tid);
+  if (errno == 0 && now < nice) ::setpriority(PRIO_PROCESS, tid, nice);  // refused: it stays as it was
+  errno = 0;
+  const int after = ::getpriority(PRIO_PROCESS, tid);
+  return errno == 0 ? after : now;
 }
 
 }  // namespace pbnbv

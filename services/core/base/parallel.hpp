@@ -27,4 +27,11 @@ void parallel_run(int workers, const std::function<void(int worker, int workers)
 void parallel_for(std::size_t n, const std::function<void(std::size_t begin, std::size_t end, int worker)>& body,
                   std::size_t grain = 1, int max_workers = 0);
 
+// Work that may wait for the CPU: lowers the calling thread's scheduling priority to the nice
+// value `nice` (1 .. 19; on Linux a thread's nice value is its own, and the threads it starts,
+// parallel_run's workers among them, inherit it). Whatever else runs at the normal priority on a
+// busy machine gets the cores first; an idle core still runs this at full speed. Never raises a
+// priority (that needs privileges). Returns the calling thread's nice value afterwards.
+int lower_thread_priority(int nice);
+
 }  // namespace pbnbv

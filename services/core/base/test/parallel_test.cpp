@@ -3,8 +3,13 @@
 #include "core/base/parallel.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -62,4 +67,34 @@ TEST(Parallel, AWorkersExceptionReachesTheCaller) {
     if (b == 0) throw std::invalid_argument("bad item 0");
     ++done;
   }), std::invalid_argument);
+}
+
+namespace {
+int thread_nice() {
+  errno = 0;
+  return ::getpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)));
+}
+}  // namespace
+
+// Lowered on one thread, the priority is that thread's and its children's, never the caller's;
+// it is never raised again.
+TEST(Parallel, LowerThreadPriorityIsTheThreadsOwnAndInherited) {
+  const int caller = thread_nice();
+  const int expected = std::max(caller, 7);  // a test run already under nice > 7 stays there
+  int lowered = -100, child = -100, again = -100, after_again = -100;
+  std::thread t([&] {
+    lowered = lower_thread_priority(7);
+    std::thread c([&] { child = thread_nice(); });
+    c.join();
+    again = lower_thread_priority(3);  // not raised back
+    after_again = thread_nice();
+  });
+  t.join();
+  EXPECT_EQ(lowered, expected);
+  EXPECT_EQ(child, expected);
+  EXPECT_EQ(again, expected);
+  EXPECT_EQ(after_again, expected);
+  EXPECT_EQ(thread_nice(), caller);  // the calling thread is as it was
+  EXPECT_THROW(lower_thread_priority(0), std::invalid_argument);
+  EXPECT_THROW(lower_thread_priority(20), std::invalid_argument);
 }
