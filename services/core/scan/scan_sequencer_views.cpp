@@ -2,8 +2,6 @@
 // registration, and (map_pose rig) the view mapped before its registration answered, held until
 // it does; and the views a scan knows before it has seen anything. The sequence itself:
 // scan_sequencer.cpp.
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <cmath>
 
