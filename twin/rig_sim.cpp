@@ -17,6 +17,9 @@ constexpr const char* kAssetMarker = "<!-- PBNBV_OBJECT_ASSET -->";
 constexpr const char* kGeomMarker = "<!-- PBNBV_OBJECT_GEOM -->";
 constexpr double kPositionTolerance = 1e-4;  // rad (m), settled
 constexpr double kVelocityTolerance = 2e-3;  // rad/s (m/s), settled
+// At rest: every degree of freedom slower than this (rad/s, m/s) with no ramp running. A step
+// then moves nothing by more than kRestSpeed x timestep (2 nrad at 2 ms): the state is held.
+constexpr double kRestSpeed = 1e-6;
 
 std::string read_text(const std::string& path) {
   std::ifstream in(path);
@@ -358,7 +361,23 @@ void RigSim::advance_ramp(JointGroup& g) {
   for (std::size_t i = 0; i < g.target.size(); ++i) d_->ctrl[g.actuator[i]] = g.setpoint[i];
 }
 
+bool RigSim::at_rest() const {
+  if (arm_.ramping || (turntable_ && turntable_->ramping)) return false;
+  for (int i = 0; i < m_->nv; ++i) {
+    if (!(std::abs(d_->qvel[i]) < kRestSpeed)) return false;
+  }
+  return true;
+}
+
 void RigSim::step() {
+  // A rig at rest stays where it is: the clock advances without a physics step (as physics
+  // engines let resting bodies sleep), and the first command wakes it. Nothing moved, so no
+  // contact can begin either.
+  if (at_rest()) {
+    d_->time += m_->opt.timestep;
+    ++rest_steps_;
+    return;
+  }
   advance_ramp(arm_);
   if (turntable_) advance_ramp(*turntable_);
   // The rig's own controller: gravity and Coriolis compensation, plus feed-forward of the

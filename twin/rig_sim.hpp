@@ -134,8 +134,12 @@ class RigSim {
   // protective stop: the arm holds where it is (its command_seq kept: the command it was
   // executing), and so does the turntable (one safety circuit for the cell: a turntable turning
   // the object into the camera stops too); the next command moves it again.
+  // A rig at rest (no ramp running, every joint still: under 1e-6 rad/s or m/s) is held without a
+  // physics step: the clock advances alone until a command wakes it (rest_steps counts them).
   void step();
   double time_s() const;
+  bool at_rest() const;
+  int64_t rest_steps() const { return rest_steps_; }
 
   Vector6d arm_position() const;  // true joint angles
   Vector6d arm_velocity() const;
@@ -188,6 +192,7 @@ class RigSim {
   std::unique_ptr<ContactMonitor> contacts_;
   std::optional<RigContact> last_contact_;
   std::vector<RigContact> untaken_contacts_;
+  int64_t rest_steps_ = 0;
 };
 
 }  // namespace pbnbv::twin

@@ -335,9 +335,11 @@ class Twin {
       if (ahead > 0) bus_.spin_once(static_cast<int>(ahead * 1000));  // sleeps in the LCM wait
     }
     const twin::ContactCheckCost& cost = sim_.contact_monitor().cost();
-    log_info(fmt::format("contact check: {} contact events; {} states checked in {} steps, {:.1f} us each, {:.2f} s in all",
+    log_info(fmt::format("contact check: {} contact events; {} states checked in {} steps, {:.1f} us each, {:.2f} s in all; "
+                         "{} steps at rest (held without physics)",
                          sim_.contact_events(), cost.states, cost.calls,
-                         cost.states > 0 ? 1e6 * cost.seconds / static_cast<double>(cost.states) : 0.0, cost.seconds));
+                         cost.states > 0 ? 1e6 * cost.seconds / static_cast<double>(cost.states) : 0.0, cost.seconds,
+                         sim_.rest_steps()));
   }
 
  private:

@@ -367,3 +367,40 @@ TEST(RigSim, PlaysTheUr5eRig) {
   }
   moves_between_hemisphere_views(rig);
 }
+
+// A rig at rest is held without physics steps: once a move has settled and every joint is still,
+// a step advances the clock by one timestep and leaves every joint exactly where it was; the next
+// command wakes it and it moves again at its limits.
+TEST(RigSim, ARigAtRestIsHeldWithoutPhysicsAndTheNextCommandWakesIt) {
+  const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
+  twin::RigSim sim(rig, twin::ObjectPlacement{}, model_out());
+  Vector6d target = rig.q_home;
+  target[0] += 0.3;
+  sim.command_arm(target, 1.0, 1);
+  EXPECT_FALSE(sim.at_rest());  // a ramp is running
+  run_until_settled(sim, sim.arm(), 30.0);
+  ASSERT_TRUE(sim.settled(sim.arm()));
+  // Settled (within 2 mrad/s) is not yet still (1 urad/s): the servo's last motion dies out.
+  const double dt = sim.model()->opt.timestep;
+  for (int i = 0; i < static_cast<int>(10.0 / dt) && !sim.at_rest(); ++i) sim.step();
+  ASSERT_TRUE(sim.at_rest()) << "still moving after 10 s: " << sim.arm_velocity().transpose();
+  const Vector6d held = sim.arm_position();
+  const double table = sim.turntable_angle();
+  const double t0 = sim.time_s();
+  const int64_t rest0 = sim.rest_steps();
+  for (int i = 0; i < 1000; ++i) sim.step();
+  EXPECT_EQ(sim.rest_steps() - rest0, 1000);
+  EXPECT_NEAR(sim.time_s() - t0, 1000 * dt, 1e-9);  // 2 s of rig time
+  EXPECT_EQ(sim.arm_position(), held);             // to the bit
+  EXPECT_EQ(sim.turntable_angle(), table);
+  EXPECT_LT((held - target).cwiseAbs().maxCoeff(), 1e-4);
+  // A command wakes it: the turntable's quarter turn takes its ramp at 60 deg/s, as from rest.
+  sim.command_turntable(table + kPi / 2, 1.0, 2);
+  EXPECT_FALSE(sim.at_rest());
+  const double t = run_until_settled(sim, sim.turntable(), 30.0);
+  ASSERT_TRUE(sim.settled(sim.turntable()));
+  const double ramp = ramp_duration_s(kPi / 2, rig.turntable_qd_max, rig.turntable_qdd_max);
+  EXPECT_GE(t, ramp);
+  EXPECT_LE(t, ramp + 0.3);
+  EXPECT_NEAR(sim.turntable_angle(), table + kPi / 2, 1e-3);
+}
