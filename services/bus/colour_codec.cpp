@@ -1,12 +1,9 @@
 #include "bus/colour_codec.hpp"
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <stdexcept>
 
 #include "bus/message_guard.hpp"
+#include "core/io/image_codec.hpp"
 
 namespace pbnbv::bus {
 
@@ -15,15 +12,7 @@ std::vector<uint8_t> encode_jpeg(const std::vector<uint8_t>& rgb, int width, int
     throw std::invalid_argument("encode_jpeg: " + std::to_string(rgb.size()) + " bytes are not a " +
                                 std::to_string(width) + " x " + std::to_string(height) + " R G B image");
   }
-  const cv::Mat in(height, width, CV_8UC3, const_cast<uint8_t*>(rgb.data()));
-  cv::Mat bgr;
-  cv::cvtColor(in, bgr, cv::COLOR_RGB2BGR);
-  std::vector<uint8_t> out;
-  if (!cv::imencode(".jpg", bgr, out, {cv::IMWRITE_JPEG_QUALITY, quality})) {
-    throw std::runtime_error("encode_jpeg: OpenCV could not encode a " + std::to_string(width) + " x " +
-                             std::to_string(height) + " image");
-  }
-  return out;
+  return pbnbv::encode_jpeg(rgb.data(), width, height, quality, "colour image");
 }
 
 std::optional<std::pair<int, int>> jpeg_size(const std::vector<uint8_t>& b) {
@@ -95,13 +84,18 @@ std::optional<ColourImage> decode_colour(const depth_frame_t& f) {
   if (f.colour_encoding == depth_frame_t::kColourRgb8) {
     c->rgb = f.colour;
   } else {
-    const cv::Mat bgr = cv::imdecode(f.colour, cv::IMREAD_COLOR);
-    if (bgr.empty() || bgr.cols != f.colour_width || bgr.rows != f.colour_height) {
-      throw std::invalid_argument(what + " (jpeg) does not decode");
+    Rgb8Image image;
+    try {
+      image = decode_jpeg_rgb(f.colour.data(), f.colour.size(), what + " (jpeg)", kMaxFramePixels);
+    } catch (const std::runtime_error& e) {
+      throw std::invalid_argument(e.what());
     }
-    cv::Mat rgb;
-    cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-    c->rgb.assign(rgb.data, rgb.data + want);
+    if (image.width != f.colour_width || image.height != f.colour_height || image.rgb.size() != want) {
+      throw std::invalid_argument(what + " (jpeg) decodes to " + std::to_string(image.width) + " x " +
+                                  std::to_string(image.height) + ", the frame says " + std::to_string(f.colour_width) +
+                                  " x " + std::to_string(f.colour_height));
+    }
+    c->rgb = std::move(image.rgb);
   }
   return c;  // its camera checked by colour_camera, its size by the checks above
 }

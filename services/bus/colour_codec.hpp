@@ -1,6 +1,6 @@
 #pragma once
 // A frame's colour image on DEPTH_FRAME (depth_frame_t colour_*): R G B bytes, raw or as JPEG
-// (OpenCV's codec). A JPEG from the wire is sized from its own header before anything is
+// (libjpeg, core/io/image_codec.hpp). A JPEG from the wire is sized from its own header before anything is
 // decoded, and refused unless that is the size the frame declares.
 #include <cstdint>
 #include <optional>

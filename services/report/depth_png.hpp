@@ -1,7 +1,7 @@
 #pragma once
 // Depth images as the files other RGB-D tools read: 16-bit single-channel PNG of depth in units of
 // 1 / units_per_metre m (0 = no reading; the scale goes beside it, as Open3D's depth_scale),
-// written and read with OpenCV's imgcodecs.
+// written and read with libpng (core/io/image_codec.hpp).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -16,8 +16,13 @@ namespace pbnbv {
 void write_depth_png(const std::vector<float>& depth_m, int width, int height, int units_per_metre,
                      const std::string& path);
 
-// Reads a 16-bit single-channel PNG back as its units (row-major); throws naming the path when
-// it is missing or not a 16-bit single-channel image.
+// The most pixels read_depth_png takes from a file's header (64 Mpixel: far above any depth
+// camera's).
+inline constexpr int64_t kMaxDepthPngPixels = int64_t{64} << 20;
+
+// Reads a 16-bit single-channel PNG back as its units (row-major); throws std::runtime_error
+// naming the path when it is missing, not a PNG, broken or truncated, not a 16-bit
+// single-channel image, or larger than kMaxDepthPngPixels.
 std::vector<uint16_t> read_depth_png(const std::string& path, int& width, int& height);
 
 }  // namespace pbnbv

@@ -1,13 +1,13 @@
 #include "report/plan_figure.hpp"
 #include "core/base/atomic_file.hpp"
 
+#include "core/io/image_codec.hpp"
 #include "report/canvas.hpp"
 
 #include <fmt/format.h>
 #include "core/base/units.hpp"
 
 #include <Eigen/Eigenvalues>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -741,10 +741,9 @@ void write_plan_figure(const PlanFigure& f, const std::string& path) {
   const PlanFigureLayout l = plan_figure_layout(f);
   Svg svg(l.size.width, l.size.height);
   const cv::Mat fig = draw_figure(f, &svg);
-  std::vector<uchar> png;
-  if (!cv::imencode(".png", fig, png, {cv::IMWRITE_PNG_COMPRESSION, 6})) {
-    throw std::runtime_error("cannot encode plan figure for '" + path + "'");
-  }
+  const cv::Mat bgr = fig.isContinuous() ? fig : fig.clone();
+  if (bgr.type() != CV_8UC3) throw std::logic_error("plan figure for '" + path + "' is not an 8-bit colour image");
+  const std::vector<uint8_t> png = encode_png(bgr.data, bgr.cols, bgr.rows, PngPixels::kBgr8, 6, "plan figure " + path);
   write_file_atomic(path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
   drawing::write_text_file(drawing::svg_path_beside(path), svg.document(), "plan figure (SVG)");
 }

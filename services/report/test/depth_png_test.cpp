@@ -1,4 +1,4 @@
-// Depth images as 16-bit PNGs of millimetres, read back with OpenCV.
+// Depth images as 16-bit PNGs of millimetres, read back (libpng; OpenCV reads them too: image_codec_test).
 #include "report/depth_png.hpp"
 
 #include <gtest/gtest.h>
