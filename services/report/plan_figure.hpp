@@ -1,7 +1,7 @@
 #pragma once
 // A picture of one planning step: the ellipsoids, every candidate view coloured by its quality F,
 // the views taken so far, the global partition and the chosen view, so a person can see why a
-// view was chosen. Drawn with OpenCV (core, imgproc, imgcodecs).
+// view was chosen. Drawn with OpenCV (core, imgproc), written as PNG by libpng (core/io/image_codec.hpp).
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
