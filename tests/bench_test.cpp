@@ -185,8 +185,12 @@ TEST(Bench, ThreePlannersTwoObjectsThreeViewsInPrivateNamespaces) {
       if (object == "sphere") {
         EXPECT_LT(c1, 50.0);
       }
-      // And the scan's own outputs are there.
+      // And the scan's own outputs are there; its coverage.json without the surface metrics,
+      // which the bench's evaluation computes (once, below).
       EXPECT_TRUE(fs::exists(out / planner / object / "cloud.ply"));
+      const json own = read_json_file(out / planner / object / "coverage.json");
+      EXPECT_EQ(own["coverage_by_view"].size(), 3u);
+      EXPECT_EQ(own["surface_metrics"], json::object());
       // The scans ran the whole budget (the stop rule off); the summary says where the rule
       // would have stopped each, from the per-view figures the scan recorded.
       const json scan = read_json_file(out / planner / object / "scan.json");

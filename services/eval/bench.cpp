@@ -74,7 +74,7 @@ std::vector<std::string> scan_argv(const BenchSpec& s, const fs::path& self, con
                      "--views", std::to_string(s.views), "--resolution", exact(s.resolution_m), "--candidates",
                      std::to_string(s.candidates), "--tmax", std::to_string(s.tmax), "--beta", std::to_string(s.beta),
                      "--size", exact(s.size_m), "--working-distance", exact(s.working_distance_m), "--seed", std::to_string(s.seed), "--when-done",
-                     std::string(name_of(s.when_done)), "--motion", std::string(name_of(s.motion)), "--seconds-per-point", exact(s.seconds_per_point), "--map-pose", std::string(name_of(s.map_pose)), "--stop-rule", "off", "--no-log", "--out", out.string(),
+                     std::string(name_of(s.when_done)), "--motion", std::string(name_of(s.motion)), "--seconds-per-point", exact(s.seconds_per_point), "--map-pose", std::string(name_of(s.map_pose)), "--stop-rule", "off", "--no-log", "--no-surface-metrics", "--out", out.string(),
                      "--camera", std::string(name_of(s.camera)), "--rig-errors", std::string(name_of(s.rig_errors)),
                      "--sim-speed", exact(s.sim_speed)});
   if (const std::optional<Eigen::Vector3d>& first = initial_view ? initial_view : s.initial_view) {

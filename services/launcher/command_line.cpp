@@ -274,6 +274,10 @@ void CommandLine::declare_scan() {
 
   cli::add_text(c, "out", &scan_.out, "output folder [out/<object>-<date-time>-<4 digits of the scan id>]", "DIR")->group(kGroupOutput);
   cli::add_flag(c, "no-log", &scan_pending_.no_log, "do not record scan.lcmlog")->group(kGroupOutput);
+  cli::add_flag(c, "no-surface-metrics", &scan_pending_.no_surface_metrics,
+                "coverage.json without the surface metrics against the true mesh (accuracy, completeness, F-score; "
+                "`pbnbv bench` computes them in its own evaluation)")
+      ->group(kGroupOutput);
   cli::add_flag(c, "overwrite", &scan_.overwrite,
                 "delete what --out holds before scanning (a folder that is not empty is refused otherwise)")
       ->group(kGroupOutput);
@@ -466,6 +470,7 @@ void CommandLine::resolve_scan() {
   // paper's simulation): its kinematic poses are exact, so registration is off by default there.
   scan_.registration = p.registration.value_or(s.rig == RigKind::kArm ? OnOff::kOn : OnOff::kOff) == OnOff::kOn;
   scan_.record_log = !p.no_log;
+  scan_.surface_metrics = !p.no_surface_metrics;
   // Registration's prior: what the user says of the rig, else on the twin what its errors make
   // (each a random direction of its size: about size / sqrt(3) per axis; a joint's error turns
   // the camera and moves it through the arm's reach; the turntable's turns the object under it).

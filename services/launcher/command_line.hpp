@@ -107,6 +107,7 @@ struct ScanOptions {
   RigErrors rig_errors = kRigErrors.value;  // --rig-errors: the figures above where not given one by one
   int64_t error_seed = kErrorSeed.value;
   bool record_log = true;        // not --no-log
+  bool surface_metrics = true;   // not --no-surface-metrics
   LengthUnit mesh_units = LengthUnit::kMetre;  // --units: mesh.obj's (and `pbnbv mesh --stl`'s) length unit
   // A rig whose drivers run outside (--external-rig): no twin, an unknown object.
   bool external_rig = false;
@@ -175,6 +176,7 @@ class CommandLine {
     std::optional<Eigen::Vector3d> initial_view;
     std::string rig_model;  // --rig-model FILE
     bool no_log = false;
+    bool no_surface_metrics = false;
   };
   struct BenchPending {
     std::string object_dir;

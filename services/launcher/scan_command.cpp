@@ -406,7 +406,7 @@ int run_scan(const ScanOptions& o, const fs::path& bin) {
   warn_small_receive_buffer();
 
   std::vector<process::Child> children = scan_processes(s, launch, out, bin);
-  return supervise(children, s, out, launch.record_log);
+  return supervise(children, s, out, launch.record_log, true, launch.surface_metrics);
 }
 
 // An external-rig scan: the drivers are checked (nothing moves), the first views planned and their
@@ -451,13 +451,13 @@ int run_external_scan(const ScanOptions& o, const fs::path& bin) {
 
 namespace {
 
-// After a scan of the twin: coverage after every view and the surface metrics against the ground
-// truth it rendered, printed and written to coverage.json (a warning when they cannot be).
-void evaluate_against_truth(const ScanSettings& s, const fs::path& out) {
-  // Against the ground truth the twin rendered: coverage after every view, the surface metrics.
+// After a scan of the twin: coverage after every view and (`surface_metrics`) the surface metrics
+// against the ground truth it rendered, printed and written to coverage.json (a warning when they
+// cannot be).
+void evaluate_against_truth(const ScanSettings& s, const fs::path& out, bool surface_metrics) {
   try {
     const CoverageParams cp;
-    const eval::ScanEvaluation e = eval::evaluate_scan(out, cp);
+    const eval::ScanEvaluation e = surface_metrics ? eval::evaluate_scan(out, cp) : eval::evaluate_coverage(out, cp);
     write_json_atomic(eval::to_json(e, cp), (out / "coverage.json").string());
     std::string line;
     for (double c : e.coverage_by_view) line += " " + fixed(c, 1);
@@ -536,10 +536,11 @@ void report_rig_contacts(const fs::path& out) {
 
 // What the user reads at the end: the outputs (with the evaluation of a twin scan), or where the
 // logs of a failed scan are; and any contact of the rig.
-void report_outcome(int code, const ScanSettings& s, const fs::path& out, bool record_log, bool evaluate) {
+void report_outcome(int code, const ScanSettings& s, const fs::path& out, bool record_log, bool evaluate,
+                    bool surface_metrics) {
   report_rig_contacts(out);
   if (code == 0) {
-    if (evaluate) evaluate_against_truth(s, out);
+    if (evaluate) evaluate_against_truth(s, out, surface_metrics);
     std::cout << "outputs: " << (out / "cloud.ply").string() << ", " << (out / "frames").string() << "/, "
               << (fs::exists(out / "mesh.ply") ? (out / "mesh.ply").string() + " (.obj), " : std::string())
               << (uses_view_scorer(s.planner) ? (out / "plans").string() + "/, " : std::string())
@@ -554,7 +555,7 @@ void report_outcome(int code, const ScanSettings& s, const fs::path& out, bool r
 }  // namespace
 
 int supervise(std::vector<process::Child>& children, const ScanSettings& s, const fs::path& out, bool record_log,
-              bool evaluate) {
+              bool evaluate, bool surface_metrics) {
   install_stop_handlers();
 
   try {
@@ -640,7 +641,7 @@ int supervise(std::vector<process::Child>& children, const ScanSettings& s, cons
     bus.spin_once(20);
   }
   wind_down(bus, children, s, out, code, cause, watch, record_log);
-  report_outcome(code, s, out, record_log, evaluate);
+  report_outcome(code, s, out, record_log, evaluate, surface_metrics);
   return code;
 }
 
@@ -716,7 +717,7 @@ int resume_scan(const fs::path& dir, const fs::path& bin) {
   for (auto& c : children) continue_scan(c);
   std::cout << "pbnbv scan: resuming " << s.scan_id << " in " << out.string()
             << (r.rerooted.empty() ? "" : " (" + r.rerooted + ")") << std::endl;
-  return supervise(children, s, out, r.launch.record_log, !s.external_rig);
+  return supervise(children, s, out, r.launch.record_log, !s.external_rig, r.launch.surface_metrics);
 }
 
 }  // namespace pbnbv::launcher

@@ -65,6 +65,7 @@ fs::path enclosing_scan_folder(const fs::path& path) {
 LaunchSettings launch_settings_of(const ScanOptions& o) {
   LaunchSettings l;
   l.record_log = o.record_log;
+  l.surface_metrics = o.surface_metrics;
   l.registration = o.registration;
   l.rig_host = o.rig_host;
   l.noise_sigma = o.noise_sigma;
@@ -81,6 +82,7 @@ LaunchSettings launch_settings_of(const ScanOptions& o) {
 
 nlohmann::json to_json(const LaunchSettings& l) {
   return {{"record_log", l.record_log},
+          {"surface_metrics", l.surface_metrics},
           {"registration", l.registration},
           {"rig_host", l.rig_host},
           {"noise_sigma", l.noise_sigma},
@@ -98,6 +100,7 @@ LaunchSettings launch_settings_from_json(const nlohmann::json& launch, const std
   if (!launch.is_object()) throw std::invalid_argument(file + ": \"launch\" is " + launch.dump() + ", not an object");
   LaunchSettings l;
   l.record_log = launch_flag(launch, "record_log", file);
+  if (launch.contains("surface_metrics")) l.surface_metrics = launch_flag(launch, "surface_metrics", file);  // since 0.13
   l.registration = launch_flag(launch, "registration", file);
   l.rig_host = launch_flag(launch, "rig_host", file);
   l.noise_sigma = launch_value(launch, "noise_sigma", kDepthNoise, file);

@@ -23,6 +23,7 @@ struct ScanOptions;
 // and the twin's depth noise and pose-error model.
 struct LaunchSettings {
   bool record_log = true;    // lcm-logger into scan.lcmlog (not --no-log)
+  bool surface_metrics = true;  // coverage.json with the surface metrics (not --no-surface-metrics)
   bool registration = true;  // --registration on|off, resolved
   bool rig_host = false;     // external rig: motion and camera run on the rig's computer (pbnbv rig-host)
   double noise_sigma = kDepthNoise.value;

@@ -34,10 +34,10 @@ void add_services(std::vector<process::Child>& children, const ScanSettings& s, 
 
 // Starts `children` (the coordinator last), keeps them running (restarts, hang detection) until
 // the coordinator ends or the user stops the scan, stops them all, and reports: scan.json's final
-// state, the log check and (`evaluate`: a twin scan) coverage against the true mesh. Returns the
-// exit code.
+// state, the log check and (`evaluate`: a twin scan) coverage against the true mesh, with the
+// surface metrics unless `surface_metrics` is false. Returns the exit code.
 int supervise(std::vector<process::Child>& children, const ScanSettings& s, const std::filesystem::path& out,
-              bool record_log, bool evaluate = true);
+              bool record_log, bool evaluate = true, bool surface_metrics = true);
 
 // STOP for `scan_id` ("" : every scan) with `reason`, sent three times 0.1 s apart (UDP may lose
 // one): `pbnbv stop`, and the launcher when a scan ends failed or interrupted.

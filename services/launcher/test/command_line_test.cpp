@@ -78,6 +78,7 @@ TEST(LauncherCommandLine, ScanDefaultsAreTheTables) {
   EXPECT_DOUBLE_EQ(s.depth_range.max_m, 3.0);
   EXPECT_TRUE(o.registration);  // arm rig
   EXPECT_TRUE(o.record_log);
+  EXPECT_TRUE(o.surface_metrics);
   EXPECT_EQ(o.error_seed, 7);
   EXPECT_EQ(s.rig_model_path, default_rig_path(RigKind::kArm));
 }
@@ -85,7 +86,7 @@ TEST(LauncherCommandLine, ScanDefaultsAreTheTables) {
 TEST(LauncherCommandLine, FreeRigDefaultsAndDependentDefaults) {
   CommandLine line;
   const Parsed p = parse(line, {"scan", "--rig", "free", "--width", "320", "--height", "180", "--initial-view", "0,0.9,0",
-                                "--no-log", "--up", "y"});
+                                "--no-log", "--no-surface-metrics", "--up", "y"});
   ASSERT_EQ(p.code, std::nullopt) << p.err;
   const ScanOptions& o = line.scan();
   EXPECT_DOUBLE_EQ(o.settings.ring_elevation_deg, 0.0);  // free rig
@@ -94,6 +95,7 @@ TEST(LauncherCommandLine, FreeRigDefaultsAndDependentDefaults) {
   EXPECT_DOUBLE_EQ(o.settings.camera.cy, 90.0);
   EXPECT_EQ(o.settings.initial_view_m, Eigen::Vector3d(0, 0.9, 0));
   EXPECT_FALSE(o.record_log);
+  EXPECT_FALSE(o.surface_metrics);
   EXPECT_EQ(o.up, UpAxis::kY);
   CommandLine x;
   ASSERT_EQ(parse(x, {"scan", "--up", "x"}).code, std::nullopt);

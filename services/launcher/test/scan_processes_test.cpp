@@ -135,8 +135,10 @@ TEST(ScanProcesses, LaunchSettingsRoundTripAndBadValuesAreNamed) {
   l.dropout = 0.25;
   l.turntable_error_deg = -1.5;
   l.error_seed = 99;
+  l.surface_metrics = false;
   const LaunchSettings back = launch_settings_from_json(to_json(l), "settings.json");
   EXPECT_EQ(back.record_log, false);
+  EXPECT_EQ(back.surface_metrics, false);
   EXPECT_EQ(back.registration, false);
   EXPECT_EQ(back.rig_host, false);
   EXPECT_EQ(back.dropout, 0.25);
@@ -155,6 +157,10 @@ TEST(ScanProcesses, LaunchSettingsRoundTripAndBadValuesAreNamed) {
   j["error_seed"] = 1.5;
   EXPECT_EQ(refusal([&] { launch_settings_from_json(j, "DIR/settings.json"); }),
             "DIR/settings.json: launch.error_seed is 1.5, not an integer");
+  // A folder from before --no-surface-metrics resumes with the metrics.
+  j = to_json(l);
+  j.erase("surface_metrics");
+  EXPECT_TRUE(launch_settings_from_json(j, "DIR/settings.json").surface_metrics);
   j = to_json(l);
   j.erase("dropout");
   EXPECT_EQ(refusal([&] { launch_settings_from_json(j, "DIR/settings.json"); }),
