@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The dependency direction between layers, beyond what the include directories already enforce
 # at compile time (see pbnbv_library in CMakeLists.txt): only the rig library and the twin see
-# MuJoCo, only the report library draws with OpenCV (and the bus's colour codec codes JPEG with it), only the surface library meshes with PCL's
+# MuJoCo, only the report library draws with OpenCV, only the surface library meshes with PCL's
 # surface module, and the processes that need neither do not load them (ldd: the coordinator,
-# which writes scan.json and nothing else, loads none of MuJoCo, PCL and OpenCV); scan.json is
-# parsed in one place; no core file is over 800 lines.
+# which writes scan.json and nothing else, loads none of MuJoCo, PCL and OpenCV); no program loads
+# OpenCV's imgcodecs (about 130 libraries at every start: PNG and JPEG are libpng's and libjpeg's,
+# core/io/image_codec); scan.json is parsed in one place; no core file is over 800 lines.
 set -uo pipefail
 src=${PBNBV_SOURCE_DIR:?}
 bin=${PBNBV_BIN_DIR:?}
@@ -28,7 +29,8 @@ check_includes() {  # <pattern> <what> <allowed path regex>
   verdict "$hits" "$2 is included outside its layer by" "$2 only in $3"
 }
 check_includes 'mujoco/' "MuJoCo" '^(services/core/rig/|twin/)'
-check_includes 'opencv2/' "OpenCV" '^(services/report/|services/bus/colour_codec\.cpp)'
+check_includes 'opencv2/' "OpenCV" '^services/report/'
+check_includes '(png|jpeglib)\.h' "libpng and libjpeg" '^services/core/io/image_codec\.cpp'
 check_includes 'pcl/surface/' "PCL's surface module (marching-cubes tables, Poisson)" '^services/core/surface/'
 
 # The scan's layer names a rig kind but uses none of the rig's model or kinematics (those are for
@@ -66,4 +68,8 @@ check_ldd pbnbv-mapping libmujoco libopencv libpcl
 check_ldd pbnbv-registration libmujoco
 # The coordinator owns scan.json only: it decodes no frame, meshes nothing, loads no rig model.
 check_ldd pbnbv-coordinator libmujoco libpcl libopencv
+# PNG and JPEG through libpng and libjpeg: no program starts with OpenCV's codecs (GDAL, Poppler, ...).
+for b in pbnbv pbnbv-twin pbnbv-motion pbnbv-camera pbnbv-registration pbnbv-scorer pbnbv-view pbnbv-replay-rig; do
+  check_ldd "$b" libopencv_imgcodecs libgdal
+done
 exit $fail
