@@ -14,8 +14,12 @@
 #include <stdexcept>
 #include <string>
 
+#include "error_message.hpp"
+
 namespace pbnbv {
 namespace {
+
+using testing::error_message;
 
 // A 5 x 3 ramp of 16-bit samples whose two bytes differ (0x0102, 0x0103, ...) and the extremes:
 // a byte-order mistake anywhere shows.
@@ -39,15 +43,6 @@ uint32_t crc32(const uint8_t* p, std::size_t n) {
     for (int k = 0; k < 8; ++k) c = (c & 1u) ? (c >> 1) ^ 0xEDB88320u : c >> 1;
   }
   return c ^ 0xFFFFFFFFu;
-}
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "(no error)";
 }
 
 TEST(ImageCodec, ASixteenBitGreyPngHoldsItsHeaderAndComesBackToTheSample) {
@@ -105,13 +100,13 @@ TEST(ImageCodec, ABrokenOrOversizedPngIsRefusedNamingIt) {
   const std::vector<uint16_t> s = ramp16();
   const std::vector<uint8_t> png = encode_png(s.data(), 5, 3, PngPixels::kGray16, 6, "ramp");
   const std::vector<uint8_t> half(png.begin(), png.begin() + static_cast<long>(png.size() / 2));
-  EXPECT_EQ(error_of([&] { decode_png_gray16(half.data(), half.size(), "depth/view_001.png", 100); }),
+  EXPECT_EQ(error_message([&] { decode_png_gray16(half.data(), half.size(), "depth/view_001.png", 100); }),
             "depth/view_001.png: a broken PNG (libpng: the PNG ends early (truncated))");
   const std::vector<uint8_t> text = {'h', 'e', 'l', 'l', 'o', ' ', 'p', 'n', 'g', '!'};
-  EXPECT_EQ(error_of([&] { decode_png_gray16(text.data(), text.size(), "x.png", 100); }),
+  EXPECT_EQ(error_message([&] { decode_png_gray16(text.data(), text.size(), "x.png", 100); }),
             "x.png: not a PNG (10 bytes that do not begin with the PNG signature)");
   // 15 pixels against a bound of 14.
-  EXPECT_EQ(error_of([&] { decode_png_gray16(png.data(), png.size(), "ramp", 14); }),
+  EXPECT_EQ(error_message([&] { decode_png_gray16(png.data(), png.size(), "ramp", 14); }),
             "ramp: declares 5 x 3 pixels, more than the 14 allowed");
   // A header that claims 100000 x 100000 (its CRC made right) is refused before anything is
   // allocated.
@@ -124,16 +119,16 @@ TEST(ImageCodec, ABrokenOrOversizedPngIsRefusedNamingIt) {
   }
   const uint32_t crc = crc32(huge.data() + 12, 17);
   for (int k = 0; k < 4; ++k) huge[static_cast<std::size_t>(29 + k)] = static_cast<uint8_t>(crc >> (24 - 8 * k));
-  EXPECT_EQ(error_of([&] { decode_png_gray16(huge.data(), huge.size(), "huge", int64_t{64} << 20); }),
+  EXPECT_EQ(error_message([&] { decode_png_gray16(huge.data(), huge.size(), "huge", int64_t{64} << 20); }),
             "huge: declares 100000 x 100000 pixels, more than the 67108864 allowed");
   // An 8-bit colour PNG is not a depth image.
   const uint8_t px[3] = {1, 2, 3};
   const std::vector<uint8_t> colour = encode_png(px, 1, 1, PngPixels::kRgb8, 6, "c");
-  EXPECT_EQ(error_of([&] { decode_png_gray16(colour.data(), colour.size(), "colour.png", 100); }),
+  EXPECT_EQ(error_message([&] { decode_png_gray16(colour.data(), colour.size(), "colour.png", 100); }),
             "colour.png: holds 8-bit colour samples, not 16-bit grey (one channel)");
-  EXPECT_EQ(error_of([&] { encode_png(px, 0, 1, PngPixels::kRgb8, 6, "empty"); }),
+  EXPECT_EQ(error_message([&] { encode_png(px, 0, 1, PngPixels::kRgb8, 6, "empty"); }),
             "encode_png: empty: 0 x 1 is not an image size (1..65535 a side)");
-  EXPECT_EQ(error_of([&] { encode_png(px, 1, 1, PngPixels::kRgb8, 10, "level"); }),
+  EXPECT_EQ(error_message([&] { encode_png(px, 1, 1, PngPixels::kRgb8, 10, "level"); }),
             "encode_png: level: compression 10 is not a zlib level (0..9)");
 }
 
@@ -176,17 +171,17 @@ TEST(ImageCodec, ABrokenOrOversizedJpegIsRefusedNamingIt) {
   for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<uint8_t>(i * 7);
   const std::vector<uint8_t> jpeg = encode_jpeg(rgb.data(), 64, 48, 90, "noise");
   const std::vector<uint8_t> half(jpeg.begin(), jpeg.begin() + static_cast<long>(jpeg.size() / 2));
-  EXPECT_EQ(error_of([&] { decode_jpeg_rgb(half.data(), half.size(), "DEPTH_FRAME 3 colour (jpeg)", 10000); }),
+  EXPECT_EQ(error_message([&] { decode_jpeg_rgb(half.data(), half.size(), "DEPTH_FRAME 3 colour (jpeg)", 10000); }),
             "DEPTH_FRAME 3 colour (jpeg): a broken JPEG (libjpeg: Premature end of JPEG file)");
   const std::vector<uint8_t> head(jpeg.begin(), jpeg.begin() + 20);
-  EXPECT_NE(error_of([&] { decode_jpeg_rgb(head.data(), head.size(), "head", 10000); }).find("head: a broken JPEG"),
+  EXPECT_NE(error_message([&] { decode_jpeg_rgb(head.data(), head.size(), "head", 10000); }).find("head: a broken JPEG"),
             std::string::npos);
   const std::vector<uint8_t> text = {'n', 'o', 't', ' ', 'j', 'p', 'e', 'g'};
-  EXPECT_EQ(error_of([&] { decode_jpeg_rgb(text.data(), text.size(), "t", 10000); }),
+  EXPECT_EQ(error_message([&] { decode_jpeg_rgb(text.data(), text.size(), "t", 10000); }),
             "t: not a JPEG (8 bytes that do not begin with a start-of-image marker)");
-  EXPECT_EQ(error_of([&] { decode_jpeg_rgb(jpeg.data(), jpeg.size(), "noise", 3071); }),
+  EXPECT_EQ(error_message([&] { decode_jpeg_rgb(jpeg.data(), jpeg.size(), "noise", 3071); }),
             "noise: declares 64 x 48 pixels, more than the 3071 allowed");
-  EXPECT_EQ(error_of([&] { encode_jpeg(rgb.data(), 64, 48, 0, "q"); }), "encode_jpeg: q: quality 0 is not in 1..100");
+  EXPECT_EQ(error_message([&] { encode_jpeg(rgb.data(), 64, 48, 0, "q"); }), "encode_jpeg: q: quality 0 is not in 1..100");
 }
 
 }  // namespace
