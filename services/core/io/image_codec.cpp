@@ -30,6 +30,7 @@ bool little_endian_host() {
 
 struct PngContext {
   char message[256] = "";
+  bool from_library = false;  // the message is libpng's (the data is broken), not one of our checks
   const uint8_t* in = nullptr;  // decoding: the bytes, their size, how far libpng has read
   std::size_t in_size = 0;
   std::size_t in_at = 0;
@@ -39,6 +40,7 @@ struct PngContext {
 [[noreturn]] void png_fail(png_structp png, png_const_charp message) {
   auto* c = static_cast<PngContext*>(png_get_error_ptr(png));
   std::snprintf(c->message, sizeof c->message, "%s", message);
+  c->from_library = true;
   png_longjmp(png, 1);
 }
 
@@ -145,7 +147,11 @@ bool png_decode_gray16(PngContext* c, int64_t max_pixels, bool swap, Gray16Image
   } catch (...) {
     allocated = false;
   }
-  if (!allocated) png_error(png, "out of memory for the decoded image");
+  if (!allocated) {
+    std::snprintf(c->message, sizeof c->message, "out of memory for the decoded image");
+    png_destroy_read_struct(&png, &info, nullptr);
+    return false;
+  }
   for (int pass = 0; pass < passes; ++pass) {
     for (png_uint_32 v = 0; v < height; ++v) {
       png_read_row(png, reinterpret_cast<png_bytep>(image->samples.data() + static_cast<std::size_t>(v) * width),
@@ -163,6 +169,7 @@ struct JpegContext {
   jpeg_error_mgr manager;  // first: libjpeg hands the callbacks a pointer to it
   std::jmp_buf jump;
   char message[JMSG_LENGTH_MAX] = "";
+  bool from_library = false;  // the message is libjpeg's (an error or a warning on the data), not one of our checks
   int warnings = 0;
   unsigned char* buffer = nullptr;  // encoding: jpeg_mem_dest's buffer (malloc'ed by libjpeg)
   unsigned long length = 0;
@@ -171,6 +178,7 @@ struct JpegContext {
 [[noreturn]] void jpeg_fail(j_common_ptr cinfo) {
   auto* c = reinterpret_cast<JpegContext*>(cinfo->err);
   (*cinfo->err->format_message)(cinfo, c->message);
+  c->from_library = true;
   std::longjmp(c->jump, 1);
 }
 
@@ -179,7 +187,10 @@ struct JpegContext {
 void jpeg_note(j_common_ptr cinfo, int level) {
   if (level >= 0) return;  // trace messages
   auto* c = reinterpret_cast<JpegContext*>(cinfo->err);
-  if (c->warnings++ == 0) (*cinfo->err->format_message)(cinfo, c->message);
+  if (c->warnings++ == 0) {
+    (*cinfo->err->format_message)(cinfo, c->message);
+    c->from_library = true;
+  }
 }
 
 bool jpeg_encode(JpegContext* c, const uint8_t* rgb, int width, int height, int quality) {
@@ -225,6 +236,7 @@ bool jpeg_decode(JpegContext* c, const uint8_t* bytes, std::size_t size, int64_t
   if (pixels > max_pixels) {
     std::snprintf(c->message, sizeof c->message, "declares %u x %u pixels, more than the %lld allowed",
                   cinfo.image_width, cinfo.image_height, static_cast<long long>(max_pixels));
+    c->from_library = false;  // ours, even after a warning on the header
     jpeg_destroy_decompress(&cinfo);
     return false;
   }
@@ -241,6 +253,7 @@ bool jpeg_decode(JpegContext* c, const uint8_t* bytes, std::size_t size, int64_t
   if (!allocated || cinfo.output_components != 3) {
     std::snprintf(c->message, sizeof c->message, "%s",
                   allocated ? "does not decode to three channels" : "out of memory for the decoded image");
+    c->from_library = false;
     jpeg_destroy_decompress(&cinfo);
     return false;
   }
@@ -295,10 +308,8 @@ Gray16Image decode_png_gray16(const uint8_t* bytes, std::size_t size, const std:
   c.in_size = size;
   Gray16Image image;
   if (!png_decode_gray16(&c, max_pixels, little_endian_host(), &image)) {
-    throw std::runtime_error(what + ": " + (std::strncmp(c.message, "holds ", 6) == 0 ||
-                                                    std::strncmp(c.message, "declares ", 9) == 0
-                                                ? std::string(c.message)
-                                                : "a broken PNG (libpng: " + std::string(c.message) + ")"));
+    throw std::runtime_error(what + ": " + (c.from_library ? "a broken PNG (libpng: " + std::string(c.message) + ")"
+                                                           : std::string(c.message)));
   }
   return image;
 }
@@ -333,9 +344,8 @@ Rgb8Image decode_jpeg_rgb(const uint8_t* bytes, std::size_t size, const std::str
   JpegContext c;
   Rgb8Image image;
   if (!jpeg_decode(&c, bytes, size, max_pixels, &image)) {
-    throw std::runtime_error(what + ": " + (std::strncmp(c.message, "declares ", 9) == 0
-                                                ? std::string(c.message)
-                                                : "a broken JPEG (libjpeg: " + std::string(c.message) + ")"));
+    throw std::runtime_error(what + ": " + (c.from_library ? "a broken JPEG (libjpeg: " + std::string(c.message) + ")"
+                                                           : std::string(c.message)));
   }
   return image;
 }
