@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <initializer_list>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -37,14 +39,24 @@ class TempDirTest : public ::testing::Test {
   std::filesystem::path dir_;
 };
 
+// The whole file at `path` ("" when it cannot be read: the test's own expectations then fail).
+inline std::string file_text(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
 // Appends n bytes of *p big-endian (the host is little-endian).
 inline void put_be(std::string& s, const void* p, size_t n) {
   const auto* b = static_cast<const unsigned char*>(p);
   for (size_t k = 0; k < n; ++k) s.push_back(static_cast<char>(b[n - 1 - k]));
 }
 
-// Throws std::runtime_error, and the message contains every one of `needles`.
-inline void expect_error(const std::function<void()>& fn, const std::vector<std::string>& needles) {
+// Throws std::runtime_error, and the message contains every one of `needles`. An initializer list
+// (not a vector), so that expect_error(f, {"a"}) picks this one beside error_message.hpp's
+// expect_error(f, needle) when a translation unit includes both.
+inline void expect_error(const std::function<void()>& fn, std::initializer_list<std::string> needles) {
   try {
     fn();
     ADD_FAILURE() << "no exception thrown";

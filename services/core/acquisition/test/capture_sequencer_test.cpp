@@ -11,18 +11,16 @@
 #include <cmath>
 
 #include "core/base/units.hpp"
+#include "arm_views.hpp"
 
 namespace pbnbv {
 namespace {
 
-constexpr double kObjectZ = 0.15;
+using testing::arm_rig;
+using testing::kObjectZ;
+
 constexpr int64_t kFirstTrigger = 500;
 constexpr int64_t kExposure = 20000000;  // rig clock, us
-
-const RigModel& arm_rig() {
-  static const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
-  return rig;
-}
 
 CaptureRequest request(int64_t id = 7) {
   CaptureRequest r;

@@ -14,18 +14,11 @@
 namespace pbnbv {
 namespace {
 
-constexpr double kObjectZ = 0.15;
+using testing::arm_rig;
+using testing::free_rig;
+using testing::kObjectZ;
+
 constexpr int64_t kFirstSeq = 1;
-
-const RigModel& arm_rig() {
-  static const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
-  return rig;
-}
-
-const RigModel& free_rig() {
-  static const RigModel rig = load_rig(default_rig_path(RigKind::kFree));
-  return rig;
-}
 
 // A view the arm reaches (the one bad_input_test moves to): 0.75 m out, 0.35 m up.
 MoveRequest reachable_request(int64_t id = 1) {

@@ -11,21 +11,17 @@
 
 #include "core/rig/rig.hpp"
 #include "error_message.hpp"
+#include "file_test_util.hpp"
 
 namespace pbnbv {
 namespace {
 
-std::string read_text(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+using testing::file_text;
 
 // The arm rig's file with its pbnbv_camera line replaced by `line` ("" removes it), written to a
 // temporary file; returns the path.
 std::string arm_rig_with(const std::string& name, const std::string& line) {
-  std::string text = read_text(default_rig_path(RigKind::kArm));
+  std::string text = file_text(default_rig_path(RigKind::kArm));
   const std::string needle = "<numeric name=\"pbnbv_camera\" data=\"1280 720 696 696 640 360 0.1 3.0\"/>";
   const std::size_t at = text.find(needle);
   EXPECT_NE(at, std::string::npos) << "models/rig_arm.xml no longer states the camera as expected";

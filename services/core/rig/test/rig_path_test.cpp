@@ -13,16 +13,10 @@
 namespace pbnbv {
 namespace {
 
-constexpr double kObjectZ = 0.15;
+using testing::arm_rig;
+using testing::cube_keepout;
+using testing::kObjectZ;
 
-const RigModel& arm_rig() {
-  static const RigModel rig = load_rig(default_rig_path(RigKind::kArm));
-  return rig;
-}
-
-Eigen::AlignedBox3d cube_keepout() {
-  return Eigen::AlignedBox3d(Eigen::Vector3d(-0.15, -0.15, -0.15), Eigen::Vector3d(0.15, 0.15, 0.15));
-}
 
 TEST(RigTime, ARampIsLimitedBySpeedOrByAccelerationAsWorkedByHand) {
   // Smoothstep: peak speed 1.5 d / T, peak acceleration 6 d / T^2.

@@ -16,27 +16,21 @@
 
 #include "core/geometry/views.hpp"
 #include "core/base/units.hpp"
+#include "arm_views.hpp"
+#include "file_test_util.hpp"
 
 namespace pbnbv {
 namespace {
 
-constexpr double kObjectZ = 0.15;  // 0.3 m cube resting on the platter: centre 0.15 m above it
+using testing::cube_keepout;
+using testing::file_text;
+using testing::kObjectZ;
 
-std::string read_text(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
 
 std::string write_temp(const std::string& name, const std::string& text) {
   const std::string path = ::testing::TempDir() + name;
   std::ofstream(path) << text;
   return path;
-}
-
-Eigen::AlignedBox3d cube_keepout() {
-  return Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-0.15), Eigen::Vector3d::Constant(0.15));
 }
 
 double hemisphere_radius() { return 0.6 + 0.5 * std::sqrt(3.0) * 0.3; }  // d_c + half diagonal
@@ -512,7 +506,7 @@ TEST(RigLoad, MalformedFileNamesPath) {
 
 // models/rig_arm.xml with each needle replaced (each must occur), written to a temporary file.
 std::string edited_rig(const std::string& file, const std::vector<std::pair<std::string, std::string>>& edits) {
-  std::string text = read_text(default_rig_path(RigKind::kArm));
+  std::string text = file_text(default_rig_path(RigKind::kArm));
   for (const auto& [needle, with] : edits) {
     const size_t at = text.find(needle);
     EXPECT_NE(at, std::string::npos) << needle;
@@ -861,7 +855,7 @@ TEST_F(Ur5eRig, ParallelAxesIkByHand) {
 
 TEST(RigLoad, Ur5eMovedOffItsLayoutUsesGeneralIk) {
   // A calibration that tilts the elbow axis by 1 mrad leaves joints 2-4 no longer parallel.
-  std::string text = read_text(model_file_path("rig_ur5e.xml"));
+  std::string text = file_text(model_file_path("rig_ur5e.xml"));
   const std::string needle = "<joint name=\"elbow\" class=\"arm\" axis=\"0 0 1\"";
   const size_t at = text.find(needle);
   ASSERT_NE(at, std::string::npos);

@@ -366,8 +366,6 @@ TEST_F(ScanRecordTest, RigTimeIsWrittenPerViewAndSummedAndReadBackChecked) {
   EXPECT_EQ(sum_rig_time(old.views).views, 0);
 }
 
-}  // namespace
-
 // A view's files and model figures are the registration service's answer, said as it said them.
 TEST_F(ScanRecordTest, AViewEntrySaysTheFilesAndNewSurfaceTheRegistrationWrote) {
   ViewRecord v;
@@ -422,3 +420,5 @@ TEST_F(ScanRecordTest, TheMeshEntrySaysWhatTheMeshIs) {
   EXPECT_EQ(j["method"], "poisson");
   EXPECT_EQ(j["settings"], json({{"poisson_depth", 8}}));
 }
+
+}  // namespace
