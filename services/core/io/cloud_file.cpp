@@ -27,9 +27,6 @@ namespace pbnbv {
 namespace {
 
 // Throws "<ctx>: <path>: <what>".
-[[noreturn]] void fail(const char* ctx, const std::string& path, const std::string& what) {
-  throw std::runtime_error(fmt::format("{}: {}: {}", ctx, path, what));
-}
 
 // Whether the machine stores numbers little-endian (PLY's binary_little_endian byte order).
 bool host_little_endian() {
@@ -99,7 +96,7 @@ void write_ply(const PointCloud& cloud, const std::string& path, const CloudExtr
   try {
     write_text_atomic(out, path);
   } catch (const std::exception& e) {
-    fail(ctx, path, e.what());
+    file_error(ctx, path, e.what());
   }
 }
 
@@ -128,7 +125,7 @@ PointCloud read_ply(const std::string& path, CloudExtras& extras) {
       std::istringstream words(line.substr(20));
       double position[3], quat[4];
       if (!(words >> position[0] >> position[1] >> position[2] >> quat[0] >> quat[1] >> quat[2] >> quat[3])) {
-        fail(ctx, path, "a camera_pose comment is not 'x y z qw qx qy qz': " + line);
+        file_error(ctx, path, "a camera_pose comment is not 'x y z qw qx qy qz': " + line);
       }
       extras.camera_poses.push_back(pose_from_arrays(position, quat, path + " camera_pose"));
     }
@@ -147,7 +144,7 @@ PointCloud read_ply(const std::string& path, CloudExtras& extras) {
           : CGAL::IO::read_PLY_with_properties(
                 in, std::back_inserter(points),
                 CGAL::IO::make_ply_point_reader(CGAL::First_of_pair_property_map<PointNormal>()));
-  if (!ok) fail(ctx, path, ply_failure(header, path, in));
+  if (!ok) file_error(ctx, path, ply_failure(header, path, in));
   PointCloud cloud;
   cloud.reserve(points.size());
   for (const auto& [p, n] : points) {

@@ -23,9 +23,6 @@ namespace pbnbv {
 namespace {
 
 // Throws "<ctx>: <path>: <what>".
-[[noreturn]] void fail(const char* ctx, const std::string& path, const std::string& what) {
-  throw std::runtime_error(fmt::format("{}: {}: {}", ctx, path, what));
-}
 
 // The 1-based line of the file holding byte `offset` (the last line if the file is shorter),
 // and its text (at most 60 characters, without the end of line).
@@ -77,19 +74,23 @@ bool whole_number(std::string_view word, std::uint64_t& n) {
   return ec == std::errc() && end == word.data() + word.size();
 }
 
+void file_error(const char* ctx, const std::string& path, const std::string& what) {
+  throw std::runtime_error(fmt::format("{}: {}: {}", ctx, path, what));
+}
+
 void check_input_file(const std::string& path, const char* ctx) {
   std::error_code ec;
   const auto st = std::filesystem::status(path, ec);
-  if (st.type() == std::filesystem::file_type::not_found) fail(ctx, path, "file does not exist");
-  if (ec) fail(ctx, path, "cannot access file: " + ec.message());
-  if (std::filesystem::is_directory(st)) fail(ctx, path, "is a directory, not a file");
+  if (st.type() == std::filesystem::file_type::not_found) file_error(ctx, path, "file does not exist");
+  if (ec) file_error(ctx, path, "cannot access file: " + ec.message());
+  if (std::filesystem::is_directory(st)) file_error(ctx, path, "is a directory, not a file");
   // A link to /dev/zero or a FIFO would be read until memory runs out or forever.
-  if (!std::filesystem::is_regular_file(st)) fail(ctx, path, "is not a regular file (a device, FIFO or socket)");
-  if (!std::ifstream(path, std::ios::binary)) fail(ctx, path, std::string("cannot open file: ") + std::strerror(errno));
+  if (!std::filesystem::is_regular_file(st)) file_error(ctx, path, "is not a regular file (a device, FIFO or socket)");
+  if (!std::ifstream(path, std::ios::binary)) file_error(ctx, path, std::string("cannot open file: ") + std::strerror(errno));
   const std::uintmax_t size = std::filesystem::file_size(path, ec);
-  if (!ec && size == 0) fail(ctx, path, "empty file");
+  if (!ec && size == 0) file_error(ctx, path, "empty file");
   if (!ec && size > kMaxInputFileBytes) {
-    fail(ctx, path, fmt::format("{} bytes, more than the {} bytes (4 GiB) an input file may hold", size, kMaxInputFileBytes));
+    file_error(ctx, path, fmt::format("{} bytes, more than the {} bytes (4 GiB) an input file may hold", size, kMaxInputFileBytes));
   }
 }
 
@@ -156,7 +157,7 @@ PlyLayout read_ply_layout(std::istream& in, const std::string& path, const char*
   for (std::string line; std::getline(in, line);) {
     ++line_number;
     bytes += line.size() + 1;
-    if (bytes > kMaxHeaderBytes) fail(ctx, path, "PLY header longer than 1 MB without end_header");
+    if (bytes > kMaxHeaderBytes) file_error(ctx, path, "PLY header longer than 1 MB without end_header");
     std::istringstream iss(line);
     std::string keyword;
     if (!(iss >> keyword)) continue;
@@ -170,20 +171,20 @@ PlyLayout read_ply_layout(std::istream& in, const std::string& path, const char*
       // second vertex element with uchar coordinates, read through a null pointer).
       for (std::size_t k = 0; k + 1 < layout.elements.size(); ++k) {
         if (layout.elements[k].name == e.name) {
-          fail(ctx, path, fmt::format("PLY header line {}: a second element '{}'", line_number, shown(e.name)));
+          file_error(ctx, path, fmt::format("PLY header line {}: a second element '{}'", line_number, shown(e.name)));
         }
       }
       if (!whole_number(count, e.count)) {
-        fail(ctx, path, fmt::format("PLY header line {}: element '{}' has count '{}', not a whole number", line_number,
+        file_error(ctx, path, fmt::format("PLY header line {}: element '{}' has count '{}', not a whole number", line_number,
                                     shown(e.name), shown(count)));
       }
       if (e.count > size) {
-        fail(ctx, path, fmt::format("PLY header line {}: element '{}' declares {} items, more than a file of {} bytes "
+        file_error(ctx, path, fmt::format("PLY header line {}: element '{}' declares {} items, more than a file of {} bytes "
                                     "can hold", line_number, shown(e.name), e.count, size));
       }
     }
     if (keyword != "property") continue;
-    if (layout.elements.empty()) fail(ctx, path, fmt::format("PLY header line {}: a property before any element", line_number));
+    if (layout.elements.empty()) file_error(ctx, path, fmt::format("PLY header line {}: a property before any element", line_number));
     PlyLayout::Property& prop = layout.elements.back().properties.emplace_back();
     std::string type, count_type, entry_type;
     iss >> type;
@@ -192,13 +193,13 @@ PlyLayout read_ply_layout(std::istream& in, const std::string& path, const char*
       bool integer = false;
       prop.count_bytes = ply_type_bytes(count_type, &prop.count_signed, &integer);
       if (prop.count_bytes == 0 || !integer) {
-        fail(ctx, path, fmt::format("PLY header line {}: a list counted in '{}', not an integer type", line_number,
+        file_error(ctx, path, fmt::format("PLY header line {}: a list counted in '{}', not an integer type", line_number,
                                     shown(count_type)));
       }
       type = entry_type;
     }
     prop.bytes = ply_type_bytes(type);
-    if (prop.bytes == 0) fail(ctx, path, fmt::format("PLY header line {}: unknown property type '{}'", line_number, shown(type)));
+    if (prop.bytes == 0) file_error(ctx, path, fmt::format("PLY header line {}: unknown property type '{}'", line_number, shown(type)));
   }
   return layout;  // no end_header: CGAL's reader names it
 }
@@ -271,7 +272,7 @@ void check_ply_lists(std::istream& in, const std::string& path, const char* ctx,
         // reader says so.
         if (count >= 0 && count <= 65535 && static_cast<std::uintmax_t>(count) > most) return;
         if (count < 0 || static_cast<std::uintmax_t>(count) > most) {
-          fail(ctx, path, fmt::format("PLY element '{}' item {}: a list of {} entries, more than the {} bytes left in "
+          file_error(ctx, path, fmt::format("PLY element '{}' item {}: a list of {} entries, more than the {} bytes left in "
                                       "the file can hold", shown(e.name), item, count, left));
         }
         if (!ascii) {
@@ -305,19 +306,19 @@ PlyHeader check_ply_header(std::istream& in, const std::string& path, const char
   precheck_ply(in, path, ctx);
   CGAL::IO::internal::PLY_reader reader(false);
   if (!reader.init(in)) {
-    fail(ctx, path, "not a PLY file, or a malformed PLY header: CGAL's PLY reader stopped " + stopped_at(path, in, true));
+    file_error(ctx, path, "not a PLY file, or a malformed PLY header: CGAL's PLY reader stopped " + stopped_at(path, in, true));
   }
   PlyHeader h;
   auto* vertex = find_element(reader, "vertex");
-  if (!vertex) fail(ctx, path, "PLY has no 'vertex' element");
+  if (!vertex) file_error(ctx, path, "PLY has no 'vertex' element");
   h.vertices = vertex->number_of_items();
   // A coordinate or a normal's component of another type is read through a null pointer.
   for (const char* c : {"x", "y", "z", "nx", "ny", "nz"}) {
     const bool normal = c[0] == 'n';
-    if (!normal && !has_named(*vertex, c)) fail(ctx, path, "PLY vertex element lacks x, y or z");
+    if (!normal && !has_named(*vertex, c)) file_error(ctx, path, "PLY vertex element lacks x, y or z");
     // has_property<double> accepts a float or a double property.
     if (has_named(*vertex, c) && !vertex->has_property<double>(c)) {
-      fail(ctx, path, fmt::format("PLY vertex property '{}' is not float or double", c));
+      file_error(ctx, path, fmt::format("PLY vertex property '{}' is not float or double", c));
     }
   }
   auto* face = faces ? find_element(reader, "face") : nullptr;
@@ -328,7 +329,7 @@ PlyHeader check_ply_header(std::istream& in, const std::string& path, const char
       ok = ok || face->has_property<std::vector<std::int32_t>>(list) ||
            face->has_property<std::vector<std::uint32_t>>(list);
     }
-    if (!ok) fail(ctx, path, "PLY face element has no vertex_indices list of int or uint");
+    if (!ok) file_error(ctx, path, "PLY face element has no vertex_indices list of int or uint");
   }
   return h;
 }

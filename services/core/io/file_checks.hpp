@@ -13,6 +13,9 @@ namespace pbnbv {
 // what a reader's memory would stand.
 inline constexpr std::uintmax_t kMaxInputFileBytes = std::uintmax_t{4} << 30;
 
+// Throws std::runtime_error "<ctx>: <path>: <what>", the readers' form of an error in a file.
+[[noreturn]] void file_error(const char* ctx, const std::string& path, const std::string& what);
+
 // Throws std::runtime_error "<ctx>: <path>: ..." unless `path` names an existing, non-empty
 // regular file (not a directory, device, FIFO or socket, also behind a link) of at most
 // kMaxInputFileBytes that can be opened for reading.

@@ -49,9 +49,6 @@ using Polygon = std::vector<std::size_t>;
 constexpr const char* kLoad = "load_mesh";
 
 // Throws "<ctx>: <path>: <what>".
-[[noreturn]] void fail(const char* ctx, const std::string& path, const std::string& what) {
-  throw std::runtime_error(fmt::format("{}: {}: {}", ctx, path, what));
-}
 
 // `s` in lower case (ASCII).
 std::string lower(std::string s) {
@@ -68,18 +65,18 @@ TriangleMesh to_mesh(const std::string& path, const std::vector<Point>& points,
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Point& p = points[i];
     if (!(std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()))) {
-      fail(kLoad, path, fmt::format("non-finite coordinate in vertex {} ({} {} {})", i, p.x(), p.y(), p.z()));
+      file_error(kLoad, path, fmt::format("non-finite coordinate in vertex {} ({} {} {})", i, p.x(), p.y(), p.z()));
     }
     m.vertices.emplace_back(p.x(), p.y(), p.z());
   }
-  if (points.size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) fail(kLoad, path, "too many vertices");
+  if (points.size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) file_error(kLoad, path, "too many vertices");
   for (std::size_t f = 0; f < polygons.size(); ++f) {
     const Polygon& poly = polygons[f];
-    if (poly.size() < 3) fail(kLoad, path, fmt::format("face {} has {} vertices, fewer than 3", f, poly.size()));
+    if (poly.size() < 3) file_error(kLoad, path, fmt::format("face {} has {} vertices, fewer than 3", f, poly.size()));
     for (const std::size_t v : poly) {
       // A negative OBJ index wraps around to a huge one: shown as the signed value it was.
       if (v >= points.size()) {
-        fail(kLoad, path, fmt::format("face {}: vertex index {} out of range ({} vertices, counted from 0)", f,
+        file_error(kLoad, path, fmt::format("face {}: vertex index {} out of range ({} vertices, counted from 0)", f,
                                       static_cast<long long>(v), points.size()));
       }
     }
@@ -105,20 +102,20 @@ bool degenerate(const TriangleMesh& m, const Eigen::Vector3i& t) {
 // Drops degenerate (zero-area) triangles, then checks that some are left and that the bounding
 // box has a non-zero size along every axis.
 void finish_mesh(TriangleMesh& m, const std::string& path) {
-  if (m.triangles.empty()) fail(kLoad, path, "no triangles");
+  if (m.triangles.empty()) file_error(kLoad, path, "no triangles");
   const std::size_t before = m.triangles.size();
   m.triangles.erase(std::remove_if(m.triangles.begin(), m.triangles.end(),
                                    [&](const Eigen::Vector3i& t) { return degenerate(m, t); }),
                     m.triangles.end());
   if (m.triangles.empty()) {
-    fail(kLoad, path, fmt::format("no triangles: all {} triangles are degenerate (zero area)", before));
+    file_error(kLoad, path, fmt::format("no triangles: all {} triangles are degenerate (zero area)", before));
   }
   Eigen::Vector3d lo, hi;
   mesh_bounds(m, lo, hi);
   const Eigen::Vector3d ext = hi - lo;
   for (int a = 0; a < 3; ++a) {
     if (!(ext[a] > 0.0)) {
-      fail(kLoad, path, fmt::format("zero-size bounding box (extent {} x {} x {}, zero along {})", ext.x(),
+      file_error(kLoad, path, fmt::format("zero-size bounding box (extent {} x {} x {}, zero along {})", ext.x(),
                                     ext.y(), ext.z(), "xyz"[a]));
     }
   }
@@ -185,36 +182,36 @@ void read_off(std::istream& in, const std::string& path, std::vector<Point>& poi
     return std::vector<std::string_view>{};
   };
   std::vector<std::string_view> words = next_words();
-  if (words.empty()) fail(kLoad, path, "not an OFF file: nothing but blank and comment lines");
+  if (words.empty()) file_error(kLoad, path, "not an OFF file: nothing but blank and comment lines");
   std::string_view keyword = words[0];
   for (std::string_view prefix : {"ST", "C", "N"}) {
     if (keyword.substr(0, prefix.size()) == prefix && keyword.size() > 3) keyword.remove_prefix(prefix.size());
   }
   if (keyword == "4OFF" || keyword == "nOFF" || keyword == "4nOFF") {
-    fail(kLoad, path, fmt::format("line {}: '{}' is an OFF file of 4 or n dimensions; only 3-D meshes are read",
+    file_error(kLoad, path, fmt::format("line {}: '{}' is an OFF file of 4 or n dimensions; only 3-D meshes are read",
                                   line_number, shown(words[0])));
   }
   if (keyword != "OFF") {
-    fail(kLoad, path, fmt::format("line {}: not an OFF file: it starts with '{}', not OFF (or COFF, NOFF, STOFF)",
+    file_error(kLoad, path, fmt::format("line {}: not an OFF file: it starts with '{}', not OFF (or COFF, NOFF, STOFF)",
                                   line_number, shown(words[0])));
   }
   words.erase(words.begin());
   if (!words.empty() && words[0] == "BINARY") {
-    fail(kLoad, path, fmt::format("line {}: a binary OFF file; only ASCII OFF is read", line_number));
+    file_error(kLoad, path, fmt::format("line {}: a binary OFF file; only ASCII OFF is read", line_number));
   }
   if (words.empty()) words = next_words();
   if (words.size() < 2 || words.size() > 3) {
-    fail(kLoad, path, fmt::format("line {}: the OFF counts line has {} words; expected the vertex, face and edge "
+    file_error(kLoad, path, fmt::format("line {}: the OFF counts line has {} words; expected the vertex, face and edge "
                                   "counts", line_number, words.size()));
   }
   auto count = [&](std::string_view word, const char* what, const char* plural, std::uintmax_t min_bytes) {
     std::uint64_t n = 0;
     if (!whole_number(word, n)) {
-      fail(kLoad, path, fmt::format("the OFF header's {} count '{}' is not a whole number", what, shown(word)));
+      file_error(kLoad, path, fmt::format("the OFF header's {} count '{}' is not a whole number", what, shown(word)));
     }
     // A vertex takes at least 6 bytes ("0 0 0\n"), a face at least 8 ("3 0 1 2\n").
     if (n > size / min_bytes) {
-      fail(kLoad, path, fmt::format("the OFF header declares {} {}, more than a file of {} bytes can hold", n,
+      file_error(kLoad, path, fmt::format("the OFF header declares {} {}, more than a file of {} bytes can hold", n,
                                     plural, size));
     }
     return static_cast<std::size_t>(n);
@@ -227,14 +224,14 @@ void read_off(std::istream& in, const std::string& path, std::vector<Point>& poi
   for (std::size_t v = 0; v < vertices; ++v) {
     words = next_words();
     if (words.empty()) {
-      fail(kLoad, path, fmt::format("the file ends after {} of the {} vertices its header declares", v, vertices));
+      file_error(kLoad, path, fmt::format("the file ends after {} of the {} vertices its header declares", v, vertices));
     }
     double xyz[3] = {0, 0, 0};
     for (int k = 0; k < 3; ++k) {
       const std::string_view w = k < static_cast<int>(words.size()) ? words[static_cast<std::size_t>(k)] : "";
       const auto [end, ec] = std::from_chars(w.data(), w.data() + w.size(), xyz[k]);
       if (w.empty() || ec != std::errc() || end != w.data() + w.size() || !std::isfinite(xyz[k])) {
-        fail(kLoad, path, fmt::format("line {}: vertex {} '{}' is not three finite numbers", line_number, v,
+        file_error(kLoad, path, fmt::format("line {}: vertex {} '{}' is not three finite numbers", line_number, v,
                                       shown(line)));
       }
     }
@@ -244,29 +241,29 @@ void read_off(std::istream& in, const std::string& path, std::vector<Point>& poi
   for (std::size_t f = 1; f <= faces; ++f) {
     words = next_words();
     if (words.empty()) {
-      fail(kLoad, path, fmt::format("the file ends after {} of the {} faces its header declares", f - 1, faces));
+      file_error(kLoad, path, fmt::format("the file ends after {} of the {} faces its header declares", f - 1, faces));
     }
     std::uint64_t corners = 0;
     if (!whole_number(words[0], corners)) {
-      fail(kLoad, path, fmt::format("line {}: face {}'s corner count '{}' is not a whole number", line_number, f,
+      file_error(kLoad, path, fmt::format("line {}: face {}'s corner count '{}' is not a whole number", line_number, f,
                                     shown(words[0])));
     }
     if (corners < 3) {
-      fail(kLoad, path, fmt::format("line {}: face {} has {} corners, fewer than 3", line_number, f, corners));
+      file_error(kLoad, path, fmt::format("line {}: face {} has {} corners, fewer than 3", line_number, f, corners));
     }
     if (corners > vertices) {
-      fail(kLoad, path, fmt::format("line {}: face {} has {} corners, more than the file's {} vertices", line_number,
+      file_error(kLoad, path, fmt::format("line {}: face {} has {} corners, more than the file's {} vertices", line_number,
                                     f, corners, vertices));
     }
     if (words.size() - 1 < corners) {
-      fail(kLoad, path, fmt::format("line {}: face {} declares {} corners and lists {}", line_number, f, corners,
+      file_error(kLoad, path, fmt::format("line {}: face {} declares {} corners and lists {}", line_number, f, corners,
                                     words.size() - 1));
     }
     Polygon& polygon = polygons.emplace_back(static_cast<std::size_t>(corners));
     for (std::size_t k = 1; k <= corners; ++k) {
       std::uint64_t index = 0;
       if (!whole_number(words[k], index) || index >= vertices) {
-        fail(kLoad, path, fmt::format("line {}: corner {} of face {} is vertex '{}'; the file has vertices 0 to {}",
+        file_error(kLoad, path, fmt::format("line {}: corner {} of face {} is vertex '{}'; the file has vertices 0 to {}",
                                       line_number, k, f, shown(words[k]), vertices - 1));
       }
       polygon[k - 1] = static_cast<std::size_t>(index);
@@ -280,10 +277,10 @@ TriangleMesh load_mesh(const std::string& path) {
   check_input_file(path, kLoad);
   const std::string ext = lower(std::filesystem::path(path).extension().string());
   if (ext != ".obj" && ext != ".off" && ext != ".stl" && ext != ".ply") {
-    fail(kLoad, path, "unknown mesh file extension '" + ext + "' (expected .obj .stl .off .ply)");
+    file_error(kLoad, path, "unknown mesh file extension '" + ext + "' (expected .obj .stl .off .ply)");
   }
   std::ifstream in(path, std::ios::binary);
-  if (!in) fail(kLoad, path, std::string("cannot open file: ") + std::strerror(errno));
+  if (!in) file_error(kLoad, path, std::string("cannot open file: ") + std::strerror(errno));
 
   std::vector<Point> points;
   std::vector<Polygon> polygons;
@@ -297,23 +294,23 @@ TriangleMesh load_mesh(const std::string& path) {
       in.clear();
       if (in.tellg() >= static_cast<std::streamoff>(std::filesystem::file_size(path))) {
         to_mesh(path, points, polygons);  // throws for an index out of range
-        if (polygons.empty()) fail(kLoad, path, "no triangles");
+        if (polygons.empty()) file_error(kLoad, path, "no triangles");
       }
-      fail(kLoad, path, "cannot read it as OBJ: CGAL::IO::read_OBJ stopped " + stopped_at(path, in, true));
+      file_error(kLoad, path, "cannot read it as OBJ: CGAL::IO::read_OBJ stopped " + stopped_at(path, in, true));
     }
   } else if (ext == ".off") {
     read_off(in, path, points, polygons);
   } else if (ext == ".stl") {
     CGAL::IO::set_mode(in, CGAL::IO::BINARY);
     if (!CGAL::IO::read_STL(in, points, polygons, quiet) || polygons.empty()) {
-      fail(kLoad, path, stl_failure(path, std::filesystem::file_size(path)));
+      file_error(kLoad, path, stl_failure(path, std::filesystem::file_size(path)));
     }
   } else {
     const PlyHeader header = check_ply_header(in, path, kLoad, true);
     in.clear();
     in.seekg(0);
     CGAL::IO::set_mode(in, CGAL::IO::BINARY);
-    if (!CGAL::IO::read_PLY(in, points, polygons, quiet)) fail(kLoad, path, ply_failure(header, path, in));
+    if (!CGAL::IO::read_PLY(in, points, polygons, quiet)) file_error(kLoad, path, ply_failure(header, path, in));
   }
   TriangleMesh m = to_mesh(path, points, polygons);
   finish_mesh(m, path);
@@ -341,7 +338,7 @@ void append_number(std::string& out, double v) {
 
 void write_stl_binary(const TriangleMesh& mesh, const std::string& path, LengthUnit unit) {
   const char* ctx = "write_stl_binary";
-  if (mesh.triangles.size() > 0xffffffffull) fail(ctx, path, "too many triangles for STL");
+  if (mesh.triangles.size() > 0xffffffffull) file_error(ctx, path, "too many triangles for STL");
   const double scale = scale_of(unit);
   std::string out;
   out.reserve(84 + 50 * mesh.triangles.size());
@@ -360,7 +357,7 @@ void write_stl_binary(const TriangleMesh& mesh, const std::string& path, LengthU
   const long long nv = static_cast<long long>(mesh.vertices.size());
   for (const auto& t : mesh.triangles) {
     for (int k = 0; k < 3; ++k) {
-      if (t[k] < 0 || t[k] >= nv) fail(ctx, path, "triangle index out of range");
+      if (t[k] < 0 || t[k] >= nv) file_error(ctx, path, "triangle index out of range");
     }
     const Eigen::Vector3d& a = mesh.vertices[static_cast<size_t>(t[0])];
     const Eigen::Vector3d& b = mesh.vertices[static_cast<size_t>(t[1])];
@@ -378,7 +375,7 @@ void write_stl_binary(const TriangleMesh& mesh, const std::string& path, LengthU
   try {
     write_file_atomic(path, out);
   } catch (const std::runtime_error& e) {
-    fail(ctx, path, e.what());
+    file_error(ctx, path, e.what());
   }
 }
 
@@ -414,7 +411,7 @@ void write_obj(const TriangleMesh& mesh, const std::string& path, const std::vec
   for (const auto& t : mesh.triangles) {
     out += 'f';
     for (int k = 0; k < 3; ++k) {
-      if (t[k] < 0 || t[k] >= nv) fail(ctx, path, "triangle index out of range");
+      if (t[k] < 0 || t[k] >= nv) file_error(ctx, path, "triangle index out of range");
       out += ' ';
       const auto r = std::to_chars(num, num + sizeof(num), t[k] + 1);
       out.append(num, r.ptr);
@@ -428,7 +425,7 @@ void write_obj(const TriangleMesh& mesh, const std::string& path, const std::vec
   try {
     write_file_atomic(path, out);
   } catch (const std::runtime_error& e) {
-    fail(ctx, path, e.what());
+    file_error(ctx, path, e.what());
   }
 }
 

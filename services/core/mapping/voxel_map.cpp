@@ -81,7 +81,7 @@ constexpr int64_t kMaxVoxels = int64_t(1) << 31;
 
 // Voxels per worker in the frontier pass below which another worker does not pay for its start
 // (core/base/parallel.hpp).
-constexpr int64_t kVoxelsPerWorker = 100000;
+constexpr int64_t kFrontierVoxelsPerWorker = 100000;
 
 inline int floor_index(double x_m, double res) { return static_cast<int>(std::floor(x_m / res)); }
 
@@ -308,7 +308,7 @@ VoxelCounts VoxelMap::update_frontiers(Eigen::Vector3i* frontier_lo, Eigen::Vect
   // Several workers only for grids beyond about 200,000 voxels (each takes >= 100,000).
   const int64_t plane_cells = int64_t(dims_.x()) * dims_.y();
   const int nt = worker_count(static_cast<std::size_t>(dims_.z()),
-                              static_cast<std::size_t>((kVoxelsPerWorker + plane_cells - 1) / plane_cells));
+                              static_cast<std::size_t>((kFrontierVoxelsPerWorker + plane_cells - 1) / plane_cells));
   dilate_in_planes(nt);
   return classify_unknown(nt, frontier_lo, frontier_hi);
 }
