@@ -26,8 +26,6 @@ namespace pbnbv {
 
 namespace {
 
-// Throws "<ctx>: <path>: <what>".
-
 // Whether the machine stores numbers little-endian (PLY's binary_little_endian byte order).
 bool host_little_endian() {
   const std::uint16_t one = 1;

@@ -22,8 +22,6 @@ namespace pbnbv {
 
 namespace {
 
-// Throws "<ctx>: <path>: <what>".
-
 // The 1-based line of the file holding byte `offset` (the last line if the file is shorter),
 // and its text (at most 60 characters, without the end of line).
 std::pair<long, std::string> line_at(const std::string& path, std::uint64_t offset) {

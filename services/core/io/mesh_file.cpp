@@ -48,8 +48,6 @@ using Polygon = std::vector<std::size_t>;
 
 constexpr const char* kLoad = "load_mesh";
 
-// Throws "<ctx>: <path>: <what>".
-
 // `s` in lower case (ASCII).
 std::string lower(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
