@@ -24,6 +24,8 @@
 namespace pbnbv {
 namespace {
 
+using testing::file_text;
+
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Throws E whose message contains `needle`.
@@ -53,13 +55,6 @@ LineChart diagonal() {
   }
   c.series.push_back(s);
   return c;
-}
-
-std::string read_all(const std::string& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 // The image pixel of data point (x, y) on axes [x0, x1] x [y0, y1] (y1 over y0, log10 when `log`):
@@ -148,13 +143,13 @@ TEST_F(LineChartFile, WritesPngSvgAndPdfBesideItsDataAndScript) {
   const cv::Mat img = cv::imread(p, cv::IMREAD_COLOR);
   ASSERT_FALSE(img.empty());
   EXPECT_EQ(img.size(), cv::Size(960, 600));
-  const std::string svg = read_all(path("chart.svg"));
+  const std::string svg = file_text(path("chart.svg"));
   EXPECT_NE(svg.find("<svg"), std::string::npos);
   EXPECT_NE(svg.find("width=\"960\" height=\"600\""), std::string::npos);
   EXPECT_NE(svg.find(">diagonal</text>"), std::string::npos);
-  EXPECT_EQ(read_all(path("chart.pdf")).substr(0, 5), "%PDF-");
-  EXPECT_EQ(read_all(path("chart.csv")), line_chart_csv(c));
-  EXPECT_EQ(read_all(path("chart.gp")), line_chart_gnuplot(c, "chart"));
+  EXPECT_EQ(file_text(path("chart.pdf")).substr(0, 5), "%PDF-");
+  EXPECT_EQ(file_text(path("chart.csv")), line_chart_csv(c));
+  EXPECT_EQ(file_text(path("chart.gp")), line_chart_gnuplot(c, "chart"));
   EXPECT_FALSE(std::filesystem::exists(path("chart.gnuplot.log")));
 
   write_line_chart(c, p, 640, 400);  // replaces the files

@@ -13,9 +13,12 @@
 #include <sstream>
 
 #include "core/base/units.hpp"
+#include "file_test_util.hpp"
 
 namespace pbnbv {
 namespace {
+
+using testing::file_text;
 
 constexpr double kDeg = kPi / 180;
 
@@ -160,13 +163,6 @@ TEST_F(Calibration, TooFewFramesAreRefused) {
   EXPECT_THROW(solve_rig_calibration(model_, sphere_.centre_in_mount(), observations(3, 0, 4)), std::invalid_argument);
 }
 
-std::string read_file_text(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // Every shipped arm rig file (the UR5e's header comment names a <custom> section: the file must
 // be edited as XML, not as text) calibrates into a file MuJoCo loads, with the new mount and zero,
 // everything else as it was: the comments byte for byte, the other bodies' poses.
@@ -174,7 +170,7 @@ TEST_F(Calibration, EveryShippedRigFileLoadsWithTheNewMountAndZero) {
   for (const std::string file : {"rig_arm.xml", "rig_ur5e.xml"}) {
     const std::string source = std::filesystem::path(default_rig_path(RigKind::kArm)).parent_path() / file;
     const RigModel before = load_rig(source);
-    const std::string text = read_file_text(source);
+    const std::string text = file_text(source);
     const std::string xml = calibrated_rig_xml(text, source, truth_.flange_T_camera, 0.01);
     // The header comment, up to <mujoco, is untouched.
     const auto head = text.find("<mujoco");
