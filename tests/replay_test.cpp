@@ -153,11 +153,11 @@ TEST(Replay, ARecordedScanReplayedMakesTheSameDecisions) {
   EXPECT_FALSE(r.comparison["views"][1]["plan"]["same"].get<bool>());
   EXPECT_GT(r.comparison["views"][1]["plan"]["position_m"].get<double>(), 0.01);
 
-  // The executor's least turn is recorded (narrowed). The same recording with the field taken out
-  // reads as one made before the least turn was narrowed: the replay commands the grid's turns
+  // The executor's turntable rule is recorded (quickest). The same recording with the field taken
+  // out reads as one made before the least turn was narrowed: the replay commands the grid's turns
   // (kLeastTurnOnGrid), which this scan's turning moves did not take, so the replay rig refuses
   // them. A recording made then replays (docs/replay.md; a scan of stop 47 did, all 10 views).
-  EXPECT_EQ(recorded["settings"]["planning"]["least_turn"], "narrowed");
+  EXPECT_EQ(recorded["settings"]["planning"]["least_turn"], "quickest");
   const fs::path older = original.parent_path() / "as-if-older";
   fs::copy(original, older, fs::copy_options::recursive);
   json settings = read_json((older / "settings.json").string());
@@ -165,7 +165,7 @@ TEST(Replay, ARecordedScanReplayedMakesTheSameDecisions) {
   write_json_atomic(settings, (older / "settings.json").string());
   const Replayed g = replay(older, "replay-grid", "", 1);  // no view reached: the replayed scan fails
   EXPECT_EQ(g.replay_scan["settings"]["planning"]["least_turn"], "grid");
-  EXPECT_FALSE(g.comparison["same_decisions"].get<bool>()) << "the grid's turns were the narrowed ones";
+  EXPECT_FALSE(g.comparison["same_decisions"].get<bool>()) << "the grid's turns were the quickest ones";
   int refused = 0;
   for (const json& v : g.replay_scan["views"]) {
     for (const json& f : v.value("failed_moves", json::array())) {

@@ -69,13 +69,17 @@ static_assert(static_cast<int>(TurntableChoice::kPreferred) == plan_request_t::k
               static_cast<int>(TurntableChoice::kLeastTurnOnGrid) == plan_request_t::kLeastTurnOnGrid &&
               move_request_t::kPreferredAzimuth == plan_request_t::kPreferredAzimuth &&
               move_request_t::kLeastTurn == plan_request_t::kLeastTurn &&
-              move_request_t::kLeastTurnOnGrid == plan_request_t::kLeastTurnOnGrid);
+              static_cast<int>(TurntableChoice::kQuickest) == plan_request_t::kQuickest &&
+              move_request_t::kLeastTurnOnGrid == plan_request_t::kLeastTurnOnGrid &&
+              move_request_t::kQuickest == plan_request_t::kQuickest);
 
 // A turntable_choice field (MOVE_REQUEST's, PLAN_REQUEST's): one of its constants, else throws naming `what`.
 inline TurntableChoice turntable_choice_from_msg(int8_t v, const std::string& what) {
-  if (v != plan_request_t::kPreferredAzimuth && v != plan_request_t::kLeastTurn && v != plan_request_t::kLeastTurnOnGrid) {
+  if (v != plan_request_t::kPreferredAzimuth && v != plan_request_t::kLeastTurn && v != plan_request_t::kLeastTurnOnGrid &&
+      v != plan_request_t::kQuickest) {
     throw std::invalid_argument(what + " = " + std::to_string(v) +
-                                " is not one of its constants (0 preferred azimuth, 1 least turn, 2 least turn on the grid)");
+                                " is not one of its constants (0 preferred azimuth, 1 least turn, 2 least turn on the grid, "
+                                "3 quickest move)");
   }
   return static_cast<TurntableChoice>(v);
 }

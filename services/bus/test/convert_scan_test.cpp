@@ -50,22 +50,23 @@ TEST(ConvertScan, BadRequestFieldsAreNamed) {
   expect_error([&] { bus::from_msg(cm); }, "CAPTURE_REQUEST voxel_m");
 }
 
-// turntable_choice: its three constants come through as they are (2, the grid's least turn, is
-// what a scan recorded before the least turn was narrowed is replayed with); any other byte is
-// refused naming the field and the constants.
+// turntable_choice: its four constants come through as they are (2, the grid's least turn, is
+// what a scan recorded before the least turn was narrowed is replayed with; 3 the quickest move);
+// any other byte is refused naming the field and the constants.
 TEST(ConvertScan, TheTurntableChoiceIsOneOfItsConstants) {
   MoveRequest r;
-  for (TurntableChoice c : {TurntableChoice::kPreferred, TurntableChoice::kLeastTurn, TurntableChoice::kLeastTurnOnGrid}) {
+  for (TurntableChoice c : {TurntableChoice::kPreferred, TurntableChoice::kLeastTurn, TurntableChoice::kLeastTurnOnGrid,
+                            TurntableChoice::kQuickest}) {
     r.turntable_choice = c;
     EXPECT_EQ(bus::from_msg(bus::to_msg(r)).turntable_choice, c);
   }
   move_request_t m = bus::to_msg(r);
-  EXPECT_EQ(m.turntable_choice, move_request_t::kLeastTurnOnGrid);
-  for (int8_t bad : {int8_t{3}, int8_t{-1}, int8_t{127}}) {
+  EXPECT_EQ(m.turntable_choice, move_request_t::kQuickest);
+  for (int8_t bad : {int8_t{4}, int8_t{-1}, int8_t{127}}) {
     m.turntable_choice = bad;
     expect_error([&] { bus::from_msg(m); }, "MOVE_REQUEST turntable_choice = " + std::to_string(bad) +
                                                 " is not one of its constants (0 preferred azimuth, 1 least turn, 2 least "
-                                                "turn on the grid)");
+                                                "turn on the grid, 3 quickest move)");
   }
 }
 

@@ -37,15 +37,26 @@ inline RigKind parse_rig_kind(const std::string& s) { return parse_name<RigKind>
 //  kLeastTurnOnGrid: kLeastTurn without the bisection, a single view's solve too: the executor's
 //    rule before the least turn was narrowed, kept so that a scan recorded then replays as it was moved
 //    (ScanSettings::least_turn, settings.json planning.least_turn).
-enum class TurntableChoice : uint8_t { kPreferred, kLeastTurn, kLeastTurnOnGrid };
+//  kQuickest: kLeastTurn's angles in the same order, but the clear solution whose move takes the
+//    rig least time (core/rig move_s: the arm and the turntable at once, the slower decides) wins,
+//    not the first. The least turn is best when the turntable is the slower part; when the arm is
+//    (a long swing of its base round the object), turning the turntable further shortens the
+//    arm's part. The search stops at the first angle whose turn alone takes longer than the best
+//    move found, and a solution that cannot beat it is not checked for collisions. A single view's
+//    solve narrows the least clear turn as kLeastTurn does, and keeps the narrowed one when it is
+//    no slower.
+enum class TurntableChoice : uint8_t { kPreferred, kLeastTurn, kLeastTurnOnGrid, kQuickest };
 
-// The motion executor's least turn, as a scan's settings record it: narrowed (kLeastTurn), or on
-// the grid alone (kLeastTurnOnGrid: a scan recorded before the least turn was narrowed).
-enum class LeastTurn : uint8_t { kNarrowed, kGrid };
+// The motion executor's rule for a view's turntable angle, as a scan's settings record it: the
+// quickest move (kQuickest, the default), the least turn narrowed (kLeastTurn: scans recorded
+// before the quickest move), or on the grid alone (kLeastTurnOnGrid: scans recorded before the
+// least turn was narrowed).
+enum class LeastTurn : uint8_t { kNarrowed, kGrid, kQuickest };
 template <>
 struct EnumNames<LeastTurn> {
   static constexpr std::string_view what = "least turn";
-  static constexpr std::array<NamedValue<LeastTurn>, 2> names{{{LeastTurn::kNarrowed, "narrowed"}, {LeastTurn::kGrid, "grid"}}};
+  static constexpr std::array<NamedValue<LeastTurn>, 3> names{
+      {{LeastTurn::kNarrowed, "narrowed"}, {LeastTurn::kGrid, "grid"}, {LeastTurn::kQuickest, "quickest"}}};
 };
 
 // The rig option of every program that works with a rig (pbnbv scan, motion, camera, scorer, twin).

@@ -29,9 +29,10 @@ enum class CandidateArea : uint8_t { kHemisphere, kFullSphere };
 // stop, or spend the remaining views on the candidates farthest from every view taken.
 enum class WhenDone : uint8_t { kStop, kSpread };
 
-// How the arm rig's moves are chosen for what they cost (`--motion`): kAware, the turntable turns
-// only as far as the arm cannot reach round the object (core/rig TurntableChoice::kLeastTurn);
-// kPlain, the view is turned to the arm's preferred azimuth every time (the paper's rig); kAuto,
+// How the arm rig's moves are chosen for what they cost (`--motion`): kAware, each view's
+// turntable angle and arm configuration are the quickest clear move's (core/rig
+// TurntableChoice::kQuickest: the turntable turns only as far as the arm cannot reach round the
+// object, or further when that shortens the arm's part); kPlain, the view is turned to the arm's preferred azimuth every time (the paper's rig); kAuto,
 // aware for every planner but pbnbv-paper (kept as the paper has it).
 enum class Motion : uint8_t { kAuto, kAware, kPlain };
 

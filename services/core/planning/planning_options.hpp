@@ -25,8 +25,8 @@ inline constexpr ChoiceSetting<WhenDone> kWhenDone{
     "stop, or spend the remaining views filling the largest gaps between the views taken"};
 inline constexpr ChoiceSetting<Motion> kMotion{
     "motion", Motion::kAuto,
-    "arm rig: aware (the turntable turns only as far as the arm cannot reach round the object, and pbnbv charges "
-    "each candidate its rig time), plain (every view turned to the arm, the paper's rig), or auto (aware for every "
+    "arm rig: aware (each view is reached by the quickest clear move, the turntable turning only as far as the arm "
+    "cannot reach round the object or further where that is quicker, and pbnbv charges each candidate its rig time), plain (every view turned to the arm, the paper's rig), or auto (aware for every "
     "planner but pbnbv-paper)"};
 
 // pbnbv's combined ranking (docs/method.md "Beyond the paper", departure 4; chosen on the tune half of

@@ -2,6 +2,7 @@
 // free line of sight in the rig's MuJoCo model. See rig.hpp (and rig_model.cpp's header comment).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -448,7 +449,7 @@ std::vector<double> candidate_turntable_angles(const RigModel& rig, const Pose& 
     angles.push_back(nearest_equivalent_angle_rad(t, turntable_current));
   }
   *preferred = angles.front();
-  if (choice == TurntableChoice::kLeastTurn || choice == TurntableChoice::kLeastTurnOnGrid) {
+  if (choice != TurntableChoice::kPreferred) {
     // Where the view is with the turntable where it stands, as an offset from the preferred azimuth.
     const double off = above ? 0.0 : nearest_equivalent_angle_rad(turntable_current - angles.front(), 0.0);
     if (std::abs(off) <= 0.5 * kPi + 1e-9) angles.push_back(turntable_current);
@@ -497,6 +498,10 @@ struct ReachabilityChecker::AngleSearch {
   const Eigen::AlignedBox3d& keepout;
   double object_z_m;
   double t;  // the turntable angle
+  // TurntableChoice::kQuickest: a solution whose move (from q_current, and the turn to t taking
+  // turn_s) takes `bound` s or longer is passed over unchecked: a quicker one is known.
+  double turn_s = 0;
+  double bound = std::numeric_limits<double>::infinity();
   std::vector<std::string> hits, blocks;
   std::vector<Vector6d> failed;
   int checked = 0;
@@ -511,6 +516,9 @@ struct ReachabilityChecker::AngleSearch {
       return motion_cost(rig, x, q_current) < motion_cost(rig, y, q_current);
     });
     for (const Vector6d& q : sols) {
+      if (bound < std::numeric_limits<double>::infinity() && std::max(arm_move_s(rig, q_current, q), turn_s) >= bound) {
+        continue;
+      }
       ++checked;
       if (std::any_of(failed.begin(), failed.end(), [&](const Vector6d& f) { return same_modulo_turns(f, q); })) {
         continue;
@@ -605,11 +613,13 @@ ViewSolution ReachabilityChecker::solve_view(const Pose& object_T_camera, const 
   Impl& im = *impl_;
   const RigModel& rig = im.rig;
   im.set_keepout(keepout, object_z_m);
-  // One turntable angle: true, with `sol` set, when a clear solution stands there; else `reason`.
-  const auto try_angle = [&](double t, ViewSolution& sol, std::string& reason) {
+  // One turntable angle: true, with `sol` set, when a clear solution stands there whose move
+  // takes less than `bound` s (kQuickest); else `reason`.
+  const auto try_angle = [&](double t, ViewSolution& sol, std::string& reason,
+                             double bound = std::numeric_limits<double>::infinity()) {
     const Pose world_T_camera = object_in_world(rig, t, object_z_m) * object_T_camera;
     const Pose world_T_flange = world_T_camera * rig.flange_T_camera.inverse();
-    AngleSearch search{im, q_current, keepout, object_z_m, t, {}, {}, {}};
+    AngleSearch search{im, q_current, keepout, object_z_m, t, turntable_move_s(rig, turntable_current, t), bound, {}, {}, {}};
     if (rig.kind == RigKind::kArm && rig.ik == IkMethod::kGeneral) {
       if (search.general(world_T_flange, sol, reason)) return true;
     } else if (rig.kind == RigKind::kArm && rig.ik == IkMethod::kParallelAxes) {
@@ -630,14 +640,46 @@ ViewSolution ReachabilityChecker::solve_view(const Pose& object_T_camera, const 
   double preferred = 0;
   const std::vector<double> angles = candidate_turntable_angles(rig, object_T_camera, turntable_current, im.choice, &preferred);
   std::string first_reason;
-  for (std::size_t a = 0; a < angles.size(); ++a) {
-    const double t = angles[a];
-    std::string reason;
-    if (try_angle(t, out, reason)) {
-      if (im.choice == TurntableChoice::kLeastTurn && narrow_turn) refine_least_turn(try_angle, turntable_current, out);
-      return out;
+  if (im.choice == TurntableChoice::kQuickest) {
+    // The angles in order of turn: the first clear one is the least turn (narrowed for a single
+    // view when that is no slower); a later one wins only with a quicker move, and none can once
+    // the turn alone takes as long as the best move found.
+    ViewSolution best;
+    double best_s = std::numeric_limits<double>::infinity();
+    const auto move_of = [&](const ViewSolution& v) {
+      return move_s(rig, RigState{q_current, turntable_current}, RigState{v.q, v.turntable_rad});
+    };
+    for (const double t : angles) {
+      if (best.reachable && turntable_move_s(rig, turntable_current, t) >= best_s) break;
+      std::string reason;
+      ViewSolution s;
+      if (!try_angle(t, s, reason, best_s)) {
+        if (t == preferred && !best.reachable) first_reason = reason;
+        continue;
+      }
+      double s_s = move_of(s);
+      if (!best.reachable && narrow_turn) {
+        ViewSolution narrowed = s;
+        refine_least_turn(try_angle, turntable_current, narrowed);
+        if (const double n_s = move_of(narrowed); n_s <= s_s) {
+          s = narrowed;
+          s_s = n_s;
+        }
+      }
+      best = s;
+      best_s = s_s;
     }
-    if (t == preferred) first_reason = reason;
+    if (best.reachable) return best;
+  } else {
+    for (std::size_t a = 0; a < angles.size(); ++a) {
+      const double t = angles[a];
+      std::string reason;
+      if (try_angle(t, out, reason)) {
+        if (im.choice == TurntableChoice::kLeastTurn && narrow_turn) refine_least_turn(try_angle, turntable_current, out);
+        return out;
+      }
+      if (t == preferred) first_reason = reason;
+    }
   }
   out.reachable = false;
   out.reason = angles.size() == 1 ? first_reason

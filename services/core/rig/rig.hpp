@@ -210,7 +210,8 @@ class ReachabilityChecker {
                      double turntable_current, const Eigen::AlignedBox3d& keepout, double object_z_m);
 
   // solve() for each pose (a planner's candidate views), same current state, but with kLeastTurn
-  // each on the grid of azimuth offsets alone (solve narrows a turn further: TurntableChoice).
+  // and kQuickest each on the grid of azimuth offsets alone (solve narrows the least turn further:
+  // TurntableChoice).
   std::vector<ViewSolution> solve_batch(const std::vector<Pose>& object_T_cameras,
                                         const Vector6d& q_current, double turntable_current,
                                         const Eigen::AlignedBox3d& keepout, double object_z_m);
@@ -249,7 +250,7 @@ class ReachabilityChecker {
  private:
   struct Impl;
   struct AngleSearch;  // solve()'s search at one turntable angle
-  // solve(), narrowing a least turn (TurntableChoice::kLeastTurn) when `narrow_turn`; solve_batch
+  // solve(), narrowing a least turn (TurntableChoice::kLeastTurn, kQuickest) when `narrow_turn`; solve_batch
   // keeps the grid's angles.
   ViewSolution solve_view(const Pose& object_T_camera, const Vector6d& q_current, double turntable_current,
                           const Eigen::AlignedBox3d& keepout, double object_z_m, bool narrow_turn);

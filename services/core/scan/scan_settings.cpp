@@ -295,7 +295,12 @@ std::string new_scan_id(const std::string& name) {
 TurntableChoice turntable_choice(const ScanSettings& s) {
   const bool aware = s.motion == Motion::kAware || (s.motion == Motion::kAuto && s.planner != PlannerKind::kPbnbvPaper);
   if (!aware) return TurntableChoice::kPreferred;
-  return s.least_turn == LeastTurn::kNarrowed ? TurntableChoice::kLeastTurn : TurntableChoice::kLeastTurnOnGrid;
+  switch (s.least_turn) {
+    case LeastTurn::kQuickest: return TurntableChoice::kQuickest;
+    case LeastTurn::kNarrowed: return TurntableChoice::kLeastTurn;
+    case LeastTurn::kGrid: return TurntableChoice::kLeastTurnOnGrid;
+  }
+  throw std::logic_error("turntable_choice: a least turn without a rule");
 }
 
 }  // namespace pbnbv

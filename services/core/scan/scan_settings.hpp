@@ -30,9 +30,9 @@ inline constexpr double kMaxInitialViewM = 10.0;
 void check_initial_view(const Eigen::Vector3d& p);
 
 struct ScanSettings;
-// The turntable choice of the scan's moves and plans: least turn when `motion` is aware (auto:
-// for every planner but pbnbv-paper; narrowed unless the scan was recorded before that:
-// least_turn), else the preferred azimuth.
+// The turntable choice of the scan's moves and plans when `motion` is aware (auto: for every
+// planner but pbnbv-paper): the quickest move, or for a scan recorded before it the least turn it
+// was moved with (least_turn); else the preferred azimuth.
 TurntableChoice turntable_choice(const ScanSettings& s);
 
 struct ScanSettings {
@@ -89,10 +89,11 @@ struct ScanSettings {
   MapPose map_pose = kMapPose.value;         // the pose each view enters the planner's map at
   Motion motion = kMotion.value;              // arm rig: moves chosen for what they cost (turntable_choice)
   double seconds_per_point = kSecondsPerPoint.value;  // motion-aware: pbnbv's ranking charges rig time
-  // Motion-aware: the turntable's least turn as the motion executor narrows it (kGrid: on the grid
-  // of 15 deg offsets alone, the rule of scans recorded before it was narrowed, whose settings.json
-  // has no planning.least_turn; kept so that they replay as they were moved).
-  LeastTurn least_turn = LeastTurn::kNarrowed;
+  // Motion-aware: how the motion executor chooses a view's turntable angle (kQuickest: the quickest
+  // clear move; kNarrowed: the least turn, narrowed, the rule of scans recorded before; kGrid: on
+  // the grid of 15 deg offsets alone, the rule of scans whose settings.json has no
+  // planning.least_turn; the older two kept so that such scans replay as they were moved).
+  LeastTurn least_turn = LeastTurn::kQuickest;
   int alternatives = kAlternatives.value;     // next-best views tried when the rig cannot reach the best
   int64_t seed = kPlannerSeed.value;          // the random planner's seed (view i uses seed + i)
 

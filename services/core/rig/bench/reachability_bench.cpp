@@ -151,10 +151,10 @@ BENCHMARK(BM_ArmSolveBatchHemisphere)->Unit(benchmark::kMillisecond);
 // services/scorer), side by side for each arm with its closed-form IK and with the general IK
 // forced. Checkers are built once, as the scorer keeps them.
 void reachability_800(benchmark::State& state, const RigModel* rig, const std::vector<Pose>& views,
-                      const Eigen::AlignedBox3d& box) {
+                      const Eigen::AlignedBox3d& box, TurntableChoice choice = TurntableChoice::kPreferred) {
   const int workers = static_cast<int>(state.range(0));
   std::vector<std::unique_ptr<ReachabilityChecker>> checkers;
-  for (int w = 0; w < workers; ++w) checkers.push_back(std::make_unique<ReachabilityChecker>(*rig));
+  for (int w = 0; w < workers; ++w) checkers.push_back(std::make_unique<ReachabilityChecker>(*rig, choice));
   std::vector<uint8_t> reachable(views.size(), 0);
   for (auto _ : state) {
     parallel_for(views.size(), [&](std::size_t begin, std::size_t end, int w) {
@@ -177,6 +177,19 @@ void BM_Reachability800(benchmark::State& state, const RigModel* rig) {
 void BM_Reachability800Large(benchmark::State& state, const RigModel* rig) {
   reachability_800(state, rig, far_hemisphere(), large_box());
 }
+// The same 800 hemisphere candidates with each turntable rule (TurntableChoice), one worker: the
+// preferred azimuth (plain), the least turn, and the quickest move (the motion-aware default),
+// which goes on past the least turn where the arm is the slower part of the move.
+void BM_Reachability800Rule(benchmark::State& state, const RigModel* rig, TurntableChoice choice) {
+  reachability_800(state, rig, hemisphere(), cube(), choice);
+}
+BENCHMARK_CAPTURE(BM_Reachability800Rule, kuka_preferred, &arm_rig(), TurntableChoice::kPreferred)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_Reachability800Rule, kuka_least_turn, &arm_rig(), TurntableChoice::kLeastTurn)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_Reachability800Rule, kuka_quickest, &arm_rig(), TurntableChoice::kQuickest)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_Reachability800Rule, ur5e_preferred, &ur5e_rig(), TurntableChoice::kPreferred)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_Reachability800Rule, ur5e_least_turn, &ur5e_rig(), TurntableChoice::kLeastTurn)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_Reachability800Rule, ur5e_quickest, &ur5e_rig(), TurntableChoice::kQuickest)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 BENCHMARK_CAPTURE(BM_Reachability800Large, kuka_analytic, &arm_rig())->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_Reachability800Large, ur5e_parallel_axes, &ur5e_rig())->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_Reachability800Large, ur5e_general, &ur5e_rig_general())->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();

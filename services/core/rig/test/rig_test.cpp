@@ -890,6 +890,67 @@ TEST_F(Ur5eRig, SolveReturnsTheSolutionNearestTheCurrentOne) {
   EXPECT_LT((s3.q - alt).norm(), 1e-9) << s3.q.transpose() << " vs " << alt.transpose();
 }
 
+// The quickest move (TurntableChoice::kQuickest) against the least turn, on the UR5e, whose arm
+// (180 deg/s) is the slower part of more moves. The camera sees the cube from 50 deg left of the
+// arm's side and is asked for the same view 50 deg right, the turntable at 0: the least turn
+// leaves the turntable where it stands and swings the shoulder round the object; the quickest
+// turns the turntable towards the arm so that the shoulder swings less, and the move is quicker.
+// Over 24 views round the cube from there, the quickest move is never slower than the least turn
+// (the least turn is the first move it considers), a view it turns differently is strictly
+// quicker, and a view whose least turn is the turntable's slower part keeps the least turn.
+TEST_F(Ur5eRig, TheQuickestMoveTurnsFurtherWhenTheArmIsTheSlowerPart) {
+  ReachabilityChecker least(*rig_, TurntableChoice::kLeastTurn);
+  ReachabilityChecker quickest(*rig_, TurntableChoice::kQuickest);
+  const double side = 0.55 * std::sin(50 * kPi / 180), front = -0.55 * std::cos(50 * kPi / 180);
+  const RigState from{testing::config_seeing_from(*rig_, Eigen::Vector3d(-side, front, 0.2), kObjectZ), 0};
+  const Pose right = look_at_z_up(Eigen::Vector3d(side, front, 0.2), Eigen::Vector3d::Zero());
+  const ViewSolution l = least.solve(right, from.q, from.turntable_rad, cube_keepout(), kObjectZ);
+  const ViewSolution q = quickest.solve(right, from.q, from.turntable_rad, cube_keepout(), kObjectZ);
+  ASSERT_TRUE(l.reachable) << l.reason;
+  ASSERT_TRUE(q.reachable) << q.reason;
+  EXPECT_EQ(l.turntable_rad, 0.0);  // the arm reaches round: no turn
+  const double arm_l = arm_move_s(*rig_, from.q, l.q);
+  const double arm_q = arm_move_s(*rig_, from.q, q.q), turn_q = turntable_move_s(*rig_, 0.0, q.turntable_rad);
+  std::cout << "least turn: 0 deg, arm " << arm_l << " s; quickest: " << rad_to_deg(q.turntable_rad) << " deg ("
+            << turn_q << " s), arm " << arm_q << " s\n";
+  EXPECT_GT(std::abs(q.turntable_rad), 0.0);
+  // The turn's time by hand: the smoothstep ramp's peak speed 1.5 d / T and peak acceleration
+  // 6 d / T^2 within 60 deg/s and 240 deg/s^2.
+  const double d = std::abs(q.turntable_rad);
+  EXPECT_NEAR(turn_q, std::max(1.5 * d / deg_to_rad(60), std::sqrt(6 * d / deg_to_rad(240))), 1e-12);
+  EXPECT_LT(arm_q, arm_l);
+  EXPECT_LT(std::max(arm_q, turn_q), arm_l);
+  EXPECT_DOUBLE_EQ(move_s(*rig_, from, {q.q, q.turntable_rad}), std::max(arm_q, turn_q));
+  EXPECT_TRUE(quickest.collisions(q.q, q.turntable_rad, cube_keepout(), kObjectZ).empty());
+  const Pose back = camera_in_object(*rig_, q.q, q.turntable_rad, kObjectZ);
+  EXPECT_LT((back.translation() - right.translation()).norm(), 1e-6);
+  EXPECT_LT(rotation_angle_rad(back.linear(), right.linear()), 1e-6);
+
+  const std::vector<Pose> views = ring_views(24, hemisphere_radius(), 20 * kPi / 180, 0.0, Eigen::Vector3d::Zero());
+  int quicker = 0, kept = 0;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const ViewSolution a = least.solve(views[i], from.q, 0.0, cube_keepout(), kObjectZ);
+    const ViewSolution b = quickest.solve(views[i], from.q, 0.0, cube_keepout(), kObjectZ);
+    ASSERT_EQ(a.reachable, b.reachable) << i;
+    if (!a.reachable) continue;
+    const double ta = move_s(*rig_, from, {a.q, a.turntable_rad}), tb = move_s(*rig_, from, {b.q, b.turntable_rad});
+    EXPECT_LE(tb, ta + 1e-12) << i;
+    if (b.turntable_rad != a.turntable_rad) {
+      EXPECT_LT(tb, ta) << i;
+      ++quicker;
+    }
+    if (turntable_move_s(*rig_, 0.0, a.turntable_rad) > arm_move_s(*rig_, from.q, a.q)) {
+      EXPECT_EQ(b.turntable_rad, a.turntable_rad) << i;
+      EXPECT_LT((b.q - a.q).cwiseAbs().maxCoeff(), 1e-12) << i;
+      ++kept;
+    }
+  }
+  std::cout << "24 views: " << quicker << " turned otherwise and quicker, " << kept
+            << " kept the least turn (the turntable the slower part)\n";
+  EXPECT_GT(quicker, 0);
+  EXPECT_GT(kept, 0);
+}
+
 TEST(RigLoad, ChangedJointAxisUsesGeneralIk) {
   // a2 turned about z instead of y: no longer the spherical-wrist layout, still a 6R chain.
   const std::string path = edited_rig("rig_axis_z.xml", "<joint name=\"a2\" class=\"arm\" axis=\"0 1 0\"",

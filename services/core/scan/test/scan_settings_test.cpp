@@ -158,17 +158,21 @@ namespace pbnbv {
 
 // --initial-view is a camera position 0.05..10 m from the object centre, every coordinate finite:
 
-// The executor's least turn: a new scan's settings say it is narrowed, and the moves and plans of a
-// motion-aware scan take kLeastTurn; a settings.json without the field (a scan recorded before the
-// least turn was narrowed) reads as the grid's, so its replay commands the turns it recorded
-// (kLeastTurnOnGrid); plain motion is unaffected; any other word is refused naming the field.
-TEST(ScanSettingsJson, TheLeastTurnIsRecordedAndAnOlderScanTurnsOnTheGrid) {
+// The executor's turntable rule: a new scan's settings say "quickest", and the moves and plans of
+// a motion-aware scan take kQuickest; a scan recorded with the narrowed least turn replays with
+// kLeastTurn; a settings.json without the field (recorded before the least turn was narrowed)
+// reads as the grid's, so its replay commands the turns it recorded (kLeastTurnOnGrid); plain
+// motion is unaffected; any other word is refused naming the field.
+TEST(ScanSettingsJson, TheTurntableRuleIsRecordedAndOlderScansReplayWithTheirs) {
   ScanSettings s;
   s.scan_id = "turn";
   s.motion = Motion::kAware;
-  EXPECT_EQ(s.least_turn, LeastTurn::kNarrowed);
+  EXPECT_EQ(s.least_turn, LeastTurn::kQuickest);
   nlohmann::json j = to_json(s);
-  EXPECT_EQ(j["planning"]["least_turn"], "narrowed");
+  EXPECT_EQ(j["planning"]["least_turn"], "quickest");
+  EXPECT_EQ(turntable_choice(scan_settings_from_json(j)), TurntableChoice::kQuickest);
+  j["planning"]["least_turn"] = "narrowed";
+  EXPECT_EQ(scan_settings_from_json(j).least_turn, LeastTurn::kNarrowed);
   EXPECT_EQ(turntable_choice(scan_settings_from_json(j)), TurntableChoice::kLeastTurn);
   j["planning"].erase("least_turn");
   EXPECT_EQ(scan_settings_from_json(j).least_turn, LeastTurn::kGrid);
@@ -177,7 +181,7 @@ TEST(ScanSettingsJson, TheLeastTurnIsRecordedAndAnOlderScanTurnsOnTheGrid) {
   EXPECT_EQ(turntable_choice(scan_settings_from_json(j)), TurntableChoice::kPreferred);
   j["planning"]["least_turn"] = "nearest";
   const std::string why = pbnbv::testing::error_message([&] { scan_settings_from_json(j); });
-  EXPECT_EQ(why, "scan settings: unknown least turn 'nearest' (expected narrowed or grid)");
+  EXPECT_EQ(why, "scan settings: unknown least turn 'nearest' (expected narrowed, grid or quickest)");
 }
 // 1e308 (which passed and failed only in the coordinator, after every process had started), inf
 // and a point at the centre are refused naming the option; 0.9 m above is taken.
