@@ -174,11 +174,11 @@ PlyLayout read_ply_layout(std::istream& in, const std::string& path, const char*
       }
       if (!whole_number(count, e.count)) {
         file_error(ctx, path, fmt::format("PLY header line {}: element '{}' has count '{}', not a whole number", line_number,
-                                    shown(e.name), shown(count)));
+                                          shown(e.name), shown(count)));
       }
       if (e.count > size) {
         file_error(ctx, path, fmt::format("PLY header line {}: element '{}' declares {} items, more than a file of {} bytes "
-                                    "can hold", line_number, shown(e.name), e.count, size));
+                                          "can hold", line_number, shown(e.name), e.count, size));
       }
     }
     if (keyword != "property") continue;
@@ -192,7 +192,7 @@ PlyLayout read_ply_layout(std::istream& in, const std::string& path, const char*
       prop.count_bytes = ply_type_bytes(count_type, &prop.count_signed, &integer);
       if (prop.count_bytes == 0 || !integer) {
         file_error(ctx, path, fmt::format("PLY header line {}: a list counted in '{}', not an integer type", line_number,
-                                    shown(count_type)));
+                                          shown(count_type)));
       }
       type = entry_type;
     }
@@ -271,7 +271,7 @@ void check_ply_lists(std::istream& in, const std::string& path, const char* ctx,
         if (count >= 0 && count <= 65535 && static_cast<std::uintmax_t>(count) > most) return;
         if (count < 0 || static_cast<std::uintmax_t>(count) > most) {
           file_error(ctx, path, fmt::format("PLY element '{}' item {}: a list of {} entries, more than the {} bytes left in "
-                                      "the file can hold", shown(e.name), item, count, left));
+                                            "the file can hold", shown(e.name), item, count, left));
         }
         if (!ascii) {
           if (!skip(static_cast<std::size_t>(count) * static_cast<std::size_t>(p.bytes))) return;

@@ -75,7 +75,7 @@ TriangleMesh to_mesh(const std::string& path, const std::vector<Point>& points,
       // A negative OBJ index wraps around to a huge one: shown as the signed value it was.
       if (v >= points.size()) {
         file_error(kLoad, path, fmt::format("face {}: vertex index {} out of range ({} vertices, counted from 0)", f,
-                                      static_cast<long long>(v), points.size()));
+                                            static_cast<long long>(v), points.size()));
       }
     }
     for (std::size_t k = 1; k + 1 < poly.size(); ++k) {
@@ -114,7 +114,7 @@ void finish_mesh(TriangleMesh& m, const std::string& path) {
   for (int a = 0; a < 3; ++a) {
     if (!(ext[a] > 0.0)) {
       file_error(kLoad, path, fmt::format("zero-size bounding box (extent {} x {} x {}, zero along {})", ext.x(),
-                                    ext.y(), ext.z(), "xyz"[a]));
+                                          ext.y(), ext.z(), "xyz"[a]));
     }
   }
 }
@@ -187,11 +187,11 @@ void read_off(std::istream& in, const std::string& path, std::vector<Point>& poi
   }
   if (keyword == "4OFF" || keyword == "nOFF" || keyword == "4nOFF") {
     file_error(kLoad, path, fmt::format("line {}: '{}' is an OFF file of 4 or n dimensions; only 3-D meshes are read",
-                                  line_number, shown(words[0])));
+                                        line_number, shown(words[0])));
   }
   if (keyword != "OFF") {
     file_error(kLoad, path, fmt::format("line {}: not an OFF file: it starts with '{}', not OFF (or COFF, NOFF, STOFF)",
-                                  line_number, shown(words[0])));
+                                        line_number, shown(words[0])));
   }
   words.erase(words.begin());
   if (!words.empty() && words[0] == "BINARY") {
@@ -200,7 +200,7 @@ void read_off(std::istream& in, const std::string& path, std::vector<Point>& poi
   if (words.empty()) words = next_words();
   if (words.size() < 2 || words.size() > 3) {
     file_error(kLoad, path, fmt::format("line {}: the OFF counts line has {} words; expected the vertex, face and edge "
-                                  "counts", line_number, words.size()));
+                                        "counts", line_number, words.size()));
   }
   auto count = [&](std::string_view word, const char* what, const char* plural, std::uintmax_t min_bytes) {
     std::uint64_t n = 0;
@@ -210,7 +210,7 @@ void read_off(std::istream& in, const std::string& path, std::vector<Point>& poi
     // A vertex takes at least 6 bytes ("0 0 0\n"), a face at least 8 ("3 0 1 2\n").
     if (n > size / min_bytes) {
       file_error(kLoad, path, fmt::format("the OFF header declares {} {}, more than a file of {} bytes can hold", n,
-                                    plural, size));
+                                          plural, size));
     }
     return static_cast<std::size_t>(n);
   };
@@ -230,7 +230,7 @@ void read_off(std::istream& in, const std::string& path, std::vector<Point>& poi
       const auto [end, ec] = std::from_chars(w.data(), w.data() + w.size(), xyz[k]);
       if (w.empty() || ec != std::errc() || end != w.data() + w.size() || !std::isfinite(xyz[k])) {
         file_error(kLoad, path, fmt::format("line {}: vertex {} '{}' is not three finite numbers", line_number, v,
-                                      shown(line)));
+                                            shown(line)));
       }
     }
     points.emplace_back(xyz[0], xyz[1], xyz[2]);
@@ -244,25 +244,25 @@ void read_off(std::istream& in, const std::string& path, std::vector<Point>& poi
     std::uint64_t corners = 0;
     if (!whole_number(words[0], corners)) {
       file_error(kLoad, path, fmt::format("line {}: face {}'s corner count '{}' is not a whole number", line_number, f,
-                                    shown(words[0])));
+                                          shown(words[0])));
     }
     if (corners < 3) {
       file_error(kLoad, path, fmt::format("line {}: face {} has {} corners, fewer than 3", line_number, f, corners));
     }
     if (corners > vertices) {
       file_error(kLoad, path, fmt::format("line {}: face {} has {} corners, more than the file's {} vertices", line_number,
-                                    f, corners, vertices));
+                                          f, corners, vertices));
     }
     if (words.size() - 1 < corners) {
       file_error(kLoad, path, fmt::format("line {}: face {} declares {} corners and lists {}", line_number, f, corners,
-                                    words.size() - 1));
+                                          words.size() - 1));
     }
     Polygon& polygon = polygons.emplace_back(static_cast<std::size_t>(corners));
     for (std::size_t k = 1; k <= corners; ++k) {
       std::uint64_t index = 0;
       if (!whole_number(words[k], index) || index >= vertices) {
         file_error(kLoad, path, fmt::format("line {}: corner {} of face {} is vertex '{}'; the file has vertices 0 to {}",
-                                      line_number, k, f, shown(words[k]), vertices - 1));
+                                            line_number, k, f, shown(words[k]), vertices - 1));
       }
       polygon[k - 1] = static_cast<std::size_t>(index);
     }
