@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "core/geometry/mesh.hpp"
 #include "core/io/mesh_file.hpp"
@@ -40,17 +41,16 @@ std::string rig_model(const std::string& name) {
   return rig_with_camera(source_dir() + "/models", name, dir, kRigCamera).string();
 }
 
-// Coverage after the last view of an external-rig scan against the mesh the twin rendered:
+// Coverage after each view of an external-rig scan against the mesh the twin rendered:
 // `twin_object_z` is where the twin put the mesh's frame above the turntable top; the scan's
 // object frame sits at the working volume's centre, so the mesh is moved into it first.
-double external_coverage(const fs::path& out, const fs::path& mesh_path, double twin_object_z) {
+std::vector<double> external_coverage(const fs::path& out, const fs::path& mesh_path, double twin_object_z) {
   const auto settings = read_json_file(out / "settings.json");
   const double scan_object_z = settings["object_z_m"].get<double>();
   TriangleMesh mesh = load_mesh(mesh_path.string());
   for (auto& v : mesh.vertices) v.z() += twin_object_z - scan_object_z;
   write_stl_binary(mesh, (out / "object.stl").string());
-  const eval::ScanEvaluation e = eval::evaluate_coverage(out);  // the coverage only
-  return e.coverage_by_view.empty() ? 0.0 : e.coverage_by_view.back();
+  return eval::evaluate_coverage(out).coverage_by_view;  // the coverage only
 }
 
 // A working volume as a user measures it: the object's bounding box rounded up to the centimetre.
@@ -67,15 +67,18 @@ std::string measured_volume(const fs::path& twin_run) {
 // The same object scanned the twin-in-the-loop way and as an unknown object on an external rig
 // (the twin started separately with the same mesh): both complete, the external one without a
 // mesh, given only a working volume measured as a user would (the object's bounding box rounded
-// up to the next centimetre), and their coverage after 6 views differs by what two plans from two
-// boxes differ by (below).
+// up to the next centimetre). Both start from the same first view, so their first views cover the
+// same surface; from view 2 on they plan from two boxes, and their coverage after 6 views differs
+// by what two plans differ by (below).
 void compare_with_twin_in_the_loop(const std::string& name, const std::string& model) {
   const fs::path twin_run = fresh_dir(name + "-twin-in-the-loop");
   const std::string options = "--rig-model " + rig_model(model) + " --views 6";
   const CommandResult a = run_command(netns_run() + " " + bin_dir() + "/pbnbv scan --object bunny " + options + " " +
                                       kSmallImage + " --sim-speed 20 --out " + twin_run.string());
   ASSERT_EQ(a.exit_code, 0) << a.output;
-  const double twin_coverage = read_json_file(twin_run / "coverage.json")["coverage_by_view"].back().get<double>();
+  const std::vector<double> twin_coverage =
+      read_json_file(twin_run / "coverage.json")["coverage_by_view"].get<std::vector<double>>();
+  ASSERT_EQ(twin_coverage.size(), 6u);
   const double object_z = read_json_file(twin_run / "settings.json")["object_z_m"].get<double>();
   const std::string volume = measured_volume(twin_run);
 
@@ -104,16 +107,27 @@ void compare_with_twin_in_the_loop(const std::string& name, const std::string& m
   EXPECT_EQ(scan["status"]["state"], "done");
   EXPECT_EQ(scan["views"].size(), 6u);
 
-  const double external_coverage_pct = external_coverage(external, twin_run / "object.stl", object_z);
-  std::cout << name << ": coverage after 6 views, twin in the loop " << twin_coverage << " %, external rig "
-            << external_coverage_pct << " %\n";
+  const std::vector<double> external_coverage_pct = external_coverage(external, twin_run / "object.stl", object_z);
+  ASSERT_EQ(external_coverage_pct.size(), 6u);
+  std::cout << name << ": coverage after views 1 and 6, twin in the loop " << twin_coverage.front() << " and "
+            << twin_coverage.back() << " %, external rig " << external_coverage_pct.front() << " and "
+            << external_coverage_pct.back() << " %\n";
+  // The first view is the same view of the same object: an object frame placed wrongly in the
+  // working volume, or a turntable or camera taken the wrong way, shows here (the cloud would miss
+  // the mesh). Measured 25.28 / 24.80 % (KUKA) and 25.32 / 24.77 % (UR5e): the external object
+  // frame, at the volume's centre, is 3 mm above the twin's.
+  EXPECT_NEAR(external_coverage_pct.front(), twin_coverage.front(), 1.0);
   // Two scans of one object whose B (mesh box against working volume) differ plan differently
-  // from view 2 on; measured 74.8 / 75.7 % (KUKA) and 77.4 / 76.2 % with earlier planners, with
-  // the combined ranking 76.2 / 73.5 % (KUKA) and 77.2 / 73.6 % (UR5e), and with its path checks
-  // (stop 46, three runs each) 78.35-78.49 / 73.59-73.94 % (KUKA) and 74.87-77.04 / 76.49-76.78 %
-  // (UR5e): after 6 views on the arm the two plans' coverage differs by up to about 5 points
-  // either way.
-  EXPECT_NEAR(external_coverage_pct, twin_coverage, 5.5);
+  // from view 2 on, and a greedy plan is sensitive to its input: the twin-in-the-loop scan of this
+  // bunny on the KUKA with its size changed by 0.5-1.5 % (--size 0.296-0.3045, eight scans) covers
+  // 73.5-77.3 % after 6 views, against 78.4 % at 0.3 (stop 57). Measured pairs (twin in the loop /
+  // external): with the path checks (stop 46) 78.35-78.49 / 73.59-73.94 % (KUKA) and 74.87-77.04 /
+  // 76.49-76.78 % (UR5e); with the quickest move (stop 57, nine runs) 78.34-78.36 / 70.93-73.92 %
+  // (KUKA; 71.22 % in CI) and 74.74-76.51 / 75.64-76.57 % (UR5e). The external plan on the KUKA
+  // stays behind at 10 views too (75.2 and 76.9 % against 80.5 %), and with the least turn
+  // (73.8 and 74.4 % after 6 views, 74.9 and 75.6 % after 10): it is that plan, not the external
+  // path. After 6 views two such plans differ by up to 7.5 points either way.
+  EXPECT_NEAR(external_coverage_pct.back(), twin_coverage.back(), 8.5);
 }
 
 }  // namespace
@@ -234,8 +248,12 @@ TEST(TwoHosts, AScanAcrossALinkCoversWhatItDoesOnOneHost) {
     EXPECT_NE(p["name"], "motion");
     EXPECT_NE(p["name"], "camera");
   }
-  const double one_host = external_coverage(one / "scan", twin_run / "object.stl", object_z);
-  const double two_hosts = external_coverage(two / "scan", twin_run / "object.stl", object_z);
+  const std::vector<double> one_by_view = external_coverage(one / "scan", twin_run / "object.stl", object_z);
+  const std::vector<double> two_by_view = external_coverage(two / "scan", twin_run / "object.stl", object_z);
+  ASSERT_FALSE(one_by_view.empty());
+  ASSERT_FALSE(two_by_view.empty());
+  const double one_host = one_by_view.back();
+  const double two_hosts = two_by_view.back();
   const double log_mb = fs::file_size(two / "scan" / "scan.lcmlog") / 1e6;
   const double seconds = read_json_file(two / "scan" / "scan.json")["status"]["elapsed_s"].get<double>();
   std::cout << "coverage after 5 views: one host " << one_host << " %, two hosts " << two_hosts << " %; the link carried "
