@@ -122,11 +122,11 @@ void compare_with_twin_in_the_loop(const std::string& name, const std::string& m
   // bunny on the KUKA with its size changed by 0.5-1.5 % (--size 0.296-0.3045, eight scans) covers
   // 73.5-77.3 % after 6 views, against 78.4 % at 0.3 (stop 57). Measured pairs (twin in the loop /
   // external): with the path checks (stop 46) 78.35-78.49 / 73.59-73.94 % (KUKA) and 74.87-77.04 /
-  // 76.49-76.78 % (UR5e); with the quickest move (stop 57, nine runs) 78.34-78.36 / 70.93-73.92 %
-  // (KUKA; 71.22 % in CI) and 74.74-76.51 / 75.64-76.57 % (UR5e). The external plan on the KUKA
-  // stays behind at 10 views too (75.2 and 76.9 % against 80.5 %), and with the least turn
-  // (73.8 and 74.4 % after 6 views, 74.9 and 75.6 % after 10): it is that plan, not the external
-  // path. After 6 views two such plans differ by up to 7.5 points either way.
+  // 76.49-76.78 % (UR5e); with the quickest move (stop 57) 78.34-78.36 / 70.93-73.92 % (KUKA,
+  // nine runs; 71.22 % in CI) and 74.74-76.51 / 75.64-76.23 % (UR5e, six runs). The external
+  // plan on the KUKA stays behind at 10 views too (75.2 and 76.9 % against 80.5 %), and with the
+  // least turn (73.8 and 74.4 % after 6 views, 74.9 and 75.6 % after 10): it is that plan, not
+  // the external path. After 6 views two such plans differ by up to 7.5 points either way.
   EXPECT_NEAR(external_coverage_pct.back(), twin_coverage.back(), 8.5);
 }
 
