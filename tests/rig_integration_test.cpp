@@ -250,19 +250,27 @@ TEST(TwoHosts, AScanAcrossALinkCoversWhatItDoesOnOneHost) {
   }
   const std::vector<double> one_by_view = external_coverage(one / "scan", twin_run / "object.stl", object_z);
   const std::vector<double> two_by_view = external_coverage(two / "scan", twin_run / "object.stl", object_z);
-  ASSERT_FALSE(one_by_view.empty());
-  ASSERT_FALSE(two_by_view.empty());
+  // No view lost on the link: both scans took all five.
+  ASSERT_EQ(one_by_view.size(), 5u);
+  ASSERT_EQ(two_by_view.size(), 5u);
+  EXPECT_EQ(read_json_file(two / "scan" / "scan.json")["views"].size(), 5u);
   const double one_host = one_by_view.back();
   const double two_hosts = two_by_view.back();
   const double log_mb = fs::file_size(two / "scan" / "scan.lcmlog") / 1e6;
   const double seconds = read_json_file(two / "scan" / "scan.json")["status"]["elapsed_s"].get<double>();
-  std::cout << "coverage after 5 views: one host " << one_host << " %, two hosts " << two_hosts << " %; the link carried "
-            << log_mb << " MB in " << seconds << " s\n";
+  std::cout << "coverage after views 1 and 5: one host " << one_by_view.front() << " and " << one_host << " %, two hosts "
+            << two_by_view.front() << " and " << two_hosts << " %; the link carried " << log_mb << " MB in " << seconds
+            << " s\n";
+  // The first view is the same view in both: a frame lost or mangled on the link shows here.
+  EXPECT_NEAR(two_by_view.front(), one_by_view.front(), 0.5);
   // Scans of one setup differ by the views the planner picks from poses the physics settles a
   // fraction of a millimetre apart: measured 71.82, 71.83, 72.79 and 73.31 % (one host and two,
-  // 2026-12-05, idle and beside the packet-loss case), so two draws differ by up to 1.5 points; a
-  // view lost on the link costs 5 or more (one of five views; 67 against 72.8 % when ICP dropped one).
-  EXPECT_NEAR(two_hosts, one_host, 2.0);
+  // 2026-12-05, idle and beside the packet-loss case); with the quickest move (stop 57) one host
+  // 73.07-73.09 % in seven runs, two hosts 72.91-73.09 % or, when a later view's plan branches,
+  // 70.89 and 70.91 % (two of seven runs, one in CI), so two draws differ by up to 2.2 points. A
+  // view lost on the link costs 5 or more (one of five views; 67 against 72.8 % when ICP dropped
+  // one), and the view counts above catch it directly.
+  EXPECT_NEAR(two_hosts, one_host, 3.0);
 }
 
 // The driver's frames are not the camera the rig file states (the twin renders 320 x 180, the
