@@ -40,7 +40,7 @@ expect "to 90 %: 7.50 -> 3.75 s over 2 runs reaching it in both (0 only before, 
 expect "to 95 %: 10.00 -> 5.75 s over 2 runs reaching it in both (0 only before, 0 only after); views 4.00 -> 4.50, 2.50 -> 1.28 s a view"
 expect "to 95 % change: -42.50 %"
 # Pooling a folder with itself changes nothing.
-out=$("$root/scripts/bench-pair" --samples 200 --pool "$dir/before" "$dir/after" "$dir/after")
+out=$("$root/scripts/bench-pair" --samples 200 "$dir/before,$dir/before" "$dir/after,$dir/after")
 expect "to 95 % change: -42.50 %"
 # What is not a bench folder, or a bad option, is refused by name.
 if msg=$("$root/scripts/bench-pair" "$dir/before" "$dir/none" 2>&1); then echo "bench_pair_test: a folder with no evaluation was taken" >&2; exit 1; fi
