@@ -42,9 +42,22 @@ expect "to 95 % change: -42.50 %"
 # Pooling a folder with itself changes nothing.
 out=$("$root/scripts/bench-pair" --samples 200 "$dir/before,$dir/before" "$dir/after,$dir/after")
 expect "to 95 % change: -42.50 %"
+# The same runs read from a summary.json alone (what docs/benchmark keeps of a bench run).
+mkdir -p "$dir/summary"
+python3 - "$dir/after/evaluation/x/evaluation.json" "$dir/summary/summary.json" <<'PY'
+import json, sys
+runs = json.load(open(sys.argv[1]))["runs"]
+out = {"pbnbv": {"runs": {r["object"]: {"object": r["object"], "first_view": 1, "complete": r["complete"],
+                                        "coverage_by_view": r["coverage_by_view"],
+                                        "observable_coverage_by_view": r["observable_by_view"],
+                                        "rig_time_s_by_view": r["rig_time_by_view"]} for r in runs}}}
+json.dump(out, open(sys.argv[2], "w"))
+PY
+out=$("$root/scripts/bench-pair" --samples 200 "$dir/before" "$dir/summary")
+expect "to 95 %: 10.00 -> 5.75 s over 2 runs reaching it in both"
 # What is not a bench folder, or a bad option, is refused by name.
 if msg=$("$root/scripts/bench-pair" "$dir/before" "$dir/none" 2>&1); then echo "bench_pair_test: a folder with no evaluation was taken" >&2; exit 1; fi
-grep -qF "$dir/none holds no evaluation" <<<"$msg" || { echo "bench_pair_test: $msg" >&2; exit 1; }
+grep -qF "$dir/none holds neither evaluation" <<<"$msg" || { echo "bench_pair_test: $msg" >&2; exit 1; }
 if msg=$("$root/scripts/bench-pair" --samples 5 "$dir/before" "$dir/after" 2>&1); then echo "bench_pair_test: --samples 5 was taken" >&2; exit 1; fi
 grep -qF -- "--samples 5 is out of 100-100000" <<<"$msg" || { echo "bench_pair_test: $msg" >&2; exit 1; }
 echo "bench_pair_test: passed"
