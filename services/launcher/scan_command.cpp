@@ -24,6 +24,7 @@
 #include "core/io/mesh_file.hpp"
 #include "core/surface/mesh_topology.hpp"
 #include "core/scan/scan_file.hpp"
+#include "eval/bench.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/objects.hpp"
 #include "launcher/commands.hpp"
@@ -482,16 +483,13 @@ void evaluate_against_truth(const ScanSettings& s, const fs::path& out, bool sur
       // The plan as the scan waited for it (map update + the view scorer's answer; the ellipsoid fit
       // and the reachability check run side by side), and the paper's figure: its parts one after
       // the other.
-      const auto median = [](std::vector<double> t) {
-        std::sort(t.begin(), t.end());
-        return t[t.size() / 2];
-      };
+      using eval::median_of;
       const std::string parts = std::string("map update + ") + (uses_ellipsoids(s.planner) ? "ellipsoids + " : "") + "view selection";
       if (e.planner_critical_ms.empty()) {
-        std::cout << "planner step (" << parts << "): median " << fixed(median(e.planner_ms), 1) << " ms" << std::endl;
+        std::cout << "planner step (" << parts << "): median " << fixed(median_of(e.planner_ms), 1) << " ms" << std::endl;
       } else {
-        std::cout << "planning: median " << fixed(median(e.planner_critical_ms), 1) << " ms a view as the scan waited for it, "
-                  << fixed(median(e.planner_ms), 1) << " ms its parts summed (" << parts << ")" << std::endl;
+        std::cout << "planning: median " << fixed(median_of(e.planner_critical_ms), 1) << " ms a view as the scan waited for it, "
+                  << fixed(median_of(e.planner_ms), 1) << " ms its parts summed (" << parts << ")" << std::endl;
       }
     }
   } catch (const std::exception& x) {
